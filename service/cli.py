@@ -1,0 +1,64 @@
+"""The ``balloon`` command: one subcommand per task.
+
+Each subcommand lives in ``service/commands/<name>.py`` and exposes
+``register(subparsers)``, which adds its parser and sets ``func`` to a function
+``run(args) -> int``. User mistakes (``BalloonError``, bad files) print one line
+on stderr and exit 2; nothing prints a traceback for them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from importlib import import_module
+from importlib.metadata import PackageNotFoundError, version
+
+from solver.errors import BalloonError, InputError, NotFoundError
+
+# Subcommands in the order `balloon --help` lists them.
+COMMAND_MODULES = (
+    "service.commands.solve",
+)
+
+
+def package_version() -> str:
+    try:
+        return version("balloon-actuator")
+    except PackageNotFoundError:
+        return "0+unknown"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="balloon",
+        description="Design bending balloon actuators: FE solves, curve database, "
+                    "surrogate fits, inverse design and the REST service.")
+    parser.add_argument("--version", action="version", version=f"balloon {package_version()}")
+    subparsers = parser.add_subparsers(title="commands", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        import_module(name).register(subparsers)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not hasattr(args, "func"):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except (InputError, NotFoundError, FileNotFoundError, IsADirectoryError,
+            PermissionError) as exc:
+        print(f"balloon: error: {exc}", file=sys.stderr)
+        return 2
+    except BalloonError as exc:
+        print(f"balloon: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("balloon: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

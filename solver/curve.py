@@ -1,0 +1,71 @@
+"""The result of one solve: a pressure-volume-angle curve with per-step statistics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+STATUSES = ("complete", "stopped", "failed")
+
+
+@dataclass(frozen=True)
+class Curve:
+    """Per converged load step i (index 0 is the undeformed state):
+
+    pressure_pa[i]            cavity pressure, Pa
+    volume_ul[i]              injected volume = cavity volume change, whole actuator, ul (mm^3)
+    time_s[i]                 volume_ul / flow_ul_s, s (the experiment's constant-flow clock)
+    angle_deg[i]              bending angle: rotation of the free end face about y, degrees,
+                              positive when the tip moves away from the membrane (+z)
+    tip_displacement_mm[i]    displacement (x, z) of the free end face's centroid, mm
+    max_membrane_stretch[i]   largest principal stretch in the membrane layer
+    force_mn[i]               tip reaction (spring or block), whole actuator, mN; NaN if free
+    newton_iterations[i]      Newton iterations of the step (0 for the first point)
+    residual_norm[i]          final relative residual of the step
+    negative_eigenvalues[i]   count of negative eigenvalues of the structural tangent at
+                              fixed pressure (> 0: not positive definite, unstable under
+                              pressure control); -1 when not computed
+
+    status: "complete" (reached a stop criterion), "stopped" (ended early by a limit
+    such as max_steps), or "failed" (a step could not converge); ``reason`` says why.
+    ``pressure_maximum_index`` is the step of a pressure maximum under volume control
+    (a limit point), or -1.
+    """
+
+    pressure_pa: np.ndarray
+    volume_ul: np.ndarray
+    time_s: np.ndarray
+    angle_deg: np.ndarray
+    tip_displacement_mm: np.ndarray
+    max_membrane_stretch: np.ndarray
+    force_mn: np.ndarray
+    newton_iterations: np.ndarray
+    residual_norm: np.ndarray
+    negative_eigenvalues: np.ndarray
+    status: str
+    reason: str
+    pressure_maximum_index: int = -1
+    n_dofs: int = 0
+    wall_time_s: float = 0.0
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+    ARRAY_FIELDS = ("pressure_pa", "volume_ul", "time_s", "angle_deg", "tip_displacement_mm",
+                    "max_membrane_stretch", "force_mn", "newton_iterations", "residual_norm",
+                    "negative_eigenvalues")
+
+    def __len__(self) -> int:
+        return int(self.pressure_pa.shape[0])
+
+    @property
+    def converged(self) -> bool:
+        return self.status != "failed"
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain-JSON view (lists of floats)."""
+        out: dict[str, object] = {name: np.asarray(getattr(self, name)).tolist()
+                                  for name in self.ARRAY_FIELDS}
+        out.update(status=self.status, reason=self.reason,
+                   pressure_maximum_index=self.pressure_maximum_index, n_dofs=self.n_dofs,
+                   wall_time_s=self.wall_time_s, timings_s=dict(self.timings_s))
+        return out

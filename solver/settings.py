@@ -1,0 +1,90 @@
+"""Solver settings: discretisation, load control, tolerances and stop criteria."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+from solver.errors import InputError
+
+CONTROLS = ("volume", "pressure")
+ELEMENTS = ("hex2", "hex1")
+TIPS = ("free", "spring", "blocked")
+
+DEFAULT_MESH_LEVEL = 1  # chosen by the mesh-convergence study, docs/verification.md
+MAX_MESH_LEVEL = 4
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """How a design is solved.
+
+    mesh_level        0 (coarsest) .. MAX_MESH_LEVEL; each level refines every direction
+    element           "hex2" (27-node triquadratic, default) or "hex1" (8-node trilinear)
+    control           "volume" (injected volume, pressure is an unknown) or "pressure"
+    max_angle_deg     stop once the bending angle's magnitude exceeds this
+    max_pressure_pa   stop once the cavity pressure exceeds this
+    max_volume_ul     stop once the injected volume (whole actuator) exceeds this
+    flow_ul_s         injection rate used to report time = volume / flow (the paper: 2.5)
+    bulk_ratio        bulk modulus over initial shear modulus, K / mu0, per material
+    newton_tol        relative residual tolerance (and energy-norm increment tolerance)
+    max_newton_iter   iterations before a step is cut back
+    max_steps         converged steps before the curve is ended
+    tip               "free", "spring" (linear spring on the tip, k) or "blocked"
+    spring_k_n_per_m  spring stiffness for tip = "spring" (whole actuator), N/m
+    """
+
+    mesh_level: int = DEFAULT_MESH_LEVEL
+    element: str = "hex2"
+    control: str = "volume"
+    max_angle_deg: float = 90.0
+    max_pressure_pa: float = 20000.0
+    max_volume_ul: float = 50.0
+    flow_ul_s: float = 2.5
+    bulk_ratio: float = 1000.0
+    newton_tol: float = 1e-8
+    max_newton_iter: int = 25
+    max_steps: int = 400
+    tip: str = "free"
+    spring_k_n_per_m: float = 0.0
+
+    def validated(self) -> "SolverSettings":
+        checks: list[tuple[str, float, float]] = [
+            ("mesh_level", 0, MAX_MESH_LEVEL), ("max_angle_deg", 0.1, 360.0),
+            ("max_pressure_pa", 1.0, 1e7), ("max_volume_ul", 1e-3, 1e4),
+            ("flow_ul_s", 1e-6, 1e6), ("bulk_ratio", 10.0, 1e6),
+            ("newton_tol", 1e-14, 1e-2), ("max_newton_iter", 3, 200), ("max_steps", 1, 10000),
+            ("spring_k_n_per_m", 0.0, 1e6),
+        ]
+        for name, lo, hi in checks:
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or value != value or not lo <= value <= hi:
+                raise InputError(name, f"got {value!r}", f"{lo} <= {name} <= {hi}")
+        for name, allowed in (("element", ELEMENTS), ("control", CONTROLS), ("tip", TIPS)):
+            if getattr(self, name) not in allowed:
+                raise InputError(name, f"got {getattr(self, name)!r}", " | ".join(allowed))
+        if self.tip == "spring" and self.spring_k_n_per_m <= 0:
+            raise InputError("spring_k_n_per_m", "a spring tip needs a positive stiffness",
+                             "spring_k_n_per_m > 0")
+        if self.tip == "blocked" and self.control == "pressure":
+            pass  # allowed: force against prescribed pressure
+        return self
+
+    def as_dict(self) -> dict[str, object]:
+        return asdict(self)
+
+
+def settings_from_dict(data: dict) -> SolverSettings:
+    """Build and validate settings from plain data; unknown keys are refused."""
+    names = {f.name: f.type for f in fields(SolverSettings)}
+    unknown = set(data) - set(names)
+    if unknown:
+        raise InputError(sorted(unknown)[0], "unknown solver setting", ", ".join(sorted(names)))
+    kwargs = {}
+    defaults = SolverSettings()
+    for key, value in data.items():
+        kind = type(getattr(defaults, key))
+        try:
+            kwargs[key] = kind(value) if kind is not str else str(value)
+        except (TypeError, ValueError):
+            raise InputError(key, f"cannot read {value!r} as {kind.__name__}") from None
+    return SolverSettings(**kwargs).validated()
