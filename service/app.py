@@ -1,0 +1,85 @@
+"""The FastAPI application: ``create_app(settings) -> FastAPI``.
+
+Start-up (lifespan) loads the fitted surrogate once and starts the solve workers;
+shut-down stops them. Nothing heavy happens at import time. Routers, one per
+resource, live in ``service.routes``; every error is answered by
+``service.errors`` as ``application/problem+json``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.middleware.cors import CORSMiddleware
+
+from service.errors import install_error_handlers
+from service.jobs import JobManager
+from service.middleware import BodyLimitMiddleware
+from service.models import ModelRegistry
+from service.routes import curves, health, inverse, jobs, materials, predict
+from service.settings import ServiceSettings, get_settings
+from service.store_access import ResultWriter
+
+DESCRIPTION = """\
+Design questions about bending balloon actuators (two bonded silicone layers).
+
+* **predict** and **inverse** answer in microseconds from a surrogate of the FE model;
+* **curves** serves the stored finite-element records;
+* **solve** queues a new FE solve (API key in `X-API-Key`); poll **jobs** for progress.
+
+Units are in every field name (`_mm`, `_pa`, `_deg`). Errors are RFC 9457
+`application/problem+json` documents naming the field and its allowed range.
+"""
+
+
+def _default_solve(design: Any, settings: Any, on_step: Callable[..., Any] | None = None
+                   ) -> Any:
+    from solver import solve
+
+    return solve(design, settings, on_step=on_step)
+
+
+def create_app(settings: ServiceSettings | None = None, *,
+               solve_fn: Callable[..., Any] | None = None,
+               write_fn: Callable[[Any, Any, Any], str] | None = None,
+               load_surrogate: bool = True) -> FastAPI:
+    """Build the app. ``solve_fn`` and ``write_fn`` replace the FE solve and the database
+    writer (tests); ``solve_fn`` must be picklable (a module-level function)."""
+    settings = settings or get_settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        if load_surrogate:
+            app.state.models.load_fitted()
+        app.state.jobs.start()
+        try:
+            yield
+        finally:
+            app.state.jobs.shutdown()
+
+    app = FastAPI(title="Balloon actuator design service", version=health.VERSION,
+                  description=DESCRIPTION, lifespan=lifespan)
+    app.state.settings = settings
+    app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir)
+    app.state.jobs = JobManager(
+        solve_fn or _default_solve, write_fn or ResultWriter(settings.db_path),
+        workers=settings.workers, queue_size=settings.queue_size,
+        time_limit_s=settings.job_time_limit_s, retry_after_s=settings.retry_after_s,
+        history=settings.job_history)
+
+    install_error_handlers(app)
+    for module in (health, materials, predict, inverse, curves, jobs):
+        app.include_router(module.router)
+    # Calibration (POST /v1/calibrate, GET /v1/effects) is included here:
+    # app.include_router(calibration.router)
+
+    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
+    if settings.cors_origins:
+        app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins,
+                           allow_methods=["GET", "POST", "DELETE"],
+                           allow_headers=["Content-Type", "X-API-Key"],
+                           expose_headers=["Location", "Retry-After"])
+    return app

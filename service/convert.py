@@ -1,0 +1,51 @@
+"""Schemas -> domain objects, with errors located in the request."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from service.errors import located
+from service.schemas import DesignIn, SolveSettingsIn
+from solver.design import Design, design_from_dict
+from solver.errors import InputError
+from solver.settings import SolverSettings, settings_from_dict
+
+
+def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body", "design")
+              ) -> Design:
+    data = design.as_input() if isinstance(design, DesignIn) else design
+    try:
+        return design_from_dict(data)
+    except InputError as exc:
+        raise located(exc, loc) from None
+
+
+def to_settings(settings: SolveSettingsIn, loc: tuple[str, ...] = ("body", "settings")
+                ) -> SolverSettings:
+    try:
+        return settings_from_dict(settings.model_dump())
+    except InputError as exc:
+        raise located(exc, loc) from None
+
+
+def finite_list(values: Any) -> list[float | None]:
+    """Floats for JSON: NaN and infinity become null."""
+    return [v if math.isfinite(v) else None for v in np.asarray(values, float).ravel().tolist()]
+
+
+def jsonable(value: Any) -> Any:
+    """Plain JSON from nested dicts/lists/arrays; non-finite floats become null."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

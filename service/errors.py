@@ -1,0 +1,196 @@
+"""Errors of the HTTP layer, and the ONE place where every error becomes an HTTP answer.
+
+Every error answer is ``application/problem+json`` (RFC 9457)::
+
+    {"type": "urn:balloon:problem:invalid-input", "title": "Invalid input", "status": 422,
+     "detail": "...", "instance": "/v1/predict",
+     "errors": [{"loc": ["body", "design", "t_mm"], "field": "design.t_mm",
+                 "message": "...", "allowed": "0.05 <= t_mm <= 5"}]}
+
+Mapping (domain class -> status):
+
+    InputError, OutOfFamilyError, request validation   422
+    NotFoundError (record, job, model, material)        404
+    AuthError                                           401 (no key) / 403 (wrong or disabled)
+    ConflictError                                       409
+    PayloadTooLargeError                                413
+    QueueFullError, UnavailableError                    503 with Retry-After
+    SolverError, any other BalloonError                 422
+    anything unexpected                                 500, logged; no stack trace is sent
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from solver.errors import BalloonError, InputError, NotFoundError, SolverError
+
+log = logging.getLogger("balloon.service")
+
+PROBLEM_JSON = "application/problem+json"
+
+
+class ServiceError(BalloonError):
+    """Base of the HTTP layer's own errors."""
+
+
+class AuthError(ServiceError):
+    """The API key is missing (``status=401``), wrong or not configured (403)."""
+
+    def __init__(self, message: str, status: int = 401) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+class ConflictError(ServiceError):
+    """The request conflicts with the current state (a finished job, a stored design)."""
+
+    def __init__(self, message: str, **extra: Any) -> None:
+        super().__init__(message)
+        self.extra = extra
+
+
+class PayloadTooLargeError(ServiceError):
+    """The request body exceeds ``max_body_bytes``."""
+
+
+class UnavailableError(ServiceError):
+    """A resource the request needs is not available now (no surrogate, busy database)."""
+
+    def __init__(self, message: str, retry_after_s: int | None = None) -> None:
+        super().__init__(message)
+        self.retry_after_s = retry_after_s
+
+
+class QueueFullError(UnavailableError):
+    """The solve queue is full; retry after ``retry_after_s`` seconds."""
+
+
+class FieldError(InputError):
+    """An InputError located in the request: ``loc`` is the full path, e.g.
+    ``("body", "design", "t_mm")``."""
+
+    def __init__(self, loc: tuple[str | int, ...], message: str,
+                 allowed: str | None = None) -> None:
+        super().__init__(".".join(str(p) for p in loc[1:]) or str(loc[0]), message, allowed)
+        self.loc = loc
+
+
+def located(exc: InputError, prefix: tuple[str | int, ...]) -> FieldError:
+    """Attach a request location to a domain InputError (``exc.field`` may be dotted)."""
+    parts: tuple[str | int, ...] = tuple(exc.field.split(".")) if exc.field else ()
+    return FieldError(prefix + parts, exc.detail, exc.allowed)
+
+
+@dataclass
+class Problem:
+    """An RFC 9457 problem document."""
+
+    status: int
+    title: str
+    detail: str
+    kind: str
+    errors: list[dict[str, Any]] = field(default_factory=list)
+    headers: dict[str, str] = field(default_factory=dict)
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def response(self, request: Request) -> JSONResponse:
+        body: dict[str, Any] = {"type": f"urn:balloon:problem:{self.kind}", "title": self.title,
+                                "status": self.status, "detail": self.detail,
+                                "instance": request.url.path}
+        if self.errors:
+            body["errors"] = self.errors
+        body.update(self.extra)
+        return JSONResponse(body, status_code=self.status, headers=self.headers,
+                            media_type=PROBLEM_JSON)
+
+
+def problem_for(exc: BaseException) -> Problem:
+    """The problem document of a domain or service error (the mapping table above)."""
+    if isinstance(exc, QueueFullError | UnavailableError):
+        headers = {"Retry-After": str(exc.retry_after_s)} if exc.retry_after_s else {}
+        kind = "queue-full" if isinstance(exc, QueueFullError) else "unavailable"
+        return Problem(503, "Service unavailable", str(exc), kind, headers=headers)
+    if isinstance(exc, AuthError):
+        headers = {"WWW-Authenticate": 'APIKey header="X-API-Key"'} if exc.status == 401 else {}
+        return Problem(exc.status, "Not authorised", str(exc), "unauthorised", headers=headers)
+    if isinstance(exc, ConflictError):
+        return Problem(409, "Conflict", str(exc), "conflict", extra=exc.extra)
+    if isinstance(exc, PayloadTooLargeError):
+        return Problem(413, "Request body too large", str(exc), "payload-too-large")
+    if isinstance(exc, InputError):
+        loc: list[str | int] = list(exc.loc) if isinstance(exc, FieldError) else [exc.field]
+        error = {"loc": loc, "field": exc.field, "message": exc.detail}
+        if exc.allowed:
+            error["allowed"] = exc.allowed
+        return Problem(422, "Invalid input", str(exc), "invalid-input", errors=[error])
+    if isinstance(exc, NotFoundError):
+        return Problem(404, "Not found", str(exc), "not-found")
+    if isinstance(exc, SolverError):
+        return Problem(422, "Solver error", str(exc), "solver-error")
+    if isinstance(exc, BalloonError):  # e.g. the surrogate's OutOfFamilyError
+        return Problem(422, "Cannot answer for this input", str(exc),
+                       _kebab(type(exc).__name__))
+    return Problem(500, "Internal server error",
+                   "an unexpected error occurred; it has been logged", "internal")
+
+
+def _kebab(name: str) -> str:
+    out = "".join("-" + c.lower() if c.isupper() else c for c in name).lstrip("-")
+    return out.removesuffix("-error") or "error"
+
+
+# Field name -> allowed range in words, filled by service.schemas from the Field limits.
+FIELD_RANGES: dict[str, str] = {}
+
+
+def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
+    out = []
+    for err in exc.errors():
+        loc = [p for p in err.get("loc", ()) if isinstance(p, str | int)]
+        names = [p for p in loc[1:] if isinstance(p, str)]
+        item: dict[str, Any] = {"loc": loc, "field": ".".join(str(p) for p in loc[1:]),
+                                "message": str(err.get("msg", "invalid value"))}
+        allowed = FIELD_RANGES.get(names[-1]) if names else None
+        if allowed:
+            item["allowed"] = allowed
+        out.append(item)
+    return out
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    """Route every error through ``problem_for`` (validation errors get one entry per field)."""
+
+    async def on_validation(request: Request, exc: RequestValidationError) -> JSONResponse:
+        errors = _validation_errors(exc)
+        detail = "; ".join(
+            f"{e['field'] or e['loc'][0]}: {e['message']}"
+            + (f" (allowed: {e['allowed']})" if "allowed" in e else "") for e in errors)
+        return Problem(422, "Invalid input", detail, "invalid-input",
+                       errors=errors).response(request)
+
+    async def on_http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        titles = {404: "Not found", 405: "Method not allowed", 406: "Not acceptable"}
+        problem = Problem(exc.status_code, titles.get(exc.status_code, "HTTP error"),
+                          str(exc.detail), f"http-{exc.status_code}",
+                          headers=dict(exc.headers or {}))
+        return problem.response(request)
+
+    async def on_domain(request: Request, exc: Exception) -> JSONResponse:
+        return problem_for(exc).response(request)
+
+    async def on_unexpected(request: Request, exc: Exception) -> JSONResponse:
+        log.exception("unexpected error on %s %s", request.method, request.url.path)
+        return problem_for(exc).response(request)
+
+    app.add_exception_handler(RequestValidationError, on_validation)  # type: ignore[arg-type]
+    app.add_exception_handler(StarletteHTTPException, on_http)  # type: ignore[arg-type]
+    app.add_exception_handler(BalloonError, on_domain)
+    app.add_exception_handler(Exception, on_unexpected)

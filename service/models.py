@@ -1,0 +1,64 @@
+"""Which surrogate answers a request: the ``model`` field of /v1/predict and /v1/inverse.
+
+    "fitted"    the surrogate loaded once at start-up from ``surrogate_path``
+    "paper"     the paper's published constants (``surrogate.paper_surrogate()``)
+    any other   a saved calibrated model in ``models_dir``, loaded through
+                ``surrogate.calibration.load_model(name, models_dir)`` (the one hook)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from service.errors import UnavailableError
+from solver.errors import NotFoundError
+
+
+@dataclass
+class ModelRegistry:
+    """The loaded surrogate plus lazily built named ones."""
+
+    surrogate_path: Path
+    models_dir: Path
+    fitted: Any = None
+    fitted_error: str | None = None
+    _paper: Any = field(default=None, repr=False)
+
+    def load_fitted(self) -> None:
+        """Load the fitted surrogate (at start-up); a failure is kept, not raised."""
+        try:
+            from surrogate import load_surrogate
+
+            self.fitted = load_surrogate(self.surrogate_path)
+            self.fitted_error = None
+        except Exception as exc:  # noqa: BLE001 - reported by /v1/health and on use
+            self.fitted = None
+            self.fitted_error = f"{type(exc).__name__}: {exc}"
+
+    def get(self, name: str) -> Any:
+        if name == "fitted":
+            if self.fitted is None:
+                raise UnavailableError(
+                    f"no fitted surrogate is loaded ({self.fitted_error}); use "
+                    f'model "paper", or set BALLOON_SURROGATE_PATH and restart')
+            return self.fitted
+        if name == "paper":
+            if self._paper is None:
+                from surrogate import paper_surrogate
+
+                self._paper = paper_surrogate()
+            return self._paper
+        return load_calibrated(name, self.models_dir)
+
+
+def load_calibrated(name: str, models_dir: Path) -> Any:
+    """A saved calibrated model by name; NotFoundError when there is none."""
+    try:
+        from surrogate.calibration import load_model
+    except ImportError:
+        load_model = None
+    if load_model is None:
+        raise NotFoundError(f"no model {name!r}: known models are \"fitted\" and \"paper\"")
+    return load_model(name, models_dir)

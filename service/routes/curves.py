@@ -1,0 +1,70 @@
+"""GET /v1/curves (filtered, paginated) and GET /v1/curves/{id}: the stored FE records."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import numpy as np
+from fastapi import APIRouter, Path, Query
+
+from service.convert import jsonable
+from service.deps import SettingsDep
+from service.schemas import CurveDetail, CurvePage, CurvesQuery, CurveSummary
+from service.store_access import open_store
+
+router = APIRouter(prefix="/v1", tags=["curves"])
+
+KEY = Path(pattern=r"^[0-9a-f]{1,64}$", description="the record key (hex)",
+           examples=["0123456789abcdef0123456789abcdef"])
+TOL_MM = 1e-6
+
+
+def _matches(record: Any, query: CurvesQuery) -> bool:
+    d = record.design
+    for name in ("L_mm", "t_mm", "T_mm", "b_mm"):
+        want = getattr(query, name)
+        if want is not None and abs(getattr(d, name) - want) > TOL_MM:
+            return False
+    if query.body_material and d.body_material.id != query.body_material:
+        return False
+    if query.membrane_material and d.membrane_material.id != query.membrane_material:
+        return False
+    return query.status is None or record.curve.status == query.status
+
+
+def _peak(values: Any) -> float | None:
+    a = np.asarray(values, float)
+    a = a[np.isfinite(a)]
+    return float(a.max()) if a.size else None
+
+
+def summary(record: Any) -> CurveSummary:
+    d, s, c = record.design, record.settings, record.curve
+    return CurveSummary(id=record.key, L_mm=d.L_mm, t_mm=d.t_mm, T_mm=d.T_mm, b_mm=d.b_mm,
+                        h_mm=d.h_mm, body_material=d.body_material.id,
+                        membrane_material=d.membrane_material.id, mesh_level=s.mesh_level,
+                        element=s.element, status=c.status, n_points=len(c),
+                        max_pressure_pa=_peak(c.pressure_pa), max_angle_deg=_peak(c.angle_deg))
+
+
+@router.get("/curves", response_model=CurvePage, summary="List FE records (filtered, paged)")
+def list_curves(query: Annotated[CurvesQuery, Query()], settings: SettingsDep) -> CurvePage:
+    """Records ordered by (materials, L_mm, t_mm, key); filters are exact (to 1e-6 mm)."""
+    with open_store(settings.db_path) as db:
+        rows = [summary(r) for r in db.records() if _matches(r, query)]
+    rows.sort(key=lambda r: (r.body_material, r.membrane_material, r.L_mm, r.t_mm, r.id))
+    page = rows[query.offset:query.offset + query.limit]
+    end = query.offset + len(page)
+    return CurvePage(items=page, total=len(rows), offset=query.offset, limit=query.limit,
+                     next_offset=end if end < len(rows) else None)
+
+
+@router.get("/curves/{curve_id}", response_model=CurveDetail, summary="One FE record")
+def get_curve(curve_id: Annotated[str, KEY], settings: SettingsDep) -> CurveDetail:
+    """Design, settings, every per-step array of the curve (NaN as null), provenance."""
+    with open_store(settings.db_path) as db:
+        record = db.get(curve_id)
+    return CurveDetail(id=record.key, design=record.design.as_dict(),
+                       settings=record.settings.as_dict(),
+                       curve=jsonable(record.curve.as_dict()),
+                       provenance=jsonable(dict(record.provenance)))

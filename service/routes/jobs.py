@@ -1,0 +1,61 @@
+"""POST /v1/solve (202 + job), GET /v1/jobs/{id} (progress), DELETE /v1/jobs/{id} (cancel)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Path
+from fastapi.responses import JSONResponse
+
+from service.convert import to_design, to_settings
+from service.deps import ApiKeyDep, JobsDep, SettingsDep
+from service.errors import ConflictError
+from service.jobs import JobState
+from service.schemas import Job, SolveRequest
+from service.store_access import stored_key
+
+router = APIRouter(prefix="/v1", tags=["jobs"])
+
+JOB_ID = Path(pattern=r"^[0-9a-f]{32}$", description="the job id",
+              examples=["0123456789abcdef0123456789abcdef"])
+AUTH = {401: {"description": "no API key"}, 403: {"description": "wrong API key"}}
+
+
+def job_view(job: JobState) -> Job:
+    return Job(id=job.id, status=job.status, key=job.key, created_utc=job.created_utc,
+               started_utc=job.started_utc, finished_utc=job.finished_utc,
+               progress=job.progress, design=job.design.as_dict(),
+               settings=job.settings.as_dict(), curve_id=job.curve_id,
+               curve_status=job.curve_status, curve_reason=job.curve_reason, error=job.error)
+
+
+@router.post("/solve", status_code=202, response_model=Job, dependencies=[ApiKeyDep],
+             responses={**AUTH, 409: {"description": "already in the database"},
+                        503: {"description": "queue full (Retry-After)"}},
+             summary="Queue an FE solve of a design that is not in the database")
+def solve(request: SolveRequest, jobs: JobsDep, settings: SettingsDep) -> JSONResponse:
+    """Returns the job (202, ``Location: /v1/jobs/{id}``); poll it for progress. The
+    same design and settings while a job for them is active return that job."""
+    from solver.store import record_key
+
+    design = to_design(request.design)
+    solver_settings = to_settings(request.settings)
+    key = record_key(design, solver_settings)
+    if stored_key(settings.db_path, key):
+        raise ConflictError(f"this design and settings are already in the database as "
+                            f"curve {key}: GET /v1/curves/{key}", curve_id=key)
+    job = jobs.submit(design, solver_settings, key)
+    return JSONResponse(job_view(job).model_dump(), status_code=202,
+                        headers={"Location": f"/v1/jobs/{job.id}"})
+
+
+@router.get("/jobs/{job_id}", response_model=Job, summary="A job's status and progress")
+def get_job(job_id: Annotated[str, JOB_ID], jobs: JobsDep) -> Job:
+    return job_view(jobs.get(job_id))
+
+
+@router.delete("/jobs/{job_id}", response_model=Job, dependencies=[ApiKeyDep],
+               responses={**AUTH, 409: {"description": "the job already ended"}},
+               summary="Cancel a queued or running job")
+def cancel_job(job_id: Annotated[str, JOB_ID], jobs: JobsDep) -> Job:
+    return job_view(jobs.cancel(job_id))

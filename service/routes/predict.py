@@ -1,0 +1,65 @@
+"""POST /v1/predict (angles with a band) and GET /v1/predict/plot (the same as a PNG)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import numpy as np
+from fastapi import APIRouter, Query
+from fastapi.responses import Response
+
+from service.convert import finite_list, jsonable, to_design
+from service.deps import ModelsDep, SettingsDep
+from service.errors import FieldError
+from service.schemas import PlotQuery, PredictRequest, PredictResponse
+from service.schemas.predict import Validity
+
+router = APIRouter(prefix="/v1", tags=["predict"])
+
+PNG = {200: {"content": {"image/png": {}}, "description": "the plot, PNG"}}
+
+
+def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
+                 model: str) -> dict[str, Any]:
+    """Run the surrogate and convert its Prediction to the response's plain data."""
+    p = surrogate.predict(design, np.asarray(pressures_pa, float), level=level)
+    validity = p.validity
+    return {"model": model, "level": level, "design": design.as_dict(),
+            "pressure_pa": finite_list(p.pressure_pa), "angle_deg": finite_list(p.angle_deg),
+            "lower_deg": finite_list(p.lower_deg), "upper_deg": finite_list(p.upper_deg),
+            "validity": Validity(in_domain=bool(validity.get("in_domain", False)),
+                                 flags=list(validity.get("flags", [])),
+                                 messages=list(validity.get("messages", []))),
+            "provenance": jsonable(dict(p.provenance or {}))}
+
+
+@router.post("/predict", response_model=PredictResponse,
+             summary="Angle against pressure, with a prediction band and validity flags")
+def predict(request: PredictRequest, models: ModelsDep) -> PredictResponse:
+    """Angles (degrees) at the given pressures (Pa) from the chosen surrogate model."""
+    design = to_design(request.design)
+    surrogate = models.get(request.model)
+    return PredictResponse(**predict_dict(surrogate, design, request.pressures_pa,
+                                          request.level, request.model))
+
+
+@router.get("/predict/plot", response_class=Response, responses=PNG,
+            summary="PNG of the predicted curve, its band, nearby FE curves and measurements")
+def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
+                 settings: SettingsDep) -> Response:
+    from service.plotting import nearby_curves, plot_prediction
+
+    if len(query.measured_pressure_pa) != len(query.measured_angle_deg):
+        raise FieldError(("query", "measured_angle_deg"),
+                         f"{len(query.measured_angle_deg)} angles for "
+                         f"{len(query.measured_pressure_pa)} pressures",
+                         "as many measured_angle_deg as measured_pressure_pa")
+    design = to_design(query.model_dump(include={"L_mm", "t_mm", "T_mm", "b_mm", "h_mm",
+                                                 "body_material", "membrane_material"}),
+                       loc=("query",))
+    surrogate = models.get(query.model)
+    pressures = np.linspace(0.0, query.p_max_pa, 101)
+    prediction = predict_dict(surrogate, design, pressures, query.level, query.model)
+    fe = nearby_curves(settings.db_path, design, query.nearby, query.p_max_pa)
+    png = plot_prediction(prediction, fe, query.measured_pressure_pa, query.measured_angle_deg)
+    return Response(png, media_type="image/png")

@@ -1,0 +1,28 @@
+"""Request and response schemas of the HTTP API (one schema per use).
+
+The HTTP layer converts between these and the domain objects (``Design``,
+``SolverSettings``, the surrogate's ``Prediction``); limits live in ``Field(...)``
+and are registered in ``service.errors.FIELD_RANGES`` so that every validation
+error states the allowed range.
+"""
+
+from service.errors import FIELD_RANGES
+from service.schemas._ranges import field_ranges
+from service.schemas.common import DesignIn, MaterialIn, Schema, SolveSettingsIn
+from service.schemas.curves import CurveDetail, CurvePage, CurvesQuery, CurveSummary
+from service.schemas.health import Health
+from service.schemas.inverse import InverseRequest, InverseResponse
+from service.schemas.jobs import Job, SolveRequest
+from service.schemas.materials import Material, MaterialList
+from service.schemas.predict import PlotQuery, PredictRequest, PredictResponse
+
+REQUEST_MODELS = (DesignIn, MaterialIn, SolveSettingsIn, CurvesQuery, InverseRequest,
+                  SolveRequest, PlotQuery, PredictRequest)
+FIELD_RANGES.update(field_ranges(REQUEST_MODELS))
+
+__all__ = [
+    "REQUEST_MODELS", "CurveDetail", "CurvePage", "CurveSummary", "CurvesQuery", "DesignIn",
+    "Health", "InverseRequest", "InverseResponse", "Job", "Material", "MaterialIn",
+    "MaterialList", "PlotQuery", "PredictRequest", "PredictResponse", "Schema", "SolveRequest",
+    "SolveSettingsIn",
+]

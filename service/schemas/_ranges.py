@@ -1,0 +1,63 @@
+"""Read the numeric limits of request schemas, to state them in validation errors."""
+
+from __future__ import annotations
+
+import typing
+from collections.abc import Iterable
+from typing import Any
+
+import annotated_types as at
+from pydantic import BaseModel
+from pydantic.fields import FieldInfo
+
+
+def _bounds(metadata: Iterable[Any]) -> tuple[str | None, str | None, int | None]:
+    lo = hi = None
+    max_len = None
+    for m in metadata:
+        if isinstance(m, at.Ge):
+            lo = f"{m.ge:g} <= "
+        elif isinstance(m, at.Gt):
+            lo = f"{m.gt:g} < "
+        elif isinstance(m, at.Le):
+            hi = f" <= {m.le:g}"
+        elif isinstance(m, at.Lt):
+            hi = f" < {m.lt:g}"
+        elif isinstance(m, at.MaxLen):
+            max_len = m.max_length
+    return lo, hi, max_len
+
+
+def _item_metadata(annotation: Any) -> list[Any]:
+    """Constraints on the items of ``list[Annotated[float, Field(...)]]``."""
+    out: list[Any] = []
+    for arg in typing.get_args(annotation):
+        if typing.get_origin(arg) is typing.Annotated:
+            for extra in typing.get_args(arg)[1:]:
+                out.extend(extra.metadata if isinstance(extra, FieldInfo) else [extra])
+        else:
+            out.extend(_item_metadata(arg))
+    return out
+
+
+def field_ranges(models: Iterable[type[BaseModel]]) -> dict[str, str]:
+    """``{field name: "lo <= name <= hi"}`` over the models; a name must mean one range."""
+    ranges: dict[str, str] = {}
+    for model in models:
+        for name, info in model.model_fields.items():
+            lo, hi, max_len = _bounds(info.metadata)
+            ilo, ihi, _ = _bounds(_item_metadata(info.annotation))
+            parts = []
+            if lo or hi:
+                parts.append(f"{lo or ''}{name}{hi or ''}")
+            if ilo or ihi:
+                parts.append(f"each {ilo or ''}{name}{ihi or ''}")
+            if max_len is not None:
+                parts.append(f"at most {max_len} values")
+            if not parts:
+                continue
+            text = "; ".join(parts)
+            if ranges.get(name, text) != text:
+                raise ValueError(f"field {name!r} has two ranges: {ranges[name]} / {text}")
+            ranges[name] = text
+    return ranges

@@ -1,0 +1,85 @@
+"""Shared request parts: a design, an inline Ogden material, solver settings."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from solver.design import LIMITS_MM
+from solver.settings import MAX_MESH_LEVEL
+
+MATERIAL_ID = r"^[A-Za-z0-9_.\-]{1,64}$"
+
+
+class Schema(BaseModel):
+    """Base of every schema: unknown fields are refused, NaN and infinity too."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+def mm(name: str, description: str, default: float | None = None) -> object:
+    """A length field (mm) with the design limits of ``solver.design.LIMITS_MM``."""
+    lo, hi = LIMITS_MM[name]
+    return Field(default, ge=lo, le=hi, description=f"{description}, mm")
+
+
+class MaterialIn(Schema):
+    """A custom N-term Ogden material (mu in kPa), given inline instead of a preset id."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": "my_silicone", "mu_kpa": [1.2, 0.01], "alpha": [3.0, 13.0]}]})
+
+    id: str = Field("custom", pattern=MATERIAL_ID, description="a name for the material")
+    mu_kpa: list[Annotated[float, Field(ge=-1e6, le=1e6)]] = Field(
+        min_length=1, max_length=6, description="Ogden moduli mu_p, kPa")
+    alpha: list[Annotated[float, Field(ge=-50, le=50)]] = Field(
+        min_length=1, max_length=6, description="Ogden exponents alpha_p (dimensionless)")
+
+
+MaterialRef = Annotated[str, Field(pattern=MATERIAL_ID)] | MaterialIn
+
+
+class DesignIn(Schema):
+    """An actuator design; omitted fields take the paper's standard design (Table 3)."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
+         "membrane_material": "ecoflex_00_30"}]})
+
+    L_mm: float = mm("L_mm", "chamber length", 7.1)  # type: ignore[assignment]
+    t_mm: float = mm("t_mm", "membrane thickness", 0.5)  # type: ignore[assignment]
+    T_mm: float = mm("T_mm", "body thickness above the chamber", 1.0)  # type: ignore[assignment]
+    b_mm: float = mm("b_mm", "chamber width", 1.8)  # type: ignore[assignment]
+    h_mm: float = mm("h_mm", "chamber height", 0.15)  # type: ignore[assignment]
+    W_mm: float = mm("W_mm", "actuator width", 3.0)  # type: ignore[assignment]
+    body_length_mm: float | None = mm(  # type: ignore[assignment]
+        "body_length_mm", "body length (default max(12, L + 2))")
+    chamber_offset_mm: float | None = mm(  # type: ignore[assignment]
+        "chamber_offset_mm", "clamped end to chamber start (default: centred)")
+    body_material: MaterialRef = Field(
+        "pdms_1_10", description="body (layer A): a preset id (GET /v1/materials) or inline")
+    membrane_material: MaterialRef = Field(
+        "ecoflex_00_30", description="membrane (layer B): a preset id or inline")
+
+    def as_input(self) -> dict[str, object]:
+        """Plain data for ``solver.design.design_from_dict``."""
+        data = self.model_dump(exclude_none=True)
+        return data
+
+
+class SolveSettingsIn(Schema):
+    """The solver settings a client may choose; the rest keep ``SolverSettings``' defaults."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"mesh_level": 1, "element": "hex2", "max_angle_deg": 90}]})
+
+    mesh_level: int = Field(1, ge=0, le=MAX_MESH_LEVEL, description="0 = coarsest")
+    element: Literal["hex2", "hex1"] = "hex2"
+    control: Literal["volume", "pressure"] = "volume"
+    max_angle_deg: float = Field(90.0, ge=0.1, le=360.0, description="stop angle, degrees")
+    max_pressure_pa: float = Field(20000.0, ge=1.0, le=1e7, description="stop pressure, Pa")
+    max_volume_ul: float = Field(50.0, ge=1e-3, le=1e4, description="stop volume, ul")
+    tip: Literal["free", "spring", "blocked"] = "free"
+    spring_k_n_per_m: float = Field(0.0, ge=0.0, le=1e6,
+                                    description="tip spring stiffness (tip = spring), N/m")

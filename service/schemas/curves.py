@@ -1,0 +1,56 @@
+"""GET /v1/curves (filtered, paginated) and GET /v1/curves/{id}: the FE records."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, Field
+
+from service.schemas.common import MATERIAL_ID, Schema
+
+
+class CurvesQuery(Schema):
+    """Filters (exact values, compared to 1e-6 mm) and the page."""
+
+    L_mm: float | None = Field(None, ge=0.5, le=60.0, description="chamber length, mm")
+    t_mm: float | None = Field(None, ge=0.05, le=5.0, description="membrane thickness, mm")
+    T_mm: float | None = Field(None, ge=0.1, le=10.0, description="body thickness, mm")
+    b_mm: float | None = Field(None, ge=0.1, le=20.0, description="chamber width, mm")
+    body_material: str | None = Field(None, pattern=MATERIAL_ID)
+    membrane_material: str | None = Field(None, pattern=MATERIAL_ID)
+    status: Literal["complete", "stopped", "failed"] | None = None
+    offset: int = Field(0, ge=0, le=1_000_000, description="records to skip")
+    limit: int = Field(50, ge=1, le=500, description="records per page")
+
+
+class CurveSummary(BaseModel):
+    id: str
+    L_mm: float
+    t_mm: float
+    T_mm: float
+    b_mm: float
+    h_mm: float
+    body_material: str
+    membrane_material: str
+    mesh_level: int
+    element: str
+    status: str
+    n_points: int
+    max_pressure_pa: float | None
+    max_angle_deg: float | None
+
+
+class CurvePage(BaseModel):
+    items: list[CurveSummary]
+    total: int
+    offset: int
+    limit: int
+    next_offset: int | None = Field(description="offset of the next page, or null")
+
+
+class CurveDetail(BaseModel):
+    id: str
+    design: dict[str, Any]
+    settings: dict[str, Any]
+    curve: dict[str, Any] = Field(description="arrays per step; NaN is sent as null")
+    provenance: dict[str, Any]

@@ -1,0 +1,45 @@
+"""POST /v1/solve and /v1/jobs/{id}: FE solves run as jobs."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from service.schemas.common import DesignIn, Schema, SolveSettingsIn
+
+JobStatus = Literal["queued", "running", "finished", "failed", "cancelled", "timed_out"]
+
+
+class SolveRequest(Schema):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"design": {"L_mm": 9.1, "t_mm": 0.6},
+         "settings": {"mesh_level": 0, "element": "hex1", "max_angle_deg": 30}}]})
+
+    design: DesignIn = Field(default_factory=DesignIn)
+    settings: SolveSettingsIn = Field(default_factory=SolveSettingsIn)
+
+
+class Progress(BaseModel):
+    step: int = 0
+    pressure_pa: float | None = None
+    volume_ul: float | None = None
+    angle_deg: float | None = None
+    newton_iterations: int | None = None
+
+
+class Job(BaseModel):
+    id: str
+    status: JobStatus = Field(description="finished: the curve is stored (see curve_status)")
+    key: str = Field(description="the database key the result is stored under")
+    created_utc: str
+    started_utc: str | None = None
+    finished_utc: str | None = None
+    progress: Progress
+    design: dict[str, Any]
+    settings: dict[str, Any]
+    curve_id: str | None = Field(None, description="GET /v1/curves/{curve_id} when finished")
+    curve_status: str | None = Field(None, description="the curve's status: complete, "
+                                     "stopped or failed (with curve_reason)")
+    curve_reason: str | None = None
+    error: str | None = None

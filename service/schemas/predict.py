@@ -1,0 +1,66 @@
+"""POST /v1/predict and GET /v1/predict/plot: angle against pressure from a surrogate."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from service.schemas.common import MATERIAL_ID, DesignIn, Schema
+
+MAX_PRESSURE_PA = 20000.0
+Pressure = Annotated[float, Field(ge=0.0, le=MAX_PRESSURE_PA)]
+MODEL = Field("fitted", pattern=MATERIAL_ID,
+              description='"fitted" (the loaded surrogate), "paper", or a saved model name')
+LEVEL = Field(0.95, ge=0.5, le=0.999, description="prediction band's coverage probability")
+
+
+class PredictRequest(Schema):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "pressures_pa": [500, 1000, 1500, 2000],
+         "model": "fitted", "level": 0.95}]})
+
+    design: DesignIn = Field(default_factory=DesignIn)
+    pressures_pa: list[Pressure] = Field(min_length=1, max_length=1000,
+                                         description="cavity pressures, Pa")
+    model: str = MODEL
+    level: float = LEVEL
+
+
+class Validity(BaseModel):
+    in_domain: bool
+    flags: list[str] = []
+    messages: list[str] = []
+
+
+class PredictResponse(BaseModel):
+    model: str
+    level: float
+    design: dict[str, Any] = Field(description="the design as resolved (all lengths, mm)")
+    pressure_pa: list[float]
+    angle_deg: list[float]
+    lower_deg: list[float]
+    upper_deg: list[float]
+    validity: Validity
+    provenance: dict[str, Any]
+
+
+class PlotQuery(Schema):
+    """Query of GET /v1/predict/plot (a design with preset materials, and optional data)."""
+
+    L_mm: float = Field(7.1, ge=0.5, le=60.0, description="chamber length, mm")
+    t_mm: float = Field(0.5, ge=0.05, le=5.0, description="membrane thickness, mm")
+    T_mm: float = Field(1.0, ge=0.1, le=10.0, description="body thickness, mm")
+    b_mm: float = Field(1.8, ge=0.1, le=20.0, description="chamber width, mm")
+    h_mm: float = Field(0.15, ge=0.02, le=5.0, description="chamber height, mm")
+    body_material: str = Field("pdms_1_10", pattern=MATERIAL_ID)
+    membrane_material: str = Field("ecoflex_00_30", pattern=MATERIAL_ID)
+    model: str = MODEL
+    level: float = LEVEL
+    p_max_pa: float = Field(2000.0, gt=0.0, le=MAX_PRESSURE_PA,
+                            description="largest pressure plotted, Pa")
+    nearby: int = Field(3, ge=0, le=10, description="FE curves of the family to overlay")
+    measured_pressure_pa: list[Pressure] = Field(
+        [], max_length=200, description="measured points to overlay: pressures, Pa")
+    measured_angle_deg: list[Annotated[float, Field(ge=-360.0, le=360.0)]] = Field(
+        [], max_length=200, description="measured points to overlay: angles, degrees")

@@ -1,0 +1,76 @@
+"""The service's access to the curve database: many readers, one serialised writer.
+
+Readers open ``CurveStore(path, "r")`` per request (a reader never sees a
+half-written record, and keeps working while ``balloon precompute`` writes).
+Finished solve jobs are stored by ``ResultWriter``: one lock in this process, and
+the store's own single-writer lock across processes; while another process
+(a precompute job) holds the writer lock, the writer waits and retries.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from service.errors import UnavailableError
+from solver.errors import NotFoundError
+
+
+@contextmanager
+def open_store(path: Path) -> Iterator[Any]:
+    """Open the database read-only; 503 when it is missing or cannot be opened now."""
+    from solver.store import CurveStore
+
+    if not Path(path).is_file():
+        raise UnavailableError(f"no curve database at {path}: set BALLOON_DB_PATH or run "
+                               "`balloon precompute` to create one")
+    try:
+        store = CurveStore(path, mode="r")
+    except OSError as exc:
+        raise UnavailableError(f"the curve database cannot be opened now ({exc})",
+                               retry_after_s=5) from None
+    with store as db:
+        yield db
+
+
+def stored_key(path: Path, key: str) -> bool:
+    """Whether the database holds ``key`` (False when there is no database yet)."""
+    if not Path(path).is_file():
+        return False
+    with open_store(path) as db:
+        try:
+            db.get(key)
+        except NotFoundError:
+            return False
+        return True
+
+
+class ResultWriter:
+    """``writer(design, settings, curve) -> key``: store one finished solve."""
+
+    def __init__(self, path: Path, busy_wait_s: float = 600.0) -> None:
+        self.path = Path(path)
+        self.busy_wait_s = busy_wait_s
+        self._lock = threading.Lock()
+
+    def __call__(self, design: Any, settings: Any, curve: Any) -> str:
+        from solver.store import CurveStore
+        from solver.store.errors import StoreBusyError
+        from solver.store.record import make_record
+
+        record = make_record(design, settings, curve)
+        deadline = time.monotonic() + self.busy_wait_s
+        with self._lock:
+            while True:
+                try:
+                    with CurveStore(self.path, mode="a") as db:
+                        db.put(record)
+                    return record.key
+                except StoreBusyError:
+                    if time.monotonic() > deadline:
+                        raise
+                    time.sleep(1.0)
