@@ -18,6 +18,7 @@ from solver.errors import BalloonError, InputError, NotFoundError
 # Subcommands in the order `balloon --help` lists them.
 COMMAND_MODULES = (
     "service.commands.solve",
+    "service.commands.serve",
 )
 
 
