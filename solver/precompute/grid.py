@@ -1,0 +1,268 @@
+"""Grid files: which designs a precompute job solves (TOML; docs/database.md has examples).
+
+    name = "example"                       # optional, free text
+    description = "..."                    # optional, free text
+    pairs = [["pdms_1_10", "ecoflex_00_30"]]   # (body, membrane) material ids
+    L_mm = {start = 4.1, stop = 17.1, num = 14}  # a range: num evenly spaced values
+    t_mm = [0.5, 0.75, 1.0]                # or a list, or one number
+    T_mm = 1.0                             # parameters left out keep Design's defaults
+
+    [settings]                             # SolverSettings fields; defaults otherwise
+    mesh_level = 1
+
+    [materials.soft]                       # optional custom Ogden materials, usable in pairs
+    mu_kpa = [1.0]
+    alpha = [2.0]
+
+    [[sweep]]                              # optional: several sweeps, whose union is solved;
+    pairs = [["pdms_1_15", "ecoflex_00_30"]]   # each takes the top-level values as defaults
+    L_mm = [4.1, 11.1]
+
+Every sweep is the Cartesian product of its pairs and parameter values. Everything
+is checked before any solve: unknown keys, lengths out of range (negative ones
+included), unknown materials, empty lists or ranges, designs that do not fit and bad
+settings raise GridError naming the file, the line, the key and the allowed values.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from solver.design import LIMITS_MM, Design
+from solver.errors import InputError
+from solver.materials import MATERIALS, OgdenMaterial, make_material
+from solver.precompute.lines import key_lines, line_of
+from solver.settings import SolverSettings, settings_from_dict
+from solver.store.keys import canonical_number, record_key
+
+PARAMETERS = tuple(LIMITS_MM)
+SWEEP_KEYS = ("pairs", "name", *PARAMETERS)
+TOP_KEYS = ("description", "materials", "settings", "sweep", *SWEEP_KEYS)
+RANGE_KEYS = ("start", "stop", "num")
+MAX_POINTS = 100_000
+
+
+class GridError(InputError):
+    """A grid file is invalid; ``path`` and ``line`` say where."""
+
+    def __init__(self, path: str, line: int, field: str, message: str,
+                 allowed: str | None = None) -> None:
+        super().__init__(field, message, allowed)
+        self.path = path
+        self.line = line
+
+    def __str__(self) -> str:
+        text = f"{self.path}, line {self.line}: {self.field}: {self.detail}"
+        return text + (f" (allowed: {self.allowed})" if self.allowed else "")
+
+
+@dataclass(frozen=True)
+class GridPoint:
+    """One design to solve, with its record key."""
+
+    key: str
+    design: Design
+    settings: SolverSettings
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A parsed, validated grid: its source, settings and the distinct designs in order."""
+
+    source: str
+    text: str
+    settings: SolverSettings
+    points: tuple[GridPoint, ...]
+
+    @property
+    def sha256(self) -> str:
+        return hashlib.sha256(self.text.encode("utf-8")).hexdigest()
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+
+class _Reader:
+    """Validation with positions: ``fail(path, ...)`` raises GridError at ``path``'s line."""
+
+    def __init__(self, text: str, source: str) -> None:
+        self.text, self.source = text, source
+        self.lines = text.splitlines()
+        self.spans = key_lines(text)
+
+    def fail(self, path: tuple, field: str, message: str, allowed: str | None = None,
+             needle: str | None = None) -> GridError:
+        return GridError(self.source, line_of(self.lines, self.spans, path, needle), field,
+                         message, allowed)
+
+    def check_keys(self, table: dict, where: tuple, allowed: tuple[str, ...]) -> None:
+        for key in table:
+            if key not in allowed:
+                raise self.fail((*where, key), key, "unknown key", ", ".join(allowed))
+
+    def number(self, value: object, path: tuple, name: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.fail(path, name, f"{value!r} is not a number", _limits(name))
+        lo, hi = LIMITS_MM[name]
+        if not lo <= value <= hi:
+            raise self.fail(path, name, f"{value!r} mm is out of range", _limits(name),
+                            needle=repr(value))
+        return float(value)
+
+    def values(self, value: object, path: tuple, name: str) -> list[float]:
+        """A parameter's values: a number, a non-empty list, or {start, stop, num}."""
+        if isinstance(value, dict):
+            self.check_keys(value, path, RANGE_KEYS)
+            missing = [k for k in RANGE_KEYS if k not in value]
+            if missing:
+                raise self.fail(path, name, f"range lacks {', '.join(missing)}",
+                                "{start = ..., stop = ..., num = ...}")
+            num = value["num"]
+            if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+                raise self.fail(path, name, f"empty range: num = {num!r}",
+                                "an integer num >= 1")
+            start = self.number(value["start"], path, name)
+            stop = self.number(value["stop"], path, name)
+            if stop < start:
+                raise self.fail(path, name, f"empty range: stop {stop:g} < start {start:g}",
+                                "start <= stop")
+            if num == 1:
+                return [start]
+            step = (stop - start) / (num - 1)
+            return [canonical_number(start + i * step) for i in range(num)]
+        if isinstance(value, list):
+            if not value:
+                raise self.fail(path, name, "empty list", "one or more values")
+            return [self.number(v, path, name) for v in value]
+        return [self.number(value, path, name)]
+
+    def materials(self, table: object) -> dict[str, OgdenMaterial]:
+        known = dict(MATERIALS)
+        if table is None:
+            return known
+        if not isinstance(table, dict):
+            raise self.fail(("materials",), "materials", "must be a table of materials",
+                            "[materials.<id>] with mu_kpa = [...] and alpha = [...]")
+        for material_id, spec in table.items():
+            where = ("materials", material_id)
+            if not isinstance(spec, dict):
+                raise self.fail(where, material_id, "must be a table", "mu_kpa, alpha")
+            self.check_keys(spec, where, ("mu_kpa", "alpha"))
+            try:
+                known[material_id] = make_material(material_id, spec.get("mu_kpa", []),
+                                                   spec.get("alpha", []))
+            except (InputError, TypeError, ValueError) as exc:
+                field = getattr(exc, "field", "mu_kpa")
+                raise self.fail((*where, field), f"materials.{material_id}.{field}",
+                                getattr(exc, "detail", str(exc)),
+                                getattr(exc, "allowed", None)) from None
+        return known
+
+    def pairs(self, value: object, path: tuple,
+              known: dict[str, OgdenMaterial]) -> list[tuple[OgdenMaterial, OgdenMaterial]]:
+        allowed = ", ".join(sorted(known))
+        shape = '[["<body id>", "<membrane id>"], ...]'
+        if not isinstance(value, list) or not value:
+            raise self.fail(path, "pairs", "needs at least one [body, membrane] pair", shape)
+        out = []
+        for pair in value:
+            if (not isinstance(pair, list) or len(pair) != 2
+                    or not all(isinstance(p, str) for p in pair)):
+                raise self.fail(path, "pairs", f"{pair!r} is not a [body, membrane] pair",
+                                shape)
+            for material_id in pair:
+                if material_id not in known:
+                    raise self.fail(path, "pairs", f"unknown material {material_id!r}",
+                                    allowed, needle=f"{material_id}")
+            out.append((known[pair[0]], known[pair[1]]))
+        return out
+
+
+def _limits(name: str) -> str:
+    lo, hi = LIMITS_MM[name]
+    return f"{lo:g} <= {name} <= {hi:g} (mm)"
+
+
+def parse_grid(text: str, source: str = "<grid>") -> Grid:
+    """Parse and validate a grid text; GridError on the first problem found."""
+    reader = _Reader(text, source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise GridError(source, _toml_line(str(exc)), "toml", str(exc),
+                        "valid TOML (https://toml.io)") from None
+    reader.check_keys(data, (), TOP_KEYS)
+    known = reader.materials(data.get("materials"))
+    settings_table = data.get("settings", {})
+    if not isinstance(settings_table, dict):
+        raise reader.fail(("settings",), "settings", "must be a table", "[settings]")
+    try:
+        settings = settings_from_dict(settings_table)
+    except InputError as exc:
+        raise reader.fail(("settings", exc.field), f"settings.{exc.field}", exc.detail,
+                          exc.allowed) from None
+    sweeps = data.get("sweep", [{}])
+    if not isinstance(sweeps, list) or not sweeps:
+        raise reader.fail(("sweep",), "sweep", "must be one or more [[sweep]] tables",
+                          "[[sweep]]")
+    defaults = {k: v for k, v in data.items() if k in SWEEP_KEYS}
+    points: dict[str, GridPoint] = {}
+    for index, sweep in enumerate(sweeps):
+        where: tuple = ("sweep", index) if "sweep" in data else ()
+        reader.check_keys(sweep, where, SWEEP_KEYS)
+        for point in _expand(reader, where, {**defaults, **sweep}, sweep, known, settings):
+            points.setdefault(point.key, point)
+        if len(points) > MAX_POINTS:
+            raise reader.fail(where, "sweep", f"more than {MAX_POINTS} designs",
+                              f"at most {MAX_POINTS} designs per grid")
+    return Grid(source, text, settings, tuple(points.values()))
+
+
+def _expand(reader: _Reader, where: tuple, merged: dict, own: dict,
+            known: dict[str, OgdenMaterial], settings: SolverSettings) -> list[GridPoint]:
+    def path_of(key: str) -> tuple:
+        return (*where, key) if key in own else (key,)
+
+    if "pairs" not in merged:
+        raise reader.fail(where, "pairs", "no material pairs given",
+                          '[["pdms_1_10", "ecoflex_00_30"], ...]')
+    pairs = reader.pairs(merged["pairs"], path_of("pairs"), known)
+    names = [n for n in PARAMETERS if n in merged]
+    axes = [reader.values(merged[n], path_of(n), n) for n in names]
+    count = len(pairs) * math.prod(len(axis) for axis in axes)
+    if count > MAX_POINTS:
+        raise reader.fail(where, "sweep", f"{count} designs in one sweep",
+                          f"at most {MAX_POINTS} designs per grid")
+    out = []
+    for (body, membrane), combo in itertools.product(pairs, itertools.product(*axes)):
+        values = dict(zip(names, combo, strict=True))
+        try:
+            design = Design(body_material=body, membrane_material=membrane,
+                            **values).validated()  # type: ignore[arg-type]
+        except InputError as exc:
+            field = exc.field if exc.field in merged else (names[0] if names else "pairs")
+            raise reader.fail(path_of(field), exc.field,
+                              f"design {values} does not fit: {exc.detail}",
+                              exc.allowed) from None
+        out.append(GridPoint(record_key(design, settings), design, settings))
+    return out
+
+
+def _toml_line(message: str) -> int:
+    marker = "at line "
+    if marker in message:
+        digits = message.split(marker, 1)[1].split(",")[0].split(")")[0]
+        if digits.strip().isdigit():
+            return int(digits)
+    return 1
+
+
+def load_grid(path: str | Path) -> Grid:
+    """Read and validate a grid file; FileNotFoundError if it does not exist."""
+    path = Path(path)
+    return parse_grid(path.read_text(encoding="utf-8"), str(path))

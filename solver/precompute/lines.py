@@ -1,0 +1,86 @@
+"""Where a key sits in a TOML text (tomllib parses without positions).
+
+``key_lines(text)`` scans the text once and maps every key path to the span of lines
+(1-based, inclusive) of its assignment: ``("L_mm",)``, ``("settings", "mesh_level")``,
+``("sweep", 1, "pairs")`` (the second ``[[sweep]]``), ``("materials", "soft", "mu_kpa")``.
+Table headers map to their own line (``("sweep", 1)``). It understands comments,
+quoted strings and values spread over several lines; that is all a grid file needs.
+"""
+
+from __future__ import annotations
+
+import re
+
+HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\-]+)\s*\]\]?\s*$")
+ASSIGNMENT = re.compile(r"""^\s*([A-Za-z0-9_\-]+|"[^"]*"|'[^']*')\s*=""")
+
+Path_ = tuple[object, ...]
+
+
+def _code(line: str) -> str:
+    """The line without its comment and with string contents blanked (brackets in
+    strings do not count)."""
+    out, quote = [], ""
+    for ch in line:
+        if quote:
+            out.append(ch if ch == quote else " ")
+            if ch == quote:
+                quote = ""
+        elif ch in "\"'":
+            quote = ch
+            out.append(ch)
+        elif ch == "#":
+            break
+        else:
+            out.append(ch)
+    return "".join(out)
+
+
+def key_lines(text: str) -> dict[Path_, tuple[int, int]]:
+    spans: dict[Path_, tuple[int, int]] = {}
+    table: Path_ = ()
+    counts: dict[str, int] = {}
+    depth = 0
+    open_key: Path_ | None = None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        code = _code(raw)
+        if depth == 0:
+            header = HEADER.match(code)
+            if header:
+                name = header.group(2)
+                parts: list[object] = list(name.split("."))
+                if header.group(1) == "[[":
+                    counts[name] = counts.get(name, -1) + 1
+                    parts.append(counts[name])
+                table = tuple(parts)
+                spans[table] = (number, number)
+                continue
+            assignment = ASSIGNMENT.match(code)
+            if assignment:
+                open_key = (*table, assignment.group(1).strip("\"'"))
+                spans[open_key] = (number, number)
+                code = code[assignment.end():]
+        depth += code.count("[") + code.count("{") - code.count("]") - code.count("}")
+        depth = max(depth, 0)
+        if open_key is not None:
+            spans[open_key] = (spans[open_key][0], number)
+            if depth == 0:
+                open_key = None
+    return spans
+
+
+def line_of(text_lines: list[str], spans: dict[Path_, tuple[int, int]], path: Path_,
+            needle: str | None = None) -> int:
+    """The line of ``path`` (or of its nearest enclosing table); with ``needle``, the first
+    line of the key's span that contains it."""
+    probe = tuple(path)
+    while probe and probe not in spans:
+        probe = probe[:-1]
+    if not probe:
+        return 1
+    first, last = spans[probe]
+    if needle is not None:
+        for number in range(first, last + 1):
+            if needle in text_lines[number - 1]:
+                return number
+    return first

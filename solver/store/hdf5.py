@@ -1,0 +1,287 @@
+"""CurveStore: the HDF5 curve database with one writer and any number of readers.
+
+Publishing is copy-on-write. A put never touches the published file: the writer
+copies it to a hidden temporary file next to it (``.curves.h5.tmp-<pid>-<n>``),
+adds the records there, flushes and fsyncs it, and ``os.replace``s it over the
+published name (an atomic rename on POSIX), then fsyncs the directory. Hence
+
+- a reader sees either the previous or the next version, never a half-written
+  record, and needs no lock: a file it already has open stays valid (the old inode
+  lives on until it closes it); a reader re-opens the new version on its next call
+  (it compares the path's inode/mtime/size with those of the file it has open);
+- a writer killed at any moment (kill -9, power loss after the fsync) leaves the
+  last published version intact; the orphaned temporary file is removed the next
+  time a writer opens the database;
+- one writer at a time, enforced by an exclusive flock on ``<db>.lock``.
+
+The price: a put costs a copy of the whole file (measured in benchmarks/RESULTS.md);
+``put_many`` publishes several records for one copy.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import shutil
+import threading
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+import h5py
+
+from solver.curve import STATUSES
+from solver.design import LIMITS_MM
+from solver.errors import InputError, NotFoundError
+from solver.settings import SolverSettings
+from solver.store import schema
+from solver.store.locking import WriterLock, lock_path
+from solver.store.record import Record, utc_now
+
+MODES = ("r", "a")
+QUERY_FIELDS = (*LIMITS_MM, "body_material", "membrane_material", "status",
+                *SolverSettings.__dataclass_fields__)
+_counter = itertools.count()
+# HDF5 1.8 object format: compact link storage in small groups (about half the size of the
+# 1.6 format here) and readable by every HDF5 release since 2008.
+LIBVER = ("v108", "v108")
+
+
+def _fsync_path(path: Path, directory: bool = False) -> None:
+    fd = os.open(path, os.O_RDONLY | (os.O_DIRECTORY if directory else 0))
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _matches(value: object, wanted: object) -> bool:
+    if isinstance(wanted, (int, float)) and not isinstance(wanted, bool):
+        return isinstance(value, (int, float)) and math.isclose(
+            float(value), float(wanted), rel_tol=1e-9, abs_tol=1e-12)
+    return value == wanted
+
+
+class CurveStore:
+    """``CurveStore(path, mode="r")`` reads; ``mode="a"`` writes (creating the file).
+
+    Readers need the file to exist (NotFoundError otherwise); a newer schema raises
+    SchemaVersionError; a second writer raises StoreBusyError. Use as a context
+    manager, or call ``close()``. Safe to share between threads.
+    """
+
+    def __init__(self, path: str | os.PathLike, mode: str = "r") -> None:
+        if mode not in MODES:
+            raise InputError("mode", f"got {mode!r}", "r (read) | a (write, create if missing)")
+        self.path = Path(path)
+        self.mode = mode
+        self._h5: h5py.File | None = None
+        self._stamp: tuple[int, ...] | None = None
+        self._mutex = threading.RLock()
+        self._lock: WriterLock | None = None
+        if mode == "a":
+            self._lock = WriterLock(lock_path(self.path))
+            self._lock.acquire()
+        try:
+            if mode == "a":
+                self._remove_orphans()
+                if not self.path.exists():
+                    self._publish(lambda f: None, create=True)
+            elif not self.path.is_file():
+                raise NotFoundError(f"no curve database at {self.path}; create one with "
+                                    f"`balloon precompute GRID.toml --db {self.path}`")
+            self._file()
+        except BaseException:
+            self.close()
+            raise
+
+    # -- lifecycle -------------------------------------------------------------------------
+    def __enter__(self) -> CurveStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        with self._mutex:
+            if self._h5 is not None:
+                self._h5.close()
+                self._h5 = None
+            if self._lock is not None:
+                self._lock.release()
+                self._lock = None
+
+    def __repr__(self) -> str:
+        return f"CurveStore({str(self.path)!r}, mode={self.mode!r})"
+
+    # -- reading ---------------------------------------------------------------------------
+    def _file(self) -> h5py.File:
+        """The latest published version, re-opened when the path points to a new file."""
+        try:
+            st = os.stat(self.path)
+        except FileNotFoundError:
+            raise NotFoundError(f"curve database {self.path} has disappeared") from None
+        stamp = (st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size)
+        if self._h5 is None or stamp != self._stamp:
+            if self._h5 is not None:
+                self._h5.close()
+                self._h5 = None
+            try:
+                f = h5py.File(self.path, "r")
+            except OSError as exc:
+                raise schema.NotACurveStoreError(
+                    "db", f"{self.path} is not a readable HDF5 file ({exc})",
+                    "a file written by balloon precompute") from None
+            try:
+                schema.check_schema(f, self.path)
+            except BaseException:
+                f.close()
+                raise
+            self._h5, self._stamp = f, stamp
+        return self._h5
+
+    def _records_group(self) -> h5py.Group:
+        return self._file()[schema.RECORDS]
+
+    @property
+    def metadata(self) -> dict[str, object]:
+        """File attributes: format, schema_version, created_utc, updated_utc, n_records,
+        and what writers added (generator_command, runs, ...)."""
+        with self._mutex:
+            return schema.read_attrs(self._file())
+
+    def keys(self) -> list[str]:
+        with self._mutex:
+            return sorted(self._records_group().keys())
+
+    def __contains__(self, key: object) -> bool:
+        with self._mutex:
+            return isinstance(key, str) and key in self._records_group()
+
+    def __len__(self) -> int:
+        with self._mutex:
+            return len(self._records_group())
+
+    def get(self, key: str) -> Record:
+        """The record with this key; NotFoundError when absent."""
+        with self._mutex:
+            group = self._records_group()
+            if key not in group:
+                raise NotFoundError(f"no record {key!r} in {self.path}; `balloon db ls "
+                                    f"{self.path}` lists the keys")
+            return schema.read_record(group[key])
+
+    def statuses(self) -> dict[str, str]:
+        """key -> curve status for every record, without loading any curve."""
+        with self._mutex:
+            group = self._records_group()
+            return {k: str(schema.plain(group[k].attrs["status"])) for k in sorted(group)}
+
+    def summaries(self) -> list[dict[str, object]]:
+        """Per record: key, status, reason, design (flat, material ids), settings, n_steps,
+        provenance -- without loading the curves."""
+        with self._mutex:
+            group = self._records_group()
+            return [schema.read_summary(group[k]) for k in sorted(group)]
+
+    def records(self, status: str | None = None) -> Iterator[Record]:
+        """Every record (in key order), optionally only those with ``status``."""
+        if status is not None and status not in STATUSES:
+            raise InputError("status", f"got {status!r}", " | ".join(STATUSES))
+        for key, found in self.statuses().items():
+            if status is None or found == status:
+                try:
+                    yield self.get(key)
+                except NotFoundError:
+                    continue  # only if a record vanished between two published versions
+
+    def query(self, **filters: object) -> list[Record]:
+        """Records whose design, settings or status equal ``filters`` (numbers to 1e-9
+        relative), e.g. ``query(L_mm=7.1, body_material="pdms_1_10", status="complete")``."""
+        for name in filters:
+            if name not in QUERY_FIELDS:
+                raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
+        out = []
+        for summary in self.summaries():
+            flat = {**summary["settings"], **summary["design"],  # type: ignore[dict-item]
+                    "status": summary["status"]}
+            if all(_matches(flat.get(k), v) for k, v in filters.items()):
+                out.append(self.get(str(summary["key"])))
+        return out
+
+    # -- writing ---------------------------------------------------------------------------
+    def put(self, record: Record) -> None:
+        """Store (or replace) one record, atomically; writer only."""
+        self.put_many([record])
+
+    def put_many(self, records: Iterable[Record]) -> None:
+        """Store (or replace) several records in one atomic publish; writer only."""
+        batch = list(records)
+        for record in batch:
+            schema.validate_record(record)
+
+        def add(f: h5py.File) -> None:
+            group = f[schema.RECORDS]
+            for record in batch:
+                schema.write_record(group.create_group(record.key), record)
+
+        with self._mutex:
+            self._require_writer()
+            existing = self._records_group()
+            replaced = {r.key for r in batch if r.key in existing}
+            self._publish(add, drop=replaced)
+
+    def set_metadata(self, **items: object) -> None:
+        """Add or overwrite file attributes (str, numbers, or JSON-able lists and dicts)."""
+        reserved = {"format", "schema_version", "created_utc", "n_records"} & set(items)
+        if reserved:
+            raise InputError(sorted(reserved)[0], "is managed by the store", "other names")
+        with self._mutex:
+            self._require_writer()
+            self._publish(lambda f: schema.write_attrs(f, items))
+
+    def _require_writer(self) -> None:
+        if self.mode != "a" or self._lock is None:
+            raise InputError("mode", f"{self!r} is read-only (or closed)", "open with mode='a'")
+
+    def _tmp_path(self) -> Path:
+        return self.path.with_name(f".{self.path.name}.tmp-{os.getpid()}-{next(_counter)}")
+
+    def _remove_orphans(self) -> None:
+        """Temporary files left by a writer that was killed mid-put (we hold the lock)."""
+        for orphan in self.path.parent.glob(f".{self.path.name}.tmp-*"):
+            orphan.unlink(missing_ok=True)
+
+    def _publish(self, change, create: bool = False, drop: set[str] = frozenset()) -> None:
+        """Copy the file, apply ``change(h5file)`` to the copy, fsync, rename over."""
+        tmp = self._tmp_path()
+        try:
+            if create:
+                with h5py.File(tmp, "w", libver=LIBVER) as f:
+                    schema.init_file(f, utc_now())
+            elif drop:
+                self._repack(tmp, drop)
+            else:
+                shutil.copyfile(self.path, tmp)
+            with h5py.File(tmp, "r+", libver=LIBVER) as f:
+                change(f)
+                f.attrs["updated_utc"] = utc_now()
+                f.attrs["n_records"] = len(f[schema.RECORDS])
+            _fsync_path(tmp)
+            os.replace(tmp, self.path)
+            _fsync_path(self.path.parent, directory=True)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+
+    def _repack(self, tmp: Path, drop: set[str]) -> None:
+        """A fresh copy without the records in ``drop`` (HDF5 does not reclaim the space of
+        deleted groups, so replaced records are dropped by rewriting the file)."""
+        src = self._file()
+        with h5py.File(tmp, "w", libver=LIBVER) as dst:
+            for name, value in src.attrs.items():
+                dst.attrs[name] = value
+            group = dst.create_group(schema.RECORDS)
+            for key in src[schema.RECORDS]:
+                if key not in drop:
+                    src.copy(src[schema.RECORDS][key], group, name=key)

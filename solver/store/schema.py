@@ -1,0 +1,197 @@
+"""The HDF5 layout of the curve database (docs/database.md describes it for other tools).
+
+    /                                 attrs: format, schema_version, created_utc,
+                                             updated_utc, n_records, user metadata
+    /records/<key>/                   one group per record; attrs: key, status, reason
+        design/                       attrs: L_mm t_mm T_mm b_mm h_mm W_mm body_length_mm
+                                             chamber_offset_mm (mm), body_material_id,
+                                             body_material_mu_kpa[], body_material_alpha[],
+                                             membrane_material_id, _mu_kpa[], _alpha[]
+        settings/                     attrs: every SolverSettings field
+        curve/                        datasets (n = converged steps incl. the undeformed
+                                      state): pressure_pa, volume_ul, time_s, angle_deg,
+                                      tip_displacement_mm (n x 2), max_membrane_stretch,
+                                      force_mn, newton_iterations (int64), residual_norm,
+                                      negative_eigenvalues (int64); attrs: status, reason,
+                                      pressure_maximum_index, n_dofs, wall_time_s
+            timings_s/                attrs: seconds per solver phase
+        provenance/                   attrs: package_version, git_commit, created_utc,
+                                             wall_time_s, status, reason, host
+
+Version history: 1 -- first layout.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from solver.curve import STATUSES, Curve
+from solver.design import LIMITS_MM, Design, design_from_dict
+from solver.errors import InputError
+from solver.settings import SolverSettings, settings_from_dict
+from solver.store.errors import NotACurveStoreError, SchemaVersionError
+from solver.store.keys import record_key
+from solver.store.record import Record
+
+FORMAT = "balloon-actuator-curves"
+SCHEMA_VERSION = 1
+RECORDS = "records"
+MATERIAL_ROLES = ("body_material", "membrane_material")
+INT_ARRAYS = ("newton_iterations", "negative_eigenvalues")
+JSON_SUFFIX = "_json"
+
+
+def plain(value: object) -> object:
+    """An HDF5 attribute value as plain Python (str, int, float, bool, list)."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8")
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def read_attrs(obj: h5py.HLObject) -> dict[str, object]:
+    """Attributes as plain values; names ending in ``_json`` are decoded JSON."""
+    out: dict[str, object] = {}
+    for name, value in obj.attrs.items():
+        value = plain(value)
+        if name.endswith(JSON_SUFFIX) and isinstance(value, str):
+            out[name[: -len(JSON_SUFFIX)]] = json.loads(value)
+        else:
+            out[name] = value
+    return out
+
+
+def write_attrs(obj: h5py.HLObject, items: dict[str, object]) -> None:
+    """Scalars and numeric lists as attributes; dicts and other lists as ``<name>_json``."""
+    for name, value in items.items():
+        if isinstance(value, (str, bool, int, float)):
+            obj.attrs[name] = value
+        elif (isinstance(value, (list, tuple)) and value
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+            obj.attrs[name] = np.asarray(value, dtype=float)
+        else:
+            obj.attrs[name + JSON_SUFFIX] = json.dumps(value, sort_keys=True)
+
+
+def check_schema(f: h5py.File, path: Path | str) -> None:
+    """Refuse files that are not curve databases or have a newer schema."""
+    if plain(f.attrs.get("format")) != FORMAT:
+        raise NotACurveStoreError("db", f"{path} is not a curve database (no format = "
+                                  f"{FORMAT!r} attribute)", "a file written by balloon precompute")
+    found = int(plain(f.attrs.get("schema_version", 0)))  # type: ignore[arg-type]
+    if found > SCHEMA_VERSION:
+        raise SchemaVersionError(
+            f"{path} has database schema version {found}, but this balloon-actuator reads "
+            f"versions up to {SCHEMA_VERSION}: upgrade the package (pip install -U "
+            f"balloon-actuator) or regenerate the file with `balloon precompute`")
+    if found < 1:
+        raise NotACurveStoreError("db", f"{path} has an invalid schema_version {found}",
+                                  f"1 <= schema_version <= {SCHEMA_VERSION}")
+
+
+def init_file(f: h5py.File, created_utc: str) -> None:
+    f.attrs["format"] = FORMAT
+    f.attrs["schema_version"] = SCHEMA_VERSION
+    f.attrs["created_utc"] = created_utc
+    f.attrs["updated_utc"] = created_utc
+    f.attrs["n_records"] = 0
+    f.require_group(RECORDS)
+
+
+def validate_record(record: Record) -> None:
+    """Raise InputError unless the record is consistent and storable."""
+    if not isinstance(record, Record):
+        raise InputError("record", f"expected a Record, got {type(record).__name__}")
+    expected = record_key(record.design, record.settings)
+    if record.key != expected:
+        raise InputError("key", f"record key {record.key!r} is not the key of its design and "
+                         f"settings", f"record_key(design, settings) = {expected}")
+    curve = record.curve
+    if curve.status not in STATUSES:
+        raise InputError("status", f"got {curve.status!r}", " | ".join(STATUSES))
+    n = len(curve)
+    for name in Curve.ARRAY_FIELDS:
+        shape = np.shape(getattr(curve, name))
+        wanted = (n, 2) if name == "tip_displacement_mm" else (n,)
+        if shape != wanted:
+            raise InputError(f"curve.{name}", f"shape {shape} does not match {n} steps",
+                             f"shape {wanted}")
+
+
+def write_record(group: h5py.Group, record: Record) -> None:
+    """Write ``record`` into the empty group ``group``."""
+    design = record.design.as_dict()
+    curve = record.curve
+    group.attrs["key"] = record.key
+    group.attrs["status"] = curve.status
+    group.attrs["reason"] = curve.reason
+    g = group.create_group("design")
+    for name in LIMITS_MM:
+        g.attrs[name] = float(design[name])  # type: ignore[arg-type]
+    for role in MATERIAL_ROLES:
+        material = getattr(record.design, role)
+        g.attrs[f"{role}_id"] = material.id
+        g.attrs[f"{role}_mu_kpa"] = np.asarray(material.mu_kpa, dtype=float)
+        g.attrs[f"{role}_alpha"] = np.asarray(material.alpha, dtype=float)
+    write_attrs(group.create_group("settings"), record.settings.as_dict())
+    g = group.create_group("curve")
+    for name in Curve.ARRAY_FIELDS:
+        dtype = np.int64 if name in INT_ARRAYS else np.float64
+        g.create_dataset(name, data=np.asarray(getattr(curve, name), dtype=dtype))
+    g.attrs["status"] = curve.status
+    g.attrs["reason"] = curve.reason
+    g.attrs["pressure_maximum_index"] = int(curve.pressure_maximum_index)
+    g.attrs["n_dofs"] = int(curve.n_dofs)
+    g.attrs["wall_time_s"] = float(curve.wall_time_s)
+    write_attrs(g.create_group("timings_s"), {k: float(v) for k, v in curve.timings_s.items()})
+    write_attrs(group.create_group("provenance"), dict(record.provenance))
+
+
+def read_design(group: h5py.Group) -> Design:
+    attrs = read_attrs(group["design"])
+    data: dict[str, object] = {name: attrs[name] for name in LIMITS_MM}
+    for role in MATERIAL_ROLES:
+        data[role] = {"id": attrs[f"{role}_id"], "mu_kpa": attrs[f"{role}_mu_kpa"],
+                      "alpha": attrs[f"{role}_alpha"]}
+    return design_from_dict(data)
+
+
+def read_settings(group: h5py.Group) -> SolverSettings:
+    return settings_from_dict(read_attrs(group["settings"]))
+
+
+def read_curve(group: h5py.Group) -> Curve:
+    g = group["curve"]
+    arrays = {name: np.asarray(g[name][()]) for name in Curve.ARRAY_FIELDS}
+    attrs = read_attrs(g)
+    return Curve(**arrays, status=str(attrs["status"]), reason=str(attrs["reason"]),
+                 pressure_maximum_index=int(attrs["pressure_maximum_index"]),  # type: ignore
+                 n_dofs=int(attrs["n_dofs"]),  # type: ignore[arg-type]
+                 wall_time_s=float(attrs["wall_time_s"]),  # type: ignore[arg-type]
+                 timings_s={k: float(v) for k, v in read_attrs(g["timings_s"]).items()})  # type: ignore[arg-type]
+
+
+def read_record(group: h5py.Group) -> Record:
+    return Record(key=str(plain(group.attrs["key"])), design=read_design(group),
+                  settings=read_settings(group), curve=read_curve(group),
+                  provenance=read_attrs(group["provenance"]))
+
+
+def read_summary(group: h5py.Group) -> dict[str, object]:
+    """Key, status, reason, design, settings and step count without loading the curve."""
+    design = read_attrs(group["design"])
+    flat: dict[str, object] = {name: design[name] for name in LIMITS_MM}
+    for role in MATERIAL_ROLES:
+        flat[role] = design[f"{role}_id"]
+    return {"key": plain(group.attrs["key"]), "status": plain(group.attrs["status"]),
+            "reason": plain(group.attrs["reason"]), "design": flat,
+            "settings": read_attrs(group["settings"]),
+            "n_steps": int(group["curve/pressure_pa"].shape[0]),
+            "provenance": read_attrs(group["provenance"])}
