@@ -19,6 +19,8 @@ from solver.errors import BalloonError, InputError, NotFoundError
 COMMAND_MODULES = (
     "service.commands.solve",
     "service.commands.serve",
+    "service.commands.precompute",
+    "service.commands.db",
 )
 
 

@@ -1,0 +1,196 @@
+"""``balloon db ls|show|export``: look into a curve database.
+
+    balloon db ls curves.h5 [--status failed] [--where L_mm=7.1 ...] [--json]
+    balloon db show curves.h5 [KEY] [--json]      # no KEY: the file's metadata
+    balloon db export curves.h5 [KEY ...] --format csv|json [-o OUT] [--where ...]
+
+Keys may be abbreviated to any unique prefix. CSV is long format: one row per
+curve point, with the record's key, design and status on every row.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+from typing import Any
+
+CSV_DESIGN = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_material",
+              "membrane_material")
+CSV_CURVE = ("pressure_pa", "volume_ul", "time_s", "angle_deg", "tip_x_mm", "tip_z_mm",
+             "max_membrane_stretch", "force_mn", "newton_iterations", "residual_norm",
+             "negative_eigenvalues")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("db", help="list, show and export curve database records",
+                                   description=__doc__.split("\n\n")[0].strip("`"))
+    sub = parser.add_subparsers(title="db commands", metavar="ACTION", required=True)
+    ls = sub.add_parser("ls", help="list the records")
+    ls.add_argument("db", help="curve database (HDF5)")
+    ls.add_argument("--status", choices=("complete", "stopped", "failed"))
+    ls.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE",
+                    help="filter on design, settings or status fields, e.g. L_mm=7.1")
+    ls.add_argument("--json", action="store_true", help="JSON lines instead of a table")
+    ls.set_defaults(func=run_ls)
+    show = sub.add_parser("show", help="show one record, or the file's metadata")
+    show.add_argument("db", help="curve database (HDF5)")
+    show.add_argument("key", nargs="?", help="record key (a unique prefix is enough)")
+    show.add_argument("--json", action="store_true", help="the full record as JSON")
+    show.set_defaults(func=run_show)
+    export = sub.add_parser("export", help="export curves to CSV or JSON")
+    export.add_argument("db", help="curve database (HDF5)")
+    export.add_argument("keys", nargs="*", metavar="KEY", help="records (default: all)")
+    export.add_argument("--format", choices=("csv", "json"), default="csv")
+    export.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE")
+    export.add_argument("--status", choices=("complete", "stopped", "failed"))
+    export.add_argument("-o", "--output", default="-", help="output file (default stdout)")
+    export.set_defaults(func=run_export)
+
+
+def parse_where(items: list[str]) -> dict[str, object]:
+    from solver.errors import InputError
+
+    filters: dict[str, object] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or not name:
+            raise InputError("--where", f"got {item!r}", "FIELD=VALUE, e.g. L_mm=7.1")
+        try:
+            filters[name] = int(text) if text.lstrip("-").isdigit() else float(text)
+        except ValueError:
+            filters[name] = text
+    return filters
+
+
+def resolve(db: Any, prefix: str) -> str:
+    from solver.errors import InputError, NotFoundError
+
+    matches = [k for k in db.keys() if k.startswith(prefix)]
+    if not matches:
+        raise NotFoundError(f"no record with a key starting {prefix!r} in {db.path}")
+    if len(matches) > 1:
+        raise InputError("key", f"{prefix!r} matches {len(matches)} records",
+                         "a longer prefix")
+    return matches[0]
+
+
+def selected(db: Any, args: argparse.Namespace) -> list[Any]:
+    filters = parse_where(args.where)
+    if args.status:
+        filters["status"] = args.status
+    if getattr(args, "keys", None):
+        records = [db.get(resolve(db, k)) for k in args.keys]
+        if filters:
+            wanted = {r.key for r in db.query(**filters)}
+            records = [r for r in records if r.key in wanted]
+        return records
+    return db.query(**filters) if filters else list(db.records())
+
+
+def jsonable(value: Any) -> Any:
+    """NaN and infinities become null (JSON has no such numbers)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    return value
+
+
+def run_ls(args: argparse.Namespace) -> int:
+    from solver.store import CurveStore
+
+    with CurveStore(args.db) as db:
+        rows = db.summaries()
+        filters = parse_where(args.where)
+        if args.status:
+            filters["status"] = args.status
+        if filters:
+            wanted = {r.key for r in db.query(**filters)}
+            rows = [r for r in rows if r["key"] in wanted]
+    rows.sort(key=lambda r: (r["design"]["body_material"], r["design"]["membrane_material"],
+                             r["design"]["L_mm"], r["design"]["t_mm"], r["key"]))
+    if args.json:
+        for row in rows:
+            print(json.dumps(jsonable(row), sort_keys=True))
+        return 0
+    print(f"{'key':12}  {'status':8}  {'L_mm':>6}  {'t_mm':>5}  {'T_mm':>5}  "
+          f"{'body/membrane':28}  {'mesh':6}  {'steps':>5}  {'wall_s':>7}")
+    for row in rows:
+        d, s = row["design"], row["settings"]
+        print(f"{row['key'][:12]:12}  {row['status']:8}  {d['L_mm']:6.2f}  {d['t_mm']:5.2f}  "
+              f"{d['T_mm']:5.2f}  {d['body_material'] + '/' + d['membrane_material']:28}  "
+              f"{str(s['mesh_level']) + ' ' + s['element']:6}  {row['n_steps']:5d}  "
+              f"{float(row['provenance'].get('wall_time_s', 0.0)):7.1f}")
+    print(f"{len(rows)} records", file=sys.stderr)
+    return 0
+
+
+def run_show(args: argparse.Namespace) -> int:
+    from solver.store import CurveStore
+
+    with CurveStore(args.db) as db:
+        if args.key is None:
+            print(json.dumps(jsonable(db.metadata), indent=2, sort_keys=True))
+            return 0
+        record = db.get(resolve(db, args.key))
+    if args.json:
+        print(json.dumps(jsonable(record.as_dict()), indent=2))
+        return 0
+    c = record.curve
+    print(f"key         {record.key}")
+    print(f"status      {c.status}: {c.reason}")
+    for name, value in record.design.as_dict().items():
+        if isinstance(value, dict):
+            value = f"{value['id']} (Ogden mu_kpa={value['mu_kpa']}, alpha={value['alpha']})"
+        print(f"design      {name} = {value}")
+    print("settings    " + ", ".join(f"{k}={v}" for k, v in record.settings.as_dict().items()))
+    print("provenance  " + ", ".join(f"{k}={v}" for k, v in record.provenance.items()))
+    if len(c):
+        print(f"curve       {len(c)} points, {c.n_dofs} dofs; last: {c.pressure_pa[-1]:.1f} Pa, "
+              f"{c.volume_ul[-1]:.3f} ul, {c.angle_deg[-1]:.2f} deg")
+    else:
+        print("curve       no points")
+    return 0
+
+
+def curve_rows(record: Any) -> list[list[object]]:
+    c = record.curve
+    d = record.design
+    design = [d.L_mm, d.t_mm, d.T_mm, d.b_mm, d.h_mm, d.W_mm, d.body_material.id,
+              d.membrane_material.id]
+    rows = []
+    for i in range(len(c)):
+        rows.append([record.key, c.status, *design, c.pressure_pa[i], c.volume_ul[i],
+                     c.time_s[i], c.angle_deg[i], c.tip_displacement_mm[i, 0],
+                     c.tip_displacement_mm[i, 1], c.max_membrane_stretch[i], c.force_mn[i],
+                     int(c.newton_iterations[i]), c.residual_norm[i],
+                     int(c.negative_eigenvalues[i])])
+    return rows
+
+
+def run_export(args: argparse.Namespace) -> int:
+    from solver.store import CurveStore
+
+    with CurveStore(args.db) as db:
+        records = selected(db, args)
+    out = sys.stdout if args.output == "-" else open(args.output, "w", newline="",
+                                                     encoding="utf-8")
+    try:
+        if args.format == "json":
+            json.dump([jsonable(r.as_dict()) for r in records], out, indent=1)
+            out.write("\n")
+        else:
+            writer = csv.writer(out)
+            writer.writerow(["key", "status", *CSV_DESIGN, *CSV_CURVE])
+            for record in records:
+                writer.writerows(curve_rows(record))
+    finally:
+        if out is not sys.stdout:
+            out.close()
+    print(f"exported {len(records)} records", file=sys.stderr)
+    return 0

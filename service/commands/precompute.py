@@ -1,0 +1,74 @@
+"""``balloon precompute GRID.toml --db curves.h5``: solve every grid design missing from
+the database (process pool of ``--workers``, or a Dask cluster with ``--scheduler``).
+
+The grid is validated completely before any solve. Each finished solve is written at
+once; Ctrl-C or a killed job keeps every finished record, and the same command resumes.
+The exact command, the grid's text and the versions are recorded in the file's metadata.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "precompute", help="fill a curve database from a grid file",
+        description="Solve every design of GRID that the database does not hold yet "
+                    "(see docs/database.md for the grid format).")
+    parser.add_argument("grid", metavar="GRID.toml", help="grid file (TOML)")
+    parser.add_argument("--db", required=True, metavar="PATH",
+                        help="curve database (HDF5); created if missing")
+    parser.add_argument("--workers", type=int, default=1, metavar="N",
+                        help="local worker processes (default 1)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="run on a Dask cluster, e.g. tcp://host:8786 (extra 'cluster')")
+    parser.add_argument("--retry-failed", action="store_true",
+                        help="solve again the designs stored as failed")
+    parser.add_argument("--dry-run", action="store_true",
+                        help="validate the grid and report what would be solved")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run)
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The command that reproduces this run (recorded in the database)."""
+    words = ["balloon", "precompute", args.grid, "--db", args.db]
+    if args.scheduler:
+        words += ["--scheduler", args.scheduler]
+    else:
+        words += ["--workers", str(args.workers)]
+    if args.retry_failed:
+        words.append("--retry-failed")
+    return shlex.join(words)
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from solver.errors import InputError
+    from solver.precompute import load_grid, plan, precompute
+    from solver.store import CurveStore
+
+    if not 1 <= args.workers <= 256:
+        raise InputError("--workers", f"got {args.workers}", "1 <= N <= 256")
+    grid = load_grid(args.grid)
+    if args.dry_run:
+        statuses: dict[str, str] = {}
+        if Path(args.db).exists():
+            with CurveStore(args.db) as db:
+                statuses = db.statuses()
+        todo, summary = plan(grid.points, statuses, args.retry_failed)
+        print(f"{grid.source}: {len(grid)} designs; in {args.db}: {summary.skipped_done} "
+              f"done, {summary.skipped_failed} failed (skipped); would solve {len(todo)}")
+        return 0
+    summary = precompute(grid, args.db, workers=args.workers, scheduler=args.scheduler,
+                         retry_failed=args.retry_failed, progress=not args.no_progress,
+                         command=command_line(args))
+    for line in summary.lines():
+        print(line, file=sys.stderr)
+    if summary.interrupted:
+        return 130
+    return 1 if summary.errors else 0

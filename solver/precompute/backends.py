@@ -1,0 +1,80 @@
+"""Where the solves run: a local process pool or a Dask cluster, behind one interface.
+
+Both offer ``submit(fn, *args) -> future``, ``as_completed(futures)``, ``abort(futures)``
+and ``close()``; futures have ``result()``, ``done()`` and ``cancel()``. The job's loop
+is the same code for both. Results travel back to the parent, which alone writes the
+database.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+from collections.abc import Callable, Iterable, Iterator
+from concurrent import futures as cf
+from typing import Any
+
+
+def _ignore_sigint() -> None:
+    """Workers leave Ctrl-C to the parent, which stops them itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class PoolBackend:
+    """``workers`` spawned processes (spawn: no inherited HDF5 handles or threads)."""
+
+    def __init__(self, workers: int) -> None:
+        self.workers = workers
+        self._pool = cf.ProcessPoolExecutor(
+            max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+            initializer=_ignore_sigint)
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> cf.Future:
+        return self._pool.submit(fn, *args)
+
+    def as_completed(self, fs: Iterable[cf.Future]) -> Iterator[cf.Future]:
+        return cf.as_completed(list(fs))
+
+    def abort(self, fs: Iterable[cf.Future]) -> None:
+        """Cancel what has not started and stop the running solves now."""
+        for f in fs:
+            f.cancel()
+        processes = list(getattr(self._pool, "_processes", {}).values())
+        for p in processes:
+            p.terminate()
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def describe(self) -> str:
+        return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"
+
+
+class DaskBackend:
+    """A dask.distributed Client: to a scheduler ``address``, or a given client."""
+
+    def __init__(self, address: str | None = None, client: Any = None) -> None:
+        from distributed import Client  # the optional 'cluster' extra
+
+        self._own = client is None
+        self.client = client if client is not None else Client(address)
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> Any:
+        return self.client.submit(fn, *args, pure=False)
+
+    def as_completed(self, fs: Iterable[Any]) -> Iterator[Any]:
+        from distributed import as_completed
+
+        return iter(as_completed(list(fs)))
+
+    def abort(self, fs: Iterable[Any]) -> None:
+        self.client.cancel(list(fs))
+
+    def close(self) -> None:
+        if self._own:
+            self.client.close()
+
+    def describe(self) -> str:
+        workers = len(self.client.scheduler_info().get("workers", {}))
+        return f"Dask scheduler {self.client.scheduler.address} ({workers} workers)"

@@ -1,0 +1,209 @@
+"""The precompute job: solve every grid design missing from the database.
+
+    plan       grid points minus what the database already holds (complete or stopped
+               records; failed ones too unless ``retry_failed``)
+    submit     every missing design to the backend (process pool or Dask), in grid order
+    collect    as each solve finishes, the parent -- the database's only writer -- puts
+               its record at once (an atomic publish), so a crash loses at most the
+               solves in flight
+    summarise  counts, failures, designs per hour
+
+A solve that fails (a "failed" curve, or an exception in the solve function) is
+stored as a failed record with its reason and does not stop the job. A worker that
+dies (out of memory, killed) is counted under ``errors`` and stored as nothing: a
+rerun tries that design again. Ctrl-C stops the workers, stores what had already
+finished, and returns a summary with ``interrupted = True``.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from solver.curve import Curve
+from solver.design import Design
+from solver.precompute.grid import GridPoint
+from solver.settings import SolverSettings
+from solver.store import CurveStore, Record, failed_curve, make_record
+
+SolveFn = Callable[[Design, SolverSettings], Curve]
+
+
+def default_solve(design: Design, settings: SolverSettings) -> Curve:
+    """``solver.solve`` (imported in the worker, so the parent never loads the FE stack)."""
+    from solver import solve
+
+    return solve(design, settings)
+
+
+def solve_point(design: Design, settings: SolverSettings, solve_fn: SolveFn) -> Record:
+    """Run in a worker: solve one design and wrap the curve in a Record with provenance.
+    Exceptions of the solve become failed records; only the worker dying escapes."""
+    start = time.perf_counter()
+    try:
+        curve = solve_fn(design, settings)
+    except Exception as exc:  # noqa: BLE001 - any solve error is recorded, not raised
+        curve = failed_curve(f"{type(exc).__name__}: {exc}", time.perf_counter() - start)
+    return make_record(design, settings, curve, wall_time_s=time.perf_counter() - start)
+
+
+def describe(design: Design) -> str:
+    return (f"L={design.L_mm:g} t={design.t_mm:g} mm "
+            f"{design.body_material.id}/{design.membrane_material.id}")
+
+
+@dataclass
+class JobSummary:
+    """What a run did. Counts are designs; ``wall_time_s`` is the whole run, s."""
+
+    grid_total: int = 0
+    skipped_done: int = 0          # already complete or stopped in the database
+    skipped_failed: int = 0        # already failed, not retried (no --retry-failed)
+    to_solve: int = 0
+    complete: int = 0
+    stopped: int = 0
+    failed: int = 0                # stored as failed records
+    errors: int = 0                # worker died or result lost: nothing stored
+    interrupted: bool = False
+    wall_time_s: float = 0.0
+    backend: str = ""
+    failures: list[tuple[str, str, str]] = field(default_factory=list)  # key, design, reason
+
+    @property
+    def solved(self) -> int:
+        return self.complete + self.stopped + self.failed
+
+    @property
+    def not_run(self) -> int:
+        return self.to_solve - self.solved - self.errors
+
+    @property
+    def designs_per_hour(self) -> float:
+        return 3600.0 * self.solved / self.wall_time_s if self.wall_time_s > 0 else 0.0
+
+    def lines(self) -> list[str]:
+        out = [f"grid: {self.grid_total} designs; already in the database: "
+               f"{self.skipped_done} done, {self.skipped_failed} failed (skipped)",
+               f"solved {self.solved} of {self.to_solve} on {self.backend} in "
+               f"{self.wall_time_s:.1f} s ({self.designs_per_hour:.0f} designs/h): "
+               f"{self.complete} complete, {self.stopped} stopped, {self.failed} failed"]
+        if self.errors:
+            out.append(f"{self.errors} lost to worker errors (nothing stored; rerun to retry)")
+        if self.interrupted:
+            out.append(f"interrupted: {self.not_run} not run; rerun the same command to "
+                       f"continue (finished records are kept)")
+        for key, design, reason in self.failures[:20]:
+            out.append(f"  failed {key[:12]} {design}: {reason}")
+        if len(self.failures) > 20:
+            out.append(f"  ... and {len(self.failures) - 20} more (balloon db ls --status "
+                       f"failed)")
+        return out
+
+
+def plan(points: Sequence[GridPoint], statuses: dict[str, str],
+         retry_failed: bool = False) -> tuple[list[GridPoint], JobSummary]:
+    """The points still to solve, and a summary with the skip counts filled in."""
+    summary = JobSummary(grid_total=len(points))
+    todo = []
+    for point in points:
+        status = statuses.get(point.key)
+        if status in ("complete", "stopped"):
+            summary.skipped_done += 1
+        elif status == "failed" and not retry_failed:
+            summary.skipped_failed += 1
+        else:
+            todo.append(point)
+    summary.to_solve = len(todo)
+    return todo, summary
+
+
+def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
+            solve_fn: SolveFn | None = None, retry_failed: bool = False,
+            progress: bool = True) -> JobSummary:
+    """Solve the missing ``points`` on ``backend``, writing each record to ``db`` (opened
+    with mode "a") as soon as it arrives."""
+    from tqdm import tqdm
+
+    solve_fn = solve_fn or default_solve
+    todo, summary = plan(points, db.statuses(), retry_failed)
+    summary.backend = backend.describe()
+    start = time.perf_counter()
+    futures: dict[Any, GridPoint] = {}
+    stored: set[Any] = set()
+    bar = tqdm(total=len(todo), desc="precompute", unit="design", file=sys.stderr,
+               disable=not progress or not todo, dynamic_ncols=True)
+
+    def store(future: Any) -> None:
+        point = futures[future]
+        try:
+            record = future.result()
+        except Exception as exc:  # noqa: BLE001 - a worker died: keep going, store nothing
+            summary.errors += 1
+            summary.failures.append((point.key, describe(point.design),
+                                     f"worker error {type(exc).__name__}: {exc}"))
+        else:
+            db.put(record)
+            status = record.curve.status
+            setattr(summary, status, getattr(summary, status) + 1)
+            if status == "failed":
+                summary.failures.append((record.key, describe(record.design),
+                                         record.curve.reason))
+        stored.add(future)
+        bar.update(1)
+        bar.set_postfix(complete=summary.complete + summary.stopped, failed=summary.failed,
+                        refresh=False)
+
+    try:
+        for point in todo:
+            futures[backend.submit(solve_point, point.design, point.settings, solve_fn)] = point
+        for future in backend.as_completed(futures):
+            store(future)
+    except KeyboardInterrupt:
+        summary.interrupted = True
+        pending = [f for f in futures if f not in stored]
+        finished = [f for f in pending if f.done() and not f.cancelled()]
+        backend.abort([f for f in pending if f not in finished])
+        for future in finished:  # solves that ended before Ctrl-C: keep them
+            try:
+                store(future)
+            except KeyboardInterrupt:
+                break
+    finally:
+        bar.close()
+        summary.wall_time_s = time.perf_counter() - start
+    return summary
+
+
+def precompute(grid: Any, db_path: str, workers: int = 1, scheduler: str | None = None,
+               client: Any = None, solve_fn: SolveFn | None = None,
+               retry_failed: bool = False, progress: bool = True,
+               command: str | None = None) -> JobSummary:
+    """Open ``db_path`` as the writer, record this run in the file's metadata (command,
+    grid text and hash, versions), run the job, and record how it ended.
+
+    ``grid`` is a ``Grid`` (from ``load_grid``); the backend is a pool of ``workers``
+    processes, or Dask when ``scheduler`` (an address) or ``client`` is given.
+    """
+    from solver.precompute.backends import DaskBackend, PoolBackend
+    from solver.store.record import git_commit, package_version, utc_now
+
+    with CurveStore(db_path, mode="a") as db:
+        runs = list(db.metadata.get("runs", []))  # type: ignore[call-overload]
+        run = {"command": command or "", "grid_source": grid.source,
+               "grid_sha256": grid.sha256, "started_utc": utc_now(),
+               "package_version": package_version(), "git_commit": git_commit()}
+        db.set_metadata(generator_command=command or "", grid_toml=grid.text,
+                        runs=[*runs, run])
+        backend = (DaskBackend(scheduler, client) if scheduler or client is not None
+                   else PoolBackend(workers))
+        try:
+            summary = run_job(grid.points, db, backend, solve_fn, retry_failed, progress)
+        finally:
+            backend.close()
+        run.update(finished_utc=utc_now(), interrupted=summary.interrupted,
+                   solved=summary.solved, failed=summary.failed, errors=summary.errors)
+        db.set_metadata(runs=[*runs, run])
+    return summary
