@@ -1,0 +1,232 @@
+"""The HTTP API through TestClient: success and error paths of every endpoint.
+
+Expected numbers come from the fake surrogate (tests/service_fakes.py, the paper's
+Eq. 5-6 constants) or from the paper's Table 1 (materials).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from fastapi.testclient import TestClient
+from service_fakes import BrokenSurrogate, FakeSurrogate, assert_problem, fast_solve, settings_for
+
+from service.app import create_app
+
+DESIGN = {"L_mm": 7.1, "t_mm": 0.5}
+
+
+@pytest.fixture
+def client(tmp_path):
+    app = create_app(settings_for(tmp_path), solve_fn=fast_solve,
+                     write_fn=lambda d, s, c: "k" * 32, load_surrogate=False)
+    app.state.models.fitted = FakeSurrogate()
+    with TestClient(app, raise_server_exceptions=False) as c:
+        yield c
+
+
+# -- health and materials ---------------------------------------------------------------
+
+def test_health_reports_what_is_loaded(client):
+    body = client.get("/v1/health").json()
+    assert body["status"] == "ok"
+    assert body["surrogate"]["loaded"] and body["surrogate"]["name"] == "fake"
+    assert body["database"]["present"] is False
+    assert body["jobs"] == {"workers": 1, "running": 0, "queued": 0, "queue_size": 2}
+
+
+def test_health_without_surrogate_says_why(tmp_path):
+    with TestClient(create_app(settings_for(tmp_path))) as c:
+        surrogate = c.get("/v1/health").json()["surrogate"]
+    assert surrogate["loaded"] is False and surrogate["error"]
+
+
+def test_materials_lists_the_presets(client):
+    items = {m["id"]: m for m in client.get("/v1/materials").json()["items"]}
+    assert set(items) == {"pdms_1_10", "pdms_1_15", "ecoflex_00_30"}
+    # Table 1: mu0 = (1.241 * 3.034 + 7.879e-9 * 13.02) / 2 = 1.883 kPa for Ecoflex 00-30
+    assert items["ecoflex_00_30"]["mu0_kpa"] == pytest.approx(1.883, abs=1e-3)
+
+
+# -- predict ------------------------------------------------------------------------------
+
+def test_predict_returns_the_surrogates_angles_and_band(client):
+    r = client.post("/v1/predict", json={"design": DESIGN, "pressures_pa": [0, 1000, 2000]})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    tau = 731.2 * math.log10(7.179 * 0.5)  # the fake's Eq. 6 (log10 reading)
+    expected = [0.101 * 7.1 * math.expm1(p / tau) for p in (0, 1000, 2000)]
+    assert body["angle_deg"] == pytest.approx(expected)
+    assert body["lower_deg"] == pytest.approx([a - 1 for a in expected])
+    assert body["model"] == "fitted" and body["level"] == 0.95
+    assert body["design"]["body_length_mm"] == 12.0
+    assert body["validity"] == {"in_domain": True, "flags": [], "messages": []}
+
+
+def test_predict_passes_validity_flags(client):
+    r = client.post("/v1/predict", json={"design": DESIGN, "pressures_pa": [3000]})
+    assert r.json()["validity"]["flags"] == ["pressure_beyond_fe"]
+
+
+def test_predict_with_an_inline_custom_material(client):
+    design = {**DESIGN, "body_material": {"id": "x", "mu_kpa": [20.0], "alpha": [2.0]}}
+    r = client.post("/v1/predict", json={"design": design, "pressures_pa": [100]})
+    # the fake covers only pdms_1_10 bodies: a custom body is out of its family
+    body = assert_problem(r, 422)
+    assert body["type"] == "urn:balloon:problem:out-of-family"
+
+
+@pytest.mark.parametrize("payload, field, allowed", [
+    ({"design": {"t_mm": 7}, "pressures_pa": [1]}, "design.t_mm", "0.05 <= t_mm <= 5"),
+    ({"design": {"L_mm": 0}, "pressures_pa": [1]}, "design.L_mm", "0.5 <= L_mm <= 60"),
+    ({"pressures_pa": [1, -5]}, "pressures_pa.1", "each 0 <= pressures_pa <= 20000"),
+    ({"pressures_pa": []}, "pressures_pa", "at most 1000 values"),
+    ({"pressures_pa": [1], "level": 1.5}, "level", "0.5 <= level <= 0.999"),
+    ({"pressures_pa": [1], "colour": "red"}, "colour", None),
+    ({}, "pressures_pa", "each 0 <= pressures_pa <= 20000"),
+])
+def test_predict_refuses_bad_fields_naming_the_range(client, payload, field, allowed):
+    body = assert_problem(client.post("/v1/predict", json=payload), 422, field)
+    error = next(e for e in body["errors"] if e["field"] == field)
+    assert error["loc"][0] == "body"
+    if allowed:
+        assert allowed in error["allowed"]
+
+
+def test_predict_refuses_nan_and_malformed_json(client):
+    headers = {"content-type": "application/json"}
+    r = client.post("/v1/predict", content=b'{"pressures_pa": [NaN]}', headers=headers)
+    assert_problem(r, 422, "pressures_pa.0")
+    assert_problem(client.post("/v1/predict", content=b"{not json", headers=headers), 422)
+
+
+@pytest.mark.parametrize("design, field", [
+    ({"b_mm": 3.5}, "design.b_mm"),                       # chamber wider than the actuator
+    ({"body_material": "unobtainium"}, "design.body_material"),
+    ({"membrane_material": {"mu_kpa": [1.0], "alpha": [-2.0]}},
+     "design.membrane_material.mu_kpa"),                  # mu0 = 1 * -2 / 2 < 0
+    ({"chamber_offset_mm": 10.0}, "design.chamber_offset_mm"),  # 10 + 7.1 > 12 mm body
+])
+def test_predict_domain_errors_name_the_field(client, design, field):
+    r = client.post("/v1/predict", json={"design": design, "pressures_pa": [1]})
+    body = assert_problem(r, 422, field)
+    assert body["errors"][0]["loc"][:2] == ["body", "design"]
+
+
+def test_predict_model_choice(client):
+    r = client.post("/v1/predict", json={"pressures_pa": [1], "model": "nonesuch"})
+    assert "nonesuch" in assert_problem(r, 404)["detail"]
+    r = client.post("/v1/predict", json={"pressures_pa": [1], "model": "bad name!"})
+    assert_problem(r, 422, "model")
+
+
+def test_predict_without_a_fitted_surrogate_is_503(tmp_path):
+    app = create_app(settings_for(tmp_path), load_surrogate=False)
+    with TestClient(app) as c:
+        r = c.post("/v1/predict", json={"pressures_pa": [1]})
+    assert "paper" in assert_problem(r, 503)["detail"]
+
+
+def test_unexpected_errors_are_500_problems_without_internals(tmp_path):
+    app = create_app(settings_for(tmp_path), load_surrogate=False)
+    app.state.models.fitted = BrokenSurrogate()
+    with TestClient(app, raise_server_exceptions=False) as c:
+        r = c.post("/v1/predict", json={"pressures_pa": [1]})
+    body = assert_problem(r, 500)
+    assert "secret" not in r.text and body["type"].endswith("internal")
+
+
+# -- plot ---------------------------------------------------------------------------------
+
+def test_plot_is_a_png(client):
+    r = client.get("/v1/predict/plot", params={
+        "L_mm": 7.1, "t_mm": 0.5, "measured_pressure_pa": [500, 1000],
+        "measured_angle_deg": [2, 8]})
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"] == "image/png"
+    assert r.content[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plot_errors(client):
+    r = client.get("/v1/predict/plot", params={"measured_pressure_pa": [500]})
+    assert_problem(r, 422, "measured_angle_deg")
+    assert_problem(client.get("/v1/predict/plot", params={"t_mm": -1}), 422, "t_mm")
+    assert_problem(client.get("/v1/predict/plot", params={"body_material": "x"}), 422,
+                   "body_material")
+
+
+# -- inverse ------------------------------------------------------------------------------
+
+def test_inverse_round_trips_predict(client):
+    r = client.post("/v1/inverse", json={"design": DESIGN, "target_angle_deg": 45})
+    assert r.status_code == 200, r.text
+    p = r.json()["pressure_pa"]
+    back = client.post("/v1/predict", json={"design": DESIGN, "pressures_pa": [p]}).json()
+    assert back["angle_deg"][0] == pytest.approx(45.0)
+
+
+def test_inverse_errors(client):
+    assert_problem(client.post("/v1/inverse", json={}), 422, "target_angle_deg")
+    r = client.post("/v1/inverse", json={"target_angle_deg": 999})
+    assert "-360 <= target_angle_deg <= 360" in assert_problem(r, 422)["errors"][0]["allowed"]
+
+
+# -- auth, body limit, CORS, unknown routes -------------------------------------------------
+
+def test_mutating_endpoints_need_the_api_key(client):
+    assert_problem(client.post("/v1/solve", json={}), 401)
+    r = client.post("/v1/solve", json={}, headers={"X-API-Key": "wrong"})
+    assert_problem(r, 403)
+    r = client.delete("/v1/jobs/" + "0" * 32)
+    assert_problem(r, 401)
+
+
+def test_mutating_endpoints_are_disabled_without_a_configured_key(tmp_path):
+    app = create_app(settings_for(tmp_path, api_key=None), load_surrogate=False)
+    with TestClient(app) as c:
+        r = c.post("/v1/solve", json={}, headers={"X-API-Key": "anything"})
+    assert "BALLOON_API_KEY" in assert_problem(r, 403)["detail"]
+
+
+def test_body_limit(client):
+    big = {"pressures_pa": [1000.0] * 1000, "design": DESIGN, "pad": "x" * 70_000}
+    assert_problem(client.post("/v1/predict", json=big), 413)
+
+    def chunks():  # no Content-Length: the limit applies while reading
+        yield b'{"pressures_pa": [1], "pad": "'
+        for _ in range(100):
+            yield b"x" * 1000
+        yield b'"}'
+    r = client.post("/v1/predict", content=chunks(),
+                    headers={"content-type": "application/json"})
+    assert_problem(r, 413)
+
+
+def test_cors_is_off_by_default_and_configurable(client, tmp_path):
+    preflight = {"Origin": "https://lab.example", "Access-Control-Request-Method": "POST"}
+    r = client.options("/v1/predict", headers=preflight)
+    assert "access-control-allow-origin" not in r.headers
+    app = create_app(settings_for(tmp_path, cors_origins=["https://lab.example"]),
+                     load_surrogate=False)
+    with TestClient(app) as c:
+        r = c.options("/v1/predict", headers=preflight)
+        assert r.headers["access-control-allow-origin"] == "https://lab.example"
+        r = c.options("/v1/predict", headers={**preflight, "Origin": "https://evil.example"})
+        assert r.status_code == 400
+
+
+def test_unknown_route_and_method_are_problems(client):
+    assert_problem(client.get("/v1/nothing"), 404)
+    assert_problem(client.put("/v1/predict"), 405)
+
+
+def test_openapi_has_an_example_for_every_request_body(client):
+    spec = client.get("/openapi.json").json()
+    schemas = spec["components"]["schemas"]
+    for path, ops in spec["paths"].items():
+        for op in ops.values():
+            ref = (op.get("requestBody", {}).get("content", {}).get("application/json", {})
+                   .get("schema", {}).get("$ref"))
+            if ref:
+                assert schemas[ref.split("/")[-1]].get("examples"), path
