@@ -17,17 +17,21 @@ def nearby_curves(db_path: Path, design: Any, count: int, p_max_pa: float
 
     if count == 0 or not Path(db_path).is_file():
         return []
-    found = []
+    family = design.family
     with open_store(db_path) as db:
-        for record in db.records():
-            d = record.design
-            if d.family != design.family or record.curve.status == "failed":
-                continue
-            distance = np.hypot((d.L_mm - design.L_mm) / 10.0, (d.t_mm - design.t_mm) / 0.5)
-            found.append((distance, record))
-    found.sort(key=lambda item: item[0])
+        rows = []
+        for row in db.summaries():
+            d = row["design"]
+            same = (d["body_material"], d["membrane_material"], round(d["T_mm"], 6),
+                    round(d["b_mm"], 6), round(d["h_mm"], 6)) == family
+            if same and row["status"] != "failed":
+                distance = np.hypot((d["L_mm"] - design.L_mm) / 10.0,
+                                    (d["t_mm"] - design.t_mm) / 0.5)
+                rows.append((distance, str(row["key"])))
+        rows.sort()
+        records = [db.get(key) for _, key in rows[:count]]
     out = []
-    for _, record in found[:count]:
+    for record in records:
         c, d = record.curve, record.design
         keep = np.asarray(c.pressure_pa) <= p_max_pa * 1.05
         out.append((f"FE L={d.L_mm:g} mm, t={d.t_mm:g} mm",

@@ -22,16 +22,22 @@ from solver.errors import NotFoundError
 
 @contextmanager
 def open_store(path: Path) -> Iterator[Any]:
-    """Open the database read-only; 503 when it is missing or cannot be opened now."""
-    from solver.store import CurveStore
+    """Open the database read-only; 503 when it is missing, damaged or of a newer schema
+    (a server-side condition, not the client's input)."""
+    from solver.store import CurveStore, NotACurveStoreError, SchemaVersionError
 
     if not Path(path).is_file():
         raise UnavailableError(f"no curve database at {path}: set BALLOON_DB_PATH or run "
                                "`balloon precompute` to create one")
     try:
         store = CurveStore(path, mode="r")
-    except OSError as exc:
-        raise UnavailableError(f"the curve database cannot be opened now ({exc})",
+        try:
+            store.metadata  # noqa: B018 - opens the file now, so its errors are mapped here
+        except BaseException:
+            store.close()
+            raise
+    except (OSError, NotFoundError, NotACurveStoreError, SchemaVersionError) as exc:
+        raise UnavailableError(f"the curve database cannot be read: {exc}",
                                retry_after_s=5) from None
     with store as db:
         yield db
@@ -42,11 +48,7 @@ def stored_key(path: Path, key: str) -> bool:
     if not Path(path).is_file():
         return False
     with open_store(path) as db:
-        try:
-            db.get(key)
-        except NotFoundError:
-            return False
-        return True
+        return key in db
 
 
 class ResultWriter:

@@ -19,17 +19,23 @@ KEY = Path(pattern=r"^[0-9a-f]{1,64}$", description="the record key (hex)",
 TOL_MM = 1e-6
 
 
-def _matches(record: Any, query: CurvesQuery) -> bool:
-    d = record.design
+def _matches(row: dict[str, Any], query: CurvesQuery) -> bool:
+    """``row`` is a store summary (flat design, material ids, status)."""
+    d = row["design"]
     for name in ("L_mm", "t_mm", "T_mm", "b_mm"):
         want = getattr(query, name)
-        if want is not None and abs(getattr(d, name) - want) > TOL_MM:
+        if want is not None and abs(float(d[name]) - want) > TOL_MM:
             return False
-    if query.body_material and d.body_material.id != query.body_material:
+    if query.body_material and d["body_material"] != query.body_material:
         return False
-    if query.membrane_material and d.membrane_material.id != query.membrane_material:
+    if query.membrane_material and d["membrane_material"] != query.membrane_material:
         return False
-    return query.status is None or record.curve.status == query.status
+    return query.status is None or row["status"] == query.status
+
+
+def _order(row: dict[str, Any]) -> tuple[Any, ...]:
+    d = row["design"]
+    return (d["body_material"], d["membrane_material"], d["L_mm"], d["t_mm"], row["key"])
 
 
 def _peak(values: Any) -> float | None:
@@ -49,11 +55,12 @@ def summary(record: Any) -> CurveSummary:
 
 @router.get("/curves", response_model=CurvePage, summary="List FE records (filtered, paged)")
 def list_curves(query: Annotated[CurvesQuery, Query()], settings: SettingsDep) -> CurvePage:
-    """Records ordered by (materials, L_mm, t_mm, key); filters are exact (to 1e-6 mm)."""
+    """Records ordered by (materials, L_mm, t_mm, id); filters are exact (to 1e-6 mm).
+    Only the page's curves are read from the file."""
     with open_store(settings.db_path) as db:
-        rows = [summary(r) for r in db.records() if _matches(r, query)]
-    rows.sort(key=lambda r: (r.body_material, r.membrane_material, r.L_mm, r.t_mm, r.id))
-    page = rows[query.offset:query.offset + query.limit]
+        rows = sorted((r for r in db.summaries() if _matches(r, query)), key=_order)
+        page = [summary(db.get(str(r["key"])))
+                for r in rows[query.offset:query.offset + query.limit]]
     end = query.offset + len(page)
     return CurvePage(items=page, total=len(rows), offset=query.offset, limit=query.limit,
                      next_offset=end if end < len(rows) else None)
