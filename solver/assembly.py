@@ -1,0 +1,218 @@
+"""Vectorised total-Lagrangian assembly of the nearly incompressible Ogden solid.
+
+Energy of the body (reference configuration, lengths mm, stresses Pa, energy nJ)::
+
+    Pi(u) = sum_e [ int_e W_iso(F) dV + K/2 * g_e^T M_e^-1 g_e ],
+    g_e = int_e N_p (J - 1) dV,   M_e = int_e N_p N_p^T dV
+
+The volumetric term is the L2 projection of the dilatation J - 1 onto a pressure
+space that is discontinuous between elements (constant for hex1: mean dilatation;
+linear for hex2: the inf-sup stable Q2/P1-disc pair), i.e. the statically
+condensed mixed u-p element. It removes volumetric locking while the whole scheme
+stays a single symmetric energy, so the tangent is its exact Hessian.
+
+Pressure field p_hat = N_p . K M_e^-1 g_e, and
+
+    residual   r = int (P_iso + p_hat cof F) : grad(du) dV
+    tangent    K = int grad(du) : (A_iso + p_hat J (f f - f (x) f)^T) : grad(Du) dV
+                   + K sum_e D_e^T M_e^-1 D_e,     D_e = int N_p cof F : grad(.) dV
+
+with f = F^-T. Element matrices are scattered into a CSR pattern computed once,
+restricted to the free degrees of freedom.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import Basis, ElementHex1, ElementHex2
+
+from solver.ogden import stress_and_tangent
+
+
+@dataclass
+class MaterialBlock:
+    """The elements of one material, with everything precomputed for assembly."""
+
+    mu_pa: np.ndarray           # Ogden terms
+    alpha: np.ndarray
+    bulk_pa: float              # K
+    dN: np.ndarray              # (ne, nq, nb, 3) shape-function gradients
+    wdV: np.ndarray             # (ne, nq) quadrature weight x det J
+    Np: np.ndarray              # (ne, nq, npr) pressure basis
+    Minv: np.ndarray            # (ne, npr, npr)
+    dofs: np.ndarray            # (ne, 3 nb) global vector dofs, local order 3 a + i
+    membrane: bool
+    box_scale: np.ndarray | None = None     # (ne, 3) element sizes when all are boxes
+    box_products: np.ndarray | None = None  # (nb nb, nq 9): dNref_aJ dNref_bL per q
+
+
+def make_basis(mesh, element: str, intorder: int | None = None) -> Basis:
+    if element == "hex2":
+        return Basis(mesh, ElementHex2(), intorder=intorder or 5)
+    return Basis(mesh, ElementHex1(), intorder=intorder or 3)
+
+
+def material_block(basis: Basis, elements: np.ndarray, mu_pa, alpha, bulk_pa: float,
+                   pressure_order: int, membrane: bool) -> MaterialBlock:
+    """Gather the shape-function data of ``elements`` from a scalar Basis."""
+    nb = basis.Nbfun
+    grads = np.stack([basis.basis[a][0].grad for a in range(nb)], axis=0)  # (nb, 3, ne, nq)
+    dN = np.transpose(grads, (2, 3, 0, 1))[elements]
+    wdV = basis.dx[elements]
+    X = basis.mapping.F(basis.X)[:, elements]                               # (3, ne, nq)
+    if pressure_order == 0:
+        Np = np.ones(wdV.shape + (1,))
+    else:
+        centre = (X * wdV).sum(axis=-1, keepdims=True) / wdV.sum(axis=-1)[:, None]
+        size = X.max(axis=-1, keepdims=True) - X.min(axis=-1, keepdims=True)
+        xi = (X - centre) / np.where(size > 0, size, 1.0)
+        Np = np.concatenate([np.ones(wdV.shape + (1,)), np.moveaxis(xi, 0, -1)], axis=-1)
+    M = np.einsum("eqm,eqn,eq->emn", Np, Np, wdV)
+    sdofs = basis.element_dofs[:, elements].T                               # (ne, nb)
+    dofs = (3 * sdofs[:, :, None] + np.arange(3)).reshape(len(elements), 3 * nb)
+    block = MaterialBlock(np.asarray(mu_pa, float), np.asarray(alpha, float), float(bulk_pa),
+                          dN, wdV, Np, np.linalg.inv(M), dofs, membrane)
+    _detect_boxes(block)
+    return block
+
+
+def _detect_boxes(block: MaterialBlock) -> None:
+    """Enable the fast path when every element is an axis-aligned box of the same
+    reference shape functions, i.e. dN[e] = dN[0] * h[0] / h[e] per direction."""
+    dN = block.dN
+    if dN.shape[0] == 0:
+        return
+    ref = dN[0]
+    scale_ref = np.abs(ref).max(axis=(0, 1))                                   # per J
+    scale = np.abs(dN).max(axis=(1, 2))                                        # (ne, 3)
+    ratio = scale_ref / scale                                                  # h_e / h_0
+    predicted = ref[None] / ratio[:, None, None, :]
+    if not np.allclose(predicted, dN, rtol=1e-10, atol=1e-12 * float(scale.max())):
+        return
+    # dN[e] = dNref / h with dNref = ref * h0; take h0 = 1 so h = ratio.
+    nq, nb = ref.shape[0], ref.shape[1]
+    prod = np.einsum("qaJ,qbL->abqJL", ref, ref).reshape(nb * nb, nq * 9)
+    block.box_scale = ratio
+    block.box_products = prod
+
+
+def element_stiffness(block: MaterialBlock, A: np.ndarray) -> np.ndarray:
+    """K_e[a i, b k] = sum_q dN_aJ A_iJkL dN_bL for weighted tangents A (ne, nq, 9, 9).
+
+    On axis-aligned box elements (our tensor-product meshes) dN = dN_ref / h_J, so
+    the shape-function products are common to all elements and the whole
+    contraction is one large matrix product; otherwise a loop over quadrature points.
+    """
+    ne, nq, nb, _ = block.dN.shape
+    if block.box_scale is not None:
+        h = block.box_scale                                                   # (ne, 3)
+        At = A.reshape(ne, nq, 3, 3, 3, 3) / (h[:, None, None, :, None, None]
+                                              * h[:, None, None, None, None, :])
+        At = At.transpose(1, 3, 5, 0, 2, 4).reshape(nq * 9, ne * 9)         # (q J L), (e i k)
+        K = block.box_products @ At                                          # (a b), (e i k)
+        K = K.reshape(nb, nb, ne, 3, 3).transpose(2, 0, 3, 1, 4)
+        return K.reshape(ne, 3 * nb, 3 * nb)
+    K = np.zeros((ne, nb, 3, nb, 3))
+    A4 = A.reshape(ne, nq, 3, 3, 3, 3)
+    for q in range(nq):
+        C = np.einsum("eaJ,eiJkL->eaikL", block.dN[:, q], A4[:, q], optimize=True)
+        K += np.einsum("eaikL,ebL->eaibk", C, block.dN[:, q], optimize=True)
+    return K.reshape(ne, 3 * nb, 3 * nb)
+
+
+def deformation_gradient(block: MaterialBlock, u: np.ndarray) -> np.ndarray:
+    """F = I + grad u at every quadrature point, (ne, nq, 3, 3)."""
+    ue = u[block.dofs].reshape(block.dofs.shape[0], -1, 3)                  # (ne, nb, 3)
+    return np.eye(3) + np.einsum("eai,eqaJ->eqiJ", ue, block.dN)
+
+
+@dataclass
+class BlockState:
+    energy: float
+    residual: np.ndarray      # (ne, 3 nb)
+    stiffness: np.ndarray | None   # (ne, 3 nb, 3 nb)
+    lam_max: np.ndarray       # (ne, nq)
+    min_J: float
+
+
+def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = True
+                   ) -> BlockState:
+    """Energy, element residuals and (optionally) element tangents of one block."""
+    F = deformation_gradient(block, u)
+    ne, nq = F.shape[:2]
+    J = np.linalg.det(F)
+    if not np.all(J > 0):
+        raise FloatingPointError("element inverted (det F <= 0)")
+    Finv_T = np.transpose(np.linalg.inv(F), (0, 1, 3, 2))
+    cof = J[..., None, None] * Finv_T
+    W, P, A, lam = stress_and_tangent(F, block.mu_pa, block.alpha)
+
+    g = np.einsum("eqm,eq,eq->em", block.Np, J - 1.0, block.wdV)
+    coef = block.bulk_pa * np.einsum("emn,en->em", block.Minv, g)
+    p_hat = np.einsum("eqm,em->eq", block.Np, coef)
+    energy = float((W * block.wdV).sum() + 0.5 * np.einsum("em,em->", g, coef))
+
+    Ptot = P + p_hat[..., None, None] * cof
+    nb = block.dN.shape[2]
+    r = np.einsum("eqiJ,eqaJ,eq->eai", Ptot, block.dN, block.wdV).reshape(ne, 3 * nb)
+    if not with_tangent:
+        return BlockState(energy, r, None, lam, float(J.min()))
+
+    f = Finv_T.reshape(ne, nq, 9)
+    # T_(iJ)(kL) = f_iL f_kJ
+    T = np.einsum("eqiL,eqkJ->eqiJkL", Finv_T, Finv_T).reshape(ne, nq, 9, 9)
+    A = A + (p_hat * J)[..., None, None] * (f[..., :, None] * f[..., None, :] - T)
+    A = A * block.wdV[..., None, None]
+    K = element_stiffness(block, A)
+    D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV, optimize=True)
+    D = D.reshape(ne, -1, 3 * nb)
+    K += block.bulk_pa * np.matmul(D.transpose(0, 2, 1), block.Minv @ D)
+    return BlockState(energy, r, K, lam, float(J.min()))
+
+
+class Pattern:
+    """CSR pattern of a set of element dof lists, restricted to free dofs.
+
+    ``reduced[g]`` is the index of global dof g among the free dofs, or -1.
+    """
+
+    def __init__(self, dof_lists: list[np.ndarray], free: np.ndarray, ndofs: int) -> None:
+        self.ndofs = ndofs
+        self.free = free
+        reduced = -np.ones(ndofs, dtype=np.int64)
+        reduced[free] = np.arange(len(free))
+        self.reduced = reduced
+        n = len(free)
+        self.n = n
+        keys_all = []
+        for dofs in dof_lists:
+            rd = reduced[dofs]                                              # (ne, m)
+            rows = np.repeat(rd[:, :, None], rd.shape[1], axis=2)
+            cols = np.repeat(rd[:, None, :], rd.shape[1], axis=1)
+            keys = np.where((rows >= 0) & (cols >= 0), rows * n + cols, -1)
+            keys_all.append(keys.ravel())
+        unique = np.unique(np.concatenate(keys_all))
+        unique = unique[unique >= 0]
+        self.positions = []
+        for keys in keys_all:
+            pos = np.searchsorted(unique, keys)
+            pos[keys < 0] = len(unique)                                     # a dump slot
+            self.positions.append(pos)
+        rows = unique // n
+        self.indices = (unique % n).astype(np.int32)
+        self.indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n)))
+                                     ).astype(np.int32)
+        self.nnz = len(unique)
+
+    def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
+        data = np.zeros(self.nnz + 1)
+        for pos, Ke in zip(self.positions, element_matrices):
+            data += np.bincount(pos, weights=Ke.ravel(), minlength=self.nnz + 1)
+        return sp.csr_matrix((data[:-1], self.indices, self.indptr), shape=(self.n, self.n))
+
+
+def scatter_vector(ndofs: int, dofs: np.ndarray, values: np.ndarray) -> np.ndarray:
+    return np.bincount(dofs.ravel(), weights=values.ravel(), minlength=ndofs)

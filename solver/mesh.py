@@ -1,0 +1,99 @@
+"""Parametric hexahedral mesh of the half actuator (symmetry plane y = 0).
+
+A tensor-product grid whose lines pass through every interface (chamber ends,
+chamber side, membrane top, chamber roof), with the elements inside the chamber
+removed. Element sizes shrink with ``level`` by sqrt(2) per level in every
+direction. Spacing is graded towards the chamber: the walls beyond the chamber
+ends grow geometrically away from it, and the body above the chamber grows
+upwards, so resolution sits where the membrane bulges and the body bends.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from skfem import MeshHex
+
+from solver.design import Design
+
+# Target element sizes at level 0, mm. Chosen from the convergence study
+# (docs/verification.md): the membrane and chamber need the resolution.
+BASE_SIZE_X_CHAMBER_MM = 1.0
+BASE_SIZE_X_WALL_MM = 1.5
+BASE_LAYERS_MEMBRANE = 1
+BASE_LAYERS_CHAMBER = 1
+BASE_LAYERS_BODY = 2
+BASE_DIV_Y_CHAMBER = 2
+BASE_DIV_Y_SIDE = 1
+GRADING_RATIO = 1.6     # largest / smallest element in a graded segment
+
+
+@dataclass(frozen=True)
+class ActuatorMesh:
+    """The mesh and the sets the solver needs (lengths in mm)."""
+
+    mesh: MeshHex
+    membrane: np.ndarray        # bool per element: True in membrane B, else body A
+    cavity_facets: np.ndarray   # facet indices of the chamber's walls (outward normal into it)
+    end_face_x_mm: float        # x of the free end
+
+
+def _divisions(base: float, level: int) -> int:
+    return max(1, int(round(base * 2.0 ** (0.5 * level))))
+
+
+def _segment(a: float, b: float, n: int, dense_at: str | None = None) -> np.ndarray:
+    """n elements on [a, b]; geometric grading with the small ones at 'a' or 'b'."""
+    if n == 1 or dense_at is None:
+        return np.linspace(a, b, n + 1)
+    q = GRADING_RATIO ** (1.0 / (n - 1))
+    sizes = q ** np.arange(n)
+    if dense_at == "b":
+        sizes = sizes[::-1]
+    return a + (b - a) * np.concatenate(([0.0], np.cumsum(sizes) / sizes.sum()))
+
+
+def _join(*segments: np.ndarray) -> np.ndarray:
+    return np.unique(np.concatenate(segments))
+
+
+def build_mesh(design: Design, level: int) -> ActuatorMesh:
+    """Mesh the half actuator of a validated design at refinement ``level`` (>= 0)."""
+    d = design.validated()
+    x0 = float(d.chamber_offset_mm)
+    x1 = x0 + d.L_mm
+    xb = float(d.body_length_mm)
+    r = 2.0 ** (0.5 * level)
+
+    n_ch = max(2, int(np.ceil(d.L_mm * r / BASE_SIZE_X_CHAMBER_MM)))
+    n_left = max(1, int(np.ceil(x0 * r / BASE_SIZE_X_WALL_MM)))
+    n_right = max(1, int(np.ceil((xb - x1) * r / BASE_SIZE_X_WALL_MM)))
+    x = _join(_segment(0.0, x0, n_left, "b"), np.linspace(x0, x1, n_ch + 1),
+              _segment(x1, xb, n_right, "a"))
+
+    yb, yw = 0.5 * d.b_mm, 0.5 * d.W_mm
+    y = _join(np.linspace(0.0, yb, _divisions(BASE_DIV_Y_CHAMBER, level) + 1),
+              _segment(yb, yw, _divisions(BASE_DIV_Y_SIDE, level), "a"))
+
+    z_m, z_c = d.t_mm, d.t_mm + d.h_mm
+    z_top = z_c + d.T_mm
+    z = _join(np.linspace(0.0, z_m, _divisions(BASE_LAYERS_MEMBRANE, level) + 1),
+              np.linspace(z_m, z_c, _divisions(BASE_LAYERS_CHAMBER, level) + 1),
+              _segment(z_c, z_top, _divisions(BASE_LAYERS_BODY, level), "a"))
+
+    mesh = MeshHex.init_tensor(x, y, z)
+    centroids = mesh.p[:, mesh.t].mean(axis=1)
+    in_cavity = ((centroids[0] > x0) & (centroids[0] < x1) & (centroids[1] < yb)
+                 & (centroids[2] > z_m) & (centroids[2] < z_c))
+    mesh = mesh.remove_elements(np.nonzero(in_cavity)[0])
+    centroids = mesh.p[:, mesh.t].mean(axis=1)
+    membrane = centroids[2] < z_m
+
+    tol = 1e-9 * max(xb, 1.0)
+    bf = mesh.boundary_facets()
+    mid = mesh.p[:, mesh.facets[:, bf]].mean(axis=1)
+    on_cavity = ((mid[0] > x0 - tol) & (mid[0] < x1 + tol) & (mid[1] < yb + tol)
+                 & (mid[1] > tol) & (mid[2] > z_m - tol) & (mid[2] < z_c + tol))
+    return ActuatorMesh(mesh=mesh, membrane=membrane, cavity_facets=bf[on_cavity],
+                        end_face_x_mm=xb)

@@ -1,0 +1,127 @@
+"""The discrete actuator: mesh, bases, material blocks, cavity, constraints.
+
+Builds once per (design, settings) everything the Newton loop needs, and
+evaluates the residual and tangent of the half model at a state (u, p)::
+
+    R(u, p) = f_int(u) - p dV/du          (free dofs)
+    K(u, p) = df_int/du - p d2V/du2
+
+Boundary conditions: the end x = 0 of both layers is clamped (u = 0); u_y = 0 on
+the symmetry plane y = 0. Units: mm, Pa, uN (= Pa mm^2), nJ.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver import cavity as cav
+from solver.assembly import Pattern, evaluate_block, make_basis, material_block, scatter_vector
+from solver.design import Design
+from solver.mesh import build_mesh
+from solver.settings import SolverSettings
+
+
+@dataclass
+class Evaluation:
+    R: np.ndarray           # reduced residual
+    K: object               # reduced sparse tangent (None if not requested)
+    g: np.ndarray           # reduced dV/du (half volume)
+    volume_mm3: float       # half cavity volume
+    energy: float
+    max_membrane_stretch: float
+    load_norm: float        # || p dV/du ||
+
+
+class ActuatorModel:
+    def __init__(self, design: Design, settings: SolverSettings) -> None:
+        self.design = design.validated()
+        self.settings = settings
+        am = build_mesh(self.design, settings.mesh_level)
+        self.mesh = am.mesh
+        basis = make_basis(am.mesh, settings.element)
+        self.doflocs = basis.doflocs                                      # (3, nnodes)
+        nnodes = basis.N
+        self.ndofs = 3 * nnodes
+        porder = 1 if settings.element == "hex2" else 0
+        self.blocks = []
+        for mat, is_membrane in ((self.design.body_material, False),
+                                 (self.design.membrane_material, True)):
+            elements = np.nonzero(am.membrane == is_membrane)[0]
+            mu = np.array(mat.mu_pa)
+            alpha = np.array(mat.alpha)
+            mu0 = 0.5 * float((mu * alpha).sum())
+            self.blocks.append(material_block(basis, elements, mu, alpha,
+                                              settings.bulk_ratio * mu0, porder, is_membrane))
+        self.mu0_min_pa = min(0.5 * float((b.mu_pa * b.alpha).sum()) for b in self.blocks)
+        self.cavity = cav.make_cavity(am.mesh, settings.element, am.cavity_facets,
+                                      basis.doflocs)
+        X = basis.doflocs
+        tol = 1e-9
+        fixed = np.zeros((nnodes, 3), dtype=bool)
+        fixed[X[0] < tol, :] = True
+        fixed[X[1] < tol, 1] = True
+        self.end_nodes = np.nonzero(np.abs(X[0] - am.end_face_x_mm) < 1e-9)[0]
+        free = np.nonzero(~fixed.ravel())[0]
+        self.pattern = Pattern([b.dofs for b in self.blocks] + [self.cavity.dofs],
+                               free, self.ndofs)
+        self.n_free = len(free)
+        self.volume0_mm3 = cav.volume(self.cavity, np.zeros(self.ndofs))
+        self.timings = {"assembly_s": 0.0, "linear_solve_s": 0.0}
+
+    def full(self, u_free: np.ndarray) -> np.ndarray:
+        u = np.zeros(self.ndofs)
+        u[self.pattern.free] = u_free
+        return u
+
+    def evaluate(self, u_free: np.ndarray, pressure_pa: float, tangent: bool = True
+                 ) -> Evaluation:
+        t0 = time.perf_counter()
+        u = self.full(u_free)
+        free = self.pattern.free
+        r = np.zeros(self.ndofs)
+        mats = []
+        energy = 0.0
+        lam_m = 1.0
+        for block in self.blocks:
+            st = evaluate_block(block, u, tangent)
+            energy += st.energy
+            r += scatter_vector(self.ndofs, block.dofs, st.residual)
+            mats.append(st.stiffness)
+            if block.membrane:
+                lam_m = float(st.lam_max.max())
+        gv = cav.volume_gradient(self.cavity, u)
+        g = scatter_vector(self.ndofs, self.cavity.dofs, gv)[free]
+        vol = cav.volume(self.cavity, u)
+        R = r[free] - pressure_pa * g
+        K = None
+        if tangent:
+            mats.append(-pressure_pa * cav.volume_hessian(self.cavity, u))
+            K = self.pattern.matrix(mats)
+        self.timings["assembly_s"] += time.perf_counter() - t0
+        return Evaluation(R, K, g, vol, energy, lam_m, float(np.linalg.norm(pressure_pa * g)))
+
+    def injected_volume_ul(self, volume_half_mm3: float) -> float:
+        """Cavity volume change of the whole actuator (two halves), ul = mm^3."""
+        return 2.0 * (volume_half_mm3 - self.volume0_mm3)
+
+    def end_face_kinematics(self, u_free: np.ndarray) -> tuple[float, np.ndarray]:
+        """Bending angle (deg) and centroid displacement (x, z) of the free end face.
+
+        The angle is the rotation about y of the end face, from a least-squares fit
+        of the deformed x and z of its nodes against their reference height Z:
+        theta = atan2(-dx/dZ, dz/dZ); positive when the tip moves to +z, away
+        from the membrane (which lies at the bottom, z < t).
+        """
+        u = self.full(u_free).reshape(-1, 3)
+        nodes = self.end_nodes
+        X = self.doflocs[:, nodes]
+        x = X + u[nodes].T
+        Z = X[2] - X[2].mean()
+        dxdZ = float(np.dot(Z, x[0] - x[0].mean()) / np.dot(Z, Z))
+        dzdZ = float(np.dot(Z, x[2] - x[2].mean()) / np.dot(Z, Z))
+        angle = float(np.degrees(np.arctan2(-dxdZ, dzdZ)))
+        disp = u[nodes].mean(axis=0)
+        return angle, np.array([disp[0], disp[2]])

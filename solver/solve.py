@@ -1,0 +1,177 @@
+"""Quasi-static inflation of the actuator: adaptive load stepping with Newton.
+
+Two controls:
+
+* pressure: each step prescribes p; Newton solves K du = -R.
+* volume (a fluid cavity, as in Abaqus or FEBio): each step prescribes the
+  injected volume; the pressure is an extra unknown. Newton on the bordered system
+
+      [ K    -g ] [du]   [ -R       ]
+      [ -g^T  0 ] [dp] = [ V - V_t  ]
+
+  solved with one factorisation of K and two back-substitutions. It passes
+  pressure plateaus and maxima, as the syringe-pump experiment does.
+
+Steps restart from the last converged state (no extrapolating predictor: it
+caused most Newton failures in earlier prototypes); a failed step is cut back
+by half; the step grows when Newton converges quickly and shrinks when the
+angle increment is large, aiming at ~4 degrees per step. A step that cannot
+converge after the cut-backs ends the curve with status "failed" and the reason.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from solver.curve import Curve
+from solver.design import Design
+from solver.linear import factorize
+from solver.model import ActuatorModel
+from solver.settings import SolverSettings
+
+TARGET_ANGLE_STEP_DEG = 4.0
+MIN_CUTBACK = 1.0 / 1024.0
+
+
+class _StepFailed(Exception):
+    pass
+
+
+def _newton(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverSettings,
+            target_volume: float | None, target_pressure: float | None, backend: str):
+    """Converge one load step; returns (u, p, iterations, residual, negative pivots)."""
+    tol = settings.newton_tol
+    force_floor = model.mu0_min_pa * 1e-6
+    volume_scale = max(model.volume0_mm3, 1e-9)
+    neg = -1
+    first_res = None
+    for it in range(1, settings.max_newton_iter + 1):
+        if target_pressure is not None:
+            p = target_pressure
+        ev = model.evaluate(u, p)
+        res = float(np.linalg.norm(ev.R)) / max(ev.load_norm, force_floor)
+        vres = 0.0 if target_volume is None else abs(ev.volume_mm3 - target_volume) / volume_scale
+        if not np.isfinite(res):
+            raise _StepFailed("non-finite residual")
+        if first_res is None:
+            first_res = max(res, vres)
+        elif max(res, vres) > 1e6 * max(first_res, 1.0):
+            raise _StepFailed("Newton diverged")
+        if it > 1 and res < tol and vres < tol:
+            return u, p, it - 1, res, neg
+        t0 = time.perf_counter()
+        try:
+            fac = factorize(ev.K, backend)
+            a = fac.solve(-ev.R)
+            if target_volume is not None:
+                b = fac.solve(ev.g)
+        except (np.linalg.LinAlgError, RuntimeError) as exc:
+            raise _StepFailed(f"linear solve failed: {exc}") from None
+        finally:
+            model.timings["linear_solve_s"] += time.perf_counter() - t0
+        neg = fac.negative_pivots
+        if target_volume is None:
+            du = a
+        else:
+            gb = float(ev.g @ b)
+            if gb == 0.0 or not np.isfinite(gb):
+                raise _StepFailed("bordered system singular (g^T K^-1 g = 0)")
+            dp = -(ev.volume_mm3 - target_volume + float(ev.g @ a)) / gb
+            du = a + b * dp
+            p = p + dp
+        u = u + du
+    raise _StepFailed(f"no convergence in {settings.max_newton_iter} Newton iterations "
+                      f"(residual {res:.2e})")
+
+
+def solve(design: Design, settings: SolverSettings | None = None,
+          on_step: Callable[[dict], None] | None = None, backend: str = "superlu") -> Curve:
+    """Inflate ``design`` until a stop criterion; return the curve.
+
+    Raises InputError for invalid input only; a solve that fails returns a Curve
+    with status "failed" and the reason.
+    """
+    settings = (settings or SolverSettings()).validated()
+    design = design.validated()
+    t_start = time.perf_counter()
+    model = ActuatorModel(design, settings)
+    volume_control = settings.control == "volume"
+
+    u = np.zeros(model.n_free)
+    p = 0.0
+    rows = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg")}
+
+    def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int) -> float:
+        ev = model.evaluate(u_, p_, tangent=False)
+        angle, tip = model.end_face_kinematics(u_)
+        rows["p"].append(p_)
+        rows["v"].append(model.injected_volume_ul(ev.volume_mm3))
+        rows["a"].append(angle)
+        rows["tip"].append(tip)
+        rows["lam"].append(ev.max_membrane_stretch)
+        rows["it"].append(it)
+        rows["res"].append(res)
+        rows["neg"].append(neg)
+        if on_step is not None and len(rows["p"]) > 1:
+            on_step({"step": len(rows["p"]) - 1, "pressure_pa": p_,
+                     "volume_ul": rows["v"][-1], "angle_deg": angle, "newton_iterations": it})
+        return angle
+
+    record(u, p, 0, 0.0, 0)
+    # Initial increments: a small fraction of the chamber volume, or of the membrane modulus.
+    step = 0.05 * model.volume0_mm3 if volume_control else 0.05 * model.mu0_min_pa
+    initial_step = step
+    status, reason = "stopped", f"reached max_steps = {settings.max_steps}"
+    for _ in range(settings.max_steps):
+        try:
+            if volume_control:
+                vt = model.volume0_mm3 + 0.5 * rows["v"][-1] + step
+                u_new, p_new, its, res, neg = _newton(model, u, p, settings, vt, None, backend)
+            else:
+                u_new, p_new, its, res, neg = _newton(model, u, p, settings, None, p + step,
+                                                      backend)
+        except (_StepFailed, FloatingPointError) as exc:
+            step *= 0.5
+            if step < MIN_CUTBACK * initial_step:
+                status, reason = "failed", (f"step at p = {p:.1f} Pa, angle = "
+                                            f"{rows['a'][-1]:.1f} deg did not converge after "
+                                            f"cut-backs: {exc}")
+                break
+            continue
+        u, p = u_new, p_new
+        angle = record(u, p, its, res, neg)
+        d_angle = abs(angle - rows["a"][-2])
+        factor = 1.5 if its <= 5 else (1.0 if its <= 9 else 0.6)
+        if d_angle > 1e-9:
+            factor = min(factor, max(0.5, TARGET_ANGLE_STEP_DEG / d_angle))
+        step *= factor
+        if abs(angle) >= settings.max_angle_deg:
+            status, reason = "complete", f"reached max_angle_deg = {settings.max_angle_deg}"
+            break
+        if p >= settings.max_pressure_pa:
+            status, reason = "complete", f"reached max_pressure_pa = {settings.max_pressure_pa}"
+            break
+        if rows["v"][-1] >= settings.max_volume_ul:
+            status, reason = "complete", f"reached max_volume_ul = {settings.max_volume_ul}"
+            break
+
+    pressure = np.array(rows["p"])
+    pmax = -1
+    if volume_control and len(pressure) > 2:
+        drops = np.nonzero(np.diff(pressure) < 0)[0]
+        if len(drops):
+            pmax = int(drops[0])
+    volume = np.array(rows["v"])
+    n = len(pressure)
+    return Curve(
+        pressure_pa=pressure, volume_ul=volume, time_s=volume / settings.flow_ul_s,
+        angle_deg=np.array(rows["a"]), tip_displacement_mm=np.array(rows["tip"]).reshape(n, 2),
+        max_membrane_stretch=np.array(rows["lam"]), force_mn=np.full(n, np.nan),
+        newton_iterations=np.array(rows["it"], dtype=np.int64),
+        residual_norm=np.array(rows["res"]),
+        negative_eigenvalues=np.array(rows["neg"], dtype=np.int64),
+        status=status, reason=reason, pressure_maximum_index=pmax, n_dofs=model.n_free,
+        wall_time_s=time.perf_counter() - t_start, timings_s=dict(model.timings))
