@@ -46,8 +46,11 @@ class ModelRegistry:
             return self.fitted
         if name == "paper":
             if self._paper is None:
-                from surrogate import paper_surrogate
-
+                try:
+                    from surrogate import paper_surrogate
+                except ImportError as exc:
+                    raise UnavailableError(f"the paper model is not available ({exc})"
+                                           ) from None
                 self._paper = paper_surrogate()
             return self._paper
         return load_calibrated(name, self.models_dir)
@@ -61,4 +64,8 @@ def load_calibrated(name: str, models_dir: Path) -> Any:
         load_model = None
     if load_model is None:
         raise NotFoundError(f"no model {name!r}: known models are \"fitted\" and \"paper\"")
-    return load_model(name, models_dir)
+    try:
+        return load_model(name, models_dir)
+    except (FileNotFoundError, IsADirectoryError, PermissionError):
+        raise NotFoundError(f"no saved model {name!r} in {models_dir}; known models are "
+                            f"\"fitted\", \"paper\" and the saved ones") from None

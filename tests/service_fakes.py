@@ -106,6 +106,8 @@ class FakeSurrogate:
 
     def inverse(self, design, angle_deg, level=0.95):
         a, tau = self._params(design)
+        if angle_deg <= -a:
+            raise InputError("target_angle_deg", f"unreachable: {angle_deg}", f"> {-a:.3g}")
         p = tau * math.log1p(angle_deg / a)
         return FakeInverse(p, p - 10.0, p + 10.0, {"in_domain": True, "flags": [],
                                                    "messages": []})

@@ -9,7 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from solver.design import LIMITS_MM
 from solver.settings import MAX_MESH_LEVEL
 
-MATERIAL_ID = r"^[A-Za-z0-9_.\-]{1,64}$"
+MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
 
 
 class Schema(BaseModel):
