@@ -1,0 +1,65 @@
+"""record_key: same inputs, same key; any change of design or settings, a new key."""
+
+from dataclasses import fields, replace
+
+import pytest
+
+from solver.design import Design
+from solver.materials import MATERIALS, make_material
+from solver.settings import SolverSettings
+from solver.store import record_key
+from solver.store.keys import canonical_json
+
+# Pinned: computed by this implementation (KEY_VERSION 1) for the paper's standard design
+# with default settings. If this changes, every stored database loses its keys: bump
+# KEY_VERSION and say so in docs/database.md instead of editing this number.
+STANDARD_KEY = "7a6747211b2edacb59ed14347eb03e2b"
+
+
+def test_key_is_pinned_for_the_standard_design():
+    assert record_key(Design(), SolverSettings()) == STANDARD_KEY
+
+
+def test_key_is_32_hex_digits_and_defaults_to_default_settings():
+    key = record_key(Design())
+    assert len(key) == 32 and int(key, 16) >= 0
+    assert key == record_key(Design(), SolverSettings())
+
+
+def test_equivalent_inputs_give_the_same_key():
+    base = record_key(Design(L_mm=7.1, t_mm=0.5), SolverSettings())
+    # an int where a float is expected, float noise far below the rounding, and the
+    # resolved body length / chamber offset given explicitly
+    assert record_key(Design(L_mm=7.1 + 1e-13, t_mm=0.5)) == base
+    assert record_key(Design(L_mm=7.1, t_mm=0.5, T_mm=1)) == base
+    assert record_key(Design(L_mm=7.1, body_length_mm=12.0, chamber_offset_mm=2.45)) == base
+    assert record_key(Design(), SolverSettings(mesh_level=1, max_angle_deg=90)) == base
+
+
+@pytest.mark.parametrize("name,value", [
+    ("L_mm", 7.2), ("t_mm", 0.75), ("T_mm", 1.5), ("b_mm", 1.7), ("h_mm", 0.2), ("W_mm", 3.5),
+    ("body_length_mm", 14.0), ("chamber_offset_mm", 3.0),
+    ("body_material", MATERIALS["pdms_1_15"]), ("membrane_material", MATERIALS["pdms_1_15"]),
+])
+def test_every_design_field_changes_the_key(name, value):
+    assert record_key(replace(Design(), **{name: value})) != record_key(Design())
+
+
+def test_every_setting_changes_the_key():
+    # one valid non-default value per field; a new SolverSettings field fails here until
+    # it is added (a field missing from the key would silently merge different solves)
+    changed = {"mesh_level": 2, "element": "hex1", "control": "pressure", "max_angle_deg": 45.0,
+               "max_pressure_pa": 1e4, "max_volume_ul": 20.0, "flow_ul_s": 5.0,
+               "bulk_ratio": 100.0, "newton_tol": 1e-9, "max_newton_iter": 30,
+               "max_steps": 200, "tip": "blocked", "spring_k_n_per_m": 1.0}
+    assert {f.name for f in fields(SolverSettings)} == set(changed)
+    keys = {record_key(Design(), SolverSettings())}
+    for name, value in changed.items():
+        keys.add(record_key(Design(), replace(SolverSettings(), **{name: value})))
+    assert len(keys) == 1 + len(changed)
+
+
+def test_material_parameters_not_just_the_id_enter_the_key():
+    fake = make_material("ecoflex_00_30", [1.3], [3.0])  # a preset's id, other parameters
+    assert record_key(Design(membrane_material=fake)) != record_key(Design())
+    assert '"mu_kpa":[1.3]' in canonical_json(Design(membrane_material=fake), SolverSettings())
