@@ -1,0 +1,34 @@
+"""Surrogate layer: the paper's exponential bending model fitted from the FE curve
+database, with prediction bands, validity flags and inverse design.
+
+    from surrogate import paper_surrogate, load_surrogate, fit_surrogate, inverse_design
+    s = paper_surrogate()                        # the paper's constants, name "paper"
+    s.predict(design, [0, 1000, 2000])           # Prediction: angle_deg, lower/upper_deg
+    s.inverse(design, 45.0)                      # InversePrediction: pressure_pa + band
+    s = fit_surrogate("curves.h5"); save_surrogate(s, "surrogate.json")
+
+Model (docs/surrogate.md): angle_deg = A (exp(p/tau) - 1), A = a L,
+tau = a_t log10(b_t t); the "extended" form adds c: exp(x + c x^2), x = p / tau.
+Errors: OutOfFamilyError and SurrogateFileError (both InputError, see surrogate.errors).
+"""
+
+from surrogate.core import InversePrediction, Prediction, Surrogate
+from surrogate.dataset import CurveData, curves_from_store
+from surrogate.errors import OutOfFamilyError, SurrogateFileError
+from surrogate.files import load_surrogate, open_surrogate, save_surrogate
+from surrogate.fit import FORMAT_VERSION, fit_surrogate
+from surrogate.inverse_design import (
+    DesignBounds,
+    DesignCandidate,
+    DesignTarget,
+    InverseDesignResult,
+    inverse_design,
+)
+from surrogate.paper import paper_surrogate
+
+__all__ = [
+    "FORMAT_VERSION", "CurveData", "DesignBounds", "DesignCandidate", "DesignTarget",
+    "InverseDesignResult", "InversePrediction", "OutOfFamilyError", "Prediction", "Surrogate",
+    "SurrogateFileError", "curves_from_store", "fit_surrogate", "inverse_design",
+    "load_surrogate", "open_surrogate", "paper_surrogate", "save_surrogate",
+]

@@ -1,0 +1,230 @@
+"""The surrogate: fitted families, prediction with bands and validity, one-design inverse.
+
+    s.predict(design, pressures_pa)  -> Prediction        angle (deg) with a band
+    s.inverse(design, angles_deg)    -> InversePrediction pressure (Pa) with a band
+    s.family_parameters(design)      -> dict              the family's model parameters
+
+Bands: see ``surrogate.bands``. The inverse is closed form, p = tau x with
+x + c x^2 = ln(1 + angle / A); its band is the delta method on p (parameter covariance)
+plus the residual scatter carried through dp/dangle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from solver.design import Design
+from solver.errors import InputError
+from surrogate import bands, model
+from surrogate.errors import OutOfFamilyError
+from surrogate.family import Family
+from surrogate.jointfit import ModelParameters, band
+from surrogate.validity import check
+
+MAX_POINTS = 10_000_000
+_PROVENANCE_SUMMARY = ("format_version", "created_utc", "package_version", "git_commit",
+                       "database_path", "source")
+
+
+def _array(values: object, field_name: str, unit: str) -> np.ndarray:
+    try:
+        a = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise InputError(field_name, f"not a list of numbers: {values!r}") from None
+    if a.ndim != 1 or a.size == 0 or a.size > MAX_POINTS:
+        raise InputError(field_name, f"{a.size} values with shape {a.shape}",
+                         f"1 to {MAX_POINTS} numbers ({unit})")
+    if not np.isfinite(a).all():
+        raise InputError(field_name, "values must be finite", f"finite numbers ({unit})")
+    return a
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Angles (deg) at ``pressure_pa`` (Pa) with a band at ``level`` (lower_deg, upper_deg);
+    force_mn (mN) and its band when the family has a force model, else None."""
+
+    design: Design
+    pressure_pa: np.ndarray
+    angle_deg: np.ndarray
+    lower_deg: np.ndarray
+    upper_deg: np.ndarray
+    level: float
+    validity: dict
+    model: str
+    form: str
+    provenance: dict
+    parameters: dict
+    force_mn: np.ndarray | None = None
+    force_lower_mn: np.ndarray | None = None
+    force_upper_mn: np.ndarray | None = None
+
+    def as_dict(self) -> dict[str, object]:
+        def lst(a: np.ndarray | None) -> list | None:
+            return None if a is None else np.asarray(a).tolist()
+
+        return {"design": self.design.as_dict(), "pressure_pa": lst(self.pressure_pa),
+                "angle_deg": lst(self.angle_deg), "lower_deg": lst(self.lower_deg),
+                "upper_deg": lst(self.upper_deg), "level": self.level,
+                "force_mn": lst(self.force_mn), "force_lower_mn": lst(self.force_lower_mn),
+                "force_upper_mn": lst(self.force_upper_mn), "validity": dict(self.validity),
+                "model": self.model, "form": self.form, "parameters": dict(self.parameters),
+                "provenance": dict(self.provenance)}
+
+
+@dataclass(frozen=True)
+class InversePrediction:
+    """Pressures (Pa) that give ``angle_deg`` (deg), with a band at ``level``; arrays have
+    the length of the requested angles."""
+
+    design: Design
+    angle_deg: np.ndarray
+    pressure_pa: np.ndarray
+    lower_pa: np.ndarray
+    upper_pa: np.ndarray
+    level: float
+    validity: dict
+    model: str
+    form: str
+    provenance: dict
+
+    def as_dict(self) -> dict[str, object]:
+        return {"design": self.design.as_dict(), "angle_deg": self.angle_deg.tolist(),
+                "pressure_pa": self.pressure_pa.tolist(), "lower_pa": self.lower_pa.tolist(),
+                "upper_pa": self.upper_pa.tolist(), "level": self.level,
+                "validity": dict(self.validity), "model": self.model, "form": self.form,
+                "provenance": dict(self.provenance)}
+
+
+@dataclass(frozen=True)
+class Surrogate:
+    """Fitted families plus where they came from. ``form`` None uses each family's
+    default form; "exponential" (the paper's) or "extended" forces one."""
+
+    name: str
+    family_fits: tuple[Family, ...]
+    provenance: dict = field(default_factory=dict)
+    form: str | None = None
+    report: dict = field(default_factory=dict)
+
+    @property
+    def families(self) -> list[dict]:
+        """Plain view: body_material / membrane_material ids, T_mm, b_mm, h_mm, parameters
+        (per form), default_form, force, domain."""
+        out = []
+        for f in self.family_fits:
+            d = f.as_dict()
+            d["body_material_parameters"] = d["body_material"]
+            d["membrane_material_parameters"] = d["membrane_material"]
+            d["body_material"] = f.body_material.id
+            d["membrane_material"] = f.membrane_material.id
+            out.append(d)
+        return out
+
+    def with_form(self, form: str | None) -> Surrogate:
+        if form is not None and form not in model.FORMS:
+            raise InputError("form", f"unknown model form {form!r}", " | ".join(model.FORMS))
+        return replace(self, form=form)
+
+    def family_for(self, design: Design) -> Family:
+        """The family covering ``design``; OutOfFamilyError (with the fix) otherwise."""
+        for fam in self.family_fits:
+            if fam.matches(design):
+                return fam
+        raise OutOfFamilyError(_out_of_family_message(self, design), design.family)
+
+    def _params(self, fam: Family, form: str | None) -> ModelParameters:
+        form = form or self.form or fam.default_form
+        if form not in fam.parameters:
+            raise InputError("form", f"model form {form!r} was not fitted for {fam.label}",
+                             " | ".join(fam.parameters))
+        return fam.parameters[form]
+
+    def _summary(self) -> dict:
+        return {k: self.provenance[k] for k in _PROVENANCE_SUMMARY if k in self.provenance}
+
+    def family_parameters(self, design: Design, form: str | None = None) -> dict[str, object]:
+        """The family's model parameters for ``design``'s family, with A and tau at the
+        design: a_deg_per_mm, a_t_pa, b_t_per_mm (and c), tau_form, covariance,
+        residual_sd_deg, residual_rel."""
+        fam = self.family_for(design)
+        par = self._params(fam, form)
+        out: dict[str, object] = {n: v for n, v in zip(par.names, par.values, strict=True)}
+        out.update(form=par.form, names=list(par.names), tau_form=model.TAU_FORM,
+                   covariance=[list(r) for r in par.covariance],
+                   residual_sd_deg=par.residual_sd, residual_rel=par.residual_rel,
+                   fixed=list(par.fixed), source=par.source,
+                   A_deg=float(model.amplitude_deg(par.theta, design.L_mm)),
+                   tau_pa=float(model.tau_pa(par.theta, design.t_mm)), family=fam.label)
+        return out
+
+    def _check_tau(self, par: ModelParameters, design: Design) -> None:
+        if not float(model.tau_pa(par.theta, design.t_mm)) > 0.0:
+            t_min = 1.0 / par.theta[2]
+            raise InputError("t_mm", f"t_mm = {design.t_mm:g} gives a non-positive pressure "
+                             "constant tau", f"t_mm > {t_min:.3g} mm")
+
+    def predict(self, design: Design, pressures_pa: object, level: float = 0.95,
+                form: str | None = None) -> Prediction:
+        """Angle (deg) at each pressure (Pa, >= 0) with a band at ``level``; force (mN)
+        as well when the family has a force model."""
+        fam = self.family_for(design)
+        par = self._params(fam, form)
+        self._check_tau(par, design)
+        p = _array(pressures_pa, "pressures_pa", "Pa")
+        if (p < 0).any():
+            raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
+                             "pressures >= 0 Pa (the model ignores suction)")
+        m, lo, hi = band(par, design.L_mm, design.t_mm, p, level)
+        force = (None, None, None)
+        if fam.force is not None:
+            force = band(fam.force, design.L_mm, design.t_mm, p, level)
+        return Prediction(design=design, pressure_pa=p, angle_deg=m, lower_deg=lo,
+                          upper_deg=hi, level=level,
+                          validity=check(fam.domain, design, p, m), model=self.name,
+                          form=par.form, provenance=self._summary(),
+                          parameters={n: v for n, v in zip(par.names, par.values, strict=True)},
+                          force_mn=force[0], force_lower_mn=force[1], force_upper_mn=force[2])
+
+    def inverse(self, design: Design, angle_deg: object, level: float = 0.95,
+                form: str | None = None) -> InversePrediction:
+        """Pressure (Pa) that gives each angle (deg), closed form, with a band."""
+        fam = self.family_for(design)
+        par = self._params(fam, form)
+        self._check_tau(par, design)
+        ang = _array(angle_deg, "angle_deg", "deg")
+        p = model.pressure_pa(par.theta, design.L_mm, design.t_mm, ang)
+        bad = ~np.isfinite(p)
+        if bad.any():
+            A = float(model.amplitude_deg(par.theta, design.L_mm))
+            top = float(model.max_angle_deg(par.theta, design.L_mm, design.t_mm))
+            sign = "positive" if A > 0 else "negative"
+            allowed = f"{sign} angles (A = {A:.4g} deg)"
+            if np.isfinite(top):
+                allowed += f" of magnitude below {top:.4g} deg"
+            raise InputError("angle_deg", f"{ang[bad][0]:g} deg is not reachable by this "
+                             "design", allowed)
+        z = bands.z_value(level)
+        g, dp_da = model.pressure_gradient(par.theta, design.L_mm, design.t_mm, ang)
+        x = p / model.tau_pa(par.theta, design.t_mm)
+        var = (bands.parameter_variance(g, par.cov)
+               + dp_da**2 * bands.scatter_variance(par.residual_sd, par.residual_rel, ang, x))
+        half = z * np.sqrt(np.where(ang == 0.0, 0.0, var))
+        return InversePrediction(design=design, angle_deg=ang, pressure_pa=p,
+                                 lower_pa=np.maximum(p - half, 0.0), upper_pa=p + half,
+                                 level=level, validity=check(fam.domain, design, p, ang),
+                                 model=self.name, form=par.form, provenance=self._summary())
+
+
+def _out_of_family_message(s: Surrogate, design: Design) -> str:
+    body, membrane, T, b, h = design.family
+    covered = "; ".join(f.label for f in s.family_fits) or "none"
+    return (f"surrogate '{s.name}' has no fitted family for body {body}, membrane "
+            f"{membrane}, T_mm={T:g}, b_mm={b:g}, h_mm={h:g} (covered: {covered}). "
+            f"To add it, put a grid line with body_material={body}, "
+            f"membrane_material={membrane}, T_mm={T:g}, b_mm={b:g}, h_mm={h:g} and at least "
+            "two L_mm and two t_mm values into the precompute grid, run `balloon precompute` "
+            "to solve it into the curve database, then `balloon fit --db DB -o "
+            "surrogate.json`")

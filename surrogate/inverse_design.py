@@ -1,0 +1,392 @@
+"""Inverse design: which (material pair, L, t) meets a target, ranked by an objective.
+
+Targets (``DesignTarget.kind``):
+
+    angle_at_pressure   reach |angle_deg| exactly at pressure_pa. For each t the chamber
+                        length is closed form, L = |angle| / (|a| (exp(x + c x^2) - 1)),
+                        x = p / tau(t); candidates are the (L, t) with L inside the bounds.
+    pressure_budget     reach |angle_deg| at a pressure of at most pressure_pa; needed
+                        pressure p = tau x, x + c x^2 = ln(1 + |angle| / |A|), on an L x t grid.
+    force_at_pressure   as angle_at_pressure with the family's force model (mN).
+
+Angles are matched in magnitude: a reversed material pair (a < 0) is a candidate too,
+and its predictions carry the negative sign. Objectives (lower score ranks first):
+
+    pressure    pressure needed (pressure_budget)
+    margin      band upper end of the pressure needed, i.e. the largest margin to the
+                budget at the band's pessimistic end (pressure_budget)
+    compact     chamber length L
+    certainty   relative width of the prediction band at the target pressure
+
+Evaluation is vectorised over a grid (per family), the best cell is refined on a finer
+local grid, and the ranked list keeps designs at least ``MIN_SPACING`` apart (normalised
+L, t). Bounds default to each family's fitted domain, with t >= 0.5 mm (no two-balloon
+designs unless the bounds ask for them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from solver.design import Design
+from solver.errors import InputError
+from surrogate import bands, model
+from surrogate.core import Prediction, Surrogate
+from surrogate.family import Family
+from surrogate.jointfit import ModelParameters
+from surrogate.paper_data import TWO_BALLOON_BELOW_t_MM
+
+KINDS = ("angle_at_pressure", "pressure_budget", "force_at_pressure")
+OBJECTIVES = ("pressure", "margin", "compact", "certainty")
+DEFAULT_OBJECTIVE = {"angle_at_pressure": "certainty", "pressure_budget": "pressure",
+                     "force_at_pressure": "certainty"}
+MIN_SPACING = 0.08
+GRID = 48
+CURVE_POINTS = 41
+
+
+@dataclass(frozen=True)
+class DesignTarget:
+    """What the design must do; units in the names. See the module docstring."""
+
+    kind: str
+    pressure_pa: float
+    angle_deg: float | None = None
+    force_mn: float | None = None
+
+    def validated(self) -> DesignTarget:
+        if self.kind not in KINDS:
+            raise InputError("kind", f"unknown target {self.kind!r}", " | ".join(KINDS))
+        if not _finite(self.pressure_pa) or not 0 < self.pressure_pa <= 1e6:
+            raise InputError("pressure_pa", f"got {self.pressure_pa!r}",
+                             "0 < pressure_pa <= 1e6 Pa")
+        name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
+        value = getattr(self, name)
+        if value is None or not _finite(value) or value == 0 or abs(value) > 1e4:
+            raise InputError(name, f"the {self.kind} target needs a non-zero {name}, got "
+                             f"{value!r}", f"0 < |{name}| <= 1e4")
+        return self
+
+    @property
+    def value(self) -> float:
+        return abs(float(self.force_mn if self.kind == "force_at_pressure"
+                         else self.angle_deg))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class DesignBounds:
+    """Search space: L and t ranges in mm (None: each family's fitted range, t from
+    0.5 mm) and allowed (body, membrane) material id pairs (None: every family)."""
+
+    L_mm: tuple[float, float] | None = None
+    t_mm: tuple[float, float] | None = None
+    material_pairs: tuple[tuple[str, str], ...] | None = None
+
+    def validated(self) -> DesignBounds:
+        for name in ("L_mm", "t_mm"):
+            r = getattr(self, name)
+            if r is None:
+                continue
+            if (len(r) != 2 or not all(_finite(v) for v in r) or not 0 < r[0] <= r[1]):
+                raise InputError(name, f"bounds {r!r}", "(low, high) with 0 < low <= high mm")
+        return self
+
+
+@dataclass(frozen=True)
+class DesignCandidate:
+    """A ranked design: the score of the objective (lower is better), the pressure it
+    needs (pressure_budget) or its predicted value at the target pressure, and the
+    predicted curve from 0 Pa with its band."""
+
+    rank: int
+    design: Design
+    family: str
+    score: float
+    pressure_needed_pa: float
+    pressure_lower_pa: float
+    pressure_upper_pa: float
+    value_at_pressure: float
+    value_lower: float
+    value_upper: float
+    curve: Prediction
+
+    def as_dict(self) -> dict[str, object]:
+        return {"rank": self.rank, "L_mm": self.design.L_mm, "t_mm": self.design.t_mm,
+                "body_material": self.design.body_material.id,
+                "membrane_material": self.design.membrane_material.id,
+                "family": self.family, "score": self.score,
+                "pressure_needed_pa": self.pressure_needed_pa,
+                "pressure_lower_pa": self.pressure_lower_pa,
+                "pressure_upper_pa": self.pressure_upper_pa,
+                "value_at_pressure": self.value_at_pressure, "value_lower": self.value_lower,
+                "value_upper": self.value_upper, "validity": self.curve.validity,
+                "curve": {k: v for k, v in self.curve.as_dict().items()
+                          if k in ("pressure_pa", "angle_deg", "lower_deg", "upper_deg",
+                                   "force_mn", "force_lower_mn", "force_upper_mn")}}
+
+
+@dataclass(frozen=True)
+class InverseDesignResult:
+    """Ranked feasible designs, or an explanation (``feasible`` False) with the largest
+    value reachable at the target pressure inside the bounds (``best_reachable``)."""
+
+    target: DesignTarget
+    objective: str
+    feasible: bool
+    candidates: tuple[DesignCandidate, ...]
+    explanation: str
+    best_reachable: dict = field(default_factory=dict)
+    n_evaluated: int = 0
+    model: str = ""
+
+    def as_dict(self) -> dict[str, object]:
+        return {"target": {"kind": self.target.kind, "pressure_pa": self.target.pressure_pa,
+                           "angle_deg": self.target.angle_deg,
+                           "force_mn": self.target.force_mn},
+                "objective": self.objective, "feasible": self.feasible,
+                "candidates": [c.as_dict() for c in self.candidates],
+                "explanation": self.explanation, "best_reachable": dict(self.best_reachable),
+                "n_evaluated": self.n_evaluated, "model": self.model}
+
+
+def _finite(v: object) -> bool:
+    return isinstance(v, (int, float)) and np.isfinite(v)
+
+
+def _families(s: Surrogate, bounds: DesignBounds) -> list[Family]:
+    fams = list(s.family_fits)
+    if bounds.material_pairs is None:
+        return fams
+    known = {(f.body_material.id, f.membrane_material.id) for f in fams}
+    for pair in bounds.material_pairs:
+        if tuple(pair) not in known:
+            raise InputError("material_pairs", f"no fitted family for {pair[0]}/{pair[1]}",
+                             ", ".join(f"{b}/{m}" for b, m in sorted(known)))
+    wanted = {tuple(p) for p in bounds.material_pairs}
+    return [f for f in fams if (f.body_material.id, f.membrane_material.id) in wanted]
+
+
+def _ranges(fam: Family, bounds: DesignBounds) -> tuple[tuple[float, float], tuple[float, float]]:
+    L = bounds.L_mm or fam.domain.L_mm
+    if bounds.t_mm is not None:
+        t = bounds.t_mm
+    else:
+        lo, hi = fam.domain.t_mm
+        t = (max(lo, TWO_BALLOON_BELOW_t_MM), hi) if hi >= TWO_BALLOON_BELOW_t_MM else (lo, hi)
+    return (float(L[0]), float(L[1])), (float(t[0]), float(t[1]))
+
+
+@dataclass
+class _Eval:
+    L: np.ndarray
+    t: np.ndarray
+    score: np.ndarray
+    p: np.ndarray
+    p_lo: np.ndarray
+    p_hi: np.ndarray
+    v: np.ndarray
+    v_lo: np.ndarray
+    v_hi: np.ndarray
+
+
+def _evaluate(par: ModelParameters, target: DesignTarget, objective: str, L: np.ndarray,
+              t: np.ndarray, level: float) -> _Eval:
+    """Metrics for candidate (L, t) arrays; infeasible candidates score +inf."""
+    th = par.theta
+    P = float(target.pressure_pa)
+    z = bands.z_value(level)
+    sign = 1.0 if th[0] > 0 else -1.0
+    tau = model.tau_pa(th, t)
+    ok = tau > 0
+    with np.errstate(all="ignore"):
+        if target.kind == "pressure_budget":
+            ang = np.full_like(L, sign * target.value)
+            p = model.pressure_pa(th, L, t, ang)
+            g, dp_da = model.pressure_gradient(th, L, t, ang)
+            var = bands.parameter_variance(g, par.cov) + dp_da**2 * bands.scatter_variance(
+                par.residual_sd, par.residual_rel, ang, p / tau)
+            half = z * np.sqrt(var)
+            p_lo, p_hi = p - half, p + half
+            ok &= np.isfinite(p) & (p <= P)
+        else:
+            x = P / tau
+            u = x + (th[3] * x * x if len(th) > 3 else 0.0)
+            L = np.where(ok, target.value / (abs(th[0]) * np.expm1(u)), np.nan)
+            p = np.full_like(L, P)
+            p_lo = p_hi = p
+            ok &= np.isfinite(L)
+        v = model.angle_deg(th, L, t, P)
+        gv = model.angle_gradient(th, L, t, P)
+        vvar = bands.parameter_variance(gv, par.cov) + bands.scatter_variance(
+            par.residual_sd, par.residual_rel, v, P / tau)
+        vh = z * np.sqrt(vvar)
+        score = {"pressure": p, "margin": p_hi, "compact": L + 1e-9 * p,
+                 "certainty": 2 * vh / np.abs(v)}[objective]
+    score = np.where(ok & np.isfinite(score), score, np.inf)
+    return _Eval(L, t, score, p, np.maximum(p_lo, 0.0), p_hi, v, v - vh, v + vh)
+
+
+def _grid(fam: Family, par: ModelParameters, target: DesignTarget, objective: str,
+          Lr: tuple[float, float], tr: tuple[float, float], level: float, n: int) -> _Eval:
+    if target.kind == "pressure_budget":
+        Lg, tg = np.meshgrid(np.linspace(*Lr, n), np.linspace(*tr, n), indexing="ij")
+        return _evaluate(par, target, objective, Lg.ravel(), tg.ravel(), level)
+    t = np.linspace(*tr, n * n)
+    e = _evaluate(par, target, objective, np.zeros_like(t), t, level)
+    e.score = np.where((e.L >= Lr[0] - 1e-12) & (e.L <= Lr[1] + 1e-12), e.score, np.inf)
+    return e
+
+
+def _refine(fam: Family, par: ModelParameters, target: DesignTarget, objective: str,
+            Lr: tuple[float, float], tr: tuple[float, float], level: float, n: int,
+            best: int, e: _Eval) -> _Eval:
+    dL = (Lr[1] - Lr[0]) / max(n - 1, 1)
+    if target.kind == "pressure_budget":
+        dt = (tr[1] - tr[0]) / max(n - 1, 1)
+        L0, t0 = e.L[best], e.t[best]
+        sub_L = (max(Lr[0], L0 - dL), min(Lr[1], L0 + dL))
+        sub_t = (max(tr[0], t0 - dt), min(tr[1], t0 + dt))
+        return _grid(fam, par, target, objective, sub_L, sub_t, level, 15)
+    dt = (tr[1] - tr[0]) / max(n * n - 1, 1)
+    t0 = e.t[best]
+    return _grid(fam, par, target, objective, Lr, (max(tr[0], t0 - dt), min(tr[1], t0 + dt)),
+                 level, 7)
+
+
+def _concat(evals: list[_Eval]) -> _Eval:
+    return _Eval(*(np.concatenate([getattr(e, f) for e in evals])
+                   for f in ("L", "t", "score", "p", "p_lo", "p_hi", "v", "v_lo", "v_hi")))
+
+
+def inverse_design(surrogate: Surrogate, target: DesignTarget,
+                   bounds: DesignBounds | None = None, *, objective: str | None = None,
+                   n_results: int = 5, level: float = 0.95,
+                   grid: int = GRID) -> InverseDesignResult:
+    """Feasible designs for ``target`` inside ``bounds`` ranked by ``objective``, or an
+    explanation of why none is feasible. See the module docstring."""
+    target = target.validated()
+    bounds = (bounds or DesignBounds()).validated()
+    objective = objective or DEFAULT_OBJECTIVE[target.kind]
+    if objective not in OBJECTIVES:
+        raise InputError("objective", f"unknown objective {objective!r}", " | ".join(OBJECTIVES))
+    if objective in ("pressure", "margin") and target.kind != "pressure_budget":
+        raise InputError("objective", f"{objective!r} ranks pressure_budget targets only",
+                         "certainty | compact")
+    if not 1 <= n_results <= 50:
+        raise InputError("n_results", f"got {n_results!r}", "1 <= n_results <= 50")
+    if not 4 <= grid <= 400:
+        raise InputError("grid", f"got {grid!r}", "4 <= grid <= 400")
+    bands.z_value(level)
+    per_family: list[tuple[Family, ModelParameters, _Eval, tuple, tuple]] = []
+    n_eval = 0
+    for fam in _families(surrogate, bounds):
+        par = fam.force if target.kind == "force_at_pressure" else surrogate._params(fam, None)
+        if par is None:
+            continue
+        Lr, tr = _ranges(fam, bounds)
+        e = _grid(fam, par, target, objective, Lr, tr, level, grid)
+        n_eval += e.score.size
+        best = int(np.argmin(e.score))
+        if np.isfinite(e.score[best]):
+            r = _refine(fam, par, target, objective, Lr, tr, level, grid, best, e)
+            n_eval += r.score.size
+            e = _concat([r, e])
+        per_family.append((fam, par, e, Lr, tr))
+    if not per_family:
+        what = "force curves" if target.kind == "force_at_pressure" else "families"
+        raise InputError("target", f"surrogate '{surrogate.name}' has no {what} for this "
+                         "target", "a surrogate fitted from records with that data")
+    picked = _pick(per_family, n_results)
+    candidates = tuple(_candidate(surrogate, i + 1, fam, par, e, j, target, level)
+                       for i, (fam, par, e, j, Lr, tr) in enumerate(picked))
+    if candidates:
+        return InverseDesignResult(target, objective, True, candidates,
+                                   f"{len(candidates)} feasible design(s), ranked by "
+                                   f"{objective}", n_evaluated=n_eval, model=surrogate.name)
+    reach = _best_reachable(per_family, target)
+    return InverseDesignResult(target, objective, False, (), reach.pop("explanation"), reach,
+                               n_evaluated=n_eval, model=surrogate.name)
+
+
+def _pick(per_family: list, n: int) -> list:
+    """Greedy: the best remaining score, then drop its neighbours in the same family
+    (closer than MIN_SPACING in L, t normalised by the bounds); n times."""
+    score, fam_i, xL, xt, idx = [], [], [], [], []
+    for k, (_, _, e, Lr, tr) in enumerate(per_family):
+        score.append(e.score)
+        fam_i.append(np.full(e.score.size, k))
+        xL.append((e.L - Lr[0]) / max(Lr[1] - Lr[0], 1e-9))
+        xt.append((e.t - tr[0]) / max(tr[1] - tr[0], 1e-9))
+        idx.append(np.arange(e.score.size))
+    s, f, a, b, j_all = (np.concatenate(v) for v in (score, fam_i, xL, xt, idx))
+    s = s.copy()
+    chosen = []
+    for _ in range(n):
+        j = int(np.argmin(s))
+        if not np.isfinite(s[j]):
+            break
+        fam, par, e, Lr, tr = per_family[f[j]]
+        chosen.append((fam, par, e, int(j_all[j]), Lr, tr))
+        near = (f == f[j]) & (np.hypot(a - a[j], b - b[j]) < MIN_SPACING)
+        s[near] = np.inf
+    return chosen
+
+
+def _design(fam: Family, L: float, t: float) -> Design:
+    W = fam.domain.W_mm[0] if fam.domain.W_mm else Design().W_mm
+    return replace(Design(), L_mm=float(L), t_mm=float(t), T_mm=fam.T_mm, b_mm=fam.b_mm,
+                   h_mm=fam.h_mm, W_mm=W, body_material=fam.body_material,
+                   membrane_material=fam.membrane_material)
+
+
+def _candidate(s: Surrogate, rank: int, fam: Family, par: ModelParameters, e: _Eval, j: int,
+               target: DesignTarget, level: float) -> DesignCandidate:
+    design = _design(fam, e.L[j], e.t[j])
+    top = max(target.pressure_pa, float(e.p_hi[j]) if np.isfinite(e.p_hi[j]) else 0.0)
+    curve = s.predict(design, np.linspace(0.0, top, CURVE_POINTS), level, form=par.form
+                      if target.kind != "force_at_pressure" else None)
+    return DesignCandidate(rank, design, fam.label, float(e.score[j]), float(e.p[j]),
+                           float(e.p_lo[j]), float(e.p_hi[j]), float(e.v[j]),
+                           float(e.v_lo[j]), float(e.v_hi[j]), curve)
+
+
+def _best_reachable(per_family: list, target: DesignTarget) -> dict[str, object]:
+    """Largest |value| at the target pressure within the bounds, and the least pressure
+    any design needs for the target (both over the search grid's corners)."""
+    unit = "mN" if target.kind == "force_at_pressure" else "deg"
+    P = target.pressure_pa
+    best = None
+    for fam, par, _, Lr, tr in per_family:
+        for L in Lr:
+            for t in tr:
+                if not model.tau_pa(par.theta, t) > 0:
+                    continue
+                v = float(model.angle_deg(par.theta, L, t, P))
+                if best is None or abs(v) > abs(best["value"]):
+                    best = {"value": v, "L_mm": L, "t_mm": t, "family": fam.label}
+    smallest = None
+    for fam, par, _, Lr, tr in per_family:
+        for L in Lr:
+            for t in tr:
+                v = float(model.angle_deg(par.theta, L, t, P))
+                if smallest is None or abs(v) < abs(smallest["value"]):
+                    smallest = {"value": v, "L_mm": L, "t_mm": t, "family": fam.label}
+    out: dict[str, object] = {"largest_at_pressure": best, "smallest_at_pressure": smallest,
+                              "unit": unit, "pressure_pa": P}
+    if best is None:
+        out["explanation"] = "no design inside the bounds has a positive pressure constant"
+    elif target.kind != "pressure_budget" and smallest and target.value < abs(
+            smallest["value"]):
+        out["explanation"] = (
+            f"{target.value:g} {unit} at {P:g} Pa is below the smallest value reachable inside "
+            f"the bounds, {abs(smallest['value']):.3g} {unit} (L = {smallest['L_mm']:g} mm, "
+            f"t = {smallest['t_mm']:g} mm): lower the pressure or widen the bounds")
+    else:
+        out["explanation"] = (
+            f"{target.value:g} {unit} is not reachable at {P:g} Pa inside the bounds: the "
+            f"largest is {abs(best['value']):.3g} {unit} (L = {best['L_mm']:g} mm, t = "
+            f"{best['t_mm']:g} mm, {best['family']}); raise the pressure, allow a longer "
+            "chamber or a thinner membrane")
+    return out

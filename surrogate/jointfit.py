@@ -1,0 +1,267 @@
+"""Joint fit of one family's curves: (a, a_t, b_t) [and c for the extended form] at once.
+
+Least squares on every usable point of every curve (scipy.optimize.least_squares),
+weighted by the residual-scatter model of ``surrogate.bands`` (two passes: unweighted,
+then weighted with the scatter estimated from the first pass). The covariance is
+(J_w^T J_w)^-1 times the weighted residual variance RSS_w / (n - k), J_w the weighted
+Jacobian at the solution. With fewer than two membrane thicknesses b_t is not
+identifiable and is held at the paper's value (its variance is then zero).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from surrogate import bands, model
+from surrogate.curvefit import fit_free, thickness_constants
+from surrogate.paper_data import B_T_PER_MM
+
+
+@dataclass(frozen=True)
+class Points:
+    """A family's data flattened: per point L_mm, t_mm, pressure_pa, value (deg or mN)
+    and the index of the curve (design) it came from."""
+
+    L_mm: np.ndarray
+    t_mm: np.ndarray
+    pressure_pa: np.ndarray
+    value: np.ndarray
+    curve: np.ndarray
+
+    def subset(self, mask: np.ndarray) -> Points:
+        return Points(self.L_mm[mask], self.t_mm[mask], self.pressure_pa[mask],
+                      self.value[mask], self.curve[mask])
+
+    @property
+    def n_curves(self) -> int:
+        return len(np.unique(self.curve))
+
+
+def make_points(curves: list[tuple[float, float, np.ndarray, np.ndarray]]) -> Points:
+    """From [(L_mm, t_mm, pressure_pa, value), ...]."""
+    parts = [(np.full(len(p), L), np.full(len(p), t), p, y, np.full(len(p), i))
+             for i, (L, t, p, y) in enumerate(curves)]
+    cols = [np.concatenate([part[j] for part in parts]) if parts else np.empty(0)
+            for j in range(5)]
+    return Points(*(c.astype(float) for c in cols[:4]), cols[4].astype(int))
+
+
+@dataclass(frozen=True)
+class ModelParameters:
+    """A fitted (or published) parameter set of one form for one family.
+
+    values/covariance follow ``names``; ``fixed`` names parameters held constant (zero
+    variance); residual scatter sd(angle) = sqrt(residual_sd^2 + (residual_rel angle)^2)
+    in the model's unit (deg for angle, mN for force). ``rmse``/``max_error`` are the
+    in-sample errors of the fit, ``n_points``/``n_curves`` its data."""
+
+    form: str
+    names: tuple[str, ...]
+    values: tuple[float, ...]
+    covariance: tuple[tuple[float, ...], ...]
+    residual_sd: float
+    residual_rel: float
+    fixed: tuple[str, ...] = ()
+    rmse: float | None = None
+    max_error: float | None = None
+    n_points: int = 0
+    n_curves: int = 0
+    source: str = "fit"
+    extra: dict = field(default_factory=dict)
+
+    @cached_property
+    def theta(self) -> np.ndarray:
+        return np.asarray(self.values, dtype=float)
+
+    @cached_property
+    def cov(self) -> np.ndarray:
+        return np.asarray(self.covariance, dtype=float).reshape(len(self.values),
+                                                                len(self.values))
+
+    def as_dict(self) -> dict[str, object]:
+        return {"form": self.form, "names": list(self.names), "values": list(self.values),
+                "covariance": [list(r) for r in self.covariance],
+                "residual_sd": self.residual_sd, "residual_rel": self.residual_rel,
+                "fixed": list(self.fixed), "rmse": self.rmse, "max_error": self.max_error,
+                "n_points": self.n_points, "n_curves": self.n_curves, "source": self.source,
+                "extra": dict(self.extra)}
+
+
+def parameters_from_dict(d: dict) -> ModelParameters:
+    return ModelParameters(
+        form=d["form"], names=tuple(d["names"]), values=tuple(float(v) for v in d["values"]),
+        covariance=tuple(tuple(float(v) for v in r) for r in d["covariance"]),
+        residual_sd=float(d["residual_sd"]), residual_rel=float(d["residual_rel"]),
+        fixed=tuple(d.get("fixed", ())), rmse=d.get("rmse"), max_error=d.get("max_error"),
+        n_points=int(d.get("n_points", 0)), n_curves=int(d.get("n_curves", 0)),
+        source=d.get("source", "fit"), extra=dict(d.get("extra", {})))
+
+
+def start_values(pts: Points) -> np.ndarray:
+    """(a, a_t, b_t) from per-curve free fits, as the paper's two-stage procedure."""
+    A, tau, L, t = [], [], [], []
+    for i in np.unique(pts.curve):
+        sub = pts.subset(pts.curve == i)
+        f = fit_free(sub.pressure_pa, sub.value)
+        A.append(f.A_deg)
+        tau.append(f.tau_pa)
+        L.append(sub.L_mm[0])
+        t.append(sub.t_mm[0])
+    L_, A_ = np.array(L), np.array(A)
+    a = float(L_ @ A_ / (L_ @ L_))
+    t_, tau_ = np.array(t), np.array(tau)
+    if len(np.unique(t_)) >= 2:
+        line = thickness_constants(t_, tau_)
+        a_t, b_t = line.values
+        if a_t > 0 and b_t * t_.min() > 1.0:
+            return np.array([a, a_t, b_t])
+    b_t = _default_b_t(t_)
+    a_t = float(np.mean(tau_ / np.log10(b_t * t_)))
+    return np.array([a, a_t, b_t])
+
+
+def _default_b_t(t_mm: np.ndarray) -> float:
+    b_t = B_T_PER_MM
+    return b_t if b_t * t_mm.min() > 1.05 else 2.0 / float(t_mm.min())
+
+
+def joint_fit(pts: Points, form: str = "exponential", start: np.ndarray | None = None,
+              weighted: bool = True) -> ModelParameters:
+    """Fit ``form`` to all points of a family; see the module docstring."""
+    names = model.PARAMETER_NAMES[form]
+    theta0 = np.array(start if start is not None else start_values(pts), dtype=float)
+    if form == "extended" and len(theta0) == 3:
+        theta0 = np.append(theta0, 0.0)
+    free = np.ones(len(names), dtype=bool)
+    if len(np.unique(pts.t_mm)) < 2:
+        free[2] = False
+    lo = np.array([-np.inf, 1e-9, 1.0 / pts.t_mm.min() * (1 + 1e-6), -5.0])[: len(names)]
+    hi = np.array([np.inf, np.inf, np.inf, 5.0])[: len(names)]
+    theta0 = np.clip(theta0, lo + 1e-12, hi - 1e-12)
+
+    def solve(theta_start: np.ndarray, w: np.ndarray) -> np.ndarray:
+        def full(q: np.ndarray) -> np.ndarray:
+            th = theta_start.copy()
+            th[free] = q
+            return th
+
+        def fun(q: np.ndarray) -> np.ndarray:
+            with np.errstate(over="ignore", invalid="ignore"):
+                r = (model.angle_deg(full(q), pts.L_mm, pts.t_mm, pts.pressure_pa)
+                     - pts.value) * w
+            return np.nan_to_num(r, nan=1e12, posinf=1e12, neginf=-1e12)
+
+        def jac(q: np.ndarray) -> np.ndarray:
+            with np.errstate(over="ignore", invalid="ignore"):
+                g = model.angle_gradient(full(q), pts.L_mm, pts.t_mm, pts.pressure_pa)
+            return np.nan_to_num(g[:, free] * w[:, None], nan=0.0, posinf=1e12, neginf=-1e12)
+
+        sol = least_squares(fun, theta_start[free], jac=jac, bounds=(lo[free], hi[free]),
+                            x_scale="jac", method="trf", max_nfev=2000)
+        return full(sol.x)
+
+    w = np.ones_like(pts.value)
+    theta = solve(theta0, w)
+    sd, rel = _scatter(theta, pts)
+    if weighted:
+        w = _weights(theta, pts, sd, rel)
+        theta = solve(theta, w)
+        sd, rel = _scatter(theta, pts)
+        w = _weights(theta, pts, sd, rel)
+    cov = _covariance(theta, pts, w, free)
+    err = _predict(theta, pts) - pts.value
+    return ModelParameters(
+        form=form, names=names, values=tuple(float(v) for v in theta),
+        covariance=tuple(tuple(float(v) for v in row) for row in cov),
+        residual_sd=sd, residual_rel=rel,
+        fixed=tuple(n for n, f in zip(names, free, strict=True) if not f),
+        rmse=float(np.sqrt(np.mean(err ** 2))), max_error=float(np.max(np.abs(err))),
+        n_points=len(pts.value), n_curves=pts.n_curves)
+
+
+def _predict(theta: np.ndarray, pts: Points) -> np.ndarray:
+    return model.angle_deg(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
+
+
+def _x(theta: np.ndarray, pts: Points) -> np.ndarray:
+    return pts.pressure_pa / model.tau_pa(theta, pts.t_mm)
+
+
+def _scatter(theta: np.ndarray, pts: Points) -> tuple[float, float]:
+    m = _predict(theta, pts)
+    return bands.fit_scatter(pts.value - m, m, _x(theta, pts))
+
+
+def _weights(theta: np.ndarray, pts: Points, sd: float, rel: float) -> np.ndarray:
+    var = bands.scatter_variance(sd, rel, _predict(theta, pts), _x(theta, pts))
+    return 1.0 / np.sqrt(np.maximum(var, 1e-12 * max(sd, 1e-9) ** 2))
+
+
+def _covariance(theta: np.ndarray, pts: Points, w: np.ndarray, free: np.ndarray) -> np.ndarray:
+    k = len(theta)
+    J = model.angle_gradient(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)[:, free] * w[:, None]
+    r = (_predict(theta, pts) - pts.value) * w
+    n, kf = J.shape
+    cov = np.zeros((k, k))
+    if n <= kf:
+        return cov
+    s2 = float(r @ r) / (n - kf)
+    sub = np.linalg.pinv(J.T @ J) * s2
+    idx = np.flatnonzero(free)
+    cov[np.ix_(idx, idx)] = sub
+    return cov
+
+
+def band(params: ModelParameters, L_mm, t_mm, pressure_pa, level: float = 0.95,
+         scale: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(prediction, lower, upper) at ``level``; ``scale`` multiplies the half-width."""
+    z = bands.z_value(level)
+    m = model.angle_deg(params.theta, L_mm, t_mm, pressure_pa)
+    g = model.angle_gradient(params.theta, L_mm, t_mm, pressure_pa)
+    x = np.asarray(pressure_pa, dtype=float) / model.tau_pa(params.theta, t_mm)
+    var = bands.parameter_variance(g, params.cov) + bands.scatter_variance(
+        params.residual_sd, params.residual_rel, m, x)
+    half = scale * z * np.sqrt(var)
+    return m, m - half, m + half
+
+
+def leave_one_design_out(pts: Points, form: str, level: float = 0.95,
+                         start: np.ndarray | None = None) -> dict[str, object]:
+    """Refit without each design in turn and predict it: RMSE and max error (model unit)
+    per held-out design and pooled, and the fraction of held-out points inside the band."""
+    designs = np.unique(pts.curve)
+    if len(designs) < 2:
+        return {"form": form, "n_designs": int(len(designs)), "available": False}
+    rows = []
+    all_err, inside = [], []
+    for i in designs:
+        held = pts.curve == i
+        train, test = pts.subset(~held), pts.subset(held)
+        if len(np.unique(train.L_mm)) < 1:
+            continue
+        params = joint_fit(train, form, start=start)
+        m, lo, hi = band(params, test.L_mm, test.t_mm, test.pressure_pa, level)
+        err = m - test.value
+        ins = (test.value >= lo) & (test.value <= hi)
+        all_err.append(err)
+        inside.append(ins)
+        rows.append({"L_mm": float(test.L_mm[0]), "t_mm": float(test.t_mm[0]),
+                     "rmse": float(np.sqrt(np.mean(err ** 2))),
+                     "max_error": float(np.max(np.abs(err))),
+                     "coverage": float(np.mean(ins)), "n_points": int(len(err))})
+    e = np.concatenate(all_err)
+    ins_all = np.concatenate(inside)
+    return {"form": form, "available": True, "level": level, "n_designs": len(rows),
+            "rmse": float(np.sqrt(np.mean(e ** 2))), "max_error": float(np.max(np.abs(e))),
+            "coverage": float(np.mean(ins_all)),
+            "mean_design_coverage": float(np.mean([r["coverage"] for r in rows])),
+            "designs": rows}
+
+
+def nan_to_none(x: float) -> float | None:
+    return None if x is None or not math.isfinite(x) else float(x)

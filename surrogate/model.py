@@ -1,0 +1,126 @@
+"""The exponential bending model and its extension, as pure vectorised functions.
+
+Paper form ("exponential", Eq. 5-6 of the reference paper)::
+
+    angle_deg = A (exp(x) - 1),  x = p / tau
+    A   = a L                         (a: deg/mm, L: chamber length, mm)
+    tau = a_t log10(b_t t)            (a_t: Pa, b_t: 1/mm, t: membrane thickness, mm)
+
+Extended form ("extended"): one more dimensionless parameter c per family::
+
+    angle_deg = A (exp(x + c x^2) - 1)
+
+i.e. an effective pressure constant that changes with pressure, 1/tau_eff = (1 + c x)/tau.
+It keeps the paper's linear small-pressure limit (angle ~ A p / tau) and bends the
+large-angle end up (c > 0: the membrane softens as it balloons) or down (c < 0: the
+Ogden material stiffens). c = 0 is the paper's form.
+
+Every function broadcasts over L_mm, t_mm and pressure_pa; ``theta`` is the parameter
+vector (a, a_t, b_t) or (a, a_t, b_t, c). A is signed: a < 0 for a family that bends the
+other way (e.g. an Ecoflex body on a PDMS membrane).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+FORMS = ("exponential", "extended")
+PARAMETER_NAMES = {
+    "exponential": ("a_deg_per_mm", "a_t_pa", "b_t_per_mm"),
+    "extended": ("a_deg_per_mm", "a_t_pa", "b_t_per_mm", "c"),
+}
+TAU_FORM = "tau_pa = a_t_pa * log10(b_t_per_mm * t_mm)"
+LN10 = float(np.log(10.0))
+
+
+def tau_pa(theta: np.ndarray, t_mm: np.ndarray | float) -> np.ndarray:
+    """Pressure constant tau (Pa) for membrane thickness t (mm); <= 0 when b_t t <= 1."""
+    return theta[1] * np.log10(theta[2] * np.asarray(t_mm, dtype=float))
+
+
+def amplitude_deg(theta: np.ndarray, L_mm: np.ndarray | float) -> np.ndarray:
+    """Amplification constant A = a L (deg), signed."""
+    return theta[0] * np.asarray(L_mm, dtype=float)
+
+
+def _c(theta: np.ndarray) -> float:
+    return float(theta[3]) if len(theta) > 3 else 0.0
+
+
+def angle_deg(theta: np.ndarray, L_mm, t_mm, pressure_pa) -> np.ndarray:
+    """Bending angle (deg) at cavity pressure p (Pa) for chamber length L and thickness t."""
+    x = np.asarray(pressure_pa, dtype=float) / tau_pa(theta, t_mm)
+    c = _c(theta)
+    u = x + c * x * x if c else x
+    return amplitude_deg(theta, L_mm) * np.expm1(u)
+
+
+def angle_gradient(theta: np.ndarray, L_mm, t_mm, pressure_pa) -> np.ndarray:
+    """d angle / d theta, shape broadcast(L, t, p) + (len(theta),)."""
+    L = np.asarray(L_mm, dtype=float)
+    t = np.asarray(t_mm, dtype=float)
+    tau = tau_pa(theta, t)
+    x = np.asarray(pressure_pa, dtype=float) / tau
+    c = _c(theta)
+    e = np.exp(x + c * x * x)
+    A = theta[0] * L
+    d_tau = -A * e * (1.0 + 2.0 * c * x) * x / tau  # d angle / d tau
+    cols = [L * (e - 1.0), d_tau * np.log10(theta[2] * t), d_tau * theta[1] / (theta[2] * LN10)]
+    if len(theta) > 3:
+        cols.append(A * e * x * x)
+    cols = np.broadcast_arrays(*cols)
+    return np.stack(cols, axis=-1)
+
+
+def pressure_pa(theta: np.ndarray, L_mm, t_mm, angle_deg_: np.ndarray | float) -> np.ndarray:
+    """Inverse of ``angle_deg``: the pressure (Pa) that gives the angle (closed form),
+    p = tau x with x + c x^2 = ln(1 + angle / A). NaN where the angle is not reachable
+    (opposite sign to A, or beyond the extended model's maximum when c < 0)."""
+    A = amplitude_deg(theta, L_mm)
+    tau = tau_pa(theta, t_mm)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.asarray(angle_deg_, dtype=float) / A
+        y = np.where(ratio >= 0.0, np.log1p(ratio), np.nan)
+        x = _solve_exponent(y, _c(theta))
+    return tau * x
+
+
+def _solve_exponent(y: np.ndarray, c: float) -> np.ndarray:
+    """Root x >= 0 of x + c x^2 = y (stable form 2y / (1 + sqrt(1 + 4 c y)))."""
+    if not c:
+        return y
+    disc = 1.0 + 4.0 * c * y
+    with np.errstate(invalid="ignore"):
+        return np.where(disc >= 0.0, 2.0 * y / (1.0 + np.sqrt(disc)), np.nan)
+
+
+def pressure_gradient(theta: np.ndarray, L_mm, t_mm, angle_deg_) -> tuple[np.ndarray, np.ndarray]:
+    """(d p / d theta with shape (..., len(theta)), d p / d angle), for the inverse's band."""
+    L = np.asarray(L_mm, dtype=float)
+    t = np.asarray(t_mm, dtype=float)
+    ang = np.asarray(angle_deg_, dtype=float)
+    A = theta[0] * L
+    tau = tau_pa(theta, t)
+    c = _c(theta)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y = np.log1p(ang / A)
+        x = _solve_exponent(y, c)
+        dx_dy = 1.0 / (1.0 + 2.0 * c * x)
+        dy_dA = -ang / (A * (A + ang))
+        cols = [tau * dx_dy * dy_dA * L, x * np.log10(theta[2] * t),
+                x * theta[1] / (theta[2] * LN10)]
+        if len(theta) > 3:
+            cols.append(-tau * x * x * dx_dy)
+        dp_dangle = tau * dx_dy / (A + ang)
+    cols = np.broadcast_arrays(*cols)
+    return np.stack(cols, axis=-1), dp_dangle
+
+
+def max_angle_deg(theta: np.ndarray, L_mm, t_mm) -> np.ndarray:
+    """Largest angle magnitude the model reaches (inf unless c < 0, where the exponent
+    x + c x^2 peaks at x = -1 / (2 c))."""
+    c = _c(theta)
+    A = amplitude_deg(theta, L_mm) + 0.0 * np.asarray(t_mm, dtype=float)
+    if c >= 0.0:
+        return np.full(np.shape(A), np.inf)
+    return np.abs(A * np.expm1(-1.0 / (4.0 * c)))
