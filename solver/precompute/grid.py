@@ -194,7 +194,7 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise GridError(source, _toml_line(str(exc)), "toml", str(exc),
+        raise GridError(source, _toml_line(str(exc), text), "toml", str(exc),
                         "valid TOML (https://toml.io)") from None
     reader.check_keys(data, (), TOP_KEYS)
     known = reader.materials(data.get("materials"))
@@ -253,7 +253,9 @@ def _expand(reader: _Reader, where: tuple, merged: dict, own: dict,
     return out
 
 
-def _toml_line(message: str) -> int:
+def _toml_line(message: str, text: str) -> int:
+    if "end of document" in message:
+        return max(1, len(text.splitlines()))
     marker = "at line "
     if marker in message:
         digits = message.split(marker, 1)[1].split(",")[0].split(")")[0]

@@ -1,0 +1,148 @@
+"""Grid files: expansion, and every kind of bad grid rejected with its line before any
+solve."""
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from solver.precompute import GridError, load_grid, parse_grid
+from solver.precompute.lines import key_lines
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def grid(text: str):
+    return parse_grid(textwrap.dedent(text).lstrip("\n"), "g.toml")
+
+
+def rejected(text: str) -> GridError:
+    with pytest.raises(GridError) as info:
+        grid(text)
+    return info.value
+
+
+def test_cartesian_product_with_ranges_lists_and_settings():
+    g = grid("""
+        pairs = [["pdms_1_10", "ecoflex_00_30"], ["pdms_1_15", "ecoflex_00_30"]]
+        L_mm = {start = 4.1, stop = 17.1, num = 14}
+        t_mm = [0.5, 1.0]
+        [settings]
+        mesh_level = 0
+        element = "hex1"
+        """)
+    assert len(g) == 2 * 14 * 2
+    first = g.points[:14 * 2:2]
+    # 14 evenly spaced values from 4.1 to 17.1 are 4.1, 5.1, ..., 17.1 (step 1 mm), exactly
+    assert [p.design.L_mm for p in first] == [round(4.1 + i, 9) for i in range(14)]
+    assert {p.settings.element for p in g.points} == {"hex1"}
+    assert g.points[0].design.body_material.id == "pdms_1_10"
+    assert len({p.key for p in g.points}) == len(g)
+
+
+def test_sweeps_take_top_level_defaults_and_duplicates_are_solved_once():
+    g = grid("""
+        pairs = [["pdms_1_10", "ecoflex_00_30"]]
+        t_mm = 0.5
+        [[sweep]]
+        L_mm = [4.1, 7.1]
+        [[sweep]]
+        L_mm = [7.1, 11.1]
+        T_mm = 1.5
+        [[sweep]]
+        L_mm = 7.1
+        """)
+    assert [(p.design.L_mm, p.design.T_mm) for p in g.points] == [
+        (4.1, 1.0), (7.1, 1.0), (7.1, 1.5), (11.1, 1.5)]
+
+
+def test_custom_materials_can_be_used_in_pairs():
+    g = grid("""
+        pairs = [["pdms_1_10", "soft"]]
+        [materials.soft]
+        mu_kpa = [1.0]
+        alpha = [2.5]
+        """)
+    assert g.points[0].design.membrane_material.alpha == (2.5,)
+
+
+def test_shipped_default_grid_is_valid_and_small():
+    g = load_grid(REPO / "grids" / "default.toml")
+    assert 20 <= len(g) <= 30
+    pairs = {(p.design.body_material.id, p.design.membrane_material.id) for p in g.points}
+    assert pairs == {("pdms_1_10", "ecoflex_00_30"), ("pdms_1_15", "ecoflex_00_30"),
+                     ("ecoflex_00_30", "pdms_1_15")}
+    # the paper's design space (Section 3): L 4.1 to 17.1 mm, t 0.5 to 1.0 mm
+    assert min(p.design.L_mm for p in g.points) == 4.1
+    assert max(p.design.L_mm for p in g.points) == 17.1
+    assert {p.design.t_mm for p in g.points} == {0.5, 0.75, 1.0}
+    assert g.settings == type(g.settings)()  # solver defaults
+
+
+@pytest.mark.parametrize("text,line,field,allowed", [
+    # unknown keys, at top level, in a sweep, in a range and in [settings]
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\ncolour = "red"\n', 2, "colour", "L_mm"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n[[sweep]]\nL_mm = 5.0\nLmm = 4\n', 4, "Lmm",
+     "t_mm"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 4, stop = 5, n = 2}\n', 2,
+     "n", "num"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n\n[settings]\nmesh = 1\n', 4,
+     "settings.mesh", "mesh_level"),
+    # negative and out-of-range lengths, in a list spread over lines and in a range
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nt_mm = [0.5,\n  -0.25]\n', 3, "t_mm",
+     "0.05 <= t_mm <= 5"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = -1, stop = 5, num = 3}\n', 2,
+     "L_mm", "0.5 <= L_mm <= 60"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nT_mm = "thick"\n', 2, "T_mm", "0.1 <= T_mm"),
+    # unknown materials (the line of the bad id inside a multi-line list)
+    ('pairs = [\n  ["pdms_1_10", "ecoflex_00_30"],\n  ["pdms_1_20", "ecoflex_00_30"],\n]\n', 3,
+     "pairs", "ecoflex_00_30, pdms_1_10, pdms_1_15"),
+    ('pairs = [["pdms_1_10"]]\n', 1, "pairs", "<membrane id>"),
+    ('L_mm = 5.0\n', 1, "pairs", "pdms_1_10"),
+    # empty ranges and lists
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 4, stop = 5, num = 0}\n', 2,
+     "L_mm", "num >= 1"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 9, stop = 5, num = 3}\n', 2,
+     "L_mm", "start <= stop"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n\nt_mm = []\n', 3, "t_mm",
+     "one or more values"),
+    ('pairs = []\n', 1, "pairs", "<body id>"),
+    # a design that does not fit, bad settings values, broken TOML, bad custom material
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nW_mm = 3.0\nb_mm = 3.5\n', 3, "b_mm",
+     "b_mm < W_mm"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n[settings]\nelement = "tet4"\n', 3,
+     "settings.element", "hex2 | hex1"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = [4.1, 7.1\n', 2, "toml", "valid TOML"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n\nL_mm = [4.1,, 7.1]\n', 3, "toml",
+     "valid TOML"),
+    ('pairs = [["x", "ecoflex_00_30"]]\n[materials.x]\nmu_kpa = [1.0, 2.0]\nalpha = [1.0]\n', 3,
+     "materials.x.mu_kpa", "1 to 6 terms"),
+])
+def test_bad_grids_are_rejected_with_line_field_and_allowed_values(text, line, field, allowed):
+    error = rejected(text)
+    assert (error.line, error.field) == (line, field), str(error)
+    assert allowed in (error.allowed or ""), str(error)
+    assert str(error).startswith(f"g.toml, line {line}: {field}: ")
+
+
+def test_key_lines_handles_comments_strings_and_tables():
+    text = textwrap.dedent("""\
+        # L_mm = 1 in a comment
+        name = "x = [ not a table"   # brackets inside a string
+        pairs = [
+          ["a", "b"],  # [not a header]
+        ]
+        [[sweep]]
+        L_mm = 4.1
+        [[sweep]]
+        L_mm = 5.1
+        [materials.soft]
+        mu_kpa = [1.0]
+        """)
+    spans = key_lines(text)
+    assert spans[("name",)] == (2, 2)
+    assert spans[("pairs",)] == (3, 5)
+    assert spans[("sweep", 0, "L_mm")] == (7, 7)
+    assert spans[("sweep", 1, "L_mm")] == (9, 9)
+    assert spans[("materials", "soft", "mu_kpa")] == (11, 11)
+    assert ("L_mm",) not in spans

@@ -1,0 +1,213 @@
+"""The precompute job's logic with a fast deterministic fake solve (tests/
+test_precompute_fakes.py): skipping, failures, retries, interruption, worker errors, and
+the same code path on a process pool and on a Dask cluster."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+from test_precompute_fakes import always_ok_solve, fake_curve, fake_solve
+
+from solver.precompute import load_grid, parse_grid, plan, precompute, run_job
+from solver.precompute.job import solve_point
+from solver.store import CurveStore
+
+HERE = Path(__file__).resolve().parent
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(HERE), str(HERE.parent)])}
+
+# 3 lengths x T in {1, 2, 3}: T = 2 makes fake_solve return a failed curve, T = 3 raise
+GRID = """
+pairs = [["pdms_1_10", "ecoflex_00_30"]]
+L_mm = [4.1, 7.1, 11.1]
+t_mm = 0.5
+T_mm = [1.0, 2.0, 3.0]
+[settings]
+mesh_level = 0
+element = "hex1"
+"""
+
+
+@pytest.fixture
+def grid():
+    return parse_grid(GRID, "grid.toml")
+
+
+def test_plan_skips_done_and_failed_unless_retried(grid):
+    keys = [p.key for p in grid.points]
+    statuses = {keys[0]: "complete", keys[1]: "stopped", keys[2]: "failed"}
+    todo, summary = plan(grid.points, statuses)
+    assert [p.key for p in todo] == keys[3:]
+    assert (summary.grid_total, summary.skipped_done, summary.skipped_failed,
+            summary.to_solve) == (9, 2, 1, 6)
+    todo, summary = plan(grid.points, statuses, retry_failed=True)
+    assert [p.key for p in todo] == keys[2:] and summary.skipped_failed == 0
+
+
+def test_solve_point_turns_exceptions_into_failed_records(grid):
+    raising = next(p for p in grid.points if p.design.T_mm == 3.0)
+    record = solve_point(raising.design, raising.settings, fake_solve)
+    assert record.key == raising.key
+    assert record.curve.status == "failed" and len(record.curve) == 0
+    assert record.curve.reason == "RuntimeError: fake: the solver blew up"
+    assert record.provenance["status"] == "failed"
+
+
+def test_pool_job_stores_everything_then_reruns_solve_only_what_is_missing(grid, tmp_path):
+    db_path = tmp_path / "curves.h5"
+    summary = precompute(grid, db_path, workers=2, solve_fn=fake_solve, progress=False,
+                         command="balloon precompute grid.toml --db curves.h5 --workers 2")
+    assert (summary.complete, summary.failed, summary.errors) == (3, 6, 0)
+    assert not summary.interrupted and summary.solved == 9
+    reasons = {reason for _, _, reason in summary.failures}
+    assert reasons == {"fake: Newton did not converge", "RuntimeError: fake: the solver blew up"}
+    with CurveStore(db_path) as db:
+        assert sorted(db.keys()) == sorted(p.key for p in grid.points)
+        ok = db.get(grid.points[0].key)
+        assert ok.curve.angle_deg.tolist() == fake_curve(ok.design).angle_deg.tolist()
+        meta = db.metadata
+    assert meta["generator_command"].startswith("balloon precompute grid.toml")
+    assert meta["grid_toml"] == GRID
+    assert meta["runs"][0]["solved"] == 9 and "finished_utc" in meta["runs"][0]
+
+    again = precompute(grid, db_path, workers=1, solve_fn=fake_solve, progress=False)
+    assert (again.to_solve, again.skipped_done, again.skipped_failed) == (0, 3, 6)
+
+    retried = precompute(grid, db_path, workers=1, solve_fn=always_ok_solve,
+                         retry_failed=True, progress=False)
+    assert (retried.to_solve, retried.complete) == (6, 6)
+    with CurveStore(db_path) as db:
+        assert set(db.statuses().values()) == {"complete"} and len(db) == 9
+        assert len(db.metadata["runs"]) == 3
+
+
+class InlineFuture:
+    """A finished (or, with done=False, never-finishing) future computed in-process."""
+
+    def __init__(self, fn, args, done=True, error=None):
+        self._done, self._error = done, error
+        self._value = fn(*args) if done and error is None else None
+
+    def result(self):
+        if self._error is not None:
+            raise self._error
+        return self._value
+
+    def done(self):
+        return self._done
+
+    def cancelled(self):
+        return False
+
+    def cancel(self):
+        return True
+
+
+class InlineBackend:
+    """Submits run at once; ``pending`` futures never finish; ``as_completed`` raises
+    KeyboardInterrupt after ``interrupt_after`` results, as Ctrl-C would."""
+
+    def __init__(self, pending=(), interrupt_after=None, broken=()):
+        self.pending, self.interrupt_after, self.broken = set(pending), interrupt_after, broken
+        self.submitted, self.aborted = 0, None
+
+    def submit(self, fn, *args):
+        i, self.submitted = self.submitted, self.submitted + 1
+        error = OSError("worker killed (simulated)") if i in self.broken else None
+        return InlineFuture(fn, args, done=i not in self.pending, error=error)
+
+    def as_completed(self, futures):
+        for i, future in enumerate(list(futures)):
+            if i == self.interrupt_after:
+                raise KeyboardInterrupt
+            if future.done():
+                yield future
+
+    def abort(self, futures):
+        self.aborted = list(futures)
+
+    def describe(self):
+        return "inline"
+
+
+def test_interrupt_keeps_every_finished_solve_and_aborts_the_rest(grid, tmp_path):
+    backend = InlineBackend(pending={4, 5, 7}, interrupt_after=2)
+    with CurveStore(tmp_path / "c.h5", mode="a") as db:
+        summary = run_job(grid.points, db, backend, fake_solve, progress=False)
+        stored = set(db.keys())
+    assert summary.interrupted
+    # yielded before Ctrl-C: 0, 1; finished but not yet yielded: 2, 3, 6, 8
+    assert stored == {grid.points[i].key for i in (0, 1, 2, 3, 6, 8)}
+    assert len(backend.aborted) == 3 and summary.not_run == 3
+    assert any("interrupted: 3 not run" in line for line in summary.lines())
+
+
+def test_worker_errors_store_nothing_and_do_not_stop_the_job(grid, tmp_path):
+    backend = InlineBackend(broken={1, 4})
+    with CurveStore(tmp_path / "c.h5", mode="a") as db:
+        summary = run_job(grid.points, db, backend, always_ok_solve, progress=False)
+        assert len(db) == 7
+    assert (summary.errors, summary.complete) == (2, 7)
+    assert all("worker error OSError" in reason for _, _, reason in summary.failures)
+
+
+def test_dask_local_cluster_runs_the_same_job(grid, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        summary = precompute(grid, tmp_path / "c.h5", client=client, solve_fn=fake_solve,
+                             progress=False)
+    assert summary.backend.startswith("Dask scheduler") and "(1 workers)" in summary.backend
+    assert (summary.complete, summary.failed, summary.errors) == (3, 6, 0)
+    with CurveStore(tmp_path / "c.h5") as db:
+        record = db.get(grid.points[0].key)
+    assert record.curve.angle_deg.tolist() == fake_curve(record.design).angle_deg.tolist()
+
+
+RUNNER = """
+import json, sys
+from solver.precompute import load_grid, precompute
+from test_precompute_fakes import slow_fake_solve
+if __name__ == "__main__":
+    s = precompute(load_grid(sys.argv[1]), sys.argv[2], workers=1, solve_fn=slow_fake_solve,
+                   progress=False)
+    print(json.dumps({"interrupted": s.interrupted, "solved": s.solved}), flush=True)
+    sys.exit(130 if s.interrupted else 0)
+"""
+
+
+def test_ctrl_c_on_a_running_job_stops_it_and_keeps_what_finished(tmp_path):
+    grid_path = tmp_path / "grid.toml"
+    grid_path.write_text(GRID.replace("T_mm = [1.0, 2.0, 3.0]", "T_mm = 1.0")
+                         .replace("[4.1, 7.1, 11.1]", "[4.1, 5.1, 6.1, 7.1, 8.1, 9.1]"))
+    runner = tmp_path / "runner.py"
+    runner.write_text(textwrap.dedent(RUNNER))
+    db_path = tmp_path / "c.h5"
+    job = subprocess.Popen([sys.executable, str(runner), grid_path, db_path], env=ENV,
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           start_new_session=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # wait for two finished records
+        if db_path.exists():
+            with CurveStore(db_path) as db:
+                if len(db) >= 2:
+                    break
+        time.sleep(0.1)
+    os.killpg(job.pid, signal.SIGINT)  # what Ctrl-C in a terminal sends
+    out, err = job.communicate(timeout=60)
+    assert job.returncode == 130, err
+    report = json.loads(out)
+    assert report["interrupted"] and 2 <= report["solved"] < 6
+    with CurveStore(db_path) as db:
+        assert len(db) == report["solved"]
+        assert set(db.statuses().values()) == {"complete"}
+    rerun = precompute(load_grid(grid_path), db_path, workers=1, solve_fn=always_ok_solve,
+                       progress=False)
+    assert rerun.to_solve == 6 - report["solved"] and rerun.skipped_done == report["solved"]
+
