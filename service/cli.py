@@ -21,6 +21,9 @@ COMMAND_MODULES = (
     "service.commands.serve",
     "service.commands.precompute",
     "service.commands.db",
+    "service.commands.fit",
+    "service.commands.predict",
+    "service.commands.inverse",
 )
 
 

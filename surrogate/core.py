@@ -221,10 +221,12 @@ class Surrogate:
 def _out_of_family_message(s: Surrogate, design: Design) -> str:
     body, membrane, T, b, h = design.family
     covered = "; ".join(f.label for f in s.family_fits) or "none"
+    same_ids = [f for f in s.family_fits if f.key == design.family]
+    note = (" (a family with these material ids exists, but its Ogden parameters differ)"
+            if same_ids else "")
     return (f"surrogate '{s.name}' has no fitted family for body {body}, membrane "
-            f"{membrane}, T_mm={T:g}, b_mm={b:g}, h_mm={h:g} (covered: {covered}). "
-            f"To add it, put a grid line with body_material={body}, "
-            f"membrane_material={membrane}, T_mm={T:g}, b_mm={b:g}, h_mm={h:g} and at least "
-            "two L_mm and two t_mm values into the precompute grid, run `balloon precompute` "
-            "to solve it into the curve database, then `balloon fit --db DB -o "
-            "surrogate.json`")
+            f"{membrane}, T_mm={T:g}, b_mm={b:g}, h_mm={h:g}{note}; covered: {covered}. "
+            f"To add it, append to the precompute grid a sweep "
+            f"[[sweep]] pairs = [[\"{body}\", \"{membrane}\"]], T_mm = {T:g}, b_mm = {b:g}, "
+            f"h_mm = {h:g}, with at least two L_mm and two t_mm values, run `balloon "
+            "precompute GRID.toml --db DB`, then `balloon fit --db DB -o surrogate.json`")

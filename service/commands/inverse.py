@@ -1,0 +1,120 @@
+"""``balloon inverse``: pressures for target angles of one design, or designs for a target.
+
+    balloon inverse --L-mm 7.1 --t-mm 0.5 --angles-deg 10 45       # one design: pressures
+    balloon inverse --angle-deg 45 --pressure-pa 1500               # designs within a budget
+    balloon inverse --kind angle_at_pressure --angle-deg 30 --pressure-pa 1200 \\
+        --L-range 4 12 --t-range 0.5 1 --pair pdms_1_10/ecoflex_00_30 --objective compact
+    balloon inverse --kind force_at_pressure --force-mn 2 --pressure-pa 1500
+
+Targets, objectives and defaults: docs/surrogate.md (``surrogate.inverse_design``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from service.commands.predict import (
+    add_design_arguments,
+    add_model_arguments,
+    design_from_args,
+    print_validity,
+    surrogate_from_args,
+)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "inverse", help="pressure for an angle, or designs that meet a target",
+        description=__doc__.split("\n\n")[0].strip("`"),
+        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n")[1])
+    add_design_arguments(parser, required=False)
+    parser.add_argument("--angles-deg", type=float, nargs="+", metavar="DEG",
+                        help="one design (--L-mm, --t-mm): the pressures for these angles")
+    parser.add_argument("--kind", choices=("pressure_budget", "angle_at_pressure",
+                                           "force_at_pressure"), default=None,
+                        help="design target (default pressure_budget, or force_at_pressure "
+                             "with --force-mn)")
+    parser.add_argument("--angle-deg", type=float, help="target angle magnitude, deg")
+    parser.add_argument("--force-mn", type=float, help="target force, mN")
+    parser.add_argument("--pressure-pa", type=float, help="target pressure or budget, Pa")
+    parser.add_argument("--L-range", type=float, nargs=2, metavar=("LO", "HI"),
+                        help="chamber length bounds, mm (default: fitted range)")
+    parser.add_argument("--t-range", type=float, nargs=2, metavar=("LO", "HI"),
+                        help="membrane thickness bounds, mm (default: fitted, >= 0.5)")
+    parser.add_argument("--pair", action="append", metavar="BODY/MEMBRANE",
+                        help="allowed material pair (repeatable; default: every family)")
+    parser.add_argument("--objective", choices=("pressure", "margin", "compact", "certainty"),
+                        help="ranking (default: pressure for budgets, certainty otherwise)")
+    parser.add_argument("-n", "--n-results", type=int, default=5, help="designs to list (5)")
+    add_model_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from solver.errors import InputError
+
+    s = surrogate_from_args(args)
+    if args.angles_deg is not None:
+        if args.L_mm is None or args.t_mm is None:
+            raise InputError("--angles-deg", "needs the design's --L-mm and --t-mm")
+        return _one_design(s, args)
+    return _design_search(s, args)
+
+
+def _one_design(s: object, args: argparse.Namespace) -> int:
+    design = design_from_args(args)
+    inv = s.inverse(design, args.angles_deg, level=args.level)  # type: ignore[attr-defined]
+    if args.json:
+        print(json.dumps(inv.as_dict(), indent=1))
+        return 0
+    print(f"model {inv.model} ({inv.form}), L = {design.L_mm:g} mm, t = "  # type: ignore
+          f"{design.t_mm:g} mm, band {100 * inv.level:g} %")  # type: ignore[attr-defined]
+    print(f"{'angle_deg':>10s} {'pressure_pa':>12s} {'lower_pa':>10s} {'upper_pa':>10s}")
+    for a, p, lo, hi in zip(inv.angle_deg, inv.pressure_pa, inv.lower_pa, inv.upper_pa,
+                            strict=True):
+        print(f"{a:10.2f} {p:12.1f} {lo:10.1f} {hi:10.1f}")
+    print_validity(inv.validity)
+    return 0
+
+
+def _design_search(s: object, args: argparse.Namespace) -> int:
+    from solver.errors import InputError
+    from surrogate import DesignBounds, DesignTarget, inverse_design
+
+    kind = args.kind or ("force_at_pressure" if args.force_mn is not None
+                         else "pressure_budget")
+    if args.pressure_pa is None:
+        raise InputError("--pressure-pa", "a design target needs a pressure (or budget), Pa")
+    pairs = None
+    if args.pair:
+        pairs = []
+        for text in args.pair:
+            body, sep, membrane = text.partition("/")
+            if not sep:
+                raise InputError("--pair", f"got {text!r}", "BODY/MEMBRANE material ids")
+            pairs.append((body, membrane))
+        pairs = tuple(pairs)
+    target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
+                          force_mn=args.force_mn)
+    bounds = DesignBounds(L_mm=tuple(args.L_range) if args.L_range else None,
+                          t_mm=tuple(args.t_range) if args.t_range else None,
+                          material_pairs=pairs)
+    res = inverse_design(s, target, bounds, objective=args.objective,  # type: ignore[arg-type]
+                         n_results=args.n_results, level=args.level)
+    if args.json:
+        print(json.dumps(res.as_dict(), indent=1))
+        return 0 if res.feasible else 1
+    print(f"model {res.model}: {kind}, objective {res.objective}: {res.explanation}")
+    if not res.feasible:
+        return 1
+    unit = "mN" if kind == "force_at_pressure" else "deg"
+    print(f"{'rank':>4s} {'L_mm':>7s} {'t_mm':>6s} {'family':40s} {'score':>9s} "
+          f"{'p_need_pa':>10s} {'p_band_pa':>15s} {'at_p_' + unit:>8s} {'band':>15s} flags")
+    for c in res.candidates:
+        flags = ",".join(c.curve.validity["flags"]) or "-"
+        print(f"{c.rank:4d} {c.design.L_mm:7.3f} {c.design.t_mm:6.3f} {c.family:40s} "
+              f"{c.score:9.3g} {c.pressure_needed_pa:10.1f} "
+              f"{c.pressure_lower_pa:7.0f}-{c.pressure_upper_pa:<7.0f} "
+              f"{c.value_at_pressure:8.2f} {c.value_lower:7.2f}-{c.value_upper:<7.2f} {flags}")
+    return 0
