@@ -1,0 +1,32 @@
+"""One call for the CLI and the HTTP layer: rows or a file -> Calibration."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from surrogate.calibration._data import Observations, observations_from_rows
+from surrogate.calibration._loop import Calibration, calibrate
+from surrogate.calibration._start import starting_parameters
+
+
+def run_calibration(data: Observations | list[dict[str, Any]], model: Any = None,
+                    folds: int = 5, progress=None) -> Calibration:
+    """Validate ``data`` (rows or Observations), take the starting parameters from ``model``
+    (None/"paper" or a surrogate) and run the loop."""
+    obs = data if isinstance(data, Observations) else observations_from_rows(data)
+    nominal, info = starting_parameters(obs.families, model)
+    return calibrate(obs, nominal, info, folds=folds, progress=progress)
+
+
+def jsonable(value: Any) -> Any:
+    """Plain JSON: non-finite floats become None, tuples lists, numpy scalars Python."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, str):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

@@ -1,0 +1,282 @@
+"""Measured data: validated rows -> ``Observations`` (numpy arrays, one row per observation).
+
+The contract is in docs/measured-data.md. Required columns: curve_id, L_mm, t_mm,
+body_material, membrane_material, pressure_pa, angle_deg. Optional: T_mm, b_mm (standard
+design's defaults, 1 and 1.8 mm), h_mm (0.15 mm), time_s, flow_ul_s, angle_sd_deg, force_mn.
+Every row is checked before anything is built, so a bad file is never half-loaded.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from solver.materials import MATERIALS
+from surrogate.calibration._errors import DataError
+
+REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
+            "pressure_pa", "angle_deg")
+OPTIONAL = ("T_mm", "b_mm", "h_mm", "time_s", "flow_ul_s", "angle_sd_deg", "force_mn")
+DEFAULTS = {"T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15}
+MIN_POINTS_PER_CURVE = 4
+MAX_ROWS = 200_000
+
+# column -> (lowest, highest, inclusive lower bound?) for numeric checks
+RANGES: dict[str, tuple[float, float, bool]] = {
+    "L_mm": (0.0, 60.0, False), "t_mm": (0.0, 5.0, False), "T_mm": (0.0, 10.0, False),
+    "b_mm": (0.0, 20.0, False), "h_mm": (0.0, 5.0, False),
+    "pressure_pa": (-1e5, 1e6, True), "angle_deg": (-720.0, 720.0, True),
+    "time_s": (0.0, 1e6, True), "flow_ul_s": (0.0, 1e4, True),
+    "angle_sd_deg": (0.0, 360.0, False), "force_mn": (-1e6, 1e6, True),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Observations:
+    """Validated measurements; arrays have one entry per row, sorted by curve then by time
+    (or pressure when there is no time_s). ``curve`` and ``family`` index ``curve_ids`` and
+    ``families``; ``group`` indexes design+flow groups (replicates share a group)."""
+
+    curve_ids: tuple[str, ...]
+    families: tuple[tuple[str, str, float, float, float], ...]
+    curve: np.ndarray
+    family: np.ndarray
+    group: np.ndarray
+    L_mm: np.ndarray
+    t_mm: np.ndarray
+    pressure_pa: np.ndarray
+    angle_deg: np.ndarray
+    time_s: np.ndarray
+    flow_ul_s: np.ndarray
+    angle_sd_deg: np.ndarray
+    force_mn: np.ndarray
+    sha256: str
+
+    @property
+    def n(self) -> int:
+        return int(self.angle_deg.size)
+
+    @property
+    def n_curves(self) -> int:
+        return len(self.curve_ids)
+
+    @property
+    def has_time(self) -> bool:
+        return bool(np.all(np.isfinite(self.time_s)))
+
+    @property
+    def has_flow(self) -> bool:
+        return bool(np.all(np.isfinite(self.flow_ul_s)))
+
+    @property
+    def flow_varies(self) -> bool:
+        if not self.has_flow:
+            return False
+        return bool(np.ptp(self.flow_ul_s) > 1e-6 * max(1.0, float(np.max(self.flow_ul_s))))
+
+    def curve_family(self) -> np.ndarray:
+        """Family index of each curve."""
+        out = np.zeros(self.n_curves, dtype=int)
+        out[self.curve] = self.family
+        return out
+
+    def curve_design(self, i: int) -> dict[str, object]:
+        """The design and flow of curve i as plain data."""
+        row = int(np.flatnonzero(self.curve == i)[0])
+        body, membrane, T, b, h = self.families[int(self.family[row])]
+        return {"curve_id": self.curve_ids[i], "L_mm": float(self.L_mm[row]),
+                "t_mm": float(self.t_mm[row]), "T_mm": T, "b_mm": b, "h_mm": h,
+                "body_material": body, "membrane_material": membrane,
+                "flow_ul_s": float(self.flow_ul_s[row])}
+
+    def subset(self, curves: np.ndarray) -> Observations:
+        """The observations of the given curve indices (families keep their indices)."""
+        keep = np.isin(self.curve, curves)
+        old = np.unique(self.curve[keep])
+        remap = np.full(self.n_curves, -1)
+        remap[old] = np.arange(old.size)
+        groups, group = np.unique(self.group[keep], return_inverse=True)
+        return Observations(
+            tuple(self.curve_ids[i] for i in old), self.families, remap[self.curve[keep]],
+            self.family[keep], group, self.L_mm[keep], self.t_mm[keep],
+            self.pressure_pa[keep], self.angle_deg[keep], self.time_s[keep],
+            self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256)
+
+    def padded_order(self) -> np.ndarray:
+        """(n_curves, max points) row indices in curve order, -1 padded (rows are sorted)."""
+        counts = np.bincount(self.curve, minlength=self.n_curves)
+        out = np.full((self.n_curves, int(counts.max())), -1, dtype=int)
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        for i, (s, k) in enumerate(zip(starts, counts, strict=False)):
+            out[i, :k] = np.arange(s, s + k)
+        return out
+
+
+def _number(value: object, column: str, row: int) -> float:
+    if isinstance(value, bool):
+        raise DataError(column, f"not a number: {value!r}", row)
+    if value is None or (isinstance(value, str) and value.strip() == ""):
+        return math.nan
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise DataError(column, f"not a number: {value!r}", row) from None
+    if not math.isfinite(x):
+        raise DataError(column, f"not a finite number: {value!r}", row)
+    return x
+
+
+def _check_range(x: float, column: str, row: int) -> None:
+    lo, hi, inclusive = RANGES[column]
+    ok = (lo <= x if inclusive else lo < x) and x <= hi
+    if not ok:
+        sign = "<=" if inclusive else "<"
+        what = "negative" if x < 0 and lo >= 0 else "out of range"
+        raise DataError(column, f"{what}: {x:g}", row, f"{lo:g} {sign} {column} <= {hi:g}")
+
+
+def observations_from_rows(rows: list[dict[str, object]]) -> Observations:
+    """Validate rows (dicts of column -> value, as read from CSV or JSON) and build the
+    arrays. Raises DataError naming the row (1-based) and the column."""
+    if not isinstance(rows, list) or not rows:
+        raise DataError("rows", "no data rows", None, "at least one curve of "
+                        f"{MIN_POINTS_PER_CURVE} points")
+    if len(rows) > MAX_ROWS:
+        raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
+    columns = set(rows[0]) if isinstance(rows[0], dict) else set()
+    known = set(REQUIRED) | set(OPTIONAL)
+    for name in REQUIRED:
+        if name not in columns:
+            raise DataError(name, "required column is missing", None,
+                            "columns " + ", ".join(REQUIRED))
+    present = [c for c in OPTIONAL if c in columns]
+    parsed = []
+    for i, raw in enumerate(rows, start=1):
+        if not isinstance(raw, dict):
+            raise DataError("rows", "a row must be an object of column -> value", i)
+        extra = sorted(set(raw) - known)
+        if extra:
+            raise DataError(str(extra[0]), "unknown column", i, ", ".join(REQUIRED + OPTIONAL))
+        rec: dict[str, object] = {}
+        cid = raw.get("curve_id")
+        if cid is None or str(cid).strip() == "":
+            raise DataError("curve_id", "empty curve id", i)
+        rec["curve_id"] = str(cid).strip()
+        for name in ("body_material", "membrane_material"):
+            value = str(raw.get(name, "") or "").strip()
+            if value not in MATERIALS:
+                raise DataError(name, f"unknown material {value!r}", i,
+                                ", ".join(sorted(MATERIALS)))
+            rec[name] = value
+        for name in ("L_mm", "t_mm", "pressure_pa", "angle_deg"):
+            x = _number(raw.get(name), name, i)
+            if math.isnan(x):
+                raise DataError(name, "missing value", i)
+            _check_range(x, name, i)
+            rec[name] = x
+        for name in OPTIONAL:
+            x = _number(raw.get(name), name, i) if name in present else math.nan
+            if math.isnan(x):
+                if name in present and name in ("time_s", "flow_ul_s"):
+                    raise DataError(name, "missing value (the column is present, so every "
+                                    "row needs one)", i)
+                x = DEFAULTS.get(name, math.nan)
+            else:
+                _check_range(x, name, i)
+            rec[name] = x
+        parsed.append(rec)
+    return _build(parsed, present)
+
+
+def _build(parsed: list[dict[str, object]], present: list[str]) -> Observations:
+    by_curve: dict[str, list[int]] = {}
+    for i, rec in enumerate(parsed):
+        by_curve.setdefault(str(rec["curve_id"]), []).append(i)
+    design_keys = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "body_material",
+                   "membrane_material")
+    for cid, idx in by_curve.items():
+        first = parsed[idx[0]]
+        for j in idx[1:]:
+            for key in design_keys + ("flow_ul_s",):
+                a, b = first[key], parsed[j][key]
+                if a != b and not (isinstance(a, float) and math.isnan(a) and b != b):
+                    raise DataError(key, f"curve {cid!r} changes {key} from {a!r} to {b!r}; "
+                                    "one curve is one specimen at one flow rate", j + 1)
+        if len(idx) < MIN_POINTS_PER_CURVE:
+            raise DataError("curve_id", f"curve {cid!r} has {len(idx)} points", idx[-1] + 1,
+                            f"at least {MIN_POINTS_PER_CURVE} points per curve")
+        if "time_s" in present:
+            times = [float(parsed[j]["time_s"]) for j in idx]  # type: ignore[arg-type]
+            if len(set(times)) != len(times):
+                raise DataError("time_s", f"curve {cid!r} repeats a time", idx[-1] + 1,
+                                "distinct times within a curve")
+    curve_ids = tuple(by_curve)
+    families: dict[tuple, int] = {}
+    groups: dict[tuple, int] = {}
+    order_key = "time_s" if "time_s" in present else "pressure_pa"
+    rows_sorted: list[tuple[int, int, int, dict]] = []
+    for ci, cid in enumerate(curve_ids):
+        idx = sorted(by_curve[cid], key=lambda j: float(parsed[j][order_key]))  # type: ignore
+        rec = parsed[idx[0]]
+        fam = (str(rec["body_material"]), str(rec["membrane_material"]),
+               round(float(rec["T_mm"]), 6), round(float(rec["b_mm"]), 6),  # type: ignore
+               round(float(rec["h_mm"]), 6))  # type: ignore[arg-type]
+        fi = families.setdefault(fam, len(families))
+        flow = rec["flow_ul_s"]
+        gkey = fam + (round(float(rec["L_mm"]), 6), round(float(rec["t_mm"]), 6),  # type: ignore
+                      None if flow != flow else round(float(flow), 6))  # type: ignore
+        gi = groups.setdefault(gkey, len(groups))
+        rows_sorted += [(ci, fi, gi, parsed[j]) for j in idx]
+
+    def col(name: str) -> np.ndarray:
+        return np.array([float(r[name]) for _, _, _, r in rows_sorted])
+
+    return Observations(
+        curve_ids, tuple(families), np.array([c for c, _, _, _ in rows_sorted]),
+        np.array([f for _, f, _, _ in rows_sorted]), np.array([g for _, _, g, _ in rows_sorted]),
+        col("L_mm"), col("t_mm"), col("pressure_pa"), col("angle_deg"), col("time_s"),
+        col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed))
+
+
+def _hash(parsed: list[dict[str, object]]) -> str:
+    """sha256 of the canonical rows (independent of column order and number formatting)."""
+    text = json.dumps(parsed, sort_keys=True, allow_nan=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def read_csv_rows(text: str) -> list[dict[str, object]]:
+    """Rows of a CSV text (header line first; '#' comment lines are skipped)."""
+    lines = [ln for ln in io.StringIO(text) if not ln.lstrip().startswith("#")]
+    reader = csv.DictReader(lines)
+    if reader.fieldnames is None:
+        raise DataError("header", "the file is empty", None)
+    names = [n.strip() for n in reader.fieldnames]
+    if len(set(names)) != len(names):
+        raise DataError("header", "a column name is repeated", 0)
+    out = []
+    for i, raw in enumerate(reader, start=1):
+        if None in raw:
+            raise DataError("row", "more values than columns", i)
+        out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
+    return out
+
+
+def load_observations(path: str | Path) -> Observations:
+    """Read a CSV file (or JSON: a list of row objects, or {"rows": [...]}) and validate."""
+    path = Path(path)
+    text = path.read_text(encoding="utf-8-sig")
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise DataError("file", f"not valid JSON: {exc}", None) from None
+        rows = data.get("rows") if isinstance(data, dict) else data
+        return observations_from_rows(rows)  # type: ignore[arg-type]
+    return observations_from_rows(read_csv_rows(text))

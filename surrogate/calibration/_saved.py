@@ -1,0 +1,186 @@
+"""Saved augmented models: ``save_model`` / ``load_model`` and ``CalibratedModel``.
+
+A saved model is one JSON file ``<models_dir>/<name>.json`` holding the fitted family
+parameters, the selected effects' values and the provenance (data sha256, starting model,
+report summary). ``CalibratedModel.predict(design, pressures_pa, level)`` answers like the
+surrogate's ``predict``: a quasi-static angle at gauge pressure, with a band of
++/- z(level) x the cross-validated error after calibration.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import tempfile
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from statistics import NormalDist
+from typing import Any
+
+import numpy as np
+
+from solver.errors import InputError
+from surrogate.calibration._errors import ModelNotFoundError
+from surrogate.calibration._forward import chamber_pressure_pa, static_angle_deg
+
+FORMAT = "balloon.calibrated-model/1"
+NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+RESERVED = ("fitted", "paper")
+
+
+@dataclass(frozen=True)
+class CalibratedPrediction:
+    """Same fields as the surrogate's Prediction."""
+
+    pressure_pa: np.ndarray
+    angle_deg: np.ndarray
+    lower_deg: np.ndarray
+    upper_deg: np.ndarray
+    validity: dict
+    model: str
+    provenance: dict = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"pressure_pa": self.pressure_pa.tolist(), "angle_deg": self.angle_deg.tolist(),
+                "lower_deg": self.lower_deg.tolist(), "upper_deg": self.upper_deg.tolist(),
+                "validity": self.validity, "model": self.model, "provenance": self.provenance}
+
+
+@dataclass(frozen=True)
+class CalibratedModel:
+    name: str
+    families: tuple[dict, ...]
+    effects: dict[str, float]
+    rmse_deg: float
+    flow_ul_s: float | None
+    domain: dict
+    provenance: dict
+
+    def _family(self, design) -> dict:
+        fam = design.family
+        for f in self.families:
+            if (f["body_material"], f["membrane_material"], round(f["T_mm"], 6),
+                    round(f["b_mm"], 6), round(f["h_mm"], 6)) == fam:
+                return f
+        raise InputError("design", f"calibrated model {self.name!r} does not cover family "
+                         f"{fam}", "families: " + "; ".join(
+                             f"{f['body_material']}/{f['membrane_material']} T {f['T_mm']:g}"
+                             f" b {f['b_mm']:g} h {f['h_mm']:g}" for f in self.families))
+
+    def predict(self, design, pressures_pa, level: float = 0.95) -> CalibratedPrediction:
+        """Quasi-static angle (deg) at gauge pressures (Pa); viscoelastic lag is not applied
+        (it vanishes at rest), the inlet drop uses the calibration's flow rate."""
+        if not 0.0 < level < 1.0:
+            raise InputError("level", f"got {level!r}", "0 < level < 1")
+        f = self._family(design)
+        p = np.asarray(pressures_pa, dtype=float)
+        fam = np.array([f["a_deg_per_mm"], f["a_t_pa"], f["b_t_per_mm"], f.get("c", 0.0)])
+        values = dict(self.effects)
+        q = self.flow_ul_s if self.flow_ul_s is not None else 0.0
+        pc = chamber_pressure_pa(p, np.full_like(p, q), values)
+        angle = static_angle_deg(pc, design.L_mm, design.t_mm, fam, values)
+        angle = angle + values.get("offset_deg", 0.0)
+        half = NormalDist().inv_cdf(0.5 + level / 2.0) * self.rmse_deg
+        flags, messages = [], []
+        d = self.domain
+        for name, value in (("L_mm", design.L_mm), ("t_mm", design.t_mm)):
+            lo, hi = d[name]
+            if not lo - 1e-9 <= value <= hi + 1e-9:
+                flags.append(f"{name}_outside_calibration")
+                messages.append(f"{name} = {value:g} is outside the calibrated {lo:g}..{hi:g}")
+        if p.size and (p.min() < d["pressure_pa"][0] - 1e-9 or p.max() > d["pressure_pa"][1]):
+            flags.append("pressure_outside_calibration")
+            messages.append(f"pressures beyond the measured {d['pressure_pa'][0]:.0f}.."
+                            f"{d['pressure_pa'][1]:.0f} Pa are extrapolated")
+        if "tau_v_s" in values:
+            messages.append("viscoelastic lag not applied: the prediction is quasi-static")
+        if "R_pa_per_ul_s" in values:
+            messages.append(f"inlet pressure drop at the calibration flow {q:g} ul/s")
+        validity = {"in_domain": not flags, "flags": flags, "messages": messages}
+        return CalibratedPrediction(p, angle, angle - half, angle + half, validity,
+                                    self.name, dict(self.provenance))
+
+    def family_parameters(self, design) -> dict:
+        f = self._family(design)
+        return {k: f[k] for k in ("a_deg_per_mm", "a_t_pa", "b_t_per_mm", "c")} | {
+            "tau_form": "tau_pa = a_t_pa * log10(b_t_per_mm * t_mm)",
+            "effects": dict(self.effects), "residual_sd_deg": self.rmse_deg}
+
+
+def _check_name(name: str) -> str:
+    if not isinstance(name, str) or not NAME_PATTERN.match(name) or name in RESERVED:
+        raise InputError("name", f"invalid model name {name!r}",
+                         "1-64 letters, digits, '_', '.', '-', starting with a letter or "
+                         "digit; not 'fitted' or 'paper'")
+    return name
+
+
+def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) -> Path:
+    """Write the calibrated model (atomically). Refuses to replace an existing model
+    unless ``overwrite``."""
+    _check_name(name)
+    models_dir = Path(models_dir)
+    models_dir.mkdir(parents=True, exist_ok=True)
+    path = models_dir / f"{name}.json"
+    if path.exists() and not overwrite:
+        raise InputError("name", f"a model named {name!r} already exists in {models_dir}",
+                         "a new name")
+    r, obs = cal.report, cal.obs
+    effects = dict(cal.after.values)
+    flows = r["data"]["flow_rates_ul_s"]
+    doc = {
+        "format": FORMAT, "name": name,
+        "families": [{k: v for k, v in f.items() if k != "tau_law_pinned"}
+                     for f in r["fitted"]["families"]],
+        "effects": effects,
+        "effect_parameters": r["fitted"]["effects"],
+        "selected_effects": r["selected_effects"],
+        "rmse_deg": r["rmse_after_deg"],
+        "flow_ul_s": float(np.median(flows)) if flows else None,
+        "domain": {"L_mm": [float(obs.L_mm.min()), float(obs.L_mm.max())],
+                   "t_mm": [float(obs.t_mm.min()), float(obs.t_mm.max())],
+                   "pressure_pa": [float(obs.pressure_pa.min()),
+                                   float(obs.pressure_pa.max())]},
+        "provenance": {"data_sha256": obs.sha256, "base_model": r["model"].get("name"),
+                       "selected_effects": r["selected_effects"],
+                       "fitted_values": {k: v["value"] for k, v in r["fitted"]["effects"].items()},
+                       "rmse_model_deg": r["rmse_model_deg"],
+                       "rmse_before_deg": r["rmse_before_deg"],
+                       "rmse_after_deg": r["rmse_after_deg"],
+                       "noise_floor_deg": r["noise_floor_deg"],
+                       "residual_structured_after": r["residual_structured_after"],
+                       "created_utc": datetime.now(UTC).isoformat(timespec="seconds")},
+    }
+    fd, tmp = tempfile.mkstemp(dir=models_dir, prefix=f".{name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            json.dump(doc, fh, indent=1, allow_nan=False)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
+    """A saved calibrated model by name (ModelNotFoundError when there is none)."""
+    models_dir = Path(models_dir)
+    if not isinstance(name, str) or not NAME_PATTERN.match(name):
+        raise ModelNotFoundError(f"no model {name!r}")
+    path = models_dir / f"{name}.json"
+    if not path.is_file():
+        known = sorted(p.stem for p in models_dir.glob("*.json")) if models_dir.is_dir() else []
+        raise ModelNotFoundError(f"no model {name!r} in {models_dir}; known: "
+                                 + ", ".join(["fitted", "paper"] + known))
+    doc = json.loads(path.read_text())
+    if doc.get("format") != FORMAT:
+        raise InputError("model", f"{path} is not a calibrated model ({doc.get('format')!r})",
+                         FORMAT)
+    rmse = doc["rmse_deg"]
+    return CalibratedModel(doc["name"], tuple(doc["families"]),
+                           {k: float(v) for k, v in doc["effects"].items()},
+                           float(rmse) if rmse is not None else math.nan, doc["flow_ul_s"],
+                           doc["domain"], doc["provenance"])
