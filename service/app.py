@@ -19,7 +19,7 @@ from service.errors import install_error_handlers
 from service.jobs import JobManager
 from service.middleware import BodyLimitMiddleware
 from service.models import ModelRegistry
-from service.routes import curves, health, inverse, jobs, materials, predict
+from service.routes import calibration, curves, health, inverse, jobs, materials, predict
 from service.settings import ServiceSettings, get_settings
 from service.store_access import ResultWriter
 
@@ -74,7 +74,7 @@ def create_app(settings: ServiceSettings | None = None, *,
     for module in (health, materials, predict, inverse, curves, jobs):
         app.include_router(module.router)
     # Calibration (POST /v1/calibrate, GET /v1/effects) is included here:
-    # app.include_router(calibration.router)
+    app.include_router(calibration.router)
 
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     if settings.cors_origins:

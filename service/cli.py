@@ -24,6 +24,7 @@ COMMAND_MODULES = (
     "service.commands.fit",
     "service.commands.predict",
     "service.commands.inverse",
+    "service.commands.calibrate",
 )
 
 

@@ -1,0 +1,107 @@
+"""POST /v1/calibrate (measured rows -> calibration report) and GET /v1/effects (catalogue).
+
+The report is the one ``balloon calibrate`` writes (docs/calibration.md). Saving the
+augmented model (``save``) changes server state, so it needs the API key.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Security
+from pydantic import BaseModel, ConfigDict, Field
+
+from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
+from service.errors import FieldError
+
+router = APIRouter(prefix="/v1", tags=["calibration"])
+
+EXAMPLE_ROWS = [
+    {"curve_id": "s1", "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
+     "membrane_material": "ecoflex_00_30", "pressure_pa": p, "angle_deg": a,
+     "time_s": float(i), "flow_ul_s": 2.5}
+    for i, (p, a) in enumerate([(0, 0.1), (400, 1.6), (800, 4.8), (1200, 12.0), (1600, 30.5)])
+]
+
+
+class CalibrateRequest(BaseModel):
+    """Measured rows (columns as in docs/measured-data.md) and the starting model."""
+
+    rows: list[dict[str, Any]] = Field(..., min_length=1, max_length=20_000,
+                                       description="one object per observation",
+                                       examples=[EXAMPLE_ROWS])
+    model: str = Field("fitted", min_length=1, max_length=64,
+                       description="starting model: fitted, paper, or a saved model name")
+    save: str | None = Field(None, min_length=1, max_length=64,
+                             description="save the augmented model under this name "
+                                         "(needs X-API-Key)")
+    folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve")
+
+
+class Candidate(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    effect: str
+    rmse_cv_deg: float | None
+    delta_bic: float | None
+    params: dict[str, Any]
+    plausible: bool | None
+
+
+class CalibrationReport(BaseModel):
+    """The calibration report; more fields than listed here are included."""
+
+    model_config = ConfigDict(extra="allow")
+    rmse_model_deg: float
+    rmse_before_deg: float
+    rmse_after_deg: float
+    noise_floor_deg: float | None
+    selected_effects: list[str]
+    candidates: list[Candidate]
+    residual_structured_after: bool
+    interpretation: str
+    saved_model: str | None = None
+
+
+class EffectList(BaseModel):
+    items: list[dict[str, Any]]
+
+
+@router.get("/effects", response_model=EffectList, summary="The catalogue of candidate effects")
+def effects() -> EffectList:
+    """Every effect the calibration tests: parameters with units, bounds, plausible range,
+    the columns it needs, and how it acts on the model."""
+    from surrogate.calibration import catalogue_dicts
+
+    return EffectList(items=catalogue_dicts())
+
+
+@router.post("/calibrate", response_model=CalibrationReport,
+             summary="Find what the model misses in measured curves; error before and after")
+def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDep,
+              key: Annotated[str | None, Security(API_KEY_HEADER)] = None
+              ) -> CalibrationReport:
+    from surrogate.calibration import (
+        DataError,
+        jsonable,
+        observations_from_rows,
+        run_calibration,
+        save_model,
+    )
+
+    if request.save is not None:
+        require_api_key(settings, key)
+    try:
+        obs = observations_from_rows(request.rows)
+    except DataError as exc:
+        loc: tuple[str | int, ...] = ("body", "rows")
+        if exc.row is not None:
+            loc += (exc.row - 1,)
+        raise FieldError(loc + (exc.column,), exc.detail, exc.allowed) from None
+    start = "paper" if request.model == "paper" else models.get(request.model)
+    cal = run_calibration(obs, start, folds=request.folds)
+    report = jsonable(cal.report)
+    report["model"]["name"] = request.model
+    if request.save is not None:
+        save_model(cal, request.save, settings.models_dir)
+        report["saved_model"] = request.save
+    return CalibrationReport(**report)
