@@ -1,0 +1,83 @@
+"""``balloon fit``, ``balloon predict`` and ``balloon inverse`` end to end on a small curve
+database written through the store API (synthetic curves with the paper's constants,
+surrogate/synthetic.py), so the fitted a must come back as 0.101 deg/mm."""
+
+import json
+
+import numpy as np
+import pytest
+
+import service.cli as cli
+from solver.curve import Curve
+from solver.settings import SolverSettings
+from solver.store import CurveStore, make_record
+from surrogate import load_surrogate
+from surrogate.synthetic import synthetic_curves
+
+
+@pytest.fixture(autouse=True)
+def only_surrogate_commands(monkeypatch):
+    # The other subcommands are tested elsewhere; keep this test independent of them.
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("service.commands.fit",
+                                                 "service.commands.predict",
+                                                 "service.commands.inverse"))
+
+
+def as_curve(p: np.ndarray, angle: np.ndarray) -> Curve:
+    n = len(p)
+    return Curve(pressure_pa=p, volume_ul=np.linspace(0, 1, n), time_s=np.linspace(0, 1, n),
+                 angle_deg=angle, tip_displacement_mm=np.zeros((n, 2)),
+                 max_membrane_stretch=np.ones(n), force_mn=np.full(n, np.nan),
+                 newton_iterations=np.zeros(n, dtype=np.int64), residual_norm=np.zeros(n),
+                 negative_eigenvalues=np.full(n, -1, dtype=np.int64), status="complete",
+                 reason="max_angle_deg reached")
+
+
+@pytest.fixture
+def db(tmp_path):
+    path = tmp_path / "curves.h5"
+    settings = SolverSettings(mesh_level=0, element="hex1")
+    with CurveStore(path, mode="a") as store:
+        for c in synthetic_curves(noise_deg=0.2, seed=31):
+            store.put(make_record(c.design, settings, as_curve(c.pressure_pa, c.angle_deg)))
+    return path
+
+
+def test_fit_predict_inverse_commands(db, tmp_path, capsys) -> None:
+    out = tmp_path / "s.json"
+    assert cli.main(["fit", "--db", str(db), "-o", str(out), "--report-dir",
+                     str(tmp_path / "rep"), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "pdms_1_10/ecoflex_00_30" in text and "no record holds a force curve" in text
+    s = load_surrogate(out)
+    assert s.family_fits[0].parameters["exponential"].theta[0] == pytest.approx(0.101, rel=0.01)
+    assert s.provenance["database_path"].endswith("curves.h5")
+    assert len(s.provenance["record_keys"]) == 12
+    assert sorted(p.name for p in (tmp_path / "rep").iterdir())[-1] == "report.json"
+    assert len(list((tmp_path / "rep").glob("*.png"))) == 2
+
+    assert cli.main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "0", "1500",
+                     "--model", str(out), "--json"]) == 0
+    pred = json.loads(capsys.readouterr().out)
+    assert pred["angle_deg"][0] == 0.0 and pred["validity"]["in_domain"]
+
+    assert cli.main(["inverse", "--L-mm", "7.1", "--t-mm", "0.5", "--angles-deg",
+                     str(pred["angle_deg"][1]), "--model", str(out), "--json"]) == 0
+    inv = json.loads(capsys.readouterr().out)
+    assert inv["pressure_pa"][0] == pytest.approx(1500.0)
+
+    assert cli.main(["inverse", "--angle-deg", "30", "--pressure-pa", "1500", "--model",
+                     str(out)]) == 0
+    assert "feasible design(s)" in capsys.readouterr().out
+
+
+def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys) -> None:
+    assert cli.main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1",
+                     "--body", "pdms_1_15", "--model", "paper"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "balloon precompute" in err
+    assert cli.main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1",
+                     "--model", str(tmp_path / "none.json")]) == 2
+    assert cli.main(["inverse", "--angle-deg", "500", "--pressure-pa", "900",
+                     "--model", "paper"]) == 1  # infeasible: explained, not an error
+    assert "not reachable" in capsys.readouterr().out

@@ -1,0 +1,135 @@
+"""Fitting: known parameters recovered from synthetic curves, the paper's procedure,
+the joint-fit covariance against a parametric bootstrap, band coverage held out.
+
+Synthetic curves (surrogate/synthetic.py) follow the model exactly with the paper's
+constants (a = 0.101, a_t = 731.2, b_t = 7.179) plus seeded normal noise, so the expected
+numbers are the generating parameters themselves.
+"""
+
+import numpy as np
+import pytest
+
+from surrogate import fit_surrogate
+from surrogate.dataset import CurveData
+from surrogate.jointfit import joint_fit, leave_one_design_out, make_points
+from surrogate.procedure import paper_procedure
+from surrogate.synthetic import PAPER_THETA, synthetic_curves
+
+L_GRID = (4.1, 7.1, 11.1, 15.1)
+T_GRID = (0.5, 0.75, 1.0)
+
+
+def points(curves: list[CurveData]):
+    return make_points([(c.design.L_mm, c.design.t_mm, *c.usable_points()) for c in curves])
+
+
+def test_noise_free_curves_give_the_generating_parameters() -> None:
+    fit = joint_fit(points(synthetic_curves(noise_deg=0.0)), "exponential")
+    np.testing.assert_allclose(fit.theta, PAPER_THETA, rtol=1e-6)
+    assert fit.rmse < 1e-6
+
+
+def test_noisy_curves_recover_parameters_within_their_standard_errors() -> None:
+    fit = joint_fit(points(synthetic_curves(noise_deg=0.5, seed=1)), "exponential")
+    se = np.sqrt(np.diag(fit.cov))
+    assert (np.abs(fit.theta - PAPER_THETA) < 4 * se).all()
+    assert fit.residual_sd == pytest.approx(0.5, rel=0.2)
+
+
+def test_extended_form_recovers_c_and_beats_the_paper_form() -> None:
+    theta = np.array([0.1, 700.0, 7.0, 0.08])
+    curves = synthetic_curves(theta, noise_deg=0.2, seed=2)
+    pts = points(curves)
+    ext, exp = joint_fit(pts, "extended"), joint_fit(pts, "exponential")
+    np.testing.assert_allclose(ext.theta, theta, rtol=0.05)
+    assert ext.rmse < 0.5 * exp.rmse
+
+
+def test_reversed_material_pair_gets_a_negative_amplitude() -> None:
+    theta = np.array([-0.05, 900.0, 6.0])
+    curves = synthetic_curves(theta, body="ecoflex_00_30", membrane="pdms_1_15",
+                              noise_deg=0.2, seed=3)
+    s = fit_surrogate(curves, forms=("exponential",))
+    fam = s.family_fits[0]
+    assert fam.key[:2] == ("ecoflex_00_30", "pdms_1_15")
+    assert fam.parameters["exponential"].theta[0] == pytest.approx(-0.05, rel=0.02)
+    assert s.report["families"][0]["paper_procedure"]["table_4"]["length_constant"][
+        "a_deg_per_mm"] < 0
+
+
+def test_paper_procedure_recovers_length_and_thickness_constants() -> None:
+    proc = paper_procedure(points(synthetic_curves(noise_deg=0.0)))
+    ref = proc["reference_design"]
+    assert (ref["L_mm"], ref["t_mm"]) == (7.1, 0.5)
+    assert ref["free_fit"]["tau_pa"] == pytest.approx(731.2 * np.log10(7.179 * 0.5), rel=1e-6)
+    a = proc["table_4"]["length_constant"]["a_deg_per_mm"]
+    tc = proc["table_5"]["thickness_constants"]
+    assert a == pytest.approx(PAPER_THETA[0], rel=1e-4)
+    assert tc["a_t_pa"] == pytest.approx(PAPER_THETA[1], rel=1e-4)
+    assert tc["b_t_per_mm"] == pytest.approx(PAPER_THETA[2], rel=1e-4)
+    assert all(r["r2"] > 0.9999 for r in proc["table_4"]["rows"])
+
+
+def test_single_thickness_family_holds_b_t_fixed() -> None:
+    fit = joint_fit(points(synthetic_curves(t_mm=(0.5,), noise_deg=0.1)), "exponential")
+    assert fit.fixed == ("b_t_per_mm",)
+    assert fit.cov[2, 2] == 0.0
+    assert fit.theta[1] * np.log10(fit.theta[2] * 0.5) == pytest.approx(405.84, rel=0.01)
+
+
+def test_joint_fit_covariance_matches_a_parametric_bootstrap() -> None:
+    """Standard errors from the Jacobian vs the spread of 60 refits of resampled noise
+    (sd ratio within 0.65-1.5: a 60-sample sd is uncertain by about 9 %)."""
+    curves = synthetic_curves(noise_deg=1.0, seed=4, n_points=15)
+    pts = points(curves)
+    fit = joint_fit(pts, "exponential")
+    rng = np.random.default_rng(5)
+    m = pts.value - (pts.value - _predict(fit, pts))
+    x = pts.pressure_pa / (fit.theta[1] * np.log10(fit.theta[2] * pts.t_mm))
+    sd = np.sqrt(fit.residual_sd**2 * np.expm1(-x) ** 2 + (fit.residual_rel * m) ** 2)
+    boot = []
+    for _ in range(60):
+        y = m + rng.normal(size=m.shape) * sd
+        boot.append(joint_fit(type(pts)(pts.L_mm, pts.t_mm, pts.pressure_pa, y, pts.curve),
+                              "exponential", start=fit.theta).theta)
+    ratio = np.std(boot, axis=0, ddof=1) / np.sqrt(np.diag(fit.cov))
+    assert ((ratio > 0.65) & (ratio < 1.5)).all(), ratio
+
+
+def _predict(fit, pts):
+    from surrogate import model
+
+    return model.angle_deg(fit.theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
+
+
+def test_band_coverage_on_held_out_designs_is_near_nominal() -> None:
+    curves = synthetic_curves(L_mm=(4.1, 5.1, 7.1, 9.1, 11.1, 13.1), noise_deg=0.5,
+                              noise_rel=0.03, seed=6)
+    lodo = leave_one_design_out(points(curves), "exponential", level=0.95)
+    assert lodo["n_designs"] == 18
+    assert 0.90 <= lodo["coverage"] <= 0.99
+    assert lodo["rmse"] < 2.0
+
+
+def test_fit_report_has_every_section_and_force_models() -> None:
+    force_theta = np.array([0.05, 800.0, 7.0])
+    curves = synthetic_curves(noise_deg=0.3, force_theta=force_theta, seed=7)
+    s = fit_surrogate(curves)
+    rep = s.report["families"][0]
+    for key in ("paper_procedure", "joint_fit", "lodo", "residual_profile", "domain", "force"):
+        assert rep[key] is not None, key
+    assert set(rep["lodo"]) == {"exponential", "extended"}
+    fam = s.family_fits[0]
+    np.testing.assert_allclose(fam.force.theta, force_theta, rtol=1e-6)
+    assert len(s.provenance["record_keys"]) == 24
+    pred = s.predict(curves[0].design, [500.0, 1000.0])
+    assert pred.force_mn is not None and (pred.force_lower_mn <= pred.force_mn).all()
+
+
+def test_failed_and_limit_point_curves_keep_their_rising_branch() -> None:
+    c = synthetic_curves(L_mm=(7.1,), t_mm=(0.5,))[0]
+    p = np.concatenate([c.pressure_pa, [c.pressure_pa[-1] * 0.99]])
+    a = np.concatenate([c.angle_deg, [c.angle_deg[-1] + 5]])
+    bent = CurveData(c.design, p, a)
+    pu, au = bent.usable_points()
+    assert len(pu) == len(c.pressure_pa) - 1 and pu[0] > 0  # p = 0 and the fall dropped

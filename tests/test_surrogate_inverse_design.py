@@ -1,0 +1,115 @@
+"""Inverse design: feasible designs meet the target, bounds and pairs are respected,
+infeasible targets are explained. Reference: the paper preset (surrogate/paper_data.py)
+and its closed form; a fitted two-family synthetic surrogate for material pairs."""
+
+import numpy as np
+import pytest
+
+from solver.errors import InputError
+from surrogate import (
+    DesignBounds,
+    DesignTarget,
+    fit_surrogate,
+    inverse_design,
+    paper_surrogate,
+)
+from surrogate.synthetic import synthetic_curves
+
+
+@pytest.fixture(scope="module")
+def two_families():
+    curves = synthetic_curves(noise_deg=0.2, seed=21)
+    curves += synthetic_curves(np.array([-0.05, 900.0, 6.0]), body="ecoflex_00_30",
+                               membrane="pdms_1_15", noise_deg=0.2, seed=22)
+    return fit_surrogate(curves, forms=("exponential",))
+
+
+def test_pressure_budget_designs_reach_the_angle_within_the_budget() -> None:
+    s = paper_surrogate()
+    res = inverse_design(s, DesignTarget("pressure_budget", 1500.0, angle_deg=30.0))
+    assert res.feasible and len(res.candidates) == 5
+    scores = [c.score for c in res.candidates]
+    assert scores == sorted(scores)
+    for c in res.candidates:
+        assert c.pressure_needed_pa <= 1500.0
+        assert s.predict(c.design, [c.pressure_needed_pa]).angle_deg[0] == pytest.approx(30.0)
+        assert 4.1 <= c.design.L_mm <= 15.1 and 0.5 <= c.design.t_mm <= 1.0
+    # least pressure: the longest chamber and thinnest membrane of the domain
+    best = res.candidates[0].design
+    assert (best.L_mm, best.t_mm) == pytest.approx((15.1, 0.5))
+
+
+def test_compact_objective_finds_the_shortest_chamber() -> None:
+    # Closed form: L_min = 30 / (0.101 (exp(1500 / tau(0.5)) - 1)) = 7.55 mm at t = 0.5.
+    res = inverse_design(paper_surrogate(), DesignTarget("pressure_budget", 1500.0,
+                                                         angle_deg=30.0), objective="compact")
+    tau = 731.2 * np.log10(7.179 * 0.5)
+    L_min = 30.0 / (0.101 * np.expm1(1500.0 / tau))
+    assert res.candidates[0].design.L_mm == pytest.approx(L_min, abs=0.05)
+
+
+def test_angle_at_pressure_candidates_hit_the_target_exactly() -> None:
+    s = paper_surrogate()
+    res = inverse_design(s, DesignTarget("angle_at_pressure", 1600.0, angle_deg=40.0),
+                         DesignBounds(L_mm=(5.0, 12.0)))
+    assert res.feasible
+    for c in res.candidates:
+        assert 5.0 <= c.design.L_mm <= 12.0
+        assert s.predict(c.design, [1600.0]).angle_deg[0] == pytest.approx(40.0)
+        assert c.curve.pressure_pa[-1] == pytest.approx(1600.0)
+
+
+def test_infeasible_target_is_explained_with_the_largest_reachable_angle() -> None:
+    res = inverse_design(paper_surrogate(), DesignTarget("angle_at_pressure", 1000.0,
+                                                         angle_deg=300.0))
+    assert not res.feasible and res.candidates == ()
+    largest = 0.101 * 15.1 * np.expm1(1000.0 / (731.2 * np.log10(7.179 * 0.5)))
+    assert res.best_reachable["largest_at_pressure"]["value"] == pytest.approx(largest)
+    assert f"{largest:.3g}" in res.explanation
+    too_small = inverse_design(paper_surrogate(), DesignTarget("angle_at_pressure", 2000.0,
+                                                               angle_deg=0.1))
+    assert not too_small.feasible and "below the smallest" in too_small.explanation
+
+
+def test_material_pairs_select_families_and_angles_match_in_magnitude(two_families) -> None:
+    pair = (("ecoflex_00_30", "pdms_1_15"),)
+    res = inverse_design(two_families, DesignTarget("pressure_budget", 2500.0, angle_deg=20.0),
+                         DesignBounds(material_pairs=pair))
+    assert res.feasible
+    assert all(c.design.body_material.id == "ecoflex_00_30" for c in res.candidates)
+    assert all(c.value_at_pressure < 0 for c in res.candidates)  # bends the other way
+    # Unfiltered, the PDMS-body family needs less pressure (larger |a|, smaller tau).
+    both = inverse_design(two_families, DesignTarget("pressure_budget", 2500.0, angle_deg=20.0))
+    assert both.candidates[0].design.body_material.id == "pdms_1_10"
+    assert both.candidates[0].pressure_needed_pa < res.candidates[0].pressure_needed_pa
+    with pytest.raises(InputError, match="material_pairs"):
+        inverse_design(two_families, DesignTarget("pressure_budget", 1.0, angle_deg=1.0),
+                       DesignBounds(material_pairs=(("pdms_1_10", "pdms_1_15"),)))
+
+
+def test_force_target_without_force_curves_is_refused() -> None:
+    with pytest.raises(InputError, match="force"):
+        inverse_design(paper_surrogate(), DesignTarget("force_at_pressure", 1000.0,
+                                                       force_mn=1.0))
+
+
+def test_force_target_with_force_curves() -> None:
+    curves = synthetic_curves(noise_deg=0.1, force_theta=np.array([0.05, 800.0, 7.0]))
+    s = fit_surrogate(curves, forms=("exponential",))
+    res = inverse_design(s, DesignTarget("force_at_pressure", 1500.0, force_mn=10.0))
+    assert res.feasible
+    c = res.candidates[0]
+    assert s.predict(c.design, [1500.0]).force_mn[0] == pytest.approx(10.0)
+
+
+@pytest.mark.parametrize(("target", "bounds", "field"), [
+    (DesignTarget("nonsense", 1.0, angle_deg=1.0), None, "kind"),
+    (DesignTarget("pressure_budget", -5.0, angle_deg=1.0), None, "pressure_pa"),
+    (DesignTarget("pressure_budget", 5.0), None, "angle_deg"),
+    (DesignTarget("pressure_budget", 5.0, angle_deg=1.0), DesignBounds(L_mm=(9.0, 3.0)),
+     "L_mm"),
+])
+def test_bad_targets_and_bounds_name_the_field(target, bounds, field) -> None:
+    with pytest.raises(InputError) as err:
+        inverse_design(paper_surrogate(), target, bounds)
+    assert err.value.field == field

@@ -1,0 +1,184 @@
+"""Prediction, one-design inverse, validity flags, refusals, and surrogate files.
+
+Reference numbers: the paper preset's constants (surrogate/paper_data.py) and the
+closed-form model angle = a L (exp(p / tau) - 1), tau = a_t log10(b_t t).
+"""
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import surrogate
+from solver.design import Design
+from solver.errors import InputError, NotFoundError
+from solver.materials import get_material, make_material
+from surrogate import (
+    OutOfFamilyError,
+    SurrogateFileError,
+    fit_surrogate,
+    load_surrogate,
+    paper_surrogate,
+    save_surrogate,
+)
+from surrogate.synthetic import synthetic_curves
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    curves = synthetic_curves(np.array([0.1, 700.0, 7.0, 0.05]), noise_deg=0.3, seed=11)
+    curves += synthetic_curves(np.array([-0.05, 900.0, 6.0]), body="ecoflex_00_30",
+                               membrane="pdms_1_15", noise_deg=0.2, seed=12)
+    return fit_surrogate(curves, name="synthetic")
+
+
+def test_public_names_are_complete() -> None:
+    public = {n for n in dir(surrogate) if not n.startswith("_")} - {
+        "annotations", "bands", "core", "curvefit", "dataset", "errors", "family", "files",
+        "fit", "inverse_design", "jointfit", "model", "paper", "paper_data", "plots",
+        "procedure", "synthetic", "validity", "calibration"}
+    assert public <= set(surrogate.__all__) | {"inverse_design"}
+    for name in ("Surrogate", "Prediction", "InversePrediction", "load_surrogate",
+                 "save_surrogate", "paper_surrogate", "fit_surrogate", "inverse_design",
+                 "OutOfFamilyError"):
+        assert name in surrogate.__all__
+
+
+def test_prediction_is_the_closed_form_model() -> None:
+    d = Design(L_mm=11.1, t_mm=0.75)
+    p = np.array([0.0, 800.0, 1600.0])
+    tau = 731.2 * np.log10(7.179 * 0.75)
+    expected = 0.101 * 11.1 * np.expm1(p / tau)
+    np.testing.assert_allclose(paper_surrogate().predict(d, p).angle_deg, expected, rtol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(L=st.floats(4.1, 15.1), t=st.floats(0.5, 1.0), angle=st.floats(0.01, 150.0),
+       extended=st.booleans())
+def test_inverse_round_trip(fitted, L: float, t: float, angle: float, extended: bool) -> None:
+    s = fitted.with_form("extended" if extended else "exponential")
+    d = Design(L_mm=L, t_mm=t)
+    inv = s.inverse(d, angle)
+    back = s.predict(d, inv.pressure_pa).angle_deg
+    np.testing.assert_allclose(back, angle, rtol=1e-9)
+    assert inv.lower_pa[0] <= inv.pressure_pa[0] <= inv.upper_pa[0]
+
+
+def test_inverse_round_trip_for_the_reversed_pair(fitted) -> None:
+    d = Design(body_material=get_material("ecoflex_00_30"),
+               membrane_material=get_material("pdms_1_15"))
+    inv = fitted.inverse(d, [-5.0, -40.0])
+    np.testing.assert_allclose(fitted.predict(d, inv.pressure_pa).angle_deg, [-5.0, -40.0])
+    with pytest.raises(InputError, match="negative angles"):
+        fitted.inverse(d, 10.0)
+
+
+def test_inverse_band_matches_the_prediction_band_roughly() -> None:
+    # Where the angle band is [lo, hi] at p, the inverse band at angle(p) spans about the
+    # pressures where the upper/lower band curves reach that angle (within 5 %: the two
+    # are different linearisations of the same uncertainty).
+    s, d = paper_surrogate(), Design()
+    inv = s.inverse(d, 45.0)
+    grid = np.linspace(1000, 2500, 3001)
+    pred = s.predict(d, grid)
+    p_from_upper = grid[np.argmin(np.abs(pred.upper_deg - 45.0))]
+    p_from_lower = grid[np.argmin(np.abs(pred.lower_deg - 45.0))]
+    assert inv.lower_pa[0] == pytest.approx(p_from_upper, rel=0.05)
+    assert inv.upper_pa[0] == pytest.approx(p_from_lower, rel=0.05)
+
+
+def test_out_of_family_design_is_refused_with_the_precompute_to_run() -> None:
+    d = Design(body_material=get_material("pdms_1_15"))
+    with pytest.raises(OutOfFamilyError) as err:
+        paper_surrogate().predict(d, [100.0])
+    text = str(err.value)
+    assert "pdms_1_15" in text and "balloon precompute" in text and "[[sweep]]" in text
+    with pytest.raises(OutOfFamilyError):
+        paper_surrogate().predict(Design(T_mm=2.0), [100.0])
+    custom = make_material("pdms_1_10", [10.0], [2.0])  # same id, other parameters
+    with pytest.raises(OutOfFamilyError, match="parameters differ"):
+        paper_surrogate().inverse(Design(body_material=custom), 10.0)
+
+
+def test_validity_flags() -> None:
+    s = paper_surrogate()
+    ok = s.predict(Design(), [500.0, 1500.0]).validity
+    assert ok["in_domain"] and ok["flags"] == []
+    v = s.predict(Design(L_mm=20.0, t_mm=0.3), [500.0, 3500.0]).validity
+    assert not v["in_domain"]
+    assert {"L_outside_fitted_range", "t_outside_fitted_range", "two_balloon_regime",
+            "pressure_beyond_fe", "angle_beyond_fe"} <= set(v["flags"])
+    assert len(v["messages"]) == len(v["flags"])
+    assert "width_not_fitted" in s.predict(replace(Design(), W_mm=4.0), [1.0]).validity["flags"]
+
+
+@pytest.mark.parametrize(("pressures", "field"), [([-1.0], "pressures_pa"),
+                                                   ([float("nan")], "pressures_pa"),
+                                                   ([], "pressures_pa"), ("abc", "pressures_pa")])
+def test_bad_pressures_are_input_errors(pressures, field) -> None:
+    with pytest.raises(InputError) as err:
+        paper_surrogate().predict(Design(), pressures)
+    assert err.value.field == field
+
+
+def test_bad_level_and_tiny_thickness_are_input_errors() -> None:
+    with pytest.raises(InputError, match="level"):
+        paper_surrogate().predict(Design(), [1.0], level=1.5)
+    with pytest.raises(InputError) as err:
+        paper_surrogate().predict(Design(t_mm=0.1), [1.0])  # b_t t < 1: tau <= 0
+    assert err.value.field == "t_mm"
+
+
+def test_loaded_surrogate_equals_the_saved_one(fitted, tmp_path) -> None:
+    path = save_surrogate(fitted, tmp_path / "s.json")
+    loaded = load_surrogate(path)
+    assert loaded == fitted
+    d = Design(L_mm=9.0, t_mm=0.6)
+    np.testing.assert_array_equal(loaded.predict(d, [700.0]).upper_deg,
+                                  fitted.predict(d, [700.0]).upper_deg)
+    paper_path = save_surrogate(paper_surrogate(), tmp_path / "paper.json")
+    assert load_surrogate(paper_path) == paper_surrogate()
+
+
+def test_newer_format_version_and_garbage_are_refused(fitted, tmp_path) -> None:
+    path = save_surrogate(fitted, tmp_path / "s.json")
+    data = json.loads(path.read_text())
+    data["format_version"] += 1
+    newer = tmp_path / "newer.json"
+    newer.write_text(json.dumps(data))
+    with pytest.raises(SurrogateFileError, match="newer"):
+        load_surrogate(newer)
+    (tmp_path / "bad.json").write_text("{not json")
+    with pytest.raises(SurrogateFileError):
+        load_surrogate(tmp_path / "bad.json")
+    with pytest.raises(NotFoundError):
+        load_surrogate(tmp_path / "missing.json")
+
+
+def test_failed_save_keeps_the_old_file(fitted, tmp_path) -> None:
+    path = save_surrogate(fitted, tmp_path / "s.json")
+    before = path.read_bytes()
+    broken = replace(fitted, provenance={"bad": float("nan")})
+    save_surrogate(broken, path)  # NaN is stored as null: the write succeeds
+    assert json.loads(path.read_text())["provenance"]["bad"] is None
+    path.write_bytes(before)
+    with pytest.raises(TypeError):
+        save_surrogate(replace(fitted, name=object()), path)  # type: ignore[arg-type]
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["s.json"]
+
+
+def test_provenance_records_the_source(fitted) -> None:
+    prov = fitted.provenance
+    assert prov["format_version"] == 1 and prov["record_keys"] and prov["created_utc"]
+    assert "package_version" in prov and "git_commit" in prov
+    fam = fitted.families[0]
+    assert {"body_material", "membrane_material", "T_mm", "b_mm", "h_mm", "parameters",
+            "domain"} <= set(fam)
+    params = fitted.family_parameters(Design())
+    for key in ("a_deg_per_mm", "a_t_pa", "b_t_per_mm", "tau_form", "covariance",
+                "residual_sd_deg"):
+        assert key in params
