@@ -78,15 +78,23 @@ class FieldError(InputError):
     ``("body", "design", "t_mm")``."""
 
     def __init__(self, loc: tuple[str | int, ...], message: str,
-                 allowed: str | None = None) -> None:
+                 allowed: str | None = None, kind: str = "invalid-input") -> None:
         super().__init__(".".join(str(p) for p in loc[1:]) or str(loc[0]), message, allowed)
         self.loc = loc
+        self.kind = kind
 
 
-def located(exc: InputError, prefix: tuple[str | int, ...]) -> FieldError:
-    """Attach a request location to a domain InputError (``exc.field`` may be dotted)."""
+def located(exc: InputError, prefix: tuple[str | int, ...],
+            rename: dict[str, tuple[str | int, ...]] | None = None) -> FieldError:
+    """Attach a request location to a domain InputError (``exc.field`` may be dotted).
+    ``rename`` maps a domain field name to its path under ``prefix``."""
+    if isinstance(exc, FieldError):
+        return exc
     parts: tuple[str | int, ...] = tuple(exc.field.split(".")) if exc.field else ()
-    return FieldError(prefix + parts, exc.detail, exc.allowed)
+    if rename and exc.field in rename:
+        parts = rename[exc.field]
+    kind = "invalid-input" if type(exc) is InputError else _kebab(type(exc).__name__)
+    return FieldError(prefix + parts, exc.detail, exc.allowed, kind)
 
 
 @dataclass
@@ -130,7 +138,9 @@ def problem_for(exc: BaseException) -> Problem:
         error = {"loc": loc, "field": exc.field, "message": exc.detail}
         if exc.allowed:
             error["allowed"] = exc.allowed
-        return Problem(422, "Invalid input", str(exc), "invalid-input", errors=[error])
+        kind = getattr(exc, "kind", None) or (
+            "invalid-input" if type(exc) is InputError else _kebab(type(exc).__name__))
+        return Problem(422, "Invalid input", str(exc), kind, errors=[error])
     if isinstance(exc, NotFoundError):
         return Problem(404, "Not found", str(exc), "not-found")
     if isinstance(exc, SolverError):

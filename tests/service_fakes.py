@@ -17,13 +17,8 @@ import numpy as np
 
 from service.settings import ServiceSettings
 from solver.curve import Curve
-from solver.errors import BalloonError, InputError
-
-try:
-    from surrogate import OutOfFamilyError
-except ImportError:  # the surrogate package is written in parallel
-    class OutOfFamilyError(BalloonError):  # type: ignore[no-redef]
-        """Stand-in until surrogate.OutOfFamilyError exists."""
+from solver.errors import InputError
+from surrogate import OutOfFamilyError
 
 
 def make_curve(n: int = 5, status: str = "complete", reason: str = "") -> Curve:
@@ -76,9 +71,9 @@ class FakePrediction:
 
 @dataclass
 class FakeInverse:
-    pressure_pa: float
-    lower_pa: float
-    upper_pa: float
+    pressure_pa: np.ndarray
+    lower_pa: np.ndarray
+    upper_pa: np.ndarray
     validity: dict
 
 
@@ -106,9 +101,10 @@ class FakeSurrogate:
 
     def inverse(self, design, angle_deg, level=0.95):
         a, tau = self._params(design)
-        if angle_deg <= -a:
-            raise InputError("target_angle_deg", f"unreachable: {angle_deg}", f"> {-a:.3g}")
-        p = tau * math.log1p(angle_deg / a)
+        angle = np.asarray(angle_deg, float)
+        if (angle <= -a).any():
+            raise InputError("angle_deg", "not reachable by this design", f"> {-a:.3g}")
+        p = tau * np.log1p(angle / a)
         return FakeInverse(p, p - 10.0, p + 10.0, {"in_domain": True, "flags": [],
                                                    "messages": []})
 

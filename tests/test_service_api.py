@@ -73,8 +73,9 @@ def test_predict_with_an_inline_custom_material(client):
     design = {**DESIGN, "body_material": {"id": "x", "mu_kpa": [20.0], "alpha": [2.0]}}
     r = client.post("/v1/predict", json={"design": design, "pressures_pa": [100]})
     # the fake covers only pdms_1_10 bodies: a custom body is out of its family
-    body = assert_problem(r, 422)
+    body = assert_problem(r, 422, "design")
     assert body["type"] == "urn:balloon:problem:out-of-family"
+    assert body["errors"][0]["loc"] == ["body", "design"]
 
 
 @pytest.mark.parametrize("payload, field, allowed", [
@@ -158,18 +159,72 @@ def test_plot_errors(client):
 
 # -- inverse ------------------------------------------------------------------------------
 
-def test_inverse_round_trips_predict(client):
-    r = client.post("/v1/inverse", json={"design": DESIGN, "target_angle_deg": 45})
+def test_inverse_pressure_round_trips_predict(client):
+    r = client.post("/v1/inverse/pressure", json={"design": DESIGN, "angles_deg": [10, 45]})
     assert r.status_code == 200, r.text
-    p = r.json()["pressure_pa"]
-    back = client.post("/v1/predict", json={"design": DESIGN, "pressures_pa": [p]}).json()
-    assert back["angle_deg"][0] == pytest.approx(45.0)
+    body = r.json()
+    assert body["lower_pa"][1] < body["pressure_pa"][1] < body["upper_pa"][1]
+    back = client.post("/v1/predict", json={"design": DESIGN,
+                                            "pressures_pa": body["pressure_pa"]}).json()
+    assert back["angle_deg"] == pytest.approx([10.0, 45.0])
 
 
-def test_inverse_errors(client):
-    assert_problem(client.post("/v1/inverse", json={}), 422, "target_angle_deg")
-    r = client.post("/v1/inverse", json={"target_angle_deg": 999})
-    assert "-360 <= target_angle_deg <= 360" in assert_problem(r, 422)["errors"][0]["allowed"]
+def test_inverse_pressure_errors(client):
+    assert_problem(client.post("/v1/inverse/pressure", json={}), 422, "angles_deg")
+    r = client.post("/v1/inverse/pressure", json={"angles_deg": [999]})
+    assert "each -360 <= angles_deg <= 360" in assert_problem(r, 422)["errors"][0]["allowed"]
+    r = client.post("/v1/inverse/pressure", json={"angles_deg": [-50]})  # below -A
+    assert_problem(r, 422, "angles_deg")
+
+
+def test_inverse_design_with_the_paper_model(client):
+    target = {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 30}
+    r = client.post("/v1/inverse", json={"target": target, "model": "paper",
+                                         "L_bounds_mm": [4.1, 15.1], "n_results": 3})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["feasible"] and 1 <= len(body["candidates"]) <= 3
+    best = body["candidates"][0]
+    assert 4.1 <= best["L_mm"] <= 15.1
+    assert best["value_at_pressure"] == pytest.approx(30.0, rel=1e-3)  # meets the target
+    # the design it names predicts the target angle at the target pressure
+    design = {k: best[k] for k in ("L_mm", "t_mm", "body_material", "membrane_material")}
+    back = client.post("/v1/predict", json={"design": design, "pressures_pa": [1500],
+                                            "model": "paper"}).json()
+    assert back["angle_deg"][0] == pytest.approx(30.0, rel=1e-3)
+
+
+def test_inverse_design_explains_an_unreachable_target(client):
+    target = {"kind": "angle_at_pressure", "pressure_pa": 100, "angle_deg": 300}
+    r = client.post("/v1/inverse", json={"target": target, "model": "paper",
+                                         "L_bounds_mm": [4, 5]})
+    body = r.json()
+    assert r.status_code == 200 and body["feasible"] is False and body["candidates"] == []
+    assert "not reachable" in body["explanation"]
+
+
+def test_inverse_design_errors(client):
+    assert_problem(client.post("/v1/inverse", json={}), 422, "target")
+    target = {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 30}
+    r = client.post("/v1/inverse", json={"target": target, "model": "paper",
+                                         "material_pairs": [{"body_material": "pdms_1_15",
+                                                             "membrane_material": "pdms_1_15"}]})
+    assert_problem(r, 422, "material_pairs")
+    r = client.post("/v1/inverse", json={"target": {"pressure_pa": 1500}, "model": "paper"})
+    assert_problem(r, 422, "target.angle_deg")  # angle_at_pressure needs an angle
+    r = client.post("/v1/inverse", json={"target": target, "L_bounds_mm": [1, 2, 3]})
+    assert_problem(r, 422, "L_bounds_mm")
+
+
+def test_predict_with_the_paper_model_reproduces_table_4(client):
+    # Table 4: A = 0.704 at L = 7.1 mm with tau = 420 Pa; the preset must give A within
+    # 10 % and (Table 5) tau(0.5 mm) = 412.2 Pa within 3 %: compare the angle at 1000 Pa.
+    r = client.post("/v1/predict", json={"design": DESIGN, "pressures_pa": [1000],
+                                         "model": "paper"})
+    assert r.status_code == 200, r.text
+    expected = 0.704 * math.expm1(1000 / 412.2)
+    assert r.json()["angle_deg"][0] == pytest.approx(expected, rel=0.12)
+    assert r.json()["model"] == "paper"
 
 
 # -- auth, body limit, CORS, unknown routes -------------------------------------------------

@@ -1,28 +1,69 @@
-"""POST /v1/inverse: the pressure (with its band) at which a design reaches a target angle."""
+"""POST /v1/inverse (designs that meet a target, ranked) and POST /v1/inverse/pressure
+(the pressure, with its band, at which one design reaches given angles)."""
 
 from __future__ import annotations
 
 from fastapi import APIRouter
 
-from service.convert import jsonable, to_design
+from service.convert import finite_list, jsonable, to_design
 from service.deps import ModelsDep
-from service.schemas import InverseRequest, InverseResponse
+from service.errors import located
+from service.schemas import InverseRequest, InverseResponse, PressureRequest, PressureResponse
+from solver.errors import InputError
 
 router = APIRouter(prefix="/v1", tags=["inverse"])
 
-
-def _num(value: object) -> float | None:
-    return jsonable(float(value)) if value is not None else None  # type: ignore[arg-type]
+# surrogate field name -> path in the request body
+DESIGN_FIELDS: dict[str, tuple[str | int, ...]] = {
+    "pressure_pa": ("target", "pressure_pa"), "angle_deg": ("target", "angle_deg"),
+    "force_mn": ("target", "force_mn"), "kind": ("target", "kind"),
+    "L_mm": ("L_bounds_mm",), "t_mm": ("t_bounds_mm",), "target": ("target",),
+}
+PRESSURE_FIELDS: dict[str, tuple[str | int, ...]] = {
+    "angle_deg": ("angles_deg",), "t_mm": ("design", "t_mm"),
+}
 
 
 @router.post("/inverse", response_model=InverseResponse,
-             summary="Pressure that gives a target angle, with its band")
+             summary="Designs that meet a target, ranked; or why none can")
 def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
+    """Searches chamber length and membrane thickness within the bounds, for every
+    allowed material pair the surrogate covers (vectorised; milliseconds)."""
+    from surrogate import DesignBounds, DesignTarget, inverse_design
+
+    surrogate = models.get(request.model)
+    t = request.target
+    pairs = (tuple((p.body_material, p.membrane_material) for p in request.material_pairs)
+             if request.material_pairs else None)
+    try:
+        result = inverse_design(
+            surrogate, DesignTarget(t.kind, t.pressure_pa, t.angle_deg, t.force_mn),
+            DesignBounds(L_mm=tuple(request.L_bounds_mm) if request.L_bounds_mm else None,
+                         t_mm=tuple(request.t_bounds_mm) if request.t_bounds_mm else None,
+                         material_pairs=pairs),
+            objective=request.objective, n_results=request.n_results, level=request.level)
+    except InputError as exc:
+        raise located(exc, ("body",), DESIGN_FIELDS) from None
+    out = jsonable(result.as_dict())
+    return InverseResponse(model=request.model, level=request.level,
+                           objective=out["objective"], feasible=out["feasible"],
+                           explanation=out["explanation"], candidates=out["candidates"],
+                           best_reachable=out["best_reachable"],
+                           n_evaluated=out["n_evaluated"])
+
+
+@router.post("/inverse/pressure", response_model=PressureResponse,
+             summary="Pressure that gives each target angle for one design, with its band")
+def inverse_pressure(request: PressureRequest, models: ModelsDep) -> PressureResponse:
     design = to_design(request.design)
     surrogate = models.get(request.model)
-    result = surrogate.inverse(design, request.target_angle_deg, level=request.level)
-    return InverseResponse(model=request.model, level=request.level,
-                           target_angle_deg=request.target_angle_deg, design=design.as_dict(),
-                           pressure_pa=_num(result.pressure_pa), lower_pa=_num(result.lower_pa),
-                           upper_pa=_num(result.upper_pa),
-                           validity=jsonable(dict(result.validity)))
+    try:
+        result = surrogate.inverse(design, request.angles_deg, level=request.level)
+    except InputError as exc:
+        raise located(exc, ("body",), PRESSURE_FIELDS) from None
+    return PressureResponse(model=request.model, level=request.level, design=design.as_dict(),
+                            angle_deg=list(request.angles_deg),
+                            pressure_pa=finite_list(result.pressure_pa),
+                            lower_pa=finite_list(result.lower_pa),
+                            upper_pa=finite_list(result.upper_pa),
+                            validity=jsonable(dict(result.validity)))

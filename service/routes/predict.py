@@ -10,9 +10,10 @@ from fastapi.responses import Response
 
 from service.convert import finite_list, jsonable, to_design
 from service.deps import ModelsDep, SettingsDep
-from service.errors import FieldError
+from service.errors import FieldError, located
 from service.schemas import PlotQuery, PredictRequest, PredictResponse
 from service.schemas.predict import Validity
+from solver.errors import InputError
 
 router = APIRouter(prefix="/v1", tags=["predict"])
 
@@ -20,9 +21,12 @@ PNG = {200: {"content": {"image/png": {}}, "description": "the plot, PNG"}}
 
 
 def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
-                 model: str) -> dict[str, Any]:
+                 model: str, loc: tuple[str, ...] = ("body",)) -> dict[str, Any]:
     """Run the surrogate and convert its Prediction to the response's plain data."""
-    p = surrogate.predict(design, np.asarray(pressures_pa, float), level=level)
+    try:
+        p = surrogate.predict(design, np.asarray(pressures_pa, float), level=level)
+    except InputError as exc:  # e.g. OutOfFamilyError (field "design")
+        raise located(exc, loc) from None
     validity = p.validity
     return {"model": model, "level": level, "design": design.as_dict(),
             "pressure_pa": finite_list(p.pressure_pa), "angle_deg": finite_list(p.angle_deg),
@@ -30,6 +34,7 @@ def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
             "validity": Validity(in_domain=bool(validity.get("in_domain", False)),
                                  flags=list(validity.get("flags", [])),
                                  messages=list(validity.get("messages", []))),
+            "form": getattr(p, "form", None),
             "provenance": jsonable(dict(p.provenance or {}))}
 
 
@@ -59,7 +64,8 @@ def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
                        loc=("query",))
     surrogate = models.get(query.model)
     pressures = np.linspace(0.0, query.p_max_pa, 101)
-    prediction = predict_dict(surrogate, design, pressures, query.level, query.model)
+    prediction = predict_dict(surrogate, design, pressures, query.level, query.model,
+                              loc=("query",))
     fe = nearby_curves(settings.db_path, design, query.nearby, query.p_max_pa)
     png = plot_prediction(prediction, fe, query.measured_pressure_pa, query.measured_angle_deg)
     return Response(png, media_type="image/png")

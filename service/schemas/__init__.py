@@ -11,18 +11,26 @@ from service.schemas._ranges import field_ranges
 from service.schemas.common import DesignIn, MaterialIn, Schema, SolveSettingsIn
 from service.schemas.curves import CurveDetail, CurvePage, CurvesQuery, CurveSummary
 from service.schemas.health import Health
-from service.schemas.inverse import InverseRequest, InverseResponse
+from service.schemas.inverse import (
+    InverseRequest,
+    InverseResponse,
+    MaterialPair,
+    PressureRequest,
+    PressureResponse,
+    TargetIn,
+)
 from service.schemas.jobs import Job, SolveRequest
 from service.schemas.materials import Material, MaterialList
 from service.schemas.predict import PlotQuery, PredictRequest, PredictResponse
 
-REQUEST_MODELS = (DesignIn, MaterialIn, SolveSettingsIn, CurvesQuery, InverseRequest,
-                  SolveRequest, PlotQuery, PredictRequest)
+REQUEST_MODELS = (DesignIn, MaterialIn, SolveSettingsIn, CurvesQuery, InverseRequest, TargetIn,
+                  MaterialPair, PressureRequest, SolveRequest, PlotQuery, PredictRequest)
 FIELD_RANGES.update(field_ranges(REQUEST_MODELS))
 
 __all__ = [
     "REQUEST_MODELS", "CurveDetail", "CurvePage", "CurveSummary", "CurvesQuery", "DesignIn",
     "Health", "InverseRequest", "InverseResponse", "Job", "Material", "MaterialIn",
-    "MaterialList", "PlotQuery", "PredictRequest", "PredictResponse", "Schema", "SolveRequest",
-    "SolveSettingsIn",
+    "MaterialList", "MaterialPair", "PlotQuery", "PredictRequest", "PredictResponse",
+    "PressureRequest", "PressureResponse", "Schema", "SolveRequest", "SolveSettingsIn",
+    "TargetIn",
 ]

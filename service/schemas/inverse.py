@@ -1,31 +1,105 @@
-"""POST /v1/inverse: designs (or the pressure) that reach a target angle."""
+"""POST /v1/inverse (ranked designs for a target) and POST /v1/inverse/pressure (the
+pressure at which one design reaches given angles)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.schemas.common import DesignIn, Schema
-from service.schemas.predict import LEVEL, MODEL
+from service.schemas.common import MATERIAL_ID, DesignIn, Schema
+from service.schemas.predict import LEVEL, MAX_PRESSURE_PA, MODEL
+
+Angle = Annotated[float, Field(ge=-360.0, le=360.0)]
+
+
+class TargetIn(Schema):
+    """What the design must do: ``angle_at_pressure`` (reach angle_deg at pressure_pa),
+    ``pressure_budget`` (reach angle_deg at no more than pressure_pa) or
+    ``force_at_pressure`` (force_mn at pressure_pa; needs force curves)."""
+
+    kind: Literal["angle_at_pressure", "pressure_budget", "force_at_pressure"] = (
+        "angle_at_pressure")
+    pressure_pa: float = Field(gt=0.0, le=MAX_PRESSURE_PA, description="pressure, Pa")
+    angle_deg: float | None = Field(None, ge=-360.0, le=360.0,
+                                    description="target angle, degrees (matched in size)")
+    force_mn: float | None = Field(None, ge=-1e4, le=1e4, description="target force, mN")
+
+
+class MaterialPair(Schema):
+    body_material: str = Field(pattern=MATERIAL_ID)
+    membrane_material: str = Field(pattern=MATERIAL_ID)
 
 
 class InverseRequest(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
-        {"target_angle_deg": 45.0, "design": {"L_mm": 7.1, "t_mm": 0.5}}]})
+        {"target": {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 45},
+         "L_bounds_mm": [4.1, 15.1], "t_bounds_mm": [0.5, 1.0], "n_results": 3}]})
 
-    target_angle_deg: float = Field(ge=-360.0, le=360.0, description="target angle, degrees")
-    design: DesignIn = Field(default_factory=DesignIn)
+    target: TargetIn
+    L_bounds_mm: list[Annotated[float, Field(ge=0.5, le=60.0)]] | None = Field(
+        None, min_length=2, max_length=2, description="[low, high] chamber length, mm "
+        "(default: each family's fitted range)")
+    t_bounds_mm: list[Annotated[float, Field(ge=0.05, le=5.0)]] | None = Field(
+        None, min_length=2, max_length=2, description="[low, high] membrane thickness, mm "
+        "(default: each family's fitted range, from 0.5 mm)")
+    material_pairs: list[MaterialPair] | None = Field(
+        None, min_length=1, max_length=20, description="allowed pairs (default: all fitted)")
+    objective: Literal["pressure", "margin", "compact", "certainty"] | None = Field(
+        None, description="ranking (default: certainty; pressure for pressure_budget)")
+    n_results: int = Field(5, ge=1, le=20, description="designs returned at most")
     model: str = MODEL
     level: float = LEVEL
+
+
+class Candidate(BaseModel):
+    rank: int
+    L_mm: float
+    t_mm: float
+    body_material: str
+    membrane_material: str
+    family: str
+    score: float | None = Field(description="the objective's value (lower ranks first)")
+    pressure_needed_pa: float | None
+    pressure_lower_pa: float | None
+    pressure_upper_pa: float | None
+    value_at_pressure: float | None = Field(
+        description="predicted angle (deg) or force (mN) at the target pressure")
+    value_lower: float | None
+    value_upper: float | None
+    validity: dict[str, Any]
+    curve: dict[str, Any] = Field(description="predicted curve from 0 Pa with its band")
 
 
 class InverseResponse(BaseModel):
     model: str
     level: float
-    target_angle_deg: float
+    objective: str
+    feasible: bool
+    explanation: str
+    candidates: list[Candidate]
+    best_reachable: dict[str, Any] = Field(
+        description="when infeasible: the largest and smallest value reachable")
+    n_evaluated: int
+
+
+class PressureRequest(Schema):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [10, 45, 90]}]})
+
+    design: DesignIn = Field(default_factory=DesignIn)
+    angles_deg: list[Angle] = Field(min_length=1, max_length=1000,
+                                    description="target angles, degrees")
+    model: str = MODEL
+    level: float = LEVEL
+
+
+class PressureResponse(BaseModel):
+    model: str
+    level: float
     design: dict[str, Any]
-    pressure_pa: float | None
-    lower_pa: float | None
-    upper_pa: float | None
+    angle_deg: list[float]
+    pressure_pa: list[float | None]
+    lower_pa: list[float | None]
+    upper_pa: list[float | None]
     validity: dict[str, Any]

@@ -42,6 +42,8 @@ class PredictResponse(BaseModel):
     lower_deg: list[float]
     upper_deg: list[float]
     validity: Validity
+    form: str | None = Field(None, description='model form: "exponential" (the paper\'s) '
+                             'or "extended"')
     provenance: dict[str, Any]
 
 
