@@ -44,7 +44,7 @@ def scatter_variance(sd_abs: float, rel: float, prediction: np.ndarray,
 
 def parameter_variance(gradient: np.ndarray, covariance: np.ndarray) -> np.ndarray:
     """g C g^T for every row of ``gradient`` (..., k)."""
-    return np.einsum("...i,ij,...j->...", gradient, covariance, gradient)
+    return np.sum((gradient @ covariance) * gradient, axis=-1)
 
 
 def fit_scatter(residuals: np.ndarray, prediction: np.ndarray,
