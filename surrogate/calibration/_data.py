@@ -246,8 +246,10 @@ def _build(parsed: list[dict[str, object]], present: list[str]) -> Observations:
 
 
 def _hash(parsed: list[dict[str, object]]) -> str:
-    """sha256 of the canonical rows (independent of column order and number formatting)."""
-    text = json.dumps(parsed, sort_keys=True, allow_nan=True, default=str)
+    """sha256 of the canonical rows (independent of row order, column order and number
+    formatting)."""
+    lines = sorted(json.dumps(r, sort_keys=True, allow_nan=True, default=str) for r in parsed)
+    text = "\n".join(lines)
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -260,6 +262,10 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     names = [n.strip() for n in reader.fieldnames]
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0)
+    for name in REQUIRED:
+        if name not in names:
+            raise DataError(name, "required column is missing", None,
+                            "columns " + ", ".join(REQUIRED))
     out = []
     for i, raw in enumerate(reader, start=1):
         if None in raw:

@@ -1,0 +1,128 @@
+"""The calibration's shells: saved models, ``balloon calibrate``, POST /v1/calibrate,
+GET /v1/effects, and a saved model answering /v1/predict."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from service_fakes import assert_problem, settings_for
+from test_calibration_loop import measured_rows
+
+import service.cli
+from service.app import create_app
+from solver.design import Design
+from solver.errors import InputError
+from surrogate.calibration import (
+    EFFECT_IDS,
+    ModelNotFoundError,
+    load_model,
+    run_calibration,
+    save_model,
+)
+
+
+def main(argv: list[str]) -> int:
+    """``balloon`` with only this command registered (others may not import yet)."""
+    saved = service.cli.COMMAND_MODULES
+    service.cli.COMMAND_MODULES = ("service.commands.calibrate",)
+    try:
+        return service.cli.main(argv)
+    finally:
+        service.cli.COMMAND_MODULES = saved
+
+
+@pytest.fixture(scope="module")
+def offset_calibration():
+    """2 deg angle offset (see test_calibration_loop): selected and saved below."""
+    return run_calibration(measured_rows({"offset": 2.0}), "paper")
+
+
+def test_saved_model_predicts_with_the_effect(tmp_path, offset_calibration):
+    path = save_model(offset_calibration, "lab1", tmp_path)
+    assert path.exists()
+    model = load_model("lab1", tmp_path)
+    assert model.provenance["data_sha256"] == offset_calibration.obs.sha256
+    assert model.provenance["selected_effects"] == ["angle_offset"]
+    p = model.predict(Design(), np.array([0.0, 1000.0]), level=0.95)
+    assert p.angle_deg[0] == pytest.approx(2.0, abs=0.4)  # the offset at zero pressure
+    assert np.all(p.upper_deg > p.angle_deg) and p.validity["in_domain"]
+    with pytest.raises(InputError):  # nothing stored is replaced silently
+        save_model(offset_calibration, "lab1", tmp_path)
+    with pytest.raises(ModelNotFoundError):
+        load_model("nope", tmp_path)
+    with pytest.raises(InputError):
+        save_model(offset_calibration, "../evil", tmp_path)
+
+
+def test_cli_writes_report_plot_and_model(tmp_path, capsys):
+    rows = measured_rows({"offset": 2.0})
+    cols = list(rows[0])
+    data = tmp_path / "data.csv"
+    data.write_text("\n".join([",".join(cols)] + [",".join(str(r[c]) for c in cols)
+                                                  for r in rows]))
+    code = main(["calibrate", str(data), "--report", str(tmp_path / "r.json"), "--plot",
+                 str(tmp_path / "r.png"), "--save", "m1", "--model", "paper",
+                 "--models-dir", str(tmp_path / "models")])
+    assert code == 0
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["selected_effects"] == ["angle_offset"]
+    assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "models" / "m1.json").exists()
+
+
+def test_cli_bad_file_is_one_line_exit_2(tmp_path, capsys):
+    data = tmp_path / "bad.csv"
+    data.write_text("curve_id,L_mm,t_mm,body_material,membrane_material,pressure_pa\n")
+    code = main(["calibrate", str(data), "--report", str(tmp_path / "r.json"),
+                 "--model", "paper"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "angle_deg" in err and err.count("\n") == 1
+    assert not (tmp_path / "r.json").exists()
+
+
+@pytest.fixture()
+def client(tmp_path):
+    app = create_app(settings_for(tmp_path, max_body_bytes=1_000_000), load_surrogate=False)
+    with TestClient(app) as c:
+        yield c
+
+
+def test_effects_lists_the_catalogue(client):
+    r = client.get("/v1/effects")
+    assert r.status_code == 200
+    items = r.json()["items"]
+    assert [e["id"] for e in items] == list(EFFECT_IDS)
+    hydraulic = next(e for e in items if e["id"] == "hydraulic_resistance")
+    assert hydraulic["parameters"][0]["unit"] == "Pa per ul/s"
+    assert "flow_ul_s" in hydraulic["needs"]
+
+
+def test_calibrate_endpoint_and_saved_model_in_predict(client):
+    rows = measured_rows({"offset": 2.0})
+    r = client.post("/v1/calibrate", json={"rows": rows, "model": "paper"})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["selected_effects"] == ["angle_offset"]
+    assert body["rmse_after_deg"] < body["rmse_before_deg"]
+    r = client.post("/v1/calibrate", json={"rows": rows, "model": "paper", "save": "lab2"})
+    assert_problem(r, 401)
+    r = client.post("/v1/calibrate", json={"rows": rows, "model": "paper", "save": "lab2"},
+                    headers={"X-API-Key": "test-key"})
+    assert r.status_code == 200 and r.json()["saved_model"] == "lab2"
+    r = client.post("/v1/predict", json={"design": {"L_mm": 7.1, "t_mm": 0.5},
+                                         "pressures_pa": [0, 500], "model": "lab2"})
+    assert r.status_code == 200, r.text
+    assert r.json()["angle_deg"][0] == pytest.approx(2.0, abs=0.4)
+
+
+def test_calibrate_endpoint_names_row_and_column(client):
+    rows = measured_rows()
+    rows[5]["t_mm"] = -1
+    r = client.post("/v1/calibrate", json={"rows": rows, "model": "paper"})
+    body = assert_problem(r, 422)
+    assert body["errors"][0]["field"] == "rows.5.t_mm"
+    assert "row 6" in body["detail"]
