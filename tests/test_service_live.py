@@ -1,0 +1,108 @@
+"""The README's client snippets (docs/snippets/, included verbatim in the README) run
+against a real server: `balloon serve` (service.commands.serve) on 127.0.0.1.
+
+The server uses a surrogate file saved from the paper's preset and a synthetic
+database; expected numbers come from the paper's model (Table 4-5 constants).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+from service_fakes import make_curve
+
+from solver.design import Design
+from solver.settings import SolverSettings
+from solver.store import CurveStore, make_record
+from surrogate import paper_surrogate, save_surrogate
+
+ROOT = Path(__file__).resolve().parents[1]
+SNIPPETS = ROOT / "docs" / "snippets"
+LAUNCH = ("import argparse, sys; from service.commands import serve; "
+          "p = argparse.ArgumentParser(prog='balloon'); serve.register(p.add_subparsers()); "
+          "a = p.parse_args(sys.argv[1:]); sys.exit(a.func(a))")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("live")
+    save_surrogate(paper_surrogate(), tmp / "surrogate.json")
+    with CurveStore(tmp / "curves.h5", mode="a") as db:
+        db.put(make_record(Design(), SolverSettings(mesh_level=0), make_curve()))
+    port = free_port()
+    env = {**os.environ, "BALLOON_DB_PATH": str(tmp / "curves.h5"),
+           "BALLOON_SURROGATE_PATH": str(tmp / "surrogate.json"),
+           "BALLOON_API_KEY": "live-key", "BALLOON_MODELS_DIR": str(tmp / "models"),
+           "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-c", LAUNCH, "serve", "--host", "127.0.0.1",
+                             "--port", str(port), "--log-level", "warning"], env=env,
+                            cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    url = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            health = httpx.get(f"{url}/v1/health", timeout=1).json()
+            break
+        except httpx.HTTPError:
+            if proc.poll() is not None or time.monotonic() > deadline:
+                proc.kill()
+                pytest.fail(f"server did not start: {proc.stdout.read().decode()[-2000:]}")
+            time.sleep(0.2)
+    assert health["surrogate"]["loaded"] and health["surrogate"]["name"] == "paper"
+    yield {"url": url, "env": {**env, "BALLOON_URL": url}}
+    proc.terminate()
+    proc.wait(10)
+
+
+def run_snippet(server, name: str, interpreter: list[str]) -> str:
+    out = subprocess.run([*interpreter, str(SNIPPETS / name)], env=server["env"],
+                         capture_output=True, text=True, timeout=60, check=False)
+    assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+def test_python_client_snippet(server):
+    out = run_snippet(server, "client.py", [sys.executable])
+    lines = out.splitlines()
+    assert lines[0].split()[:2] == ["500", "Pa"]
+    assert "45 deg needs" in out and "#1: L =" in out
+    assert lines[-1] == "422 design.t_mm 0.05 <= t_mm <= 5"
+
+
+def test_batch_snippet(server):
+    rows = list(csv.DictReader(io.StringIO(run_snippet(server, "batch.py", [sys.executable]))))
+    assert len(rows) == 4 * 3 * 6  # designs x pressures
+    # the angle grows with L at fixed t and p (Table 4: A = a L)
+    at = {(float(r["L_mm"]), float(r["t_mm"]), float(r["pressure_pa"])): float(r["angle_deg"])
+          for r in rows}
+    assert at[4.1, 0.5, 1000] < at[7.1, 0.5, 1000] < at[15.1, 0.5, 1000]
+
+
+@pytest.mark.skipif(shutil.which("curl") is None, reason="needs curl")
+def test_curl_snippets(server):
+    import json
+
+    body = json.loads(run_snippet(server, "predict.sh", ["bash"]))
+    assert body["pressure_pa"] == [500, 1000, 1500, 2000] and body["model"] == "fitted"
+    job, polled = run_snippet(server, "solve.sh", ["bash"]).splitlines()
+    assert json.loads(job)["status"] in ("queued", "running")
+    assert json.loads(polled)["id"] == json.loads(job)["id"]
+    r = httpx.delete(f"{server['url']}/v1/jobs/{json.loads(job)['id']}",
+                     headers={"X-API-Key": "live-key"}, timeout=30)
+    assert r.status_code in (200, 409)
