@@ -178,7 +178,7 @@ class Surrogate:
             raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
                              "pressures >= 0 Pa (the model ignores suction)")
         m, lo, hi = band(par, design.L_mm, design.t_mm, p, level)
-        force = (None, None, None)
+        force: tuple[np.ndarray | None, ...] = (None, None, None)
         if fam.force is not None:
             force = band(fam.force, design.L_mm, design.t_mm, p, level)
         return Prediction(design=design, pressure_pa=p, angle_deg=m, lower_deg=lo,

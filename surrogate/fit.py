@@ -16,6 +16,7 @@ import os
 import subprocess
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from surrogate import model
 from surrogate.core import Surrogate
 from surrogate.dataset import CurveData, curves_from_store, select_angle_curves, select_force_curves
 from surrogate.family import Domain, Family
-from surrogate.jointfit import Points, joint_fit, leave_one_design_out, make_points
+from surrogate.jointfit import ModelParameters, Points, joint_fit, leave_one_design_out, make_points
 from surrogate.procedure import paper_procedure
 
 FORMAT_VERSION = 1
@@ -108,7 +109,8 @@ def _fit_family(members: list[CurveData], force_members: list[CurveData],
     d0 = members[0].design
     members = sorted(members, key=lambda c: (c.design.L_mm, c.design.t_mm))
     pts = make_points([(c.design.L_mm, c.design.t_mm, *c.usable_points()) for c in members])
-    params, lodo = {}, {}
+    params: dict[str, ModelParameters] = {}
+    lodo: dict[str, dict[str, Any]] = {}
     start = None
     for form in forms:
         params[form] = joint_fit(pts, form, start=start)
@@ -169,7 +171,7 @@ def residual_profile(pts: Points, params: dict) -> dict[str, object]:
     return out
 
 
-def _plain(obj: object) -> object:
+def _plain(obj: Any) -> Any:
     """JSON-safe copy: numpy to Python, NaN/inf to None, tuples to lists."""
     if isinstance(obj, dict):
         return {str(k): _plain(v) for k, v in obj.items()}
@@ -196,7 +198,7 @@ class _NoBar:
         pass
 
 
-def _progress(total: int, show: bool) -> object:
+def _progress(total: int, show: bool) -> Any:
     if not show:
         return _NoBar()
     from tqdm import tqdm

@@ -306,7 +306,8 @@ def inverse_design(surrogate: Surrogate, target: DesignTarget,
                                    f"{len(candidates)} feasible design(s), ranked by "
                                    f"{objective}", n_evaluated=n_eval, model=surrogate.name)
     reach = _best_reachable(per_family, target)
-    return InverseDesignResult(target, objective, False, (), reach.pop("explanation"), reach,
+    return InverseDesignResult(target, objective, False, (), str(reach.pop("explanation")),
+                               reach,
                                n_evaluated=n_eval, model=surrogate.name)
 
 

@@ -48,7 +48,8 @@ def make_points(curves: list[tuple[float, float, np.ndarray, np.ndarray]]) -> Po
              for i, (L, t, p, y) in enumerate(curves)]
     cols = [np.concatenate([part[j] for part in parts]) if parts else np.empty(0)
             for j in range(5)]
-    return Points(*(c.astype(float) for c in cols[:4]), cols[4].astype(int))
+    L, t, p, y = (c.astype(float) for c in cols[:4])
+    return Points(L, t, p, y, cols[4].astype(int))
 
 
 @dataclass(frozen=True)

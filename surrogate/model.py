@@ -68,8 +68,7 @@ def angle_gradient(theta: np.ndarray, L_mm, t_mm, pressure_pa) -> np.ndarray:
     cols = [L * (e - 1.0), d_tau * np.log10(theta[2] * t), d_tau * theta[1] / (theta[2] * LN10)]
     if len(theta) > 3:
         cols.append(A * e * x * x)
-    cols = np.broadcast_arrays(*cols)
-    return np.stack(cols, axis=-1)
+    return np.stack(np.broadcast_arrays(*cols), axis=-1)
 
 
 def pressure_pa(theta: np.ndarray, L_mm, t_mm, angle_deg_: np.ndarray | float) -> np.ndarray:
@@ -112,8 +111,7 @@ def pressure_gradient(theta: np.ndarray, L_mm, t_mm, angle_deg_) -> tuple[np.nda
         if len(theta) > 3:
             cols.append(-tau * x * x * dx_dy)
         dp_dangle = tau * dx_dy / (A + ang)
-    cols = np.broadcast_arrays(*cols)
-    return np.stack(cols, axis=-1), dp_dangle
+    return np.stack(np.broadcast_arrays(*cols), axis=-1), dp_dangle
 
 
 def max_angle_deg(theta: np.ndarray, L_mm, t_mm) -> np.ndarray:

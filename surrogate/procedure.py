@@ -9,6 +9,8 @@ analogue: the curves at L = L_ref, tau (A fixed) against t, tau = a_t log10(b_t 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from surrogate.curvefit import (
@@ -35,7 +37,7 @@ def paper_procedure(pts: Points) -> dict[str, object]:
     ref = int(np.argmin(dist))
     L_ref, t_ref = curves[ref][0], curves[ref][1]
     ref_fit = fit_free(curves[ref][2].pressure_pa, curves[ref][2].value)
-    rows = []
+    rows: list[dict[str, Any]] = []
     for L, t, sub in curves:
         p, y = sub.pressure_pa, sub.value
         rows.append({"L_mm": L, "t_mm": t, "free": fit_free(p, y).as_dict(),
@@ -43,13 +45,13 @@ def paper_procedure(pts: Points) -> dict[str, object]:
                      "A_fixed": fit_A_fixed(p, y, ref_fit.A_deg).as_dict()})
     l_series = [r for r in rows if abs(r["t_mm"] - t_ref) < 1e-9]
     t_series = [r for r in rows if abs(r["L_mm"] - L_ref) < 1e-9]
-    table_4 = {"t_mm": t_ref, "tau_fixed_pa": ref_fit.tau_pa,
+    table_4: dict[str, Any] = {"t_mm": t_ref, "tau_fixed_pa": ref_fit.tau_pa,
                "rows": [{"L_mm": r["L_mm"], **_pick(r["tau_fixed"], "A")} for r in l_series]}
     if l_series:
         line = length_constant(np.array([r["L_mm"] for r in l_series]),
                                np.array([r["tau_fixed"]["A_deg"] for r in l_series]))
         table_4["length_constant"] = line.as_dict()
-    table_5 = {"L_mm": L_ref, "A_fixed_deg": ref_fit.A_deg,
+    table_5: dict[str, Any] = {"L_mm": L_ref, "A_fixed_deg": ref_fit.A_deg,
                "rows": [{"t_mm": r["t_mm"], **_pick(r["A_fixed"], "tau")} for r in t_series]}
     if len({r["t_mm"] for r in t_series}) >= 2:
         line = thickness_constants(np.array([r["t_mm"] for r in t_series]),

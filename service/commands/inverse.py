@@ -86,15 +86,15 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                          else "pressure_budget")
     if args.pressure_pa is None:
         raise InputError("--pressure-pa", "a design target needs a pressure (or budget), Pa")
-    pairs = None
+    pairs: tuple[tuple[str, str], ...] | None = None
     if args.pair:
-        pairs = []
+        found = []
         for text in args.pair:
             body, sep, membrane = text.partition("/")
             if not sep:
                 raise InputError("--pair", f"got {text!r}", "BODY/MEMBRANE material ids")
-            pairs.append((body, membrane))
-        pairs = tuple(pairs)
+            found.append((body, membrane))
+        pairs = tuple(found)
     target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
                           force_mn=args.force_mn)
     bounds = DesignBounds(L_mm=tuple(args.L_range) if args.L_range else None,
