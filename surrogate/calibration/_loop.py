@@ -28,6 +28,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -146,8 +147,8 @@ def calibrate(obs: Observations, nominal: np.ndarray, model: dict | None = None,
         e = EFFECTS[eid]
         missing = [c for c in e.needs if c == "time_s" and not obs.has_time
                    or c == "flow_ul_s" and not obs.has_flow]
-        st = {"applicable": not missing, "identifiable": True, "confounded_with": None,
-              "note": None}
+        st: dict[str, Any] = {"applicable": not missing, "identifiable": True,
+                              "confounded_with": None, "note": None}
         if missing:
             st["note"] = f"needs column {missing[0]}"
         elif eid == "hydraulic_resistance" and not obs.flow_varies:
