@@ -45,6 +45,7 @@ class MaterialBlock:
     Minv: np.ndarray            # (ne, npr, npr)
     dofs: np.ndarray            # (ne, 3 nb) global vector dofs, local order 3 a + i
     membrane: bool
+    elements: np.ndarray | None = None      # element indices in the mesh
     box_scale: np.ndarray | None = None     # (ne, 3) element sizes when all are boxes
     box_products: np.ndarray | None = None  # (nb nb, nq 9): dNref_aJ dNref_bL per q
 
@@ -74,7 +75,7 @@ def material_block(basis: Basis, elements: np.ndarray, mu_pa, alpha, bulk_pa: fl
     sdofs = basis.element_dofs[:, elements].T                               # (ne, nb)
     dofs = (3 * sdofs[:, :, None] + np.arange(3)).reshape(len(elements), 3 * nb)
     block = MaterialBlock(np.asarray(mu_pa, float), np.asarray(alpha, float), float(bulk_pa),
-                          dN, wdV, Np, np.linalg.inv(M), dofs, membrane)
+                          dN, wdV, Np, np.linalg.inv(M), dofs, membrane, elements)
     _detect_boxes(block)
     return block
 

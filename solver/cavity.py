@@ -42,19 +42,19 @@ def make_cavity(mesh, element: str, facets: np.ndarray, doflocs: np.ndarray) -> 
     fb = FacetBasis(mesh, elem, facets=facets, intorder=5 if element == "hex2" else 3)
     nb = fb.Nbfun
     # The solid's outward normal points into the cavity; the cavity's own outward
-    # normal (the one the volume integral needs) is its negative.
-    normal = -fb.normals[:, :, 0].T                                  # (nf, 3), axis-aligned
-    k = np.argmax(np.abs(normal), axis=1)
-    sign = np.sign(normal[np.arange(len(k)), k])
-    s1 = np.where(sign > 0, (k + 1) % 3, (k + 2) % 3)
-    s2 = np.where(sign > 0, (k + 2) % 3, (k + 1) % 3)
+    # normal N (the one the volume integral needs) is its negative. Tangents
+    # t1, t2 with t1 x t2 = N at every quadrature point.
+    N = -np.moveaxis(fb.normals, 0, -1)                              # (nf, nq, 3)
+    helper = np.where(np.abs(N[..., :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    t1 = np.cross(helper, N)
+    t1 /= np.linalg.norm(t1, axis=-1, keepdims=True)
+    t2 = np.cross(N, t1)
     vals = np.stack([fb.basis[a][0].value for a in range(nb)], axis=-1)       # (nf, nq, nb)
     grads = np.stack([fb.basis[a][0].grad for a in range(nb)], axis=-1)       # (3, nf, nq, nb)
-    idx = np.arange(len(k))
-    N1 = grads[s1, idx]
-    N2 = grads[s2, idx]
+    N1 = np.einsum("jfqa,fqj->fqa", grads, t1)
+    N2 = np.einsum("jfqa,fqj->fqa", grads, t2)
     sdofs = fb.element_dofs.T                                                 # (nf, nb)
-    dofs = (3 * sdofs[:, :, None] + np.arange(3)).reshape(len(k), 3 * nb)
+    dofs = (3 * sdofs[:, :, None] + np.arange(3)).reshape(sdofs.shape[0], 3 * nb)
     return Cavity(vals, N1, N2, fb.dx, dofs, doflocs[:, sdofs].transpose(1, 2, 0))
 
 

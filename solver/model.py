@@ -35,35 +35,32 @@ class Evaluation:
     load_norm: float        # || p dV/du ||
 
 
-class ActuatorModel:
-    def __init__(self, design: Design, settings: SolverSettings) -> None:
-        self.design = design.validated()
-        self.settings = settings
-        am = build_mesh(self.design, settings.mesh_level)
-        self.mesh = am.mesh
-        basis = make_basis(am.mesh, settings.element)
+class SolidModel:
+    """A hyperelastic solid with one fluid cavity, discretised once.
+
+    groups: list of (element indices, OgdenMaterial, is_membrane) covering the mesh.
+    fixed:  bool (nnodes, 3) mask of constrained displacement components (u = 0),
+            over the scalar nodes (dofs) of the basis.
+    """
+
+    def __init__(self, mesh, element: str, groups, cavity_facets: np.ndarray,
+                 fixed_fn, bulk_ratio: float) -> None:
+        self.mesh = mesh
+        basis = make_basis(mesh, element)
         self.doflocs = basis.doflocs                                      # (3, nnodes)
         nnodes = basis.N
         self.ndofs = 3 * nnodes
-        porder = 1 if settings.element == "hex2" else 0
+        porder = 1 if element == "hex2" else 0
         self.blocks = []
-        for mat, is_membrane in ((self.design.body_material, False),
-                                 (self.design.membrane_material, True)):
-            elements = np.nonzero(am.membrane == is_membrane)[0]
+        for elements, mat, is_membrane in groups:
             mu = np.array(mat.mu_pa)
             alpha = np.array(mat.alpha)
             mu0 = 0.5 * float((mu * alpha).sum())
-            self.blocks.append(material_block(basis, elements, mu, alpha,
-                                              settings.bulk_ratio * mu0, porder, is_membrane))
+            self.blocks.append(material_block(basis, np.asarray(elements), mu, alpha,
+                                              bulk_ratio * mu0, porder, is_membrane))
         self.mu0_min_pa = min(0.5 * float((b.mu_pa * b.alpha).sum()) for b in self.blocks)
-        self.cavity = cav.make_cavity(am.mesh, settings.element, am.cavity_facets,
-                                      basis.doflocs)
-        X = basis.doflocs
-        tol = 1e-9
-        fixed = np.zeros((nnodes, 3), dtype=bool)
-        fixed[X[0] < tol, :] = True
-        fixed[X[1] < tol, 1] = True
-        self.end_nodes = np.nonzero(np.abs(X[0] - am.end_face_x_mm) < 1e-9)[0]
+        self.cavity = cav.make_cavity(mesh, element, cavity_facets, basis.doflocs)
+        fixed = np.asarray(fixed_fn(basis.doflocs), dtype=bool)
         free = np.nonzero(~fixed.ravel())[0]
         self.pattern = Pattern([b.dofs for b in self.blocks] + [self.cavity.dofs],
                                free, self.ndofs)
@@ -102,6 +99,28 @@ class ActuatorModel:
             K = self.pattern.matrix(mats)
         self.timings["assembly_s"] += time.perf_counter() - t0
         return Evaluation(R, K, g, vol, energy, lam_m, float(np.linalg.norm(pressure_pa * g)))
+
+
+
+class ActuatorModel(SolidModel):
+    """The half actuator: body A over membrane B, clamped at x = 0, symmetric in y."""
+
+    def __init__(self, design: Design, settings: SolverSettings) -> None:
+        self.design = design.validated()
+        self.settings = settings
+        am = build_mesh(self.design, settings.mesh_level)
+        groups = [(np.nonzero(~am.membrane)[0], self.design.body_material, False),
+                  (np.nonzero(am.membrane)[0], self.design.membrane_material, True)]
+
+        def fixed(X: np.ndarray) -> np.ndarray:
+            mask = np.zeros((X.shape[1], 3), dtype=bool)
+            mask[X[0] < 1e-9, :] = True           # clamped end
+            mask[X[1] < 1e-9, 1] = True           # symmetry plane y = 0
+            return mask
+
+        super().__init__(am.mesh, settings.element, groups, am.cavity_facets, fixed,
+                         settings.bulk_ratio)
+        self.end_nodes = np.nonzero(np.abs(self.doflocs[0] - am.end_face_x_mm) < 1e-9)[0]
 
     def injected_volume_ul(self, volume_half_mm3: float) -> float:
         """Cavity volume change of the whole actuator (two halves), ul = mm^3."""

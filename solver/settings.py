@@ -38,7 +38,7 @@ class SolverSettings:
     control: str = "volume"
     max_angle_deg: float = 90.0
     max_pressure_pa: float = 20000.0
-    max_volume_ul: float = 50.0
+    max_volume_ul: float = 500.0
     flow_ul_s: float = 2.5
     bulk_ratio: float = 1000.0
     newton_tol: float = 1e-8

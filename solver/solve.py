@@ -15,7 +15,7 @@ Two controls:
 Steps restart from the last converged state (no extrapolating predictor: it
 caused most Newton failures in earlier prototypes); a failed step is cut back
 by half; the step grows when Newton converges quickly and shrinks when the
-angle increment is large, aiming at ~4 degrees per step. A step that cannot
+angle increment is large, aiming at ~6 degrees per step. A step that cannot
 converge after the cut-backs ends the curve with status "failed" and the reason.
 """
 
@@ -32,15 +32,16 @@ from solver.linear import factorize
 from solver.model import ActuatorModel
 from solver.settings import SolverSettings
 
-TARGET_ANGLE_STEP_DEG = 4.0
+TARGET_ANGLE_STEP_DEG = 6.0
 MIN_CUTBACK = 1.0 / 1024.0
 
 
-class _StepFailed(Exception):
-    pass
+class StepFailed(Exception):
+    """A load step did not converge; the caller cuts the step back."""
 
 
-def _newton(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverSettings,
+
+def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverSettings,
             target_volume: float | None, target_pressure: float | None, backend: str):
     """Converge one load step; returns (u, p, iterations, residual, negative pivots)."""
     tol = settings.newton_tol
@@ -48,18 +49,33 @@ def _newton(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverSetti
     volume_scale = max(model.volume0_mm3, 1e-9)
     neg = -1
     first_res = None
+    du, dp = None, 0.0
     for it in range(1, settings.max_newton_iter + 1):
         if target_pressure is not None:
             p = target_pressure
-        ev = model.evaluate(u, p)
+        ev = None
+        if du is None:
+            ev = model.evaluate(u, p)
+        else:
+            # Damped update: halve it while it would invert an element.
+            scale = 1.0
+            for _ in range(6):
+                try:
+                    ev = model.evaluate(u + scale * du, p + scale * dp)
+                    break
+                except FloatingPointError:
+                    scale *= 0.5
+            if ev is None:
+                raise StepFailed("every damped Newton update inverts an element")
+            u, p = u + scale * du, p + scale * dp
         res = float(np.linalg.norm(ev.R)) / max(ev.load_norm, force_floor)
         vres = 0.0 if target_volume is None else abs(ev.volume_mm3 - target_volume) / volume_scale
         if not np.isfinite(res):
-            raise _StepFailed("non-finite residual")
+            raise StepFailed("non-finite residual")
         if first_res is None:
             first_res = max(res, vres)
         elif max(res, vres) > 1e6 * max(first_res, 1.0):
-            raise _StepFailed("Newton diverged")
+            raise StepFailed("Newton diverged")
         if it > 1 and res < tol and vres < tol:
             return u, p, it - 1, res, neg
         t0 = time.perf_counter()
@@ -69,21 +85,19 @@ def _newton(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverSetti
             if target_volume is not None:
                 b = fac.solve(ev.g)
         except (np.linalg.LinAlgError, RuntimeError) as exc:
-            raise _StepFailed(f"linear solve failed: {exc}") from None
+            raise StepFailed(f"linear solve failed: {exc}") from None
         finally:
             model.timings["linear_solve_s"] += time.perf_counter() - t0
         neg = fac.negative_pivots
         if target_volume is None:
-            du = a
+            du, dp = a, 0.0
         else:
             gb = float(ev.g @ b)
             if gb == 0.0 or not np.isfinite(gb):
-                raise _StepFailed("bordered system singular (g^T K^-1 g = 0)")
+                raise StepFailed("bordered system singular (g^T K^-1 g = 0)")
             dp = -(ev.volume_mm3 - target_volume + float(ev.g @ a)) / gb
             du = a + b * dp
-            p = p + dp
-        u = u + du
-    raise _StepFailed(f"no convergence in {settings.max_newton_iter} Newton iterations "
+    raise StepFailed(f"no convergence in {settings.max_newton_iter} Newton iterations "
                       f"(residual {res:.2e})")
 
 
@@ -94,6 +108,14 @@ def solve(design: Design, settings: SolverSettings | None = None,
     Raises InputError for invalid input only; a solve that fails returns a Curve
     with status "failed" and the reason.
     """
+    return inflate(design, settings, on_step, backend)[0]
+
+
+def inflate(design: Design, settings: SolverSettings | None = None,
+            on_step: Callable[[dict], None] | None = None, backend: str = "superlu"
+            ) -> tuple[Curve, ActuatorModel, np.ndarray]:
+    """Like ``solve``, also returning the discrete model and the last converged
+    displacement (free dofs), for field output (VTK)."""
     settings = (settings or SolverSettings()).validated()
     design = design.validated()
     t_start = time.perf_counter()
@@ -129,11 +151,11 @@ def solve(design: Design, settings: SolverSettings | None = None,
         try:
             if volume_control:
                 vt = model.volume0_mm3 + 0.5 * rows["v"][-1] + step
-                u_new, p_new, its, res, neg = _newton(model, u, p, settings, vt, None, backend)
+                u_new, p_new, its, res, neg = newton_step(model, u, p, settings, vt, None, backend)
             else:
-                u_new, p_new, its, res, neg = _newton(model, u, p, settings, None, p + step,
+                u_new, p_new, its, res, neg = newton_step(model, u, p, settings, None, p + step,
                                                       backend)
-        except (_StepFailed, FloatingPointError) as exc:
+        except (StepFailed, FloatingPointError) as exc:
             step *= 0.5
             if step < MIN_CUTBACK * initial_step:
                 status, reason = "failed", (f"step at p = {p:.1f} Pa, angle = "
@@ -144,7 +166,7 @@ def solve(design: Design, settings: SolverSettings | None = None,
         u, p = u_new, p_new
         angle = record(u, p, its, res, neg)
         d_angle = abs(angle - rows["a"][-2])
-        factor = 1.5 if its <= 5 else (1.0 if its <= 9 else 0.6)
+        factor = 1.6 if its <= 6 else (1.0 if its <= 9 else 0.6)
         if d_angle > 1e-9:
             factor = min(factor, max(0.5, TARGET_ANGLE_STEP_DEG / d_angle))
         step *= factor
@@ -166,7 +188,7 @@ def solve(design: Design, settings: SolverSettings | None = None,
             pmax = int(drops[0])
     volume = np.array(rows["v"])
     n = len(pressure)
-    return Curve(
+    curve = Curve(
         pressure_pa=pressure, volume_ul=volume, time_s=volume / settings.flow_ul_s,
         angle_deg=np.array(rows["a"]), tip_displacement_mm=np.array(rows["tip"]).reshape(n, 2),
         max_membrane_stretch=np.array(rows["lam"]), force_mn=np.full(n, np.nan),
@@ -175,3 +197,4 @@ def solve(design: Design, settings: SolverSettings | None = None,
         negative_eigenvalues=np.array(rows["neg"], dtype=np.int64),
         status=status, reason=reason, pressure_maximum_index=pmax, n_dofs=model.n_free,
         wall_time_s=time.perf_counter() - t_start, timings_s=dict(model.timings))
+    return curve, model, u

@@ -9,10 +9,13 @@ database.
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
 from collections.abc import Callable, Iterable, Iterator
 from concurrent import futures as cf
 from typing import Any
+
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def _ignore_sigint() -> None:
@@ -21,10 +24,19 @@ def _ignore_sigint() -> None:
 
 
 class PoolBackend:
-    """``workers`` spawned processes (spawn: no inherited HDF5 handles or threads)."""
+    """``workers`` spawned processes (spawn: no inherited HDF5 handles or threads).
+
+    Each worker's BLAS/OpenMP threads are capped at cores // workers (unless the user set
+    OMP_NUM_THREADS etc.), so N workers do not oversubscribe the machine; the children
+    inherit the setting from the environment, which ``close`` restores.
+    """
 
     def __init__(self, workers: int) -> None:
         self.workers = workers
+        threads = str(max(1, (os.cpu_count() or 1) // workers))
+        self._saved_env = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+        for name in THREAD_VARIABLES:
+            os.environ.setdefault(name, threads)
         self._pool = cf.ProcessPoolExecutor(
             max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
             initializer=_ignore_sigint)
@@ -42,10 +54,15 @@ class PoolBackend:
         processes = list(getattr(self._pool, "_processes", {}).values())
         for p in processes:
             p.terminate()
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        self.close()
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
+        for name, value in self._saved_env.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
     def describe(self) -> str:
         return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"

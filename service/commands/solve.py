@@ -1,0 +1,100 @@
+"""``balloon solve``: one finite-element solve of a design, with outputs to files."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from solver.design import design_from_dict
+from solver.settings import CONTROLS, ELEMENTS, MAX_MESH_LEVEL, TIPS, SolverSettings
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "solve", help="solve one design with the FE solver (pressure-angle curve)",
+        description="Inflate one actuator design with the 3D finite-element solver and "
+                    "write its pressure-volume-angle curve. Lengths in mm.")
+    g = p.add_argument_group("design (mm; defaults: the paper's standard design)")
+    g.add_argument("--L-mm", type=float, default=7.1, help="chamber length")
+    g.add_argument("--t-mm", type=float, default=0.5, help="membrane thickness")
+    g.add_argument("--T-mm", type=float, default=1.0, help="body thickness above the chamber")
+    g.add_argument("--b-mm", type=float, default=1.8, help="chamber width")
+    g.add_argument("--h-mm", type=float, default=0.15, help="chamber height")
+    g.add_argument("--W-mm", type=float, default=3.0, help="actuator width")
+    g.add_argument("--body-length-mm", type=float, default=None)
+    g.add_argument("--chamber-offset-mm", type=float, default=None,
+                   help="distance from the clamped end to the chamber (default: centred)")
+    g.add_argument("--body-material", default="pdms_1_10")
+    g.add_argument("--membrane-material", default="ecoflex_00_30")
+    s = p.add_argument_group("solver")
+    d = SolverSettings()
+    s.add_argument("--control", choices=CONTROLS, default=d.control)
+    s.add_argument("--element", choices=ELEMENTS, default=d.element)
+    s.add_argument("--mesh", type=int, default=d.mesh_level,
+                   help=f"mesh level 0..{MAX_MESH_LEVEL} (default {d.mesh_level})")
+    s.add_argument("--max-angle-deg", type=float, default=d.max_angle_deg)
+    s.add_argument("--max-pressure-pa", type=float, default=d.max_pressure_pa)
+    s.add_argument("--flow-ul-s", type=float, default=d.flow_ul_s)
+    s.add_argument("--bulk-ratio", type=float, default=d.bulk_ratio)
+    s.add_argument("--tip", choices=TIPS, default=d.tip)
+    s.add_argument("--spring-k-n-per-m", type=float, default=d.spring_k_n_per_m)
+    o = p.add_argument_group("output")
+    o.add_argument("--json", metavar="PATH", help="write the curve as JSON")
+    o.add_argument("--csv", metavar="PATH", help="write the curve as CSV")
+    o.add_argument("--plot", metavar="PATH", help="write a PNG of angle and volume vs pressure")
+    o.add_argument("--vtk", metavar="PATH", help="write the final deformed state (VTU)")
+    o.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def _design(args: argparse.Namespace):
+    return design_from_dict({
+        "L_mm": args.L_mm, "t_mm": args.t_mm, "T_mm": args.T_mm, "b_mm": args.b_mm,
+        "h_mm": args.h_mm, "W_mm": args.W_mm, "body_length_mm": args.body_length_mm,
+        "chamber_offset_mm": args.chamber_offset_mm, "body_material": args.body_material,
+        "membrane_material": args.membrane_material})
+
+
+def run(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from solver.io import curve_to_csv, plot_curve
+    from solver.solve import inflate
+
+    design = _design(args)
+    settings = SolverSettings(
+        mesh_level=args.mesh, element=args.element, control=args.control,
+        max_angle_deg=args.max_angle_deg, max_pressure_pa=args.max_pressure_pa,
+        flow_ul_s=args.flow_ul_s, bulk_ratio=args.bulk_ratio, tip=args.tip,
+        spring_k_n_per_m=args.spring_k_n_per_m).validated()
+    bar = tqdm(total=round(settings.max_angle_deg), unit="deg", disable=args.quiet,
+               file=sys.stderr, desc="bending")
+
+    def on_step(info: dict) -> None:
+        bar.n = min(round(abs(info["angle_deg"])), bar.total)
+        bar.set_postfix(p_pa=f"{info['pressure_pa']:.0f}", step=info["step"])
+        bar.refresh()
+
+    curve, model, u = inflate(design, settings, on_step=on_step)
+    bar.close()
+    print(f"{curve.status}: {curve.reason}; {len(curve)} points, {curve.n_dofs} dofs, "
+          f"{curve.wall_time_s:.1f} s")
+    print(f"{'pressure_pa':>12} {'volume_ul':>10} {'time_s':>8} {'angle_deg':>10} "
+          f"{'stretch':>8}")
+    for i in range(len(curve)):
+        print(f"{curve.pressure_pa[i]:12.1f} {curve.volume_ul[i]:10.3f} {curve.time_s[i]:8.2f} "
+              f"{curve.angle_deg[i]:10.2f} {curve.max_membrane_stretch[i]:8.3f}")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"design": design.as_dict(), "settings": settings.as_dict(),
+                       "curve": curve.as_dict()}, fh, indent=1)
+    if args.csv:
+        curve_to_csv(curve, args.csv)
+    if args.plot:
+        plot_curve(curve, args.plot, title=f"L = {design.L_mm} mm, t = {design.t_mm} mm")
+    if args.vtk:
+        from solver.export import write_vtu
+
+        write_vtu(args.vtk, model, u)
+    return 0 if curve.status != "failed" else 1

@@ -1,0 +1,90 @@
+"""The discrete model: residual = gradient of the energy, tangent = derivative of the
+residual, cavity volume and its derivatives, fast assembly path = general path."""
+
+import numpy as np
+import pytest
+
+from solver import Design, SolverSettings
+from solver import cavity as cav
+from solver.assembly import element_stiffness
+from solver.model import ActuatorModel
+
+
+@pytest.fixture(scope="module", params=["hex1", "hex2"])
+def model(request):
+    return ActuatorModel(Design(L_mm=4.1), SolverSettings(mesh_level=0, element=request.param,
+                                                          bulk_ratio=50))
+
+
+def _state(model, seed=1):
+    return np.random.default_rng(seed).standard_normal(model.n_free) * 2e-3
+
+
+def test_undeformed_cavity_volume_is_the_chamber(model):
+    # Half chamber: L x b/2 x h = 4.1 x 0.9 x 0.15 mm^3.
+    assert model.volume0_mm3 == pytest.approx(4.1 * 0.9 * 0.15, rel=1e-12)
+
+
+def test_rigid_translation_keeps_volume(model):
+    u = np.zeros(model.ndofs)
+    u[0::3] = 0.3
+    u[2::3] = -0.2
+    assert cav.volume(model.cavity, u) == pytest.approx(model.volume0_mm3, rel=1e-12)
+
+
+def test_pressure_load_is_the_volume_derivative(model):
+    u = model.full(_state(model))
+    g = cav.volume_gradient(model.cavity, u)
+    d = np.random.default_rng(5).standard_normal(model.ndofs) * 1e-3
+    h = 1e-4
+    fd = (cav.volume(model.cavity, u + h * d) - cav.volume(model.cavity, u - h * d)) / (2 * h)
+    assert (g * d[model.cavity.dofs]).sum() == pytest.approx(fd, rel=1e-7)
+
+
+def test_volume_hessian_is_the_gradient_derivative(model):
+    u = model.full(_state(model))
+    H = cav.volume_hessian(model.cavity, u)
+    d = np.random.default_rng(6).standard_normal(model.ndofs) * 1e-3
+    h = 1e-5
+    fd = (cav.volume_gradient(model.cavity, u + h * d)
+          - cav.volume_gradient(model.cavity, u - h * d)) / (2 * h)
+    Hd = np.einsum("fxy,fy->fx", H, d[model.cavity.dofs])
+    assert np.abs(Hd - fd).max() < 1e-7 * np.abs(fd).max()
+    assert np.allclose(H, H.transpose(0, 2, 1))
+
+
+def test_residual_is_the_energy_gradient(model):
+    u, p = _state(model), 300.0
+    ev = model.evaluate(u, p)
+
+    def potential(v):
+        e = model.evaluate(v, p, tangent=False)
+        return e.energy - p * e.volume_mm3
+
+    d = np.random.default_rng(2).standard_normal(model.n_free) * 1e-3
+    h = 1e-4
+    fd = (potential(u + h * d) - potential(u - h * d)) / (2 * h)
+    assert ev.R @ d == pytest.approx(fd, rel=1e-7)
+
+
+def test_tangent_is_the_residual_derivative(model):
+    u, p = _state(model), 300.0
+    ev = model.evaluate(u, p)
+    d = np.random.default_rng(3).standard_normal(model.n_free) * 1e-3
+    h = 1e-5
+    fd = (model.evaluate(u + h * d, p, False).R - model.evaluate(u - h * d, p, False).R) / (2 * h)
+    assert np.abs(ev.K @ d - fd).max() < 1e-7 * np.abs(fd).max()
+    assert abs(ev.K - ev.K.T).max() < 1e-12 * abs(ev.K).max()
+
+
+def test_box_fast_path_equals_general_contraction(model):
+    block = model.blocks[0]
+    assert block.box_scale is not None      # the actuator mesh is made of boxes
+    A = np.random.default_rng(4).standard_normal(block.dN.shape[:2] + (9, 9))
+    fast = element_stiffness(block, A)
+    saved, block.box_scale = block.box_scale, None
+    try:
+        general = element_stiffness(block, A)
+    finally:
+        block.box_scale = saved
+    assert np.abs(fast - general).max() < 1e-12 * np.abs(general).max()
