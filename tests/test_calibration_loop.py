@@ -160,3 +160,22 @@ def test_observations_are_independent_of_row_order():
     assert a.sha256 == b.sha256
     assert np.allclose(np.sort(a.angle_deg), np.sort(b.angle_deg))
     assert observations_from_rows(measured_rows(seed=4)).sha256 != a.sha256
+
+
+def test_inlet_channel_resistance_by_hand():
+    """R = 12 mu L / (w h^3 (1 - 0.63 h/w)), water 1.0e-3 Pa s, L = 3 mm, w = 0.5 mm,
+    h = 0.15 mm (paper's fabrication section): 3.6e-5 / 1.3686e-15 = 2.630e10 Pa s/m^3
+    = 26.3 Pa per ul/s."""
+    from surrogate.calibration import rectangular_channel_resistance_pa_per_ul_s
+
+    assert rectangular_channel_resistance_pa_per_ul_s(3.0, 0.5, 0.15) == pytest.approx(
+        26.30, rel=1e-3)
+
+
+def test_one_thickness_confounds_thickness_bias_with_stiffness():
+    rows = measured_rows({"s": 1.2}, designs=((7.1, 0.5), (4.1, 0.5), (11.1, 0.5)))
+    report = run_calibration(rows, "paper").report
+    entry = next(c for c in report["candidates"] if c["effect"] == "membrane_thickness_bias")
+    assert entry["confounded_with"] == "stiffness_scale"
+    assert report["selected_effects"] == ["stiffness_scale"]
+    assert "second thickness" in report["interpretation"]
