@@ -121,3 +121,23 @@ def test_result_writer_adds_a_record_and_keeps_the_others(db_path):
     with CurveStore(db_path) as db:
         assert len(db) == len(ROWS) + 1
         assert key == record_key(new, SETTINGS) and len(db.get(key).curve) == 3
+
+
+def test_reads_go_on_while_another_writer_holds_the_database(client, db_path):
+    """A precompute job holding the single writer lock does not stop the readers, and a
+    finished solve waits for the lock instead of failing."""
+    import threading
+
+    writer = CurveStore(db_path, mode="a")  # e.g. `balloon precompute` running
+    try:
+        assert client.get("/v1/curves").json()["total"] == len(ROWS)
+        done = []
+        thread = threading.Thread(target=lambda: done.append(
+            ResultWriter(db_path, busy_wait_s=30)(Design(L_mm=13.1), SETTINGS, make_curve(2))))
+        thread.start()
+        thread.join(0.5)
+        assert not done  # waiting for the lock
+    finally:
+        writer.close()
+    thread.join(30)
+    assert done and client.get("/v1/curves").json()["total"] == len(ROWS) + 1
