@@ -72,7 +72,7 @@ class Design:
         return (self.body_material.id, self.membrane_material.id,
                 round(self.T_mm, 6), round(self.b_mm, 6), round(self.h_mm, 6))
 
-    def validated(self) -> "Design":
+    def validated(self) -> Design:
         """Check ranges and consistency; return the design with lengths resolved."""
         values = {name: getattr(self, name) for name in LIMITS_MM}
         for name, value in values.items():

@@ -39,8 +39,10 @@ class SolidModel:
     """A hyperelastic solid with one fluid cavity, discretised once.
 
     groups: list of (element indices, OgdenMaterial, is_membrane) covering the mesh.
-    fixed:  bool (nnodes, 3) mask of constrained displacement components (u = 0),
-            over the scalar nodes (dofs) of the basis.
+    fixed_fn: maps the scalar nodes' reference positions (3, nnodes) to a bool
+            (nnodes, 3) mask of constrained displacement components (u = 0).
+    cavity_facets may be empty (no fluid cavity). ``external_force`` (full vector,
+    uN, dead load) may be set after construction; it enters the residual as -f.
     """
 
     def __init__(self, mesh, element: str, groups, cavity_facets: np.ndarray,
@@ -59,14 +61,19 @@ class SolidModel:
             self.blocks.append(material_block(basis, np.asarray(elements), mu, alpha,
                                               bulk_ratio * mu0, porder, is_membrane))
         self.mu0_min_pa = min(0.5 * float((b.mu_pa * b.alpha).sum()) for b in self.blocks)
-        self.cavity = cav.make_cavity(mesh, element, cavity_facets, basis.doflocs)
+        self.cavity = (cav.make_cavity(mesh, element, cavity_facets, basis.doflocs)
+                       if len(cavity_facets) else None)
+        self.external_force: np.ndarray | None = None
         fixed = np.asarray(fixed_fn(basis.doflocs), dtype=bool)
         free = np.nonzero(~fixed.ravel())[0]
-        self.pattern = Pattern([b.dofs for b in self.blocks] + [self.cavity.dofs],
-                               free, self.ndofs)
+        cavity_dofs = [self.cavity.dofs] if self.cavity is not None else []
+        self.pattern = Pattern([b.dofs for b in self.blocks] + cavity_dofs, free, self.ndofs)
         self.n_free = len(free)
-        self.volume0_mm3 = cav.volume(self.cavity, np.zeros(self.ndofs))
+        self.volume0_mm3 = self._volume(np.zeros(self.ndofs))
         self.timings = {"assembly_s": 0.0, "linear_solve_s": 0.0}
+
+    def _volume(self, u: np.ndarray) -> float:
+        return cav.volume(self.cavity, u) if self.cavity is not None else 0.0
 
     def full(self, u_free: np.ndarray) -> np.ndarray:
         u = np.zeros(self.ndofs)
@@ -89,13 +96,19 @@ class SolidModel:
             mats.append(st.stiffness)
             if block.membrane:
                 lam_m = float(st.lam_max.max())
-        gv = cav.volume_gradient(self.cavity, u)
-        g = scatter_vector(self.ndofs, self.cavity.dofs, gv)[free]
-        vol = cav.volume(self.cavity, u)
+        if self.cavity is not None:
+            gv = cav.volume_gradient(self.cavity, u)
+            g = scatter_vector(self.ndofs, self.cavity.dofs, gv)[free]
+        else:
+            g = np.zeros(len(free))
+        vol = self._volume(u)
         R = r[free] - pressure_pa * g
+        if self.external_force is not None:
+            R = R - self.external_force[free]
         K = None
         if tangent:
-            mats.append(-pressure_pa * cav.volume_hessian(self.cavity, u))
+            if self.cavity is not None:
+                mats.append(-pressure_pa * cav.volume_hessian(self.cavity, u))
             K = self.pattern.matrix(mats)
         self.timings["assembly_s"] += time.perf_counter() - t0
         return Evaluation(R, K, g, vol, energy, lam_m, float(np.linalg.norm(pressure_pa * g)))

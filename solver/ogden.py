@@ -48,7 +48,8 @@ def energy_derivatives(c: np.ndarray, mu: np.ndarray, alpha: np.ndarray
         # g_i = -phi/(6 c_i) + c_i^(a/2 - 1)/2 ;  w_i = mu s g_i
         g = -phi[..., None] * inv_c / 6.0 + 0.5 * ca * inv_c
         dw += m * s[..., None] * g
-        # dg_i/dc_j = -(a/2) c_j^(a/2-1) / (6 c_i) + delta_ij (phi/(6 c_i^2) + (a/2-1) c_i^(a/2-2)/2)
+        # dg_i/dc_j = -(a/2) c_j^(a/2-1) / (6 c_i)
+        #             + delta_ij (phi / (6 c_i^2) + (a/2 - 1) c_i^(a/2-2) / 2)
         dg = (-(a / 12.0) * (ca * inv_c)[..., None, :] * inv_c[..., :, None]
               + eye * (phi[..., None] * inv_c**2 / 6.0
                        + 0.5 * (0.5 * a - 1.0) * ca * inv_c**2)[..., None])

@@ -47,7 +47,7 @@ class SolverSettings:
     tip: str = "free"
     spring_k_n_per_m: float = 0.0
 
-    def validated(self) -> "SolverSettings":
+    def validated(self) -> SolverSettings:
         checks: list[tuple[str, float, float]] = [
             ("mesh_level", 0, MAX_MESH_LEVEL), ("max_angle_deg", 0.1, 360.0),
             ("max_pressure_pa", 1.0, 1e7), ("max_volume_ul", 1e-3, 1e4),
