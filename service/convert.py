@@ -26,7 +26,7 @@ def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body",
 def to_settings(settings: SolveSettingsIn, loc: tuple[str, ...] = ("body", "settings")
                 ) -> SolverSettings:
     try:
-        return settings_from_dict(settings.model_dump())
+        return settings_from_dict(settings.model_dump(exclude_unset=True))
     except InputError as exc:
         raise located(exc, loc) from None
 

@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from solver.design import LIMITS_MM
-from solver.settings import MAX_MESH_LEVEL
+from solver.settings import MAX_MESH_LEVEL, SolverSettings
 
 MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
 
@@ -68,18 +68,25 @@ class DesignIn(Schema):
         return data
 
 
+_SOLVER = SolverSettings()  # omitted settings keep the solver's defaults
+
+
 class SolveSettingsIn(Schema):
     """The solver settings a client may choose; the rest keep ``SolverSettings``' defaults."""
 
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"mesh_level": 1, "element": "hex2", "max_angle_deg": 90}]})
 
-    mesh_level: int = Field(1, ge=0, le=MAX_MESH_LEVEL, description="0 = coarsest")
-    element: Literal["hex2", "hex1"] = "hex2"
-    control: Literal["volume", "pressure"] = "volume"
-    max_angle_deg: float = Field(90.0, ge=0.1, le=360.0, description="stop angle, degrees")
-    max_pressure_pa: float = Field(20000.0, ge=1.0, le=1e7, description="stop pressure, Pa")
-    max_volume_ul: float = Field(50.0, ge=1e-3, le=1e4, description="stop volume, ul")
-    tip: Literal["free", "spring", "blocked"] = "free"
-    spring_k_n_per_m: float = Field(0.0, ge=0.0, le=1e6,
+    mesh_level: int = Field(_SOLVER.mesh_level, ge=0, le=MAX_MESH_LEVEL,
+                            description="0 = coarsest")
+    element: Literal["hex2", "hex1"] = _SOLVER.element  # type: ignore[assignment]
+    control: Literal["volume", "pressure"] = _SOLVER.control  # type: ignore[assignment]
+    max_angle_deg: float = Field(_SOLVER.max_angle_deg, ge=0.1, le=360.0,
+                                 description="stop angle, degrees")
+    max_pressure_pa: float = Field(_SOLVER.max_pressure_pa, ge=1.0, le=1e7,
+                                   description="stop pressure, Pa")
+    max_volume_ul: float = Field(_SOLVER.max_volume_ul, ge=1e-3, le=1e4,
+                                 description="stop volume, ul")
+    tip: Literal["free", "spring", "blocked"] = _SOLVER.tip  # type: ignore[assignment]
+    spring_k_n_per_m: float = Field(_SOLVER.spring_k_n_per_m, ge=0.0, le=1e6,
                                     description="tip spring stiffness (tip = spring), N/m")
