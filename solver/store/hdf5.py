@@ -27,6 +27,7 @@ import shutil
 import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 import h5py
 
@@ -177,7 +178,7 @@ class CurveStore:
             group = self._records_group()
             return {k: str(schema.plain(group[k].attrs["status"])) for k in sorted(group)}
 
-    def summaries(self) -> list[dict[str, object]]:
+    def summaries(self) -> list[dict[str, Any]]:
         """Per record: key, status, reason, design (flat, material ids), settings, n_steps,
         provenance -- without loading the curves."""
         with self._mutex:
@@ -203,8 +204,7 @@ class CurveStore:
                 raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
         out = []
         for summary in self.summaries():
-            flat = {**summary["settings"], **summary["design"],  # type: ignore[dict-item]
-                    "status": summary["status"]}
+            flat = {**summary["settings"], **summary["design"], "status": summary["status"]}
             if all(_matches(flat.get(k), v) for k, v in filters.items()):
                 out.append(self.get(str(summary["key"])))
         return out
@@ -252,7 +252,8 @@ class CurveStore:
         for orphan in self.path.parent.glob(f".{self.path.name}.tmp-*"):
             orphan.unlink(missing_ok=True)
 
-    def _publish(self, change, create: bool = False, drop: set[str] = frozenset()) -> None:
+    def _publish(self, change: Any, create: bool = False,
+                 drop: frozenset[str] | set[str] = frozenset()) -> None:
         """Copy the file, apply ``change(h5file)`` to the copy, fsync, rename over."""
         tmp = self._tmp_path()
         try:
@@ -274,7 +275,7 @@ class CurveStore:
             tmp.unlink(missing_ok=True)
             raise
 
-    def _repack(self, tmp: Path, drop: set[str]) -> None:
+    def _repack(self, tmp: Path, drop: frozenset[str] | set[str]) -> None:
         """A fresh copy without the records in ``drop`` (HDF5 does not reclaim the space of
         deleted groups, so replaced records are dropped by rewriting the file)."""
         src = self._file()

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
@@ -56,9 +57,9 @@ def plain(value: object) -> object:
     return value
 
 
-def read_attrs(obj: h5py.HLObject) -> dict[str, object]:
+def read_attrs(obj: h5py.HLObject) -> dict[str, Any]:
     """Attributes as plain values; names ending in ``_json`` are decoded JSON."""
-    out: dict[str, object] = {}
+    out: dict[str, Any] = {}
     for name, value in obj.attrs.items():
         value = plain(value)
         if name.endswith(JSON_SUFFIX) and isinstance(value, str):
@@ -85,7 +86,7 @@ def check_schema(f: h5py.File, path: Path | str) -> None:
     if plain(f.attrs.get("format")) != FORMAT:
         raise NotACurveStoreError("db", f"{path} is not a curve database (no format = "
                                   f"{FORMAT!r} attribute)", "a file written by balloon precompute")
-    found = int(plain(f.attrs.get("schema_version", 0)))  # type: ignore[arg-type]
+    found = int(plain(f.attrs.get("schema_version", 0)))  # type: ignore[call-overload]
     if found > SCHEMA_VERSION:
         raise SchemaVersionError(
             f"{path} has database schema version {found}, but this balloon-actuator reads "
@@ -173,9 +174,9 @@ def read_curve(group: h5py.Group) -> Curve:
     attrs = read_attrs(g)
     return Curve(**arrays, status=str(attrs["status"]), reason=str(attrs["reason"]),
                  pressure_maximum_index=int(attrs["pressure_maximum_index"]),  # type: ignore
-                 n_dofs=int(attrs["n_dofs"]),  # type: ignore[arg-type]
-                 wall_time_s=float(attrs["wall_time_s"]),  # type: ignore[arg-type]
-                 timings_s={k: float(v) for k, v in read_attrs(g["timings_s"]).items()})  # type: ignore[arg-type]
+                 n_dofs=int(attrs["n_dofs"]),
+                 wall_time_s=float(attrs["wall_time_s"]),
+                 timings_s={k: float(v) for k, v in read_attrs(g["timings_s"]).items()})
 
 
 def read_record(group: h5py.Group) -> Record:
@@ -184,10 +185,10 @@ def read_record(group: h5py.Group) -> Record:
                   provenance=read_attrs(group["provenance"]))
 
 
-def read_summary(group: h5py.Group) -> dict[str, object]:
+def read_summary(group: h5py.Group) -> dict[str, Any]:
     """Key, status, reason, design, settings and step count without loading the curve."""
     design = read_attrs(group["design"])
-    flat: dict[str, object] = {name: design[name] for name in LIMITS_MM}
+    flat: dict[str, Any] = {name: design[name] for name in LIMITS_MM}
     for role in MATERIAL_ROLES:
         flat[role] = design[f"{role}_id"]
     return {"key": plain(group.attrs["key"]), "status": plain(group.attrs["status"]),
