@@ -102,7 +102,7 @@ class JobManager:
         self.retry_after_s = retry_after_s
         self._history = history
         self._poll_s = poll_s
-        self._ctx = multiprocessing.get_context(mp_context)
+        self._ctx: Any = multiprocessing.get_context(mp_context)
         self._cond = threading.Condition()
         self._jobs: OrderedDict[str, JobState] = OrderedDict()
         self._pending: deque[str] = deque()

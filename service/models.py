@@ -58,6 +58,7 @@ class ModelRegistry:
 
 def load_calibrated(name: str, models_dir: Path) -> Any:
     """A saved calibrated model by name; NotFoundError when there is none."""
+    load_model: Any
     try:
         from surrogate.calibration import load_model
     except ImportError:

@@ -47,4 +47,4 @@ class ServiceSettings(BaseSettings):
 @lru_cache
 def get_settings() -> ServiceSettings:
     """The process-wide settings, read from the environment once."""
-    return ServiceSettings()
+    return ServiceSettings()  # type: ignore[call-arg]  # fields come from the environment

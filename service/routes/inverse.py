@@ -24,6 +24,10 @@ PRESSURE_FIELDS: dict[str, tuple[str | int, ...]] = {
 }
 
 
+def _pair(values: list[float] | None) -> tuple[float, float] | None:
+    return (values[0], values[1]) if values else None
+
+
 @router.post("/inverse", response_model=InverseResponse,
              summary="Designs that meet a target, ranked; or why none can")
 def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
@@ -38,8 +42,7 @@ def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
     try:
         result = inverse_design(
             surrogate, DesignTarget(t.kind, t.pressure_pa, t.angle_deg, t.force_mn),
-            DesignBounds(L_mm=tuple(request.L_bounds_mm) if request.L_bounds_mm else None,
-                         t_mm=tuple(request.t_bounds_mm) if request.t_bounds_mm else None,
+            DesignBounds(L_mm=_pair(request.L_bounds_mm), t_mm=_pair(request.t_bounds_mm),
                          material_pairs=pairs),
             objective=request.objective, n_results=request.n_results, level=request.level)
     except InputError as exc:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Path
 from fastapi.responses import JSONResponse
@@ -12,20 +12,23 @@ from service.deps import ApiKeyDep, JobsDep, SettingsDep
 from service.errors import ConflictError
 from service.jobs import JobState
 from service.schemas import Job, SolveRequest
+from service.schemas.jobs import Progress
 from service.store_access import stored_key
 
 router = APIRouter(prefix="/v1", tags=["jobs"])
 
 JOB_ID = Path(pattern=r"^[0-9a-f]{32}$", description="the job id",
               examples=["0123456789abcdef0123456789abcdef"])
-AUTH = {401: {"description": "no API key"}, 403: {"description": "wrong API key"}}
+AUTH: dict[int | str, dict[str, Any]] = {401: {"description": "no API key"},
+                                         403: {"description": "wrong API key"}}
 
 
 def job_view(job: JobState) -> Job:
-    return Job(id=job.id, status=job.status, key=job.key, created_utc=job.created_utc,
-               started_utc=job.started_utc, finished_utc=job.finished_utc,
-               progress=job.progress, design=job.design.as_dict(),
-               settings=job.settings.as_dict(), curve_id=job.curve_id,
+    return Job(id=job.id, status=job.status, key=job.key,  # type: ignore[arg-type]
+               created_utc=job.created_utc, started_utc=job.started_utc,
+               finished_utc=job.finished_utc, progress=Progress(**job.progress),
+               design=job.design.as_dict(), settings=job.settings.as_dict(),
+               curve_id=job.curve_id,
                curve_status=job.curve_status, curve_reason=job.curve_reason, error=job.error)
 
 

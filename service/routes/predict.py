@@ -17,7 +17,8 @@ from solver.errors import InputError
 
 router = APIRouter(prefix="/v1", tags=["predict"])
 
-PNG = {200: {"content": {"image/png": {}}, "description": "the plot, PNG"}}
+PNG: dict[int | str, dict[str, Any]] = {
+    200: {"content": {"image/png": {}}, "description": "the plot, PNG"}}
 
 
 def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,

@@ -87,7 +87,7 @@ class PressureRequest(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [10, 45, 90]}]})
 
-    design: DesignIn = Field(default_factory=DesignIn)
+    design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
     angles_deg: list[Angle] = Field(min_length=1, max_length=1000,
                                     description="target angles, degrees")
     model: str = MODEL

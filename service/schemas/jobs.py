@@ -16,8 +16,8 @@ class SolveRequest(Schema):
         {"design": {"L_mm": 9.1, "t_mm": 0.6},
          "settings": {"mesh_level": 0, "element": "hex1", "max_angle_deg": 30}}]})
 
-    design: DesignIn = Field(default_factory=DesignIn)
-    settings: SolveSettingsIn = Field(default_factory=SolveSettingsIn)
+    design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
+    settings: SolveSettingsIn = Field(default_factory=lambda: SolveSettingsIn.model_validate({}))
 
 
 class Progress(BaseModel):

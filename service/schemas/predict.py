@@ -20,7 +20,7 @@ class PredictRequest(Schema):
         {"design": {"L_mm": 7.1, "t_mm": 0.5}, "pressures_pa": [500, 1000, 1500, 2000],
          "model": "fitted", "level": 0.95}]})
 
-    design: DesignIn = Field(default_factory=DesignIn)
+    design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
     pressures_pa: list[Pressure] = Field(min_length=1, max_length=1000,
                                          description="cavity pressures, Pa")
     model: str = MODEL
