@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from service.errors import UnavailableError
-from solver.errors import NotFoundError
+from service.errors import FieldError, UnavailableError
+from solver.errors import BalloonError, NotFoundError
 
 
 @dataclass
@@ -67,6 +67,20 @@ def load_calibrated(name: str, models_dir: Path) -> Any:
         raise NotFoundError(f"no model {name!r}: known models are \"fitted\" and \"paper\"")
     try:
         return load_model(name, models_dir)
-    except (FileNotFoundError, IsADirectoryError, PermissionError):
+    except BalloonError:
+        raise
+    except (FileNotFoundError, IsADirectoryError):
         raise NotFoundError(f"no saved model {name!r} in {models_dir}; known models are "
                             f"\"fitted\", \"paper\" and the saved ones") from None
+    except Exception as exc:  # noqa: BLE001 - a damaged file on the server, not bad input
+        raise UnavailableError(f"the saved model {name!r} cannot be read "
+                               f"({type(exc).__name__}: {exc})") from None
+
+
+def require(model: Any, name: str, capability: str) -> Any:
+    """``model`` if it has ``capability`` (a method or attribute), else a 422 naming the
+    ``model`` field: calibrated models predict but do not (yet) invert."""
+    if not hasattr(model, capability):
+        raise FieldError(("body", "model"), f"model {name!r} does not support this request",
+                         '"fitted", "paper" or another fitted surrogate')
+    return model

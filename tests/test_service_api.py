@@ -287,3 +287,29 @@ def test_openapi_has_an_example_for_every_request_body(client):
                 schema = schemas[ref.split("/")[-1]]
                 assert schema.get("examples") or any(
                     "examples" in prop for prop in schema["properties"].values()), path
+
+
+def test_saved_models_hook(client, monkeypatch):
+    """Names other than fitted/paper go to surrogate.calibration.load_model (one hook)."""
+    import service.models
+
+    class PredictOnly:  # like a calibrated model: predicts, does not invert
+        predict = FakeSurrogate.predict
+        _params = FakeSurrogate._params
+
+    monkeypatch.setattr(service.models, "load_calibrated", lambda name, d: PredictOnly())
+    r = client.post("/v1/predict", json={"pressures_pa": [0], "model": "lab1"})
+    assert r.status_code == 200 and r.json()["model"] == "lab1"
+    r = client.post("/v1/inverse/pressure", json={"angles_deg": [10], "model": "lab1"})
+    assert_problem(r, 422, "model")
+    target = {"pressure_pa": 1500, "angle_deg": 30}
+    assert_problem(client.post("/v1/inverse", json={"target": target, "model": "lab1"}), 422,
+                   "model")
+
+
+def test_a_damaged_saved_model_is_503(client):
+    models_dir = client.app.state.settings.models_dir
+    models_dir.mkdir(parents=True, exist_ok=True)
+    (models_dir / "broken.json").write_text("{not json")
+    r = client.post("/v1/predict", json={"pressures_pa": [0], "model": "broken"})
+    assert_problem(r, 503)

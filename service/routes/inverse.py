@@ -8,6 +8,7 @@ from fastapi import APIRouter
 from service.convert import finite_list, jsonable, to_design
 from service.deps import ModelsDep
 from service.errors import located
+from service.models import require
 from service.schemas import InverseRequest, InverseResponse, PressureRequest, PressureResponse
 from solver.errors import InputError
 
@@ -35,7 +36,7 @@ def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
     allowed material pair the surrogate covers (vectorised; milliseconds)."""
     from surrogate import DesignBounds, DesignTarget, inverse_design
 
-    surrogate = models.get(request.model)
+    surrogate = require(models.get(request.model), request.model, "family_fits")
     t = request.target
     pairs = (tuple((p.body_material, p.membrane_material) for p in request.material_pairs)
              if request.material_pairs else None)
@@ -59,7 +60,7 @@ def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
              summary="Pressure that gives each target angle for one design, with its band")
 def inverse_pressure(request: PressureRequest, models: ModelsDep) -> PressureResponse:
     design = to_design(request.design)
-    surrogate = models.get(request.model)
+    surrogate = require(models.get(request.model), request.model, "inverse")
     try:
         result = surrogate.inverse(design, request.angles_deg, level=request.level)
     except InputError as exc:
