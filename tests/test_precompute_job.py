@@ -86,6 +86,19 @@ def test_pool_job_stores_everything_then_reruns_solve_only_what_is_missing(grid,
         assert len(db.metadata["runs"]) == 3
 
 
+def test_one_job_per_database(grid, tmp_path):
+    from solver.store import StoreBusyError
+    from solver.store.locking import WriterLock
+
+    db_path = tmp_path / "c.h5"
+    other_job = WriterLock(tmp_path / "c.h5.job.lock")
+    other_job.acquire()
+    with pytest.raises(StoreBusyError, match="another precompute job"):
+        precompute(grid, db_path, solve_fn=fake_solve, progress=False)
+    other_job.release()
+    assert not db_path.exists()
+
+
 class InlineFuture:
     """A finished (or, with done=False, never-finishing) future computed in-process."""
 

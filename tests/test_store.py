@@ -231,3 +231,16 @@ def test_failed_put_leaves_the_published_file_untouched(db_path, monkeypatch):
     assert not list(db_path.parent.glob(".*tmp*"))
     with CurveStore(db_path) as db:
         assert db.keys() == [record_key(Design(L_mm=4.1), SETTINGS)]
+
+
+def test_a_writer_without_a_held_lock_interleaves_with_other_writers(db_path):
+    with CurveStore(db_path, mode="a", hold_lock=False) as batch, \
+            CurveStore(db_path, mode="a", hold_lock=False, lock_timeout_s=0.1) as short:
+        batch.put(record_for(4.1))
+        with CurveStore(db_path, mode="a") as other:  # e.g. the service storing a solve
+            other.put(record_for(5.1))
+            # while ``other`` holds the lock, a put waits lock_timeout_s, then gives up
+            with pytest.raises(StoreBusyError, match="single writer"):
+                short.put(record_for(6.1))
+        batch.put(record_for(6.1))  # sees the other writer's record and keeps it
+        assert len(batch) == 3

@@ -71,11 +71,24 @@ class PoolBackend:
 class DaskBackend:
     """A dask.distributed Client: to a scheduler ``address``, or a given client."""
 
-    def __init__(self, address: str | None = None, client: Any = None) -> None:
-        from distributed import Client  # the optional 'cluster' extra
+    def __init__(self, address: str | None = None, client: Any = None,
+                 timeout_s: float = 30.0) -> None:
+        from solver.errors import InputError
 
+        try:
+            from distributed import Client  # the optional 'cluster' extra
+        except ImportError:
+            raise InputError("--scheduler", "Dask distributed is not installed",
+                             "pip install 'balloon-actuator[cluster]'") from None
         self._own = client is None
-        self.client = client if client is not None else Client(address)
+        if client is None:
+            try:
+                client = Client(address, timeout=timeout_s)
+            except (OSError, TimeoutError) as exc:
+                raise InputError("--scheduler", f"cannot reach the Dask scheduler at "
+                                 f"{address!r} ({exc})", "a running scheduler's address, "
+                                 "e.g. tcp://host:8786") from None
+        self.client = client
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> Any:
         return self.client.submit(fn, *args, pure=False)

@@ -21,6 +21,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from solver.curve import Curve
@@ -28,6 +29,8 @@ from solver.design import Design
 from solver.precompute.grid import GridPoint
 from solver.settings import SolverSettings
 from solver.store import CurveStore, Record, failed_curve, make_record
+from solver.store.locking import WriterLock
+from solver.store.record import git_commit, package_version, utc_now
 
 SolveFn = Callable[[Design, SolverSettings], Curve]
 
@@ -179,33 +182,43 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
     return summary
 
 
-def precompute(grid: Any, db_path: str, workers: int = 1, scheduler: str | None = None,
-               client: Any = None, solve_fn: SolveFn | None = None,
-               retry_failed: bool = False, progress: bool = True,
-               command: str | None = None) -> JobSummary:
-    """Open ``db_path`` as the writer, record this run in the file's metadata (command,
+def precompute(grid: Any, db_path: str | Path, workers: int = 1,
+               scheduler: str | None = None, client: Any = None,
+               solve_fn: SolveFn | None = None, retry_failed: bool = False,
+               progress: bool = True, command: str | None = None) -> JobSummary:
+    """Open ``db_path`` as a writer, record this run in the file's metadata (command,
     grid text and hash, versions), run the job, and record how it ended.
 
     ``grid`` is a ``Grid`` (from ``load_grid``); the backend is a pool of ``workers``
     processes, or Dask when ``scheduler`` (an address) or ``client`` is given.
+    One job per database at a time (``<db>.job.lock``; a second one raises
+    StoreBusyError). The writer lock is taken only around each put, so other writers
+    (the service storing its own solves) interleave with a long job.
     """
     from solver.precompute.backends import DaskBackend, PoolBackend
-    from solver.store.record import git_commit, package_version, utc_now
 
-    with CurveStore(db_path, mode="a") as db:
-        runs = list(db.metadata.get("runs", []))  # type: ignore[call-overload]
-        run = {"command": command or "", "grid_source": grid.source,
-               "grid_sha256": grid.sha256, "started_utc": utc_now(),
-               "package_version": package_version(), "git_commit": git_commit()}
-        db.set_metadata(generator_command=command or "", grid_toml=grid.text,
-                        runs=[*runs, run])
-        backend = (DaskBackend(scheduler, client) if scheduler or client is not None
-                   else PoolBackend(workers))
-        try:
-            summary = run_job(grid.points, db, backend, solve_fn, retry_failed, progress)
-        finally:
-            backend.close()
-        run.update(finished_utc=utc_now(), interrupted=summary.interrupted,
-                   solved=summary.solved, failed=summary.failed, errors=summary.errors)
-        db.set_metadata(runs=[*runs, run])
-    return summary
+    path = Path(db_path)
+    job_lock = WriterLock(path.with_name(path.name + ".job.lock"),
+                          what="being filled by another precompute job")
+    job_lock.acquire()
+    try:
+        with CurveStore(path, mode="a", hold_lock=False) as db:
+            run = {"command": command or "", "grid_source": grid.source,
+                   "grid_sha256": grid.sha256, "started_utc": utc_now(),
+                   "package_version": package_version(), "git_commit": git_commit()}
+            db.set_metadata(generator_command=command or "", grid_toml=grid.text,
+                            runs=[*db.metadata.get("runs", []), run])
+            backend = (DaskBackend(scheduler, client) if scheduler or client is not None
+                       else PoolBackend(workers))
+            try:
+                summary = run_job(grid.points, db, backend, solve_fn, retry_failed, progress)
+            finally:
+                backend.close()
+            runs = list(db.metadata.get("runs", []))
+            runs[-1] = {**run, "finished_utc": utc_now(), "interrupted": summary.interrupted,
+                        "solved": summary.solved, "failed": summary.failed,
+                        "errors": summary.errors}
+            db.set_metadata(runs=runs)
+        return summary
+    finally:
+        job_lock.release()

@@ -12,7 +12,9 @@ published name (an atomic rename on POSIX), then fsyncs the directory. Hence
 - a writer killed at any moment (kill -9, power loss after the fsync) leaves the
   last published version intact; the orphaned temporary file is removed the next
   time a writer opens the database;
-- one writer at a time, enforced by an exclusive flock on ``<db>.lock``.
+- one writer at a time, enforced by an exclusive flock on ``<db>.lock``: held for the
+  writer's lifetime by default, or, with ``hold_lock=False``, only during each put (a
+  long batch job then lets other writers, such as the service, interleave their puts).
 
 The price: a put costs a copy of the whole file (measured in benchmarks/RESULTS.md);
 ``put_many`` publishes several records for one copy.
@@ -26,6 +28,7 @@ import os
 import shutil
 import threading
 from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -67,27 +70,35 @@ class CurveStore:
     """``CurveStore(path, mode="r")`` reads; ``mode="a"`` writes (creating the file).
 
     Readers need the file to exist (NotFoundError otherwise); a newer schema raises
-    SchemaVersionError; a second writer raises StoreBusyError. Use as a context
+    SchemaVersionError. A writer holds the single-writer lock from opening to closing
+    (another writer gets StoreBusyError at once); with ``hold_lock=False`` it takes the
+    lock only for each put, waiting up to ``lock_timeout_s`` for it. Use as a context
     manager, or call ``close()``. Safe to share between threads.
     """
 
-    def __init__(self, path: str | os.PathLike, mode: str = "r") -> None:
+    def __init__(self, path: str | os.PathLike, mode: str = "r", hold_lock: bool = True,
+                 lock_timeout_s: float = 60.0) -> None:
         if mode not in MODES:
             raise InputError("mode", f"got {mode!r}", "r (read) | a (write, create if missing)")
         self.path = Path(path)
         self.mode = mode
+        self.hold_lock = hold_lock
+        self.lock_timeout_s = lock_timeout_s
         self._h5: h5py.File | None = None
         self._stamp: tuple[int, ...] | None = None
         self._mutex = threading.RLock()
         self._lock: WriterLock | None = None
+        self._closed = False
         if mode == "a":
             self._lock = WriterLock(lock_path(self.path))
-            self._lock.acquire()
+            if hold_lock:
+                self._lock.acquire()
         try:
             if mode == "a":
-                self._remove_orphans()
-                if not self.path.exists():
-                    self._publish(lambda f: None, create=True)
+                with self._locked():
+                    self._remove_orphans()  # before the first put, ``_file`` reads
+                    if not self.path.exists():
+                        self._publish(lambda f: None, create=True)
             elif not self.path.is_file():
                 raise NotFoundError(f"no curve database at {self.path}; create one with "
                                     f"`balloon precompute GRID.toml --db {self.path}`")
@@ -105,12 +116,25 @@ class CurveStore:
 
     def close(self) -> None:
         with self._mutex:
+            self._closed = True
             if self._h5 is not None:
                 self._h5.close()
                 self._h5 = None
             if self._lock is not None:
                 self._lock.release()
                 self._lock = None
+
+    @contextmanager
+    def _locked(self) -> Iterator[None]:
+        """The writer lock for one change (a no-op when held for the writer's lifetime)."""
+        if self._lock is None or self._lock.held:
+            yield
+            return
+        self._lock.acquire(timeout_s=self.lock_timeout_s)
+        try:
+            yield
+        finally:
+            self._lock.release()
 
     def __repr__(self) -> str:
         return f"CurveStore({str(self.path)!r}, mode={self.mode!r})"
@@ -145,7 +169,7 @@ class CurveStore:
         return self._file()[schema.RECORDS]
 
     @property
-    def metadata(self) -> dict[str, object]:
+    def metadata(self) -> dict[str, Any]:
         """File attributes: format, schema_version, created_utc, updated_utc, n_records,
         and what writers added (generator_command, runs, ...)."""
         with self._mutex:
@@ -227,9 +251,10 @@ class CurveStore:
 
         with self._mutex:
             self._require_writer()
-            existing = self._records_group()
-            replaced = {r.key for r in batch if r.key in existing}
-            self._publish(add, drop=replaced)
+            with self._locked():
+                existing = self._records_group()  # the latest version, read under the lock
+                replaced = {r.key for r in batch if r.key in existing}
+                self._publish(add, drop=replaced)
 
     def set_metadata(self, **items: object) -> None:
         """Add or overwrite file attributes (str, numbers, or JSON-able lists and dicts)."""
@@ -238,10 +263,11 @@ class CurveStore:
             raise InputError(sorted(reserved)[0], "is managed by the store", "other names")
         with self._mutex:
             self._require_writer()
-            self._publish(lambda f: schema.write_attrs(f, items))
+            with self._locked():
+                self._publish(lambda f: schema.write_attrs(f, items))
 
     def _require_writer(self) -> None:
-        if self.mode != "a" or self._lock is None:
+        if self.mode != "a" or self._closed:
             raise InputError("mode", f"{self!r} is read-only (or closed)", "open with mode='a'")
 
     def _tmp_path(self) -> Path:
@@ -254,7 +280,9 @@ class CurveStore:
 
     def _publish(self, change: Any, create: bool = False,
                  drop: frozenset[str] | set[str] = frozenset()) -> None:
-        """Copy the file, apply ``change(h5file)`` to the copy, fsync, rename over."""
+        """Copy the file, apply ``change(h5file)`` to the copy, fsync, rename over.
+        Called with the writer lock held."""
+        self._remove_orphans()
         tmp = self._tmp_path()
         try:
             if create:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import time
 from pathlib import Path
 
 from solver.store.errors import StoreBusyError
@@ -18,23 +19,35 @@ def lock_path(db_path: Path) -> Path:
 
 
 class WriterLock:
-    """Non-blocking exclusive lock; ``acquire`` raises StoreBusyError when held elsewhere."""
+    """Exclusive lock; ``acquire`` waits up to ``timeout_s`` (default: not at all), then
+    raises StoreBusyError naming the holder's pid. ``what`` words the message."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, what: str = "being written by another process") -> None:
         self.path = Path(path)
+        self.what = what
         self._fd: int | None = None
 
-    def acquire(self) -> None:
+    @property
+    def held(self) -> bool:
+        return self._fd is not None
+
+    def acquire(self, timeout_s: float = 0.0) -> None:
         fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.read(fd, 64).decode("ascii", "replace").strip() or "?"
-            os.close(fd)
-            raise StoreBusyError(
-                f"{self.path.with_suffix('')} is being written by another process (pid "
-                f"{holder}); the database has a single writer: wait for it to finish or "
-                f"stop it") from None
+        deadline = time.monotonic() + timeout_s
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() < deadline:
+                    time.sleep(0.02)
+                    continue
+                holder = os.read(fd, 64).decode("ascii", "replace").strip() or "?"
+                os.close(fd)
+                raise StoreBusyError(
+                    f"{self.path.with_suffix('')} is {self.what} (pid {holder}); a database "
+                    f"has a single writer and one precompute job at a time: wait for it to "
+                    f"finish or stop it") from None
         os.ftruncate(fd, 0)
         os.write(fd, str(os.getpid()).encode("ascii"))
         self._fd = fd
