@@ -1,0 +1,63 @@
+"""The README's promises: its snippets are the files the live-server tests run, its two
+set-up commands are the ones CI and the Dockerfile use, and the CLI it documents exists."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from service.cli import build_parser, main
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text()
+
+
+def _code_blocks(lang: str) -> list[str]:
+    return re.findall(rf"```{lang}\n(.*?)```", README, flags=re.S)
+
+
+@pytest.mark.parametrize("name", ["client.py", "batch.py"])
+def test_python_snippets_are_included_verbatim(name):
+    text = (ROOT / "docs" / "snippets" / name).read_text().rstrip("\n")
+    assert any(block.rstrip("\n") == text for block in _code_blocks("python"))
+
+
+def test_curl_snippet_is_the_tested_one():
+    text = (ROOT / "docs" / "snippets" / "predict.sh").read_text()
+    command = text[text.index("curl"):].rstrip("\n")
+    assert any(command in block for block in _code_blocks("sh"))
+
+
+def test_setup_commands_match_ci():
+    blocks = [b.strip() for b in _code_blocks("sh")]
+    serve, test = blocks[0], blocks[1]
+    assert serve.endswith("balloon serve")
+    assert test.endswith("pytest -q")
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert "pip install --quiet '.[test]'" in ci and "pytest -q" in ci
+
+
+def test_every_documented_subcommand_exists():
+    documented = set(re.findall(r"^balloon (\w+)", README, flags=re.M))
+    parser = build_parser()
+    available = set(parser._subparsers._group_actions[0].choices)  # noqa: SLF001
+    assert documented <= available, documented - available
+
+
+def test_version_and_help(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.startswith("balloon ")
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    for command in ("solve", "precompute", "db", "fit", "predict", "inverse", "calibrate",
+                    "serve"):
+        assert command in out
+
+
+def test_user_mistake_is_one_line_and_exit_2(capsys):
+    assert main(["solve", "--t-mm", "-1", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "t_mm" in err[0] and "allowed" in err[0]
