@@ -172,10 +172,10 @@ def test_worker_errors_store_nothing_and_do_not_stop_the_job(grid, tmp_path):
 def test_dask_local_cluster_runs_the_same_job(grid, tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        summary = precompute(grid, tmp_path / "c.h5", client=client, solve_fn=fake_solve,
-                             progress=False)
+                                  dashboard_address=None) as cluster:
+        # through the scheduler's address, as `balloon precompute --scheduler ADDRESS` does
+        summary = precompute(grid, tmp_path / "c.h5", scheduler=cluster.scheduler_address,
+                             solve_fn=fake_solve, progress=False)
     assert summary.backend.startswith("Dask scheduler") and "(1 workers)" in summary.backend
     assert (summary.complete, summary.failed, summary.errors) == (3, 6, 0)
     with CurveStore(tmp_path / "c.h5") as db:

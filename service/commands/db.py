@@ -26,7 +26,8 @@ CSV_CURVE = ("pressure_pa", "volume_ul", "time_s", "angle_deg", "tip_x_mm", "tip
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("db", help="list, show and export curve database records",
-                                   description=__doc__.split("\n\n")[0].strip("`"))
+                                   description="List, show and export the records of a curve "
+                                               "database (docs/database.md).")
     sub = parser.add_subparsers(title="db commands", metavar="ACTION", required=True)
     ls = sub.add_parser("ls", help="list the records")
     ls.add_argument("db", help="curve database (HDF5)")
