@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import math
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -16,11 +18,24 @@ from solver.settings import SolverSettings, settings_from_dict
 
 def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body", "design")
               ) -> Design:
-    data = design.as_input() if isinstance(design, DesignIn) else design
+    text = (design.model_dump_json(exclude_none=True) if isinstance(design, DesignIn)
+            else json.dumps(design, sort_keys=True))
     try:
-        return design_from_dict(data)
+        return _design_from_json(text)
     except InputError as exc:
         raise located(exc, loc) from None
+
+
+@lru_cache(maxsize=4096)
+def _design_from_json(text: str) -> Design:
+    """Designs repeat across requests: validate each distinct one once (Design is frozen)."""
+    return design_from_dict(json.loads(text))
+
+
+@lru_cache(maxsize=4096)
+def design_dict(design: Design) -> dict[str, Any]:
+    """``design.as_dict()``, cached (treat the result as read-only)."""
+    return design.as_dict()
 
 
 def to_settings(settings: SolveSettingsIn, loc: tuple[str, ...] = ("body", "settings")

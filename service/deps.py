@@ -1,4 +1,8 @@
-"""Request dependencies as ``Annotated`` aliases (swap them with ``app.dependency_overrides``)."""
+"""Request dependencies as ``Annotated`` aliases (swap them with ``app.dependency_overrides``).
+
+They are ``async def`` although they never await: FastAPI runs a plain ``def``
+dependency in its thread pool, a hand-off that costs more than the predict itself.
+"""
 
 from __future__ import annotations
 
@@ -17,15 +21,15 @@ API_KEY_HEADER = APIKeyHeader(name="X-API-Key", auto_error=False,
                               description="required by the mutating endpoints")
 
 
-def app_settings(request: Request) -> ServiceSettings:
+async def app_settings(request: Request) -> ServiceSettings:
     return request.app.state.settings
 
 
-def app_models(request: Request) -> ModelRegistry:
+async def app_models(request: Request) -> ModelRegistry:
     return request.app.state.models
 
 
-def app_jobs(request: Request) -> JobManager:
+async def app_jobs(request: Request) -> JobManager:
     return request.app.state.jobs
 
 
@@ -34,7 +38,7 @@ ModelsDep = Annotated[ModelRegistry, Depends(app_models)]
 JobsDep = Annotated[JobManager, Depends(app_jobs)]
 
 
-def require_api_key(settings: SettingsDep,
+async def require_api_key(settings: SettingsDep,
                     key: Annotated[str | None, Security(API_KEY_HEADER)] = None) -> None:
     """Mutating endpoints: 401 without a key, 403 with a wrong one or when none is set."""
     if settings.api_key is None:

@@ -66,7 +66,7 @@ def plot_prediction(prediction: dict[str, Any],
     d = prediction["design"]
     ax.set_title(f"L = {d['L_mm']:g} mm, t = {d['t_mm']:g} mm, "
                  f"{d['body_material']['id']} / {d['membrane_material']['id']}", fontsize=10)
-    if not prediction["validity"].in_domain:
+    if not prediction["validity"]["in_domain"]:
         ax.text(0.02, 0.95, "outside the fitted domain", transform=ax.transAxes,
                 color="C3", va="top", fontsize=9)
     ax.set_xlabel("pressure (Pa)")

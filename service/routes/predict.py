@@ -7,12 +7,12 @@ from typing import Annotated, Any
 import numpy as np
 from fastapi import APIRouter, Query
 from fastapi.responses import Response
+from pydantic_core import to_json
 
-from service.convert import finite_list, jsonable, to_design
+from service.convert import design_dict, finite_list, jsonable, to_design
 from service.deps import ModelsDep, SettingsDep
 from service.errors import FieldError, located
 from service.schemas import PlotQuery, PredictRequest, PredictResponse
-from service.schemas.predict import Validity
 from solver.errors import InputError
 
 router = APIRouter(prefix="/v1", tags=["predict"])
@@ -29,27 +29,28 @@ def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
     except InputError as exc:  # e.g. OutOfFamilyError (field "design")
         raise located(exc, loc) from None
     validity = p.validity
-    return {"model": model, "level": level, "design": design.as_dict(),
+    return {"model": model, "level": level, "design": design_dict(design),
             "pressure_pa": finite_list(p.pressure_pa), "angle_deg": finite_list(p.angle_deg),
             "lower_deg": finite_list(p.lower_deg), "upper_deg": finite_list(p.upper_deg),
-            "validity": Validity(in_domain=bool(validity.get("in_domain", False)),
-                                 flags=list(validity.get("flags", [])),
-                                 messages=list(validity.get("messages", []))),
+            "validity": {"in_domain": bool(validity.get("in_domain", False)),
+                         "flags": [str(f) for f in validity.get("flags", [])],
+                         "messages": [str(m) for m in validity.get("messages", [])]},
             "form": getattr(p, "form", None),
             "provenance": jsonable(dict(p.provenance or {}))}
 
 
 @router.post("/predict", response_model=PredictResponse,
              summary="Angle against pressure, with a prediction band and validity flags")
-async def predict(request: PredictRequest, models: ModelsDep) -> PredictResponse:
+async def predict(request: PredictRequest, models: ModelsDep) -> Response:
     """Angles (degrees) at the given pressures (Pa) from the chosen surrogate model.
 
     Runs on the event loop: the model evaluation takes about 0.1 ms, less than a
     thread-pool hand-off (benchmarks/bench_service.py)."""
     design = to_design(request.design)
     surrogate = models.get(request.model)
-    return PredictResponse(**predict_dict(surrogate, design, request.pressures_pa,
-                                          request.level, request.model))
+    body = predict_dict(surrogate, design, request.pressures_pa, request.level, request.model)
+    # plain JSON of plain data: the schema is PredictResponse (response_model, for the docs)
+    return Response(to_json(body), media_type="application/json")
 
 
 @router.get("/predict/plot", response_class=Response, responses=PNG,
