@@ -7,7 +7,7 @@ hits both alike), ``--duration`` seconds per endpoint in total. Reports throughp
 (requests/s) and latency percentiles (ms) per endpoint, and checks the targets:
 predict throughput >= 70 % of health's, predict p99 < 20 ms.
 
-    .venv/bin/python benchmarks/bench_service.py [--duration 20] [--concurrency 4]
+    .venv/bin/python benchmarks/bench_service.py [--duration 20] [--concurrency 2]
 
 The client runs on the same machine and competes for its cores: the figures are a
 lower bound of what the server does alone.
@@ -114,7 +114,7 @@ async def drive(url: str, duration: float, concurrency: int, rounds: int) -> dic
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=20.0, help="seconds per endpoint")
-    parser.add_argument("--concurrency", type=int, default=4, help="requests in flight")
+    parser.add_argument("--concurrency", type=int, default=2, help="requests in flight")
     parser.add_argument("--rounds", type=int, default=4, help="alternating phases")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
