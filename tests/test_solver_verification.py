@@ -1,0 +1,160 @@
+"""The FE solver against independent references (docs/verification-references.md).
+
+* exact incompressible inflation of a thick-walled hollow sphere (a 1D integral),
+* Timoshenko / Euler-Bernoulli tip deflection of a slender cantilever,
+* bulk-modulus independence of the actuator's angle,
+* quadratic convergence of Newton's method on the actuator.
+"""
+
+import numpy as np
+import pytest
+
+from solver.assembly import make_basis
+from solver.linear import factorize
+from solver.materials import MATERIALS, OgdenMaterial
+from solver.model import SolidModel
+from solver.verification.cantilever import (
+    bar_mesh,
+    beam_tip_deflection,
+    clamp_mask,
+    end_load,
+)
+from solver.verification.drive import drive_volume
+from solver.verification.sphere import (
+    exact_pressure_pa,
+    octant_shell_mesh,
+    outer_stretch,
+    symmetry_mask,
+)
+
+ECOFLEX = MATERIALS["ecoflex_00_30"]
+STRETCHES = (1.2, 1.6, 2.0, 2.4)
+
+
+# --- the exact sphere curve itself -------------------------------------------------------
+
+def test_exact_sphere_curve_matches_independent_values():
+    # Values computed by others with other codes (fe-findings notes, "A verification
+    # benchmark measured with other codes"): 0.641, 0.958, 1.013, 1.028 kPa.
+    expected_pa = (641.0, 958.0, 1013.0, 1028.0)
+    for lam, p in zip(STRETCHES, expected_pa):
+        assert exact_pressure_pa(lam, ECOFLEX) == pytest.approx(p, abs=0.6)
+
+
+def test_exact_sphere_curve_neo_hookean_closed_form():
+    # Neo-Hookean (Ogden alpha = 2, mu0 = mu): w'(l) = 2 mu (l - l^-5) and the integral
+    # has the closed form p = mu [1/(2 l^4) + 2/l]_{l_a}^{l_b} (textbook, e.g. Ogden,
+    # Non-linear elastic deformations, 1984, sec. 5.2.3); its maximum is near l_a = 1.6,
+    # 0.928 kPa for mu = 1.88 kPa (fe-findings notes).
+    mu = 1880.0
+    nh = OgdenMaterial("nh", (mu / 1e3,), (2.0,))
+    for lam in (1.1, 1.6, 3.0):
+        lb = outer_stretch(lam)
+        closed = mu * ((0.5 * lb**-4 + 2 / lb) - (0.5 * lam**-4 + 2 / lam))
+        assert exact_pressure_pa(lam, nh) == pytest.approx(closed, rel=1e-9)
+    grid = np.linspace(1.3, 2.0, 71)
+    p = [exact_pressure_pa(lam, nh) for lam in grid]
+    assert grid[int(np.argmax(p))] == pytest.approx(1.6, abs=0.05)
+    assert max(p) == pytest.approx(928.0, abs=1.0)
+
+
+def test_exact_sphere_curve_small_strain_limit():
+    # Linear elasticity of an incompressible thick sphere (Lame): p = 4 G (1 - A^3/B^3) eps
+    # for a small inner hoop strain eps, G = mu0.
+    eps = 1e-5
+    mu0 = 1e3 * ECOFLEX.mu0_kpa
+    assert exact_pressure_pa(1 + eps, ECOFLEX) == pytest.approx(
+        4 * mu0 * (1 - 1 / 1.5**3) * eps, rel=1e-4)
+
+
+# --- the FE sphere ------------------------------------------------------------------------
+
+def _sphere_run(bulk_ratio, n=2, m=2, substeps=2):
+    sm = octant_shell_mesh(n, m, "hex2")
+    model = SolidModel(sm.mesh, "hex2", [(np.arange(sm.mesh.nelements), ECOFLEX, True)],
+                       sm.cavity_facets, symmetry_mask, bulk_ratio)
+    targets = [model.volume0_mm3 * lam**3 for lam in STRETCHES]
+    steps, _ = drive_volume(model, targets, substeps=substeps)
+    return model, np.array([p for _, p, _ in steps])
+
+
+def test_sphere_mesh_volume_is_the_octant():
+    # V = pi A^3 / 6 for the octant of the unit sphere; the quadratic surface of the
+    # 2 x 2 patches misses it by ~1e-4 (measured 1.2e-4).
+    sm = octant_shell_mesh(2, 2, "hex2")
+    model = SolidModel(sm.mesh, "hex2", [(np.arange(sm.mesh.nelements), ECOFLEX, True)],
+                       sm.cavity_facets, symmetry_mask, 100.0)
+    assert model.volume0_mm3 == pytest.approx(np.pi / 6, rel=3e-4)
+    assert len(sm.cavity_facets) == 3 * 2 * 2
+
+
+def test_sphere_inflation_matches_the_exact_curve():
+    # Requirement (issue 3): within 1 % of the exact incompressible solution over a large
+    # range of stretch. Measured: -0.02, -0.04, -0.08, -0.13 % at bulk_ratio 3000
+    # (docs/verification-references.md); the residual error is the 1/K compressibility bias.
+    model, p = _sphere_run(3000.0)
+    exact = np.array([exact_pressure_pa(lam, ECOFLEX) for lam in STRETCHES])
+    err = p / exact - 1
+    assert np.all(np.abs(err) < 0.01)
+    assert np.all(err < 0)            # a compressible model inflates more easily
+
+
+@pytest.mark.slow
+def test_sphere_error_scales_as_one_over_bulk_modulus():
+    # The compressibility bias ~ c / K (fe-findings notes); measured -0.36 % at
+    # K = 1000 mu0 and -0.043 % at 10000 mu0 at lam_a = 2.4: ratio 8.4 for a 10x K.
+    exact = exact_pressure_pa(STRETCHES[-1], ECOFLEX)
+    e1 = _sphere_run(1000.0)[1][-1] / exact - 1
+    e2 = _sphere_run(10000.0)[1][-1] / exact - 1
+    assert 6.0 < e1 / e2 < 11.0
+    assert abs(e2) < 1e-3
+
+
+# --- the cantilever -----------------------------------------------------------------------
+
+def _cantilever(L_mm, nx, bulk_ratio=1000.0):
+    b = h = 1.0
+    mesh = bar_mesh(L_mm, b, h, nx, 1, 2)
+    model = SolidModel(mesh, "hex2", [(np.arange(mesh.nelements), ECOFLEX, False)],
+                       np.array([], dtype=int), clamp_mask, bulk_ratio)
+    mu0 = 1e3 * ECOFLEX.mu0_kpa
+    # A load giving w / L = 1e-4 by Euler-Bernoulli: geometrically linear regime.
+    P = 1e-4 * L_mm / beam_tip_deflection(1.0, L_mm, b, h, mu0, bulk_ratio).euler_bernoulli_mm
+    beam = beam_tip_deflection(P, L_mm, b, h, mu0, bulk_ratio)
+    model.external_force = end_load(mesh, "hex2", P, L_mm, b, h)
+    ev = model.evaluate(np.zeros(model.n_free), 0.0)          # R = -f at u = 0
+    u = factorize(ev.K).solve(-ev.R)                           # one Newton step
+    # Mean end-face deflection = work of the consistent load / P.
+    w = float(model.external_force @ model.full(u)) / P
+    return w, beam, model.external_force
+
+
+def test_cantilever_end_load_is_consistent():
+    # The nodal forces of a uniform traction sum to P and act only in z on x = L.
+    mesh = bar_mesh(20.0, 1.0, 1.0, 4, 1, 2)
+    f = end_load(mesh, "hex2", 0.3, 20.0, 1.0, 1.0)
+    assert f.sum() == pytest.approx(0.3, rel=1e-12)
+    assert np.abs(f[0::3]).max() == 0.0 and np.abs(f[1::3]).max() == 0.0
+    loaded = np.nonzero(np.abs(f[2::3]) > 1e-12 * 0.3)[0]
+    assert np.allclose(make_basis(mesh, "hex2").doflocs[0, loaded], 20.0)
+
+
+def test_cantilever_tip_deflection_matches_beam_theory():
+    # Timoshenko (E = 3 mu0 in the incompressible limit, shear correction 0.3 % here).
+    # L / h = 20: measured -1.34 % against Timoshenko. The gap is the 3D clamp (no
+    # lateral contraction at x = 0 in an incompressible bar), an O(h / L) end effect:
+    # it halves when L doubles (next test). Tolerance 2 %.
+    w, beam, _ = _cantilever(20.0, 20)
+    assert beam.E_pa == pytest.approx(3e3 * ECOFLEX.mu0_kpa, rel=1e-3)
+    assert w == pytest.approx(beam.timoshenko_mm, rel=0.02)
+    assert w == pytest.approx(beam.euler_bernoulli_mm, rel=0.02)
+
+
+def test_cantilever_clamp_effect_is_an_end_effect():
+    # Relative gap to Timoshenko at L / h = 20 and 40 (same element length): an O(h/L)
+    # end effect halves (measured -1.34 % -> -0.68 %, ratio 1.98).
+    w20, b20, _ = _cantilever(20.0, 20)
+    w40, b40, _ = _cantilever(40.0, 40)
+    g20 = w20 / b20.timoshenko_mm - 1
+    g40 = w40 / b40.timoshenko_mm - 1
+    assert g20 / g40 == pytest.approx(2.0, rel=0.15)
