@@ -33,6 +33,7 @@ class Evaluation:
     energy: float
     max_membrane_stretch: float
     load_norm: float        # || p dV/du ||
+    tip_force_un: float = float("nan")   # spring force or block reaction on the model, uN
 
 
 class SolidModel:
@@ -43,10 +44,14 @@ class SolidModel:
             (nnodes, 3) mask of constrained displacement components (u = 0).
     cavity_facets may be empty (no fluid cavity). ``external_force`` (full vector,
     uN, dead load) may be set after construction; it enters the residual as -f.
+    spring: optional (dofs, weights, k_un_per_mm): a linear spring on the weighted
+            mean displacement w . u[dofs], energy k/2 (w . u)^2, force k (w . u).
+    reaction_dofs: optional constrained dofs whose summed reaction is reported
+            (a blocked tip), as the force the solid exerts on the support.
     """
 
     def __init__(self, mesh, element: str, groups, cavity_facets: np.ndarray,
-                 fixed_fn, bulk_ratio: float) -> None:
+                 fixed_fn, bulk_ratio: float, spring=None, reaction_dofs=None) -> None:
         self.mesh = mesh
         basis = make_basis(mesh, element)
         self.doflocs = basis.doflocs                                      # (3, nnodes)
@@ -67,7 +72,11 @@ class SolidModel:
         fixed = np.asarray(fixed_fn(basis.doflocs), dtype=bool)
         free = np.nonzero(~fixed.ravel())[0]
         cavity_dofs = [self.cavity.dofs] if self.cavity is not None else []
-        self.pattern = Pattern([b.dofs for b in self.blocks] + cavity_dofs, free, self.ndofs)
+        self.spring = spring
+        spring_dofs = [np.asarray(spring[0])[None, :]] if spring is not None else []
+        self.reaction_dofs = reaction_dofs
+        self.pattern = Pattern([b.dofs for b in self.blocks] + cavity_dofs + spring_dofs,
+                               free, self.ndofs)
         self.n_free = len(free)
         self.volume0_mm3 = self._volume(np.zeros(self.ndofs))
         self.timings = {"assembly_s": 0.0, "linear_solve_s": 0.0}
@@ -102,6 +111,19 @@ class SolidModel:
         else:
             g = np.zeros(len(free))
         vol = self._volume(u)
+        tip_force = float("nan")
+        if self.reaction_dofs is not None:
+            # The support holds f_int - p dV/du = reaction; the solid pushes with -reaction.
+            full_g = np.zeros(self.ndofs)
+            if self.cavity is not None:
+                full_g = scatter_vector(self.ndofs, self.cavity.dofs, gv)
+            tip_force = -float((r - pressure_pa * full_g)[self.reaction_dofs].sum())
+        if self.spring is not None:
+            sdofs, weights, k = self.spring
+            stretch = float(weights @ u[sdofs])
+            r[sdofs] += k * stretch * weights
+            energy += 0.5 * k * stretch**2
+            tip_force = k * stretch
         R = r[free] - pressure_pa * g
         if self.external_force is not None:
             R = R - self.external_force[free]
@@ -109,14 +131,23 @@ class SolidModel:
         if tangent:
             if self.cavity is not None:
                 mats.append(-pressure_pa * cav.volume_hessian(self.cavity, u))
+            if self.spring is not None:
+                mats.append((k * np.outer(weights, weights))[None])
             K = self.pattern.matrix(mats)
         self.timings["assembly_s"] += time.perf_counter() - t0
-        return Evaluation(R, K, g, vol, energy, lam_m, float(np.linalg.norm(pressure_pa * g)))
+        return Evaluation(R, K, g, vol, energy, lam_m, float(np.linalg.norm(pressure_pa * g)),
+                          tip_force)
 
 
 
 class ActuatorModel(SolidModel):
-    """The half actuator: body A over membrane B, clamped at x = 0, symmetric in y."""
+    """The half actuator: body A over membrane B, clamped at x = 0, symmetric in y.
+
+    Tip options (settings.tip): "free"; "spring": a linear spring of stiffness k
+    (N/m, whole actuator) on the mean z displacement of the end face's nodes, like the
+    paper's elastic band; "blocked": u_z = 0 on the end face. The reported force is
+    the z force the actuator exerts on the spring or block (mN, whole actuator).
+    """
 
     def __init__(self, design: Design, settings: SolverSettings) -> None:
         self.design = design.validated()
@@ -125,15 +156,36 @@ class ActuatorModel(SolidModel):
         groups = [(np.nonzero(~am.membrane)[0], self.design.body_material, False),
                   (np.nonzero(am.membrane)[0], self.design.membrane_material, True)]
 
+        x_end = am.end_face_x_mm
+
         def fixed(X: np.ndarray) -> np.ndarray:
             mask = np.zeros((X.shape[1], 3), dtype=bool)
             mask[X[0] < 1e-9, :] = True           # clamped end
             mask[X[1] < 1e-9, 1] = True           # symmetry plane y = 0
+            if settings.tip == "blocked":
+                mask[np.abs(X[0] - x_end) < 1e-9, 2] = True
             return mask
 
+        end_nodes = np.nonzero(np.abs(self._node_positions(am.mesh, settings.element)[0]
+                                      - x_end) < 1e-9)[0]
+        spring = reaction = None
+        if settings.tip == "spring":
+            # k in N/m = 1e3 uN/mm; the half model carries half of it.
+            weights = np.full(len(end_nodes), 1.0 / len(end_nodes))
+            spring = (3 * end_nodes + 2, weights, 0.5 * settings.spring_k_n_per_m * 1e3)
+        elif settings.tip == "blocked":
+            reaction = 3 * end_nodes + 2
         super().__init__(am.mesh, settings.element, groups, am.cavity_facets, fixed,
-                         settings.bulk_ratio)
-        self.end_nodes = np.nonzero(np.abs(self.doflocs[0] - am.end_face_x_mm) < 1e-9)[0]
+                         settings.bulk_ratio, spring=spring, reaction_dofs=reaction)
+        self.end_nodes = end_nodes
+
+    @staticmethod
+    def _node_positions(mesh, element: str) -> np.ndarray:
+        return make_basis(mesh, element).doflocs
+
+    def tip_force_mn(self, ev: Evaluation) -> float:
+        """Whole-actuator tip force in mN (the half model's uN x 2 / 1000)."""
+        return 2.0 * ev.tip_force_un / 1000.0
 
     def injected_volume_ul(self, volume_half_mm3: float) -> float:
         """Cavity volume change of the whole actuator (two halves), ul = mm^3."""

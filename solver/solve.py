@@ -124,7 +124,7 @@ def inflate(design: Design, settings: SolverSettings | None = None,
 
     u = np.zeros(model.n_free)
     p = 0.0
-    rows = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg")}
+    rows = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f")}
 
     def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int) -> float:
         ev = model.evaluate(u_, p_, tangent=False)
@@ -137,6 +137,7 @@ def inflate(design: Design, settings: SolverSettings | None = None,
         rows["it"].append(it)
         rows["res"].append(res)
         rows["neg"].append(neg)
+        rows["f"].append(model.tip_force_mn(ev))
         if on_step is not None and len(rows["p"]) > 1:
             on_step({"step": len(rows["p"]) - 1, "pressure_pa": p_,
                      "volume_ul": rows["v"][-1], "angle_deg": angle, "newton_iterations": it})
@@ -191,7 +192,7 @@ def inflate(design: Design, settings: SolverSettings | None = None,
     curve = Curve(
         pressure_pa=pressure, volume_ul=volume, time_s=volume / settings.flow_ul_s,
         angle_deg=np.array(rows["a"]), tip_displacement_mm=np.array(rows["tip"]).reshape(n, 2),
-        max_membrane_stretch=np.array(rows["lam"]), force_mn=np.full(n, np.nan),
+        max_membrane_stretch=np.array(rows["lam"]), force_mn=np.array(rows["f"]),
         newton_iterations=np.array(rows["it"], dtype=np.int64),
         residual_norm=np.array(rows["res"]),
         negative_eigenvalues=np.array(rows["neg"], dtype=np.int64),

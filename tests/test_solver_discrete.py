@@ -88,3 +88,17 @@ def test_box_fast_path_equals_general_contraction(model):
     finally:
         block.box_scale = saved
     assert np.abs(fast - general).max() < 1e-12 * np.abs(general).max()
+
+
+def test_tip_spring_tangent_and_force():
+    m = ActuatorModel(Design(L_mm=4.1), SolverSettings(mesh_level=0, element="hex1",
+                                                       tip="spring", spring_k_n_per_m=2.0))
+    u, p = _state(m), 200.0
+    ev = m.evaluate(u, p)
+    d = np.random.default_rng(7).standard_normal(m.n_free) * 1e-3
+    h = 1e-5
+    fd = (m.evaluate(u + h * d, p, False).R - m.evaluate(u - h * d, p, False).R) / (2 * h)
+    assert np.abs(ev.K @ d - fd).max() < 1e-7 * np.abs(fd).max()
+    # Force = k * mean tip z displacement: 2 N/m = 2e3 uN/mm on the whole actuator.
+    uz = m.full(u)[3 * m.end_nodes + 2].mean()
+    assert m.tip_force_mn(ev) == pytest.approx(2.0 * uz, rel=1e-12)
