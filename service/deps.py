@@ -1,7 +1,8 @@
 """Request dependencies as ``Annotated`` aliases (swap them with ``app.dependency_overrides``).
 
-They are ``async def`` although they never await: FastAPI runs a plain ``def``
-dependency in its thread pool, a hand-off that costs more than the predict itself.
+The read-path ones are ``async def`` although they never await: FastAPI runs a plain
+``def`` dependency in its thread pool, a hand-off that costs more than the predict
+itself. ``require_api_key`` stays a plain function: other routes call it directly.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ ModelsDep = Annotated[ModelRegistry, Depends(app_models)]
 JobsDep = Annotated[JobManager, Depends(app_jobs)]
 
 
-async def require_api_key(settings: SettingsDep,
+def require_api_key(settings: SettingsDep,
                     key: Annotated[str | None, Security(API_KEY_HEADER)] = None) -> None:
     """Mutating endpoints: 401 without a key, 403 with a wrong one or when none is set."""
     if settings.api_key is None:

@@ -100,3 +100,19 @@ def test_every_bounded_request_field_has_one_range():
 def test_serve_refuses_a_bad_port():
     with pytest.raises(InputError, match="port"):
         serve.run(argparse.Namespace(host="127.0.0.1", port=70000, log_level="info"))
+
+
+def test_require_api_key_can_be_called_directly(tmp_path):
+    """Routes that save state call it as a plain function (service/routes/calibration.py)."""
+    from service_fakes import settings_for
+
+    from service.deps import require_api_key
+
+    settings = settings_for(tmp_path)
+    require_api_key(settings, "test-key")  # accepted: returns None, raises nothing
+    with pytest.raises(AuthError) as missing:
+        require_api_key(settings, None)
+    assert missing.value.status == 401
+    with pytest.raises(AuthError) as wrong:
+        require_api_key(settings, "nope")
+    assert wrong.value.status == 403
