@@ -105,14 +105,11 @@ def jsonable(value: Any) -> Any:
 def run_ls(args: argparse.Namespace) -> int:
     from solver.store import CurveStore
 
+    filters = parse_where(args.where)
+    if args.status:
+        filters["status"] = args.status
     with CurveStore(args.db) as db:
-        rows = db.summaries()
-        filters = parse_where(args.where)
-        if args.status:
-            filters["status"] = args.status
-        if filters:
-            wanted = {r.key for r in db.query(**filters)}
-            rows = [r for r in rows if r["key"] in wanted]
+        rows = db.summaries(**filters)
     rows.sort(key=lambda r: (r["design"]["body_material"], r["design"]["membrane_material"],
                              r["design"]["L_mm"], r["design"]["t_mm"], r["key"]))
     if args.json:

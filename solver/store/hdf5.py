@@ -202,12 +202,18 @@ class CurveStore:
             group = self._records_group()
             return {k: str(schema.plain(group[k].attrs["status"])) for k in sorted(group)}
 
-    def summaries(self) -> list[dict[str, Any]]:
+    def summaries(self, **filters: object) -> list[dict[str, Any]]:
         """Per record: key, status, reason, design (flat, material ids), settings, n_steps,
-        provenance -- without loading the curves."""
+        provenance -- without loading the curves; ``filters`` as for ``query``."""
+        for name in filters:
+            if name not in QUERY_FIELDS:
+                raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
         with self._mutex:
             group = self._records_group()
-            return [schema.read_summary(group[k]) for k in sorted(group)]
+            rows = [schema.read_summary(group[k]) for k in sorted(group)]
+        return [row for row in rows
+                if all(_matches({**row["settings"], **row["design"], "status": row["status"]}
+                                .get(k), v) for k, v in filters.items())]
 
     def records(self, status: str | None = None) -> Iterator[Record]:
         """Every record (in key order), optionally only those with ``status``."""
@@ -223,15 +229,7 @@ class CurveStore:
     def query(self, **filters: object) -> list[Record]:
         """Records whose design, settings or status equal ``filters`` (numbers to 1e-9
         relative), e.g. ``query(L_mm=7.1, body_material="pdms_1_10", status="complete")``."""
-        for name in filters:
-            if name not in QUERY_FIELDS:
-                raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
-        out = []
-        for summary in self.summaries():
-            flat = {**summary["settings"], **summary["design"], "status": summary["status"]}
-            if all(_matches(flat.get(k), v) for k, v in filters.items()):
-                out.append(self.get(str(summary["key"])))
-        return out
+        return [self.get(str(row["key"])) for row in self.summaries(**filters)]
 
     # -- writing ---------------------------------------------------------------------------
     def put(self, record: Record) -> None:
