@@ -28,14 +28,14 @@ from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from typing import Any
 
+from service._worker import child_main
 from service.errors import ConflictError, QueueFullError
-from solver.errors import BalloonError, NotFoundError
+from solver.errors import NotFoundError
 
 SolveFn = Callable[..., Any]
 WriteFn = Callable[[Any, Any, Any], str]
 
 ACTIVE = ("queued", "running")
-PROGRESS_KEYS = ("step", "pressure_pa", "volume_ul", "angle_deg", "newton_iterations")
 
 
 def _now() -> str:
@@ -63,29 +63,6 @@ class JobState:
     @property
     def active(self) -> bool:
         return self.status in ACTIVE
-
-
-def _child_main(solve_fn: SolveFn, design: Any, settings: Any, conn: Any) -> None:
-    """Worker process: solve and report through ``conn`` (steps, then done or error)."""
-
-    def on_step(info: dict[str, Any]) -> None:
-        conn.send(("step", {k: _plain(info.get(k)) for k in PROGRESS_KEYS if k in info}))
-
-    try:
-        curve = solve_fn(design, settings, on_step=on_step)
-        conn.send(("done", curve))
-    except BalloonError as exc:
-        conn.send(("error", str(exc)))
-    except Exception as exc:  # noqa: BLE001 - reported to the client as the job's error
-        conn.send(("error", f"{type(exc).__name__}: {exc}"))
-    finally:
-        conn.close()
-
-
-def _plain(value: Any) -> Any:
-    if hasattr(value, "item"):
-        value = value.item()
-    return value
 
 
 class JobManager:
@@ -131,13 +108,17 @@ class JobManager:
     def submit(self, design: Any, settings: Any, key: str) -> JobState:
         """Queue a solve; an active job for the same key is returned instead of a new one.
 
-        Raises QueueFullError when ``queue_size`` jobs are already waiting.
+        Raises QueueFullError when ``queue_size`` jobs are already waiting for a worker
+        (``queue_size`` 0: accept only what an idle worker can start now).
         """
         with self._cond:
             for job in self._jobs.values():
                 if job.key == key and job.active:
                     return job
-            if len(self._pending) >= self.queue_size:
+            # a pending job that an idle worker is about to take is not waiting
+            running = sum(1 for j in self._jobs.values() if j.status == "running")
+            idle = max(0, self.workers - running)
+            if len(self._pending) >= self.queue_size + idle:
                 raise QueueFullError(
                     f"the solve queue is full ({self.queue_size} jobs waiting); "
                     f"retry in {self.retry_after_s} s", retry_after_s=self.retry_after_s)
@@ -209,7 +190,7 @@ class JobManager:
 
     def _run(self, job: JobState) -> None:
         receiver, sender = self._ctx.Pipe(duplex=False)
-        proc = self._ctx.Process(target=_child_main, daemon=True,
+        proc = self._ctx.Process(target=child_main, daemon=True,
                                  args=(self._solve_fn, job.design, job.settings, sender))
         proc.start()
         sender.close()

@@ -159,3 +159,13 @@ def test_manager_write_failure_keeps_the_error(tmp_path):
             jobs.get("missing")
     finally:
         jobs.shutdown()
+
+
+def test_queue_size_zero_still_feeds_idle_workers(tmp_path):
+    with make_client(tmp_path, slow_solve, queue_size=0) as client:
+        first = client.post("/v1/solve", json=SOLVE, headers=KEY)
+        assert first.status_code == 202  # the idle worker takes it
+        wait_for(client, first.json()["id"], states=("running",))
+        other = {**SOLVE, "design": {"L_mm": 5.0, "t_mm": 0.6}}
+        assert_problem(client.post("/v1/solve", json=other, headers=KEY), 503)
+        client.delete(f"/v1/jobs/{first.json()['id']}", headers=KEY)
