@@ -9,15 +9,17 @@ the store's own single-writer lock across processes; while another process
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 from service.errors import UnavailableError
-from solver.errors import NotFoundError
+from solver.errors import BalloonError, NotFoundError
 
 
 @contextmanager
@@ -41,6 +43,25 @@ def open_store(path: Path) -> Iterator[Any]:
                                retry_after_s=5) from None
     with store as db:
         yield db
+
+
+def record_count(path: Path) -> int | None:
+    """Records in the database (None when absent or unreadable); re-read only when the
+    file changes (the store publishes a new file on every write)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return _count(str(path), st.st_ino, st.st_mtime_ns, st.st_size)
+
+
+@lru_cache(maxsize=8)
+def _count(path: str, inode: int, mtime_ns: int, size: int) -> int | None:
+    try:
+        with open_store(Path(path)) as db:
+            return len(db)
+    except BalloonError:
+        return None
 
 
 def stored_key(path: Path, key: str) -> bool:

@@ -47,6 +47,11 @@ def client(tmp_path, db_path):
         yield c
 
 
+def test_health_counts_the_records(client):
+    assert client.get("/v1/health").json()["database"] == {
+        "path": str(client.app.state.settings.db_path), "present": True, "records": len(ROWS)}
+
+
 def test_list_filters_and_pages(client):
     page = client.get("/v1/curves").json()
     assert page["total"] == 5 and page["next_offset"] is None

@@ -8,6 +8,7 @@ from pydantic import BaseModel
 class DatabaseStatus(BaseModel):
     path: str
     present: bool
+    records: int | None = None
 
 
 class SurrogateStatus(BaseModel):
