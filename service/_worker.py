@@ -32,3 +32,10 @@ def _plain(value: Any) -> Any:
     if hasattr(value, "item"):
         value = value.item()
     return value
+
+
+def default_solve(design: Any, settings: Any, on_step: Any = None) -> Any:
+    """The FE solve (``solver.solve``), imported in the worker process only."""
+    from solver import solve
+
+    return solve(design, settings, on_step=on_step)

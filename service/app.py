@@ -15,6 +15,7 @@ from typing import Any
 from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 
+from service._worker import default_solve
 from service.errors import install_error_handlers
 from service.jobs import JobManager
 from service.middleware import BodyLimitMiddleware
@@ -33,13 +34,6 @@ Design questions about bending balloon actuators (two bonded silicone layers).
 Units are in every field name (`_mm`, `_pa`, `_deg`). Errors are RFC 9457
 `application/problem+json` documents naming the field and its allowed range.
 """
-
-
-def _default_solve(design: Any, settings: Any, on_step: Callable[..., Any] | None = None
-                   ) -> Any:
-    from solver import solve
-
-    return solve(design, settings, on_step=on_step)
 
 
 def create_app(settings: ServiceSettings | None = None, *,
@@ -65,7 +59,7 @@ def create_app(settings: ServiceSettings | None = None, *,
     app.state.settings = settings
     app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir)
     app.state.jobs = JobManager(
-        solve_fn or _default_solve, write_fn or ResultWriter(settings.db_path),
+        solve_fn or default_solve, write_fn or ResultWriter(settings.db_path),
         workers=settings.workers, queue_size=settings.queue_size,
         time_limit_s=settings.job_time_limit_s, retry_after_s=settings.retry_after_s,
         history=settings.job_history)
