@@ -46,6 +46,42 @@ def drive_volume(model, volumes_mm3: Sequence[float], settings: SolverSettings |
                 inc *= 0.5
                 continue
             v = vt
+            cut = 0
             its_total += its
         out.append((v, p, its_total))
     return out, u
+
+
+def drive_pressure(model, pressures_pa: Sequence[float], settings: SolverSettings | None = None,
+                   max_cutbacks: int = 6, backend: str = "superlu"
+                   ) -> list[tuple[np.ndarray, int]]:
+    """Converge at each prescribed cavity pressure (Pa) in turn, from the undeformed state.
+
+    A failed increment is halved (up to ``max_cutbacks`` times in a row). Returns
+    [(free displacement, newton_iterations)] at the requested pressures; raises
+    ConvergenceError if an increment cannot converge.
+    """
+    settings = settings or SolverSettings()
+    u = np.zeros(model.n_free)
+    p = 0.0
+    out = []
+    for target in pressures_pa:
+        its_total = 0
+        inc = target - p
+        cut = 0
+        while p != target:
+            pt = target if abs(target - p) <= abs(inc) * (1 + 1e-12) else p + inc
+            try:
+                u, _, its, _, _ = newton_step(model, u, p, settings, None, pt, backend)
+            except (StepFailed, FloatingPointError) as exc:
+                cut += 1
+                if cut > max_cutbacks:
+                    raise ConvergenceError(f"pressure step to {pt:.6g} Pa failed: {exc}"
+                                           ) from None
+                inc *= 0.5
+                continue
+            p = pt
+            cut = 0
+            its_total += its
+        out.append((u.copy(), its_total))
+    return out
