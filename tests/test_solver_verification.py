@@ -175,14 +175,14 @@ def _angle_at_volume(bulk_ratio, volume_ul=10.0, steps=8):
 @pytest.mark.slow
 def test_actuator_angle_does_not_depend_on_the_bulk_modulus():
     # Standard design (Table 3), hex2, mesh level 0, 10 ul injected (~11 deg).
-    # Measured (docs/verification-references.md): the angle changes by < 0.5 % between
-    # K = 300 mu0 and 3000 mu0, by < 0.2 % between 1000 mu0 and 3000 mu0.
+    # Measured (docs/verification-references.md): 11.148 / 11.140 / 11.137 deg at
+    # K = 300 / 1000 / 3000 mu0, i.e. +0.10 % and +0.02 % against 3000 mu0. ~6 min.
     a300, _ = _angle_at_volume(300.0)
     a1000, _ = _angle_at_volume(1000.0)
     a3000, _ = _angle_at_volume(3000.0)
     assert 5.0 < a1000 < 30.0
-    assert abs(a300 / a3000 - 1) < 0.005
-    assert abs(a1000 / a3000 - 1) < 0.002
+    assert abs(a300 / a3000 - 1) < 0.003
+    assert abs(a1000 / a3000 - 1) < 0.001
 
 
 def test_newton_converges_quadratically_on_the_actuator():
