@@ -34,6 +34,7 @@ from solver.settings import SolverSettings
 
 TARGET_ANGLE_STEP_DEG = 6.0
 MIN_CUTBACK = 1.0 / 1024.0
+DEBUG_RESIDUALS = False
 
 
 class StepFailed(Exception):
@@ -49,6 +50,7 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
     volume_scale = max(model.volume0_mm3, 1e-9)
     neg = -1
     first_res = None
+    predictor_res = np.inf
     du, dp = None, 0.0
     for it in range(1, settings.max_newton_iter + 1):
         if target_pressure is not None:
@@ -66,7 +68,8 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
                 except FloatingPointError:
                     scale *= 0.5
             if ev is None:
-                raise StepFailed("every damped Newton update inverts an element")
+                raise StepFailed(f"every damped Newton update inverts an element (iteration {it},"
+                                 f" |du|max = {np.abs(du).max():.3g} mm, dp = {dp:.3g} Pa)")
             u, p = u + scale * du, p + scale * dp
         res = float(np.linalg.norm(ev.R)) / max(ev.load_norm, force_floor)
         vres = 0.0 if target_volume is None else abs(ev.volume_mm3 - target_volume) / volume_scale
@@ -76,6 +79,14 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
             first_res = max(res, vres)
         elif max(res, vres) > 1e6 * max(first_res, 1.0):
             raise StepFailed("Newton diverged")
+        if it == 2:
+            predictor_res = res
+        elif it > 2 and res > predictor_res:
+            # Worse than right after the predictor: this step is leaving the basin of
+            # convergence; cutting back now is cheaper than iterating on.
+            raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
+        if DEBUG_RESIDUALS:
+            print(f"    it {it}: res {res:.3e} vres {vres:.3e} p {p:.2f}")
         if it > 1 and res < tol and vres < tol:
             return u, p, it - 1, res, neg
         t0 = time.perf_counter()
@@ -112,8 +123,8 @@ def solve(design: Design, settings: SolverSettings | None = None,
 
 
 def inflate(design: Design, settings: SolverSettings | None = None,
-            on_step: Callable[[dict], None] | None = None, backend: str = "superlu"
-            ) -> tuple[Curve, ActuatorModel, np.ndarray]:
+            on_step: Callable[[dict], None] | None = None, backend: str = "superlu",
+            debug: bool = False) -> tuple[Curve, ActuatorModel, np.ndarray]:
     """Like ``solve``, also returning the discrete model and the last converged
     displacement (free dofs), for field output (VTK)."""
     settings = (settings or SolverSettings()).validated()
@@ -157,6 +168,9 @@ def inflate(design: Design, settings: SolverSettings | None = None,
                 u_new, p_new, its, res, neg = newton_step(model, u, p, settings, None, p + step,
                                                       backend)
         except (StepFailed, FloatingPointError) as exc:
+            model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
+            if debug:
+                print(f"cut-back at p = {p:.1f}, step {step:.4g}: {exc}")
             step *= 0.5
             if step < MIN_CUTBACK * initial_step:
                 status, reason = "failed", (f"step at p = {p:.1f} Pa, angle = "
