@@ -2,7 +2,8 @@
 the database (process pool of ``--workers``, or a Dask cluster with ``--scheduler``).
 
 The grid is validated completely before any solve. Each finished solve is written at
-once; Ctrl-C or a killed job keeps every finished record, and the same command resumes.
+once; Ctrl-C, SIGTERM or a killed job keeps every finished record, and the same command
+resumes.
 The exact command, the grid's text and the versions are recorded in the file's metadata.
 """
 
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import signal
 import sys
 
 
@@ -45,6 +47,10 @@ def command_line(args: argparse.Namespace) -> str:
     return shlex.join(words)
 
 
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -64,9 +70,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"{grid.source}: {len(grid)} designs; in {args.db}: {summary.skipped_done} "
               f"done, {summary.skipped_failed} failed (skipped); would solve {len(todo)}")
         return 0
-    summary = precompute(grid, args.db, workers=args.workers, scheduler=args.scheduler,
-                         retry_failed=args.retry_failed, progress=not args.no_progress,
-                         command=command_line(args))
+    # `kill PID` (SIGTERM) stops the job like Ctrl-C: workers stopped, finished records kept
+    previous = signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        summary = precompute(grid, args.db, workers=args.workers, scheduler=args.scheduler,
+                             retry_failed=args.retry_failed, progress=not args.no_progress,
+                             command=command_line(args))
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     for line in summary.lines():
         print(line, file=sys.stderr)
     if summary.interrupted:
