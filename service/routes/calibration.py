@@ -16,11 +16,14 @@ from service.errors import FieldError
 
 router = APIRouter(prefix="/v1", tags=["calibration"])
 
+# Two replicate specimens of one design (the loop needs at least 2 curves).
 EXAMPLE_ROWS = [
-    {"curve_id": "s1", "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
+    {"curve_id": cid, "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
      "membrane_material": "ecoflex_00_30", "pressure_pa": p, "angle_deg": a,
      "time_s": float(i), "flow_ul_s": 2.5}
-    for i, (p, a) in enumerate([(0, 0.1), (400, 1.6), (800, 4.8), (1200, 12.0), (1600, 30.5)])
+    for cid, points in (("s1", [(0, 0.1), (400, 1.6), (800, 4.8), (1200, 12.0), (1600, 30.5)]),
+                        ("s2", [(0, -0.2), (400, 1.9), (800, 5.1), (1200, 12.6), (1600, 31.4)]))
+    for i, (p, a) in enumerate(points)
 ]
 
 
@@ -35,7 +38,8 @@ class CalibrateRequest(BaseModel):
     save: str | None = Field(None, min_length=1, max_length=64,
                              description="save the augmented model under this name "
                                          "(needs X-API-Key)")
-    folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve")
+    folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve "
+                       "(reduced to the number of curves when there are fewer)")
 
 
 class Candidate(BaseModel):
@@ -52,8 +56,8 @@ class CalibrationReport(BaseModel):
 
     model_config = ConfigDict(extra="allow")
     rmse_model_deg: float
-    rmse_before_deg: float
-    rmse_after_deg: float
+    rmse_before_deg: float | None = Field(..., description="null when not finite")
+    rmse_after_deg: float | None = Field(..., description="null when not finite")
     noise_floor_deg: float | None
     selected_effects: list[str]
     candidates: list[Candidate]
@@ -90,15 +94,15 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
 
     if request.save is not None:
         require_api_key(settings, key)
-    try:
+    try:  # the data's errors: the loader's, then the loop's (e.g. fewer than 2 curves)
         obs = observations_from_rows(request.rows)
+        start = "paper" if request.model == "paper" else models.get(request.model)
+        cal = run_calibration(obs, start, folds=request.folds)
     except DataError as exc:
         loc: tuple[str | int, ...] = ("body", "rows")
         if exc.row is not None:
             loc += (exc.row - 1,)
         raise FieldError(loc + (exc.column,), exc.detail, exc.allowed) from None
-    start = "paper" if request.model == "paper" else models.get(request.model)
-    cal = run_calibration(obs, start, folds=request.folds)
     report = jsonable(cal.report)
     report["model"]["name"] = request.model
     if request.save is not None:

@@ -21,6 +21,9 @@ from surrogate.calibration._forward import angle_model
 
 # Internal (fit) name, physical name, and transforms for reparametrised parameters.
 INTERNAL = {"theta_max_deg": "inv_theta_max_per_deg"}
+# Residuals are capped at +/- this (deg) while fitting: a trial step into a region where
+# the exponential overflows then stays a large finite penalty with a finite Jacobian.
+R_CAP_DEG = 1e6
 
 
 @dataclass(frozen=True)
@@ -144,7 +147,7 @@ def fit(obs: Observations, effects: tuple[str, ...], nominal: np.ndarray,
     def residual(x: np.ndarray) -> np.ndarray:
         fam, values = unpack(layout, nominal, x)
         r = angle_model(obs, fam, values) - obs.angle_deg
-        return np.where(np.isfinite(r), r, 1e6)
+        return np.clip(np.nan_to_num(r, nan=R_CAP_DEG), -R_CAP_DEG, R_CAP_DEG)
 
     res = least_squares(residual, x0, bounds=(layout.lower, layout.upper), x_scale="jac",
                         method="trf", max_nfev=400 * max(layout.k, 1))
@@ -170,8 +173,12 @@ def _cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np
 
 def curve_folds(n_curves: int, k: int = 5) -> list[np.ndarray]:
     """Grouped K-fold by curve: curve i is held out in fold i mod K (replicates, which
-    are usually listed together, land in different folds)."""
-    k = max(2, min(k, n_curves))
+    are usually listed together, land in different folds). K is reduced to ``n_curves``
+    (leave-one-curve-out), so no fold is empty and every fit sees at least one curve."""
+    if n_curves < 2 or k < 2:
+        raise ValueError(f"cross-validation by curve needs >= 2 curves and folds, got "
+                         f"{n_curves} curves, {k} folds (check_calibratable says so first)")
+    k = min(k, n_curves)
     return [np.arange(i, n_curves, k) for i in range(k)]
 
 

@@ -32,11 +32,12 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.calibration._checks import check_calibratable
 from surrogate.calibration._data import Observations
 from surrogate.calibration._effects import EFFECT_IDS, EFFECTS, R_CHANNEL
 from surrogate.calibration._fit import FitResult, cross_validate, fit
 from surrogate.calibration._forward import angle_model
-from surrogate.calibration._noise import noise_floor
+from surrogate.calibration._noise import N_FLEX, noise_floor
 from surrogate.calibration._structure import structure_test
 
 Z_SIGNIFICANT = 3.0
@@ -106,8 +107,13 @@ def _nuisance(obs: Observations, f: FitResult) -> np.ndarray:
 def calibrate(obs: Observations, nominal: np.ndarray, model: dict | None = None,
               folds: int = 5, progress=None) -> Calibration:
     """Run the loop on validated observations; ``nominal`` is (n_families, 4) starting
-    parameters (a, a_t, b_t, c) in the order of ``obs.families``."""
+    parameters (a, a_t, b_t, c) in the order of ``obs.families``. Data the loop cannot
+    use (one curve, pressures where the starting model is not finite) and ``folds`` < 2
+    raise DataError/InputError (_checks.py); more folds than curves are reduced to the
+    number of curves."""
     nominal = np.asarray(nominal, dtype=float)
+    folds_requested = folds
+    folds = check_calibratable(obs, nominal, folds)
     tick = progress or (lambda: None)
     y = obs.angle_deg
     rmse_model = float(np.sqrt(np.mean((angle_model(obs, nominal, {}) - y) ** 2)))
@@ -263,8 +269,8 @@ def calibrate(obs: Observations, nominal: np.ndarray, model: dict | None = None,
         "rmse_after_deg": rmse_after,
         "noise_floor_deg": _num(noise.rms_deg),
         "noise_floor_source": noise.source,
-        "cross_validation": {"method": "grouped K-fold by curve", "folds":
-                             max(2, min(folds, obs.n_curves))},
+        "cross_validation": {"method": "grouped K-fold by curve", "folds": folds,
+                             "folds_requested": folds_requested},
         "selected_effects": list(chosen),
         "candidates": candidates,
         "confounded": confounded,
@@ -295,10 +301,12 @@ def _family_table(obs: Observations, f: FitResult) -> list[dict]:
 def interpret(report: dict, obs: Observations, status: dict) -> str:
     """A few sentences a lab can act on."""
     noise = report["noise_floor_deg"]
+    floor = (f"against a noise floor of {noise:.2f} deg from {report['noise_floor_source']}"
+             if noise is not None else "with no noise floor to compare against (it needs "
+             f"replicate curves of one design, or more than {N_FLEX + 1} points per curve)")
     s = [f"The model as is misses the data by {report['rmse_model_deg']:.2f} deg RMS; "
          f"with its own constants refitted it predicts unseen curves to "
-         f"{report['rmse_before_deg']:.2f} deg (cross-validated by curve), against a noise "
-         f"floor of {noise:.2f} deg from {report['noise_floor_source']}."]
+         f"{report['rmse_before_deg']:.2f} deg (cross-validated by curve), {floor}."]
     fitted = report["fitted"]["effects"]
     flows = report["data"]["flow_rates_ul_s"]
     q = flows[0] if len(flows) == 1 else (max(flows) if flows else None)
