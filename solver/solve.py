@@ -35,6 +35,7 @@ from solver.settings import SolverSettings
 TARGET_ANGLE_STEP_DEG = 6.0
 MIN_CUTBACK = 1.0 / 1024.0
 DEBUG_RESIDUALS = False
+DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
 
 
 class StepFailed(Exception):
@@ -81,7 +82,7 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
             raise StepFailed("Newton diverged")
         if it == 2:
             predictor_res = res
-        elif it > 2 and res > predictor_res:
+        elif it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR:
             # Worse than right after the predictor: this step is leaving the basin of
             # convergence; cutting back now is cheaper than iterating on.
             raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
