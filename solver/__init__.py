@@ -19,9 +19,9 @@ __all__ = [
 ]
 
 
-def solve(design, settings=None, on_step=None):  # noqa: ANN001 - documented in solver.solve
-    """Solve one design; see ``solver.solve.solve``. Imported lazily: the FE stack
+def solve(design, settings=None, on_step=None):  # noqa: ANN001 - documented in solver.stepping
+    """Solve one design; see ``solver.stepping.solve``. Imported lazily: the FE stack
     (scikit-fem) is only loaded by code that solves."""
-    from solver.solve import solve as _solve
+    from solver.stepping import solve as _solve
 
     return _solve(design, settings, on_step=on_step)

@@ -28,7 +28,6 @@ if __name__ == "__main__":
     sys.exit(cli.main())
 """
 
-pytest.importorskip("solver.solve", reason="the FE solver (solver/solve.py) is not there yet")
 
 
 @pytest.fixture

@@ -36,10 +36,9 @@ SolveFn = Callable[[Design, SolverSettings], Curve]
 
 
 def default_solve(design: Design, settings: SolverSettings) -> Curve:
-    """``solver.solve.solve``, imported in the worker, so the parent never loads the FE
-    stack. (Imported from the submodule: once ``solver.solve`` the module is imported, it
-    shadows the package's lazy ``solver.solve`` function of the same name.)"""
-    from solver.solve import solve
+    """``solver.stepping.solve``, imported in the worker, so the parent never loads the FE
+    stack."""
+    from solver.stepping import solve
 
     return solve(design, settings)
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from solver.errors import ConvergenceError
 from solver.settings import SolverSettings
-from solver.solve import StepFailed, newton_step
+from solver.stepping import StepFailed, newton_step
 
 
 def drive_volume(model, volumes_mm3: Sequence[float], settings: SolverSettings | None = None,
