@@ -19,7 +19,7 @@ import numpy as np
 
 from solver import Design, SolverSettings
 from solver.linear import available_backends
-from solver.solve import solve
+from solver.stepping import solve
 
 
 def run(level: int, element: str, max_angle: float, backend: str) -> dict:

@@ -14,7 +14,7 @@ from solver.assembly import make_basis
 from solver.linear import factorize
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.model import ActuatorModel, SolidModel
-from solver.solve import StepFailed, newton_step
+from solver.stepping import StepFailed, newton_step
 from solver.verification.cantilever import (
     bar_mesh,
     beam_tip_deflection,

@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from solver.io import curve_to_csv, plot_curve
-    from solver.solve import inflate
+    from solver.stepping import inflate
 
     design = _design(args)
     settings = SolverSettings(
