@@ -26,7 +26,8 @@ class SolverSettings:
     max_volume_ul     stop once the injected volume (whole actuator) exceeds this
     flow_ul_s         injection rate used to report time = volume / flow (the paper: 2.5)
     bulk_ratio        bulk modulus over initial shear modulus, K / mu0, per material
-    newton_tol        relative residual tolerance (and energy-norm increment tolerance)
+    newton_tol        relative residual ||R|| / ||p dV/du|| (a stall at the rounding floor
+                      within 100 x newton_tol also counts as converged)
     max_newton_iter   iterations before a step is cut back
     max_steps         converged steps before the curve is ended
     tip               "free", "spring" (linear spring on the tip, k) or "blocked"
