@@ -34,7 +34,6 @@ from solver.settings import SolverSettings
 
 TARGET_ANGLE_STEP_DEG = 6.0
 MIN_CUTBACK = 1.0 / 1024.0
-DEBUG_RESIDUALS = False
 DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
 
 
@@ -87,8 +86,6 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
             # Worse than right after the predictor: this step is leaving the basin of
             # convergence; cutting back now is cheaper than iterating on.
             raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
-        if DEBUG_RESIDUALS:
-            print(f"    it {it}: res {res:.3e} vres {vres:.3e} p {p:.2f}")
         # Converged below the tolerance, or stalled at the rounding floor (which grows
         # with the bulk modulus) within 100 x the tolerance.
         floor = it > 2 and res < 100 * tol and res > 0.3 * previous_res
