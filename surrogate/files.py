@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 
+from solver.atomic_file import write_text_atomic
 from solver.errors import NotFoundError
 from surrogate.core import Surrogate
 from surrogate.errors import SurrogateFileError
@@ -50,20 +50,8 @@ def surrogate_from_dict(d: dict, origin: str = "<dict>") -> Surrogate:
 
 def save_surrogate(s: Surrogate, path: str | os.PathLike) -> Path:
     """Write ``s`` as JSON to ``path`` atomically; returns the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     text = json.dumps(surrogate_to_dict(s), indent=1, allow_nan=False)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return write_text_atomic(path, text)
 
 
 def load_surrogate(path: str | os.PathLike) -> Surrogate:

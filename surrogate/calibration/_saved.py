@@ -11,9 +11,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -22,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from solver.atomic_file import write_text_atomic
 from solver.errors import InputError
 from surrogate.calibration._errors import ModelNotFoundError
 from surrogate.calibration._forward import chamber_pressure_pa, static_angle_deg
@@ -154,14 +153,7 @@ def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) 
                        "residual_structured_after": r["residual_structured_after"],
                        "created_utc": datetime.now(UTC).isoformat(timespec="seconds")},
     }
-    fd, tmp = tempfile.mkstemp(dir=models_dir, prefix=f".{name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(doc, fh, indent=1, allow_nan=False)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_text_atomic(path, json.dumps(doc, indent=1, allow_nan=False))
     return path
 
 
