@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
 def summary_table(s: object) -> str:
     """One row per family: default form, parameters, LODO RMSE and band coverage."""
     rows = [f"{'family':44s} {'form':11s} {'a deg/mm':>9s} {'a_t Pa':>8s} {'b_t 1/mm':>8s} "
-            f"{'LODO rmse exp/ext deg':>22s} {'coverage':>8s}"]
+            f"{'LODO rmse exp/ext deg':>22s} {'coverage all/interp':>19s}"]
     for rep in s.report["families"]:  # type: ignore[attr-defined]
         form = rep["default_form"]
         v = rep["joint_fit"][form]["values"]
@@ -58,8 +58,10 @@ def summary_table(s: object) -> str:
             return f"{d['rmse']:.2f}" if d.get("available") else "-"
 
         cov = lodo[form].get("coverage")
+        cov_in = lodo[form].get("coverage_interpolated")
+        cov_text = "/".join("-" if c is None else f"{c:.2f}" for c in (cov, cov_in))
         rows.append(f"{rep['family']:44s} {form:11s} {v[0]:9.4f} {v[1]:8.1f} {v[2]:8.3f} "
                     f"{rmse('exponential') + ' / ' + rmse('extended'):>22s} "
-                    f"{'-' if cov is None else f'{cov:.3f}':>8s}")
+                    f"{cov_text:>19s}")
     rows.append(f"force: {s.report.get('force')}")  # type: ignore[attr-defined]
     return "\n".join(rows)
