@@ -1,7 +1,8 @@
 """Load test of the REST service on loopback: POST /v1/predict against GET /v1/health.
 
-Starts `balloon serve` (one uvicorn process) on 127.0.0.1 with a surrogate file saved
-from the paper's preset, then drives it with an async httpx client: ``--concurrency``
+Starts `balloon serve` (one uvicorn process) on 127.0.0.1 with its default settings,
+i.e. the shipped data (service/data/surrogate.json and curves.h5; the paper's preset
+when the package has no shipped surrogate), then drives it with an async httpx client: ``--concurrency``
 requests in flight, alternating phases of each endpoint (so drift on a shared machine
 hits both alike), ``--duration`` seconds per endpoint in total. Reports throughput
 (requests/s) and latency percentiles (ms) per endpoint, and checks the targets:
@@ -45,12 +46,13 @@ def free_port() -> int:
 
 
 def start_server(tmp: Path) -> tuple[subprocess.Popen, str]:
-    from surrogate import paper_surrogate, save_surrogate
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    if not (ROOT / "service" / "data" / "surrogate.json").is_file():
+        from surrogate import paper_surrogate, save_surrogate
 
-    save_surrogate(paper_surrogate(), tmp / "surrogate.json")
+        save_surrogate(paper_surrogate(), tmp / "surrogate.json")
+        env["BALLOON_SURROGATE_PATH"] = str(tmp / "surrogate.json")
     port = free_port()
-    env = {**os.environ, "BALLOON_SURROGATE_PATH": str(tmp / "surrogate.json"),
-           "BALLOON_DB_PATH": str(tmp / "none.h5"), "PYTHONPATH": str(ROOT)}
     proc = subprocess.Popen([sys.executable, "-c", LAUNCH, "serve", "--host", "127.0.0.1",
                              "--port", str(port), "--log-level", "warning"], env=env)
     url = f"http://127.0.0.1:{port}"

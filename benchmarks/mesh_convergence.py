@@ -20,16 +20,17 @@ import numpy as np
 PAPER_A, PAPER_TAU_PA = 0.704, 420.0   # the paper's fit of the standard design (Table 4)
 
 
-def run_level(level: int, outdir: Path, max_angle: float) -> dict:
+def run_level(level: int, outdir: Path, max_angle: float, backend: str) -> dict:
     from solver import Design, SolverSettings
     from solver.stepping import solve
 
     t0 = time.perf_counter()
     c = solve(Design(), SolverSettings(mesh_level=level, element="hex2",
-                                       max_angle_deg=max_angle))
+                                       max_angle_deg=max_angle), backend=backend)
     data = {"level": level, "dofs": c.n_dofs, "wall_s": time.perf_counter() - t0,
             "status": c.status, "pressure_pa": c.pressure_pa.tolist(),
-            "angle_deg": c.angle_deg.tolist(), "iterations": int(c.newton_iterations.sum())}
+            "angle_deg": c.angle_deg.tolist(), "iterations": int(c.newton_iterations.sum()),
+            "backend": backend}
     (outdir / f"level{level}.json").write_text(json.dumps(data))
     return data
 
@@ -78,13 +79,14 @@ def main() -> None:
     ap.add_argument("--levels", type=int, nargs="*", default=[0, 1, 2])
     ap.add_argument("--outdir", type=Path, default=Path("out/convergence"))
     ap.add_argument("--max-angle-deg", type=float, default=65.0)
+    ap.add_argument("--backend", default="superlu", help="linear solver: superlu or pardiso")
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--plot", type=Path, default=Path("docs/verification-convergence.png"))
     args = ap.parse_args()
     args.outdir.mkdir(parents=True, exist_ok=True)
     if not args.plot_only:
         for level in args.levels:
-            run_level(level, args.outdir, args.max_angle_deg)
+            run_level(level, args.outdir, args.max_angle_deg, args.backend)
     runs = [json.loads(p.read_text()) for p in sorted(args.outdir.glob("level*.json"))]
     summarise(runs)
     plot(runs, args.plot)

@@ -14,7 +14,7 @@ import sys
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("fit", help="fit the surrogate model to a curve database",
-                                   description=__doc__.split("\n\n")[0].strip("`"))
+                                   description=__doc__.split("\n\n")[0].replace("``", ""))
     parser.add_argument("--db", required=True, metavar="PATH", help="curve database (HDF5)")
     parser.add_argument("-o", "--output", required=True, metavar="PATH",
                         help="surrogate file to write (JSON)")

@@ -26,7 +26,7 @@ from service.commands.predict import (
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "inverse", help="pressure for an angle, or designs that meet a target",
-        description=__doc__.split("\n\n")[0].strip("`"),
+        description=__doc__.split("\n\n")[0].replace("``", ""),
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n")[1])
     add_design_arguments(parser, required=False)
     parser.add_argument("--angles-deg", type=float, nargs="+", metavar="DEG",

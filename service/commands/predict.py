@@ -60,7 +60,7 @@ def surrogate_from_args(args: argparse.Namespace) -> object:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("predict", help="predict bending angles from the surrogate",
-                                   description=__doc__.split("\n\n")[0].strip("`"))
+                                   description=__doc__.split("\n\n")[0].replace("``", ""))
     add_design_arguments(parser)
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--pressures", type=float, nargs="+", metavar="PA",
