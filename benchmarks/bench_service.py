@@ -2,9 +2,9 @@
 
 Starts `balloon serve` (one uvicorn process) on 127.0.0.1 with its default settings,
 i.e. the shipped data (service/data/surrogate.json and curves.h5; the paper's preset
-when the package has no shipped surrogate), then drives it with an async httpx client: ``--concurrency``
-requests in flight, alternating phases of each endpoint (so drift on a shared machine
-hits both alike), ``--duration`` seconds per endpoint in total. Reports throughput
+when the package has no shipped surrogate), then drives it with an async httpx client:
+``--concurrency`` requests in flight, alternating phases of each endpoint (so drift on a
+shared machine hits both alike), ``--duration`` seconds per endpoint in total. Reports throughput
 (requests/s) and latency percentiles (ms) per endpoint, and checks the targets:
 predict throughput >= 70 % of health's, predict p99 < 20 ms.
 

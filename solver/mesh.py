@@ -61,6 +61,7 @@ def _join(*segments: np.ndarray) -> np.ndarray:
 def build_mesh(design: Design, level: int) -> ActuatorMesh:
     """Mesh the half actuator of a validated design at refinement ``level`` (>= 0)."""
     d = design.validated()
+    assert d.chamber_offset_mm is not None and d.body_length_mm is not None  # validated
     x0 = float(d.chamber_offset_mm)
     x1 = x0 + d.L_mm
     xb = float(d.body_length_mm)

@@ -95,14 +95,15 @@ class SolidModel:
         u = self.full(u_free)
         free = self.pattern.free
         r = np.zeros(self.ndofs)
-        mats = []
+        mats: list[np.ndarray] = []
         energy = 0.0
         lam_m = 1.0
         for block in self.blocks:
             st = evaluate_block(block, u, tangent)
             energy += st.energy
             r += scatter_vector(self.ndofs, block.dofs, st.residual)
-            mats.append(st.stiffness)
+            if st.stiffness is not None:
+                mats.append(st.stiffness)
             if block.membrane:
                 lam_m = float(st.lam_max.max())
         if self.cavity is not None:

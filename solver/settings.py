@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
+from typing import Any
 
 from solver.errors import InputError
 
@@ -80,7 +81,7 @@ def settings_from_dict(data: dict) -> SolverSettings:
     unknown = set(data) - set(names)
     if unknown:
         raise InputError(sorted(unknown)[0], "unknown solver setting", ", ".join(sorted(names)))
-    kwargs = {}
+    kwargs: dict[str, Any] = {}
     defaults = SolverSettings()
     for key, value in data.items():
         kind = type(getattr(defaults, key))

@@ -138,7 +138,7 @@ def inflate(design: Design, settings: SolverSettings | None = None,
 
     u = np.zeros(model.n_free)
     p = 0.0
-    rows = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f")}
+    rows: dict[str, list] = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f")}
 
     def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int) -> float:
         ev = model.evaluate(u_, p_, tangent=False)
