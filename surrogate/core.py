@@ -211,7 +211,7 @@ class Surrogate:
         x = p / model.tau_pa(par.theta, design.t_mm)
         var = (bands.parameter_variance(g, par.cov)
                + dp_da**2 * bands.scatter_variance(par.residual_sd, par.residual_rel, ang, x))
-        half = z * np.sqrt(np.where(ang == 0.0, 0.0, var))
+        half = par.band_scale * z * np.sqrt(np.where(ang == 0.0, 0.0, var))
         return InversePrediction(design=design, angle_deg=ang, pressure_pa=p,
                                  lower_pa=np.maximum(p - half, 0.0), upper_pa=p + half,
                                  level=level, validity=check(fam.domain, design, p, ang),

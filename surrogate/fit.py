@@ -11,6 +11,7 @@ RMSE by at least 10 % (else the paper's "exponential"). Everything lands in
 
 from __future__ import annotations
 
+from dataclasses import replace
 import math
 import os
 import subprocess
@@ -117,6 +118,8 @@ def _fit_family(members: list[CurveData], force_members: list[CurveData],
         if form == "exponential":
             start = params[form].theta
         lodo[form] = leave_one_design_out(pts, form, level, start=params[form].theta)
+        if lodo[form].get("available"):
+            params[form] = replace(params[form], band_scale=lodo[form]["band_scale"])
     default = "exponential" if "exponential" in forms else forms[0]
     if ("extended" in params and "exponential" in params and lodo["extended"].get("available")
             and lodo["extended"]["rmse"] < EXTENDED_GAIN * lodo["exponential"]["rmse"]):
@@ -126,10 +129,12 @@ def _fit_family(members: list[CurveData], force_members: list[CurveData],
         fpts = make_points([(c.design.L_mm, c.design.t_mm, *c.usable_points("force_mn"))
                             for c in force_members])
         force = joint_fit(fpts, "exponential")
+        force_lodo = leave_one_design_out(fpts, "exponential", level, start=force.theta)
+        if force_lodo.get("available"):
+            force = replace(force, band_scale=force_lodo["band_scale"])
         force_report = {"parameters": force.as_dict(), "tip": force_members[0].tip,
                         "spring_k_n_per_m": force_members[0].spring_k_n_per_m,
-                        "lodo": leave_one_design_out(fpts, "exponential", level,
-                                                     start=force.theta)}
+                        "lodo": force_lodo}
     last_p = [float(c.usable_points()[0].max()) for c in members]
     domain = Domain(
         L_mm=(float(pts.L_mm.min()), float(pts.L_mm.max())),

@@ -196,7 +196,7 @@ def _evaluate(par: ModelParameters, target: DesignTarget, objective: str, L: np.
     """Metrics for candidate (L, t) arrays; infeasible candidates score +inf."""
     th = par.theta
     P = float(target.pressure_pa)
-    z = bands.z_value(level)
+    z = bands.z_value(level) * par.band_scale
     sign = 1.0 if th[0] > 0 else -1.0
     tau = model.tau_pa(th, t)
     ok = tau > 0

@@ -59,7 +59,10 @@ class ModelParameters:
     values/covariance follow ``names``; ``fixed`` names parameters held constant (zero
     variance); residual scatter sd(angle) = sqrt(residual_sd^2 + (residual_rel angle)^2)
     in the model's unit (deg for angle, mN for force). ``rmse``/``max_error`` are the
-    in-sample errors of the fit, ``n_points``/``n_curves`` its data."""
+    in-sample errors of the fit, ``n_points``/``n_curves`` its data. ``band_scale``
+    (>= 1) multiplies every band's half-width: it is calibrated on held-out designs
+    (``band_scale_from_lodo``) because model-form error is correlated along a curve and
+    the in-sample scatter model alone gives bands that are too narrow."""
 
     form: str
     names: tuple[str, ...]
@@ -74,6 +77,7 @@ class ModelParameters:
     n_curves: int = 0
     source: str = "fit"
     extra: dict = field(default_factory=dict)
+    band_scale: float = 1.0
 
     @cached_property
     def theta(self) -> np.ndarray:
@@ -90,7 +94,7 @@ class ModelParameters:
                 "residual_sd": self.residual_sd, "residual_rel": self.residual_rel,
                 "fixed": list(self.fixed), "rmse": self.rmse, "max_error": self.max_error,
                 "n_points": self.n_points, "n_curves": self.n_curves, "source": self.source,
-                "extra": dict(self.extra)}
+                "extra": dict(self.extra), "band_scale": self.band_scale}
 
 
 def parameters_from_dict(d: dict) -> ModelParameters:
@@ -100,7 +104,8 @@ def parameters_from_dict(d: dict) -> ModelParameters:
         residual_sd=float(d["residual_sd"]), residual_rel=float(d["residual_rel"]),
         fixed=tuple(d.get("fixed", ())), rmse=d.get("rmse"), max_error=d.get("max_error"),
         n_points=int(d.get("n_points", 0)), n_curves=int(d.get("n_curves", 0)),
-        source=d.get("source", "fit"), extra=dict(d.get("extra", {})))
+        source=d.get("source", "fit"), extra=dict(d.get("extra", {})),
+        band_scale=float(d.get("band_scale", 1.0)))
 
 
 def start_values(pts: Points) -> np.ndarray:
@@ -227,7 +232,7 @@ def band(params: ModelParameters, L_mm, t_mm, pressure_pa, level: float = 0.95,
     x = np.asarray(pressure_pa, dtype=float) / model.tau_pa(params.theta, t_mm)
     var = bands.parameter_variance(g, params.cov) + bands.scatter_variance(
         params.residual_sd, params.residual_rel, m, x)
-    half = scale * z * np.sqrt(var)
+    half = scale * params.band_scale * z * np.sqrt(var)
     return m, m - half, m + half
 
 
@@ -239,12 +244,17 @@ def leave_one_design_out(pts: Points, form: str, level: float = 0.95,
     A held-out design whose L or t lies outside the range of the remaining designs is
     an extrapolation (``"extrapolated": true``); the pooled figures are also given over
     the interpolated designs alone (``*_interpolated``), which is what a user asking
-    inside the fitted domain should expect."""
+    inside the fitted domain should expect.
+
+    ``band_scale`` is the factor on the band's half-width that would have put ``level``
+    of the held-out (interpolated) points inside it; ``coverage_calibrated`` is the
+    coverage with that factor when each design is judged by the factor estimated from
+    the other designs only (a jackknife, so the figure is not self-fulfilling)."""
     designs = np.unique(pts.curve)
     if len(designs) < 2:
         return {"form": form, "n_designs": int(len(designs)), "available": False}
     rows = []
-    all_err, inside, interior = [], [], []
+    all_err, inside, interior, standardized = [], [], [], []
     for i in designs:
         held = pts.curve == i
         train, test = pts.subset(~held), pts.subset(held)
@@ -254,6 +264,8 @@ def leave_one_design_out(pts: Points, form: str, level: float = 0.95,
         m, lo, hi = band(params, test.L_mm, test.t_mm, test.pressure_pa, level)
         err = m - test.value
         ins = (test.value >= lo) & (test.value <= hi)
+        half = 0.5 * (hi - lo) / (params.band_scale * bands.z_value(level))
+        standardized.append(np.abs(err) / np.where(half > 0, half, np.inf))
         L0, t0 = float(test.L_mm[0]), float(test.t_mm[0])
         outside = not (train.L_mm.min() <= L0 <= train.L_mm.max()
                        and train.t_mm.min() <= t0 <= train.t_mm.max())
@@ -267,7 +279,23 @@ def leave_one_design_out(pts: Points, form: str, level: float = 0.95,
     e = np.concatenate(all_err)
     ins_all = np.concatenate(inside)
     mid = np.concatenate(interior)
-    return {"form": form, "available": True, "level": level, "n_designs": len(rows),
+    # Band calibration on the held-out designs (interpolated ones when there are any),
+    # and its honest coverage: each design judged with the scale estimated without it.
+    z = bands.z_value(level)
+    use = [j for j, r in enumerate(rows) if not r["extrapolated"]] or list(range(len(rows)))
+    scale = band_scale_from_lodo([standardized[j] for j in use], level)
+    inside_cal = []
+    for i, r in enumerate(rows):
+        s_i = band_scale_from_lodo([standardized[j] for j in use if j != i], level)
+        ok = standardized[i] <= s_i * z
+        r["coverage_calibrated"] = float(np.mean(ok))
+        inside_cal.append(ok)
+    cal = np.concatenate(inside_cal)
+    return {"band_scale": scale,
+            "coverage_calibrated": float(np.mean(cal)),
+            "coverage_calibrated_interpolated": nan_to_none(float(np.mean(cal[mid]))
+                                                            if mid.any() else math.nan),
+"form": form, "available": True, "level": level, "n_designs": len(rows),
             "rmse": float(np.sqrt(np.mean(e ** 2))), "max_error": float(np.max(np.abs(e))),
             "coverage": float(np.mean(ins_all)),
             "n_interpolated": int(sum(not r["extrapolated"] for r in rows)),
@@ -277,6 +305,16 @@ def leave_one_design_out(pts: Points, form: str, level: float = 0.95,
                                                  if mid.any() else math.nan),
             "mean_design_coverage": float(np.mean([r["coverage"] for r in rows])),
             "designs": rows}
+
+
+def band_scale_from_lodo(standardized: list[np.ndarray], level: float) -> float:
+    """Smallest factor (>= 1) on the band's half-width that puts a fraction ``level`` of
+    the held-out points inside it; ``standardized`` holds |error| / band sd per design."""
+    r = np.concatenate(standardized) if standardized else np.empty(0)
+    r = r[np.isfinite(r)]
+    if r.size == 0:
+        return 1.0
+    return max(1.0, float(np.quantile(r, level)) / bands.z_value(level))
 
 
 def nan_to_none(x: float) -> float | None:

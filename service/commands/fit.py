@@ -45,9 +45,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def summary_table(s: object) -> str:
-    """One row per family: default form, parameters, LODO RMSE and band coverage."""
+    """One row per family: default form, parameters, LODO RMSE, the band's calibration
+    factor and the coverage of held-out interpolated designs before and after it."""
     rows = [f"{'family':44s} {'form':11s} {'a deg/mm':>9s} {'a_t Pa':>8s} {'b_t 1/mm':>8s} "
-            f"{'LODO rmse exp/ext deg':>22s} {'coverage all/interp':>19s}"]
+            f"{'LODO rmse exp/ext deg':>22s} {'band x':>6s} {'coverage raw/calibrated':>23s}"]
     for rep in s.report["families"]:  # type: ignore[attr-defined]
         form = rep["default_form"]
         v = rep["joint_fit"][form]["values"]
@@ -57,11 +58,14 @@ def summary_table(s: object) -> str:
             d = lodo.get(f, {})
             return f"{d['rmse']:.2f}" if d.get("available") else "-"
 
-        cov = lodo[form].get("coverage")
-        cov_in = lodo[form].get("coverage_interpolated")
-        cov_text = "/".join("-" if c is None else f"{c:.2f}" for c in (cov, cov_in))
+        # Coverage of the held-out designs inside the range of the others.
+        raw = lodo[form].get("coverage_interpolated")
+        cal = lodo[form].get("coverage_calibrated_interpolated")
+        cov_text = "/".join("-" if c is None else f"{c:.2f}" for c in (raw, cal))
+        scale = lodo[form].get("band_scale")
+        scale_text = "-" if scale is None else f"{scale:.2f}"
         rows.append(f"{rep['family']:44s} {form:11s} {v[0]:9.4f} {v[1]:8.1f} {v[2]:8.3f} "
                     f"{rmse('exponential') + ' / ' + rmse('extended'):>22s} "
-                    f"{cov_text:>19s}")
+                    f"{scale_text:>6s} {cov_text:>23s}")
     rows.append(f"force: {s.report.get('force')}")  # type: ignore[attr-defined]
     return "\n".join(rows)
