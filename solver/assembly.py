@@ -19,6 +19,23 @@ Pressure field p_hat = N_p . K M_e^-1 g_e, and
 
 with f = F^-T. Element matrices are scattered into a CSR pattern computed once,
 restricted to the free degrees of freedom.
+
+Newton iterates the mixed form rather than the penalty: the element pressures q_e
+(coefficients of p_hat in N_p) are a state of their own, with the constraint
+
+    R_p = g_e - M_e q_e / K = 0,
+
+condensed element by element. Its linearisation gives the same matrix as above with
+p_hat = N_p . q_e in the geometric term, the condensed residual
+
+    r_c = r + K D_e^T M_e^-1 R_p,
+
+and the pressure update dq_e = K M_e^-1 (R_p + D_e du_e). At R_p = 0 (q_e = K M_e^-1 g_e,
+which is what ``pressure_coef=None`` evaluates) everything equals the penalty form.
+The difference is in the iterates: after a large predictor step a rotated element
+shows a spurious second-order dilatation, and the penalty turns it into a pressure
+K (J - 1) that swamps the geometric stiffness and makes the tangent indefinite;
+the mixed iterate keeps the linearised, physical pressure (docs/physics.md).
 """
 
 from __future__ import annotations
@@ -48,6 +65,7 @@ class MaterialBlock:
     elements: np.ndarray | None = None      # element indices in the mesh
     box_scale: np.ndarray | None = None     # (ne, 3) element sizes when all are boxes
     box_products: np.ndarray | None = None  # (nb nb, nq 9): dNref_aJ dNref_bL per q
+    M: np.ndarray | None = None             # (ne, npr, npr) pressure mass matrices
 
 
 def make_basis(mesh, element: str, intorder: int | None = None) -> Basis:
@@ -75,7 +93,7 @@ def material_block(basis: Basis, elements: np.ndarray, mu_pa, alpha, bulk_pa: fl
     sdofs = basis.element_dofs[:, elements].T                               # (ne, nb)
     dofs = (3 * sdofs[:, :, None] + np.arange(3)).reshape(len(elements), 3 * nb)
     block = MaterialBlock(np.asarray(mu_pa, float), np.asarray(alpha, float), float(bulk_pa),
-                          dN, wdV, Np, np.linalg.inv(M), dofs, membrane, elements)
+                          dN, wdV, Np, np.linalg.inv(M), dofs, membrane, elements, M=M)
     _detect_boxes(block)
     return block
 
@@ -133,15 +151,37 @@ def deformation_gradient(block: MaterialBlock, u: np.ndarray) -> np.ndarray:
 @dataclass
 class BlockState:
     energy: float
-    residual: np.ndarray      # (ne, 3 nb)
+    residual: np.ndarray      # (ne, 3 nb); condensed (r_c) when pressures were given
     stiffness: np.ndarray | None   # (ne, 3 nb, 3 nb)
     lam_max: np.ndarray       # (ne, nq)
     min_J: float
+    pressure_coef: np.ndarray | None = None     # (ne, npr) q_e used
+    constraint: np.ndarray | None = None        # (ne, npr) R_p = g - M q / K
+    D: np.ndarray | None = None                 # (ne, npr, 3 nb)
 
 
-def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = True
-                   ) -> BlockState:
-    """Energy, element residuals and (optionally) element tangents of one block."""
+def consistent_pressures(block: MaterialBlock, u: np.ndarray) -> np.ndarray:
+    """q_e = K M_e^-1 g_e: the element pressures (Pa) of the penalty form at u."""
+    F = deformation_gradient(block, u)
+    g = np.einsum("eqm,eq,eq->em", block.Np, np.linalg.det(F) - 1.0, block.wdV)
+    return block.bulk_pa * np.einsum("emn,en->em", block.Minv, g)
+
+
+def pressure_update(block: MaterialBlock, state: BlockState, du: np.ndarray) -> np.ndarray:
+    """dq_e = K M_e^-1 (R_p + D_e du_e) for a full displacement update du (mm)."""
+    assert state.constraint is not None and state.D is not None
+    due = du[block.dofs]                                                    # (ne, 3 nb)
+    rhs = state.constraint + np.einsum("ema,ea->em", state.D, due)
+    return block.bulk_pa * np.einsum("emn,en->em", block.Minv, rhs)
+
+
+def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = True,
+                   pressure_coef: np.ndarray | None = None) -> BlockState:
+    """Energy, element residuals and (optionally) element tangents of one block.
+
+    ``pressure_coef`` (ne, npr, Pa): the mixed iterate's element pressures; None for
+    the penalty form (pressures consistent with u, R_p = 0).
+    """
     F = deformation_gradient(block, u)
     ne, nq = F.shape[:2]
     J = np.linalg.det(F)
@@ -152,15 +192,32 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     W, P, A, lam = stress_and_tangent(F, block.mu_pa, block.alpha)
 
     g = np.einsum("eqm,eq,eq->em", block.Np, J - 1.0, block.wdV)
-    coef = block.bulk_pa * np.einsum("emn,en->em", block.Minv, g)
+    constraint: np.ndarray | None = None
+    if pressure_coef is not None:
+        coef = pressure_coef
+        assert block.M is not None                                            # set by material_block
+        Mq = np.einsum("emn,en->em", block.M, coef)                           # M_e q_e
+        Rp = g - Mq / block.bulk_pa
+        constraint = Rp
+        # Mixed functional int W + q.g - q.M.q / 2K (equals the penalty energy at R_p = 0).
+        energy = float((W * block.wdV).sum() + np.einsum("em,em->", coef, g)
+                       - 0.5 * np.einsum("em,em->", coef, Mq) / block.bulk_pa)
+    else:
+        coef = block.bulk_pa * np.einsum("emn,en->em", block.Minv, g)
+        energy = float((W * block.wdV).sum() + 0.5 * np.einsum("em,em->", g, coef))
     p_hat = np.einsum("eqm,em->eq", block.Np, coef)
-    energy = float((W * block.wdV).sum() + 0.5 * np.einsum("em,em->", g, coef))
 
     Ptot = P + p_hat[..., None, None] * cof
     nb = block.dN.shape[2]
     r = np.einsum("eqiJ,eqaJ,eq->eai", Ptot, block.dN, block.wdV).reshape(ne, 3 * nb)
+    D = None
+    if pressure_coef is not None:
+        D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV,
+                      optimize=True).reshape(ne, -1, 3 * nb)
+        KMR = block.bulk_pa * np.einsum("emn,en->em", block.Minv, Rp)
+        r = r + np.einsum("ema,em->ea", D, KMR)
     if not with_tangent:
-        return BlockState(energy, r, None, lam, float(J.min()))
+        return BlockState(energy, r, None, lam, float(J.min()), coef, constraint, D)
 
     f = Finv_T.reshape(ne, nq, 9)
     # T_(iJ)(kL) = f_iL f_kJ
@@ -168,10 +225,11 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     A = A + (p_hat * J)[..., None, None] * (f[..., :, None] * f[..., None, :] - T)
     A = A * block.wdV[..., None, None]
     K = element_stiffness(block, A)
-    D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV, optimize=True)
-    D = D.reshape(ne, -1, 3 * nb)
+    if D is None:
+        D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV,
+                      optimize=True).reshape(ne, -1, 3 * nb)
     K += block.bulk_pa * np.matmul(D.transpose(0, 2, 1), block.Minv @ D)
-    return BlockState(energy, r, K, lam, float(J.min()))
+    return BlockState(energy, r, K, lam, float(J.min()), coef, constraint, D)
 
 
 class Pattern:

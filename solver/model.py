@@ -18,7 +18,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from solver import cavity as cav
-from solver.assembly import Pattern, evaluate_block, make_basis, material_block, scatter_vector
+from solver.assembly import (
+    Pattern,
+    consistent_pressures,
+    evaluate_block,
+    make_basis,
+    material_block,
+    pressure_update,
+    scatter_vector,
+)
 from solver.design import Design
 from solver.mesh import build_mesh
 from solver.settings import SolverSettings
@@ -34,6 +42,8 @@ class Evaluation:
     max_membrane_stretch: float
     load_norm: float        # || p dV/du ||
     tip_force_un: float = float("nan")   # spring force or block reaction on the model, uN
+    block_states: list | None = None     # per block, for the mixed pressure update
+    constraint_error: float = 0.0        # max |M^-1 R_p|: dilatation mismatch of the iterate
 
 
 class SolidModel:
@@ -89,8 +99,23 @@ class SolidModel:
         u[self.pattern.free] = u_free
         return u
 
-    def evaluate(self, u_free: np.ndarray, pressure_pa: float, tangent: bool = True
-                 ) -> Evaluation:
+    def consistent_pressures(self, u_free: np.ndarray) -> list[np.ndarray]:
+        """Element pressures of the penalty form at u (Pa), per block: the starting
+        mixed state, e.g. q = 0 at u = 0."""
+        u = self.full(u_free)
+        return [consistent_pressures(block, u) for block in self.blocks]
+
+    def pressure_update(self, ev: Evaluation, du_free: np.ndarray) -> list[np.ndarray]:
+        """The mixed element pressures' Newton update (Pa) for a displacement update."""
+        assert ev.block_states is not None
+        du = self.full(du_free)
+        return [pressure_update(b, st, du) for b, st in zip(self.blocks, ev.block_states)]
+
+    def evaluate(self, u_free: np.ndarray, pressure_pa: float, tangent: bool = True,
+                 pressures: list[np.ndarray] | None = None) -> Evaluation:
+        """Residual and tangent at (u, p). ``pressures``: the mixed iterate's element
+        pressures per block (residual condensed, see solver.assembly); None: the
+        penalty form, whose residual is the exact gradient of the energy."""
         t0 = time.perf_counter()
         u = self.full(u_free)
         free = self.pattern.free
@@ -98,8 +123,15 @@ class SolidModel:
         mats: list[np.ndarray] = []
         energy = 0.0
         lam_m = 1.0
-        for block in self.blocks:
-            st = evaluate_block(block, u, tangent)
+        states = []
+        constraint_error = 0.0
+        for i, block in enumerate(self.blocks):
+            st = evaluate_block(block, u, tangent,
+                                None if pressures is None else pressures[i])
+            states.append(st)
+            if st.constraint is not None and st.constraint.size:
+                strain = np.einsum("emn,en->em", block.Minv, st.constraint)
+                constraint_error = max(constraint_error, float(np.abs(strain).max()))
             energy += st.energy
             r += scatter_vector(self.ndofs, block.dofs, st.residual)
             if st.stiffness is not None:
@@ -137,7 +169,8 @@ class SolidModel:
             K = self.pattern.matrix(mats)
         self.timings["assembly_s"] += time.perf_counter() - t0
         return Evaluation(R, K, g, vol, energy, lam_m, float(np.linalg.norm(pressure_pa * g)),
-                          tip_force)
+                          tip_force, states if pressures is not None else None,
+                          constraint_error)
 
 
 

@@ -12,11 +12,19 @@ Two controls:
   solved with one factorisation of K and two back-substitutions. It passes
   pressure plateaus and maxima, as the syringe-pump experiment does.
 
+The Newton iterate is the mixed u-q pair (element pressures q as unknowns, condensed
+per element; solver/assembly.py): with the penalty form, the spurious second-order
+dilatation of a large rotating predictor step, times the bulk modulus, made the
+tangent indefinite and forced ~2.5 degree steps; the mixed iterate takes the full
+target step (benchmarks/RESULTS.md).
+
 Steps restart from the last converged state (no extrapolating predictor: it
 caused most Newton failures in earlier prototypes); a failed step is cut back
 by half; the step grows when Newton converges quickly and shrinks when the
-angle increment is large, aiming at ~6 degrees per step. A step that cannot
-converge after the cut-backs ends the curve with status "failed" and the reason.
+angle increment is large, aiming at ~6 degrees and at most ~100 Pa per step (so
+that the curve is resolved where the angle is small and the pressure rises fast).
+A step that cannot converge after the cut-backs ends the curve with status
+"failed" and the reason.
 """
 
 from __future__ import annotations
@@ -33,6 +41,7 @@ from solver.model import ActuatorModel
 from solver.settings import SolverSettings
 
 TARGET_ANGLE_STEP_DEG = 6.0
+MAX_PRESSURE_STEP_PA = 100.0   # output resolution where the curve is steep in pressure
 MIN_CUTBACK = 1.0 / 1024.0
 DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
 
@@ -43,8 +52,25 @@ class StepFailed(Exception):
 
 
 def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverSettings,
-            target_volume: float | None, target_pressure: float | None, backend: str):
-    """Converge one load step; returns (u, p, iterations, residual, negative pivots)."""
+                target_volume: float | None, target_pressure: float | None, backend: str):
+    """Converge one load step from (u, p); returns (u, p, iterations, residual, negative
+    pivots). The element pressures start consistent with u (see ``mixed_newton_step``)."""
+    u, _, p, its, res, neg = mixed_newton_step(model, u, model.consistent_pressures(u), p,
+                                               settings, target_volume, target_pressure,
+                                               backend)
+    return u, p, its, res, neg
+
+
+def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
+                      settings: SolverSettings, target_volume: float | None,
+                      target_pressure: float | None, backend: str):
+    """Converge one load step of the mixed u-q form (q: element pressures per block).
+
+    Returns (u, q, p, iterations, residual, negative pivots). Converged when the
+    condensed residual, the cavity volume and the dilatation constraint are all
+    below ``settings.newton_tol`` (relative to the pressure load, the chamber
+    volume, and absolute strain).
+    """
     tol = settings.newton_tol
     force_floor = model.mu0_min_pa * 1e-6
     volume_scale = max(model.volume0_mm3, 1e-9)
@@ -53,25 +79,27 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
     predictor_res = np.inf
     previous_res = np.inf
     du, dp = None, 0.0
+    dq: list[np.ndarray] = []
     for it in range(1, settings.max_newton_iter + 1):
         if target_pressure is not None:
             p = target_pressure
         ev = None
         if du is None:
-            ev = model.evaluate(u, p)
+            ev = model.evaluate(u, p, pressures=q)
         else:
             # Damped update: halve it while it would invert an element.
             scale = 1.0
             for _ in range(6):
                 try:
-                    ev = model.evaluate(u + scale * du, p + scale * dp)
+                    q_try = [qb + scale * d for qb, d in zip(q, dq)]
+                    ev = model.evaluate(u + scale * du, p + scale * dp, pressures=q_try)
                     break
                 except FloatingPointError:
                     scale *= 0.5
             if ev is None:
                 raise StepFailed(f"every damped Newton update inverts an element (iteration {it},"
                                  f" |du|max = {np.abs(du).max():.3g} mm, dp = {dp:.3g} Pa)")
-            u, p = u + scale * du, p + scale * dp
+            u, p, q = u + scale * du, p + scale * dp, q_try
         res = float(np.linalg.norm(ev.R)) / max(ev.load_norm, force_floor)
         vres = 0.0 if target_volume is None else abs(ev.volume_mm3 - target_volume) / volume_scale
         if not np.isfinite(res):
@@ -89,8 +117,8 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
         # Converged below the tolerance, or stalled at the rounding floor (which grows
         # with the bulk modulus) within 100 x the tolerance.
         floor = it > 2 and res < 100 * tol and res > 0.3 * previous_res
-        if it > 1 and vres < tol and (res < tol or floor):
-            return u, p, it - 1, res, neg
+        if it > 1 and vres < tol and ev.constraint_error < tol and (res < tol or floor):
+            return u, q, p, it - 1, res, neg
         previous_res = res
         t0 = time.perf_counter()
         try:
@@ -111,6 +139,7 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
                 raise StepFailed("bordered system singular (g^T K^-1 g = 0)")
             dp = -(ev.volume_mm3 - target_volume + float(ev.g @ a)) / gb
             du = a + b * dp
+        dq = model.pressure_update(ev, du)
     raise StepFailed(f"no convergence in {settings.max_newton_iter} Newton iterations "
                       f"(residual {res:.2e})")
 
@@ -137,11 +166,12 @@ def inflate(design: Design, settings: SolverSettings | None = None,
     volume_control = settings.control == "volume"
 
     u = np.zeros(model.n_free)
+    q = model.consistent_pressures(u)
     p = 0.0
     rows: dict[str, list] = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f")}
 
     def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int) -> float:
-        ev = model.evaluate(u_, p_, tangent=False)
+        ev = model.evaluate(u_, p_, tangent=False, pressures=q)
         angle, tip = model.end_face_kinematics(u_)
         rows["p"].append(p_)
         rows["v"].append(model.injected_volume_ul(ev.volume_mm3))
@@ -166,10 +196,11 @@ def inflate(design: Design, settings: SolverSettings | None = None,
         try:
             if volume_control:
                 vt = model.volume0_mm3 + 0.5 * rows["v"][-1] + step
-                u_new, p_new, its, res, neg = newton_step(model, u, p, settings, vt, None, backend)
+                u_new, q_new, p_new, its, res, neg = mixed_newton_step(
+                    model, u, q, p, settings, vt, None, backend)
             else:
-                u_new, p_new, its, res, neg = newton_step(model, u, p, settings, None, p + step,
-                                                      backend)
+                u_new, q_new, p_new, its, res, neg = mixed_newton_step(
+                    model, u, q, p, settings, None, p + step, backend)
         except (StepFailed, FloatingPointError) as exc:
             model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
             if debug:
@@ -181,12 +212,15 @@ def inflate(design: Design, settings: SolverSettings | None = None,
                                             f"cut-backs: {exc}")
                 break
             continue
-        u, p = u_new, p_new
+        u, p, q = u_new, p_new, q_new
         angle = record(u, p, its, res, neg)
         d_angle = abs(angle - rows["a"][-2])
         factor = 1.6 if its <= 6 else (1.0 if its <= 9 else 0.6)
         if d_angle > 1e-9:
             factor = min(factor, max(0.5, TARGET_ANGLE_STEP_DEG / d_angle))
+        d_pressure = abs(p - rows["p"][-2])
+        if volume_control and d_pressure > 1e-9:
+            factor = min(factor, max(0.5, MAX_PRESSURE_STEP_PA / d_pressure))
         step *= factor
         if abs(angle) >= settings.max_angle_deg:
             status, reason = "complete", f"reached max_angle_deg = {settings.max_angle_deg}"

@@ -6,7 +6,7 @@ import pytest
 
 from solver import Design, SolverSettings
 from solver import cavity as cav
-from solver.assembly import element_stiffness
+from solver.assembly import element_stiffness, evaluate_block
 from solver.model import ActuatorModel
 
 
@@ -75,6 +75,49 @@ def test_tangent_is_the_residual_derivative(model):
     fd = (model.evaluate(u + h * d, p, False).R - model.evaluate(u - h * d, p, False).R) / (2 * h)
     assert np.abs(ev.K @ d - fd).max() < 1e-7 * np.abs(fd).max()
     assert abs(ev.K - ev.K.T).max() < 1e-12 * abs(ev.K).max()
+
+
+def _two_field(block, u, q):
+    """The uncondensed mixed residuals (r_u, R_p) and the tangent pieces at (u, q)."""
+    st = evaluate_block(block, u, True, q)
+    kmr = block.bulk_pa * np.einsum("emn,en->em", block.Minv, st.constraint)
+    r_u = st.residual - np.einsum("ema,em->ea", st.D, kmr)
+    K_uu = st.stiffness - block.bulk_pa * np.matmul(st.D.transpose(0, 2, 1), block.Minv @ st.D)
+    return r_u, st.constraint, K_uu, st.D
+
+
+def test_mixed_linearisation_is_exact_off_the_constraint(model):
+    # Newton on (u, q) is exact when both residuals are linearised exactly, at element
+    # pressures q that do NOT satisfy the constraint (the iterates' case):
+    #   d r_u = K_uu du + D^T dq,   d R_p = D du - M dq / K   (solver/assembly.py).
+    block = model.blocks[1]
+    rng = np.random.default_rng(8)
+    u = model.full(_state(model))
+    q = rng.standard_normal(block.Minv.shape[:2]) * 50.0            # Pa, arbitrary
+    du = model.full(rng.standard_normal(model.n_free) * 1e-3)
+    dq = rng.standard_normal(q.shape) * 10.0
+    r_u, R_p, K_uu, D = _two_field(block, u, q)
+    assert np.abs(R_p).max() > 1e-6                                 # off the constraint
+    h = 1e-5
+    plus = _two_field(block, u + h * du, q + h * dq)
+    minus = _two_field(block, u - h * du, q - h * dq)
+    due = du[block.dofs]
+    lin_u = np.einsum("eab,eb->ea", K_uu, due) + np.einsum("ema,em->ea", D, dq)
+    lin_p = np.einsum("ema,ea->em", D, due) - np.einsum("emn,en->em", block.M, dq) / block.bulk_pa
+    fd_u = (plus[0] - minus[0]) / (2 * h)
+    fd_p = (plus[1] - minus[1]) / (2 * h)
+    assert np.abs(lin_u - fd_u).max() < 1e-7 * np.abs(fd_u).max()
+    assert np.abs(lin_p - fd_p).max() < 1e-7 * np.abs(fd_p).max()
+
+
+def test_mixed_form_equals_penalty_on_the_constraint(model):
+    u = _state(model)
+    penalty = model.evaluate(u, 300.0)
+    mixed = model.evaluate(u, 300.0, pressures=model.consistent_pressures(u))
+    assert mixed.constraint_error < 1e-12
+    assert np.abs(mixed.R - penalty.R).max() < 1e-9 * np.abs(penalty.R).max()
+    assert abs(mixed.K - penalty.K).max() < 1e-9 * abs(penalty.K).max()
+    assert mixed.energy == pytest.approx(penalty.energy, rel=1e-10)
 
 
 def test_box_fast_path_equals_general_contraction(model):
