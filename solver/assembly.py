@@ -195,7 +195,7 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     constraint: np.ndarray | None = None
     if pressure_coef is not None:
         coef = pressure_coef
-        assert block.M is not None                                            # set by material_block
+        assert block.M is not None                        # set by material_block
         Mq = np.einsum("emn,en->em", block.M, coef)                           # M_e q_e
         Rp = g - Mq / block.bulk_pa
         constraint = Rp
