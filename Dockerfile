@@ -31,10 +31,15 @@ RUN python -c "import tomllib; print('\n'.join(tomllib.load(open('/tmp/pyproject
 COPY --from=build /wheels /wheels
 RUN pip install --no-cache-dir --no-deps /wheels/*.whl && rm -rf /wheels
 
-RUN groupadd --gid 10001 balloon && useradd --create-home --uid 10001 --gid 10001 balloon
+# The package's own copy of the data (site-packages) is read-only for the service user:
+# solve jobs store their curves in a writable copy of the shipped database.
+RUN groupadd --gid 10001 balloon && useradd --create-home --uid 10001 --gid 10001 balloon \
+    && install -d -o 10001 -g 10001 /home/balloon/data /home/balloon/models
+COPY --chown=10001:10001 service/data/curves.h5 /home/balloon/data/curves.h5
 USER 10001:10001
 WORKDIR /home/balloon
-ENV BALLOON_MODELS_DIR=/home/balloon/models
+ENV BALLOON_DB_PATH=/home/balloon/data/curves.h5 \
+    BALLOON_MODELS_DIR=/home/balloon/models
 
 EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=5s --start-period=30s --retries=3 \

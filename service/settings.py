@@ -9,11 +9,16 @@ works right after installation.
 
 from __future__ import annotations
 
+import re
 from functools import lru_cache
 from pathlib import Path
 
-from pydantic import Field, SecretStr
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, SecretStr, ValidationError
+from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
+
+from solver.errors import InputError
+
+ENV_PREFIX = "BALLOON_"
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 
@@ -21,7 +26,7 @@ DATA_DIR = Path(__file__).resolve().parent / "data"
 class ServiceSettings(BaseSettings):
     """Where the data lives, who may mutate, and how much work the server accepts."""
 
-    model_config = SettingsConfigDict(env_prefix="BALLOON_", extra="ignore")
+    model_config = SettingsConfigDict(env_prefix=ENV_PREFIX, extra="ignore")
 
     db_path: Path = Field(DATA_DIR / "curves.h5", description="FE curve database (HDF5)")
     surrogate_path: Path = Field(DATA_DIR / "surrogate.json",
@@ -44,7 +49,33 @@ class ServiceSettings(BaseSettings):
                                     description="origins allowed by CORS; empty disables CORS")
 
 
+def settings_from_environment() -> ServiceSettings:
+    """``ServiceSettings()`` read from the environment; a bad value is an InputError
+    naming its variable and the allowed range (``balloon serve`` prints it on one line)."""
+    try:
+        return ServiceSettings()  # type: ignore[call-arg]  # fields come from the environment
+    except ValidationError as exc:
+        errors = exc.errors()
+        name = str(errors[0]["loc"][0]) if errors[0].get("loc") else ""
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise InputError(ENV_PREFIX + name.upper(), errors[0]["msg"] + more,
+                         _allowed(name)) from None
+    except SettingsError as exc:  # a list that is not JSON
+        match = re.search(r'field "(\w+)"', str(exc))
+        name = match.group(1) if match else ""
+        raise InputError(ENV_PREFIX + name.upper(), "cannot be parsed", _allowed(name)
+                         ) from None
+
+
+def _allowed(name: str) -> str | None:
+    from service.schemas._ranges import field_ranges
+
+    if name == "cors_origins":
+        return 'a JSON list of origins, e.g. ["https://lab.example"]'
+    return field_ranges([ServiceSettings]).get(name)
+
+
 @lru_cache
 def get_settings() -> ServiceSettings:
     """The process-wide settings, read from the environment once."""
-    return ServiceSettings()  # type: ignore[call-arg]  # fields come from the environment
+    return settings_from_environment()

@@ -313,3 +313,18 @@ def test_a_damaged_saved_model_is_503(client):
     (models_dir / "broken.json").write_text("{not json")
     r = client.post("/v1/predict", json={"pressures_pa": [0], "model": "broken"})
     assert_problem(r, 503)
+
+
+def test_calibrate_save_name_errors_name_the_save_field(client):
+    from service.routes.calibration import EXAMPLE_ROWS
+
+    def calibrate(save):
+        return client.post("/v1/calibrate", headers={"X-API-Key": "test-key"},
+                           json={"rows": EXAMPLE_ROWS, "model": "paper", "save": save})
+
+    assert_problem(calibrate("../lab"), 422, "save")  # a name, never a path
+    assert "not 'fitted' or 'paper'" in assert_problem(calibrate("paper"), 422, "save")[
+        "errors"][0]["allowed"]
+    assert calibrate("lab1").json()["saved_model"] == "lab1"
+    body = assert_problem(calibrate("lab1"), 422, "save")  # never overwrites a model
+    assert body["errors"][0]["loc"] == ["body", "save"] and "already exists" in body["detail"]

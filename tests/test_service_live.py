@@ -1,5 +1,5 @@
 """The README's client snippets (docs/snippets/, included verbatim in the README) run
-against a real server: `balloon serve` (service.commands.serve) on 127.0.0.1.
+against a real server: the installed `balloon serve` command on 127.0.0.1.
 
 The server uses a surrogate file saved from the paper's preset and a synthetic
 database; expected numbers come from the paper's model (Table 4-5 constants).
@@ -28,9 +28,12 @@ from surrogate import paper_surrogate, save_surrogate
 
 ROOT = Path(__file__).resolve().parents[1]
 SNIPPETS = ROOT / "docs" / "snippets"
-LAUNCH = ("import argparse, sys; from service.commands import serve; "
-          "p = argparse.ArgumentParser(prog='balloon'); serve.register(p.add_subparsers()); "
-          "a = p.parse_args(sys.argv[1:]); sys.exit(a.func(a))")
+
+
+def balloon() -> list[str]:
+    """The installed ``balloon`` command, as the README runs it (else the same CLI's module)."""
+    script = Path(sys.executable).parent / "balloon"
+    return [str(script)] if script.is_file() else [sys.executable, "-m", "service.cli"]
 
 
 def free_port() -> int:
@@ -50,7 +53,7 @@ def server(tmp_path_factory):
            "BALLOON_SURROGATE_PATH": str(tmp / "surrogate.json"),
            "BALLOON_API_KEY": "live-key", "BALLOON_MODELS_DIR": str(tmp / "models"),
            "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-c", LAUNCH, "serve", "--host", "127.0.0.1",
+    proc = subprocess.Popen([*balloon(), "serve", "--host", "127.0.0.1",
                              "--port", str(port), "--log-level", "warning"], env=env,
                             cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     url = f"http://127.0.0.1:{port}"

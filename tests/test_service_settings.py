@@ -55,6 +55,34 @@ def test_bad_settings_are_refused(monkeypatch):
         ServiceSettings()
 
 
+@pytest.mark.parametrize("name, value, allowed", [
+    ("BALLOON_WORKERS", "abc", "1 <= workers <= 64"),
+    ("BALLOON_WORKERS", "0", "1 <= workers <= 64"),
+    ("BALLOON_MAX_BODY_BYTES", "10", "1024 <= max_body_bytes <= 67108864"),  # 64 MiB
+    ("BALLOON_JOB_TIME_LIMIT_S", "-1", "0 < job_time_limit_s <= 86400"),
+    ("BALLOON_CORS_ORIGINS", "https://lab.example", "a JSON list of origins"),
+])
+def test_serve_with_a_bad_setting_is_one_line_and_exit_2(monkeypatch, capsys, name, value,
+                                                         allowed):
+    import uvicorn
+
+    from service.cli import main
+
+    def must_not_start(*args, **kwargs):
+        raise AssertionError("the server started with a bad setting")
+
+    monkeypatch.setattr(uvicorn, "run", must_not_start)
+    monkeypatch.setenv(name, value)
+    get_settings.cache_clear()
+    try:
+        assert main(["serve", "--port", "8011"]) == 2
+    finally:
+        get_settings.cache_clear()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"balloon: error: {name}:"), err
+    assert f"(allowed: {allowed}" in err[0]
+
+
 @pytest.mark.parametrize("exc, status, kind", [
     (InputError("t_mm", "bad", "0 < t_mm"), 422, "invalid-input"),
     (FieldError(("body", "design", "t_mm"), "bad"), 422, "invalid-input"),

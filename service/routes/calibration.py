@@ -12,7 +12,8 @@ from fastapi import APIRouter, Security
 from pydantic import BaseModel, ConfigDict, Field
 
 from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
-from service.errors import FieldError
+from service.errors import FieldError, located
+from solver.errors import InputError
 
 router = APIRouter(prefix="/v1", tags=["calibration"])
 
@@ -36,8 +37,9 @@ class CalibrateRequest(BaseModel):
     model: str = Field("fitted", min_length=1, max_length=64,
                        description="starting model: fitted, paper, or a saved model name")
     save: str | None = Field(None, min_length=1, max_length=64,
+                             pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$",
                              description="save the augmented model under this name "
-                                         "(needs X-API-Key)")
+                                         "(needs X-API-Key; a new name, not fitted or paper)")
     folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve "
                        "(reduced to the number of curves when there are fewer)")
 
@@ -106,6 +108,9 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
     report = jsonable(cal.report)
     report["model"]["name"] = request.model
     if request.save is not None:
-        save_model(cal, request.save, settings.models_dir)
+        try:  # a reserved or already used name
+            save_model(cal, request.save, settings.models_dir)
+        except InputError as exc:
+            raise located(exc, ("body",), {"name": ("save",)}) from None
         report["saved_model"] = request.save
     return CalibrationReport(**report)

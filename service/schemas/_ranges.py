@@ -11,18 +11,24 @@ from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
 
+def _num(value: Any) -> str:
+    """A limit as written: whole numbers in full (65536, not 6.5536e+04), others short."""
+    x = float(value)
+    return str(int(x)) if x.is_integer() and abs(x) < 1e15 else f"{x:g}"
+
+
 def _bounds(metadata: Iterable[Any]) -> tuple[str | None, str | None, int | None]:
     lo = hi = None
     max_len = None
     for m in metadata:
         if isinstance(m, at.Ge):
-            lo = f"{m.ge:g} <= "
+            lo = f"{_num(m.ge)} <= "
         elif isinstance(m, at.Gt):
-            lo = f"{m.gt:g} < "
+            lo = f"{_num(m.gt)} < "
         elif isinstance(m, at.Le):
-            hi = f" <= {m.le:g}"
+            hi = f" <= {_num(m.le)}"
         elif isinstance(m, at.Lt):
-            hi = f" < {m.lt:g}"
+            hi = f" < {_num(m.lt)}"
         elif isinstance(m, at.MaxLen):
             max_len = m.max_length
     return lo, hi, max_len
