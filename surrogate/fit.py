@@ -11,13 +11,13 @@ RMSE by at least 10 % (else the paper's "exponential"). Everything lands in
 
 from __future__ import annotations
 
-from dataclasses import replace
 import math
 import os
 import subprocess
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -119,7 +119,7 @@ def _fit_family(members: list[CurveData], force_members: list[CurveData],
             start = params[form].theta
         lodo[form] = leave_one_design_out(pts, form, level, start=params[form].theta)
         if lodo[form].get("available"):
-            params[form] = replace(params[form], band_scale=lodo[form]["band_scale"])
+            params[form] = replace(params[form], band_scale=float(lodo[form]["band_scale"]))
     default = "exponential" if "exponential" in forms else forms[0]
     if ("extended" in params and "exponential" in params and lodo["extended"].get("available")
             and lodo["extended"]["rmse"] < EXTENDED_GAIN * lodo["exponential"]["rmse"]):
@@ -131,7 +131,7 @@ def _fit_family(members: list[CurveData], force_members: list[CurveData],
         force = joint_fit(fpts, "exponential")
         force_lodo = leave_one_design_out(fpts, "exponential", level, start=force.theta)
         if force_lodo.get("available"):
-            force = replace(force, band_scale=force_lodo["band_scale"])
+            force = replace(force, band_scale=float(cast(float, force_lodo["band_scale"])))
         force_report = {"parameters": force.as_dict(), "tip": force_members[0].tip,
                         "spring_k_n_per_m": force_members[0].spring_k_n_per_m,
                         "lodo": force_lodo}

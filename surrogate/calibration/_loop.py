@@ -16,7 +16,10 @@ Selection rule. A candidate set E (one effect, or a pair) is selectable when
    fewer numbers) is no more than 5 % worse than it;
 5. it explains at least a quarter of the excess error of its null model over the noise floor,
    (cv_null^2 - cv_E^2) / (cv_null^2 - noise^2) >= 0.25, and that excess is itself real
-   (cv_null > 1.118 x noise floor).
+   (cv_null > 1.118 x noise floor);
+6. a pair earns its second term: BIC(pair) < BIC(each member alone) - 6, and its
+   cross-validated error is below each member's alone (otherwise one member is riding
+   along on the other's gain, or compensating the pinned tau law of a parameter effect).
 Among selectable sets the lowest BIC wins. Confounded pairs: with one flow rate
 hydraulic_resistance is pressure_offset (p0 = R Q): only pressure_offset is fitted, and the
 interpretation gives both readings; with one thickness per family membrane_thickness_bias
@@ -215,6 +218,14 @@ def calibrate(obs: Observations, nominal: np.ndarray, model: dict | None = None,
                            f"{DELTA_BIC:g}")
         if not cv_ok:
             reasons.append("cross-validated error not better than the recalibrated baseline")
+        if len(effects) > 1:
+            alone = [(get_fit((m,)).bic, get_cv((m,))[0]) for m in effects]
+            if f.bic >= min(b for b, _ in alone) + DELTA_BIC:
+                reasons.append(f"delta BIC against its better member alone "
+                               f"{f.bic - min(b for b, _ in alone):.1f} is not below "
+                               f"{DELTA_BIC:g}")
+            if cv >= min(c for _, c in alone):
+                reasons.append("cross-validated error not better than a member alone")
         if cvn <= EXCESS_RATIO * sigma:
             reasons.append("its null model is already at the noise floor")
         elif explained < EXPLAINED_FRACTION:
