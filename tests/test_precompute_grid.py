@@ -101,7 +101,7 @@ def test_shipped_default_grid_is_valid_and_small():
     ('L_mm = 5.0\n', 1, "pairs", "pdms_1_10"),
     # empty ranges and lists
     ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 4, stop = 5, num = 0}\n', 2,
-     "L_mm", "num >= 1"),
+     "L_mm", "1 <= num"),
     ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 9, stop = 5, num = 3}\n', 2,
      "L_mm", "start <= stop"),
     ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n\nt_mm = []\n', 3, "t_mm",
@@ -117,6 +117,23 @@ def test_shipped_default_grid_is_valid_and_small():
      "valid TOML"),
     ('pairs = [["x", "ecoflex_00_30"]]\n[materials.x]\nmu_kpa = [1.0, 2.0]\nalpha = [1.0]\n', 3,
      "materials.x.mu_kpa", "1 to 6 terms"),
+    # a custom material may not take a built-in id (its records would share the id)
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n[materials.pdms_1_10]\nmu_kpa = [1.0]\n'
+     'alpha = [2.0]\n', 2, "materials.pdms_1_10", "a new id (built-in: ecoflex_00_30"),
+    # settings that settings_from_dict would silently convert (0.5 -> 0, true -> 1.0)
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n[settings]\nmesh_level = 0.5\n', 3,
+     "settings.mesh_level", "an integer"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n[settings]\nmax_angle_deg = true\n', 3,
+     "settings.max_angle_deg", "a number"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n[settings]\nelement = 1\n', 3,
+     "settings.element", "a string"),
+    # non-integer and huge num (refused before expanding), sweeps that are not tables
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 4, stop = 5, num = 2.5}\n', 2,
+     "L_mm", "an integer 1 <= num <= 100000"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 4, stop = 5, num = 10000000000}'
+     '\n', 2, "L_mm", "num <= 100000"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nsweep = [1, 2]\n', 2, "sweep", "[[sweep]]"),
+    ('name = 3\npairs = [["pdms_1_10", "ecoflex_00_30"]]\n', 1, "name", "free text"),
 ])
 def test_bad_grids_are_rejected_with_line_field_and_allowed_values(text, line, field, allowed):
     error = rejected(text)

@@ -224,3 +224,22 @@ def test_ctrl_c_on_a_running_job_stops_it_and_keeps_what_finished(tmp_path):
                        progress=False)
     assert rerun.to_solve == 6 - report["solved"] and rerun.skipped_done == report["solved"]
 
+
+
+def test_progress_bar_shows_counts_failures_and_eta_and_the_summary_counts(grid, tmp_path,
+                                                                            capsys):
+    with CurveStore(tmp_path / "c.h5", mode="a") as db:
+        summary = run_job(grid.points, db, InlineBackend(broken={8}), fake_solve,
+                          progress=True)
+    bar = capsys.readouterr().err.split("\r")[-1]  # tqdm redraws the line; the final state
+    # tqdm's format: "desc: pct|bar| n/total [elapsed<remaining, rate, postfix]"
+    assert bar.startswith("precompute: 100%") and " 9/9 [" in bar, bar
+    assert "<00:00" in bar  # the ETA field
+    # point 8 (L = 11.1, T = 3: a raising solve) is lost to a worker error instead
+    assert "complete=3, failed=5, worker_errors=1" in bar, bar
+    lines = summary.lines()
+    assert lines[0] == "grid: 9 designs; already in the database: 0 done, 0 failed (skipped)"
+    assert "solved 8 of 9 on inline" in lines[1]
+    assert lines[1].endswith("3 complete, 0 stopped, 5 failed")
+    assert lines[2] == "1 lost to worker errors (nothing stored; rerun to retry)"
+    assert sum(line.startswith("  failed ") for line in lines) == 6  # 5 failed + 1 error

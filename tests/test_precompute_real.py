@@ -67,6 +67,15 @@ def test_cli_end_to_end_with_the_real_solver(tmp_path, balloon, capsys):
     assert len(rows) == len(curve)
     assert float(rows[-1]["angle_deg"]) == curve.angle_deg[-1]  # repr round-trips exactly
     assert rows[0]["key"] == record.key and rows[0]["body_material"] == "pdms_1_10"
+    assert float(rows[0]["chamber_offset_mm"]) == record.design.chamber_offset_mm
+    assert balloon(["db", "export", str(db), "--format", "json", "--status", "complete",
+                    "-o", str(tmp_path / "c.json")]) == 0
+    (exported,) = json.loads((tmp_path / "c.json").read_text())
+    assert exported["key"] == record.key and exported["settings"]["max_angle_deg"] == 10.0
+    assert exported["curve"]["angle_deg"] == curve.angle_deg.tolist()
+    assert exported["provenance"]["status"] == "complete"
+    assert balloon(["db", "export", str(db), "--status", "failed", "--format", "json"]) == 0
+    assert json.loads(capsys.readouterr().out) == []
     assert balloon(["db", "show", str(db), record.key[:6], "--json"]) == 0
     shown = json.loads(capsys.readouterr().out)
     assert shown["curve"]["force_mn"][0] is None  # NaN (free tip) exported as null
@@ -80,6 +89,13 @@ def test_cli_end_to_end_with_the_real_solver(tmp_path, balloon, capsys):
     err = capsys.readouterr().err
     assert err.startswith("balloon: error: ") and "line 3: t_mm" in err and "0.05 <=" in err
     assert balloon(["db", "show", str(db), "ffff"]) == 2
+    capsys.readouterr()
+    assert balloon(["precompute", str(grid), "--db", str(tmp_path / "no" / "c.h5")]) == 2
+    assert "--db: directory" in capsys.readouterr().err
+    assert balloon(["precompute", str(grid), "--db", str(tmp_path)]) == 2
+    assert "is not a file" in capsys.readouterr().err
+    assert balloon(["db", "ls", str(tmp_path / "missing.h5")]) == 2
+    assert "no curve database" in capsys.readouterr().err
 
 
 def test_killed_job_resumes_without_loss_or_duplicates(tmp_path):
@@ -116,3 +132,29 @@ def test_killed_job_resumes_without_loss_or_duplicates(tmp_path):
         assert after[key].provenance == record.provenance
     assert "finished_utc" not in runs[0] and runs[1]["solved"] == 1
     assert not list(tmp_path.glob(".curves.h5.tmp-*"))
+
+
+def test_cli_skips_stored_failures_and_retries_them_with_retry_failed(tmp_path, balloon,
+                                                                      capsys):
+    from solver.precompute import load_grid
+    from solver.store import failed_curve, make_record
+
+    grid, db = write_grid(tmp_path, "[7.1]"), tmp_path / "curves.h5"
+    (point,) = load_grid(grid).points
+    with CurveStore(db, mode="a") as store:  # as a failed solve of an earlier run left it
+        store.put(make_record(point.design, point.settings,
+                              failed_curve("ConvergenceError: seeded by the test")))
+    assert balloon(["precompute", str(grid), "--db", str(db), "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert "already in the database: 0 done, 1 failed (skipped)" in err
+    assert "solved 0 of 0" in err
+    with CurveStore(db) as store:
+        assert store.get(point.key).curve.reason == "ConvergenceError: seeded by the test"
+
+    assert balloon(["precompute", str(grid), "--db", str(db), "--no-progress",
+                    "--retry-failed"]) == 0
+    assert "solved 1 of 1" in capsys.readouterr().err
+    with CurveStore(db) as store:
+        assert store.keys() == [point.key]  # replaced, not duplicated
+        assert store.get(point.key).curve.status == "complete"
+        assert store.metadata["generator_command"].endswith("--workers 1 --retry-failed")

@@ -5,7 +5,9 @@
     balloon db export curves.h5 [KEY ...] --format csv|json [-o OUT] [--where ...]
 
 Keys may be abbreviated to any unique prefix. CSV is long format: one row per
-curve point, with the record's key, design and status on every row.
+curve point, with the record's key, status and design (lengths in mm, material ids) on
+every row; NaN is written as ``nan``. JSON is a list of full records (``Record.as_dict``),
+NaN as null.
 """
 
 from __future__ import annotations
@@ -17,8 +19,8 @@ import math
 import sys
 from typing import Any
 
-CSV_DESIGN = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_material",
-              "membrane_material")
+CSV_DESIGN = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm",
+              "chamber_offset_mm", "body_material", "membrane_material")
 CSV_CURVE = ("pressure_pa", "volume_ul", "time_s", "angle_deg", "tip_x_mm", "tip_z_mm",
              "max_membrane_stretch", "force_mn", "newton_iterations", "residual_norm",
              "negative_eigenvalues")
@@ -159,8 +161,8 @@ def run_show(args: argparse.Namespace) -> int:
 def curve_rows(record: Any) -> list[list[object]]:
     c = record.curve
     d = record.design
-    design = [d.L_mm, d.t_mm, d.T_mm, d.b_mm, d.h_mm, d.W_mm, d.body_material.id,
-              d.membrane_material.id]
+    design = [d.L_mm, d.t_mm, d.T_mm, d.b_mm, d.h_mm, d.W_mm, d.body_length_mm,
+              d.chamber_offset_mm, d.body_material.id, d.membrane_material.id]
     rows = []
     for i in range(len(c)):
         rows.append([record.key, c.status, *design, c.pressure_pa[i], c.volume_ul[i],

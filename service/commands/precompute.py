@@ -60,6 +60,12 @@ def run(args: argparse.Namespace) -> int:
 
     if not 1 <= args.workers <= 256:
         raise InputError("--workers", f"got {args.workers}", "1 <= N <= 256")
+    db_path = Path(args.db)
+    if db_path.exists() and not db_path.is_file():
+        raise InputError("--db", f"{args.db} is not a file", "the path of an HDF5 file")
+    if not db_path.parent.is_dir():
+        raise InputError("--db", f"directory {str(db_path.parent)!r} does not exist",
+                         "a path in an existing directory")
     grid = load_grid(args.grid)
     if args.dry_run:
         statuses: dict[str, str] = {}

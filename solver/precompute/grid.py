@@ -20,8 +20,10 @@
 
 Every sweep is the Cartesian product of its pairs and parameter values. Everything
 is checked before any solve: unknown keys, lengths out of range (negative ones
-included), unknown materials, empty lists or ranges, designs that do not fit and bad
-settings raise GridError naming the file, the line, the key and the allowed values.
+included), unknown materials (and custom ones that reuse a built-in id), empty lists or
+ranges, designs that do not fit, settings of the wrong type or range and more than
+MAX_POINTS designs raise GridError naming the file, the line, the key and the allowed
+values.
 """
 
 from __future__ import annotations
@@ -123,9 +125,15 @@ class _Reader:
                 raise self.fail(path, name, f"range lacks {', '.join(missing)}",
                                 "{start = ..., stop = ..., num = ...}")
             num = value["num"]
-            if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-                raise self.fail(path, name, f"empty range: num = {num!r}",
-                                "an integer num >= 1")
+            if isinstance(num, bool) or not isinstance(num, int):
+                raise self.fail(path, name, f"num = {num!r} is not an integer",
+                                f"an integer 1 <= num <= {MAX_POINTS}")
+            if num < 1:
+                raise self.fail(path, name, f"empty range: num = {num}",
+                                f"an integer 1 <= num <= {MAX_POINTS}")
+            if num > MAX_POINTS:  # checked before expanding: a typo must not hang the job
+                raise self.fail(path, name, f"num = {num} values",
+                                f"an integer 1 <= num <= {MAX_POINTS}")
             start = self.number(value["start"], path, name)
             stop = self.number(value["stop"], path, name)
             if stop < start:
@@ -150,6 +158,10 @@ class _Reader:
                             "[materials.<id>] with mu_kpa = [...] and alpha = [...]")
         for material_id, spec in table.items():
             where = ("materials", material_id)
+            if material_id in MATERIALS:  # one id, one set of parameters in the database
+                raise self.fail(where, f"materials.{material_id}",
+                                "redefines a built-in material",
+                                f"a new id (built-in: {', '.join(sorted(MATERIALS))})")
             if not isinstance(spec, dict):
                 raise self.fail(where, material_id, "must be a table", "mu_kpa, alpha")
             self.check_keys(spec, where, ("mu_kpa", "alpha"))
@@ -197,10 +209,14 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
         raise GridError(source, _toml_line(str(exc), text), "toml", str(exc),
                         "valid TOML (https://toml.io)") from None
     reader.check_keys(data, (), TOP_KEYS)
+    for key in ("name", "description"):
+        if key in data and not isinstance(data[key], str):
+            raise reader.fail((key,), key, f"{data[key]!r} is not a string", "free text")
     known = reader.materials(data.get("materials"))
     settings_table = data.get("settings", {})
     if not isinstance(settings_table, dict):
         raise reader.fail(("settings",), "settings", "must be a table", "[settings]")
+    _check_setting_types(reader, settings_table)
     try:
         settings = settings_from_dict(settings_table)
     except InputError as exc:
@@ -214,13 +230,39 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     points: dict[str, GridPoint] = {}
     for index, sweep in enumerate(sweeps):
         where: tuple = ("sweep", index) if "sweep" in data else ()
+        if not isinstance(sweep, dict):
+            raise reader.fail(("sweep",), "sweep", f"{sweep!r} is not a table",
+                              "[[sweep]] tables")
         reader.check_keys(sweep, where, SWEEP_KEYS)
+        if "name" in sweep and not isinstance(sweep["name"], str):
+            raise reader.fail((*where, "name"), "name", f"{sweep['name']!r} is not a string",
+                              "free text")
         for point in _expand(reader, where, {**defaults, **sweep}, sweep, known, settings):
             points.setdefault(point.key, point)
         if len(points) > MAX_POINTS:
             raise reader.fail(where, "sweep", f"more than {MAX_POINTS} designs",
                               f"at most {MAX_POINTS} designs per grid")
     return Grid(source, text, settings, tuple(points.values()))
+
+
+def _check_setting_types(reader: _Reader, table: dict) -> None:
+    """Refuse values that settings_from_dict would silently convert (``mesh_level = 0.5``
+    read as 0, ``true`` as 1)."""
+    defaults = SolverSettings()
+    for key, value in table.items():
+        if not hasattr(defaults, key):
+            continue  # unknown keys: settings_from_dict names the allowed ones
+        kind = type(getattr(defaults, key))
+        if kind is str:
+            ok, wanted = isinstance(value, str), "a string"
+        elif kind is int:
+            ok, wanted = isinstance(value, int) and not isinstance(value, bool), "an integer"
+        else:
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+            wanted = "a number"
+        if not ok:
+            raise reader.fail(("settings", key), f"settings.{key}",
+                              f"{value!r} is not {wanted}", wanted)
 
 
 def _expand(reader: _Reader, where: tuple, merged: dict, own: dict,

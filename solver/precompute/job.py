@@ -157,8 +157,10 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
                                          record.curve.reason))
         stored.add(future)
         bar.update(1)
-        bar.set_postfix(complete=summary.complete + summary.stopped, failed=summary.failed,
-                        refresh=False)
+        counts = {"complete": summary.complete + summary.stopped, "failed": summary.failed}
+        if summary.errors:
+            counts["worker_errors"] = summary.errors
+        bar.set_postfix(counts, refresh=False)
 
     try:
         for point in todo:

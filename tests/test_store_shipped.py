@@ -1,0 +1,76 @@
+"""The shipped default database (service/data/curves.h5) is what grids/default.toml says:
+the same designs and settings, the paper's design space, and the command that made it."""
+
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from solver.precompute import load_grid
+from solver.store import CurveStore
+
+REPO = Path(__file__).resolve().parent.parent
+DB = REPO / "service" / "data" / "curves.h5"
+GRID = REPO / "grids" / "default.toml"
+COMMAND = "balloon precompute grids/default.toml --db service/data/curves.h5"
+
+
+def test_shipped_database_holds_exactly_the_default_grid():
+    grid = load_grid(GRID)
+    with CurveStore(DB) as db:
+        summaries = db.summaries()
+        meta = db.metadata
+    # same keys = same designs, materials and solver settings: a change of the grid, of a
+    # SolverSettings default or of the key makes this fail until the file is regenerated
+    assert {s["key"] for s in summaries} == {p.key for p in grid.points}
+    assert meta["n_records"] == len(grid) == len(summaries)
+    assert meta["grid_toml"] == GRID.read_text(encoding="utf-8")
+    assert meta["generator_command"].startswith(COMMAND)
+    assert meta["runs"] and all(run["command"].startswith(COMMAND) for run in meta["runs"])
+    assert {run["grid_sha256"] for run in meta["runs"]} == {grid.sha256}
+    assert "finished_utc" in meta["runs"][-1] and not meta["runs"][-1]["interrupted"]
+
+
+def test_shipped_database_covers_the_papers_design_space():
+    with CurveStore(DB) as db:
+        summaries = db.summaries()
+    designs = [s["design"] for s in summaries]
+    # Section 3 of the paper: L 4.1 to 17.1 mm, t 0.5 to 1.0 mm, three material pairs
+    assert min(d["L_mm"] for d in designs) == 4.1 and max(d["L_mm"] for d in designs) == 17.1
+    assert min(d["t_mm"] for d in designs) == 0.5 and max(d["t_mm"] for d in designs) == 1.0
+    pairs = {(d["body_material"], d["membrane_material"]) for d in designs}
+    assert pairs == {("pdms_1_10", "ecoflex_00_30"), ("pdms_1_15", "ecoflex_00_30"),
+                     ("ecoflex_00_30", "pdms_1_15")}  # the last one: the reversed pair
+    for pair in pairs:  # every pair spans the full L and t ranges
+        own = [d for d in designs if (d["body_material"], d["membrane_material"]) == pair]
+        assert {min(d["L_mm"] for d in own), max(d["L_mm"] for d in own)} == {4.1, 17.1}
+        assert {min(d["t_mm"] for d in own), max(d["t_mm"] for d in own)} == {0.5, 1.0}
+    complete = [s for s in summaries if s["status"] == "complete"]
+    assert len(complete) >= 0.9 * len(summaries)
+    assert all(s["reason"] for s in summaries if s["status"] == "failed")
+
+
+def test_shipped_database_reads_with_plain_h5py_as_documented():
+    """docs/database.md, "File layout": enough to read a curve without our code."""
+    with h5py.File(DB, "r") as f:
+        assert f.attrs["format"] == "balloon-actuator-curves"
+        assert int(f.attrs["schema_version"]) == 1
+        runs = json.loads(f.attrs["runs_json"])
+        key = sorted(f["records"])[0]
+        g = f["records"][key]
+        design = dict(g["design"].attrs)
+        angle = g["curve/angle_deg"][()]
+        pressure = g["curve/pressure_pa"][()]
+        tip = g["curve/tip_displacement_mm"][()]
+        status = g["curve"].attrs["status"]
+    assert runs[-1]["command"].startswith(COMMAND)
+    with CurveStore(DB) as db:
+        record = db.get(key)
+    assert design["L_mm"] == record.design.L_mm
+    assert design["body_material_id"] == record.design.body_material.id
+    np.testing.assert_array_equal(design["body_material_mu_kpa"],
+                                  record.design.body_material.mu_kpa)
+    np.testing.assert_array_equal(angle, record.curve.angle_deg)
+    np.testing.assert_array_equal(pressure, record.curve.pressure_pa)
+    assert tip.shape == (len(angle), 2) and status == record.curve.status
