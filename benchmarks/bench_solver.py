@@ -2,7 +2,7 @@
 
 Reports DOFs, steps, Newton iterations, cut-backs, time per iteration split into
 assembly and linear solve, wall time and peak memory, for each linear-solver backend
-available (SuperLU always; MKL PARDISO with the `fast` extra).
+available (SuperLU always; MKL PARDISO, installed by default on x86_64).
 
     python benchmarks/bench_solver.py [--mesh LEVEL] [--element hex2] [--max-angle-deg 90]
 """

@@ -92,15 +92,19 @@ def stress_and_tangent(F: np.ndarray, mu: np.ndarray, alpha: np.ndarray
         n = np.arange(h.shape[0])
         theta[idx] = h[n, a_idx, a_idx] - h[n, a_idx, b_idx]
 
-    # E_ab = u_a (x) q_b with u_a = F n_a, q_b = n_b, flattened to 9 (row 3 i + J).
+    # E_ab = u_a (x) q_b with u_a = F n_a, q_b = n_b, flattened to 9 (row 3 i + J);
+    # E is (..., 9 (a b), 9 (i J)), so every sum over (a, b) is one batched matmul.
+    batch = c.shape[:-1]
     U = F @ Q                                                   # columns u_a
-    E = np.einsum("...ia,...jb->...abij", U, Q).reshape(c.shape[:-1] + (3, 3, 9))
-    Ediag = np.einsum("...aai->...ai", E)                       # E_aa
-    A = 4.0 * np.einsum("...ab,...ai,...bj->...ij", d2w, Ediag, Ediag)
-    off = 2.0 * theta * (1.0 - np.eye(3))
-    A += np.einsum("...ab,...abi,...abj->...ij", off, E, E)
-    A += np.einsum("...ab,...abi,...baj->...ij", off, E, E)
+    E = np.einsum("...ia,...jb->...abij", U, Q).reshape(batch + (9, 9))
+    Ediag = E[..., [0, 4, 8], :]                                # E_aa, (..., 3, 9)
+    A = 4.0 * np.swapaxes(Ediag, -1, -2) @ (d2w @ Ediag)
+    off = (2.0 * theta * (1.0 - np.eye(3))).reshape(batch + (9, 1))
+    E_ba = E.reshape(batch + (3, 3, 9)).swapaxes(-3, -2).reshape(batch + (9, 9))
+    A += np.swapaxes(off * E, -1, -2) @ (E + E_ba)
     # Geometric part delta_ik S_JL.
-    A += np.einsum("ik,...jl->...ijkl", np.eye(3), S).reshape(A.shape)
+    A4 = A.reshape(batch + (3, 3, 3, 3))
+    for i in range(3):
+        A4[..., i, :, i, :] += S
     lam_max = np.sqrt(c[..., -1])
     return w, P, A, lam_max

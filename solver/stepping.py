@@ -31,13 +31,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
-from solver.model import ActuatorModel
+from solver.model import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
 
 TARGET_ANGLE_STEP_DEG = 6.0
@@ -55,18 +56,33 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
                 target_volume: float | None, target_pressure: float | None, backend: str):
     """Converge one load step from (u, p); returns (u, p, iterations, residual, negative
     pivots). The element pressures start consistent with u (see ``mixed_newton_step``)."""
-    u, _, p, its, res, neg = mixed_newton_step(model, u, model.consistent_pressures(u), p,
-                                               settings, target_volume, target_pressure,
-                                               backend)
-    return u, p, its, res, neg
+    out = mixed_newton_step(model, u, model.consistent_pressures(u), p, settings,
+                            target_volume, target_pressure, backend)
+    return out.u, out.pressure_pa, out.iterations, out.residual, out.negative_pivots
+
+
+@dataclass
+class Converged:
+    """A converged load step: the state, how it was reached, and its evaluation
+    (residual and tangent at the state, reused by the next volume step)."""
+
+    u: np.ndarray
+    q: list[np.ndarray]
+    pressure_pa: float
+    iterations: int
+    residual: float
+    negative_pivots: int
+    evaluation: Evaluation
 
 
 def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
                       settings: SolverSettings, target_volume: float | None,
-                      target_pressure: float | None, backend: str):
+                      target_pressure: float | None, backend: str,
+                      start: Evaluation | None = None) -> Converged:
     """Converge one load step of the mixed u-q form (q: element pressures per block).
 
-    Returns (u, q, p, iterations, residual, negative pivots). Converged when the
+    ``start``: the evaluation at (u, q, p) when known (a volume step starting from the
+    last converged state). Converged when the
     condensed residual, the cavity volume and the dilatation constraint are all
     below ``settings.newton_tol`` (relative to the pressure load, the chamber
     volume, and absolute strain).
@@ -85,7 +101,8 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             p = target_pressure
         ev = None
         if du is None:
-            ev = model.evaluate(u, p, pressures=q)
+            ev = start if start is not None and target_pressure is None else (
+                model.evaluate(u, p, pressures=q))
         else:
             # Damped update: halve it while it would invert an element.
             scale = 1.0
@@ -118,7 +135,7 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
         # with the bulk modulus) within 100 x the tolerance.
         floor = it > 2 and res < 100 * tol and res > 0.3 * previous_res
         if it > 1 and vres < tol and ev.constraint_error < tol and (res < tol or floor):
-            return u, q, p, it - 1, res, neg
+            return Converged(u, q, p, it - 1, res, neg, ev)
         previous_res = res
         t0 = time.perf_counter()
         try:
@@ -145,7 +162,7 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
 
 
 def solve(design: Design, settings: SolverSettings | None = None,
-          on_step: Callable[[dict], None] | None = None, backend: str = "superlu") -> Curve:
+          on_step: Callable[[dict], None] | None = None, backend: str = "auto") -> Curve:
     """Inflate ``design`` until a stop criterion; return the curve.
 
     Raises InputError for invalid input only; a solve that fails returns a Curve
@@ -155,7 +172,7 @@ def solve(design: Design, settings: SolverSettings | None = None,
 
 
 def inflate(design: Design, settings: SolverSettings | None = None,
-            on_step: Callable[[dict], None] | None = None, backend: str = "superlu",
+            on_step: Callable[[dict], None] | None = None, backend: str = "auto",
             debug: bool = False) -> tuple[Curve, ActuatorModel, np.ndarray]:
     """Like ``solve``, also returning the discrete model and the last converged
     displacement (free dofs), for field output (VTK)."""
@@ -170,8 +187,8 @@ def inflate(design: Design, settings: SolverSettings | None = None,
     p = 0.0
     rows: dict[str, list] = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f")}
 
-    def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int) -> float:
-        ev = model.evaluate(u_, p_, tangent=False, pressures=q)
+    def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int, ev: Evaluation
+               ) -> float:
         angle, tip = model.end_face_kinematics(u_)
         rows["p"].append(p_)
         rows["v"].append(model.injected_volume_ul(ev.volume_mm3))
@@ -187,7 +204,8 @@ def inflate(design: Design, settings: SolverSettings | None = None,
                      "volume_ul": rows["v"][-1], "angle_deg": angle, "newton_iterations": it})
         return angle
 
-    record(u, p, 0, 0.0, 0)
+    last = model.evaluate(u, p, pressures=q)
+    record(u, p, 0, 0.0, 0, last)
     # Initial increments: a small fraction of the chamber volume, or of the membrane modulus.
     step = 0.05 * model.volume0_mm3 if volume_control else 0.05 * model.mu0_min_pa
     initial_step = step
@@ -196,11 +214,10 @@ def inflate(design: Design, settings: SolverSettings | None = None,
         try:
             if volume_control:
                 vt = model.volume0_mm3 + 0.5 * rows["v"][-1] + step
-                u_new, q_new, p_new, its, res, neg = mixed_newton_step(
-                    model, u, q, p, settings, vt, None, backend)
+                step_out = mixed_newton_step(model, u, q, p, settings, vt, None, backend,
+                                             start=last)
             else:
-                u_new, q_new, p_new, its, res, neg = mixed_newton_step(
-                    model, u, q, p, settings, None, p + step, backend)
+                step_out = mixed_newton_step(model, u, q, p, settings, None, p + step, backend)
         except (StepFailed, FloatingPointError) as exc:
             model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
             if debug:
@@ -212,8 +229,9 @@ def inflate(design: Design, settings: SolverSettings | None = None,
                                             f"cut-backs: {exc}")
                 break
             continue
-        u, p, q = u_new, p_new, q_new
-        angle = record(u, p, its, res, neg)
+        u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
+        its = step_out.iterations
+        angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last)
         d_angle = abs(angle - rows["a"][-2])
         factor = 1.6 if its <= 6 else (1.0 if its <= 9 else 0.6)
         if d_angle > 1e-9:

@@ -186,39 +186,43 @@ def test_actuator_angle_does_not_depend_on_the_bulk_modulus():
 
 
 def test_newton_converges_quadratically_on_the_actuator():
-    # The exact consistent tangent gives r_{k+1} <= C r_k^2 once r_k is small (measured
-    # C ~ 1 for the relative residual; rounding floor ~1e-9 at K = 1000 mu0). Two volume
-    # steps of 5 % of the chamber (the solver's first step size), hex2, mesh level 0.
+    # The exact consistent tangent of the mixed u-q iterate gives r_{k+1} <= C r_k^2
+    # once r_k is small. Measured (hex2, level 0, relative residual): a 30 % chamber
+    # volume step goes 2.3e2 -> 0.42 -> 8.5e-6 -> 2e-10 (the rounding floor at
+    # K = 1000 mu0, ~1e-10); a linear rate would keep r_{k+1} / r_k fixed instead.
     settings = SolverSettings(mesh_level=0, element="hex2", newton_tol=1e-12,
                               max_newton_iter=6)
     model = ActuatorModel(Design(), settings)
     evaluate = model.evaluate
     log: list[float] = []
 
-    def recording(u, p, tangent=True):
-        ev = evaluate(u, p, tangent)
+    def recording(u, p, tangent=True, pressures=None):
+        ev = evaluate(u, p, tangent, pressures)
         log.append(float(np.linalg.norm(ev.R)) / max(ev.load_norm, 1e-30))
         return ev
 
     model.evaluate = recording
     u, p = np.zeros(model.n_free), 0.0
     pairs = []
-    for k in (1, 2):
+    floor = 1e-9
+    for fraction in (0.3, 0.6):
         log.clear()
-        with pytest.raises(StepFailed):        # 1e-12 is below the rounding floor
-            newton_step(model, u, p, settings, model.volume0_mm3 * (1 + 0.05 * k), None,
+        try:       # 1e-12 is below the rounding floor: runs to the floor, may stop there
+            newton_step(model, u, p, settings, model.volume0_mm3 * (1 + fraction), None,
                         "superlu")
+        except StepFailed:
+            pass
         r = np.array(log[1:])                   # log[0]: the previous converged state
         assert r.min() < 1e-8
-        floor = 1e-8
-        pairs += [(a, b) for a, b in zip(r[:-1], r[1:]) if a < 0.1 and b > floor]
+        pairs += [(a, b) for a, b in zip(r[:-1], r[1:]) if a < 0.5 and b > floor]
         n_to_floor = int(np.argmax(r < floor)) + 1
         assert n_to_floor <= 4
         # Re-converge to the solver's tolerance for the next step.
         model.evaluate = evaluate
         u, p, _, _, _ = newton_step(model, u, p, SolverSettings(mesh_level=0, element="hex2"),
-                                    model.volume0_mm3 * (1 + 0.05 * k), None, "superlu")
+                                    model.volume0_mm3 * (1 + fraction), None, "superlu")
         model.evaluate = recording
     assert pairs, "no iterate in the asymptotic range"
     for a, b in pairs:
         assert b <= 10.0 * a * a
+        assert b <= 1e-3 * a                    # the error squares, it does not just shrink

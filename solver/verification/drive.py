@@ -17,7 +17,7 @@ from solver.stepping import StepFailed, newton_step
 
 
 def drive_volume(model, volumes_mm3: Sequence[float], settings: SolverSettings | None = None,
-                 substeps: int = 1, max_cutbacks: int = 6, backend: str = "superlu"
+                 substeps: int = 1, max_cutbacks: int = 6, backend: str = "auto"
                  ) -> tuple[list[tuple[float, float, int]], np.ndarray]:
     """Converge at each cavity volume in turn (mm^3, the model's own, e.g. half volume).
 
@@ -53,7 +53,7 @@ def drive_volume(model, volumes_mm3: Sequence[float], settings: SolverSettings |
 
 
 def drive_pressure(model, pressures_pa: Sequence[float], settings: SolverSettings | None = None,
-                   max_cutbacks: int = 6, backend: str = "superlu"
+                   max_cutbacks: int = 6, backend: str = "auto"
                    ) -> list[tuple[np.ndarray, int]]:
     """Converge at each prescribed cavity pressure (Pa) in turn, from the undeformed state.
 
