@@ -2,9 +2,11 @@
 
 A tensor-product grid whose lines pass through every interface (chamber ends,
 chamber side, membrane top, chamber roof), with the elements inside the chamber
-removed. Element sizes shrink with ``level`` by sqrt(2) per level in every
-direction. Spacing is graded towards the chamber: the walls beyond the chamber
-ends grow geometrically away from it, and the body above the chamber grows
+removed. Mesh level n multiplies every division of level 0 by n + 1, in every
+direction and every segment, so that the levels are a nested family with element
+sizes h0 / (n + 1): the sequence the convergence study's Richardson estimate needs
+(docs/verification.md). Spacing is graded towards the chamber: the walls beyond the
+chamber ends grow geometrically away from it, and the body above the chamber grows
 upwards, so resolution sits where the membrane bulges and the body bends.
 """
 
@@ -39,8 +41,9 @@ class ActuatorMesh:
     end_face_x_mm: float        # x of the free end
 
 
-def _divisions(base: float, level: int) -> int:
-    return max(1, int(round(base * 2.0 ** (0.5 * level))))
+def refinement(level: int) -> int:
+    """Divisions of level ``level`` per division of level 0."""
+    return level + 1
 
 
 def _segment(a: float, b: float, n: int, dense_at: str | None = None) -> np.ndarray:
@@ -65,23 +68,23 @@ def build_mesh(design: Design, level: int) -> ActuatorMesh:
     x0 = float(d.chamber_offset_mm)
     x1 = x0 + d.L_mm
     xb = float(d.body_length_mm)
-    r = 2.0 ** (0.5 * level)
+    r = refinement(level)
 
-    n_ch = max(2, int(np.ceil(d.L_mm * r / BASE_SIZE_X_CHAMBER_MM)))
-    n_left = max(1, int(np.ceil(x0 * r / BASE_SIZE_X_WALL_MM)))
-    n_right = max(1, int(np.ceil((xb - x1) * r / BASE_SIZE_X_WALL_MM)))
+    n_ch = r * max(2, int(np.ceil(d.L_mm / BASE_SIZE_X_CHAMBER_MM)))
+    n_left = r * max(1, int(np.ceil(x0 / BASE_SIZE_X_WALL_MM)))
+    n_right = r * max(1, int(np.ceil((xb - x1) / BASE_SIZE_X_WALL_MM)))
     x = _join(_segment(0.0, x0, n_left, "b"), np.linspace(x0, x1, n_ch + 1),
               _segment(x1, xb, n_right, "a"))
 
     yb, yw = 0.5 * d.b_mm, 0.5 * d.W_mm
-    y = _join(np.linspace(0.0, yb, _divisions(BASE_DIV_Y_CHAMBER, level) + 1),
-              _segment(yb, yw, _divisions(BASE_DIV_Y_SIDE, level), "a"))
+    y = _join(np.linspace(0.0, yb, r * BASE_DIV_Y_CHAMBER + 1),
+              _segment(yb, yw, r * BASE_DIV_Y_SIDE, "a"))
 
     z_m, z_c = d.t_mm, d.t_mm + d.h_mm
     z_top = z_c + d.T_mm
-    z = _join(np.linspace(0.0, z_m, _divisions(BASE_LAYERS_MEMBRANE, level) + 1),
-              np.linspace(z_m, z_c, _divisions(BASE_LAYERS_CHAMBER, level) + 1),
-              _segment(z_c, z_top, _divisions(BASE_LAYERS_BODY, level), "a"))
+    z = _join(np.linspace(0.0, z_m, r * BASE_LAYERS_MEMBRANE + 1),
+              np.linspace(z_m, z_c, r * BASE_LAYERS_CHAMBER + 1),
+              _segment(z_c, z_top, r * BASE_LAYERS_BODY, "a"))
 
     mesh = MeshHex.init_tensor(x, y, z)
     centroids = mesh.p[:, mesh.t].mean(axis=1)

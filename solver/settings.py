@@ -12,14 +12,15 @@ ELEMENTS = ("hex2", "hex1")
 TIPS = ("free", "spring", "blocked")
 
 DEFAULT_MESH_LEVEL = 1  # chosen by the mesh-convergence study, docs/verification.md
-MAX_MESH_LEVEL = 4
+MAX_MESH_LEVEL = 3   # level 3: every division x 4, ~250k dofs at the standard design
 
 
 @dataclass(frozen=True)
 class SolverSettings:
     """How a design is solved.
 
-    mesh_level        0 (coarsest) .. MAX_MESH_LEVEL; each level refines every direction
+    mesh_level        0 (coarsest) .. MAX_MESH_LEVEL; level n has n + 1 times the divisions
+                      of level 0 in every direction (solver/mesh.py)
     element           "hex2" (27-node triquadratic, default) or "hex1" (8-node trilinear)
     control           "volume" (injected volume, pressure is an unknown) or "pressure"
     max_angle_deg     stop once the bending angle's magnitude exceeds this
