@@ -86,6 +86,10 @@ def settings_from_dict(data: dict) -> SolverSettings:
     defaults = SolverSettings()
     for key, value in data.items():
         kind = type(getattr(defaults, key))
+        if kind in (int, float) and isinstance(value, bool):
+            raise InputError(key, f"got {value!r}", f"a number ({kind.__name__})")
+        if kind is int and isinstance(value, float) and not value.is_integer():
+            raise InputError(key, f"got {value!r}, which is not a whole number", "an integer")
         try:
             kwargs[key] = kind(value) if kind is not str else str(value)
         except (TypeError, ValueError):
