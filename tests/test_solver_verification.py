@@ -11,7 +11,7 @@ import pytest
 
 from solver import Design, SolverSettings
 from solver.assembly import make_basis
-from solver.linear import factorize
+from solver.linear import available_backends, factorize
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.model import ActuatorModel, SolidModel
 from solver.stepping import StepFailed, newton_step
@@ -99,6 +99,37 @@ def test_sphere_inflation_matches_the_exact_curve():
     err = p / exact - 1
     assert np.all(np.abs(err) < 0.01)
     assert np.all(err < 0)            # a compressible model inflates more easily
+
+
+@pytest.mark.parametrize("backend", available_backends())
+def test_volume_control_passes_the_neo_hookean_limit_point_and_flags_it(backend):
+    # The neo-Hookean sphere's exact pressure peaks near lam_a = 1.6 (test above). Under
+    # volume control the FE curve must pass the maximum, and the structural tangent
+    # (pressure held fixed) must lose positive definiteness there: one negative
+    # eigenvalue (the uniform inflation mode of the octant) beyond the maximum, none
+    # before it. This is how the solver reports a loss of stability.
+    nh = OgdenMaterial("nh", (1.88,), (2.0,))
+    sm = octant_shell_mesh(2, 2, "hex2")
+    model = SolidModel(sm.mesh, "hex2", [(np.arange(sm.mesh.nelements), nh, True)],
+                       sm.cavity_facets, symmetry_mask, 1000.0)
+    settings = SolverSettings()
+    u, p = np.zeros(model.n_free), 0.0
+    rows = []
+    for lam in np.arange(1.1, 2.21, 0.1):
+        target = model.volume0_mm3 * lam**3
+        for sub in (0.5, 1.0):          # two substeps per stretch increment
+            v_prev = model.volume0_mm3 * (lam - 0.1) ** 3
+            u, p, _, _, neg = newton_step(model, u, p, settings, v_prev + sub * (target - v_prev),
+                                          None, backend)
+        rows.append((lam, p, neg))
+    lam, pressure, neg = (np.array(c) for c in zip(*rows))
+    k = int(np.argmax(pressure))
+    assert 1.45 < lam[k] < 1.75                      # the maximum, inside the range
+    assert pressure[-1] < 0.97 * pressure[k]         # and passed: the curve comes down
+    exact = np.array([exact_pressure_pa(x, nh) for x in lam])
+    assert np.all(np.abs(pressure / exact - 1) < 0.02)
+    assert np.all(neg[lam < lam[k] - 0.15] == 0)
+    assert np.all(neg[lam > lam[k] + 0.15] == 1)
 
 
 @pytest.mark.slow
