@@ -19,15 +19,25 @@ from skfem import MeshHex
 
 from solver.design import Design
 
-# Target element sizes at level 0, mm. Chosen from the convergence study
-# (docs/verification.md): the membrane and chamber need the resolution.
-BASE_SIZE_X_CHAMBER_MM = 1.0
-BASE_SIZE_X_WALL_MM = 1.5
-BASE_LAYERS_MEMBRANE = 1
-BASE_LAYERS_CHAMBER = 1
-BASE_LAYERS_BODY = 2
-BASE_DIV_Y_CHAMBER = 2
-BASE_DIV_Y_SIDE = 1
+
+@dataclass(frozen=True)
+class MeshDivisions:
+    """Level-0 resolution: element sizes along x (mm) and division counts per segment."""
+
+    x_chamber_mm: float = 1.0       # element size along the chamber
+    x_wall_mm: float = 1.5          # along the end walls (graded away from the chamber)
+    y_chamber: int = 4              # across the half chamber width b/2
+    y_side: int = 2                 # across the side wall, b/2 .. W/2 (graded)
+    membrane: int = 2               # layers through the membrane thickness t
+    chamber: int = 1                # layers through the chamber height h
+    body: int = 2                   # layers through the body above the chamber T (graded)
+
+
+# The default level 0, chosen by the convergence study (docs/verification.md): the curve
+# is most sensitive to the divisions across the chamber width and through the membrane,
+# hardly to the body layers, so those two are doubled against the uniform COARSE family.
+DEFAULT_DIVISIONS = MeshDivisions()
+COARSE_DIVISIONS = MeshDivisions(y_chamber=2, y_side=1, membrane=1)
 GRADING_RATIO = 1.6     # largest / smallest element in a graded segment
 
 
@@ -61,8 +71,10 @@ def _join(*segments: np.ndarray) -> np.ndarray:
     return np.unique(np.concatenate(segments))
 
 
-def build_mesh(design: Design, level: int) -> ActuatorMesh:
-    """Mesh the half actuator of a validated design at refinement ``level`` (>= 0)."""
+def build_mesh(design: Design, level: int,
+               divisions: MeshDivisions = DEFAULT_DIVISIONS) -> ActuatorMesh:
+    """Mesh the half actuator of a validated design at refinement ``level`` (>= 0):
+    every division of ``divisions`` times level + 1."""
     d = design.validated()
     assert d.chamber_offset_mm is not None and d.body_length_mm is not None  # validated
     x0 = float(d.chamber_offset_mm)
@@ -70,21 +82,21 @@ def build_mesh(design: Design, level: int) -> ActuatorMesh:
     xb = float(d.body_length_mm)
     r = refinement(level)
 
-    n_ch = r * max(2, int(np.ceil(d.L_mm / BASE_SIZE_X_CHAMBER_MM)))
-    n_left = r * max(1, int(np.ceil(x0 / BASE_SIZE_X_WALL_MM)))
-    n_right = r * max(1, int(np.ceil((xb - x1) / BASE_SIZE_X_WALL_MM)))
+    n_ch = r * max(2, int(np.ceil(d.L_mm / divisions.x_chamber_mm)))
+    n_left = r * max(1, int(np.ceil(x0 / divisions.x_wall_mm)))
+    n_right = r * max(1, int(np.ceil((xb - x1) / divisions.x_wall_mm)))
     x = _join(_segment(0.0, x0, n_left, "b"), np.linspace(x0, x1, n_ch + 1),
               _segment(x1, xb, n_right, "a"))
 
     yb, yw = 0.5 * d.b_mm, 0.5 * d.W_mm
-    y = _join(np.linspace(0.0, yb, r * BASE_DIV_Y_CHAMBER + 1),
-              _segment(yb, yw, r * BASE_DIV_Y_SIDE, "a"))
+    y = _join(np.linspace(0.0, yb, r * divisions.y_chamber + 1),
+              _segment(yb, yw, r * divisions.y_side, "a"))
 
     z_m, z_c = d.t_mm, d.t_mm + d.h_mm
     z_top = z_c + d.T_mm
-    z = _join(np.linspace(0.0, z_m, r * BASE_LAYERS_MEMBRANE + 1),
-              np.linspace(z_m, z_c, r * BASE_LAYERS_CHAMBER + 1),
-              _segment(z_c, z_top, r * BASE_LAYERS_BODY, "a"))
+    z = _join(np.linspace(0.0, z_m, r * divisions.membrane + 1),
+              np.linspace(z_m, z_c, r * divisions.chamber + 1),
+              _segment(z_c, z_top, r * divisions.body, "a"))
 
     mesh = MeshHex.init_tensor(x, y, z)
     centroids = mesh.p[:, mesh.t].mean(axis=1)

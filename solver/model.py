@@ -28,7 +28,7 @@ from solver.assembly import (
     scatter_vector,
 )
 from solver.design import Design
-from solver.mesh import build_mesh
+from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions, build_mesh
 from solver.settings import SolverSettings
 
 
@@ -183,10 +183,11 @@ class ActuatorModel(SolidModel):
     the z force the actuator exerts on the spring or block (mN, whole actuator).
     """
 
-    def __init__(self, design: Design, settings: SolverSettings) -> None:
+    def __init__(self, design: Design, settings: SolverSettings,
+                 divisions: MeshDivisions = DEFAULT_DIVISIONS) -> None:
         self.design = design.validated()
         self.settings = settings
-        am = build_mesh(self.design, settings.mesh_level)
+        am = build_mesh(self.design, settings.mesh_level, divisions)
         groups = [(np.nonzero(~am.membrane)[0], self.design.body_material, False),
                   (np.nonzero(am.membrane)[0], self.design.membrane_material, True)]
 

@@ -38,6 +38,7 @@ import numpy as np
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
+from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions
 from solver.model import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
 
@@ -162,24 +163,27 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
 
 
 def solve(design: Design, settings: SolverSettings | None = None,
-          on_step: Callable[[dict], None] | None = None, backend: str = "auto") -> Curve:
+          on_step: Callable[[dict], None] | None = None, backend: str = "auto",
+          divisions: MeshDivisions = DEFAULT_DIVISIONS) -> Curve:
     """Inflate ``design`` until a stop criterion; return the curve.
 
     Raises InputError for invalid input only; a solve that fails returns a Curve
     with status "failed" and the reason.
     """
-    return inflate(design, settings, on_step, backend)[0]
+    return inflate(design, settings, on_step, backend, divisions=divisions)[0]
 
 
 def inflate(design: Design, settings: SolverSettings | None = None,
             on_step: Callable[[dict], None] | None = None, backend: str = "auto",
-            debug: bool = False) -> tuple[Curve, ActuatorModel, np.ndarray]:
+            debug: bool = False, divisions: MeshDivisions = DEFAULT_DIVISIONS
+            ) -> tuple[Curve, ActuatorModel, np.ndarray]:
     """Like ``solve``, also returning the discrete model and the last converged
-    displacement (free dofs), for field output (VTK)."""
+    displacement (free dofs), for field output (VTK). ``divisions``: the level-0 mesh
+    resolution (convergence studies only; records assume the default)."""
     settings = (settings or SolverSettings()).validated()
     design = design.validated()
     t_start = time.perf_counter()
-    model = ActuatorModel(design, settings)
+    model = ActuatorModel(design, settings, divisions)
     volume_control = settings.control == "volume"
 
     u = np.zeros(model.n_free)

@@ -23,7 +23,7 @@ from service.app import create_app
 from service.jobs import JobManager
 from solver.design import Design
 from solver.errors import NotFoundError
-from solver.settings import SolverSettings
+from solver.settings import MAX_MESH_LEVEL, SolverSettings
 
 KEY = {"X-API-Key": "test-key"}
 SOLVE = {"design": {"L_mm": 9.1, "t_mm": 0.6},
@@ -134,8 +134,8 @@ def test_failed_and_crashed_solves_are_reported(tmp_path, solve_fn, message):
 def test_solve_and_job_errors(tmp_path):
     with make_client(tmp_path, fast_solve) as client:
         r = client.post("/v1/solve", json={"settings": {"mesh_level": 9}}, headers=KEY)
-        assert "0 <= mesh_level <= 4" in assert_problem(r, 422, "settings.mesh_level")[
-            "errors"][0]["allowed"]
+        problem = assert_problem(r, 422, "settings.mesh_level")
+        assert f"0 <= mesh_level <= {MAX_MESH_LEVEL}" in problem["errors"][0]["allowed"]
         r = client.post("/v1/solve", json={"settings": {"tip": "spring"}}, headers=KEY)
         assert_problem(r, 422, "settings.spring_k_n_per_m")  # a spring needs a stiffness
         assert_problem(client.get("/v1/jobs/" + "a" * 32), 404)

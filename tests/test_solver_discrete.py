@@ -38,7 +38,9 @@ def test_pressure_load_is_the_volume_derivative(model):
     d = np.random.default_rng(5).standard_normal(model.ndofs) * 1e-3
     h = 1e-4
     fd = (cav.volume(model.cavity, u + h * d) - cav.volume(model.cavity, u - h * d)) / (2 * h)
-    assert (g * d[model.cavity.dofs]).sum() == pytest.approx(fd, rel=1e-7)
+    # Central differences: O(h^2) truncation, measured 1.4e-7 relative on hex1 level 0;
+    # a wrong derivative is off by O(1).
+    assert (g * d[model.cavity.dofs]).sum() == pytest.approx(fd, rel=5e-7)
 
 
 def test_volume_hessian_is_the_gradient_derivative(model):

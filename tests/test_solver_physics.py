@@ -53,8 +53,9 @@ def test_reversed_materials_bend_the_other_way():
 
 def test_pressure_and_volume_control_agree(standard):
     pc = solve(Design(), SolverSettings(mesh_level=0, element="hex1", control="pressure",
-                                        max_pressure_pa=1200))
+                                        max_pressure_pa=1000))
     assert pc.status == "complete"
+    assert pc.angle_deg[-1] < standard.angle_deg[-1]   # inside the volume-control curve
     expected = _angle_at(standard, pc.pressure_pa[-1])
     assert pc.angle_deg[-1] == pytest.approx(expected, rel=0.02)
 

@@ -24,7 +24,7 @@ from solver.design import Design
 from solver.errors import InputError
 from solver.settings import SolverSettings
 
-KEY_VERSION = 1
+KEY_VERSION = 2   # 2: mesh levels redefined (solver/mesh.py), so a level names a new mesh
 SIGNIFICANT_DIGITS = 10
 KEY_HEX_DIGITS = 32
 
