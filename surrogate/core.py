@@ -147,13 +147,16 @@ class Surrogate:
 
     def family_parameters(self, design: Design, form: str | None = None) -> dict[str, object]:
         """The family's model parameters for ``design``'s family, with A and tau at the
-        design: a_deg_per_mm, a_t_pa, b_t_per_mm (and c), tau_form, covariance,
+        design: a_deg_per_mm, a_t_pa, b_t_per_mm (and c), tau_form, covariance (of
+        ``covariance_names``: log10 b_t in place of b_t), standard_errors,
         residual_sd_deg, residual_rel."""
         fam = self.family_for(design)
         par = self._params(fam, form)
         out: dict[str, object] = {n: v for n, v in zip(par.names, par.values, strict=True)}
         out.update(form=par.form, names=list(par.names), tau_form=model.TAU_FORM,
+                   covariance_names=list(par.covariance_names),
                    covariance=[list(r) for r in par.covariance],
+                   standard_errors=par.standard_errors,
                    residual_sd_deg=par.residual_sd, residual_rel=par.residual_rel,
                    fixed=list(par.fixed), source=par.source,
                    A_deg=float(model.amplitude_deg(par.theta, design.L_mm)),
@@ -209,7 +212,7 @@ class Surrogate:
         z = bands.z_value(level)
         g, dp_da = model.pressure_gradient(par.theta, design.L_mm, design.t_mm, ang)
         x = p / model.tau_pa(par.theta, design.t_mm)
-        var = (bands.parameter_variance(g, par.cov)
+        var = (par.parameter_variance(g)
                + dp_da**2 * bands.scatter_variance(par.residual_sd, par.residual_rel, ang, x))
         half = par.band_scale * z * np.sqrt(np.where(ang == 0.0, 0.0, var))
         return InversePrediction(design=design, angle_deg=ang, pressure_pa=p,

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 from solver.design import Design
 from solver.materials import OgdenMaterial
-from surrogate.jointfit import ModelParameters, parameters_from_dict
+from surrogate.jointfit import COVARIANCE_IN_LOG10_B_T_SINCE, ModelParameters, parameters_from_dict
 
 
 @dataclass(frozen=True)
@@ -85,10 +85,12 @@ def _material(d: dict) -> OgdenMaterial:
                          tuple(float(v) for v in d["alpha"]))
 
 
-def family_from_dict(d: dict) -> Family:
+def family_from_dict(d: dict, format_version: int = COVARIANCE_IN_LOG10_B_T_SINCE) -> Family:
+    """From ``as_dict``; ``format_version`` of the file it was read from."""
+    v = format_version
     return Family(body_material=_material(d["body_material"]),
                   membrane_material=_material(d["membrane_material"]),
                   T_mm=float(d["T_mm"]), b_mm=float(d["b_mm"]), h_mm=float(d["h_mm"]),
-                  parameters={k: parameters_from_dict(v) for k, v in d["parameters"].items()},
+                  parameters={k: parameters_from_dict(p, v) for k, p in d["parameters"].items()},
                   default_form=d["default_form"], domain=domain_from_dict(d["domain"]),
-                  force=parameters_from_dict(d["force"]) if d.get("force") else None)
+                  force=parameters_from_dict(d["force"], v) if d.get("force") else None)

@@ -1,11 +1,14 @@
 """Surrogate files: versioned JSON.
 
-    {"format": "balloon-surrogate", "format_version": 1, "name", "form", "provenance"
+    {"format": "balloon-surrogate", "format_version": 2, "name", "form", "provenance"
      (database path and metadata, record keys, package version, git commit, date),
      "families": [Family.as_dict()...], "report": {...the fit report...}}
 
-Writes are atomic (temporary file + rename): a failed save leaves the old file intact.
-A file of a newer format version than this code reads is refused with SurrogateFileError.
+Format versions: 2 stores each parameter covariance in the fit coordinates
+(``covariance_names``: log10 b_t in place of b_t); 1 stored it in b_t (1/mm) and is
+still read (converted on load, same bands). Writes are atomic (temporary file +
+rename): a failed save leaves the old file intact. A file of a newer format version
+than this code reads is refused with SurrogateFileError.
 """
 
 from __future__ import annotations
@@ -40,7 +43,7 @@ def surrogate_from_dict(d: dict, origin: str = "<dict>") -> Surrogate:
         raise SurrogateFileError(origin, f"format version {version!r} is newer than this "
                                  f"code reads ({FORMAT_VERSION}); upgrade balloon-actuator")
     try:
-        families = tuple(family_from_dict(f) for f in d["families"])
+        families = tuple(family_from_dict(f, version) for f in d["families"])
         return Surrogate(name=str(d["name"]), family_fits=families,
                          provenance=dict(d.get("provenance", {})), form=d.get("form"),
                          report=dict(d.get("report", {})))

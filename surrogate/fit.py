@@ -29,7 +29,7 @@ from surrogate.family import Domain, Family
 from surrogate.jointfit import ModelParameters, Points, joint_fit, leave_one_design_out, make_points
 from surrogate.procedure import paper_procedure
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: covariances in log10 b_t (surrogate.files reads 1 as well)
 EXTENDED_GAIN = 0.9  # extended becomes the default when its LODO RMSE < 0.9 x the paper's
 
 

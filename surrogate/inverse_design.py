@@ -205,7 +205,7 @@ def _evaluate(par: ModelParameters, target: DesignTarget, objective: str, L: np.
             ang = np.full_like(L, sign * target.value)
             p = model.pressure_pa(th, L, t, ang)
             g, dp_da = model.pressure_gradient(th, L, t, ang)
-            var = bands.parameter_variance(g, par.cov) + dp_da**2 * bands.scatter_variance(
+            var = par.parameter_variance(g) + dp_da**2 * bands.scatter_variance(
                 par.residual_sd, par.residual_rel, ang, p / tau)
             half = z * np.sqrt(var)
             p_lo, p_hi = p - half, p + half
@@ -219,7 +219,7 @@ def _evaluate(par: ModelParameters, target: DesignTarget, objective: str, L: np.
             ok &= np.isfinite(L)
         v = model.angle_deg(th, L, t, P)
         gv = model.angle_gradient(th, L, t, P)
-        vvar = bands.parameter_variance(gv, par.cov) + bands.scatter_variance(
+        vvar = par.parameter_variance(gv) + bands.scatter_variance(
             par.residual_sd, par.residual_rel, v, P / tau)
         vh = z * np.sqrt(vvar)
         score = {"pressure": p, "margin": p_hi, "compact": L + 1e-9 * p,

@@ -2,10 +2,12 @@
 
 Least squares on every usable point of every curve (scipy.optimize.least_squares),
 weighted by the residual-scatter model of ``surrogate.bands`` (two passes: unweighted,
-then weighted with the scatter estimated from the first pass). The covariance is
-(J_w^T J_w)^-1 times the weighted residual variance RSS_w / (n - k), J_w the weighted
-Jacobian at the solution. With fewer than two membrane thicknesses b_t is not
-identifiable and is held at the paper's value (its variance is then zero).
+then weighted with the scatter estimated from the first pass). The fit runs in the fit
+coordinates of ``surrogate.model`` (log10 b_t in place of b_t), and the covariance is
+taken there: (J_w^T J_w)^-1 times the weighted residual variance RSS_w / (n - k), J_w
+the weighted Jacobian at the solution (columns scaled to unit norm before the
+pseudo-inverse). With fewer than two membrane thicknesses b_t is not identifiable and
+is held at the paper's value (its variance is then zero).
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ from scipy.optimize import least_squares
 from surrogate import bands, model
 from surrogate.curvefit import fit_free, thickness_constants
 from surrogate.paper_data import B_T_PER_MM
+
+LOG10_B_T_MAX = 100.0  # upper bound of log10 b_t (1/mm) in the fit: tau flat in t
 
 
 @dataclass(frozen=True)
@@ -56,13 +60,16 @@ def make_points(curves: list[tuple[float, float, np.ndarray, np.ndarray]]) -> Po
 class ModelParameters:
     """A fitted (or published) parameter set of one form for one family.
 
-    values/covariance follow ``names``; ``fixed`` names parameters held constant (zero
-    variance); residual scatter sd(angle) = sqrt(residual_sd^2 + (residual_rel angle)^2)
-    in the model's unit (deg for angle, mN for force). ``rmse``/``max_error`` are the
-    in-sample errors of the fit, ``n_points``/``n_curves`` its data. ``band_scale``
-    (>= 1) multiplies every band's half-width: it is calibrated on held-out designs
-    (``band_scale_from_lodo``) because model-form error is correlated along a curve and
-    the in-sample scatter model alone gives bands that are too narrow."""
+    ``values`` follow ``names`` (b_t in 1/mm); ``covariance`` is that of the fit
+    coordinates ``covariance_names`` (log10 b_t in place of b_t, see ``surrogate.model``;
+    use ``parameter_variance`` for g C g^T with g = d / d values); ``fixed`` names
+    parameters held constant (zero variance); residual scatter sd(angle) =
+    sqrt(residual_sd^2 + (residual_rel angle)^2) in the model's unit (deg for angle, mN
+    for force). ``rmse``/``max_error`` are the in-sample errors of the fit,
+    ``n_points``/``n_curves`` its data. ``band_scale`` (>= 1) multiplies every band's
+    half-width: it is calibrated on held-out designs (``band_scale_from_lodo``) because
+    model-form error is correlated along a curve and the in-sample scatter model alone
+    gives bands that are too narrow."""
 
     form: str
     names: tuple[str, ...]
@@ -85,22 +92,52 @@ class ModelParameters:
 
     @cached_property
     def cov(self) -> np.ndarray:
+        """Covariance of the fit coordinates (``covariance_names``)."""
         return np.asarray(self.covariance, dtype=float).reshape(len(self.values),
                                                                 len(self.values))
 
+    @property
+    def covariance_names(self) -> tuple[str, ...]:
+        return model.FIT_NAMES[self.form]
+
+    @property
+    def standard_errors(self) -> dict[str, float]:
+        """sqrt of the covariance's diagonal, by ``covariance_names``."""
+        se = np.sqrt(np.clip(np.diag(self.cov), 0.0, None))
+        return {n: float(v) for n, v in zip(self.covariance_names, se, strict=True)}
+
+    def parameter_variance(self, gradient: np.ndarray) -> np.ndarray:
+        """g C g^T for a gradient (..., k) in ``values`` (d / d b_t in the b_t column)."""
+        return bands.parameter_variance(model.gradient_to_fit(gradient, self.theta), self.cov)
+
     def as_dict(self) -> dict[str, object]:
         return {"form": self.form, "names": list(self.names), "values": list(self.values),
+                "covariance_names": list(self.covariance_names),
                 "covariance": [list(r) for r in self.covariance],
+                "standard_errors": self.standard_errors,
                 "residual_sd": self.residual_sd, "residual_rel": self.residual_rel,
                 "fixed": list(self.fixed), "rmse": self.rmse, "max_error": self.max_error,
                 "n_points": self.n_points, "n_curves": self.n_curves, "source": self.source,
                 "extra": dict(self.extra), "band_scale": self.band_scale}
 
 
-def parameters_from_dict(d: dict) -> ModelParameters:
+COVARIANCE_IN_LOG10_B_T_SINCE = 2  # surrogate file format versions before: b_t in 1/mm
+
+
+def parameters_from_dict(d: dict, format_version: int = COVARIANCE_IN_LOG10_B_T_SINCE
+                         ) -> ModelParameters:
+    """From ``as_dict``; a covariance written by format version 1 (in b_t, 1/mm) is
+    converted to the fit coordinates (``model.covariance_from_b_t``: same bands)."""
+    values = tuple(float(v) for v in d["values"])
+    cov = np.array(d["covariance"], dtype=float).reshape(len(values), len(values))
+    fit_names = model.FIT_NAMES[d["form"]]
+    if format_version < COVARIANCE_IN_LOG10_B_T_SINCE:
+        cov = model.covariance_from_b_t(cov, np.array(values))
+    elif tuple(d.get("covariance_names", fit_names)) != fit_names:
+        raise ValueError(f"covariance_names {d['covariance_names']!r} are not {fit_names}")
     return ModelParameters(
-        form=d["form"], names=tuple(d["names"]), values=tuple(float(v) for v in d["values"]),
-        covariance=tuple(tuple(float(v) for v in r) for r in d["covariance"]),
+        form=d["form"], names=tuple(d["names"]), values=values,
+        covariance=tuple(tuple(float(v) for v in r) for r in cov),
         residual_sd=float(d["residual_sd"]), residual_rel=float(d["residual_rel"]),
         fixed=tuple(d.get("fixed", ())), rmse=d.get("rmse"), max_error=d.get("max_error"),
         n_points=int(d.get("n_points", 0)), n_curves=int(d.get("n_curves", 0)),
@@ -145,40 +182,46 @@ def joint_fit(pts: Points, form: str = "exponential", start: np.ndarray | None =
         theta0 = np.append(theta0, 0.0)
     free = np.ones(len(names), dtype=bool)
     if len(np.unique(pts.t_mm)) < 2:
-        free[2] = False
-    lo = np.array([-np.inf, 1e-9, 1.0 / pts.t_mm.min() * (1 + 1e-6), -5.0])[: len(names)]
-    hi = np.array([np.inf, np.inf, np.inf, 5.0])[: len(names)]
-    theta0 = np.clip(theta0, lo + 1e-12, hi - 1e-12)
+        free[model.B_T] = False
+    # fit coordinates (log10 b_t); b_t t > 1 for every t, b_t <= 1e100 /mm (tau flat in t)
+    lo = np.array([-np.inf, 1e-9, -math.log10(pts.t_mm.min()) + 1e-6, -5.0])[: len(names)]
+    hi = np.array([np.inf, np.inf, LOG10_B_T_MAX, 5.0])[: len(names)]
+    q0 = np.clip(model.to_fit(theta0), lo + 1e-9, hi - 1e-9)
 
-    def solve(theta_start: np.ndarray, w: np.ndarray) -> np.ndarray:
-        def full(q: np.ndarray) -> np.ndarray:
-            th = theta_start.copy()
-            th[free] = q
-            return th
+    def solve(q_start: np.ndarray, w: np.ndarray) -> np.ndarray:
+        def full(x: np.ndarray) -> np.ndarray:
+            q = q_start.copy()
+            q[free] = x
+            return model.from_fit(q)
 
-        def fun(q: np.ndarray) -> np.ndarray:
+        def fun(x: np.ndarray) -> np.ndarray:
             with np.errstate(over="ignore", invalid="ignore"):
-                r = (model.angle_deg(full(q), pts.L_mm, pts.t_mm, pts.pressure_pa)
+                r = (model.angle_deg(full(x), pts.L_mm, pts.t_mm, pts.pressure_pa)
                      - pts.value) * w
-            return np.nan_to_num(r, nan=1e12, posinf=1e12, neginf=-1e12)
+            return np.clip(np.nan_to_num(r, nan=1e12), -1e12, 1e12)
 
-        def jac(q: np.ndarray) -> np.ndarray:
+        def jac(x: np.ndarray) -> np.ndarray:
+            th = full(x)
             with np.errstate(over="ignore", invalid="ignore"):
-                g = model.angle_gradient(full(q), pts.L_mm, pts.t_mm, pts.pressure_pa)
-            return np.nan_to_num(g[:, free] * w[:, None], nan=0.0, posinf=1e12, neginf=-1e12)
+                g = model.gradient_to_fit(
+                    model.angle_gradient(th, pts.L_mm, pts.t_mm, pts.pressure_pa), th)
+            return np.clip(np.nan_to_num(g[:, free] * w[:, None], nan=0.0), -1e12, 1e12)
 
-        sol = least_squares(fun, theta_start[free], jac=jac, bounds=(lo[free], hi[free]),
+        sol = least_squares(fun, q_start[free], jac=jac, bounds=(lo[free], hi[free]),
                             x_scale="jac", method="trf", max_nfev=2000)
-        return full(sol.x)
+        q = q_start.copy()
+        q[free] = sol.x
+        return q
 
     w = np.ones_like(pts.value)
-    theta = solve(theta0, w)
-    sd, rel = _scatter(theta, pts)
+    q = solve(q0, w)
+    sd, rel = _scatter(model.from_fit(q), pts)
     if weighted:
-        w = _weights(theta, pts, sd, rel)
-        theta = solve(theta, w)
-        sd, rel = _scatter(theta, pts)
-        w = _weights(theta, pts, sd, rel)
+        w = _weights(model.from_fit(q), pts, sd, rel)
+        q = solve(q, w)
+        sd, rel = _scatter(model.from_fit(q), pts)
+        w = _weights(model.from_fit(q), pts, sd, rel)
+    theta = model.from_fit(q)
     cov = _covariance(theta, pts, w, free)
     err = _predict(theta, pts) - pts.value
     return ModelParameters(
@@ -209,15 +252,21 @@ def _weights(theta: np.ndarray, pts: Points, sd: float, rel: float) -> np.ndarra
 
 
 def _covariance(theta: np.ndarray, pts: Points, w: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """Covariance of the fit coordinates; J's columns are scaled to unit norm before the
+    pseudo-inverse so that its cut-off only drops directions the data do not fix."""
     k = len(theta)
-    J = model.angle_gradient(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)[:, free] * w[:, None]
+    g = model.angle_gradient(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
+    J = model.gradient_to_fit(g, theta)[:, free] * w[:, None]
     r = (_predict(theta, pts) - pts.value) * w
     n, kf = J.shape
     cov = np.zeros((k, k))
     if n <= kf:
         return cov
     s2 = float(r @ r) / (n - kf)
-    sub = np.linalg.pinv(J.T @ J) * s2
+    norm = np.linalg.norm(J, axis=0)
+    s = np.where(norm > 0, 1.0 / np.where(norm > 0, norm, 1.0), 0.0)
+    Js = J * s
+    sub = np.linalg.pinv(Js.T @ Js) * np.outer(s, s) * s2
     idx = np.flatnonzero(free)
     cov[np.ix_(idx, idx)] = sub
     return cov
@@ -230,7 +279,7 @@ def band(params: ModelParameters, L_mm, t_mm, pressure_pa, level: float = 0.95,
     m = model.angle_deg(params.theta, L_mm, t_mm, pressure_pa)
     g = model.angle_gradient(params.theta, L_mm, t_mm, pressure_pa)
     x = np.asarray(pressure_pa, dtype=float) / model.tau_pa(params.theta, t_mm)
-    var = bands.parameter_variance(g, params.cov) + bands.scatter_variance(
+    var = params.parameter_variance(g) + bands.scatter_variance(
         params.residual_sd, params.residual_rel, m, x)
     half = scale * params.band_scale * z * np.sqrt(var)
     return m, m - half, m + half

@@ -18,6 +18,12 @@ Ogden material stiffens). c = 0 is the paper's form.
 Every function broadcasts over L_mm, t_mm and pressure_pa; ``theta`` is the parameter
 vector (a, a_t, b_t) or (a, a_t, b_t, c). A is signed: a < 0 for a family that bends the
 other way (e.g. an Ecoflex body on a PDMS membrane).
+
+Fit coordinates: the joint fit and its covariance use log10 b_t in place of b_t
+(``to_fit``, ``from_fit``, ``gradient_to_fit``), tau = a_t (log10 b_t + log10 t). b_t is
+badly scaled: when tau hardly depends on t, b_t = 10^(level / a_t) runs to 1e8-1e15 /mm
+and d angle / d b_t to ~1e-15, below any pseudo-inverse cut-off, while log10 b_t stays
+an ordinary parameter with a finite standard error.
 """
 
 from __future__ import annotations
@@ -29,8 +35,41 @@ PARAMETER_NAMES = {
     "exponential": ("a_deg_per_mm", "a_t_pa", "b_t_per_mm"),
     "extended": ("a_deg_per_mm", "a_t_pa", "b_t_per_mm", "c"),
 }
+FIT_NAMES = {form: names[:2] + ("log10_b_t_per_mm",) + names[3:]
+             for form, names in PARAMETER_NAMES.items()}
 TAU_FORM = "tau_pa = a_t_pa * log10(b_t_per_mm * t_mm)"
 LN10 = float(np.log(10.0))
+B_T = 2  # index of b_t in theta (of log10 b_t in the fit coordinates)
+
+
+def to_fit(theta: np.ndarray) -> np.ndarray:
+    """theta -> fit coordinates (b_t replaced by log10 b_t)."""
+    q = np.array(theta, dtype=float)
+    q[B_T] = np.log10(q[B_T])
+    return q
+
+
+def from_fit(q: np.ndarray) -> np.ndarray:
+    """Fit coordinates -> theta (log10 b_t replaced by b_t)."""
+    theta = np.array(q, dtype=float)
+    theta[B_T] = 10.0 ** theta[B_T]
+    return theta
+
+
+def gradient_to_fit(gradient: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """d / d theta (..., k) -> d / d (fit coordinates): the b_t column times
+    d b_t / d log10 b_t = b_t ln 10 (e.g. d angle / d log10 b_t = a_t d angle / d tau)."""
+    g = np.array(gradient, dtype=float)
+    g[..., B_T] *= float(theta[B_T]) * LN10
+    return g
+
+
+def covariance_from_b_t(cov: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """A covariance of theta (b_t in 1/mm) -> one of the fit coordinates (delta method,
+    exact to first order: bands computed from either agree)."""
+    d = np.ones(len(theta))
+    d[B_T] = 1.0 / (float(theta[B_T]) * LN10)
+    return np.asarray(cov, dtype=float) * np.outer(d, d)
 
 
 def tau_pa(theta: np.ndarray, t_mm: np.ndarray | float) -> np.ndarray:

@@ -6,11 +6,12 @@ tau = a_t log10(b_t t) (the reading that reproduces Table 5; see docs/surrogate.
 
 Uncertainty: standard errors as printed (a 0.002, a_t 57.11, b_t 0.896). The paper gives
 no correlation; a_t and b_t come from one fit of tau against t, so their correlation is
-taken from refitting Table 5 (``_tau_correlation``). Residual scatter (its
-large-pressure level): sqrt(1 - R^2) times the spread of the standard design's curve
-from 0 to 90 deg, with R^2 = 0.998 (Table 4, L = 7.1 mm). Domain: L and t of Tables 4
-and 5; the pressure and angle limits (3000 Pa, 90 deg) are assumptions (the paper prints
-no axis limits).
+taken from refitting Table 5 (``_tau_correlation``). Like a fitted one, the covariance
+is stored in log10 b_t (``model.covariance_from_b_t``: the same bands). Residual scatter
+(its large-pressure level): sqrt(1 - R^2) times the spread of the standard design's
+curve from 0 to 90 deg, with R^2 = 0.998 (Table 4, L = 7.1 mm). Domain: L and t of
+Tables 4 and 5; the pressure and angle limits (3000 Pa, 90 deg) are assumptions (the
+paper prints no axis limits).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from solver.materials import get_material
 from surrogate import model, paper_data
 from surrogate.core import Surrogate
 from surrogate.family import Domain, Family
+from surrogate.fit import FORMAT_VERSION
 from surrogate.jointfit import ModelParameters
 
 PAPER_PRESSURE_MAX_PA = 3000.0
@@ -59,7 +61,7 @@ def paper_surrogate() -> Surrogate:
     se = np.array([paper_data.A_SE, paper_data.A_T_SE, paper_data.B_T_SE])
     corr = np.eye(3)
     corr[1, 2] = corr[2, 1] = _tau_correlation()
-    cov = corr * np.outer(se, se)
+    cov = model.covariance_from_b_t(corr * np.outer(se, se), theta)
     params = ModelParameters(
         form="exponential", names=model.PARAMETER_NAMES["exponential"],
         values=tuple(float(v) for v in theta),
@@ -80,4 +82,5 @@ def paper_surrogate() -> Surrogate:
                     h_mm=paper_data.STANDARD_H_MM, parameters={"exponential": params},
                     default_form="exponential", domain=domain)
     return Surrogate(name="paper", family_fits=(family,),
-                     provenance={"source": paper_data.SOURCE, "format_version": 1})
+                     provenance={"source": paper_data.SOURCE,
+                                 "format_version": FORMAT_VERSION})

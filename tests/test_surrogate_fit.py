@@ -3,15 +3,18 @@ the joint-fit covariance against a parametric bootstrap, band coverage held out.
 
 Synthetic curves (surrogate/synthetic.py) follow the model exactly with the paper's
 constants (a = 0.101, a_t = 731.2, b_t = 7.179) plus seeded normal noise, so the expected
-numbers are the generating parameters themselves.
+numbers are the generating parameters themselves. The covariance is that of the fit
+coordinates (log10 b_t in place of b_t, ``surrogate.model.to_fit``).
 """
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from surrogate import fit_surrogate
+from surrogate import fit_surrogate, model
 from surrogate.dataset import CurveData
-from surrogate.jointfit import joint_fit, leave_one_design_out, make_points
+from surrogate.jointfit import band, joint_fit, leave_one_design_out, make_points
 from surrogate.procedure import paper_procedure
 from surrogate.synthetic import PAPER_THETA, synthetic_curves
 
@@ -32,7 +35,7 @@ def test_noise_free_curves_give_the_generating_parameters() -> None:
 def test_noisy_curves_recover_parameters_within_their_standard_errors() -> None:
     fit = joint_fit(points(synthetic_curves(noise_deg=0.5, seed=1)), "exponential")
     se = np.sqrt(np.diag(fit.cov))
-    assert (np.abs(fit.theta - PAPER_THETA) < 4 * se).all()
+    assert (np.abs(model.to_fit(fit.theta) - model.to_fit(PAPER_THETA)) < 4 * se).all()
     assert fit.residual_sd == pytest.approx(0.5, rel=0.2)
 
 
@@ -90,10 +93,51 @@ def test_joint_fit_covariance_matches_a_parametric_bootstrap() -> None:
     boot = []
     for _ in range(60):
         y = m + rng.normal(size=m.shape) * sd
-        boot.append(joint_fit(type(pts)(pts.L_mm, pts.t_mm, pts.pressure_pa, y, pts.curve),
-                              "exponential", start=fit.theta).theta)
+        boot.append(model.to_fit(joint_fit(
+            type(pts)(pts.L_mm, pts.t_mm, pts.pressure_pa, y, pts.curve),
+            "exponential", start=fit.theta).theta))
     ratio = np.std(boot, axis=0, ddof=1) / np.sqrt(np.diag(fit.cov))
     assert ((ratio > 0.65) & (ratio < 1.5)).all(), ratio
+
+
+@pytest.mark.parametrize(("form", "theta", "noise_deg"), [
+    ("exponential", np.array([-0.05, 50.0, 1e12]), 2.0),
+    ("extended", np.array([-0.05, 60.0, 1e10, -0.03]), 2.0),
+])
+def test_b_t_of_a_family_whose_tau_ignores_t_has_an_honest_error(form, theta,
+                                                                  noise_deg) -> None:
+    """tau = a_t (log10 b_t + log10 t) with log10 b_t = 12 (10) and a_t = 50 (60) Pa:
+    tau is ~600 Pa and changes by 2.5 % (3 %) from t = 0.5 to 1 mm, like the reversed
+    pair's FE fits (b_t 1e15 and 2.2e8 /mm). b_t is then badly scaled (d angle / d b_t
+    ~ 1e-14) but log10 b_t is an ordinary parameter: its standard error must be finite
+    and match a parametric bootstrap (200 refits; sd ratio within 1/1.5-1.5), and the
+    parameter part of the band must not be narrower than the bootstrap's spread of
+    the fitted curves (>= 0.9 x: a 200-sample sd is uncertain by ~5 %), also where the
+    slope of tau in log t matters most (t = 0.3 and 4 mm, outside the fitted range)."""
+    curves = synthetic_curves(theta, body="ecoflex_00_30", membrane="pdms_1_15",
+                              noise_deg=noise_deg, seed=21, n_points=15)
+    pts = points(curves)
+    fit = joint_fit(pts, form)
+    se = fit.standard_errors["log10_b_t_per_mm"]
+    assert np.isfinite(se) and se > 0.1
+    m = _predict(fit, pts)
+    x = pts.pressure_pa / model.tau_pa(fit.theta, pts.t_mm)
+    sd = np.sqrt(fit.residual_sd**2 * np.expm1(-x) ** 2 + (fit.residual_rel * m) ** 2)
+    L, t, p = np.full(5, 15.1), np.array([0.3, 0.5, 1.0, 2.0, 4.0]), np.full(5, 1500.0)
+    rng = np.random.default_rng(22)
+    log_b_t, curve = [], []
+    for _ in range(200):
+        y = m + rng.normal(size=m.shape) * sd
+        f = joint_fit(type(pts)(pts.L_mm, pts.t_mm, pts.pressure_pa, y, pts.curve), form,
+                      start=fit.theta)
+        log_b_t.append(np.log10(f.theta[2]))
+        curve.append(model.angle_deg(f.theta, L, t, p))
+    ratio = np.std(log_b_t, ddof=1) / se
+    assert 1 / 1.5 < ratio < 1.5, (se, ratio)
+    bare = replace(fit, residual_sd=0.0, residual_rel=0.0, band_scale=1.0)
+    mid, lo, hi = band(bare, L, t, p, level=0.95)
+    boot_half = 1.96 * np.std(curve, axis=0, ddof=1)
+    assert ((hi - mid) >= 0.9 * boot_half).all(), (hi - mid) / boot_half
 
 
 def _predict(fit, pts):

@@ -6,6 +6,7 @@ closed-form model angle = a L (exp(p / tau) - 1), tau = a_t log10(b_t t).
 
 import json
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -173,12 +174,47 @@ def test_failed_save_keeps_the_old_file(fitted, tmp_path) -> None:
 
 def test_provenance_records_the_source(fitted) -> None:
     prov = fitted.provenance
-    assert prov["format_version"] == 1 and prov["record_keys"] and prov["created_utc"]
+    assert prov["format_version"] == surrogate.FORMAT_VERSION == 2
+    assert prov["record_keys"] and prov["created_utc"]
     assert "package_version" in prov and "git_commit" in prov
     fam = fitted.families[0]
     assert {"body_material", "membrane_material", "T_mm", "b_mm", "h_mm", "parameters",
             "domain"} <= set(fam)
     params = fitted.family_parameters(Design())
     for key in ("a_deg_per_mm", "a_t_pa", "b_t_per_mm", "tau_form", "covariance",
-                "residual_sd_deg"):
+                "covariance_names", "standard_errors", "residual_sd_deg"):
         assert key in params
+    assert params["covariance_names"][2] == "log10_b_t_per_mm"
+
+
+DATA = Path(__file__).parent / "data"
+
+
+def test_format_version_1_file_loads_with_the_same_answers(tmp_path) -> None:
+    """tests/data/surrogate_v1.json is service/data/surrogate.json as shipped at commit
+    5d1f4a8 (format version 1: covariances in b_t, 1/mm; report stripped), and
+    surrogate_v1_expected.json holds that code's predictions and inverses from it. Read
+    now, the covariance is converted to log10 b_t (delta method, exact to first order),
+    so every band comes out the same; saved again it is a version-2 file."""
+    old = load_surrogate(DATA / "surrogate_v1.json")
+    cases = json.loads((DATA / "surrogate_v1_expected.json").read_text())["cases"]
+    assert len(cases) == 18
+    for c in cases:
+        fam = next(f for f in old.family_fits if (f.body_material.id, f.membrane_material.id)
+                   == (c["body"], c["membrane"]))
+        d = Design(L_mm=c["L_mm"], t_mm=c["t_mm"], body_material=fam.body_material,
+                   membrane_material=fam.membrane_material, T_mm=fam.T_mm, b_mm=fam.b_mm,
+                   h_mm=fam.h_mm)
+        pred = old.predict(d, c["pressure_pa"], form=c["form"])
+        inv = old.inverse(d, c["inverse_angle_deg"], form=c["form"])
+        for got, key in ((pred.angle_deg, "angle_deg"), (pred.lower_deg, "lower_deg"),
+                         (pred.upper_deg, "upper_deg"), (inv.pressure_pa, "inverse_pressure_pa"),
+                         (inv.lower_pa, "inverse_lower_pa"), (inv.upper_pa, "inverse_upper_pa")):
+            np.testing.assert_allclose(got, c[key], rtol=1e-12, err_msg=key)
+    std = next(f for f in old.family_fits if f.body_material.id == "pdms_1_10")
+    # b_t = 7.7 /mm with sd 0.14 /mm in the v1 file -> log10 b_t sd 0.008
+    assert std.parameters["exponential"].standard_errors["log10_b_t_per_mm"] == \
+        pytest.approx(0.00803, rel=1e-3)
+    again = load_surrogate(save_surrogate(old, tmp_path / "v2.json"))
+    assert json.loads((tmp_path / "v2.json").read_text())["format_version"] == 2
+    assert again == old
