@@ -91,10 +91,11 @@ class PardisoFactor:
         self.negative_pivots = int(cached.ps.iparm[22])
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        x = self._p._call(33, np.ascontiguousarray(b, dtype=float))
+        """Solve for one right-hand side (n,) or several (n, k) in one pass."""
+        x = self._p._call(33, np.asfortranarray(b, dtype=float))
         if not np.all(np.isfinite(x)):
             raise np.linalg.LinAlgError("PARDISO returned a non-finite solution")
-        return x
+        return np.ascontiguousarray(x)
 
 
 def available_backends() -> list[str]:

@@ -21,7 +21,7 @@ target step (benchmarks/RESULTS.md).
 Steps restart from the last converged state (no extrapolating predictor: it
 caused most Newton failures in earlier prototypes); a failed step is cut back
 by half; the step grows when Newton converges quickly and shrinks when the
-angle increment is large, aiming at ~6 degrees and at most ~100 Pa per step (so
+angle increment is large, aiming at ~8 degrees and at most ~150 Pa per step (so
 that the curve is resolved where the angle is small and the pressure rises fast).
 A step that cannot converge after the cut-backs ends the curve with status
 "failed" and the reason.
@@ -42,8 +42,8 @@ from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions
 from solver.model import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
 
-TARGET_ANGLE_STEP_DEG = 6.0
-MAX_PRESSURE_STEP_PA = 100.0   # output resolution where the curve is steep in pressure
+TARGET_ANGLE_STEP_DEG = 8.0
+MAX_PRESSURE_STEP_PA = 150.0   # output resolution where the curve is steep in pressure
 MIN_CUTBACK = 1.0 / 1024.0
 DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
 
@@ -141,9 +141,10 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
         t0 = time.perf_counter()
         try:
             fac = factorize(ev.K, backend)
-            a = fac.solve(-ev.R)
-            if target_volume is not None:
-                b = fac.solve(ev.g)
+            if target_volume is None:
+                a = fac.solve(-ev.R)
+            else:                               # both right-hand sides in one pass
+                a, b = fac.solve(np.column_stack((-ev.R, ev.g))).T
         except (np.linalg.LinAlgError, RuntimeError) as exc:
             raise StepFailed(f"linear solve failed: {exc}") from None
         finally:

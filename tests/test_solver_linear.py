@@ -30,6 +30,10 @@ def test_solution_and_inertia(backend):
     x = fac.solve(b)
     assert np.abs(K @ x - b).max() < 1e-10 * np.abs(b).max()
     assert fac.negative_pivots == negative
+    B = np.column_stack((b, 2.0 * b + 1.0))            # several right-hand sides at once
+    X = fac.solve(B)
+    assert X.shape == B.shape
+    assert np.abs(K @ X - B).max() < 1e-10 * np.abs(B).max()
 
 
 @pytest.mark.skipif("pardiso" not in available_backends(), reason="pypardiso not installed")
