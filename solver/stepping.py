@@ -34,6 +34,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from solver.curve import Curve
 from solver.design import Design
@@ -180,9 +181,20 @@ def inflate(design: Design, settings: SolverSettings | None = None,
             ) -> tuple[Curve, ActuatorModel, np.ndarray]:
     """Like ``solve``, also returning the discrete model and the last converged
     displacement (free dofs), for field output (VTK). ``divisions``: the level-0 mesh
-    resolution (convergence studies only; records assume the default)."""
+    resolution (convergence studies only; records assume the default).
+
+    numpy's OpenBLAS is held to one thread meanwhile: its idle threads spin and take
+    the cores from MKL PARDISO's, which does the parallel work (benchmarks/RESULTS.md).
+    """
     settings = (settings or SolverSettings()).validated()
     design = design.validated()
+    with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
+        return _inflate(design, settings, on_step, backend, debug, divisions)
+
+
+def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict], None] | None,
+             backend: str, debug: bool, divisions: MeshDivisions
+             ) -> tuple[Curve, ActuatorModel, np.ndarray]:
     t_start = time.perf_counter()
     model = ActuatorModel(design, settings, divisions)
     volume_control = settings.control == "volume"
