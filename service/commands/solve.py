@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from solver.design import design_from_dict
+from solver.errors import InputError
 from solver.settings import CONTROLS, ELEMENTS, MAX_MESH_LEVEL, TIPS, SolverSettings
 
 
@@ -56,12 +58,27 @@ def _design(args: argparse.Namespace):
         "membrane_material": args.membrane_material})
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse output paths that cannot be written before spending minutes on a solve."""
+    for option in ("json", "csv", "plot", "vtk"):
+        path = getattr(args, option)
+        if path is None:
+            continue
+        target = Path(path)
+        if target.is_dir():
+            raise InputError(f"--{option}", f"{path} is a directory", "a file path")
+        if not target.parent.is_dir():
+            raise InputError(f"--{option}", f"directory {target.parent} does not exist",
+                             "a path in an existing directory")
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from solver.io import curve_to_csv, plot_curve
     from solver.stepping import inflate
 
+    _check_outputs(args)
     design = _design(args)
     settings = SolverSettings(
         mesh_level=args.mesh, element=args.element, control=args.control,
