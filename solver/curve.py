@@ -69,3 +69,23 @@ class Curve:
                    pressure_maximum_index=self.pressure_maximum_index, n_dofs=self.n_dofs,
                    wall_time_s=self.wall_time_s, timings_s=dict(self.timings_s))
         return out
+
+    def stability_notes(self) -> list[str]:
+        """Plain-language notes on a loss of stability along the curve (empty if none):
+        the first step whose tangent at fixed pressure is not positive definite (the
+        actuator would snap under pressure control: e.g. the two-balloon mode of thin
+        membranes), and a pressure maximum under volume control."""
+        notes = []
+        unstable = np.nonzero(np.asarray(self.negative_eigenvalues) > 0)[0]
+        if len(unstable):
+            i = int(unstable[0])
+            notes.append(
+                f"tangent not positive definite from step {i} (p = {self.pressure_pa[i]:.0f} Pa,"
+                f" angle = {self.angle_deg[i]:.1f} deg, {int(self.negative_eigenvalues[i])}"
+                " negative eigenvalue(s)): unstable under pressure control")
+        if self.pressure_maximum_index >= 0:
+            i = self.pressure_maximum_index
+            notes.append(f"pressure maximum {self.pressure_pa[i]:.0f} Pa at step {i} "
+                         f"(angle = {self.angle_deg[i]:.1f} deg): a limit point")
+        return notes
+

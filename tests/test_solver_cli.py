@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from service.cli import main
+from solver.curve import Curve
 
 COARSE = ["--mesh", "0", "--element", "hex1", "--max-angle-deg", "4", "--quiet"]
 
@@ -43,3 +44,22 @@ def test_output_in_a_missing_directory_is_refused_before_solving(tmp_path, capsy
     assert "points" not in captured.out          # no solve ran (it prints its summary)
     assert option in err and "does not exist" in err
     assert "Traceback" not in err
+
+
+def _curve(negative, pmax_index):
+    n = len(negative)
+    p = np.linspace(0.0, 2000.0, n)
+    return Curve(pressure_pa=p, volume_ul=p / 100, time_s=p / 250, angle_deg=p / 20,
+                 tip_displacement_mm=np.zeros((n, 2)), max_membrane_stretch=np.ones(n),
+                 force_mn=np.full(n, np.nan), newton_iterations=np.zeros(n, int),
+                 residual_norm=np.zeros(n), negative_eigenvalues=np.array(negative),
+                 status="failed", reason="test", pressure_maximum_index=pmax_index)
+
+
+def test_stability_notes_name_the_first_unstable_step_and_the_pressure_maximum():
+    assert _curve([0, 0, 0, 0, 0], -1).stability_notes() == []
+    assert _curve([-1, -1, -1], -1).stability_notes() == []          # inertia not computed
+    notes = _curve([0, 0, 0, 2, 2], 3).stability_notes()
+    assert len(notes) == 2
+    assert "from step 3 (p = 1500 Pa, angle = 75.0 deg, 2 negative" in notes[0]
+    assert "pressure maximum 1500 Pa at step 3" in notes[1]

@@ -97,6 +97,8 @@ def run(args: argparse.Namespace) -> int:
     bar.close()
     print(f"{curve.status}: {curve.reason}; {len(curve)} points, {curve.n_dofs} dofs, "
           f"{curve.wall_time_s:.1f} s")
+    for note in curve.stability_notes():
+        print(f"stability: {note}")
     print(f"{'pressure_pa':>12} {'volume_ul':>10} {'time_s':>8} {'angle_deg':>10} "
           f"{'stretch':>8}")
     for i in range(len(curve)):
