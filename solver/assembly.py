@@ -155,9 +155,9 @@ class BlockState:
     stiffness: np.ndarray | None   # (ne, 3 nb, 3 nb)
     lam_max: np.ndarray       # (ne, nq)
     min_J: float
-    pressure_coef: np.ndarray | None = None     # (ne, npr) q_e used
     constraint: np.ndarray | None = None        # (ne, npr) R_p = g - M q / K
     D: np.ndarray | None = None                 # (ne, npr, 3 nb)
+    dilatation_error: float = 0.0               # max |M^-1 R_p| (a strain)
 
 
 def consistent_pressures(block: MaterialBlock, u: np.ndarray) -> np.ndarray:
@@ -214,10 +214,14 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     if pressure_coef is not None:
         D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV,
                       optimize=True).reshape(ne, -1, 3 * nb)
-        KMR = block.bulk_pa * np.einsum("emn,en->em", block.Minv, Rp)
-        r = r + np.einsum("ema,em->ea", D, KMR)
+        strain = np.einsum("emn,en->em", block.Minv, Rp)                      # M^-1 R_p
+        r = r + np.einsum("ema,em->ea", D, block.bulk_pa * strain)
+        dilatation_error = float(np.abs(strain).max()) if strain.size else 0.0
+    else:
+        dilatation_error = 0.0
     if not with_tangent:
-        return BlockState(energy, r, None, lam, float(J.min()), coef, constraint, D)
+        return BlockState(energy, r, None, lam, float(J.min()), constraint, D,
+                          dilatation_error)
 
     f = Finv_T.reshape(ne, nq, 9)
     # T_(iJ)(kL) = f_iL f_kJ
@@ -229,7 +233,7 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
         D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV,
                       optimize=True).reshape(ne, -1, 3 * nb)
     K += block.bulk_pa * np.matmul(D.transpose(0, 2, 1), block.Minv @ D)
-    return BlockState(energy, r, K, lam, float(J.min()), coef, constraint, D)
+    return BlockState(energy, r, K, lam, float(J.min()), constraint, D, dilatation_error)
 
 
 class Pattern:

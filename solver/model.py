@@ -129,9 +129,7 @@ class SolidModel:
             st = evaluate_block(block, u, tangent,
                                 None if pressures is None else pressures[i])
             states.append(st)
-            if st.constraint is not None and st.constraint.size:
-                strain = np.einsum("emn,en->em", block.Minv, st.constraint)
-                constraint_error = max(constraint_error, float(np.abs(strain).max()))
+            constraint_error = max(constraint_error, st.dilatation_error)
             energy += st.energy
             r += scatter_vector(self.ndofs, block.dofs, st.residual)
             if st.stiffness is not None:

@@ -84,10 +84,9 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
     """Converge one load step of the mixed u-q form (q: element pressures per block).
 
     ``start``: the evaluation at (u, q, p) when known (a volume step starting from the
-    last converged state). Converged when the
-    condensed residual, the cavity volume and the dilatation constraint are all
-    below ``settings.newton_tol`` (relative to the pressure load, the chamber
-    volume, and absolute strain).
+    last converged state). Converged when the condensed residual, the cavity volume
+    and the dilatation constraint are all below ``settings.newton_tol`` (relative to
+    the pressure load, the chamber volume, and absolute strain).
     """
     tol = settings.newton_tol
     force_floor = model.mu0_min_pa * 1e-6
