@@ -69,6 +69,23 @@ class VectorGP:
         var = self.scale**2 * (variances @ self.components**2) + self.residual_var
         return mean, var
 
+    def predict_many(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Means and variances (N, c) at the N rows of ``u``."""
+        st = self._stack  # type: ignore[attr-defined]
+        u = np.atleast_2d(np.asarray(u, float))
+        d2 = (u[:, None, :] - st["x"][None, :, :]) ** 2                 # (N, n, d)
+        r = np.sqrt(np.maximum(np.einsum("md,Nnd->mNn", st["inv_l2"], d2), 0.0))
+        k = (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * np.exp(-SQRT5 * r)  # (m, N, n)
+        h = np.column_stack((np.ones(len(u)), u[:, st["varying"]]))     # (N, p)
+        means = h @ st["beta"].T + np.einsum("mNn,mn->Nm", k, st["alpha"])
+        v = np.einsum("mij,mNj->mNi", st["linv"], k)
+        rr = h[None, :, :] - np.einsum("mnp,mNn->mNp", st["kinv_h"], k)
+        quad = np.einsum("mNp,mpq,mNq->mN", rr, st["a_inv"], rr)
+        variances = st["s2"][:, None] * np.maximum(1.0 - (v * v).sum(2) + quad, 0.0)
+        mean = self.center + self.scale * (means @ self.components)
+        var = self.scale**2 * (variances.T @ self.components**2) + self.residual_var
+        return mean, var
+
     def loo(self) -> tuple[np.ndarray, np.ndarray]:
         """Leave-one-out mean and variance of every output at every training row."""
         n = len(self.gps[0].y)
