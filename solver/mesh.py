@@ -24,7 +24,7 @@ from solver.design import Design
 class MeshDivisions:
     """Level-0 resolution: element sizes along x (mm) and division counts per segment."""
 
-    x_chamber_mm: float = 1.0       # element size along the chamber
+    x_chamber_mm: float = 1.0       # element size along the chamber, at W = 3 mm
     x_wall_mm: float = 1.5          # along the end walls (graded away from the chamber)
     y_chamber: int = 4              # across the half chamber width b/2
     y_side: int = 2                 # across the side wall, b/2 .. W/2 (graded)
@@ -39,6 +39,7 @@ class MeshDivisions:
 DEFAULT_DIVISIONS = MeshDivisions()
 COARSE_DIVISIONS = MeshDivisions(y_chamber=2, y_side=1, membrane=1)
 GRADING_RATIO = 1.6     # largest / smallest element in a graded segment
+REFERENCE_WIDTH_MM = 3.0   # the x element sizes are given at this width (the paper's W)
 
 
 @dataclass(frozen=True)
@@ -82,9 +83,13 @@ def build_mesh(design: Design, level: int,
     xb = float(d.body_length_mm)
     r = refinement(level)
 
-    n_ch = r * max(2, int(np.ceil(d.L_mm / divisions.x_chamber_mm)))
-    n_left = r * max(1, int(np.ceil(x0 / divisions.x_wall_mm)))
-    n_right = r * max(1, int(np.ceil((xb - x1) / divisions.x_wall_mm)))
+    # Element sizes along x scale with the width, so that a design scaled by k in every
+    # length gets the mesh scaled by k: the FE keeps the problem's exact invariance
+    # (angle(p) unchanged), and the emulator relies on it (solver/design_space.py).
+    k = d.W_mm / REFERENCE_WIDTH_MM
+    n_ch = r * max(2, int(np.ceil(d.L_mm / (k * divisions.x_chamber_mm) - 1e-9)))
+    n_left = r * max(1, int(np.ceil(x0 / (k * divisions.x_wall_mm) - 1e-9)))
+    n_right = r * max(1, int(np.ceil((xb - x1) / (k * divisions.x_wall_mm) - 1e-9)))
     x = _join(_segment(0.0, x0, n_left, "b"), np.linspace(x0, x1, n_ch + 1),
               _segment(x1, xb, n_right, "a"))
 
