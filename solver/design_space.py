@@ -47,6 +47,15 @@ PAIRS: tuple[tuple[str, str], ...] = (
     ("ecoflex_00_30", "pdms_1_15"),
     ("ecoflex_00_30", "ecoflex_00_30"),
 )
+# Pairs whose bodies differ only in stiffness share one emulator: PDMS 1:10 and 1:15 have
+# the same Ogden exponent to 1 % (3.268, 3.299; Table 1), so on the same membrane they are
+# one material family whose coordinate is the stiffness contrast mu0_body / mu0_membrane.
+GROUPS: dict[tuple[str, str], str] = {
+    ("pdms_1_10", "ecoflex_00_30"): "pdms/ecoflex_00_30",
+    ("pdms_1_15", "ecoflex_00_30"): "pdms/ecoflex_00_30",
+    ("ecoflex_00_30", "pdms_1_15"): "ecoflex_00_30/pdms_1_15",
+    ("ecoflex_00_30", "ecoflex_00_30"): "ecoflex_00_30/ecoflex_00_30",
+}
 STIFFNESS_SCALE_RANGE = (0.5, 2.0)
 REDUCED_RATIO_RANGE = (STIFFNESS_SCALE_RANGE[0] / STIFFNESS_SCALE_RANGE[1],
                        STIFFNESS_SCALE_RANGE[1] / STIFFNESS_SCALE_RANGE[0])
@@ -54,6 +63,18 @@ REDUCED_RATIO_RANGE = (STIFFNESS_SCALE_RANGE[0] / STIFFNESS_SCALE_RANGE[1],
 # p's within this relative tolerance (JSON round trips and 4-digit inputs stay inside).
 SCALE_TOLERANCE = 1e-3
 SAMPLED = (*GEOMETRY, "stiffness_ratio")   # coordinates of the reduced box, in order
+
+
+def contrast(pair: tuple[str, str], stiffness_ratio: float) -> float:
+    """Initial-shear-modulus contrast mu0_body / mu0_membrane of a reduced design."""
+    return stiffness_ratio * MATERIALS[pair[0]].mu0_kpa / MATERIALS[pair[1]].mu0_kpa
+
+
+def contrast_range(group: str) -> tuple[float, float]:
+    """The contrast range the group's pairs cover in the reduced box."""
+    pairs = [p for p, g in GROUPS.items() if g == group]
+    lo, hi = REDUCED_RATIO_RANGE
+    return (min(contrast(p, lo) for p in pairs), max(contrast(p, hi) for p in pairs))
 
 
 def scaled_material(preset_id: str, scale: float) -> OgdenMaterial:
@@ -100,6 +121,11 @@ class BoxPoint:
     pressure_scale: float
     length_scale: float
 
+    @property
+    def group(self) -> str:
+        """The emulator that answers for this design (``GROUPS``)."""
+        return GROUPS[self.pair]
+
     def reduced_design(self) -> Design:
         """The database design with the same angle(p / pressure_scale)."""
         body, membrane = self.pair
@@ -108,8 +134,12 @@ class BoxPoint:
                       **self.geometry_mm).validated()
 
     def coordinates(self) -> np.ndarray:
-        """Unit-cube coordinates (log scale) of the reduced design, in SAMPLED order."""
-        return unit_coordinates(self.geometry_mm, self.stiffness_ratio)
+        """Unit-cube coordinates (log scale) of the reduced design in its group: the five
+        lengths on the box's ranges, then the stiffness contrast on the group's range."""
+        u = unit_coordinates(self.geometry_mm, REDUCED_RATIO_RANGE[0])
+        u[-1] = _log_unit(contrast(self.pair, self.stiffness_ratio),
+                          *contrast_range(self.group))
+        return u
 
 
 def _log_unit(value: float, lo: float, hi: float) -> float:
@@ -150,9 +180,11 @@ def _preset_and_scale(material: OgdenMaterial, field: str) -> tuple[str, float]:
     return found
 
 
-def locate(design: Design) -> BoxPoint:
+def locate(design: Design, reduced: bool = False) -> BoxPoint:
     """The design in the box's terms; OutOfBoxError (naming the field, the range and the
-    nearest in-box design) when it is outside."""
+    nearest in-box design) when it is outside. ``reduced``: check only the stiffness
+    ratio s_body / s_membrane against REDUCED_RATIO_RANGE (database designs: membrane at
+    its preset, body at the ratio), not each layer's scale."""
     design = design.validated()
     body, s_body = _preset_and_scale(design.body_material, "body_material")
     membrane, s_membrane = _preset_and_scale(design.membrane_material, "membrane_material")
@@ -181,7 +213,10 @@ def locate(design: Design) -> BoxPoint:
                                 "the emulator's box",
                                 f"{lo:g} <= {n} <= {hi:g} mm at W = 3 mm (or the same "
                                 "ratios to W)", nearest())
-    for field, s in (("body_material", s_body), ("membrane_material", s_membrane)):
+    scales = ((("body_material", s_body / s_membrane),) if reduced else
+              (("body_material", s_body), ("membrane_material", s_membrane)))
+    for field, s in scales:
+        lo_s, hi_s = REDUCED_RATIO_RANGE if reduced else STIFFNESS_SCALE_RANGE
         if not lo_s * (1 - SCALE_TOLERANCE) <= s <= hi_s * (1 + SCALE_TOLERANCE):
             raise OutOfBoxError(field, f"stiffness scale {s:.4g} is outside the box",
                                 f"{lo_s:g} <= s <= {hi_s:g} (mu_kpa = s x the preset's)",

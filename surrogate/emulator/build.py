@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from solver.design_space import PAIRS, locate
+from solver.design_space import GROUPS, locate
 from solver.errors import InputError
 from solver.precompute.grid import BLOCKED_MAX_PRESSURE_PA
 from solver.settings import SolverSettings
@@ -58,6 +58,7 @@ class _Rows:
     curves: list          # (p_red, angle) per record, for LOO in angle
     failed: list          # (u, end angle, reason)
     signs: list
+    failed_signs: list
 
 
 def default_free_settings() -> SolverSettings:
@@ -75,18 +76,19 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
     force: dict[tuple[str, str], tuple[list, list]] = {}
     for rec in records:
         try:
-            point = locate(rec.design)
+            point = locate(rec.design, reduced=True)
         except InputError:
             continue
         c = rec.curve
         if rec.settings == free_settings:
-            rows = free.setdefault(point.pair, _Rows([], [], [], [], [], []))
+            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], []))
             f = curve_features(c.pressure_pa / point.pressure_scale,
                                c.volume_ul / point.length_scale**3, c.angle_deg)
             u = point.coordinates()
             if f.end_angle_deg < LIMIT_ANGLE_DEG or not np.isfinite(f.log_p).all():
                 rows.failed.append((u.tolist(), min(f.end_angle_deg, LIMIT_ANGLE_DEG),
                                     c.reason))
+                rows.failed_signs.append(f.sign)
                 continue
             rows.u.append(u)
             rows.y.append(np.concatenate((f.log_p, f.log_v)))
@@ -97,7 +99,7 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
             y = force_features(c.pressure_pa / point.pressure_scale,
                                c.force_mn / (point.pressure_scale * point.length_scale**2))
             if np.isfinite(y).all():
-                us, ys = force.setdefault(point.pair, ([], []))
+                us, ys = force.setdefault(point.group, ([], []))
                 us.append(point.coordinates())
                 ys.append(y)
     return free, force
@@ -156,50 +158,69 @@ def _band_scale_for(curves: list, mean: np.ndarray, var: np.ndarray, level: floa
     return float(scale), report
 
 
+def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float, seed: int,
+             force_rows: tuple[list, list] | None) -> tuple[PairEmulator, dict]:
+    u = np.array(rows.u)[keep]
+    y = np.array(rows.y)[keep]
+    curves = [c for c, k in zip(rows.curves, keep) if k]
+    keys = tuple(k for k, kk in zip(rows.keys, keep) if kk)
+    vgp = fit_vector_gp(u, y, seed=seed)
+    loo_mean, loo_var = vgp.loo()
+    band_scale, loo = _band_scale_for(curves, loo_mean, loo_var, level)
+    force_gp, force_scale = None, 1.0
+    if force_rows is not None and len(force_rows[0]) >= MIN_DESIGNS:
+        force_gp = fit_vector_gp(np.array(force_rows[0]), np.array(force_rows[1]), seed=seed)
+        fm, fv = force_gp.loo()
+        zs = np.abs(fm - np.array(force_rows[1])) / np.sqrt(fv)
+        force_scale = float(max(np.quantile(zs, level) / z_value(level), 0.5))
+    failed = tuple((np.array(fu), fa, fr) for fu, fa, fr in rows.failed)
+    pe = PairEmulator(
+        pair=key, sign=sign, curves=vgp, band_scale=band_scale,
+        fe_limit_angle_deg=LIMIT_ANGLE_DEG,
+        fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
+                       "(SolverSettings.max_angle_deg)",
+        coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale, failed=failed)
+    report = {"designs": int(keep.sum()), "failed_designs": len(failed),
+              "components": len(vgp.gps),
+              "force_designs": 0 if force_rows is None else len(force_rows[0]),
+              "force_band_scale": force_scale, "fitted": True, **loo}
+    return pe, report
+
+
 def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
                  provenance: dict | None = None, seed: int = 0) -> Emulator:
-    """Fit one PairEmulator per pair with at least MIN_DESIGNS complete curves."""
+    """One emulator per material group (``solver.design_space.GROUPS``) and bending sign
+    with at least MIN_DESIGNS complete curves; where a group bends both ways (a soft body
+    on a soft membrane), a GP of the sign over the box says which applies."""
     free, force = _collect(records)
-    pairs: dict[tuple[str, str], PairEmulator] = {}
+    models: dict[str, PairEmulator] = {}
+    sign_models: dict[str, object] = {}
     report: dict[str, object] = {"level": level, "pairs": {}}
-    for pair in PAIRS:
-        rows = free.get(pair)
+    for group in sorted(set(GROUPS.values())):
+        rows = free.get(group)
         if rows is None or len(rows.u) < MIN_DESIGNS:
-            report["pairs"][f"{pair[0]}/{pair[1]}"] = {  # type: ignore[index]
+            report["pairs"][group] = {  # type: ignore[index]
                 "designs": 0 if rows is None else len(rows.u), "fitted": False}
             continue
         signs = np.array(rows.signs)
-        sign = 1.0 if (signs > 0).sum() >= (signs < 0).sum() else -1.0
-        keep = signs == sign
-        u = np.array(rows.u)[keep]
-        y = np.array(rows.y)[keep]
-        curves = [c for c, k in zip(rows.curves, keep) if k]
-        keys = tuple(k for k, kk in zip(rows.keys, keep) if kk)
-        vgp = fit_vector_gp(u, y, seed=seed)
-        loo_mean, loo_var = vgp.loo()
-        band_scale, loo = _band_scale_for(curves, loo_mean, loo_var, level)
-        force_gp, force_scale = None, 1.0
-        if pair in force and len(force[pair][0]) >= MIN_DESIGNS:
-            force_gp = fit_vector_gp(np.array(force[pair][0]), np.array(force[pair][1]),
-                                     seed=seed)
-            fm, fv = force_gp.loo()
-            fy = np.array(force[pair][1])
-            zs = np.abs(fm - fy) / np.sqrt(fv)
-            force_scale = float(max(np.quantile(zs, level) / z_value(level), 0.5))
-        failed = [(np.array(fu), fa, fr) for fu, fa, fr in rows.failed]
-        pairs[pair] = PairEmulator(
-            pair=pair, sign=sign, curves=vgp, band_scale=band_scale,
-            fe_limit_angle_deg=LIMIT_ANGLE_DEG,
-            fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
-                           "(SolverSettings.max_angle_deg)",
-            coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
-            failed=tuple(failed))
-        report["pairs"][f"{pair[0]}/{pair[1]}"] = {  # type: ignore[index]
-            "designs": int(keep.sum()), "opposite_sign_designs": int((~keep).sum()),
-            "failed_designs": len(failed), "components": len(vgp.gps),
-            "force_designs": 0 if pair not in force else len(force[pair][0]),
-            "force_band_scale": force_scale, "fitted": True, **loo}
-    if not pairs:
+        all_u = np.array(rows.u + [np.asarray(f[0]) for f in rows.failed])
+        all_signs = np.concatenate((signs, np.array(rows.failed_signs)))
+        both = (all_signs > 0).any() and (all_signs < 0).any()
+        if both:
+            sign_models[group] = fit_vector_gp(all_u, all_signs[:, None], seed=seed)
+        for sign in (1.0, -1.0):
+            keep = signs == sign
+            key = group + ("+" if sign > 0 else "-")
+            if keep.sum() < MIN_DESIGNS:
+                if keep.any():
+                    report["pairs"][key] = {"designs": int(keep.sum()),  # type: ignore
+                                            "fitted": False}
+                continue
+            pe, rep = _fit_one(key, rows, keep, sign, level, seed, force.get(group))
+            models[key] = pe
+            report["pairs"][key] = rep  # type: ignore[index]
+    if not models:
         raise InputError("db", "no material pair has enough default-FE curves in the box",
                          f">= {MIN_DESIGNS} complete free-tip curves per pair")
-    return Emulator(name=name, pairs=pairs, provenance=dict(provenance or {}), report=report)
+    return Emulator(name=name, pairs=models, provenance=dict(provenance or {}), report=report,
+                    sign_models=sign_models)  # type: ignore[arg-type]

@@ -27,7 +27,7 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95
     fit_s = time.perf_counter() - t0
     path = save_emulator(emulator, output)
     yield ""
-    yield (f"{'emulator pair':32s} {'designs':>7s} {'failed':>6s} {'comp':>4s} "
+    yield (f"{'emulator group':32s} {'designs':>7s} {'failed':>6s} {'comp':>4s} "
            f"{'LOO rmse deg':>12s} {'LOO max deg':>11s} {'band x':>7s} {'LOO cover':>9s} "
            f"{'force designs':>13s}")
     for pair, rep in emulator.report["pairs"].items():

@@ -41,6 +41,7 @@ from surrogate.emulator.vector_gp import VectorGP
 
 N_NODES = len(ANGLE_NODES_DEG)
 FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE curve limits
+SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness balance
 _B_ANGLE = spline_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
 _FINE_FORCE_PA = np.geomspace(FORCE_PRESSURE_NODES_PA[0], FORCE_PRESSURE_NODES_PA[-1], 200)
 _B_FORCE = spline_matrix(FORCE_PRESSURE_NODES_PA, _FINE_FORCE_PA)
@@ -61,7 +62,7 @@ class PairEmulator:
     keys                 their record keys (nearest FE curves)
     """
 
-    pair: tuple[str, str]
+    pair: str                    # group and sign, e.g. "pdms/ecoflex_00_30+"
     sign: float
     curves: VectorGP
     band_scale: float
@@ -108,18 +109,35 @@ class Emulator:
     """The default predictor: implements ``surrogate.predictor.Predictor``."""
 
     name: str
-    pairs: dict[tuple[str, str], PairEmulator]
+    pairs: dict[str, PairEmulator]        # by group and sign ("pdms/ecoflex_00_30+")
     provenance: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
+    sign_models: dict[str, VectorGP] = field(default_factory=dict)
 
     # -- the curve of one design --------------------------------------------------------
-    def _pair(self, point: BoxPoint) -> PairEmulator:
+    def _sign(self, point: BoxPoint, u: np.ndarray | None = None) -> float:
+        """The bending direction at ``point``: the group's sign model where the group bends
+        both ways (InputError near the balance), else the one sign the data has."""
+        model = self.sign_models.get(point.group)
+        if model is None:
+            return 1.0 if point.group + "+" in self.pairs else -1.0
+        m = float(model.predict(point.coordinates() if u is None else u)[0][0])
+        if abs(m) < SIGN_MARGIN:
+            raise InputError("design", "this design sits near the balance of the two layers' "
+                             "stiffness, where the membrane and the body balloon alike: it "
+                             "bends little and the FE data do not tell which way",
+                             "a stiffness contrast further from 1 (a stiffer body or a softer "
+                             "membrane), or an FE solve of this design (POST /v1/solve)")
+        return 1.0 if m > 0 else -1.0
+
+    def _pair(self, point: BoxPoint, u: np.ndarray | None = None) -> PairEmulator:
+        key = point.group + ("+" if self._sign(point, u) > 0 else "-")
         try:
-            return self.pairs[point.pair]
+            return self.pairs[key]
         except KeyError:
-            raise InputError("body_material", f"the emulator '{self.name}' has no data for "
-                             f"the pair {point.pair[0]}/{point.pair[1]}",
-                             ", ".join(f"{b}/{m}" for b, m in self.pairs)) from None
+            raise InputError("body_material", f"the emulator '{self.name}' has too few FE "
+                             f"curves for {point.pair[0]}/{point.pair[1]} here",
+                             ", ".join(sorted(self.pairs))) from None
 
     def curve_band(self, point: BoxPoint, z: float) -> tuple[PairEmulator, CurveBand]:
         pe = self._pair(point)
@@ -258,12 +276,17 @@ class Emulator:
         out = {k: np.full(len(designs), np.nan) for k in (
             "angle", "angle_lo", "angle_hi", "needed", "needed_lo", "needed_hi", "force",
             "force_lo", "force_hi")}
-        by_pair: dict[tuple[str, str], list[int]] = {}
+        by_pair: dict[str, list[int]] = {}
         for i, pt in enumerate(points):
-            by_pair.setdefault(pt.pair, []).append(i)
+            try:
+                key = pt.group + ("+" if self._sign(pt) > 0 else "-")
+            except InputError:
+                continue
+            if key in self.pairs:
+                by_pair.setdefault(key, []).append(i)
         theta = FINE_ANGLES_DEG
-        for pair, idx in by_pair.items():
-            pe = self._pair(points[idx[0]])
+        for key, idx in by_pair.items():
+            pe = self.pairs[key]
             u = np.array([points[i].coordinates() for i in idx])
             mean, var = pe.curves.predict_many(u)
             y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * pe.band_scale

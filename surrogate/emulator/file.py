@@ -25,7 +25,7 @@ from surrogate.emulator.vector_gp import vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 
 def _plain(value: object) -> object:
@@ -46,7 +46,7 @@ def emulator_to_dict(e: Emulator) -> dict:
     pairs = []
     for pe in e.pairs.values():
         pairs.append({
-            "pair": list(pe.pair), "sign": pe.sign, "band_scale": pe.band_scale,
+            "pair": pe.pair, "sign": pe.sign, "band_scale": pe.band_scale,
             "fe_limit_angle_deg": pe.fe_limit_angle_deg, "fe_stop_reason": pe.fe_stop_reason,
             "coordinates": pe.coordinates.tolist(), "keys": list(pe.keys),
             "failed": [[np.asarray(u).tolist(), a, r] for u, a, r in pe.failed],
@@ -56,7 +56,8 @@ def emulator_to_dict(e: Emulator) -> dict:
     return _plain({"format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
                    "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
                    "force_pressure_nodes_pa": FORCE_PRESSURE_NODES_PA.tolist(),
-                   "provenance": e.provenance, "report": e.report, "pairs": pairs})
+                   "provenance": e.provenance, "report": e.report, "pairs": pairs,
+                   "sign_models": {g: m.as_dict() for g, m in e.sign_models.items()}})
 
 
 def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
@@ -74,7 +75,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
     try:
         pairs = {}
         for p in d["pairs"]:
-            pair = (str(p["pair"][0]), str(p["pair"][1]))
+            pair = str(p["pair"])
             pairs[pair] = PairEmulator(
                 pair=pair, sign=float(p["sign"]), curves=vector_gp_from_dict(p["curves"]),
                 band_scale=float(p["band_scale"]),
@@ -86,8 +87,10 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                 force_band_scale=float(p["force_band_scale"]),
                 force_limit_pa=float(p["force_limit_pa"]),
                 failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]))
+        sign_models = {str(g): vector_gp_from_dict(m)
+                       for g, m in (d.get("sign_models") or {}).items()}
         return Emulator(name=str(d["name"]), pairs=pairs, provenance=dict(d["provenance"]),
-                        report=dict(d.get("report") or {}))
+                        report=dict(d.get("report") or {}), sign_models=sign_models)
     except (KeyError, TypeError, ValueError, IndexError, np.linalg.LinAlgError) as exc:
         raise SurrogateFileError(origin, f"damaged emulator file ({type(exc).__name__}: "
                                  f"{exc})") from None
