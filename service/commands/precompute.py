@@ -13,6 +13,7 @@ import argparse
 import shlex
 import signal
 import sys
+from pathlib import Path
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -29,6 +30,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="run on a Dask cluster, e.g. tcp://host:8786 (extra 'cluster')")
     parser.add_argument("--retry-failed", action="store_true",
                         help="solve again the designs stored as failed")
+    parser.add_argument("--adaptive", type=int, default=None, metavar="N",
+                        help="instead of the grid's designs, solve the N designs where the "
+                             "emulator (--emulator, default: fitted from --db) is least "
+                             "certain; the grid file still gives the settings")
+    parser.add_argument("--emulator", default=None, metavar="PATH",
+                        help="emulator file for --adaptive (default: fit one from --db)")
     parser.add_argument("--dry-run", action="store_true",
                         help="validate the grid and report what would be solved")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -44,7 +51,34 @@ def command_line(args: argparse.Namespace) -> str:
         words += ["--workers", str(args.workers)]
     if args.retry_failed:
         words.append("--retry-failed")
+    if getattr(args, "adaptive", None):
+        words += ["--adaptive", str(args.adaptive)]
+        if args.emulator:
+            words += ["--emulator", args.emulator]
     return shlex.join(words)
+
+
+def _adaptive_grid(grid: object, args: argparse.Namespace) -> object:
+    """The grid with its points replaced by the N most uncertain designs."""
+    from dataclasses import replace
+
+    from solver.errors import InputError
+    from solver.store import CurveStore
+    from surrogate.emulator import fit_emulator, load_emulator
+    from surrogate.emulator.adaptive import next_designs
+
+    if args.emulator:
+        emulator = load_emulator(args.emulator)
+    else:
+        if not Path(args.db).is_file():
+            raise InputError("--adaptive", f"{args.db} does not exist yet",
+                             "a database with curves to fit the emulator from")
+        with CurveStore(args.db) as db:
+            emulator = fit_emulator(list(db.records()))
+    points = next_designs(emulator, args.adaptive, grid.settings)  # type: ignore[attr-defined]
+    print(f"--adaptive {args.adaptive}: {len(points)} designs where the emulator is least "
+          "certain", file=sys.stderr)
+    return replace(grid, points=tuple(points))  # type: ignore[type-var]
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -67,6 +101,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--db", f"directory {str(db_path.parent)!r} does not exist",
                          "a path in an existing directory")
     grid = load_grid(args.grid)
+    if args.adaptive is not None:
+        grid = _adaptive_grid(grid, args)
     if args.dry_run:
         statuses: dict[str, str] = {}
         if Path(args.db).exists():

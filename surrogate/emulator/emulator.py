@@ -15,7 +15,7 @@ vector over the box's unit-cube coordinates (``solver.design_space``). A query
    stop (``fe_limit_angle_deg``, 90 deg unless a curve failed earlier) and past it the
    answer is NaN with the flag ``past_fe_range``.
 
-Force: blocked-tip FE curves, log(|F| / p) at fixed pressures, emulated the same way;
+Force: blocked-tip FE curves, F / p at fixed pressures, emulated the same way;
 F scales with the membrane's stiffness scale s (p / s fixed) and with the square of
 the length scale. Volume scales with the cube of the length scale.
 """
@@ -43,8 +43,6 @@ N_NODES = len(ANGLE_NODES_DEG)
 FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE curve limits
 SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness balance
 _B_ANGLE = spline_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
-_FINE_FORCE_PA = np.geomspace(FORCE_PRESSURE_NODES_PA[0], FORCE_PRESSURE_NODES_PA[-1], 200)
-_B_FORCE = spline_matrix(FORCE_PRESSURE_NODES_PA, _FINE_FORCE_PA)
 
 
 @dataclass(frozen=True)
@@ -197,20 +195,21 @@ class Emulator:
 
     def _force(self, pe: PairEmulator, point: BoxPoint, p_red: np.ndarray, z: float
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Blocked-tip force (mN) with its band: F = p x (F/p emulated at the pressure
+        nodes, linear between them), F scaling with s_membrane x length_scale^2."""
         if pe.force is None:
             return None
         mean, var = pe.force.predict(point.coordinates())
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
+        nodes = np.concatenate(([0.0], FORCE_PRESSURE_NODES_PA))
         out = []
         for y in (mean, mean - z * sd, mean + z * sd):
-            lf = np.interp(np.log(np.maximum(p_red, 1e-300)), np.log(_FINE_FORCE_PA),
-                           _B_FORCE @ y)
-            f = pe.sign * scale * p_red * np.exp(lf)
+            per_kpa = np.interp(p_red, nodes, np.concatenate(([y[0]], y)))
+            f = scale * (p_red / 1000.0) * per_kpa
             f[p_red > pe.force_limit_pa * (1 + 1e-12)] = np.nan
             out.append(f)
-        lo, hi = (out[1], out[2]) if pe.sign > 0 else (out[2], out[1])
-        return out[0], lo, hi
+        return out[0], np.fmin(out[1], out[2]), np.fmax(out[1], out[2])
 
     def _validity(self, pe: PairEmulator, cb: CurveBand, point: BoxPoint, p: np.ndarray,
                   past: np.ndarray, force: object) -> dict[str, object]:
@@ -317,11 +316,13 @@ class Emulator:
                     out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
                 if fmean is not None and q <= pe.force_limit_pa:
                     scale = pt.pressure_scale * pt.length_scale**2
-                    lq = np.log(max(q, 1e-300))
-                    for key, yy in (("force", fmean[row]), ("force_lo", fmean[row] - z * fsd[row]),
-                                    ("force_hi", fmean[row] + z * fsd[row])):
-                        lf = np.interp(lq, np.log(_FINE_FORCE_PA), _B_FORCE @ yy)
-                        out[key][i] = scale * q * np.exp(lf)
+                    nodes = np.concatenate(([0.0], FORCE_PRESSURE_NODES_PA))
+                    vals = []
+                    for yy in (fmean[row], fmean[row] - z * fsd[row], fmean[row] + z * fsd[row]):
+                        per_kpa = np.interp(q, nodes, np.concatenate(([yy[0]], yy)))
+                        vals.append(scale * q / 1000.0 * per_kpa)
+                    out["force"][i] = vals[0]
+                    out["force_lo"][i], out["force_hi"][i] = min(vals[1:]), max(vals[1:])
         return out
 
     def nearest_records(self, design: Design, count: int = 3) -> list[str]:

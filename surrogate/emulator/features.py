@@ -11,7 +11,8 @@ Values between FE points come from monotone cubic (PCHIP) interpolation in
 (log theta, log p) and (log theta, log V), so a power-law stretch of the curve is exact.
 
 A blocked-tip curve is read as force per pressure at fixed pressures
-(``FORCE_PRESSURE_NODES_PA``): y = log(|F_j| / p_j).
+(``FORCE_PRESSURE_NODES_PA``, to 2500 Pa where nearly every blocked FE curve converges):
+y = F_j / p_j in mN/kPa, signed (the small initial reaction can change sign).
 """
 
 from __future__ import annotations
@@ -26,8 +27,7 @@ ANGLE_NODES_DEG = np.array([0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 5
                             45.0, 50.0, 55.0, 60.0,
                             65.0, 70.0, 75.0, 80.0, 85.0, 90.0])
 FORCE_PRESSURE_NODES_PA = np.array([25.0, 50.0, 100.0, 200.0, 300.0, 400.0, 500.0, 750.0,
-                                    1000.0, 1250.0, 1500.0, 2000.0, 2500.0, 3000.0,
-                                    3500.0, 4000.0, 5000.0, 6000.0])
+                                    1000.0, 1250.0, 1500.0, 1750.0, 2000.0, 2500.0])
 FINE_ANGLES_DEG = np.concatenate((np.linspace(0.01, 0.5, 50),
                                   np.linspace(0.5, 90.0, 359)[1:]))
 
@@ -99,21 +99,18 @@ def curve_features(pressure_pa: np.ndarray, volume_ul: np.ndarray,
 
 
 def force_features(pressure_pa: np.ndarray, force_mn: np.ndarray) -> np.ndarray:
-    """log(|F| / p) at FORCE_PRESSURE_NODES_PA (mN/Pa), NaN beyond the curve's end."""
+    """F / p (mN/kPa, signed) at FORCE_PRESSURE_NODES_PA, NaN beyond the curve's end;
+    linear interpolation between FE points (F is smooth and nearly linear in p)."""
     p = np.asarray(pressure_pa, float)
-    f = np.abs(np.asarray(force_mn, float))
+    f = np.asarray(force_mn, float)
     n = 1
     while n < len(p) and p[n] > p[n - 1] and np.isfinite(f[n]):
         n += 1
-    keep = (p[:n] > 0) & (f[:n] > 0)
     out = np.full(len(FORCE_PRESSURE_NODES_PA), np.nan)
-    if keep.sum() >= 2:
-        lp, lf = np.log(p[:n][keep]), np.log(f[:n][keep])
-        nodes = FORCE_PRESSURE_NODES_PA <= p[:n][keep][-1] * (1 + 1e-9)
-        ln = np.log(FORCE_PRESSURE_NODES_PA[nodes])
-        ln_c = np.maximum(ln, lp[0])
-        lf_n = PchipInterpolator(lp, lf)(ln_c) + np.where(ln < lp[0], ln - lp[0], 0.0)
-        out[nodes] = lf_n - ln
+    if n >= 2:
+        nodes = FORCE_PRESSURE_NODES_PA <= p[n - 1] * (1 + 1e-9)
+        q = FORCE_PRESSURE_NODES_PA[nodes]
+        out[nodes] = np.interp(q, p[:n], f[:n]) / (q / 1000.0)
     return out
 
 

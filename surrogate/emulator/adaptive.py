@@ -1,0 +1,94 @@
+"""Adaptive refinement: the next designs to solve, where the emulator is least certain.
+
+    points = next_designs(emulator, n=16)       # GridPoints for the precompute job
+
+Candidates are scrambled Sobol points of every group's reduced box (``CANDIDATES``
+per group, a seed different from the grid's); each is scored by the emulator's
+predictive standard deviation of log p, averaged over the angle nodes from 5 to 90 deg,
+times the group's band scale (so that a group whose LOO errors exceed its GP variance
+is refined first). The n best are taken greedily, each at least ``MIN_SPACING``
+(unit-cube distance) from the others and from the database designs, so that one
+uncertain corner does not take every slot.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from solver.design import Design
+from solver.design_space import (
+    GROUPS,
+    REDUCED_RATIO_RANGE,
+    contrast,
+    contrast_range,
+    from_unit,
+    locate,
+    scaled_material,
+    sobol_points,
+)
+from solver.errors import InputError
+from solver.materials import MATERIALS
+from solver.precompute.grid import GridPoint
+from solver.settings import SolverSettings
+from solver.store.keys import record_key
+from surrogate.emulator.emulator import N_NODES, Emulator
+from surrogate.emulator.features import ANGLE_NODES_DEG
+
+CANDIDATES = 1024
+MIN_SPACING = 0.12
+SEED = 1009
+
+
+def _design_for(group: str, u: np.ndarray) -> Design | None:
+    """The database design (membrane at its preset) whose group coordinates are ``u``."""
+    geometry, _ = from_unit(u)
+    lo, hi = contrast_range(group)
+    target = float(np.exp(np.log(lo) + u[-1] * (np.log(hi) - np.log(lo))))
+    for pair, g in GROUPS.items():
+        if g != group:
+            continue
+        ratio = target / contrast(pair, 1.0)
+        if REDUCED_RATIO_RANGE[0] <= ratio <= REDUCED_RATIO_RANGE[1]:
+            return Design(body_material=scaled_material(pair[0], round(ratio, 6)),
+                          membrane_material=MATERIALS[pair[1]], **geometry).validated()
+    return None
+
+
+def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = None
+                 ) -> list[GridPoint]:
+    """The ``n`` most uncertain designs, as precompute grid points."""
+    if not 1 <= n <= 10_000:
+        raise InputError("--adaptive", f"got {n}", "1 <= N <= 10000")
+    settings = settings or SolverSettings()
+    nodes = ANGLE_NODES_DEG >= 5.0
+    scored: list[tuple[float, str, np.ndarray, Design]] = []
+    for group in sorted(set(GROUPS.values())):
+        models = [pe for key, pe in emulator.pairs.items() if key[:-1] == group]
+        if not models:
+            continue
+        for u in sobol_points(CANDIDATES, seed=SEED):
+            design = _design_for(group, u)
+            if design is None:
+                continue
+            point = locate(design, reduced=True)
+            uu = point.coordinates()
+            try:
+                pe = emulator._pair(point, uu)
+            except InputError:
+                pe = max(models, key=lambda m: m.band_scale)   # near a balance: uncertain
+            _, var = pe.curves.predict(uu)
+            score = float(np.sqrt(var[:N_NODES][nodes]).mean()) * pe.band_scale
+            scored.append((score, group, uu, design))
+    scored.sort(key=lambda s: -s[0])
+    taken: dict[str, list[np.ndarray]] = {
+        g: [pe.coordinates[i] for key, pe in emulator.pairs.items() if key[:-1] == g
+            for i in range(len(pe.coordinates))] for g in set(GROUPS.values())}
+    out: list[GridPoint] = []
+    for _score, group, uu, design in scored:
+        if any(np.linalg.norm(uu - t) < MIN_SPACING for t in taken[group]):
+            continue
+        taken[group].append(uu)
+        out.append(GridPoint(record_key(design, settings), design, settings))
+        if len(out) == n:
+            break
+    return out
