@@ -4,7 +4,8 @@ the models.
 With ``--emulator-output``, fits the design-space emulator (the default predictor) to every
 default-FE curve of the database in the box, with leave-one-out errors and calibrated
 bands (docs/surrogate.md). Always fits the paper's exponential model (and the extended
-form) to every family of the curve database, with leave-one-design-out errors and band coverage; writes the versioned
+form) to every family of the curve database, with leave-one-design-out errors and band
+coverage; writes the versioned
 surrogate JSON (which embeds the full fit report) and, with ``--report-dir``, report.json
 and PNG plots (FE curves against the models, A against L, tau against t).
 """
