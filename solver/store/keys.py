@@ -24,7 +24,8 @@ from solver.design import Design
 from solver.errors import InputError
 from solver.settings import SolverSettings
 
-KEY_VERSION = 2   # 2: mesh levels redefined (solver/mesh.py), so a level names a new mesh
+KEY_VERSION = 3   # 2: mesh levels redefined (solver/mesh.py), so a level names a new mesh;
+                  # 3: new default level-0 divisions (issue 12): finer along x and in the body
 SIGNIFICANT_DIGITS = 10
 KEY_HEX_DIGITS = 32
 
