@@ -21,13 +21,17 @@ from pathlib import Path
 
 import numpy as np
 
-from solver.mesh import COARSE_DIVISIONS, DEFAULT_DIVISIONS
+from solver.mesh import COARSE_DIVISIONS, DEFAULT_DIVISIONS, xz_family
+from solver.verification.richardson import observed_order, richardson
 
 PAPER_A, PAPER_TAU_PA = 0.704, 420.0   # the paper's fit of the standard design (Table 4)
 # "default": the product's levels; "coarse": the uniform family of the previous level 0
 # (half the divisions across the chamber width and through the membrane), whose three
 # cheap levels give the observed order.
-FAMILIES = {"default": DEFAULT_DIVISIONS, "coarse": COARSE_DIVISIONS}
+# "xz1".."xz3": the x-and-layers family of issue 12 (solver.mesh.xz_family; run each at
+# --levels 0, the member number is the refinement): the reference of the default level 0.
+FAMILIES = {"default": DEFAULT_DIVISIONS, "coarse": COARSE_DIVISIONS,
+            **{f"xz{r}": xz_family(r) for r in (1, 2, 3)}}
 
 
 def run_level(level: int, outdir: Path, max_angle: float, backend: str, family: str) -> dict:
@@ -55,30 +59,6 @@ def _p_at(run: dict, angles: list[float]) -> np.ndarray:
     a, p = np.asarray(run["angle_deg"]), np.asarray(run["pressure_pa"])
     keep = a > 2.0
     return PchipInterpolator(a[keep], p[keep])(angles)
-
-
-def observed_order(h: np.ndarray, f: np.ndarray) -> float | None:
-    """q with f_i = f* + C h_i^q through three (h, f) pairs; None when the three are
-    not monotone (outside the asymptotic range)."""
-    from scipy.optimize import brentq
-
-    d12, d23 = f[0] - f[1], f[1] - f[2]
-    if d12 == 0 or d23 == 0 or np.sign(d12) != np.sign(d23):
-        return None
-    ratio = d12 / d23
-
-    def g(q: float) -> float:
-        return (h[0]**q - h[1]**q) / (h[1]**q - h[2]**q) - ratio
-
-    try:
-        return float(brentq(g, 0.05, 12.0))
-    except ValueError:
-        return None
-
-
-def richardson(h: np.ndarray, f: np.ndarray, q: float) -> float:
-    """f* from the two finest levels for order q."""
-    return float(f[-1] - (f[-2] - f[-1]) * h[-1]**q / (h[-2]**q - h[-1]**q))
 
 
 def summarise(runs: list[dict]) -> None:

@@ -118,27 +118,48 @@ def _detect_boxes(block: MaterialBlock) -> None:
     block.box_products = prod
 
 
+def node_pairs(nb: int) -> tuple[np.ndarray, np.ndarray]:
+    """The node pairs (a, b) with a <= b of an element with nb nodes: the blocks of
+    the symmetric element matrix that are computed and stored."""
+    a, b = np.triu_indices(nb)
+    return a, b
+
+
 def element_stiffness(block: MaterialBlock, A: np.ndarray) -> np.ndarray:
-    """K_e[a i, b k] = sum_q dN_aJ A_iJkL dN_bL for weighted tangents A (ne, nq, 9, 9).
+    """K_e[a i, b k] = sum_q dN_aJ A_iJkL dN_bL for weighted tangents A (ne, nq, 9, 9),
+    symmetric under (iJ) <-> (kL). Returned in the symmetric pair layout
+    (npairs, ne, 3, 3): the 3 x 3 block of node pair (a, b), a <= b (``node_pairs``),
+    K_e[b k, a i] being its transpose.
 
     On axis-aligned box elements (our tensor-product meshes) dN = dN_ref / h_J, so
     the shape-function products are common to all elements and the whole
     contraction is one large matrix product; otherwise a loop over quadrature points.
     """
     ne, nq, nb, _ = block.dN.shape
+    pa, pb = node_pairs(nb)
     if block.box_scale is not None:
         h = block.box_scale                                                   # (ne, 3)
         At = A.reshape(ne, nq, 3, 3, 3, 3) / (h[:, None, None, :, None, None]
                                               * h[:, None, None, None, None, :])
         At = At.transpose(1, 3, 5, 0, 2, 4).reshape(nq * 9, ne * 9)         # (q J L), (e i k)
-        K = block.box_products @ At                                          # (a b), (e i k)
-        K = K.reshape(nb, nb, ne, 3, 3).transpose(2, 0, 3, 1, 4)
-        return K.reshape(ne, 3 * nb, 3 * nb)
+        prod = block.box_products.reshape(nb, nb, nq * 9)[pa, pb]             # (pairs, q J L)
+        return (prod @ At).reshape(len(pa), ne, 3, 3)
     K = np.zeros((ne, nb, 3, nb, 3))
     A4 = A.reshape(ne, nq, 3, 3, 3, 3)
     for q in range(nq):
         C = np.einsum("eaJ,eiJkL->eaikL", block.dN[:, q], A4[:, q], optimize=True)
         K += np.einsum("eaikL,ebL->eaibk", C, block.dN[:, q], optimize=True)
+    return np.ascontiguousarray(K[:, pa, :, pb, :])    # (pairs, ne, 3, 3)
+
+
+def full_element_matrices(pairs: np.ndarray) -> np.ndarray:
+    """(ne, 3 nb, 3 nb) element matrices from the symmetric pair layout."""
+    npairs, ne = pairs.shape[:2]
+    nb = int(round((np.sqrt(8 * npairs + 1) - 1) / 2))
+    pa, pb = node_pairs(nb)
+    K = np.zeros((ne, nb, 3, nb, 3))
+    K[:, pb, :, pa, :] = np.swapaxes(pairs, -1, -2)
+    K[:, pa, :, pb, :] = pairs
     return K.reshape(ne, 3 * nb, 3 * nb)
 
 
@@ -152,7 +173,7 @@ def deformation_gradient(block: MaterialBlock, u: np.ndarray) -> np.ndarray:
 class BlockState:
     energy: float
     residual: np.ndarray      # (ne, 3 nb); condensed (r_c) when pressures were given
-    stiffness: np.ndarray | None   # (ne, 3 nb, 3 nb)
+    stiffness: np.ndarray | None   # (npairs, ne, 3, 3): symmetric pair layout
     lam_max: np.ndarray       # (ne, nq)
     min_J: float
     constraint: np.ndarray | None = None        # (ne, npr) R_p = g - M q / K
@@ -232,17 +253,27 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     if D is None:
         D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV,
                       optimize=True).reshape(ne, -1, 3 * nb)
-    K += block.bulk_pa * np.matmul(D.transpose(0, 2, 1), block.Minv @ D)
+    # + K D^T M^-1 D, on the same node pairs.
+    # Per node pair a <= b: the (3 x npr) @ (npr x 3) product D_a^T (K M^-1 D)_b.
+    pa, pb = node_pairs(nb)
+    Dn = np.ascontiguousarray(D.reshape(ne, -1, nb, 3).transpose(2, 0, 3, 1))  # (nb, e, 3, m)
+    Gn = np.ascontiguousarray((block.bulk_pa * (block.Minv @ D)).reshape(ne, -1, nb, 3)
+                              .transpose(2, 0, 1, 3))                          # (nb, e, m, 3)
+    K += Dn[pa] @ Gn[pb]
     return BlockState(energy, r, K, lam, float(J.min()), constraint, D, dilatation_error)
 
 
 class Pattern:
     """CSR pattern of a set of element dof lists, restricted to free dofs.
 
+    Material blocks (the first ``n_pair_lists`` dof lists, 3 nb dofs per element) give
+    their element matrices in the symmetric pair layout of ``element_stiffness``; the
+    others (cavity, spring) as full (ne, m, m) matrices.
     ``reduced[g]`` is the index of global dof g among the free dofs, or -1.
     """
 
-    def __init__(self, dof_lists: list[np.ndarray], free: np.ndarray, ndofs: int) -> None:
+    def __init__(self, dof_lists: list[np.ndarray], free: np.ndarray, ndofs: int,
+                 n_pair_lists: int = 0) -> None:
         self.ndofs = ndofs
         self.free = free
         reduced = -np.ones(ndofs, dtype=np.int64)
@@ -250,20 +281,44 @@ class Pattern:
         self.reduced = reduced
         n = len(free)
         self.n = n
-        keys_all = []
-        for dofs in dof_lists:
+        keys_all = []      # per list: one key array, or (upper, mirror) for pair layout
+        for index, dofs in enumerate(dof_lists):
             rd = reduced[dofs]                                              # (ne, m)
-            rows = np.repeat(rd[:, :, None], rd.shape[1], axis=2)
-            cols = np.repeat(rd[:, None, :], rd.shape[1], axis=1)
-            keys = np.where((rows >= 0) & (cols >= 0), rows * n + cols, -1)
-            keys_all.append(keys.ravel())
-        unique = np.unique(np.concatenate(keys_all))
-        unique = unique[unique >= 0]
-        self.positions = []
-        for keys in keys_all:
-            pos = np.searchsorted(unique, keys)
-            pos[keys < 0] = len(unique)                                     # a dump slot
-            self.positions.append(pos)
+            if index < n_pair_lists:
+                nb = rd.shape[1] // 3
+                pa, pb = node_pairs(nb)
+                r3 = rd.reshape(-1, nb, 3)
+                rows = np.broadcast_to(r3[:, pa, :, None], (rd.shape[0], len(pa), 3, 3))
+                cols = np.broadcast_to(r3[:, pb, None, :], (rd.shape[0], len(pa), 3, 3))
+                rows = np.moveaxis(rows, 1, 0)                              # (P, ne, 3, 3)
+                cols = np.moveaxis(cols, 1, 0)
+                ok = (rows >= 0) & (cols >= 0)
+                upper = np.where(ok, rows * n + cols, -1).ravel()
+                diagonal = np.broadcast_to((pa == pb)[:, None, None, None], rows.shape)
+                mirror = np.where(ok & ~diagonal, cols * n + rows, -1).ravel()
+                keys_all.append((upper, mirror))
+            else:
+                rows = np.repeat(rd[:, :, None], rd.shape[1], axis=2)
+                cols = np.repeat(rd[:, None, :], rd.shape[1], axis=1)
+                keys_all.append((np.where((rows >= 0) & (cols >= 0), rows * n + cols,
+                                          -1).ravel(),))
+        # One sort of all keys gives both the pattern and every entry's slot.
+        flat = [k for ks in keys_all for k in ks]
+        keys = np.concatenate(flat)
+        order = np.argsort(keys, kind="stable")
+        sorted_keys = keys[order]
+        new_key = np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1]))
+        unique = sorted_keys[new_key]
+        slot = np.cumsum(new_key) - 1
+        if len(unique) and unique[0] < 0:                                   # fixed dofs
+            unique = unique[1:]
+            slot -= 1
+            slot[slot < 0] = len(unique)                                    # a dump slot
+        positions = np.empty(len(keys), dtype=np.int64)
+        positions[order] = slot
+        bounds = np.cumsum([0] + [len(k) for k in flat])
+        chunks = iter(positions[a:b] for a, b in zip(bounds[:-1], bounds[1:]))
+        self.positions = [[next(chunks) for _ in ks] for ks in keys_all]
         rows = unique // n
         self.indices = (unique % n).astype(np.int32)
         self.indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n)))
@@ -272,8 +327,10 @@ class Pattern:
 
     def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
         data = np.zeros(self.nnz + 1)
-        for pos, Ke in zip(self.positions, element_matrices):
-            data += np.bincount(pos, weights=Ke.ravel(), minlength=self.nnz + 1)
+        for pos_list, Ke in zip(self.positions, element_matrices):
+            values = Ke.ravel()
+            for pos in pos_list:
+                data += np.bincount(pos, weights=values, minlength=self.nnz + 1)
         return sp.csr_matrix((data[:-1], self.indices, self.indptr), shape=(self.n, self.n))
 
 

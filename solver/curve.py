@@ -27,10 +27,17 @@ class Curve:
                               fixed pressure (> 0: not positive definite, unstable under
                               pressure control); -1 when not computed
 
+    volume_control_negative_eigenvalues[i]  (optional, None in records that predate it)
+                              unstable modes at constant volume (the syringe pump): the
+                              tangent's count less the limit point's (solver/stability.py);
+                              > 0: a bifurcation, the curve follows an unstable branch
+
     status: "complete" (reached a stop criterion), "stopped" (ended early by a limit
     such as max_steps), or "failed" (a step could not converge); ``reason`` says why.
     ``pressure_maximum_index`` is the step of a pressure maximum under volume control
-    (a limit point), or -1.
+    (a limit point), or -1. ``branch_switch_index``: the step at which the solve left
+    the unstable primary branch along its unstable mode (-1: never; points from it on
+    lie on the stable secondary branch).
     """
 
     pressure_pa: np.ndarray
@@ -49,6 +56,8 @@ class Curve:
     n_dofs: int = 0
     wall_time_s: float = 0.0
     timings_s: dict[str, float] = field(default_factory=dict)
+    volume_control_negative_eigenvalues: np.ndarray | None = None
+    branch_switch_index: int = -1
 
     ARRAY_FIELDS = ("pressure_pa", "volume_ul", "time_s", "angle_deg", "tip_displacement_mm",
                     "max_membrane_stretch", "force_mn", "newton_iterations", "residual_norm",
@@ -67,7 +76,11 @@ class Curve:
                                   for name in self.ARRAY_FIELDS}
         out.update(status=self.status, reason=self.reason,
                    pressure_maximum_index=self.pressure_maximum_index, n_dofs=self.n_dofs,
-                   wall_time_s=self.wall_time_s, timings_s=dict(self.timings_s))
+                   wall_time_s=self.wall_time_s, timings_s=dict(self.timings_s),
+                   branch_switch_index=self.branch_switch_index)
+        if self.volume_control_negative_eigenvalues is not None:
+            out["volume_control_negative_eigenvalues"] = np.asarray(
+                self.volume_control_negative_eigenvalues).tolist()
         return out
 
     def stability_notes(self) -> list[str]:
@@ -83,6 +96,21 @@ class Curve:
                 f"tangent not positive definite from step {i} (p = {self.pressure_pa[i]:.0f} Pa,"
                 f" angle = {self.angle_deg[i]:.1f} deg, {int(self.negative_eigenvalues[i])}"
                 " negative eigenvalue(s)): unstable under pressure control")
+        if self.volume_control_negative_eigenvalues is not None:
+            vneg = np.asarray(self.volume_control_negative_eigenvalues)
+            bif = np.nonzero(vneg > 0)[0]
+            if len(bif):
+                i = int(bif[0])
+                notes.append(
+                    f"unstable at constant volume too from step {i} (p = "
+                    f"{self.pressure_pa[i]:.0f} Pa, angle = {self.angle_deg[i]:.1f} deg, "
+                    f"{int(vneg[i])} volume-neutral mode(s)): a bifurcation, not a limit point;"
+                    " the syringe-pump experiment would leave this branch")
+        if self.branch_switch_index >= 0:
+            i = self.branch_switch_index
+            notes.append(f"left the unstable branch along its unstable mode at step {i} "
+                         f"(angle = {self.angle_deg[i]:.1f} deg); later points are on the "
+                         "stable branch")
         if self.pressure_maximum_index >= 0:
             i = self.pressure_maximum_index
             notes.append(f"pressure maximum {self.pressure_pa[i]:.0f} Pa at step {i} "

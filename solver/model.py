@@ -86,7 +86,7 @@ class SolidModel:
         spring_dofs = [np.asarray(spring[0])[None, :]] if spring is not None else []
         self.reaction_dofs = reaction_dofs
         self.pattern = Pattern([b.dofs for b in self.blocks] + cavity_dofs + spring_dofs,
-                               free, self.ndofs)
+                               free, self.ndofs, n_pair_lists=len(self.blocks))
         self.n_free = len(free)
         self.volume0_mm3 = self._volume(np.zeros(self.ndofs))
         self.timings = {"assembly_s": 0.0, "linear_solve_s": 0.0}
@@ -166,6 +166,8 @@ class SolidModel:
                 mats.append((k * np.outer(weights, weights))[None])
             K = self.pattern.matrix(mats)
         self.timings["assembly_s"] += time.perf_counter() - t0
+        counter = "tangent_evaluations" if tangent else "residual_evaluations"
+        self.timings[counter] = self.timings.get(counter, 0) + 1
         return Evaluation(R, K, g, vol, energy, lam_m, float(np.linalg.norm(pressure_pa * g)),
                           tip_force, states if pressures is not None else None,
                           constraint_error)

@@ -12,7 +12,8 @@ ELEMENTS = ("hex2", "hex1")
 TIPS = ("free", "spring", "blocked")
 
 DEFAULT_MESH_LEVEL = 0  # within 2 % of the mesh-converged curve (docs/verification.md)
-MAX_MESH_LEVEL = 2   # level 2: every division x 3, ~250k dofs at the standard design
+MAX_MESH_LEVEL = 2   # level 2: every division x 3, ~500k dofs at the standard design (a
+                     # study level: many GB of memory)
 
 
 @dataclass(frozen=True)

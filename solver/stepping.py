@@ -18,11 +18,18 @@ dilatation of a large rotating predictor step, times the bulk modulus, made the
 tangent indefinite and forced ~2.5 degree steps; the mixed iterate takes the full
 target step (benchmarks/RESULTS.md).
 
-Steps restart from the last converged state (no extrapolating predictor: it
-caused most Newton failures in earlier prototypes); a failed step is cut back
-by half; the step grows when Newton converges quickly and shrinks when the
-angle increment is large, aiming at ~8 degrees and at most ~150 Pa per step (so
-that the curve is resolved where the angle is small and the pressure rises fast).
+Predictor: from the third step on, each step starts from the parabola through the
+last three converged states (u, q, p) extrapolated to the new load; the first two
+start from the converged state with its tangent (an Euler predictor). Near the
+solution the iterate is evaluated without its tangent first and corrected with the
+last factorisation (chord updates) while that converges fast (``mixed_newton_step``).
+Neither changes the converged states beyond the Newton tolerance; together they cut
+the tangent assemblies and factorisations per step by about a third
+(benchmarks/RESULTS.md). A step whose extrapolated start fails is retried from the
+converged state before it is cut back; a failed step is cut back by half; the step grows when Newton converges quickly and shrinks when the
+angle increment is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
+pressure, if more) per step (so that the curve is resolved where the angle is small
+and the pressure rises fast).
 A step that cannot converge after the cut-backs ends the curve with status
 "failed" and the reason.
 """
@@ -36,17 +43,24 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from solver.branching import switch_branch
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
 from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions
 from solver.model import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
+from solver.stability import volume_control_index
 
 TARGET_ANGLE_STEP_DEG = 8.0
-MAX_PRESSURE_STEP_PA = 150.0   # output resolution where the curve is steep in pressure
+MAX_PRESSURE_STEP_PA = 150.0   # output resolution where the curve is steep in pressure,
+MAX_RELATIVE_PRESSURE_STEP = 0.08   # or 8 % of the pressure when that is more (a blocked
+                                    # tip climbing to kPa: ~45 steps to 20 kPa, not 130)
 MIN_CUTBACK = 1.0 / 1024.0
 DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
+PREDICTOR_POINTS = 3        # converged states the predictor's parabola passes through
+CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated without tangent
+CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
 
 
 class StepFailed(Exception):
@@ -75,6 +89,7 @@ class Converged:
     residual: float
     negative_pivots: int
     evaluation: Evaluation
+    g_kinv_g: float = float("nan")   # g^T K^-1 g at the last factorisation (= dV/dp)
 
 
 def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
@@ -84,9 +99,16 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
     """Converge one load step of the mixed u-q form (q: element pressures per block).
 
     ``start``: the evaluation at (u, q, p) when known (a volume step starting from the
-    last converged state). Converged when the condensed residual, the cavity volume
-    and the dilatation constraint are all below ``settings.newton_tol`` (relative to
-    the pressure load, the chamber volume, and absolute strain).
+    last converged state, with its tangent). Converged when the condensed residual, the
+    cavity volume and the dilatation constraint are all below ``settings.newton_tol``
+    (relative to the pressure load, the chamber volume, and absolute strain).
+
+    Full Newton while the iterate is far; once the error measure is below
+    ``CHORD_SWITCH`` the next iterate is evaluated without its tangent (a third of the
+    cost): converged, or a chord update with the last factorisation while that
+    contracts the error by ``CHORD_RATE`` per update (near the solution the chord
+    update is nearly as good as Newton's: the tangent changes by O(|du|)); otherwise
+    the tangent is assembled again. ``iterations`` counts linear solves.
     """
     tol = settings.newton_tol
     force_floor = model.mu0_min_pa * 1e-6
@@ -95,8 +117,15 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
     first_res = None
     predictor_res = np.inf
     previous_res = np.inf
+    previous_err = np.inf
     du, dp = None, 0.0
     dq: list[np.ndarray] = []
+    fac = None
+    want_tangent = True
+    chord = False                   # the last update reused an older factorisation
+    solves = 0
+    res = np.inf
+    gb = float("nan")
     for it in range(1, settings.max_newton_iter + 1):
         if target_pressure is not None:
             p = target_pressure
@@ -110,7 +139,8 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             for _ in range(6):
                 try:
                     q_try = [qb + scale * d for qb, d in zip(q, dq)]
-                    ev = model.evaluate(u + scale * du, p + scale * dp, pressures=q_try)
+                    ev = model.evaluate(u + scale * du, p + scale * dp, tangent=want_tangent,
+                                        pressures=q_try)
                     break
                 except FloatingPointError:
                     scale *= 0.5
@@ -120,6 +150,7 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             u, p, q = u + scale * du, p + scale * dp, q_try
         res = float(np.linalg.norm(ev.R)) / max(ev.load_norm, force_floor)
         vres = 0.0 if target_volume is None else abs(ev.volume_mm3 - target_volume) / volume_scale
+        err = max(res, vres, ev.constraint_error)
         if not np.isfinite(res):
             raise StepFailed("non-finite residual")
         if first_res is None:
@@ -134,50 +165,90 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
         # Converged below the tolerance, or stalled at the rounding floor (which grows
         # with the bulk modulus) within 100 x the tolerance.
-        floor = it > 2 and res < 100 * tol and res > 0.3 * previous_res
+        # (Not after a chord update: its slower, linear convergence is no stall.)
+        floor = it > 2 and res < 100 * tol and res > 0.3 * previous_res and not chord
         if it > 1 and vres < tol and ev.constraint_error < tol and (res < tol or floor):
-            return Converged(u, q, p, it - 1, res, neg, ev)
+            return Converged(u, q, p, solves, res, neg, ev, gb)
+        if ev.K is None and (fac is None or err > CHORD_RATE * previous_err):
+            # The chord update would contract too slowly: assemble the tangent here.
+            ev = model.evaluate(u, p, pressures=q)
+            fac = None
         previous_res = res
+        previous_err = err
         t0 = time.perf_counter()
         try:
-            fac = factorize(ev.K, backend)
-            if target_volume is None:
-                a = fac.solve(-ev.R)
-            else:                               # both right-hand sides in one pass
-                a, b = fac.solve(np.column_stack((-ev.R, ev.g))).T
+            chord = ev.K is None
+            if not chord:
+                fac = factorize(ev.K, backend)
+                model.timings["factorisations"] = model.timings.get("factorisations", 0) + 1
+                neg = fac.negative_pivots
+            # Both right-hand sides in one pass (b also gives the volume-control
+            # stability under pressure control, solver/stability.py).
+            a, b = fac.solve(np.column_stack((-ev.R, ev.g))).T
         except (np.linalg.LinAlgError, RuntimeError) as exc:
             raise StepFailed(f"linear solve failed: {exc}") from None
         finally:
             model.timings["linear_solve_s"] += time.perf_counter() - t0
-        neg = fac.negative_pivots
+        solves += 1
+        gb = float(ev.g @ b)
         if target_volume is None:
             du, dp = a, 0.0
         else:
-            gb = float(ev.g @ b)
             if gb == 0.0 or not np.isfinite(gb):
                 raise StepFailed("bordered system singular (g^T K^-1 g = 0)")
             dp = -(ev.volume_mm3 - target_volume + float(ev.g @ a)) / gb
             du = a + b * dp
         dq = model.pressure_update(ev, du)
+        want_tangent = err >= CHORD_SWITCH
     raise StepFailed(f"no convergence in {settings.max_newton_iter} Newton iterations "
                       f"(residual {res:.2e})")
 
 
+def predictor(history: list[tuple[float, np.ndarray, list[np.ndarray], float]], load: float
+              ) -> tuple[np.ndarray, list[np.ndarray], float] | None:
+    """Extrapolated start (u, q, p) for the next step at load parameter ``load`` (the
+    cavity volume under volume control, the pressure under pressure control): the
+    Lagrange polynomial through the last three converged states (a parabola in the
+    load), or None before there are three (the step then starts from the converged
+    state with its tangent: an Euler predictor)."""
+    n = len(history)
+    if n < 3:
+        return None
+    s = np.array([h[0] for h in history])
+    w = np.ones(n)
+    for i in range(n):
+        for j in range(n):
+            if i != j:
+                w[i] *= (load - s[j]) / (s[i] - s[j])
+    u = sum(wi * h[1] for wi, h in zip(w, history))
+    q = [sum(wi * h[2][b] for wi, h in zip(w, history)) for b in range(len(history[0][2]))]
+    p = float(sum(wi * h[3] for wi, h in zip(w, history)))
+    return u, q, p
+
+
 def solve(design: Design, settings: SolverSettings | None = None,
           on_step: Callable[[dict], None] | None = None, backend: str = "auto",
-          divisions: MeshDivisions = DEFAULT_DIVISIONS) -> Curve:
+          divisions: MeshDivisions = DEFAULT_DIVISIONS,
+          follow_stable_branch: bool = False) -> Curve:
     """Inflate ``design`` until a stop criterion; return the curve.
+
+    ``follow_stable_branch`` (volume control): where the state first becomes unstable
+    at constant volume (a bifurcation, solver/stability.py), inject the unstable mode
+    and continue on the stable branch (solver/branching.py); the curve records the
+    step in ``branch_switch_index``. Off by default: the database's curves follow the
+    primary branch and flag the instability (``volume_control_negative_eigenvalues``).
 
     Raises InputError for invalid input only; a solve that fails returns a Curve
     with status "failed" and the reason.
     """
-    return inflate(design, settings, on_step, backend, divisions=divisions)[0]
+    return inflate(design, settings, on_step, backend, divisions=divisions,
+                   follow_stable_branch=follow_stable_branch)[0]
 
 
 def inflate(design: Design, settings: SolverSettings | None = None,
             on_step: Callable[[dict], None] | None = None, backend: str = "auto",
-            debug: bool = False, divisions: MeshDivisions = DEFAULT_DIVISIONS
-            ) -> tuple[Curve, ActuatorModel, np.ndarray]:
+            debug: bool = False, divisions: MeshDivisions = DEFAULT_DIVISIONS,
+            follow_stable_branch: bool = False) -> tuple[Curve, ActuatorModel, np.ndarray]:
     """Like ``solve``, also returning the discrete model and the last converged
     displacement (free dofs), for field output (VTK). ``divisions``: the level-0 mesh
     resolution (convergence studies only; records assume the default).
@@ -188,12 +259,13 @@ def inflate(design: Design, settings: SolverSettings | None = None,
     settings = (settings or SolverSettings()).validated()
     design = design.validated()
     with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
-        return _inflate(design, settings, on_step, backend, debug, divisions)
+        return _inflate(design, settings, on_step, backend, debug, divisions,
+                        follow_stable_branch)
 
 
 def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict], None] | None,
-             backend: str, debug: bool, divisions: MeshDivisions
-             ) -> tuple[Curve, ActuatorModel, np.ndarray]:
+             backend: str, debug: bool, divisions: MeshDivisions,
+             follow_stable_branch: bool) -> tuple[Curve, ActuatorModel, np.ndarray]:
     t_start = time.perf_counter()
     model = ActuatorModel(design, settings, divisions)
     volume_control = settings.control == "volume"
@@ -201,11 +273,13 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
     u = np.zeros(model.n_free)
     q = model.consistent_pressures(u)
     p = 0.0
-    rows: dict[str, list] = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f")}
+    rows: dict[str, list] = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f",
+                                             "negv")}
 
-    def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int, ev: Evaluation
-               ) -> float:
+    def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int, ev: Evaluation,
+               g_kinv_g: float = 1.0) -> float:
         angle, tip = model.end_face_kinematics(u_)
+        rows["negv"].append(volume_control_index(neg, g_kinv_g) if neg >= 0 else neg)
         rows["p"].append(p_)
         rows["v"].append(model.injected_volume_ul(ev.volume_mm3))
         rows["a"].append(angle)
@@ -226,18 +300,31 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
     step = 0.05 * model.volume0_mm3 if volume_control else 0.05 * model.mu0_min_pa
     initial_step = step
     status, reason = "stopped", f"reached max_steps = {settings.max_steps}"
+    history: list[tuple[float, np.ndarray, list[np.ndarray], float]] = [
+        (model.volume0_mm3 if volume_control else 0.0, u, q, p)]
+    extrapolate = True
+    switch_index = -1
     for _ in range(settings.max_steps):
+        # Under pressure control the last step lands on max_pressure_pa, not beyond it.
+        load = (model.volume0_mm3 + 0.5 * rows["v"][-1] + step) if volume_control else (
+            min(p + step, settings.max_pressure_pa))
+        guess = predictor(history, load) if extrapolate else None
         try:
+            u0, q0, p0, start = (u, q, p, last) if guess is None else (*guess, None)
             if volume_control:
-                vt = model.volume0_mm3 + 0.5 * rows["v"][-1] + step
-                step_out = mixed_newton_step(model, u, q, p, settings, vt, None, backend,
-                                             start=last)
+                step_out = mixed_newton_step(model, u0, q0, p0, settings, load, None, backend,
+                                             start=start)
             else:
-                step_out = mixed_newton_step(model, u, q, p, settings, None, p + step, backend)
+                step_out = mixed_newton_step(model, u0, q0, p0, settings, None, load, backend,
+                                             start=start)
         except (StepFailed, FloatingPointError) as exc:
             model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
             if debug:
                 print(f"cut-back at p = {p:.1f}, step {step:.4g}: {exc}")
+            if guess is not None:
+                extrapolate = False            # retry the same step from the converged state
+                continue
+            extrapolate = True
             step *= 0.5
             if step < MIN_CUTBACK * initial_step:
                 status, reason = "failed", (f"step at p = {p:.1f} Pa, angle = "
@@ -246,15 +333,38 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                 break
             continue
         u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
+        extrapolate = True
+        history = (history + [(load, u, q, p)])[-PREDICTOR_POINTS:]
         its = step_out.iterations
-        angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last)
+        angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last,
+                       step_out.g_kinv_g)
+        if (follow_stable_branch and volume_control and switch_index < 0
+                and rows["negv"][-1] > 0):
+            switch = switch_branch(
+                model, u, q, p, load,
+                lambda u_, q_, p_: mixed_newton_step(model, u_, q_, p_, settings, load, None,
+                                                     backend), backend)
+            model.timings["branch_switch_attempts"] = (
+                model.timings.get("branch_switch_attempts", 0) + 1)
+            if debug:
+                print(f"branch switch at step {len(rows['p']) - 1}: {switch.reason}")
+            if switch.converged is not None:
+                out = switch.converged
+                for column in rows.values():
+                    column.pop()
+                u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
+                history = [(load, u, q, p)]
+                angle = record(u, p, its + out.iterations, out.residual, out.negative_pivots,
+                               last, out.g_kinv_g)
+                switch_index = len(rows["p"]) - 1
         d_angle = abs(angle - rows["a"][-2])
         factor = 1.6 if its <= 6 else (1.0 if its <= 9 else 0.6)
         if d_angle > 1e-9:
             factor = min(factor, max(0.5, TARGET_ANGLE_STEP_DEG / d_angle))
         d_pressure = abs(p - rows["p"][-2])
         if volume_control and d_pressure > 1e-9:
-            factor = min(factor, max(0.5, MAX_PRESSURE_STEP_PA / d_pressure))
+            allowed = max(MAX_PRESSURE_STEP_PA, MAX_RELATIVE_PRESSURE_STEP * abs(p))
+            factor = min(factor, max(0.5, allowed / d_pressure))
         step *= factor
         if abs(angle) >= settings.max_angle_deg:
             status, reason = "complete", f"reached max_angle_deg = {settings.max_angle_deg}"
@@ -282,5 +392,7 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
         residual_norm=np.array(rows["res"]),
         negative_eigenvalues=np.array(rows["neg"], dtype=np.int64),
         status=status, reason=reason, pressure_maximum_index=pmax, n_dofs=model.n_free,
-        wall_time_s=time.perf_counter() - t_start, timings_s=dict(model.timings))
+        wall_time_s=time.perf_counter() - t_start, timings_s=dict(model.timings),
+        volume_control_negative_eigenvalues=np.array(rows["negv"], dtype=np.int64),
+        branch_switch_index=switch_index)
     return curve, model, u

@@ -10,8 +10,9 @@ from solver.settings import DEFAULT_MESH_LEVEL, SolverSettings
 from solver.store import record_key
 from solver.store.keys import canonical_json
 
-# Pinned: computed by this implementation (KEY_VERSION 2; version 1 gave
-# 7a6747211b2edacb59ed14347eb03e2b before the mesh levels were redefined) for the paper's
+# Pinned: computed by this implementation (KEY_VERSION 3; version 1 gave
+# 7a6747211b2edacb59ed14347eb03e2b before the mesh levels were redefined, version 2
+# b8183475f8bbcdba8151ed6fd5c94bed before the default level-0 divisions changed) for the paper's
 # standard design and these explicit settings (explicit, so a change of a default does not
 # move it). If this changes, every stored database loses its keys: bump KEY_VERSION and say so in
 # docs/database.md rather than editing the number. (A new SolverSettings field also

@@ -25,6 +25,7 @@ from solver.errors import InputError
 from solver.settings import SolverSettings
 
 KEY_VERSION = 2   # 2: mesh levels redefined (solver/mesh.py), so a level names a new mesh
+                  # (3 is reserved for the day the default divisions become FINE_X_DIVISIONS)
 SIGNIFICANT_DIGITS = 10
 KEY_HEX_DIGITS = 32
 

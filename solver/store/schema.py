@@ -12,13 +12,16 @@
                                       state): pressure_pa, volume_ul, time_s, angle_deg,
                                       tip_displacement_mm (n x 2), max_membrane_stretch,
                                       force_mn, newton_iterations (int64), residual_norm,
-                                      negative_eigenvalues (int64); attrs: status, reason,
-                                      pressure_maximum_index, n_dofs, wall_time_s
+                                      negative_eigenvalues (int64), optional
+                                      volume_control_negative_eigenvalues (int64);
+                                      attrs: status, reason, pressure_maximum_index,
+                                      n_dofs, wall_time_s, optional branch_switch_index
             timings_s/                attrs: seconds per solver phase
         provenance/                   attrs: package_version, git_commit, created_utc,
                                              wall_time_s, status, reason, host
 
-Version history: 1 -- first layout.
+Version history: 1 -- first layout (the two optional members, added with issue 12, are
+absent from older records and read as None / -1).
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ SCHEMA_VERSION = 1
 RECORDS = "records"
 MATERIAL_ROLES = ("body_material", "membrane_material")
 INT_ARRAYS = ("newton_iterations", "negative_eigenvalues")
+VOLUME_CONTROL_NEGATIVE = "volume_control_negative_eigenvalues"   # optional dataset
 JSON_SUFFIX = "_json"
 
 
@@ -124,6 +128,10 @@ def validate_record(record: Record) -> None:
         if shape != wanted:
             raise InputError(f"curve.{name}", f"shape {shape} does not match {n} steps",
                              f"shape {wanted}")
+    vneg = curve.volume_control_negative_eigenvalues
+    if vneg is not None and np.shape(vneg) != (n,):
+        raise InputError(f"curve.{VOLUME_CONTROL_NEGATIVE}",
+                         f"shape {np.shape(vneg)} does not match {n} steps", f"shape ({n},)")
 
 
 def write_record(group: h5py.Group, record: Record) -> None:
@@ -149,6 +157,10 @@ def write_record(group: h5py.Group, record: Record) -> None:
     g.attrs["status"] = curve.status
     g.attrs["reason"] = curve.reason
     g.attrs["pressure_maximum_index"] = int(curve.pressure_maximum_index)
+    if curve.volume_control_negative_eigenvalues is not None:
+        g.create_dataset(VOLUME_CONTROL_NEGATIVE, data=np.asarray(
+            curve.volume_control_negative_eigenvalues, dtype=np.int64))
+    g.attrs["branch_switch_index"] = int(curve.branch_switch_index)
     g.attrs["n_dofs"] = int(curve.n_dofs)
     g.attrs["wall_time_s"] = float(curve.wall_time_s)
     write_attrs(g.create_group("timings_s"), {k: float(v) for k, v in curve.timings_s.items()})
@@ -174,6 +186,10 @@ def read_curve(group: h5py.Group) -> Curve:
     attrs = read_attrs(g)
     return Curve(**arrays, status=str(attrs["status"]), reason=str(attrs["reason"]),
                  pressure_maximum_index=int(attrs["pressure_maximum_index"]),  # type: ignore
+                 volume_control_negative_eigenvalues=(
+                     np.asarray(g[VOLUME_CONTROL_NEGATIVE][()])
+                     if VOLUME_CONTROL_NEGATIVE in g else None),
+                 branch_switch_index=int(attrs.get("branch_switch_index", -1)),  # type: ignore
                  n_dofs=int(attrs["n_dofs"]),
                  wall_time_s=float(attrs["wall_time_s"]),
                  timings_s={k: float(v) for k, v in read_attrs(g["timings_s"]).items()})
