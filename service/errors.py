@@ -12,7 +12,7 @@ Mapping (domain class -> status):
     InputError, OutOfFamilyError, request validation   422
     NotFoundError (record, job, model, material)        404
     AuthError                                           401 (no key) / 403 (wrong or disabled)
-    ConflictError                                       409
+    ConflictError, ExistsError (a saved model's name)    409
     PayloadTooLargeError                                413
     QueueFullError, UnavailableError                    503 with Retry-After
     SolverError, any other BalloonError                 422
@@ -30,7 +30,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from solver.errors import BalloonError, InputError, NotFoundError, SolverError
+from solver.errors import BalloonError, ExistsError, InputError, NotFoundError, SolverError
 
 log = logging.getLogger("balloon.service")
 
@@ -131,6 +131,8 @@ def problem_for(exc: BaseException) -> Problem:
         return Problem(exc.status, "Not authorised", str(exc), "unauthorised", headers=headers)
     if isinstance(exc, ConflictError):
         return Problem(409, "Conflict", str(exc), "conflict", extra=exc.extra)
+    if isinstance(exc, ExistsError):  # before InputError: a taken name is a conflict
+        return Problem(409, "Conflict", str(exc), "conflict")
     if isinstance(exc, PayloadTooLargeError):
         return Problem(413, "Request body too large", str(exc), "payload-too-large")
     if isinstance(exc, InputError):

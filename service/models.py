@@ -57,24 +57,21 @@ class ModelRegistry:
 
 
 def load_calibrated(name: str, models_dir: Path) -> Any:
-    """A saved calibrated model by name; NotFoundError when there is none."""
-    load_model: Any
-    try:
-        from surrogate.calibration import load_model
-    except ImportError:
-        load_model = None
-    if load_model is None:
-        raise NotFoundError(f"no model {name!r}: known models are \"fitted\" and \"paper\"")
+    """A saved calibrated model by name: NotFoundError when there is none, 503 when its
+    file is damaged. The answers name the model only: never the models directory, never
+    the other saved models (another user's)."""
+    from surrogate.calibration import load_model
+
     try:
         return load_model(name, models_dir)
-    except BalloonError:
-        raise
-    except (FileNotFoundError, IsADirectoryError):
-        raise NotFoundError(f"no saved model {name!r} in {models_dir}; known models are "
-                            f"\"fitted\", \"paper\" and the saved ones") from None
-    except Exception as exc:  # noqa: BLE001 - a damaged file on the server, not bad input
+    except (NotFoundError, FileNotFoundError, IsADirectoryError):
+        raise NotFoundError(f"no saved model {name!r}; known models are \"fitted\", "
+                            f"\"paper\" and the saved ones") from None
+    except BalloonError as exc:  # SavedModelError: a damaged file on the server
+        raise UnavailableError(str(exc)) from None
+    except Exception as exc:  # noqa: BLE001 - unreadable file (permissions, I/O)
         raise UnavailableError(f"the saved model {name!r} cannot be read "
-                               f"({type(exc).__name__}: {exc})") from None
+                               f"({type(exc).__name__})") from None
 
 
 def require(model: Any, name: str, capability: str) -> Any:

@@ -326,5 +326,5 @@ def test_calibrate_save_name_errors_name_the_save_field(client):
     assert "not 'fitted' or 'paper'" in assert_problem(calibrate("paper"), 422, "save")[
         "errors"][0]["allowed"]
     assert calibrate("lab1").json()["saved_model"] == "lab1"
-    body = assert_problem(calibrate("lab1"), 422, "save")  # never overwrites a model
-    assert body["errors"][0]["loc"] == ["body", "save"] and "already exists" in body["detail"]
+    body = assert_problem(calibrate("lab1"), 409)  # never overwrites a model
+    assert body["model"] == "lab1" and "'lab1' already exists" in body["detail"]

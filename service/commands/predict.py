@@ -1,7 +1,9 @@
-"""``balloon predict --L-mm 7.1 --t-mm 0.5 --pressures 500 1000 1500 [--model paper|PATH]``:
+"""``balloon predict --L-mm 7.1 --t-mm 0.5 --pressures 500 1000 1500 [--model paper|PATH|NAME]``:
 bending angle (deg) with a prediction band from the surrogate, and validity flags.
 
-The default model is service/data/surrogate.json when it exists, else the paper preset.
+The default model is service/data/surrogate.json when it exists, else the paper preset;
+``--model NAME`` uses a calibrated model saved by ``balloon calibrate --save NAME`` (the
+models directory: ``--models-dir``, default BALLOON_MODELS_DIR or ~/.balloon/models).
 """
 
 from __future__ import annotations
@@ -24,15 +26,21 @@ def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True)
                         help="chamber width, mm (default 1.8)")
     parser.add_argument("--h-mm", type=float, default=None, dest="h_mm",
                         help="chamber height, mm (default 0.15)")
-    parser.add_argument("--body", default=None, help="body material id (default pdms_1_10)")
-    parser.add_argument("--membrane", default=None,
+    # the flag names of `balloon solve`; --body and --membrane are kept as aliases
+    parser.add_argument("--body-material", "--body", default=None, dest="body_material",
+                        help="body material id (default pdms_1_10)")
+    parser.add_argument("--membrane-material", "--membrane", default=None,
+                        dest="membrane_material",
                         help="membrane material id (default ecoflex_00_30)")
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--model", default=None, metavar="paper|PATH",
-                        help="`paper` or a surrogate file (default: the bundled fit if "
-                             "present, else paper)")
+    parser.add_argument("--model", default=None, metavar="paper|PATH|NAME",
+                        help="`paper`, a surrogate file, or the name of a saved calibrated "
+                             "model (default: the bundled fit if present, else paper)")
+    parser.add_argument("--models-dir", type=Path, default=None,
+                        help="where saved calibrated models are (default: BALLOON_MODELS_DIR,"
+                             " else ~/.balloon/models)")
     parser.add_argument("--form", choices=("exponential", "extended"), default=None,
                         help="model form (default: each family's fitted default)")
     parser.add_argument("--level", type=float, default=0.95, help="band level (0.95)")
@@ -44,16 +52,41 @@ def design_from_args(args: argparse.Namespace) -> object:
 
     data = {k: getattr(args, k) for k in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
             if getattr(args, k, None) is not None}
-    if args.body:
-        data["body_material"] = args.body
-    if args.membrane:
-        data["membrane_material"] = args.membrane
+    if args.body_material:
+        data["body_material"] = args.body_material
+    if args.membrane_material:
+        data["membrane_material"] = args.membrane_material
     return design_from_dict(data)
 
 
+def saved_model_name(spec: str | None) -> str | None:
+    """``spec`` if it names a saved calibrated model: a bare name (not "paper", not a path
+    or a .json file)."""
+    from surrogate.calibration._saved import NAME_PATTERN
+
+    if (spec is None or spec == "paper" or spec.endswith(".json") or Path(spec).exists()
+            or not NAME_PATTERN.match(spec)):
+        return None
+    return spec
+
+
 def surrogate_from_args(args: argparse.Namespace) -> object:
+    from solver.errors import InputError
     from surrogate import open_surrogate
 
+    name = saved_model_name(args.model)
+    if name is not None:
+        from surrogate.calibration import load_model
+
+        if args.form is not None:
+            raise InputError("--form", f"the calibrated model {name!r} has one form",
+                             "leave --form out with a saved model")
+        models_dir = args.models_dir
+        if models_dir is None:
+            from service.settings import get_settings
+
+            models_dir = get_settings().models_dir
+        return load_model(name, models_dir)
     spec = args.model or (str(DEFAULT_SURROGATE) if DEFAULT_SURROGATE.is_file() else "paper")
     return open_surrogate(spec).with_form(args.form)
 
@@ -89,16 +122,18 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(pred.as_dict(), indent=1))
         return 0
-    print(f"model {pred.model} ({pred.form}), L = {design.L_mm:g} mm, "  # type: ignore
-          f"t = {design.t_mm:g} mm, band {100 * pred.level:g} %")  # type: ignore
+    form = getattr(pred, "form", None) or "calibrated"  # a saved model has no form choice
+    force = getattr(pred, "force_mn", None)
+    print(f"model {pred.model} ({form}), L = {design.L_mm:g} mm, "  # type: ignore
+          f"t = {design.t_mm:g} mm, band {100 * args.level:g} %")
     head = f"{'pressure_pa':>12s} {'angle_deg':>10s} {'lower_deg':>10s} {'upper_deg':>10s}"
-    if pred.force_mn is not None:
+    if force is not None:
         head += f" {'force_mn':>9s} {'lower_mn':>9s} {'upper_mn':>9s}"
     print(head)
     for i, p in enumerate(pred.pressure_pa):
         line = (f"{p:12.1f} {pred.angle_deg[i]:10.2f} {pred.lower_deg[i]:10.2f} "
                 f"{pred.upper_deg[i]:10.2f}")
-        if pred.force_mn is not None:
+        if force is not None:
             line += (f" {pred.force_mn[i]:9.3f} {pred.force_lower_mn[i]:9.3f} "
                      f"{pred.force_upper_mn[i]:9.3f}")
         print(line)

@@ -4,13 +4,15 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from service.schemas.common import MATERIAL_ID, Schema
 
 
 class CurvesQuery(Schema):
     """Filters (exact values, compared to 1e-6 mm) and the page."""
+
+    model_config = ConfigDict(strict=False)  # query values arrive as text
 
     L_mm: float | None = Field(None, ge=0.5, le=60.0, description="chamber length, mm")
     t_mm: float | None = Field(None, ge=0.05, le=5.0, description="membrane thickness, mm")

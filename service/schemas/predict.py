@@ -50,6 +50,8 @@ class PredictResponse(BaseModel):
 class PlotQuery(Schema):
     """Query of GET /v1/predict/plot (a design with preset materials, and optional data)."""
 
+    model_config = ConfigDict(strict=False)  # query values arrive as text
+
     L_mm: float = Field(7.1, ge=0.5, le=60.0, description="chamber length, mm")
     t_mm: float = Field(0.5, ge=0.05, le=5.0, description="membrane thickness, mm")
     T_mm: float = Field(1.0, ge=0.1, le=10.0, description="body thickness, mm")
