@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from functools import lru_cache
+from pathlib import PurePath
 from typing import Any
 
 import numpy as np
@@ -64,3 +65,16 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def public_provenance(provenance: dict[str, Any]) -> dict[str, Any]:
+    """Provenance for an answer: a ``*_path`` entry (where a file was on the machine that
+    made the model) becomes the file's logical name under the key without ``_path``
+    (``database_path: /home/x/curves.h5`` -> ``database: curves.h5``)."""
+    out: dict[str, Any] = {}
+    for key, value in provenance.items():
+        if key.endswith("_path"):
+            out[key.removesuffix("_path")] = PurePath(str(value)).name if value else value
+        else:
+            out[key] = value
+    return jsonable(out)

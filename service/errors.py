@@ -159,6 +159,8 @@ def _kebab(name: str) -> str:
     return out.removesuffix("-error") or "error"
 
 
+BODY_NOT_PARSED = "There was an error parsing the body"  # FastAPI's words for its 400
+
 # Field name -> allowed range in words, filled by service.schemas from the Field limits.
 FIELD_RANGES: dict[str, str] = {}
 
@@ -189,6 +191,15 @@ def install_error_handlers(app: FastAPI) -> None:
                        errors=errors).response(request)
 
     async def on_http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        if exc.status_code == 400 and exc.detail == BODY_NOT_PARSED:
+            # FastAPI's 400 for a body json.loads cannot take (nested deeper than the
+            # parser's recursion limit, not UTF-8): an input error like any other JSON one
+            return Problem(422, "Invalid input", "body: cannot be parsed as JSON",
+                           "invalid-input", errors=[{
+                               "loc": ["body"], "field": "body",
+                               "message": "cannot be parsed as JSON",
+                               "allowed": "a UTF-8 JSON document of the documented shape"}]
+                           ).response(request)
         titles = {404: "Not found", 405: "Method not allowed", 406: "Not acceptable"}
         problem = Problem(exc.status_code, titles.get(exc.status_code, "HTTP error"),
                           str(exc.detail), f"http-{exc.status_code}",

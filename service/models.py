@@ -35,7 +35,9 @@ class ModelRegistry:
             self.fitted_error = None
         except Exception as exc:  # noqa: BLE001 - reported by /v1/health and on use
             self.fitted = None
-            self.fitted_error = f"{type(exc).__name__}: {exc}"
+            path = Path(self.surrogate_path)  # clients see the file's name, not its place
+            text = str(exc).replace(str(path), path.name)
+            self.fitted_error = f"{type(exc).__name__}: {text}"
 
     def get(self, name: str) -> Any:
         if name == "fitted":

@@ -9,7 +9,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import Response
 from pydantic_core import to_json
 
-from service.convert import design_dict, finite_list, jsonable, to_design
+from service.convert import design_dict, finite_list, public_provenance, to_design
 from service.deps import ModelsDep, SettingsDep
 from service.errors import FieldError, located
 from service.schemas import PlotQuery, PredictRequest, PredictResponse
@@ -36,7 +36,7 @@ def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
                          "flags": [str(f) for f in validity.get("flags", [])],
                          "messages": [str(m) for m in validity.get("messages", [])]},
             "form": getattr(p, "form", None),
-            "provenance": jsonable(dict(p.provenance or {}))}
+            "provenance": public_provenance(dict(p.provenance or {}))}
 
 
 @router.post("/predict", response_model=PredictResponse,
