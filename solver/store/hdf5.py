@@ -1,9 +1,9 @@
 """CurveStore: the HDF5 curve database with one writer and any number of readers.
 
 Publishing is copy-on-write. A put never touches the published file: the writer
-copies it to a hidden temporary file next to it (``.curves.h5.tmp-<pid>-<n>``),
-adds the records there, flushes and fsyncs it, and ``os.replace``s it over the
-published name (an atomic rename on POSIX), then fsyncs the directory. Hence
+copies it in memory, adds the records there, writes the copy to a hidden temporary
+file next to it (``.curves.h5.tmp-<pid>-<n>``), fsyncs it, and ``os.replace``s it over
+the published name (an atomic rename on POSIX), then fsyncs the directory. Hence
 
 - a reader sees either the previous or the next version, never a half-written
   record, and needs no lock: a file it already has open stays valid (the old inode
@@ -27,10 +27,10 @@ The price: a put costs a copy of the whole file (measured in benchmarks/RESULTS.
 
 from __future__ import annotations
 
+import io
 import itertools
 import math
 import os
-import shutil
 import threading
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -55,6 +55,14 @@ _counter = itertools.count()
 # HDF5 1.8 object format: compact link storage in small groups (about half the size of the
 # 1.6 format here) and readable by every HDF5 release since 2008.
 LIBVER = ("v108", "v108")
+
+
+def _write_file(path: Path, data: memoryview) -> None:
+    """Write ``data`` to a new file and fsync it (plain I/O: failures are OSError)."""
+    with open(path, "xb") as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
 
 
 def _fsync_path(path: Path, directory: bool = False) -> None:
@@ -311,32 +319,39 @@ class CurveStore:
     def _publish(self, change: Any, create: bool = False,
                  drop: frozenset[str] | set[str] = frozenset()) -> None:
         """Copy the file, apply ``change(h5file)`` to the copy, fsync, rename over.
-        Called with the writer lock held."""
+        Called with the writer lock held.
+
+        The copy is built in memory and written to disk with plain file I/O: a failed
+        write (disk full, read-only) is then one clean OSError, where HDF5 writing to a
+        full disk leaves file handles it can neither flush nor close (and may crash the
+        process at exit)."""
         self._remove_orphans()
+        image = io.BytesIO()
+        if create:
+            with h5py.File(image, "w", libver=LIBVER) as f:
+                schema.init_file(f, utc_now())
+        elif drop:
+            self._repack(image, drop)
+        else:
+            with self._reading():
+                image.write(self.path.read_bytes())
         tmp = self._tmp_path()
         try:
-            if create:
-                with h5py.File(tmp, "w", libver=LIBVER) as f:
-                    schema.init_file(f, utc_now())
-            elif drop:
-                self._repack(tmp, drop)
-            else:
-                shutil.copyfile(self.path, tmp)
-            with h5py.File(tmp, "r+", libver=LIBVER) as f:
+            with h5py.File(image, "r+", libver=LIBVER) as f:
                 change(f)
                 f.attrs["updated_utc"] = utc_now()
                 f.attrs["n_records"] = len(f[schema.RECORDS])
-            _fsync_path(tmp)
+            _write_file(tmp, image.getbuffer())
             os.replace(tmp, self.path)
             _fsync_path(self.path.parent, directory=True)
-        except (OSError, RuntimeError) as exc:  # disk full, read-only, no permission
+        except OSError as exc:  # disk full, read-only, no permission
             tmp.unlink(missing_ok=True)
             raise StoreWriteError(self.path, exc) from None
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
 
-    def _repack(self, tmp: Path, drop: frozenset[str] | set[str]) -> None:
+    def _repack(self, tmp: Any, drop: frozenset[str] | set[str]) -> None:
         """A fresh copy without the records in ``drop`` (HDF5 does not reclaim the space of
         deleted groups, so replaced records are dropped by rewriting the file)."""
         with self._reading():

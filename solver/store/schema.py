@@ -48,6 +48,7 @@ RECORDS = "records"
 MATERIAL_ROLES = ("body_material", "membrane_material")
 INT_ARRAYS = ("newton_iterations", "negative_eigenvalues")
 JSON_SUFFIX = "_json"
+MAX_ATTRS = 1000  # far more than any object here has
 
 
 def plain(value: object) -> object:
@@ -64,7 +65,9 @@ def plain(value: object) -> object:
 def read_attrs(obj: h5py.HLObject) -> dict[str, Any]:
     """Attributes as plain values; names ending in ``_json`` are decoded JSON."""
     out: dict[str, Any] = {}
-    for name, value in obj.attrs.items():
+    for count, (name, value) in enumerate(obj.attrs.items()):
+        if count > MAX_ATTRS:  # a damaged attribute list can make HDF5 iterate forever
+            raise ValueError(f"more than {MAX_ATTRS} attributes: the object is damaged")
         value = plain(value)
         if name.endswith(JSON_SUFFIX) and isinstance(value, str):
             out[name[: -len(JSON_SUFFIX)]] = json.loads(value)
