@@ -159,7 +159,6 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
 
     def store(future: Any) -> None:
         point = futures[future]
-        stored.add(future)
         try:
             record = future.result()
         except Exception as exc:  # noqa: BLE001 - a worker died: keep going, store nothing
@@ -180,6 +179,7 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
             if status == "failed":
                 summary.failures.append((record.key, describe(record.design),
                                          record.curve.reason))
+        stored.add(future)  # not before: a put cut short by Ctrl-C is retried below
         bar.update(1)
         counts = {"complete": summary.complete + summary.stopped, "failed": summary.failed}
         if summary.errors:
