@@ -10,10 +10,11 @@ from typing import Any
 
 import numpy as np
 
-from service.errors import located
+from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
 from solver.design import Design, design_from_dict
 from solver.errors import InputError
+from solver.materials import MATERIALS
 from solver.settings import SolverSettings, settings_from_dict
 
 
@@ -22,9 +23,18 @@ def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body",
     text = (design.model_dump_json(exclude_none=True) if isinstance(design, DesignIn)
             else json.dumps(design, sort_keys=True))
     try:
-        return _design_from_json(text)
+        resolved = _design_from_json(text)
     except InputError as exc:
         raise located(exc, loc) from None
+    for role in ("body_material", "membrane_material"):
+        material = getattr(resolved, role)
+        preset = MATERIALS.get(material.id)
+        if preset is not None and material != preset:  # one id, one set of parameters
+            raise FieldError((*loc, role, "id"), f"inline material reuses the preset id "
+                             f"{material.id!r} with other parameters",
+                             f"a new id (presets: {', '.join(sorted(MATERIALS))}), or the "
+                             "preset by its id as a string")
+    return resolved
 
 
 @lru_cache(maxsize=4096)
