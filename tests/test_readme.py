@@ -65,3 +65,48 @@ def test_user_mistake_is_one_line_and_exit_2(capsys):
     assert main(["solve", "--t-mm", "-1", "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "t_mm" in err[0] and "allowed" in err[0]
+
+
+def _subparser(name):
+    parser = build_parser()
+    return parser._subparsers._group_actions[0].choices[name]  # noqa: SLF001
+
+
+def test_solve_help_documents_every_option_with_unit_default_and_range():
+    units = ("mm", "Pa", "degrees", "ul/s", "N/m", "dimensionless")
+    for action in _subparser("solve")._actions:  # noqa: SLF001
+        if not action.option_strings or action.dest in ("help", "quiet"):
+            continue
+        text = action.help or ""
+        assert text, action.dest
+        if action.dest in ("json", "csv", "plot", "vtk"):
+            continue
+        assert "default" in text, action.dest
+        if action.type in (float, int):
+            assert any(u in text for u in units) or action.dest == "mesh", action.dest
+            assert " to " in text, action.dest  # the allowed range
+        elif not action.choices:
+            assert "pdms_1_10" in text, action.dest  # the allowed materials
+
+
+def test_the_same_flag_names_across_subcommands():
+    for name in ("solve", "predict", "inverse"):
+        flags = {s for a in _subparser(name)._actions for s in a.option_strings}  # noqa: SLF001
+        assert {"--body-material", "--membrane-material", "--L-mm", "--t-mm"} <= flags, name
+
+
+def test_one_name_per_csv_column(tmp_path, capsys):
+    from test_store import record_for
+
+    from solver.io import CSV_COLUMNS, curve_to_csv
+    from solver.store import CurveStore
+
+    record = record_for(L_mm=7.1)
+    with CurveStore(tmp_path / "c.h5", mode="a") as db:
+        db.put(record)
+    assert main(["db", "export", str(tmp_path / "c.h5"), "--format", "csv"]) == 0
+    export_header = capsys.readouterr().out.splitlines()[0].split(",")
+    curve_to_csv(record.curve, str(tmp_path / "solve.csv"))
+    solve_header = (tmp_path / "solve.csv").read_text().splitlines()[0].split(",")
+    assert export_header[-len(CSV_COLUMNS):] == solve_header == list(CSV_COLUMNS)
+    assert "tip_dx_mm" in solve_header and "tip_x_mm" not in export_header
