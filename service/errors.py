@@ -22,6 +22,7 @@ Mapping (domain class -> status):
 from __future__ import annotations
 
 import logging
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -179,6 +180,17 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
     return out
 
 
+def _allowed_methods(request: Request) -> list[str]:
+    """The methods the published contract has for the request's path."""
+    path = request.url.path
+    methods: set[str] = set()
+    for template, operations in request.app.openapi()["paths"].items():
+        pattern = re.sub(r"\\\{[^/]+?\\\}", "[^/]+", re.escape(template))
+        if re.fullmatch(pattern, path):
+            methods |= {m.upper() for m in operations}
+    return sorted(methods)
+
+
 def install_error_handlers(app: FastAPI) -> None:
     """Route every error through ``problem_for`` (validation errors get one entry per field)."""
 
@@ -201,9 +213,11 @@ def install_error_handlers(app: FastAPI) -> None:
                                "allowed": "a UTF-8 JSON document of the documented shape"}]
                            ).response(request)
         titles = {404: "Not found", 405: "Method not allowed", 406: "Not acceptable"}
+        headers = dict(exc.headers or {})
+        if exc.status_code == 405:  # every method of the path (Starlette names one route's)
+            headers["Allow"] = ", ".join(_allowed_methods(request))
         problem = Problem(exc.status_code, titles.get(exc.status_code, "HTTP error"),
-                          str(exc.detail), f"http-{exc.status_code}",
-                          headers=dict(exc.headers or {}))
+                          str(exc.detail), f"http-{exc.status_code}", headers=headers)
         return problem.response(request)
 
     async def on_domain(request: Request, exc: Exception) -> JSONResponse:

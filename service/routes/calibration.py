@@ -73,9 +73,9 @@ class CalibrateRequest(Schema):
 
 class Candidate(BaseModel):
     model_config = ConfigDict(extra="allow")
-    effect: str
-    rmse_cv_deg: float | None
-    delta_bic: float | None
+    effect: str = Field(description="effect id(s), + joined")
+    rmse_cv_deg: float | None = Field(description="cross-validated RMS error, degrees")
+    delta_bic: float | None = Field(description="BIC change against the baseline")
     params: dict[str, Any]
     plausible: bool | None
 
@@ -84,10 +84,13 @@ class CalibrationReport(BaseModel):
     """The calibration report; more fields than listed here are included."""
 
     model_config = ConfigDict(extra="allow")
-    rmse_model_deg: float
-    rmse_before_deg: float | None = Field(..., description="null when not finite")
-    rmse_after_deg: float | None = Field(..., description="null when not finite")
-    noise_floor_deg: float | None
+    rmse_model_deg: float = Field(description="the starting model's RMS error, degrees")
+    rmse_before_deg: float | None = Field(..., description="recalibrated baseline, cross-"
+                                          "validated RMS error, degrees (null: not finite)")
+    rmse_after_deg: float | None = Field(..., description="with the selected effects, cross-"
+                                         "validated RMS error, degrees (null: not finite)")
+    noise_floor_deg: float | None = Field(description="RMS measurement noise from "
+                                          "replicates, degrees (null: no replicates)")
     selected_effects: list[str]
     candidates: list[Candidate]
     residual_structured_after: bool

@@ -53,21 +53,21 @@ class InverseRequest(Schema):
 
 
 class Candidate(BaseModel):
-    rank: int
-    L_mm: float
-    t_mm: float
-    body_material: str
-    membrane_material: str
-    family: str
+    rank: int = Field(description="1 = best by the objective")
+    L_mm: float = Field(description="chamber length, mm")
+    t_mm: float = Field(description="membrane thickness, mm")
+    body_material: str = Field(description="body material id")
+    membrane_material: str = Field(description="membrane material id")
+    family: str = Field(description="the fitted family it belongs to")
     score: float | None = Field(description="the objective's value (lower ranks first)")
-    pressure_needed_pa: float | None
-    pressure_lower_pa: float | None
-    pressure_upper_pa: float | None
+    pressure_needed_pa: float | None = Field(description="pressure that meets the target, Pa")
+    pressure_lower_pa: float | None = Field(description="its band's lower edge, Pa")
+    pressure_upper_pa: float | None = Field(description="its band's upper edge, Pa")
     value_at_pressure: float | None = Field(
         description="predicted angle (deg) or force (mN) at the target pressure")
-    value_lower: float | None
-    value_upper: float | None
-    validity: dict[str, Any]
+    value_lower: float | None = Field(description="band's lower edge (deg or mN)")
+    value_upper: float | None = Field(description="band's upper edge (deg or mN)")
+    validity: dict[str, Any] = Field(description="in_domain, flags, messages")
     curve: dict[str, Any] = Field(description="predicted curve from 0 Pa with its band")
 
 
@@ -95,11 +95,12 @@ class PressureRequest(Schema):
 
 
 class PressureResponse(BaseModel):
-    model: str
-    level: float
-    design: dict[str, Any]
-    angle_deg: list[float]
-    pressure_pa: list[float | None]
-    lower_pa: list[float | None]
-    upper_pa: list[float | None]
-    validity: dict[str, Any]
+    model: str = Field(description="the model that answered")
+    level: float = Field(description="the band's coverage probability")
+    design: dict[str, Any] = Field(description="the design as resolved (lengths, mm)")
+    angle_deg: list[float] = Field(description="the target angles, degrees")
+    pressure_pa: list[float | None] = Field(description="pressure for each angle, Pa (null: "
+                                            "not reachable)")
+    lower_pa: list[float | None] = Field(description="band's lower edge, Pa")
+    upper_pa: list[float | None] = Field(description="band's upper edge, Pa")
+    validity: dict[str, Any] = Field(description="in_domain, flags, messages")

@@ -28,23 +28,25 @@ class PredictRequest(Schema):
 
 
 class Validity(BaseModel):
-    in_domain: bool
-    flags: list[str] = []
-    messages: list[str] = []
+    in_domain: bool = Field(description="inside the fitted or calibrated domain")
+    flags: list[str] = Field([], description="machine-readable reasons it is not")
+    messages: list[str] = Field([], description="the same in words")
 
 
 class PredictResponse(BaseModel):
-    model: str
-    level: float
+    model: str = Field(description="the model that answered")
+    level: float = Field(description="the band's coverage probability")
     design: dict[str, Any] = Field(description="the design as resolved (all lengths, mm)")
-    pressure_pa: list[float]
-    angle_deg: list[float]
-    lower_deg: list[float]
-    upper_deg: list[float]
-    validity: Validity
+    pressure_pa: list[float | None] = Field(description="cavity pressures, Pa")
+    angle_deg: list[float | None] = Field(description="bending angle at each pressure, "
+                                          "degrees (null where not defined)")
+    lower_deg: list[float | None] = Field(description="lower band edge, degrees")
+    upper_deg: list[float | None] = Field(description="upper band edge, degrees")
+    validity: Validity = Field(description="whether the answer is inside the model's domain")
     form: str | None = Field(None, description='model form: "exponential" (the paper\'s) '
                              'or "extended"')
-    provenance: dict[str, Any]
+    provenance: dict[str, Any] = Field(description="where the model came from (files by "
+                                       "their name)")
 
 
 class PlotQuery(Schema):
