@@ -20,6 +20,7 @@ from service.errors import install_error_handlers
 from service.jobs import JobManager
 from service.middleware import BodyLimitMiddleware
 from service.models import ModelRegistry
+from service.openapi import install_contract
 from service.routes import calibration, curves, health, inverse, jobs, materials, predict
 from service.settings import ServiceSettings, get_settings
 from service.store_access import ResultWriter
@@ -66,6 +67,7 @@ def create_app(settings: ServiceSettings | None = None, *,
         history=settings.job_history)
 
     install_error_handlers(app)
+    install_contract(app)
     for module in (health, materials, predict, inverse, curves, jobs):
         app.include_router(module.router)
     # Calibration (POST /v1/calibrate, GET /v1/effects) is included here:

@@ -5,14 +5,16 @@ from __future__ import annotations
 import json
 import math
 from functools import lru_cache
+from pathlib import PurePath
 from typing import Any
 
 import numpy as np
 
-from service.errors import located
+from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
 from solver.design import Design, design_from_dict
 from solver.errors import InputError
+from solver.materials import MATERIALS
 from solver.settings import SolverSettings, settings_from_dict
 
 
@@ -21,9 +23,18 @@ def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body",
     text = (design.model_dump_json(exclude_none=True) if isinstance(design, DesignIn)
             else json.dumps(design, sort_keys=True))
     try:
-        return _design_from_json(text)
+        resolved = _design_from_json(text)
     except InputError as exc:
         raise located(exc, loc) from None
+    for role in ("body_material", "membrane_material"):
+        material = getattr(resolved, role)
+        preset = MATERIALS.get(material.id)
+        if preset is not None and material != preset:  # one id, one set of parameters
+            raise FieldError((*loc, role, "id"), f"inline material reuses the preset id "
+                             f"{material.id!r} with other parameters",
+                             f"a new id (presets: {', '.join(sorted(MATERIALS))}), or the "
+                             "preset by its id as a string")
+    return resolved
 
 
 @lru_cache(maxsize=4096)
@@ -93,15 +104,17 @@ def prediction_body(prediction: Any, model: str, level: float | None = None
                 **{k: validity[k] for k in ("fe_limit_pa", "fe_limit_angle_deg",
                                             "fe_stop_reason") if k in validity}}),
             "form": getattr(prediction, "form", None),
-            "provenance": jsonable(_public_provenance(dict(prediction.provenance or {})))}
+            "provenance": public_provenance(dict(prediction.provenance or {}))}
 
 
-def _public_provenance(provenance: dict[str, Any]) -> dict[str, Any]:
-    """Provenance without local paths: files are named by their logical name."""
-    out = {}
+def public_provenance(provenance: dict[str, Any]) -> dict[str, Any]:
+    """Provenance for an answer: a ``*_path`` entry (where a file was on the machine that
+    made the model) becomes the file's logical name under the key without ``_path``
+    (``database_path: /home/x/curves.h5`` -> ``database: curves.h5``)."""
+    out: dict[str, Any] = {}
     for key, value in provenance.items():
-        if key.endswith("_path") and isinstance(value, str):
-            out[key.removesuffix("_path") + "_name"] = value.rsplit("/", 1)[-1]
+        if key.endswith("_path"):
+            out[key.removesuffix("_path")] = PurePath(str(value)).name if value else value
         else:
             out[key] = value
-    return out
+    return jsonable(out)

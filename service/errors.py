@@ -12,7 +12,7 @@ Mapping (domain class -> status):
     InputError, OutOfFamilyError, request validation   422
     NotFoundError (record, job, model, material)        404
     AuthError                                           401 (no key) / 403 (wrong or disabled)
-    ConflictError                                       409
+    ConflictError, ExistsError (a saved model's name)    409
     PayloadTooLargeError                                413
     QueueFullError, UnavailableError                    503 with Retry-After
     SolverError, any other BalloonError                 422
@@ -22,6 +22,7 @@ Mapping (domain class -> status):
 from __future__ import annotations
 
 import logging
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,7 +31,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from solver.errors import BalloonError, InputError, NotFoundError, SolverError
+from solver.errors import BalloonError, ExistsError, InputError, NotFoundError, SolverError
 
 log = logging.getLogger("balloon.service")
 
@@ -131,6 +132,8 @@ def problem_for(exc: BaseException) -> Problem:
         return Problem(exc.status, "Not authorised", str(exc), "unauthorised", headers=headers)
     if isinstance(exc, ConflictError):
         return Problem(409, "Conflict", str(exc), "conflict", extra=exc.extra)
+    if isinstance(exc, ExistsError):  # before InputError: a taken name is a conflict
+        return Problem(409, "Conflict", str(exc), "conflict")
     if isinstance(exc, PayloadTooLargeError):
         return Problem(413, "Request body too large", str(exc), "payload-too-large")
     if isinstance(exc, InputError):
@@ -157,6 +160,8 @@ def _kebab(name: str) -> str:
     return out.removesuffix("-error") or "error"
 
 
+BODY_NOT_PARSED = "There was an error parsing the body"  # FastAPI's words for its 400
+
 # Field name -> allowed range in words, filled by service.schemas from the Field limits.
 FIELD_RANGES: dict[str, str] = {}
 
@@ -175,6 +180,17 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
     return out
 
 
+def _allowed_methods(request: Request) -> list[str]:
+    """The methods the published contract has for the request's path."""
+    path = request.url.path
+    methods: set[str] = set()
+    for template, operations in request.app.openapi()["paths"].items():
+        pattern = re.sub(r"\\\{[^/]+?\\\}", "[^/]+", re.escape(template))
+        if re.fullmatch(pattern, path):
+            methods |= {m.upper() for m in operations}
+    return sorted(methods)
+
+
 def install_error_handlers(app: FastAPI) -> None:
     """Route every error through ``problem_for`` (validation errors get one entry per field)."""
 
@@ -187,10 +203,21 @@ def install_error_handlers(app: FastAPI) -> None:
                        errors=errors).response(request)
 
     async def on_http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        if exc.status_code == 400 and exc.detail == BODY_NOT_PARSED:
+            # FastAPI's 400 for a body json.loads cannot take (nested deeper than the
+            # parser's recursion limit, not UTF-8): an input error like any other JSON one
+            return Problem(422, "Invalid input", "body: cannot be parsed as JSON",
+                           "invalid-input", errors=[{
+                               "loc": ["body"], "field": "body",
+                               "message": "cannot be parsed as JSON",
+                               "allowed": "a UTF-8 JSON document of the documented shape"}]
+                           ).response(request)
         titles = {404: "Not found", 405: "Method not allowed", 406: "Not acceptable"}
+        headers = dict(exc.headers or {})
+        if exc.status_code == 405:  # every method of the path (Starlette names one route's)
+            headers["Allow"] = ", ".join(_allowed_methods(request))
         problem = Problem(exc.status_code, titles.get(exc.status_code, "HTTP error"),
-                          str(exc.detail), f"http-{exc.status_code}",
-                          headers=dict(exc.headers or {}))
+                          str(exc.detail), f"http-{exc.status_code}", headers=headers)
         return problem.response(request)
 
     async def on_domain(request: Request, exc: Exception) -> JSONResponse:

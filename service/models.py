@@ -44,7 +44,9 @@ class ModelRegistry:
             self.fitted_error = None
         except Exception as exc:  # noqa: BLE001 - reported by /v1/health and on use
             self.fitted = None
-            self.fitted_error = f"{type(exc).__name__}: {_plain_error(exc)}"
+            path = Path(self.surrogate_path)  # clients see the file's name, not its place
+            text = str(exc).replace(str(path), path.name)
+            self.fitted_error = f"{type(exc).__name__}: {text}"
         if self.emulator_path is None:
             return
         try:
@@ -89,24 +91,21 @@ def _plain_error(exc: BaseException) -> str:
 
 
 def load_calibrated(name: str, models_dir: Path) -> Any:
-    """A saved calibrated model by name; NotFoundError when there is none."""
-    load_model: Any
-    try:
-        from surrogate.calibration import load_model
-    except ImportError:
-        load_model = None
-    if load_model is None:
-        raise NotFoundError(f"no model {name!r}: known models are \"fitted\" and \"paper\"")
+    """A saved calibrated model by name: NotFoundError when there is none, 503 when its
+    file is damaged. The answers name the model only: never the models directory, never
+    the other saved models (another user's)."""
+    from surrogate.calibration import load_model
+
     try:
         return load_model(name, models_dir)
-    except BalloonError:
-        raise
-    except (FileNotFoundError, IsADirectoryError):
-        raise NotFoundError(f"no saved model {name!r} in {models_dir}; known models are "
-                            f"\"fitted\", \"paper\" and the saved ones") from None
-    except Exception as exc:  # noqa: BLE001 - a damaged file on the server, not bad input
+    except (NotFoundError, FileNotFoundError, IsADirectoryError):
+        raise NotFoundError(f"no saved model {name!r}; known models are \"fitted\", "
+                            f"\"paper\" and the saved ones") from None
+    except BalloonError as exc:  # SavedModelError: a damaged file on the server
+        raise UnavailableError(str(exc)) from None
+    except Exception as exc:  # noqa: BLE001 - unreadable file (permissions, I/O)
         raise UnavailableError(f"the saved model {name!r} cannot be read "
-                               f"({type(exc).__name__}: {exc})") from None
+                               f"({type(exc).__name__})") from None
 
 
 def require(model: Any, name: str, capability: str) -> Any:

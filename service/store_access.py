@@ -24,13 +24,15 @@ from solver.errors import BalloonError, NotFoundError
 
 @contextmanager
 def open_store(path: Path) -> Iterator[Any]:
-    """Open the database read-only; 503 when it is missing, damaged or of a newer schema
-    (a server-side condition, not the client's input)."""
+    """Open the database read-only; 503 when it is missing, damaged (at opening or while
+    a request reads it) or of a newer schema: a server-side condition, not the client's
+    input. The answers name the file by its name, never its directory."""
     from solver.store import CurveStore, NotACurveStoreError, SchemaVersionError
 
-    if not Path(path).is_file():
-        raise UnavailableError(f"no curve database at {path}: set BALLOON_DB_PATH or run "
-                               "`balloon precompute` to create one")
+    path = Path(path)
+    if not path.is_file():
+        raise UnavailableError(f"no curve database {path.name} on the server (set "
+                               "BALLOON_DB_PATH, or run `balloon precompute`)")
     try:
         store = CurveStore(path, mode="r")
         try:
@@ -39,29 +41,38 @@ def open_store(path: Path) -> Iterator[Any]:
             store.close()
             raise
     except (OSError, NotFoundError, NotACurveStoreError, SchemaVersionError) as exc:
-        raise UnavailableError(f"the curve database cannot be read: {exc}",
-                               retry_after_s=5) from None
+        raise UnavailableError(_unreadable(path, exc), retry_after_s=5) from None
     with store as db:
-        yield db
+        try:
+            yield db
+        except NotACurveStoreError as exc:  # DamagedStoreError while reading a record
+            raise UnavailableError(_unreadable(path, exc), retry_after_s=5) from None
 
 
-def record_count(path: Path) -> int | None:
-    """Records in the database (None when absent or unreadable); re-read only when the
-    file changes (the store publishes a new file on every write)."""
+def _unreadable(path: Path, exc: BaseException) -> str:
+    public = getattr(exc, "public", None)
+    text = public() if public else str(exc).replace(str(path), path.name)
+    return f"the curve database cannot be read: {text}"
+
+
+def database_state(path: Path) -> tuple[int | None, str | None]:
+    """(records, problem) of the database: (None, None) when there is none, (None, why)
+    when it cannot be read; re-read only when the file changes (the store publishes a new
+    file on every write). Every record's index entry is read, not the curves."""
     try:
         st = os.stat(path)
     except OSError:
-        return None
-    return _count(str(path), st.st_ino, st.st_mtime_ns, st.st_size)
+        return None, None
+    return _state(str(path), st.st_ino, st.st_mtime_ns, st.st_size)
 
 
 @lru_cache(maxsize=8)
-def _count(path: str, inode: int, mtime_ns: int, size: int) -> int | None:
+def _state(path: str, inode: int, mtime_ns: int, size: int) -> tuple[int | None, str | None]:
     try:
         with open_store(Path(path)) as db:
-            return len(db)
-    except BalloonError:
-        return None
+            return len(db.statuses()), None
+    except BalloonError as exc:
+        return None, str(exc)
 
 
 def stored_key(path: Path, key: str) -> bool:

@@ -4,6 +4,7 @@
     ├── InputError (ValueError)   a user-supplied value is out of range or unknown;
     │                             carries the field name and the allowed range
     ├── NotFoundError (KeyError)  a named thing (record, material, model) does not exist
+    ├── ExistsError               a named thing to be created already exists
     └── SolverError               the finite-element solve could not proceed
         └── ConvergenceError      Newton failed even after the step was cut back
 
@@ -40,6 +41,10 @@ class NotFoundError(BalloonError, KeyError):
 
     def __str__(self) -> str:  # KeyError would add quotes around the message
         return str(self.args[0]) if self.args else "not found"
+
+
+class ExistsError(BalloonError):
+    """A named object (a saved model) cannot be created: one of that name already exists."""
 
 
 class SolverError(BalloonError):

@@ -26,7 +26,8 @@ last factorisation (chord updates) while that converges fast (``mixed_newton_ste
 Neither changes the converged states beyond the Newton tolerance; together they cut
 the tangent assemblies and factorisations per step by about a third
 (benchmarks/RESULTS.md). A step whose extrapolated start fails is retried from the
-converged state before it is cut back; a failed step is cut back by half; the step grows when Newton converges quickly and shrinks when the
+converged state before it is cut back; a failed step is cut back by half; the step grows
+when Newton converges quickly and shrinks when the
 angle increment is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
 pressure, if more) per step (so that the curve is resolved where the angle is small
 and the pressure rises fast).
@@ -342,7 +343,8 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                 and rows["negv"][-1] > 0):
             switch = switch_branch(
                 model, u, q, p, load,
-                lambda u_, q_, p_: mixed_newton_step(model, u_, q_, p_, settings, load, None,
+                lambda u_, q_, p_, load=load: mixed_newton_step(model, u_, q_, p_, settings, load,
+                                                                  None,
                                                      backend), backend)
             model.timings["branch_switch_attempts"] = (
                 model.timings.get("branch_switch_attempts", 0) + 1)

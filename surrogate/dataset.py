@@ -8,6 +8,7 @@ after a limit point, where angle is no longer a function of pressure).
 
 from __future__ import annotations
 
+import hashlib
 import os
 from dataclasses import dataclass, field
 
@@ -98,19 +99,47 @@ def _design_identity(design: Design) -> tuple:
             round(d.resolved_body_length_mm, 6), round(d.resolved_chamber_offset_mm, 6))
 
 
+def by_physics(designs: list[Design]) -> list[Design]:
+    """The designs with their materials named by physics, not by id alone: a material
+    keeps its id when it equals the preset of that id, or (a custom id) is the only
+    parameter set stored under it; otherwise it becomes ``<id>~<8 hex of its parameters>``, so
+    that families (grouped by ``family_key``) never mix two materials of one name."""
+    from dataclasses import replace
+
+    from solver.materials import MATERIALS
+
+    seen: dict[str, set[tuple]] = {}
+    for d in designs:
+        for m in (d.body_material, d.membrane_material):
+            seen.setdefault(m.id, set()).add((m.mu_kpa, m.alpha))
+
+    def named(m):
+        preset = MATERIALS.get(m.id)
+        if preset == m or (preset is None and len(seen[m.id]) == 1):
+            return m
+        tag = hashlib.sha256(repr((m.mu_kpa, m.alpha)).encode()).hexdigest()[:8]
+        return replace(m, id=f"{m.id}~{tag}")
+
+    return [replace(d, body_material=named(d.body_material),
+                    membrane_material=named(d.membrane_material)) for d in designs]
+
+
 def curves_from_store(path: str | os.PathLike) -> tuple[list[CurveData], dict]:
     """Read every record of a CurveStore as CurveData; returns (curves, store metadata).
-    Failed records keep their converged points (the rising branch up to the failure)."""
+    Failed records keep their converged points (the rising branch up to the failure).
+    Materials are named by physics (``by_physics``)."""
     from solver.store import CurveStore
 
     curves: list[CurveData] = []
     with CurveStore(path, mode="r") as db:
         metadata = dict(db.metadata)
-        for rec in db.records():
+        records = list(db.records())
+        designs = by_physics([rec.design for rec in records])
+        for rec, design in zip(records, designs, strict=True):
             c = rec.curve
             s = rec.settings
             curves.append(CurveData(
-                design=rec.design, pressure_pa=np.asarray(c.pressure_pa, dtype=float),
+                design=design, pressure_pa=np.asarray(c.pressure_pa, dtype=float),
                 angle_deg=np.asarray(c.angle_deg, dtype=float),
                 force_mn=np.asarray(c.force_mn, dtype=float), key=rec.key, tip=s.tip,
                 spring_k_n_per_m=float(s.spring_k_n_per_m),

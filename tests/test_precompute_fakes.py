@@ -5,6 +5,8 @@ fake_solve: a 6-point curve whose numbers follow from the design alone
     (angle_deg = 0.1 L (exp(p / 500) - 1) with p = 0 .. 400 t Pa), status "complete";
     T_mm = 2 returns a "failed" curve, T_mm = 3 raises RuntimeError.
 slow_fake_solve: the same after FAKE_SLEEP_S seconds (interrupt and kill tests).
+blocking_fake_solve: fake_solve, except that L_mm = 6.1 touches the file named by
+    BALLOON_FAKE_MARKER and then never returns (a deterministic Ctrl-C test).
 """
 
 from __future__ import annotations
@@ -46,3 +48,13 @@ def slow_fake_solve(design, settings) -> Curve:
 
 def always_ok_solve(design, settings) -> Curve:
     return fake_curve(design)
+
+
+def blocking_fake_solve(design, settings) -> Curve:
+    if design.L_mm == 6.1:
+        from pathlib import Path
+
+        Path(os.environ["BALLOON_FAKE_MARKER"]).touch()
+        while True:  # until the job stops this worker
+            time.sleep(1.0)
+    return fake_solve(design, settings)

@@ -163,3 +163,34 @@ def test_key_lines_handles_comments_strings_and_tables():
     assert spans[("sweep", 1, "L_mm")] == (9, 9)
     assert spans[("materials", "soft", "mu_kpa")] == (11, 11)
     assert ("L_mm",) not in spans
+
+
+@pytest.mark.parametrize("content, line, words", [
+    ("name = 'caf\xe9'\n".encode("latin-1"), 1, "0xe9 at offset 11 is not UTF-8"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n'.encode("utf-16"), 1, "not UTF-8"),
+    (b'pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = 4.1\n\x00\x01\x02', 3, "binary"),
+    (b"\x89HDF\r\n\x1a\n" + bytes(range(256)), 1, "not UTF-8"),
+])
+def test_a_grid_file_that_is_not_utf8_text_is_one_clear_error(tmp_path, content, line,
+                                                              words):
+    path = tmp_path / "grid.toml"
+    path.write_bytes(content)
+    with pytest.raises(GridError) as exc:
+        load_grid(path)
+    assert exc.value.line == line and words in str(exc.value)
+    assert str(exc.value).startswith(f"{path}, line {line}: encoding: ")
+
+
+@pytest.mark.parametrize("depth", [101, 5_000, 200_000])
+def test_deeply_nested_toml_is_one_clear_error(depth):
+    text = 'pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = ' + "[" * depth + "]" * depth
+    with pytest.raises(GridError) as exc:
+        parse_grid(text, "deep.toml")
+    assert str(exc.value) == (f"deep.toml, line 2: toml: values nested {depth} levels deep "
+                              "(allowed: at most 100 levels of [ ] and { })")
+
+
+def test_nesting_a_grid_needs_is_fine():
+    grid = parse_grid('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = [4.1]\n'
+                      '[[sweep]]\nt_mm = {start = 0.5, stop = 1.0, num = 2}\n', "ok.toml")
+    assert len(grid) == 2

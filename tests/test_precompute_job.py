@@ -186,44 +186,44 @@ def test_dask_local_cluster_runs_the_same_job(grid, tmp_path):
 RUNNER = """
 import json, sys
 from solver.precompute import load_grid, precompute
-from test_precompute_fakes import slow_fake_solve
+from test_precompute_fakes import blocking_fake_solve
 if __name__ == "__main__":
-    s = precompute(load_grid(sys.argv[1]), sys.argv[2], workers=1, solve_fn=slow_fake_solve,
-                   progress=False)
+    s = precompute(load_grid(sys.argv[1]), sys.argv[2], workers=1,
+                   solve_fn=blocking_fake_solve, progress=False)
     print(json.dumps({"interrupted": s.interrupted, "solved": s.solved}), flush=True)
     sys.exit(130 if s.interrupted else 0)
 """
 
 
 def test_ctrl_c_on_a_running_job_stops_it_and_keeps_what_finished(tmp_path):
+    """Deterministic: the third design's solve never returns; Ctrl-C comes once the
+    first two are stored and the third has started, whatever the machine's load."""
     grid_path = tmp_path / "grid.toml"
     grid_path.write_text(GRID.replace("T_mm = [1.0, 2.0, 3.0]", "T_mm = 1.0")
                          .replace("[4.1, 7.1, 11.1]", "[4.1, 5.1, 6.1, 7.1, 8.1, 9.1]"))
     runner = tmp_path / "runner.py"
     runner.write_text(textwrap.dedent(RUNNER))
-    db_path = tmp_path / "c.h5"
-    job = subprocess.Popen([sys.executable, str(runner), grid_path, db_path], env=ENV,
+    db_path, marker = tmp_path / "c.h5", tmp_path / "third-started"
+    job = subprocess.Popen([sys.executable, str(runner), grid_path, db_path],
+                           env={**ENV, "BALLOON_FAKE_MARKER": str(marker)},
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            start_new_session=True)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:  # wait for two finished records
-        if db_path.exists():
+    deadline = time.monotonic() + 300  # a bound for a broken run, not a timing assumption
+    while time.monotonic() < deadline and job.poll() is None:
+        if marker.exists() and db_path.exists():
             with CurveStore(db_path) as db:
-                if len(db) >= 2:
+                if len(db) == 2:
                     break
-        time.sleep(0.1)
+        time.sleep(0.05)
     os.killpg(job.pid, signal.SIGINT)  # what Ctrl-C in a terminal sends
-    out, err = job.communicate(timeout=60)
+    out, err = job.communicate(timeout=120)
     assert job.returncode == 130, err
-    report = json.loads(out)
-    assert report["interrupted"] and 2 <= report["solved"] < 6
+    assert json.loads(out) == {"interrupted": True, "solved": 2}
     with CurveStore(db_path) as db:
-        assert len(db) == report["solved"]
-        assert set(db.statuses().values()) == {"complete"}
+        assert len(db) == 2 and set(db.statuses().values()) == {"complete"}
     rerun = precompute(load_grid(grid_path), db_path, workers=1, solve_fn=always_ok_solve,
                        progress=False)
-    assert rerun.to_solve == 6 - report["solved"] and rerun.skipped_done == report["solved"]
-
+    assert rerun.to_solve == 4 and rerun.skipped_done == 2
 
 
 def test_progress_bar_shows_counts_failures_and_eta_and_the_summary_counts(grid, tmp_path,
@@ -243,3 +243,93 @@ def test_progress_bar_shows_counts_failures_and_eta_and_the_summary_counts(grid,
     assert lines[1].endswith("3 complete, 0 stopped, 5 failed")
     assert lines[2] == "1 lost to worker errors (nothing stored; rerun to retry)"
     assert sum(line.startswith("  failed ") for line in lines) == 6  # 5 failed + 1 error
+
+
+def test_disk_full_mid_job_parks_the_finished_results_and_the_next_run_writes_them(
+        grid, tmp_path, monkeypatch):
+    import errno
+
+    import solver.store.hdf5
+
+    db_path = tmp_path / "c.h5"
+    real_write, writes = solver.store.hdf5._write_file, []
+
+    def write_until_full(path, data):  # the creation and 3 puts fit, the 4th put does not
+        writes.append(path)
+        if len(writes) > 4:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_write(path, data)
+
+    monkeypatch.setattr(solver.store.hdf5, "_write_file", write_until_full)
+    with CurveStore(db_path, mode="a") as db:  # the job's loop, on an inline pool
+        summary = run_job(grid.points, db, InlineBackend(pending={7}), always_ok_solve,
+                          progress=False)
+    assert summary.write_error and str(db_path) in summary.write_error
+    assert "No space left on device" in summary.write_error
+    with CurveStore(db_path) as db:
+        stored = set(db.keys())
+    # 3 puts published, the 4th failed and stopped the job; everything else that had
+    # finished (all but the pending point 7) is parked, the database is as after put 3
+    assert len(stored) == 3
+    parked = sorted(p.stem for p in (tmp_path / "c.h5.parked").glob("*.h5"))
+    assert len(parked) == 5 and not set(parked) & stored
+    assert summary.parked == 5 and summary.not_run == 1
+    assert any("5 finished results parked in" in line for line in summary.lines())
+
+    monkeypatch.setattr(solver.store.hdf5, "_write_file", real_write)  # space again
+    rerun = precompute(grid, db_path, workers=1, solve_fn=always_ok_solve, progress=False)
+    assert rerun.unparked == 5 and rerun.to_solve == 1 and rerun.complete == 1
+    assert rerun.lines()[0] == "wrote 5 results parked by an earlier run"
+    assert not (tmp_path / "c.h5.parked").exists()
+    with CurveStore(db_path) as db:
+        assert len(db) == 9 and set(db.statuses().values()) == {"complete"}
+        record = db.get(parked[0])
+    assert record.curve.angle_deg.tolist() == fake_curve(record.design).angle_deg.tolist()
+
+
+FULL_DISK_RUNNER = """
+import resource, signal, sys
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG
+import solver.precompute.job as job
+from test_precompute_fakes import always_ok_solve
+job.default_solve = always_ok_solve  # the CLI's solve, replaced by the fast fake
+from service.cli import main
+if __name__ == "__main__":
+    resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[3]), resource.RLIM_INFINITY))
+    sys.exit(main(["precompute", sys.argv[1], "--db", sys.argv[2], "--workers", "1",
+                   "--no-progress"]))
+"""
+
+
+def test_balloon_precompute_on_a_full_file_system_says_where_and_why(tmp_path):
+    """A real failed write (the file-size limit, as a full disk would): one line naming
+    the database and the cause, exit 1, the file intact, finished results parked."""
+    grid_text = GRID.replace("T_mm = [1.0, 2.0, 3.0]", "T_mm = 1.0")
+    db_path = tmp_path / "c.h5"
+    sizes = []
+    for lengths in ("[4.1]", "[4.1, 5.1]"):
+        precompute(parse_grid(grid_text.replace("[4.1, 7.1, 11.1]", lengths)), db_path,
+                   solve_fn=always_ok_solve, progress=False)
+        sizes.append(db_path.stat().st_size)
+    before = db_path.read_bytes()
+    limit = sizes[1] + (sizes[1] - sizes[0]) // 2  # room for the run's metadata only
+    grid_path = tmp_path / "grid.toml"
+    grid_path.write_text(grid_text.replace("[4.1, 7.1, 11.1]", "[4.1, 5.1, 6.1, 7.1, 8.1]"))
+    runner = tmp_path / "runner.py"
+    runner.write_text(textwrap.dedent(FULL_DISK_RUNNER))
+    job = subprocess.run([sys.executable, "-X", "faulthandler", str(runner), grid_path, db_path, str(limit)],
+                         env=ENV, capture_output=True, text=True, timeout=120)
+    assert job.returncode == 1, job.stderr
+    assert "Traceback" not in job.stderr
+    stopped = [ln for ln in job.stderr.splitlines() if ln.startswith("stopped: ")]
+    assert len(stopped) == 1 and f"cannot write {db_path}" in stopped[0], job.stderr
+    assert "File too large" in stopped[0]
+    with CurveStore(db_path) as db:  # intact: the two records of before, readable
+        assert len(db) == 2 and db_path.stat().st_size <= limit
+    parked = list((tmp_path / "c.h5.parked").glob("*.h5"))
+    assert parked and before  # finished results kept beside the database
+    rerun = precompute(load_grid(grid_path), db_path, solve_fn=always_ok_solve,
+                       progress=False)
+    assert rerun.unparked == len(parked) and rerun.skipped_done == 2 + len(parked)
+    with CurveStore(db_path) as db:
+        assert len(db) == 5

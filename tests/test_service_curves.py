@@ -50,7 +50,7 @@ def client(tmp_path, db_path):
 
 def test_health_counts_the_records(client):
     assert client.get("/v1/health").json()["database"] == {
-        "path": str(client.app.state.settings.db_path), "present": True, "records": len(ROWS)}
+        "name": "curves.h5", "present": True, "records": len(ROWS), "error": None}
 
 
 def test_list_filters_and_pages(client):
@@ -96,8 +96,9 @@ def test_get_one_curve(client):
     assert body["curve"]["angle_deg"] == [0, 10, 20, 30, 40, 50]
     assert body["curve"]["force_mn"] == [None] * 6  # NaN (free tip) is sent as null
     assert body["provenance"]["status"] == "complete"
-    assert_problem(client.get("/v1/curves/" + "f" * 32), 404)
-    assert_problem(client.get("/v1/curves/NOT-A-KEY"), 422, "curve_id")
+    body = assert_problem(client.get("/v1/curves/" + "f" * 32), 404)
+    assert str(client.app.state.settings.db_path) not in body["detail"]  # no local path
+    assert_problem(client.get("/v1/curves/NOT-A-KEY"), 404)  # no such record, whatever the text
 
 
 def test_plot_overlays_nearby_fe_curves(client):

@@ -17,6 +17,7 @@ from solver.store import (
     Record,
     SchemaVersionError,
     StoreBusyError,
+    StoreWriteError,
     make_record,
     record_key,
 )
@@ -225,8 +226,9 @@ def test_failed_put_leaves_the_published_file_untouched(db_path, monkeypatch):
             raise OSError("disk full (simulated)")
 
         monkeypatch.setattr("solver.store.schema.write_record", broken)
-        with pytest.raises(OSError, match="disk full"):
+        with pytest.raises(StoreWriteError, match="disk full") as caught:
             db.put(record_for(5.1))
+        assert str(db_path) in str(caught.value)  # names the path and the cause
     assert db_path.read_bytes() == before
     assert not list(db_path.parent.glob(".*tmp*"))
     with CurveStore(db_path) as db:

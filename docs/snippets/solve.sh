@@ -1,4 +1,5 @@
 # Queue an FE solve of a new design (needs the server's API key), then poll the job
+: "${BALLOON_API_KEY:?set BALLOON_API_KEY to the API key of the server (POST /v1/solve needs it)}"
 URL="${BALLOON_URL:-http://127.0.0.1:8000}"
 JOB=$(curl -s -X POST "$URL/v1/solve" \
   -H "Content-Type: application/json" -H "X-API-Key: $BALLOON_API_KEY" \

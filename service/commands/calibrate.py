@@ -48,6 +48,12 @@ def _starting_model(name: str):
     return load_surrogate(Path(name))
 
 
+def _deg(value: float | None, missing: str = "n/a") -> str:
+    """A report figure in degrees; the report has null where a figure is not defined
+    (no noise floor without replicates, a non-finite error)."""
+    return missing if value is None else f"{value:.2f}"
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -82,8 +88,9 @@ def run(args: argparse.Namespace) -> int:
             args.models_dir = get_settings().models_dir
         path = save_model(cal, args.save, args.models_dir)
         print(f"saved model {args.save!r} to {path}", file=sys.stderr)
-    print(f"rmse model {report['rmse_model_deg']:.2f} deg, before {report['rmse_before_deg']:.2f}"
-          f", after {report['rmse_after_deg']:.2f} (noise floor {report['noise_floor_deg']:.2f})"
+    print(f"rmse model {_deg(report['rmse_model_deg'])} deg, before "
+          f"{_deg(report['rmse_before_deg'])}, after {_deg(report['rmse_after_deg'])} "
+          f"(noise floor {_deg(report['noise_floor_deg'], 'n/a: no replicate curves')})"
           f"; selected: {', '.join(report['selected_effects']) or 'none'}"
           f"{'; RESIDUAL STRUCTURE REMAINS' if report['residual_structured_after'] else ''}")
     print(report["interpretation"])

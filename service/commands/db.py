@@ -19,11 +19,13 @@ import math
 import sys
 from typing import Any
 
+from solver.io import CSV_COLUMNS
+
 CSV_DESIGN = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm",
               "chamber_offset_mm", "body_material", "membrane_material")
-CSV_CURVE = ("pressure_pa", "volume_ul", "time_s", "angle_deg", "tip_x_mm", "tip_z_mm",
-             "max_membrane_stretch", "force_mn", "newton_iterations", "residual_norm",
-             "negative_eigenvalues")
+# the curve columns of `balloon solve --csv` (one name per column everywhere:
+# tip_dx_mm, tip_dz_mm are the two columns of the Curve's tip_displacement_mm array)
+CSV_CURVE = CSV_COLUMNS
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -55,6 +55,9 @@ def run(args: argparse.Namespace) -> int:
     from solver.errors import InputError
 
     s = surrogate_from_args(args)
+    if not hasattr(s, "inverse"):
+        raise InputError("--model", f"the saved calibrated model {args.model!r} predicts but "
+                         "does not invert", "paper, a surrogate file, or leave --model out")
     if args.angles_deg is not None:
         if args.L_mm is None or args.t_mm is None:
             raise InputError("--angles-deg", "needs the design's --L-mm and --t-mm")

@@ -122,6 +122,8 @@ def run(args: argparse.Namespace) -> int:
         signal.signal(signal.SIGTERM, previous)
     for line in summary.lines():
         print(line, file=sys.stderr)
+    if summary.write_error:  # disk full, read-only: the lines above say where and why
+        return 1
     if summary.interrupted:
         return 130
     return 1 if summary.errors else 0

@@ -28,8 +28,11 @@ def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True)
                         help="chamber width, mm (default 1.8)")
     parser.add_argument("--h-mm", type=float, default=None, dest="h_mm",
                         help="chamber height, mm (default 0.15)")
-    parser.add_argument("--body", default=None, help="body material id (default pdms_1_10)")
-    parser.add_argument("--membrane", default=None,
+    # the flag names of `balloon solve`; --body and --membrane are kept as aliases
+    parser.add_argument("--body-material", "--body", default=None, dest="body_material",
+                        help="body material id (default pdms_1_10)")
+    parser.add_argument("--membrane-material", "--membrane", default=None,
+                        dest="membrane_material",
                         help="membrane material id (default ecoflex_00_30)")
     parser.add_argument("--body-stiffness-scale", type=float, default=None, metavar="S",
                         help="body mu = S x the preset's (0.5..2 in the emulator's box)")
@@ -41,6 +44,9 @@ def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", default="emulator", metavar="NAME|PATH",
                         help="emulator (default), exponential, paper, a saved calibrated "
                              "model's name, or a model file")
+    parser.add_argument("--models-dir", type=Path, default=None,
+                        help="where saved calibrated models are (default: BALLOON_MODELS_DIR,"
+                             " else ~/.balloon/models)")
     parser.add_argument("--form", choices=("exponential", "extended"), default=None,
                         help="model form (default: each family's fitted default)")
     parser.add_argument("--level", type=float, default=0.95, help="band level (0.95)")
@@ -56,7 +62,7 @@ def design_from_args(args: argparse.Namespace) -> object:
                                                               "h_mm")
                                if getattr(args, k, None) is not None}
     for layer, default in (("body", "pdms_1_10"), ("membrane", "ecoflex_00_30")):
-        preset = getattr(args, layer, None) or default
+        preset = getattr(args, f"{layer}_material", None) or default
         scale = getattr(args, f"{layer}_stiffness_scale", None)
         if scale is None:
             data[f"{layer}_material"] = preset
@@ -74,6 +80,17 @@ def design_from_args(args: argparse.Namespace) -> object:
     return design_from_dict(data)
 
 
+def saved_model_name(spec: str | None) -> str | None:
+    """``spec`` if it names a saved calibrated model: a bare name (not "paper", not a path
+    or a .json file)."""
+    from surrogate.calibration._saved import NAME_PATTERN
+
+    if (spec is None or spec == "paper" or spec.endswith(".json") or Path(spec).exists()
+            or not NAME_PATTERN.match(spec)):
+        return None
+    return spec
+
+
 def surrogate_from_args(args: argparse.Namespace) -> object:
     """The model named by --model: the service's own names first, then a file path."""
     from service.models import ModelRegistry
@@ -84,8 +101,8 @@ def surrogate_from_args(args: argparse.Namespace) -> object:
     if Path(spec).suffix == ".json" and Path(spec).is_file():
         return open_model_file(Path(spec), getattr(args, "form", None))
     settings = get_settings()
-    registry = ModelRegistry(settings.surrogate_path, settings.models_dir,
-                             settings.emulator_path)
+    models_dir = getattr(args, "models_dir", None) or settings.models_dir
+    registry = ModelRegistry(settings.surrogate_path, models_dir, settings.emulator_path)
     if spec in ("emulator", "fitted", "exponential"):
         registry.load_fitted()
     model = registry.get(spec) if spec != "paper" else open_surrogate("paper")

@@ -7,45 +7,79 @@ import json
 import sys
 from pathlib import Path
 
-from solver.design import design_from_dict
+from solver.design import LIMITS_MM, design_from_dict
 from solver.errors import InputError
+from solver.io import CSV_COLUMNS
+from solver.materials import MATERIALS
 from solver.settings import CONTROLS, ELEMENTS, MAX_MESH_LEVEL, TIPS, SolverSettings
+
+
+def _mm(name: str, what: str) -> str:
+    lo, hi = LIMITS_MM[name]
+    return f"{what}, mm ({lo:g} to {hi:g}; default %(default)s)"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "solve", help="solve one design with the FE solver (pressure-angle curve)",
         description="Inflate one actuator design with the 3D finite-element solver and "
-                    "write its pressure-volume-angle curve. Lengths in mm.")
-    g = p.add_argument_group("design (mm; defaults: the paper's standard design)")
-    g.add_argument("--L-mm", type=float, default=7.1, help="chamber length")
-    g.add_argument("--t-mm", type=float, default=0.5, help="membrane thickness")
-    g.add_argument("--T-mm", type=float, default=1.0, help="body thickness above the chamber")
-    g.add_argument("--b-mm", type=float, default=1.8, help="chamber width")
-    g.add_argument("--h-mm", type=float, default=0.15, help="chamber height")
-    g.add_argument("--W-mm", type=float, default=3.0, help="actuator width")
-    g.add_argument("--body-length-mm", type=float, default=None)
+                    "write its pressure-volume-angle curve. Lengths in mm, pressures in Pa, "
+                    "angles in degrees, volumes in ul (= mm^3).")
+    g = p.add_argument_group("design (defaults: the paper's standard design, Table 3)")
+    g.add_argument("--L-mm", type=float, default=7.1, help=_mm("L_mm", "chamber length"))
+    g.add_argument("--t-mm", type=float, default=0.5,
+                   help=_mm("t_mm", "membrane thickness"))
+    g.add_argument("--T-mm", type=float, default=1.0,
+                   help=_mm("T_mm", "body thickness above the chamber"))
+    g.add_argument("--b-mm", type=float, default=1.8, help=_mm("b_mm", "chamber width"))
+    g.add_argument("--h-mm", type=float, default=0.15, help=_mm("h_mm", "chamber height"))
+    g.add_argument("--W-mm", type=float, default=3.0, help=_mm("W_mm", "actuator width"))
+    g.add_argument("--body-length-mm", type=float, default=None,
+                   help=_mm("body_length_mm", "body length").replace(
+                       "default %(default)s", "default max(12, L + 2)"))
     g.add_argument("--chamber-offset-mm", type=float, default=None,
-                   help="distance from the clamped end to the chamber (default: centred)")
-    g.add_argument("--body-material", default="pdms_1_10")
-    g.add_argument("--membrane-material", default="ecoflex_00_30")
+                   help=_mm("chamber_offset_mm", "clamped end to chamber start").replace(
+                       "default %(default)s", "default: centred"))
+    materials = ", ".join(sorted(MATERIALS))
+    g.add_argument("--body-material", default="pdms_1_10",
+                   help=f"body (layer A) material: {materials} (default %(default)s)")
+    g.add_argument("--membrane-material", default="ecoflex_00_30",
+                   help=f"membrane (layer B) material: {materials} (default %(default)s)")
     s = p.add_argument_group("solver")
     d = SolverSettings()
-    s.add_argument("--control", choices=CONTROLS, default=d.control)
-    s.add_argument("--element", choices=ELEMENTS, default=d.element)
-    s.add_argument("--mesh", type=int, default=d.mesh_level,
-                   help=f"mesh level 0..{MAX_MESH_LEVEL} (default {d.mesh_level})")
-    s.add_argument("--max-angle-deg", type=float, default=d.max_angle_deg)
-    s.add_argument("--max-pressure-pa", type=float, default=d.max_pressure_pa)
-    s.add_argument("--flow-ul-s", type=float, default=d.flow_ul_s)
-    s.add_argument("--bulk-ratio", type=float, default=d.bulk_ratio)
-    s.add_argument("--tip", choices=TIPS, default=d.tip)
-    s.add_argument("--spring-k-n-per-m", type=float, default=d.spring_k_n_per_m)
-    o = p.add_argument_group("output")
-    o.add_argument("--json", metavar="PATH", help="write the curve as JSON")
-    o.add_argument("--csv", metavar="PATH", help="write the curve as CSV")
+    s.add_argument("--control", choices=CONTROLS, default=d.control,
+                   help="volume: inject volume, pressure follows (passes pressure maxima); "
+                        "pressure: prescribe pressure (default %(default)s)")
+    s.add_argument("--element", choices=ELEMENTS, default=d.element,
+                   help="hex2: 27-node triquadratic; hex1: 8-node trilinear, faster "
+                        "(default %(default)s)")
+    s.add_argument("--mesh", type=int, default=d.mesh_level, metavar="LEVEL",
+                   help=f"mesh level 0 to {MAX_MESH_LEVEL}: level n has n + 1 times the "
+                        "divisions of level 0 (default %(default)s)")
+    s.add_argument("--max-angle-deg", type=float, default=d.max_angle_deg,
+                   help="stop at this bending angle, degrees (0.1 to 360; default "
+                        "%(default)s)")
+    s.add_argument("--max-pressure-pa", type=float, default=d.max_pressure_pa,
+                   help="stop at this cavity pressure, Pa (1 to 1e7; default %(default)s)")
+    s.add_argument("--flow-ul-s", type=float, default=d.flow_ul_s,
+                   help="injection rate for the reported time = volume / flow, ul/s "
+                        "(1e-6 to 1e6; default %(default)s)")
+    s.add_argument("--bulk-ratio", type=float, default=d.bulk_ratio,
+                   help="bulk modulus over initial shear modulus K / mu0, dimensionless "
+                        "(10 to 1e6; default %(default)s)")
+    s.add_argument("--tip", choices=TIPS, default=d.tip,
+                   help="free tip, a linear spring on the tip (--spring-k-n-per-m), or "
+                        "blocked (default %(default)s)")
+    s.add_argument("--spring-k-n-per-m", type=float, default=d.spring_k_n_per_m,
+                   help="tip spring stiffness for --tip spring, N/m (0 to 1e6, > 0 for a "
+                        "spring; default %(default)s)")
+    o = p.add_argument_group("output (files are checked before the solve)")
+    o.add_argument("--json", metavar="PATH", help="write design, settings and curve as JSON")
+    o.add_argument("--csv", metavar="PATH",
+                   help="write the curve as CSV (columns: " + ", ".join(CSV_COLUMNS) + ")")
     o.add_argument("--plot", metavar="PATH", help="write a PNG of angle and volume vs pressure")
-    o.add_argument("--vtk", metavar="PATH", help="write the final deformed state (VTU)")
+    o.add_argument("--vtk", metavar="PATH",
+                   help="write the final deformed state with stretch and stress (VTU)")
     o.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 

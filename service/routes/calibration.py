@@ -6,14 +6,16 @@ augmented model (``save``) changes server state, so it needs the API key.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Security
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
 from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
-from service.errors import FieldError, located
-from solver.errors import InputError
+from service.errors import ConflictError, FieldError, located
+from service.schemas import Schema
+from solver.errors import ExistsError, InputError
 
 router = APIRouter(prefix="/v1", tags=["calibration"])
 
@@ -28,10 +30,35 @@ EXAMPLE_ROWS = [
 ]
 
 
-class CalibrateRequest(BaseModel):
+MAX_CELL_INT = 10**15  # larger integers are no measurement (and overflow a float)
+
+
+def _cell(value: Any) -> Any:
+    """One value of a measured row: a finite number, text or null; named by its row and
+    column in the 422 (a 400-digit integer, true, a list are input errors, not a 500)."""
+    if value is None or isinstance(value, str):
+        if isinstance(value, str) and len(value) > 200:
+            raise ValueError(f"text of {len(value)} characters (at most 200)")
+        return value
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{type(value).__name__} is not a measured value: give a number, "
+                         "text or null")
+    if isinstance(value, int) and abs(value) > MAX_CELL_INT:
+        raise ValueError(f"an integer of {len(str(abs(value)))} digits is out of range "
+                         f"(|value| <= 1e15)")
+    if not math.isfinite(value):
+        raise ValueError("NaN and infinity are not measured values")
+    return value
+
+
+Cell = Annotated[Any, PlainValidator(_cell),
+                 WithJsonSchema({"type": ["number", "string", "null"]})]
+
+
+class CalibrateRequest(Schema):
     """Measured rows (columns as in docs/measured-data.md) and the starting model."""
 
-    rows: list[dict[str, Any]] = Field(..., min_length=1, max_length=20_000,
+    rows: list[dict[str, Cell]] = Field(..., min_length=1, max_length=20_000,
                                        description="one object per observation",
                                        examples=[EXAMPLE_ROWS])
     model: str = Field("fitted", min_length=1, max_length=64,
@@ -46,9 +73,9 @@ class CalibrateRequest(BaseModel):
 
 class Candidate(BaseModel):
     model_config = ConfigDict(extra="allow")
-    effect: str
-    rmse_cv_deg: float | None
-    delta_bic: float | None
+    effect: str = Field(description="effect id(s), + joined")
+    rmse_cv_deg: float | None = Field(description="cross-validated RMS error, degrees")
+    delta_bic: float | None = Field(description="BIC change against the baseline")
     params: dict[str, Any]
     plausible: bool | None
 
@@ -57,10 +84,13 @@ class CalibrationReport(BaseModel):
     """The calibration report; more fields than listed here are included."""
 
     model_config = ConfigDict(extra="allow")
-    rmse_model_deg: float
-    rmse_before_deg: float | None = Field(..., description="null when not finite")
-    rmse_after_deg: float | None = Field(..., description="null when not finite")
-    noise_floor_deg: float | None
+    rmse_model_deg: float = Field(description="the starting model's RMS error, degrees")
+    rmse_before_deg: float | None = Field(..., description="recalibrated baseline, cross-"
+                                          "validated RMS error, degrees (null: not finite)")
+    rmse_after_deg: float | None = Field(..., description="with the selected effects, cross-"
+                                         "validated RMS error, degrees (null: not finite)")
+    noise_floor_deg: float | None = Field(description="RMS measurement noise from "
+                                          "replicates, degrees (null: no replicates)")
     selected_effects: list[str]
     candidates: list[Candidate]
     residual_structured_after: bool
@@ -108,8 +138,11 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
     report = jsonable(cal.report)
     report["model"]["name"] = request.model
     if request.save is not None:
-        try:  # a reserved or already used name
+        try:  # a reserved or already used name (atomic create: one of two saves wins)
             save_model(cal, request.save, settings.models_dir)
+        except ExistsError:
+            raise ConflictError(f"save: a model named {request.save!r} already exists; "
+                                "choose a new name", model=request.save) from None
         except InputError as exc:
             raise located(exc, ("body",), {"name": ("save",)}) from None
         report["saved_model"] = request.save

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import Annotated, Any
 
 import numpy as np
@@ -11,11 +12,13 @@ from service.convert import jsonable
 from service.deps import SettingsDep
 from service.schemas import CurveDetail, CurvePage, CurvesQuery, CurveSummary
 from service.store_access import open_store
+from solver.errors import NotFoundError
 
 router = APIRouter(prefix="/v1", tags=["curves"])
 
-KEY = Path(pattern=r"^[0-9a-f]{1,64}$", description="the record key (hex)",
+KEY = Path(description="the record key (hex; any other text is not found)",
            examples=["0123456789abcdef0123456789abcdef"])
+KEY_PATTERN = re.compile(r"[0-9a-f]{1,64}")  # record keys; anything else is not found
 TOL_MM = 1e-6
 
 
@@ -70,6 +73,8 @@ def list_curves(query: Annotated[CurvesQuery, Query()], settings: SettingsDep) -
 def get_curve(curve_id: Annotated[str, KEY], settings: SettingsDep) -> CurveDetail:
     """Design, settings, every per-step array of the curve (NaN as null), provenance."""
     with open_store(settings.db_path) as db:
+        if not KEY_PATTERN.fullmatch(curve_id) or curve_id not in db:
+            raise NotFoundError(f"no curve {curve_id!r}: GET /v1/curves lists them")
         record = db.get(curve_id)
     return CurveDetail(id=record.key, design=record.design.as_dict(),
                        settings=record.settings.as_dict(),

@@ -9,7 +9,7 @@ from fastapi import APIRouter
 from service.deps import JobsDep, ModelsDep, SettingsDep
 from service.schemas import Health
 from service.schemas.health import DatabaseStatus, JobsStatus, SurrogateStatus
-from service.store_access import record_count
+from service.store_access import database_state
 
 router = APIRouter(prefix="/v1", tags=["health"])
 
@@ -26,15 +26,26 @@ VERSION = _version()
 
 @router.get("/health", response_model=Health, summary="Liveness and loaded data")
 async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Health:
-    """Cheap by design (the record count is re-read only when the file changes): used by
-    the Docker HEALTHCHECK."""
+    """Cheap by design (the database's index is re-read only when the file changes): used
+    by the Docker HEALTHCHECK, which needs 200 (the process is alive) also when
+    ``status`` is "degraded" (no or damaged database, no fitted surrogate)."""
     fitted = models.fitted
+    present = settings.db_path.is_file()
+    records, db_error = database_state(settings.db_path)
+    problems = []
+    if not present:
+        problems.append(f"no curve database {settings.db_path.name}: /v1/curves answers 503")
+    elif db_error:
+        problems.append(f"{db_error}: /v1/curves answers 503")
+    if fitted is None:
+        problems.append(f"no fitted surrogate ({models.fitted_error}): model \"fitted\" "
+                        "answers 503; \"paper\" answers")
     return Health(
-        version=VERSION,
-        database=DatabaseStatus(path=str(settings.db_path), present=settings.db_path.is_file(),
-                                records=record_count(settings.db_path)),
+        status="degraded" if problems else "ok", problems=problems, version=VERSION,
+        database=DatabaseStatus(name=settings.db_path.name, present=present,
+                                records=records, error=db_error),
         surrogate=SurrogateStatus(
-            loaded=fitted is not None, path=str(settings.surrogate_path),
+            loaded=fitted is not None, file=settings.surrogate_path.name,
             name=getattr(fitted, "name", None), error=models.fitted_error,
             families=len(getattr(fitted, "families", []) or [])),
         jobs=JobsStatus(**jobs.stats()))

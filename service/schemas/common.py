@@ -13,9 +13,12 @@ MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
 
 
 class Schema(BaseModel):
-    """Base of every schema: unknown fields are refused, NaN and infinity too."""
+    """Base of every request schema: unknown fields are refused, NaN and infinity too, and
+    values are strict JSON types: a number field takes a JSON number (an integer too),
+    never ``true`` or the string ``"7.1"``; an integer field never takes 0.5. Query
+    models (whose values arrive as text) relax ``strict``."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
 def mm(name: str, description: str, default: float | None = None) -> object:

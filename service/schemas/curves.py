@@ -4,13 +4,15 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from service.schemas.common import MATERIAL_ID, Schema
 
 
 class CurvesQuery(Schema):
     """Filters (exact values, compared to 1e-6 mm) and the page."""
+
+    model_config = ConfigDict(strict=False)  # query values arrive as text
 
     L_mm: float | None = Field(None, ge=0.5, le=60.0, description="chamber length, mm")
     t_mm: float | None = Field(None, ge=0.05, le=5.0, description="membrane thickness, mm")
@@ -24,27 +26,27 @@ class CurvesQuery(Schema):
 
 
 class CurveSummary(BaseModel):
-    id: str
-    L_mm: float
-    t_mm: float
-    T_mm: float
-    b_mm: float
-    h_mm: float
-    body_material: str
-    membrane_material: str
-    mesh_level: int
-    element: str
-    status: str
-    n_points: int
-    max_pressure_pa: float | None
-    max_angle_deg: float | None
+    id: str = Field(description="the record key: GET /v1/curves/{id}")
+    L_mm: float = Field(description="chamber length, mm")
+    t_mm: float = Field(description="membrane thickness, mm")
+    T_mm: float = Field(description="body thickness above the chamber, mm")
+    b_mm: float = Field(description="chamber width, mm")
+    h_mm: float = Field(description="chamber height, mm")
+    body_material: str = Field(description="body material id")
+    membrane_material: str = Field(description="membrane material id")
+    mesh_level: int = Field(description="FE mesh level (0 = coarsest)")
+    element: str = Field(description="hex2 or hex1")
+    status: str = Field(description="complete, stopped or failed")
+    n_points: int = Field(description="converged steps, including the undeformed state")
+    max_pressure_pa: float | None = Field(description="largest pressure reached, Pa")
+    max_angle_deg: float | None = Field(description="largest bending angle reached, degrees")
 
 
 class CurvePage(BaseModel):
     items: list[CurveSummary]
-    total: int
-    offset: int
-    limit: int
+    total: int = Field(description="records matching the filters")
+    offset: int = Field(description="records skipped")
+    limit: int = Field(description="records per page")
     next_offset: int | None = Field(description="offset of the next page, or null")
 
 

@@ -1,34 +1,42 @@
-"""GET /v1/health: liveness and what is loaded."""
+"""GET /v1/health: liveness and what is loaded (files by their name, never a path)."""
 
 from __future__ import annotations
 
-from pydantic import BaseModel
+from typing import Literal
+
+from pydantic import BaseModel, Field
 
 
 class DatabaseStatus(BaseModel):
-    path: str
+    name: str = Field(description="the curve database's file name (its directory is not "
+                      "shown)")
     present: bool
-    records: int | None = None
+    records: int | None = Field(None, description="records stored; null when absent or "
+                                "unreadable")
+    error: str | None = Field(None, description="why the database cannot be read")
 
 
 class SurrogateStatus(BaseModel):
     loaded: bool
-    name: str | None = None
-    path: str
-    families: int = 0
-    error: str | None = None
+    name: str | None = Field(None, description="the fitted surrogate's name")
+    file: str = Field(description="the surrogate file's name (its directory is not shown)")
+    families: int = Field(0, description="material/geometry families it covers")
+    error: str | None = Field(None, description="why it is not loaded")
 
 
 class JobsStatus(BaseModel):
-    workers: int
-    running: int
-    queued: int
-    queue_size: int
+    workers: int = Field(description="FE solve worker processes")
+    running: int = Field(description="jobs being solved now")
+    queued: int = Field(description="jobs waiting for a worker")
+    queue_size: int = Field(description="jobs that may wait; one more is refused with 503")
 
 
 class Health(BaseModel):
-    status: str = "ok"
-    version: str
+    status: Literal["ok", "degraded"] = Field(
+        "ok", description='"degraded" when an endpoint answers 503 because of the server\'s '
+        "data (no or damaged database, no fitted surrogate); `problems` says why")
+    problems: list[str] = Field([], description="what is degraded, one sentence each")
+    version: str = Field(description="balloon-actuator package version")
     database: DatabaseStatus
     surrogate: SurrogateStatus
     jobs: JobsStatus

@@ -68,28 +68,29 @@ class InverseRequest(Schema):
 
 
 class Candidate(BaseModel):
-    rank: int
-    L_mm: float
-    t_mm: float
-    T_mm: float | None = None
-    b_mm: float | None = None
-    h_mm: float | None = None
-    body_material: str
-    membrane_material: str
-    body_stiffness_scale: float | None = None
-    membrane_stiffness_scale: float | None = None
+    rank: int = Field(description="1 = best by the objective")
+    L_mm: float = Field(description="chamber length, mm")
+    t_mm: float = Field(description="membrane thickness, mm")
+    T_mm: float | None = Field(None, description="body thickness above the chamber, mm")
+    b_mm: float | None = Field(None, description="chamber width, mm")
+    h_mm: float | None = Field(None, description="chamber height, mm")
+    body_material: str = Field(description="body material preset id")
+    membrane_material: str = Field(description="membrane material preset id")
+    body_stiffness_scale: float | None = Field(None, description="body mu / the preset's")
+    membrane_stiffness_scale: float | None = Field(None, description="membrane mu / the "
+                                                   "preset's")
     design: dict[str, Any] | None = Field(None, description="the design, as /v1/predict "
                                           "takes it (lengths mm, materials inline)")
-    family: str
+    family: str = Field(description="the material group or fitted family it belongs to")
     score: float | None = Field(description="the objective's value (lower ranks first)")
-    pressure_needed_pa: float | None
-    pressure_lower_pa: float | None
-    pressure_upper_pa: float | None
+    pressure_needed_pa: float | None = Field(description="pressure that meets the target, Pa")
+    pressure_lower_pa: float | None = Field(description="its band's lower edge, Pa")
+    pressure_upper_pa: float | None = Field(description="its band's upper edge, Pa")
     value_at_pressure: float | None = Field(
         description="predicted angle (deg) or force (mN) at the target pressure")
-    value_lower: float | None
-    value_upper: float | None
-    validity: dict[str, Any]
+    value_lower: float | None = Field(description="band's lower edge (deg or mN)")
+    value_upper: float | None = Field(description="band's upper edge (deg or mN)")
+    validity: dict[str, Any] = Field(description="in_domain, flags, messages")
     curve: dict[str, Any] = Field(description="predicted curve from 0 Pa with its band")
 
 
@@ -117,11 +118,12 @@ class PressureRequest(Schema):
 
 
 class PressureResponse(BaseModel):
-    model: str
-    level: float
-    design: dict[str, Any]
-    angle_deg: list[float]
-    pressure_pa: list[float | None]
-    lower_pa: list[float | None]
-    upper_pa: list[float | None]
-    validity: dict[str, Any]
+    model: str = Field(description="the model that answered")
+    level: float = Field(description="the band's coverage probability")
+    design: dict[str, Any] = Field(description="the design as resolved (lengths, mm)")
+    angle_deg: list[float] = Field(description="the target angles, degrees")
+    pressure_pa: list[float | None] = Field(description="pressure for each angle, Pa (null: "
+                                            "not reachable)")
+    lower_pa: list[float | None] = Field(description="band's lower edge, Pa")
+    upper_pa: list[float | None] = Field(description="band's upper edge, Pa")
+    validity: dict[str, Any] = Field(description="in_domain, flags, messages")

@@ -21,20 +21,20 @@ class SolveRequest(Schema):
 
 
 class Progress(BaseModel):
-    step: int = 0
-    pressure_pa: float | None = None
-    volume_ul: float | None = None
-    angle_deg: float | None = None
-    newton_iterations: int | None = None
+    step: int = Field(0, description="converged steps so far")
+    pressure_pa: float | None = Field(None, description="cavity pressure at the last step, Pa")
+    volume_ul: float | None = Field(None, description="injected volume at the last step, ul")
+    angle_deg: float | None = Field(None, description="bending angle at the last step, deg")
+    newton_iterations: int | None = Field(None, description="Newton iterations of that step")
 
 
 class Job(BaseModel):
     id: str
     status: JobStatus = Field(description="finished: the curve is stored (see curve_status)")
     key: str = Field(description="the database key the result is stored under")
-    created_utc: str
-    started_utc: str | None = None
-    finished_utc: str | None = None
+    created_utc: str = Field(description="when it was queued, ISO 8601 UTC")
+    started_utc: str | None = Field(None, description="when a worker took it, ISO 8601 UTC")
+    finished_utc: str | None = Field(None, description="when it ended, ISO 8601 UTC")
     progress: Progress
     design: dict[str, Any]
     settings: dict[str, Any]

@@ -43,10 +43,10 @@ OptFloats = list[float | None] | None
 
 
 class PredictResponse(BaseModel):
-    model: str
-    level: float
+    model: str = Field(description="the model that answered")
+    level: float = Field(description="the band's coverage probability")
     design: dict[str, Any] = Field(description="the design as resolved (all lengths, mm)")
-    pressure_pa: list[float] = Field(description="chamber pressures, Pa")
+    pressure_pa: list[float | None] = Field(description="chamber pressures, Pa")
     angle_deg: list[float | None] = Field(description="bending angle, degrees (null past "
                                           "the FE's range)")
     lower_deg: list[float | None] = Field(description="band's lower end, degrees")
@@ -56,14 +56,17 @@ class PredictResponse(BaseModel):
     force_lower_mn: OptFloats = Field(None, description="force band's lower end, mN")
     force_upper_mn: OptFloats = Field(None, description="force band's upper end, mN")
     volume_ul: OptFloats = Field(None, description="injected volume at each pressure, ul")
-    validity: Validity
+    validity: Validity = Field(description="whether the answer is inside the model's domain")
     form: str | None = Field(None, description='model form: "exponential" (the paper\'s) '
                              'or "extended"')
-    provenance: dict[str, Any]
+    provenance: dict[str, Any] = Field(description="where the model came from (files by "
+                                       "their name)")
 
 
 class PlotQuery(Schema):
     """Query of GET /v1/predict/plot (a design with preset materials, and optional data)."""
+
+    model_config = ConfigDict(strict=False)  # query values arrive as text
 
     L_mm: float = Field(7.1, ge=0.5, le=60.0, description="chamber length, mm")
     t_mm: float = Field(0.5, ge=0.05, le=5.0, description="membrane thickness, mm")

@@ -38,7 +38,7 @@ from pathlib import Path
 from solver.design import LIMITS_MM, Design
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial, make_material
-from solver.precompute.lines import key_lines, line_of
+from solver.precompute.lines import deepest, key_lines, line_of
 from solver.settings import SolverSettings, settings_from_dict
 from solver.store.keys import canonical_number, record_key
 
@@ -49,6 +49,7 @@ TOP_KEYS = ("description", "materials", "settings", "sweep", "sample", *SWEEP_KE
 BLOCKED_MAX_PRESSURE_PA = 6000.0   # blocked-tip force curves: to this chamber pressure
 RANGE_KEYS = ("start", "stop", "num")
 MAX_POINTS = 100_000
+MAX_NESTING = 100  # what a grid needs is 3 ([[body, membrane], ...] in a table)
 
 
 class GridError(InputError):
@@ -204,12 +205,19 @@ def _limits(name: str) -> str:
 
 def parse_grid(text: str, source: str = "<grid>") -> Grid:
     """Parse and validate a grid text; GridError on the first problem found."""
+    depth, at = deepest(text)
+    if depth > MAX_NESTING:  # before tomllib, which recurses once per level
+        raise GridError(source, at, "toml", f"values nested {depth} levels deep",
+                        f"at most {MAX_NESTING} levels of [ ] and {{ }}")
     reader = _Reader(text, source)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise GridError(source, _toml_line(str(exc), text), "toml", str(exc),
                         "valid TOML (https://toml.io)") from None
+    except RecursionError:  # arrays or tables nested thousands deep
+        raise GridError(source, 1, "toml", "values nested too deeply to parse",
+                        f"at most {MAX_NESTING} levels of [ ] and {{ }}") from None
     reader.check_keys(data, (), TOP_KEYS)
     for key in ("name", "description"):
         if key in data and not isinstance(data[key], str):
@@ -360,6 +368,19 @@ def _toml_line(message: str, text: str) -> int:
 
 
 def load_grid(path: str | Path) -> Grid:
-    """Read and validate a grid file; FileNotFoundError if it does not exist."""
+    """Read and validate a grid file; FileNotFoundError if it does not exist, GridError
+    naming the line when it is not UTF-8 text (TOML is UTF-8; a binary file is refused)."""
     path = Path(path)
-    return parse_grid(path.read_text(encoding="utf-8"), str(path))
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise GridError(str(path), line, "encoding",
+                        f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not UTF-8",
+                        "a UTF-8 text file (TOML); save it as UTF-8") from None
+    if "\x00" in text:
+        line = text[:text.index("\x00")].count("\n") + 1
+        raise GridError(str(path), line, "encoding", "a NUL byte: this is a binary file",
+                        "a UTF-8 text file (TOML)")
+    return parse_grid(text, str(path))

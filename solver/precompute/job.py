@@ -12,7 +12,11 @@ A solve that fails (a "failed" curve, or an exception in the solve function) is
 stored as a failed record with its reason and does not stop the job. A worker that
 dies (out of memory, killed) is counted under ``errors`` and stored as nothing: a
 rerun tries that design again. Ctrl-C stops the workers, stores what had already
-finished, and returns a summary with ``interrupted = True``.
+finished, and returns a summary with ``interrupted = True``. A write that fails (disk
+full, read-only file system: StoreWriteError) stops the job the same way, with
+``write_error`` naming the path and the cause; the database is untouched and the
+finished results are parked (``solver.precompute.parking``) and written first by the
+next run.
 """
 
 from __future__ import annotations
@@ -27,8 +31,9 @@ from typing import Any
 from solver.curve import Curve
 from solver.design import Design
 from solver.precompute.grid import GridPoint
+from solver.precompute.parking import park, unpark
 from solver.settings import SolverSettings
-from solver.store import CurveStore, Record, failed_curve, make_record
+from solver.store import CurveStore, Record, StoreWriteError, failed_curve, make_record
 from solver.store.locking import WriterLock
 from solver.store.record import git_commit, package_version, utc_now
 
@@ -72,6 +77,10 @@ class JobSummary:
     failed: int = 0                # stored as failed records
     errors: int = 0                # worker died or result lost: nothing stored
     interrupted: bool = False
+    write_error: str | None = None  # the database could not be written: why
+    parked: int = 0                # finished results parked instead (written next run)
+    parked_in: str = ""
+    unparked: int = 0              # parked results of an earlier run written this run
     wall_time_s: float = 0.0
     backend: str = ""
     failures: list[tuple[str, str, str]] = field(default_factory=list)  # key, design, reason
@@ -89,14 +98,22 @@ class JobSummary:
         return 3600.0 * self.solved / self.wall_time_s if self.wall_time_s > 0 else 0.0
 
     def lines(self) -> list[str]:
-        out = [f"grid: {self.grid_total} designs; already in the database: "
+        out = [f"wrote {self.unparked} results parked by an earlier run"] if self.unparked \
+            else []
+        out += [f"grid: {self.grid_total} designs; already in the database: "
                f"{self.skipped_done} done, {self.skipped_failed} failed (skipped)",
                f"solved {self.solved} of {self.to_solve} on {self.backend} in "
                f"{self.wall_time_s:.1f} s ({self.designs_per_hour:.0f} designs/h): "
                f"{self.complete} complete, {self.stopped} stopped, {self.failed} failed"]
         if self.errors:
             out.append(f"{self.errors} lost to worker errors (nothing stored; rerun to retry)")
-        if self.interrupted:
+        if self.write_error:
+            out.append(f"stopped: {self.write_error}")
+            if self.parked:
+                out.append(f"{self.parked} finished results parked in {self.parked_in}; "
+                           "fix the cause and rerun the same command: they are written "
+                           f"first, then the {self.not_run} not run are solved")
+        elif self.interrupted:
             out.append(f"interrupted: {self.not_run} not run; rerun the same command to "
                        f"continue (finished records are kept)")
         for key, design, reason in self.failures[:20]:
@@ -149,25 +166,43 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
             summary.failures.append((point.key, describe(point.design),
                                      f"worker error {type(exc).__name__}: {exc}"))
         else:
-            db.put(record)
+            if summary.write_error is None:
+                try:
+                    db.put(record)
+                except StoreWriteError as exc:
+                    summary.write_error = str(exc)
+                    park_result(record)
+            else:
+                park_result(record)
             status = record.curve.status
             setattr(summary, status, getattr(summary, status) + 1)
             if status == "failed":
                 summary.failures.append((record.key, describe(record.design),
                                          record.curve.reason))
-        stored.add(future)
+        stored.add(future)  # not before: a put cut short by Ctrl-C is retried below
         bar.update(1)
         counts = {"complete": summary.complete + summary.stopped, "failed": summary.failed}
         if summary.errors:
             counts["worker_errors"] = summary.errors
         bar.set_postfix(counts, refresh=False)
+        if summary.write_error:
+            raise _WriteFailed  # stop submitting and waiting: park what has finished
+
+    def park_result(record: Record) -> None:
+        try:
+            summary.parked_in = str(park(record, db.path))
+            summary.parked += 1
+        except OSError as exc:  # nowhere to park either: say it is lost
+            summary.errors += 1
+            summary.failures.append((record.key, describe(record.design),
+                                     f"finished but lost: cannot park it ({exc})"))
 
     try:
         for point in todo:
             futures[backend.submit(solve_point, point.design, point.settings, solve_fn)] = point
         for future in backend.as_completed(futures):
             store(future)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, _WriteFailed):
         summary.interrupted = True
         pending = [f for f in futures if f not in stored]
         finished = [f for f in pending if f.done() and not f.cancelled()]
@@ -175,12 +210,18 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
         for future in finished:  # solves that ended before Ctrl-C: keep them
             try:
                 store(future)
+            except _WriteFailed:
+                continue  # the rest are parked
             except KeyboardInterrupt:
                 break
     finally:
         bar.close()
         summary.wall_time_s = time.perf_counter() - start
     return summary
+
+
+class _WriteFailed(Exception):
+    """Internal: the database cannot be written; stop the job, park what finished."""
 
 
 def precompute(grid: Any, db_path: str | Path, workers: int = 1,
@@ -209,12 +250,16 @@ def precompute(grid: Any, db_path: str | Path, workers: int = 1,
                    "package_version": package_version(), "git_commit": git_commit()}
             db.set_metadata(generator_command=command or "", grid_toml=grid.text,
                             runs=[*db.metadata.get("runs", []), run])
+            unparked = unpark(db)  # results an earlier run could not write
             backend = (DaskBackend(scheduler, client) if scheduler or client is not None
                        else PoolBackend(workers))
             try:
                 summary = run_job(grid.points, db, backend, solve_fn, retry_failed, progress)
             finally:
                 backend.close()
+            summary.unparked = unparked
+            if summary.write_error:  # the database cannot take the run's end either
+                return summary
             runs = list(db.metadata.get("runs", []))
             runs[-1] = {**run, "finished_utc": utc_now(), "interrupted": summary.interrupted,
                         "solved": summary.solved, "failed": summary.failed,

@@ -84,3 +84,21 @@ def line_of(text_lines: list[str], spans: dict[Path_, tuple[int, int]], path: Pa
             if needle in text_lines[number - 1]:
                 return number
     return first
+
+
+def deepest(text: str) -> tuple[int, int]:
+    """(depth, line) of the deepest nesting of [ ] and { } in the values (table headers
+    such as ``[[sweep]]`` do not count)."""
+    best, at, depth = 0, 1, 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        code = _code(raw)
+        if depth == 0 and HEADER.match(code):
+            continue
+        for ch in code:
+            if ch in "[{":
+                depth += 1
+                if depth > best:
+                    best, at = depth, number
+            elif ch in "]}":
+                depth = max(depth - 1, 0)
+    return best, at

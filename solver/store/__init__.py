@@ -9,17 +9,25 @@
 Layout: ``solver.store.schema`` and docs/database.md. Publishing (why readers never
 see a half-written record, and what survives kill -9): ``solver.store.hdf5``.
 Errors: SchemaVersionError, StoreBusyError (a second writer), NotACurveStoreError
-(an InputError), and NotFoundError for a missing record or file.
+(an InputError) and DamagedStoreError (bytes damaged inside the file), StoreWriteError
+(disk full, read-only), and NotFoundError for a missing record or file.
 """
 
-from solver.store.errors import NotACurveStoreError, SchemaVersionError, StoreBusyError
+from solver.store.errors import (
+    DamagedStoreError,
+    NotACurveStoreError,
+    SchemaVersionError,
+    StoreBusyError,
+    StoreWriteError,
+)
 from solver.store.hdf5 import CurveStore
 from solver.store.keys import canonical_json, record_key
 from solver.store.record import Record, failed_curve, make_provenance, make_record
 from solver.store.schema import SCHEMA_VERSION
 
 __all__ = [
-    "SCHEMA_VERSION", "CurveStore", "NotACurveStoreError", "Record", "SchemaVersionError",
-    "StoreBusyError", "canonical_json", "failed_curve", "make_provenance", "make_record",
+    "SCHEMA_VERSION", "CurveStore", "DamagedStoreError", "NotACurveStoreError", "Record",
+    "SchemaVersionError", "StoreBusyError", "StoreWriteError", "canonical_json", "failed_curve",
+    "make_provenance", "make_record",
     "record_key",
 ]

@@ -1,9 +1,9 @@
 """CurveStore: the HDF5 curve database with one writer and any number of readers.
 
 Publishing is copy-on-write. A put never touches the published file: the writer
-copies it to a hidden temporary file next to it (``.curves.h5.tmp-<pid>-<n>``),
-adds the records there, flushes and fsyncs it, and ``os.replace``s it over the
-published name (an atomic rename on POSIX), then fsyncs the directory. Hence
+copies it in memory, adds the records there, writes the copy to a hidden temporary
+file next to it (``.curves.h5.tmp-<pid>-<n>``), fsyncs it, and ``os.replace``s it over
+the published name (an atomic rename on POSIX), then fsyncs the directory. Hence
 
 - a reader sees either the previous or the next version, never a half-written
   record, and needs no lock: a file it already has open stays valid (the old inode
@@ -12,6 +12,11 @@ published name (an atomic rename on POSIX), then fsyncs the directory. Hence
 - a writer killed at any moment (kill -9, power loss after the fsync) leaves the
   last published version intact; the orphaned temporary file is removed the next
   time a writer opens the database;
+- a failed write (disk full, read-only file system) raises StoreWriteError naming the
+  path and the cause; the published file is untouched;
+- damage inside the file (flipped bytes: HDF5 structures that no longer parse, a
+  record whose design or settings no longer give its key, a dataset whose fletcher32
+  checksum fails) raises DamagedStoreError naming the record, never a wrong number;
 - one writer at a time, enforced by an exclusive flock on ``<db>.lock``: held for the
   writer's lifetime by default, or, with ``hold_lock=False``, only during each put (a
   long batch job then lets other writers, such as the service, interleave their puts).
@@ -22,10 +27,10 @@ The price: a put costs a copy of the whole file (measured in benchmarks/RESULTS.
 
 from __future__ import annotations
 
+import io
 import itertools
 import math
 import os
-import shutil
 import threading
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -36,9 +41,10 @@ import h5py
 
 from solver.curve import STATUSES
 from solver.design import LIMITS_MM
-from solver.errors import InputError, NotFoundError
+from solver.errors import BalloonError, InputError, NotFoundError
 from solver.settings import SolverSettings
 from solver.store import schema
+from solver.store.errors import DamagedStoreError, StoreWriteError, cause_of
 from solver.store.locking import WriterLock, lock_path
 from solver.store.record import Record, utc_now
 
@@ -49,6 +55,14 @@ _counter = itertools.count()
 # HDF5 1.8 object format: compact link storage in small groups (about half the size of the
 # 1.6 format here) and readable by every HDF5 release since 2008.
 LIBVER = ("v108", "v108")
+
+
+def _write_file(path: Path, data: memoryview) -> None:
+    """Write ``data`` to a new file and fsync it (plain I/O: failures are OSError)."""
+    with open(path, "xb") as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
 
 
 def _fsync_path(path: Path, directory: bool = False) -> None:
@@ -139,6 +153,19 @@ class CurveStore:
     def __repr__(self) -> str:
         return f"CurveStore({str(self.path)!r}, mode={self.mode!r})"
 
+    @contextmanager
+    def _reading(self, record: str | None = None) -> Iterator[None]:
+        """HDF5 failures inside the file become DamagedStoreError (naming ``record``);
+        the project's own errors (a missing record: NotFoundError) pass unchanged.
+        A design or settings attribute that no longer validates is damage too."""
+        try:
+            yield
+        except (schema.NotACurveStoreError, NotFoundError, schema.SchemaVersionError):
+            raise
+        except (BalloonError, OSError, KeyError, RuntimeError, ValueError, TypeError,
+                IndexError) as exc:
+            raise DamagedStoreError(self.path, cause_of(exc, self.path), record) from None
+
     # -- reading ---------------------------------------------------------------------------
     def _file(self) -> h5py.File:
         """The latest published version, re-opened when the path points to a new file."""
@@ -155,10 +182,13 @@ class CurveStore:
                 f = h5py.File(self.path, "r")
             except OSError as exc:
                 raise schema.NotACurveStoreError(
-                    "db", f"{self.path} is not a readable HDF5 file ({exc})",
-                    "a file written by balloon precompute") from None
+                    "db", f"{self.path} is not a readable HDF5 file "
+                    f"({cause_of(exc, self.path)})", "a file written by balloon precompute"
+                ) from None
             try:
-                schema.check_schema(f, self.path)
+                with self._reading():
+                    schema.check_schema(f, self.path)
+                    f[schema.RECORDS]  # noqa: B018 - the index must open
             except BaseException:
                 f.close()
                 raise
@@ -172,24 +202,24 @@ class CurveStore:
     def metadata(self) -> dict[str, Any]:
         """File attributes: format, schema_version, created_utc, updated_utc, n_records,
         and what writers added (generator_command, runs, ...)."""
-        with self._mutex:
+        with self._mutex, self._reading():
             return schema.read_attrs(self._file())
 
     def keys(self) -> list[str]:
-        with self._mutex:
+        with self._mutex, self._reading():
             return sorted(self._records_group().keys())
 
     def __contains__(self, key: object) -> bool:
-        with self._mutex:
+        with self._mutex, self._reading():
             return isinstance(key, str) and key in self._records_group()
 
     def __len__(self) -> int:
-        with self._mutex:
+        with self._mutex, self._reading():
             return len(self._records_group())
 
     def get(self, key: str) -> Record:
         """The record with this key; NotFoundError when absent."""
-        with self._mutex:
+        with self._mutex, self._reading(key):
             group = self._records_group()
             if key not in group:
                 raise NotFoundError(f"no record {key!r} in {self.path}; `balloon db ls "
@@ -198,9 +228,13 @@ class CurveStore:
 
     def statuses(self) -> dict[str, str]:
         """key -> curve status for every record, without loading any curve."""
-        with self._mutex:
+        with self._mutex, self._reading():
             group = self._records_group()
-            return {k: str(schema.plain(group[k].attrs["status"])) for k in sorted(group)}
+            out = {}
+            for k in sorted(group):
+                with self._reading(k):
+                    out[k] = str(schema.plain(group[k].attrs["status"]))
+            return out
 
     def summaries(self, **filters: object) -> list[dict[str, Any]]:
         """Per record: key, status, reason, design (flat, material ids), settings, n_steps,
@@ -208,9 +242,12 @@ class CurveStore:
         for name in filters:
             if name not in QUERY_FIELDS:
                 raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
-        with self._mutex:
+        with self._mutex, self._reading():
             group = self._records_group()
-            rows = [schema.read_summary(group[k]) for k in sorted(group)]
+            rows = []
+            for k in sorted(group):
+                with self._reading(k):
+                    rows.append(schema.read_summary(group[k]))
         return [row for row in rows
                 if all(_matches({**row["settings"], **row["design"], "status": row["status"]}
                                 .get(k), v) for k, v in filters.items())]
@@ -274,37 +311,51 @@ class CurveStore:
     def _remove_orphans(self) -> None:
         """Temporary files left by a writer that was killed mid-put (we hold the lock)."""
         for orphan in self.path.parent.glob(f".{self.path.name}.tmp-*"):
-            orphan.unlink(missing_ok=True)
+            try:
+                orphan.unlink(missing_ok=True)
+            except OSError as exc:  # a read-only file system
+                raise StoreWriteError(self.path, exc) from None
 
     def _publish(self, change: Any, create: bool = False,
                  drop: frozenset[str] | set[str] = frozenset()) -> None:
         """Copy the file, apply ``change(h5file)`` to the copy, fsync, rename over.
-        Called with the writer lock held."""
+        Called with the writer lock held.
+
+        The copy is built in memory and written to disk with plain file I/O: a failed
+        write (disk full, read-only) is then one clean OSError, where HDF5 writing to a
+        full disk leaves file handles it can neither flush nor close (and may crash the
+        process at exit)."""
         self._remove_orphans()
+        image = io.BytesIO()
+        if create:
+            with h5py.File(image, "w", libver=LIBVER) as f:
+                schema.init_file(f, utc_now())
+        elif drop:
+            self._repack(image, drop)
+        else:
+            with self._reading():
+                image.write(self.path.read_bytes())
         tmp = self._tmp_path()
         try:
-            if create:
-                with h5py.File(tmp, "w", libver=LIBVER) as f:
-                    schema.init_file(f, utc_now())
-            elif drop:
-                self._repack(tmp, drop)
-            else:
-                shutil.copyfile(self.path, tmp)
-            with h5py.File(tmp, "r+", libver=LIBVER) as f:
+            with h5py.File(image, "r+", libver=LIBVER) as f:
                 change(f)
                 f.attrs["updated_utc"] = utc_now()
                 f.attrs["n_records"] = len(f[schema.RECORDS])
-            _fsync_path(tmp)
+            _write_file(tmp, image.getbuffer())
             os.replace(tmp, self.path)
             _fsync_path(self.path.parent, directory=True)
+        except OSError as exc:  # disk full, read-only, no permission
+            tmp.unlink(missing_ok=True)
+            raise StoreWriteError(self.path, exc) from None
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
 
-    def _repack(self, tmp: Path, drop: frozenset[str] | set[str]) -> None:
+    def _repack(self, tmp: Any, drop: frozenset[str] | set[str]) -> None:
         """A fresh copy without the records in ``drop`` (HDF5 does not reclaim the space of
         deleted groups, so replaced records are dropped by rewriting the file)."""
-        src = self._file()
+        with self._reading():
+            src = self._file()
         with h5py.File(tmp, "w", libver=LIBVER) as dst:
             for name, value in src.attrs.items():
                 dst.attrs[name] = value

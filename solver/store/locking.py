@@ -11,7 +11,7 @@ import os
 import time
 from pathlib import Path
 
-from solver.store.errors import StoreBusyError
+from solver.store.errors import StoreBusyError, StoreWriteError
 
 
 def lock_path(db_path: Path) -> Path:
@@ -32,7 +32,10 @@ class WriterLock:
         return self._fd is not None
 
     def acquire(self, timeout_s: float = 0.0) -> None:
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:  # read-only file system, no permission, disk full
+            raise StoreWriteError(self.path, exc) from None
         deadline = time.monotonic() + timeout_s
         while True:
             try:

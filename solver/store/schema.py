@@ -20,12 +20,17 @@
         provenance/                   attrs: package_version, git_commit, created_utc,
                                              wall_time_s, status, reason, host
 
-Version history: 1 -- first layout (the two optional members, added with issue 12, are
-absent from older records and read as None / -1).
+A record group's ``sha256`` attribute is the checksum of its curve, curve attributes and
+provenance (``record_checksum``); a reader recomputes it, so that a flipped byte is an
+error, never a wrong number (records written before it have none and are read as they
+are; design and settings are checked by their key). Version history: 1 -- first layout
+(the two optional members, added with issue 12, are absent from older records and read as
+None / -1).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 from typing import Any
@@ -48,6 +53,7 @@ MATERIAL_ROLES = ("body_material", "membrane_material")
 INT_ARRAYS = ("newton_iterations", "negative_eigenvalues")
 VOLUME_CONTROL_NEGATIVE = "volume_control_negative_eigenvalues"   # optional dataset
 JSON_SUFFIX = "_json"
+MAX_ATTRS = 1000  # far more than any object here has
 
 
 def plain(value: object) -> object:
@@ -64,7 +70,9 @@ def plain(value: object) -> object:
 def read_attrs(obj: h5py.HLObject) -> dict[str, Any]:
     """Attributes as plain values; names ending in ``_json`` are decoded JSON."""
     out: dict[str, Any] = {}
-    for name, value in obj.attrs.items():
+    for count, (name, value) in enumerate(obj.attrs.items()):
+        if count > MAX_ATTRS:  # a damaged attribute list can make HDF5 iterate forever
+            raise ValueError(f"more than {MAX_ATTRS} attributes: the object is damaged")
         value = plain(value)
         if name.endswith(JSON_SUFFIX) and isinstance(value, str):
             out[name[: -len(JSON_SUFFIX)]] = json.loads(value)
@@ -134,11 +142,30 @@ def validate_record(record: Record) -> None:
                          f"shape {np.shape(vneg)} does not match {n} steps", f"shape ({n},)")
 
 
+def record_checksum(record: Record) -> str:
+    """sha256 of what the key does not cover: the curve's arrays (as stored: float64 or
+    int64), its status, reason and scalars, and the provenance."""
+    curve = record.curve
+    h = hashlib.sha256()
+    for name in Curve.ARRAY_FIELDS:
+        dtype = np.int64 if name in INT_ARRAYS else np.float64
+        h.update(name.encode())
+        h.update(np.ascontiguousarray(getattr(curve, name), dtype=dtype).tobytes())
+    rest = {"status": curve.status, "reason": curve.reason,
+            "pressure_maximum_index": int(curve.pressure_maximum_index),
+            "n_dofs": int(curve.n_dofs), "wall_time_s": float(curve.wall_time_s),
+            "timings_s": {k: float(v) for k, v in curve.timings_s.items()},
+            "provenance": dict(record.provenance)}
+    h.update(json.dumps(rest, sort_keys=True, default=str).encode())
+    return h.hexdigest()
+
+
 def write_record(group: h5py.Group, record: Record) -> None:
     """Write ``record`` into the empty group ``group``."""
     design = record.design.as_dict()
     curve = record.curve
     group.attrs["key"] = record.key
+    group.attrs["sha256"] = record_checksum(record)
     group.attrs["status"] = curve.status
     group.attrs["reason"] = curve.reason
     g = group.create_group("design")
@@ -196,9 +223,21 @@ def read_curve(group: h5py.Group) -> Curve:
 
 
 def read_record(group: h5py.Group) -> Record:
-    return Record(key=str(plain(group.attrs["key"])), design=read_design(group),
-                  settings=read_settings(group), curve=read_curve(group),
-                  provenance=read_attrs(group["provenance"]))
+    """The stored record, checked: its design and settings must still give its key and
+    the curve's arrays must agree in length (ValueError otherwise: damage)."""
+    record = Record(key=str(plain(group.attrs["key"])), design=read_design(group),
+                    settings=read_settings(group), curve=read_curve(group),
+                    provenance=read_attrs(group["provenance"]))
+    if record.key != group.name.rsplit("/", 1)[-1]:
+        raise ValueError(f"the record's key attribute {record.key[:12]} is not its name")
+    try:
+        validate_record(record)
+    except InputError as exc:
+        raise ValueError(f"inconsistent record: {exc}") from None
+    stored = group.attrs.get("sha256")
+    if stored is not None and plain(stored) != record_checksum(record):
+        raise ValueError("checksum mismatch: the stored curve or provenance has changed")
+    return record
 
 
 def read_summary(group: h5py.Group) -> dict[str, Any]:

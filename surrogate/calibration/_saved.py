@@ -20,14 +20,24 @@ from typing import Any
 
 import numpy as np
 
-from solver.atomic_file import write_text_atomic
-from solver.errors import InputError
+from solver.atomic_file import write_text_atomic, write_text_exclusive
+from solver.errors import BalloonError, ExistsError, InputError
 from surrogate.calibration._errors import ModelNotFoundError
 from surrogate.calibration._forward import chamber_pressure_pa, static_angle_deg
 
 FORMAT = "balloon.calibrated-model/1"
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 RESERVED = ("fitted", "paper")
+
+
+class ModelExistsError(ExistsError, InputError):
+    """A model of that name is already saved (HTTP 409; the CLI's one line): saving never
+    replaces one, and of two concurrent saves of one name exactly one wins."""
+
+    def __init__(self, name: str) -> None:
+        InputError.__init__(self, "name", f"a model named {name!r} already exists",
+                            "a new name")
+        self.name = name
 
 
 @dataclass(frozen=True)
@@ -122,11 +132,9 @@ def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) 
     unless ``overwrite``."""
     _check_name(name)
     models_dir = Path(models_dir)
-    models_dir.mkdir(parents=True, exist_ok=True)
     path = models_dir / f"{name}.json"
-    if path.exists() and not overwrite:
-        raise InputError("name", f"a model named {name!r} already exists in {models_dir}",
-                         "a new name")
+    if path.exists() and not overwrite:  # early answer; the create below decides
+        raise ModelExistsError(name)
     r, obs = cal.report, cal.obs
     effects = dict(cal.after.values)
     flows = r["data"]["flow_rates_ul_s"]
@@ -153,12 +161,89 @@ def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) 
                        "residual_structured_after": r["residual_structured_after"],
                        "created_utc": datetime.now(UTC).isoformat(timespec="seconds")},
     }
-    write_text_atomic(path, json.dumps(doc, indent=1, allow_nan=False))
+    text = json.dumps(doc, indent=1, allow_nan=False)
+    if overwrite:
+        write_text_atomic(path, text)
+    else:
+        try:  # atomic create: of two concurrent saves of one name exactly one wins
+            write_text_exclusive(path, text)
+        except FileExistsError:
+            raise ModelExistsError(name) from None
     return path
 
 
+
+class SavedModelError(BalloonError):
+    """A saved model file is damaged or not one this code reads (not valid JSON, wrong
+    format or version, missing keys, wrong types). Names the model, never the path: a
+    server answers 503 with it."""
+
+    def __init__(self, name: str, problem: str) -> None:
+        super().__init__(f"the saved model {name!r} cannot be used: {problem}")
+        self.name = name
+        self.problem = problem
+
+
+FAMILY_TEXT = ("body_material", "membrane_material")
+FAMILY_NUMBERS = ("T_mm", "b_mm", "h_mm", "a_deg_per_mm", "a_t_pa", "b_t_per_mm")
+
+
+def _finite(value: object) -> bool:
+    return (isinstance(value, int | float) and not isinstance(value, bool)
+            and math.isfinite(value))
+
+
+def _checked(doc: object, name: str) -> CalibratedModel:
+    """The model of a parsed file, every key and type checked (SavedModelError on the
+    first problem), so that a damaged file fails here and never inside a prediction."""
+    def bad(what: str) -> SavedModelError:
+        return SavedModelError(name, what)
+
+    if not isinstance(doc, dict):
+        raise bad("the file is not a JSON object")
+    fmt = doc.get("format")
+    if fmt != FORMAT:
+        if isinstance(fmt, str) and fmt.startswith(FORMAT.rsplit("/", 1)[0] + "/"):
+            raise bad(f"format {fmt!r} is not {FORMAT!r} (a newer version of "
+                      "balloon-actuator wrote it?)")
+        raise bad(f"not a calibrated model (format {fmt!r}, expected {FORMAT!r})")
+    for key, kind in (("name", str), ("families", list), ("effects", dict),
+                      ("domain", dict), ("provenance", dict)):
+        if not isinstance(doc.get(key), kind):
+            raise bad(f"{key!r} is missing or not a {kind.__name__}")
+    if not doc["families"]:
+        raise bad("'families' is empty")
+    for i, fam in enumerate(doc["families"]):
+        if not isinstance(fam, dict):
+            raise bad(f"families[{i}] is not an object")
+        for key in FAMILY_TEXT:
+            if not isinstance(fam.get(key), str):
+                raise bad(f"families[{i}].{key} is missing or not text")
+        for key in FAMILY_NUMBERS:
+            if not _finite(fam.get(key)):
+                raise bad(f"families[{i}].{key} is missing or not a finite number")
+        if "c" in fam and not _finite(fam["c"]):
+            raise bad(f"families[{i}].c is not a finite number")
+    for key, value in doc["effects"].items():
+        if not _finite(value):
+            raise bad(f"effects.{key} is not a finite number")
+    for key in ("L_mm", "t_mm", "pressure_pa"):
+        pair = doc["domain"].get(key)
+        if not (isinstance(pair, list) and len(pair) == 2 and all(map(_finite, pair))):
+            raise bad(f"domain.{key} is missing or not [low, high]")
+    for key in ("rmse_deg", "flow_ul_s"):
+        if key not in doc or not (doc[key] is None or _finite(doc[key])):
+            raise bad(f"{key!r} is missing or not a finite number (or null)")
+    rmse = doc["rmse_deg"]
+    return CalibratedModel(doc["name"], tuple(doc["families"]),
+                           {k: float(v) for k, v in doc["effects"].items()},
+                           float(rmse) if rmse is not None else math.nan, doc["flow_ul_s"],
+                           doc["domain"], doc["provenance"])
+
+
 def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
-    """A saved calibrated model by name (ModelNotFoundError when there is none)."""
+    """A saved calibrated model by name: ModelNotFoundError when there is none,
+    SavedModelError when its file is damaged or malformed."""
     models_dir = Path(models_dir)
     if not isinstance(name, str) or not NAME_PATTERN.match(name):
         raise ModelNotFoundError(f"no model {name!r}")
@@ -167,12 +252,8 @@ def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
         known = sorted(p.stem for p in models_dir.glob("*.json")) if models_dir.is_dir() else []
         raise ModelNotFoundError(f"no model {name!r} in {models_dir}; known: "
                                  + ", ".join(["fitted", "paper"] + known))
-    doc = json.loads(path.read_text())
-    if doc.get("format") != FORMAT:
-        raise InputError("model", f"{path} is not a calibrated model ({doc.get('format')!r})",
-                         FORMAT)
-    rmse = doc["rmse_deg"]
-    return CalibratedModel(doc["name"], tuple(doc["families"]),
-                           {k: float(v) for k, v in doc["effects"].items()},
-                           float(rmse) if rmse is not None else math.nan, doc["flow_ul_s"],
-                           doc["domain"], doc["provenance"])
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise SavedModelError(name, f"not valid JSON ({type(exc).__name__})") from None
+    return _checked(doc, name)
