@@ -149,9 +149,11 @@ async function update() {
     clearProblems($("design-form"));
     app.prediction = null;
     app.request = body;
-    showProblem(err, DESIGN_SLOTS(), $("err-design"));
     app.refused = offersSolve(err) ? err : null;
-    $("status").textContent = err instanceof ApiError ? `${err.problem.title || "Error"} (${err.status})` : String(err);
+    // a refusal of the design as a whole is shown once, in the FE solve box
+    showProblem(err, { ...DESIGN_SLOTS(), ...(app.refused ? { design: null } : {}) }, $("err-design"));
+    $("status").textContent = app.refused ? "No prediction: the model refuses this design (below)."
+      : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
   refreshPinned(grid);
   showRefused();

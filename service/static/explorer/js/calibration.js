@@ -151,7 +151,8 @@ export function setupCalibration() {
     for (const c of rep.candidates || []) {
       const tr = document.createElement("tr");
       const params = Object.entries(c.params || {}).map(([k, p]) => (p && typeof p === "object" ? `${k} = ${fmtSig(p.value)} ${p.unit || ""}` : `${k} = ${fmtSig(p)}`)).join("; ");
-      const cells = [c.effect, fmt(c.rmse_cv_deg, 2), fmt(c.delta_bic, 1), params, c.selectable === undefined ? "" : (c.selectable ? "yes" : "no"), c.why_not || ""];
+      const cells = [c.effect, fmt(c.rmse_cv_deg, 2), fmt(c.delta_bic, 1), params, c.selectable === undefined ? "" : (c.selectable ? "yes" : "no"),
+        Array.isArray(c.why_not) ? c.why_not.join("; ") : (c.why_not || "")];
       tr.innerHTML = cells.map(() => "<td></td>").join("");
       cells.forEach((v, i) => { tr.children[i].textContent = String(v); });
       cand.appendChild(tr);
@@ -176,13 +177,13 @@ export function setupCalibration() {
       try {
         data.push({ id: `before-${k}`, label: `model "${start}" as is`, color, x: grid, y: await modelValues(start, g, grid), dash: "5 4", width: 1.4 });
         const atData = await modelValues(start, g, measuredP);
-        resid.push({ id: `rb-${k}`, label: `${label}, model as is`, color, x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
+        resid.push({ id: `rb-${k}`, label: k === 0 ? `model "${start}" as is (colour: design as above)` : "", color, x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
       } catch (err) { notes.push(`model "${start}" for ${label}: ${err.message}`); }
       if (after) {
         try {
           data.push({ id: `after-${k}`, label: `augmented "${after}"`, color, x: grid, y: await modelValues(after, g, grid), width: 2 });
           const atData = await modelValues(after, g, measuredP);
-          resid.push({ id: `ra-${k}`, label: `${label}, augmented`, color: "#111827", x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
+          resid.push({ id: `ra-${k}`, label: k === 0 ? `augmented "${after}"` : "", color: "#111827", x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
         } catch (err) { notes.push(`augmented model for ${label}: ${err.message}`); }
       }
     }
@@ -190,8 +191,8 @@ export function setupCalibration() {
       resid.push({ id: "ra-report", label: "with the selected effects (report)", color: "#111827", x: points.items.map((p) => p.pressure_pa),
         y: points.items.map((p) => (typeof p.angle_deg === "number" && typeof p[points.after] === "number" ? p.angle_deg - p[points.after] : null)), markersOnly: true });
     }
-    renderPlot($("cal-plot"), data, { xLabel: "pressure (Pa)", yLabel: "bending angle (deg)", height: 360 });
-    renderPlot($("cal-resid"), resid, { xLabel: "pressure (Pa)", yLabel: "measured - model (deg)", height: 260 });
+    renderPlot($("cal-plot"), data, { xLabel: "pressure (Pa)", yLabel: "bending angle (deg)", height: 360, legend: "below" });
+    renderPlot($("cal-resid"), resid, { xLabel: "pressure (Pa)", yLabel: "measured - model (deg)", height: 260, legend: "below" });
     const msg = after || points ? "" : "The augmented model's curves are drawn once it is saved (below).";
     $("cal-status").textContent = [$("cal-status").textContent, msg, ...notes].filter(Boolean).join(" ");
   }

@@ -116,17 +116,28 @@ export function renderPlot(svg, series, opts = {}) {
     el("line", { x1: px(opts.cursorX), x2: px(opts.cursorX), y1: m.t, y2: H - m.b, stroke: "#111827",
       "stroke-dasharray": "3 3", "data-cursor": opts.cursorX }, svg);
   }
-  // legend, top left inside the axes
+  // legend: top left inside the axes, or below them (the SVG grows to hold it)
   const shown = series.filter((s) => s.label);
   if (shown.length) {
-    const lg = el("g", { transform: `translate(${m.l + 8},${m.t + 8})` }, svg);
-    const lineH = 16, wBox = Math.min(360, 12 + 7 * Math.max(...shown.map((s) => s.label.length)));
-    el("rect", { x: 0, y: 0, width: wBox, height: shown.length * lineH + 6, fill: "#ffffff", "fill-opacity": 0.85, stroke: "#d1d5db" }, lg);
+    const lineH = 16;
+    const below = opts.legend === "below";
+    const cols = below ? 2 : 1;
+    const colW = below ? (W - m.l - m.r) / cols : Math.min(360, 12 + 7 * Math.max(...shown.map((s) => s.label.length)));
+    const rows = Math.ceil(shown.length / cols);
+    let lg;
+    if (below) {
+      svg.setAttribute("viewBox", `0 0 ${W} ${H + rows * lineH + 8}`);
+      svg.querySelector("rect").setAttribute("height", H + rows * lineH + 8);
+      lg = el("g", { transform: `translate(${m.l},${H})` }, svg);
+    } else {
+      lg = el("g", { transform: `translate(${m.l + 8},${m.t + 8})` }, svg);
+      el("rect", { x: 0, y: 0, width: colW, height: rows * lineH + 6, fill: "#ffffff", "fill-opacity": 0.85, stroke: "#d1d5db" }, lg);
+    }
     shown.forEach((s, k) => {
-      const y = 12 + k * lineH;
-      if (s.markersOnly) el("circle", { cx: 14, cy: y - 4, r: 3, fill: s.color }, lg);
-      else el("line", { x1: 6, x2: 24, y1: y - 4, y2: y - 4, stroke: s.color, "stroke-width": s.width || 2, "stroke-dasharray": s.dash || null }, lg);
-      el("text", { x: 30, y, fill: "#111827", "font-size": 11 }, lg).textContent = s.label;
+      const x0 = (k % cols) * colW, y = 12 + Math.floor(k / cols) * lineH;
+      if (s.markersOnly) el("circle", { cx: x0 + 14, cy: y - 4, r: 3, fill: s.color }, lg);
+      else el("line", { x1: x0 + 6, x2: x0 + 24, y1: y - 4, y2: y - 4, stroke: s.color, "stroke-width": s.width || 2, "stroke-dasharray": s.dash || null }, lg);
+      el("text", { x: x0 + 30, y, fill: "#111827", "font-size": 11 }, lg).textContent = s.label;
     });
   }
   if (opts.note) {

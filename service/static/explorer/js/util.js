@@ -9,6 +9,7 @@ export function fmt(v, digits = 1) {
 export function fmtSig(v, sig = 3) {
   if (typeof v !== "number" || !Number.isFinite(v)) return "-";
   if (v === 0) return "0";
+  if (Math.abs(v) < 1e-3 || Math.abs(v) >= 1e6) return v.toExponential(sig - 1);
   const d = Math.max(0, sig - 1 - Math.floor(Math.log10(Math.abs(v))));
   return v.toFixed(Math.min(d, 6));
 }
