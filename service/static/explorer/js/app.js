@@ -15,7 +15,7 @@ import { $, csvCell, download, fmt, fmtSig } from "./util.js";
 
 const N_POINTS = 81;
 const LEVEL = 0.95;
-const DEBOUNCE_MS = 30;
+const DEBOUNCE_MS = 16;  // one frame: a drag's inputs coalesce, a stale request is aborted
 const MAX_PINNED = 4;
 const FLAG_WORDS = {
   angle_beyond_fe: "past the largest FE angle",
@@ -134,9 +134,10 @@ async function update() {
   const p = $("p_op");
   p.max = String(pMax());
   p.step = String(pMax() / (N_POINTS - 1));
-  const body = predictBody(app.state, grid);
   const mark = app.inputMark;
+  let body = null;
   try {
+    body = predictBody(app.state, grid);  // throws while a scaled layer's preset is unknown
     const prediction = await api("/v1/predict", { method: "POST", body, signal: controller.signal });
     if (controller.signal.aborted) return;
     clearProblems($("design-form"));
@@ -229,6 +230,10 @@ async function loadNearest(controller) {
 }
 
 // ---------------------------------------------------------------- drawing
+function designKey(state) {
+  try { return JSON.stringify(designBody(state, app.presets)); } catch { return null; }
+}
+
 function axisKeys() {
   return { x: $("x_axis").value, y: $("y_axis").value };
 }
@@ -259,7 +264,7 @@ function curveSeries() {
   });
   // pinned curves without their bands (the table gives the band at the chosen pressure)
   app.pinned.forEach((pin) => { if (pin.prediction) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pin.prediction, pin.color, { width: 1.6, lower: null, upper: null }); });
-  const key = JSON.stringify(designBody(app.state, app.presets));
+  const key = designKey(app.state);
   const solved = app.solved.get(key);
   if (solved) add("fe-solve", `FE solve ${solved.id.slice(0, 8)}`, solved.curve, "#111827", { width: 2, markers: true });
   if (app.job && app.job.key === key && app.job.trace.length) {
@@ -532,19 +537,19 @@ async function start() {
   $("export-json").addEventListener("click", exportJson);
   $("export-svg").addEventListener("click", () => download("balloon-curves.svg", svgText($("plot")), "image/svg+xml"));
   $("export-png").addEventListener("click", async () => download("balloon-curves.png", await svgToPngBlob($("plot"))));
-  try {
-    const materials = await api("/v1/materials");
-    for (const m of materials.items) app.presets[m.id] = m;
-  } catch (err) {
+  // the presets are needed only for a stiffness scale != 1: the first curve does not wait
+  const materials = api("/v1/materials").then((list) => {
+    for (const m of list.items) app.presets[m.id] = m;
+  }).catch((err) => {
     $("err-design").textContent = `Materials unavailable: ${err.message}`;
     $("err-design").hidden = false;
-  }
+  });
   api("/v1/health").then((h) => {
     $("health").textContent = `service ${h.version}; ${h.database.records ?? 0} FE records; surrogate ${h.surrogate.loaded ? h.surrogate.name : "not loaded"}`;
   }).catch(() => { $("health").textContent = "service health unknown"; });
   setupInverse({ loadDesign, presets: app.presets });
   setupCalibration({ presets: app.presets });
-  await update();
+  await Promise.all([update(), materials]);
   document.body.dataset.ready = "true";
 }
 
