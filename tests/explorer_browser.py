@@ -46,7 +46,8 @@ class LiveServer:
 
         db = tmp / "curves.h5"
         shutil.copy(ROOT / "service" / "data" / "curves.h5", db)
-        settings = ServiceSettings(db_path=db, surrogate_path=ROOT / "service" / "data" / "surrogate.json",
+        settings = ServiceSettings(db_path=db,
+                                   surrogate_path=ROOT / "service" / "data" / "surrogate.json",
                                    models_dir=tmp / "models", api_key=API_KEY, job_time_limit_s=60)
         self.settings = settings
         self.app = create_app(settings, solve_fn=solve_fn)
@@ -74,8 +75,8 @@ def launch_browser():
     """(playwright, browser), or pytest.skip with the reason."""
     if not CHROMIUM.is_file():
         pytest.skip("no /usr/bin/chromium (apt-get install -y chromium; .ci/run does it)")
-    sync_api = pytest.importorskip("playwright.sync_api",
-                                   reason="playwright (Python) is not installed: pip install '.[test]'")
+    sync_api = pytest.importorskip(
+        "playwright.sync_api", reason="playwright (Python) is not installed: pip install '.[test]'")
     pw = sync_api.sync_playwright().start()
     browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
     return pw, browser

@@ -49,7 +49,8 @@ def series(page, name: str) -> dict:
 
 def wait_prediction(page, **design):
     cond = " && ".join(f"p.design.{k} === {v}" for k, v in design.items())
-    page.wait_for_function(f"(() => {{ const p = window.explorer.prediction; return p && {cond}; }})()")
+    page.wait_for_function(
+        f"(() => {{ const p = window.explorer.prediction; return p && {cond}; }})()")
 
 
 def test_page_loads_offline_with_no_console_error_at_both_widths(browser, server):
@@ -147,7 +148,8 @@ def test_validity_flags_and_messages_are_shown_in_words(watched, server):
     page.fill("#t_mm", "0.55")
     page.fill("#p_max", "3000")
     page.dispatch_event("#p_max", "change")
-    page.wait_for_function("window.explorer.prediction && window.explorer.prediction.pressure_pa.at(-1) === 3000")
+    page.wait_for_function("window.explorer.prediction"
+                           " && window.explorer.prediction.pressure_pa.at(-1) === 3000")
     api = httpx.post(server.url + "/v1/predict", json={
         "design": {"L_mm": 7.1, "t_mm": 0.55}, "pressures_pa": grid(3000.0)}).json()
     assert api["validity"]["messages"], "the design should be flagged past the FE range"

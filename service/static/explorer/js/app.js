@@ -286,7 +286,7 @@ export function redraw() {
   if (app.prediction && i !== null) cursor = (xOf(app.prediction) || [])[i];
   renderPlot($("plot"), series, {
     xLabel, yLabel, cursorX: cursor,
-    xRange: x === "pressure_pa" ? [0, pMax()] : undefined,
+    xRange: x === "pressure_pa" ? [0, pMax()] : undefined, legend: "below",
     note: app.prediction ? "" : (app.refused ? "the model refuses this design" : ""),
   });
   drawSketch();

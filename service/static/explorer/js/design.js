@@ -25,7 +25,7 @@ export const PAIRS = [
 export const MATERIAL_NAMES = { pdms_1_10: "PDMS 1:10", pdms_1_15: "PDMS 1:15", ecoflex_00_30: "Ecoflex 00-30" };
 
 export function pairLabel(body, membrane) {
-  return `${MATERIAL_NAMES[body] || body} body / ${MATERIAL_NAMES[membrane] || membrane} membrane`;
+  return `${MATERIAL_NAMES[body] || body} / ${MATERIAL_NAMES[membrane] || membrane}`;
 }
 
 export function defaultState() {

@@ -63,6 +63,8 @@ export function renderPlot(svg, series, opts = {}) {
   }
   const xr = opts.xRange || [Math.min(0, ...xs), xs.length ? Math.max(...xs) : 1];
   let yLo = ys.length ? Math.min(0, ...ys) : 0, yHi = ys.length ? Math.max(...ys) : 1;
+  // a curve starting at 0 with round-off below it (-0.005 deg) keeps its axis at 0
+  if (yLo < 0 && yLo > -0.01 * (yHi - yLo)) yLo = 0;
   if (opts.yClip) { yLo = Math.max(yLo, opts.yClip[0]); yHi = Math.min(yHi, opts.yClip[1]); }
   const xt = niceTicks(xr[0], xr[1]), yt = niceTicks(yLo, yHi);
   const px = (v) => m.l + ((v - xt.lo) / (xt.hi - xt.lo)) * (W - m.l - m.r);
@@ -121,7 +123,8 @@ export function renderPlot(svg, series, opts = {}) {
   if (shown.length) {
     const lineH = 16;
     const below = opts.legend === "below";
-    const cols = below ? 2 : 1;
+    const longest = Math.max(...shown.map((s) => s.label.length));
+    const cols = below && 40 + 6.2 * longest < (W - m.l - m.r) / 2 ? 2 : 1;
     const colW = below ? (W - m.l - m.r) / cols : Math.min(360, 12 + 7 * Math.max(...shown.map((s) => s.label.length)));
     const rows = Math.ceil(shown.length / cols);
     let lg;
