@@ -4,7 +4,9 @@ FE solves from service_solves.py in real worker processes) and headless Debian C
 driven by Playwright. Without /usr/bin/chromium or playwright the tests skip, saying why
 (.ci/run installs both).
 
-Screenshots go to test-artifacts/explorer/ (git-ignored).
+Screenshots go to test-artifacts/explorer/ (git-ignored). A test module imports the
+fixtures ``browser`` and ``watched`` (as ``browser_fixture``, ``watched_fixture``) and
+defines its own ``server`` fixture.
 """
 
 from __future__ import annotations
@@ -109,6 +111,23 @@ class Watched:
 
     def close(self) -> None:
         self.context.close()
+
+
+@pytest.fixture(scope="module", name="browser")
+def browser_fixture():
+    """One headless Chromium per test module."""
+    pw, chromium = launch_browser()
+    yield chromium
+    chromium.close()
+    pw.stop()
+
+
+@pytest.fixture(name="watched")
+def watched_fixture(browser, server):
+    """A fresh page (own context) on the module's ``server`` fixture, watched."""
+    w = Watched(browser, server.url)
+    yield w
+    w.close()
 
 
 def screenshot(page, name: str) -> Path:

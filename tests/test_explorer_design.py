@@ -12,14 +12,14 @@ import json
 
 import httpx
 import pytest
-from explorer_browser import (
+from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
     API_KEY,
     ROOT,
     LiveServer,
-    Watched,
-    launch_browser,
+    browser_fixture,
     open_explorer,
     screenshot,
+    watched_fixture,
 )
 from service_solves import fast_solve
 
@@ -32,19 +32,6 @@ def server(tmp_path_factory):
         yield live
 
 
-@pytest.fixture(scope="module")
-def browser():
-    pw, browser = launch_browser()
-    yield browser
-    browser.close()
-    pw.stop()
-
-
-@pytest.fixture
-def watched(browser, server):
-    w = Watched(browser, server.url)
-    yield w
-    w.close()
 
 
 def test_inverse_design_lists_candidates_and_loading_one_updates_the_panel(watched, server):

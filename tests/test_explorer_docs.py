@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import httpx
 import pytest
-from explorer_browser import LiveServer, Watched, launch_browser, screenshot
+from explorer_browser import LiveServer, Watched, browser_fixture, screenshot  # noqa: F401
 
 
 @pytest.fixture(scope="module")
@@ -13,13 +13,6 @@ def server(tmp_path_factory):
     with LiveServer(tmp_path_factory.mktemp("explorer-docs")) as live:
         yield live
 
-
-@pytest.fixture(scope="module")
-def browser():
-    pw, browser = launch_browser()
-    yield browser
-    browser.close()
-    pw.stop()
 
 
 def operations(server) -> list[tuple[str, str]]:

@@ -12,7 +12,14 @@ import json
 
 import httpx
 import pytest
-from explorer_browser import LiveServer, Watched, launch_browser, open_explorer, screenshot
+from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
+    LiveServer,
+    Watched,
+    browser_fixture,
+    open_explorer,
+    screenshot,
+    watched_fixture,
+)
 
 GRID_POINTS = 81  # the page's pressure grid: 0 .. p_max in 80 steps
 
@@ -23,19 +30,6 @@ def server(tmp_path_factory):
         yield live
 
 
-@pytest.fixture(scope="module")
-def browser():
-    pw, browser = launch_browser()
-    yield browser
-    browser.close()
-    pw.stop()
-
-
-@pytest.fixture
-def watched(browser, server):
-    w = Watched(browser, server.url)
-    yield w
-    w.close()
 
 
 def grid(p_max: float) -> list[float]:
