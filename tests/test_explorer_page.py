@@ -137,6 +137,21 @@ def test_pinned_designs_overlay_and_export_as_csv_json_svg_png(watched, server):
     assert watched.errors == []
 
 
+def test_an_out_of_range_field_is_refused_beside_it_with_its_allowed_range(watched, server):
+    page = open_explorer(watched, server.url)
+    page.fill("#L_mm", "70")  # the number box takes any value; the server names the limit
+    page.wait_for_selector("#err-L_mm:not([hidden])")
+    problem = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 70}, "pressures_pa": [0]}).json()
+    allowed = problem["errors"][0]["allowed"]
+    assert allowed in page.locator("#err-L_mm").inner_text()
+    assert page.get_attribute("#L_mm", "aria-invalid") == "true"
+    assert page.locator("#refused").is_hidden()  # a range error is not offered an FE solve
+    page.fill("#L_mm", "7.1")
+    page.wait_for_selector("#err-L_mm", state="hidden")
+    assert page.get_attribute("#L_mm", "aria-invalid") is None
+
+
 def test_validity_flags_and_messages_are_shown_in_words(watched, server):
     page = open_explorer(watched, server.url)
     page.fill("#t_mm", "0.55")

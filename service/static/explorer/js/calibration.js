@@ -106,6 +106,7 @@ export function setupCalibration() {
     try {
       report = await api("/v1/calibrate", { method: "POST", body, key });
       $("cal-status").textContent = report.saved_model ? `Saved the augmented model as "${report.saved_model}": use it as the model in the design panel.` : "";
+      if (report.saved_model) $("model-list").appendChild(new Option(report.saved_model, report.saved_model));
       await render(report, body);
     } catch (err) {
       $("cal-status").textContent = "";
