@@ -137,6 +137,23 @@ def test_pinned_designs_overlay_and_export_as_csv_json_svg_png(watched, server):
     assert watched.errors == []
 
 
+def test_every_control_is_labelled_and_the_design_panel_works_from_the_keyboard(watched, server):
+    page = open_explorer(watched, server.url)
+    unlabelled = page.evaluate("""[...document.querySelectorAll('input, select, button')]
+        .filter(e => !e.hidden && !(e.labels && e.labels.length) && !e.getAttribute('aria-label')
+                     && !(e.tagName === 'BUTTON' && e.textContent.trim()))
+        .map(e => e.id || e.outerHTML)""")
+    assert unlabelled == []
+    page.focus("#L_mm")
+    page.keyboard.press("Tab")  # L number box -> t slider
+    assert page.evaluate("document.activeElement.id") == "t_mm-range"
+    page.keyboard.press("ArrowRight")  # 0.5 -> 0.51 mm
+    wait_prediction(page, t_mm=0.51)
+    page.focus("#pin")
+    page.keyboard.press("Enter")
+    assert page.locator("#compare-table tbody tr").count() == 1
+
+
 def test_an_out_of_range_field_is_refused_beside_it_with_its_allowed_range(watched, server):
     page = open_explorer(watched, server.url)
     page.fill("#L_mm", "70")  # the number box takes any value; the server names the limit
