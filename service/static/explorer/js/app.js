@@ -322,7 +322,7 @@ function drawSketch() {
   const i = opIndex();
   const design = pred ? pred.design : { ...app.state };
   const angle = pred ? pred.angle_deg[i] : null;
-  renderSketch($("sketch"), design, angle === null ? NaN : angle, i / (N_POINTS - 1));
+  renderSketch($("sketch"), design, angle === null ? NaN : angle, angle === null ? 0 : i / (N_POINTS - 1));
 }
 
 function showValidity() {
