@@ -118,6 +118,8 @@ def test_uploading_the_example_csv_shows_the_report_and_saving_asks_for_the_key(
     assert "lab_example" in page.locator("#cal-status").inner_text()
     assert (server.settings.models_dir / "lab_example.json").exists()
     assert page.locator('#cal-resid g[data-series^="ra-"] circle').count() == len(rows)
+    page.locator("#cal-plot").scroll_into_view_if_needed()
+    screenshot(page, "explorer-calibration-saved-1280")
 
 
 def test_a_refused_design_offers_the_fe_solve_and_plots_the_stored_curve(watched, server):

@@ -150,7 +150,8 @@ async function update() {
     clearProblems($("design-form"));
     app.prediction = null;
     app.request = body;
-    app.refused = offersSolve(err) ? err : null;
+    app.refused = (await offersSolve(err, body)) ? err : null;
+    if (controller.signal.aborted) return;
     // a refusal of the design as a whole is shown once, in the FE solve box
     showProblem(err, { ...DESIGN_SLOTS(), ...(app.refused ? { design: null } : {}) }, $("err-design"));
     $("status").textContent = app.refused ? "No prediction: the model refuses this design (below)."
@@ -170,16 +171,33 @@ async function update() {
   loadNearest(controller);
 }
 
-// A design the predictor refuses can still be solved by FE: a 422 whose errors all
-// name the design (its family, its box), not the pressures or the model.
-function offersSolve(err) {
-  if (!(err instanceof ApiError) || err.status !== 422) return false;
+// A design the predictor refuses can still be solved by FE: a 422 whose errors all name
+// the design (its family, the model's box), for a design the API's own schema accepts
+// (DesignIn's limits in /openapi.json, which POST /v1/solve checks too). A value outside
+// those limits is not offered a solve that would be refused the same way.
+let designLimits = null;
+
+async function schemaLimits() {
+  if (!designLimits) {
+    try {
+      const spec = await api("/openapi.json");
+      const props = spec.components.schemas.DesignIn.properties;
+      designLimits = Object.fromEntries(Object.entries(props).map(([k, v]) => [k, [v.minimum ?? -Infinity, v.maximum ?? Infinity]]));
+    } catch { designLimits = {}; }
+  }
+  return designLimits;
+}
+
+async function offersSolve(err, body) {
+  if (!(err instanceof ApiError) || err.status !== 422 || !body) return false;
   const errs = err.fieldErrors;
-  if (err.kind === "out-of-family") return true;
-  return errs.length > 0 && errs.every((e) => {
+  const inDesign = errs.length > 0 && errs.every((e) => {
     const loc = Array.isArray(e.loc) ? e.loc.slice(1).join(".") : String(e.field || "");
-    return loc.startsWith("design");
-  }) && !errs.some((e) => /should be (less|greater)/.test(e.message || ""));
+    return loc === "design" || loc.startsWith("design.");
+  });
+  if (!inDesign) return false;
+  const limits = await schemaLimits();
+  return Object.entries(body.design).every(([k, v]) => typeof v !== "number" || !limits[k] || (v >= limits[k][0] && v <= limits[k][1]));
 }
 
 // ---------------------------------------------------------------- nearest FE curves
