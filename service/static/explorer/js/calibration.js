@@ -176,13 +176,13 @@ export function setupCalibration() {
       const grid = Array.from({ length: 41 }, (_, i) => (pMax * i) / 40);
       const measuredP = g.rows.map((r) => r.pressure_pa);
       try {
-        data.push({ id: `before-${k}`, label: `model "${start}" as is`, color, x: grid, y: await modelValues(start, g, grid), dash: "5 4", width: 1.4 });
+        data.push({ id: `before-${k}`, label: k === 0 ? `model "${start}" as is (dashed, colour of its design)` : "", color, x: grid, y: await modelValues(start, g, grid), dash: "5 4", width: 1.4 });
         const atData = await modelValues(start, g, measuredP);
         resid.push({ id: `rb-${k}`, label: k === 0 ? `model "${start}" as is (colour: design as above)` : "", color, x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
       } catch (err) { notes.push(`model "${start}" for ${label}: ${err.message}`); }
       if (after) {
         try {
-          data.push({ id: `after-${k}`, label: `augmented "${after}"`, color, x: grid, y: await modelValues(after, g, grid), width: 2 });
+          data.push({ id: `after-${k}`, label: k === 0 ? `augmented "${after}" from /v1/predict (solid)` : "", color, x: grid, y: await modelValues(after, g, grid), width: 2 });
           const atData = await modelValues(after, g, measuredP);
           resid.push({ id: `ra-${k}`, label: k === 0 ? `augmented "${after}"` : "", color: "#111827", x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
         } catch (err) { notes.push(`augmented model for ${label}: ${err.message}`); }
@@ -194,7 +194,9 @@ export function setupCalibration() {
     }
     renderPlot($("cal-plot"), data, { xLabel: "pressure (Pa)", yLabel: "bending angle (deg)", height: 360, legend: "below" });
     renderPlot($("cal-resid"), resid, { xLabel: "pressure (Pa)", yLabel: "measured - model (deg)", height: 260, legend: "below" });
-    const msg = after || points ? "" : "The augmented model's curves are drawn once it is saved (below).";
+    const msg = after
+      ? `The augmented curves come from /v1/predict with model "${after}": quasi-static, at the calibration's median flow rate, so they differ from the report's own fit (${fmt(rep.rmse_after_deg, 2)} deg, each curve at its own flow rate and time) where flow rates or creep matter.`
+      : (points ? "" : "The augmented model's curves are drawn once it is saved (below).");
     $("cal-status").textContent = [$("cal-status").textContent, msg, ...notes].filter(Boolean).join(" ");
   }
 }
