@@ -94,6 +94,36 @@ def test_moving_the_L_slider_redraws_the_curve_with_the_numbers_of_v1_predict(wa
     assert watched.errors == []
 
 
+def test_a_stale_prediction_is_cancelled_and_never_drawn_over_a_newer_one(watched, server):
+    page = open_explorer(watched, server.url)
+    held, failed = [], []
+    page.on("requestfailed",
+            lambda r: failed.append(r.post_data_json) if "/v1/predict" in r.url else None)
+
+    def hold_the_first(route):
+        if not held:
+            held.append(route)  # answered only after the newer request has been drawn
+        else:
+            route.continue_()
+
+    page.route("**/v1/predict", hold_the_first)
+    page.fill("#L_mm", "9")
+    while not held:
+        page.wait_for_timeout(20)
+    page.fill("#L_mm", "10")
+    wait_prediction(page, L_mm=10)
+    try:
+        held[0].continue_()
+    except Exception:  # the browser has already given the request up
+        pass
+    page.wait_for_timeout(500)
+    assert page.evaluate("window.explorer.prediction.design.L_mm") == 10
+    assert [b["design"]["L_mm"] for b in failed] == [9]  # aborted by the page
+    api = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 10}, "pressures_pa": grid(2000.0)}).json()
+    assert series(page, "prediction")["y"] == pytest.approx(api["angle_deg"], abs=1e-9)
+
+
 def test_pinned_designs_overlay_and_export_as_csv_json_svg_png(watched, server):
     page = open_explorer(watched, server.url)
     page.click("#pin")
