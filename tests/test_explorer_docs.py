@@ -8,6 +8,8 @@ import pytest
 from explorer_browser import LiveServer, Watched, browser_fixture, screenshot  # noqa: F401
 
 
+pytestmark = pytest.mark.timeout(300)  # a browser that hangs fails the test
+
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     with LiveServer(tmp_path_factory.mktemp("explorer-docs")) as live:

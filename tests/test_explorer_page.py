@@ -24,6 +24,8 @@ from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
 GRID_POINTS = 81  # the page's pressure grid: 0 .. p_max in 80 steps
 
 
+pytestmark = pytest.mark.timeout(300)  # a browser that hangs fails the test
+
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     with LiveServer(tmp_path_factory.mktemp("explorer-page")) as live:
@@ -108,8 +110,11 @@ def test_a_stale_prediction_is_cancelled_and_never_drawn_over_a_newer_one(watche
 
     page.route("**/v1/predict", hold_the_first)
     page.fill("#L_mm", "9")
-    while not held:
+    for _ in range(1000):  # up to ~20 s
+        if held:
+            break
         page.wait_for_timeout(20)
+    assert held, "the first prediction request was never sent"
     page.fill("#L_mm", "10")
     wait_prediction(page, L_mm=10)
     try:
@@ -163,6 +168,16 @@ def test_pinned_designs_overlay_and_export_as_csv_json_svg_png(watched, server):
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 5000
     page.click('#compare-table button[data-load="1"]')  # loads the first pinned design back
     wait_prediction(page, L_mm=7.1, t_mm=0.5)
+    for L in (9, 10):  # four pinned at most
+        page.fill("#L_mm", str(L))
+        wait_prediction(page, L_mm=L)
+        page.click("#pin")
+    assert page.locator("#compare-table tbody tr").count() == 4
+    assert page.locator("#pin").is_disabled()
+    page.click('#compare-table button[data-unpin="2"]')
+    assert page.locator("#compare-table tbody tr").count() == 3
+    assert page.locator('#plot g[data-series="pin-2"]').count() == 0
+    assert page.locator("#pin").is_enabled()
     screenshot(page, "explorer-compare-1280")
     assert watched.errors == []
 

@@ -61,7 +61,7 @@ export function setupInverse({ loadDesign }) {
       "target.kind": $("err-inv-kind"), "target.pressure_pa": $("err-inv-pressure"),
       "target.angle_deg": $("err-inv-angle"), "target.force_mn": $("err-inv-force"),
       L_bounds_mm: $("err-inv-L"), t_bounds_mm: $("err-inv-t"), material_pairs: $("err-inv-pairs"),
-      objective: $("err-inv-objective"), n_results: $("err-inv-n"), target: $("err-inverse"),
+      objective: $("err-inv-objective"), n_results: $("err-inv-n"), target: $("err-inv-kind"),
     };
     $("inv-explanation").textContent = "Searching...";
     $("inv-run").disabled = true;
