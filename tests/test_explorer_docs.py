@@ -7,7 +7,6 @@ import httpx
 import pytest
 from explorer_browser import LiveServer, Watched, browser_fixture, screenshot  # noqa: F401
 
-
 pytestmark = pytest.mark.timeout(300)  # a browser that hangs fails the test
 
 @pytest.fixture(scope="module")
