@@ -90,6 +90,9 @@ class Watched:
     def __init__(self, browser, server_url: str, width: int = 1280) -> None:
         self.context = browser.new_context(viewport={"width": width, "height": 900},
                                            accept_downloads=True)
+        # generous: on a loaded 2-core machine Chromium took 60 s to evaluate Swagger UI's
+        # 1.7 MB bundle (2 s when quiet); a real failure still fails, only later
+        self.context.set_default_timeout(120_000)
         self.page = self.context.new_page()
         self.requests: list[str] = []
         self.errors: list[str] = []
@@ -140,5 +143,5 @@ def screenshot(page, name: str) -> Path:
 def open_explorer(watched: Watched, url: str):
     page = watched.page
     page.goto(url + "/")
-    page.wait_for_selector("body[data-ready=true]", timeout=20_000)
+    page.wait_for_selector("body[data-ready=true]")
     return page
