@@ -22,6 +22,7 @@ from service.middleware import BodyLimitMiddleware
 from service.models import ModelRegistry
 from service.openapi import install_contract
 from service.routes import calibration, curves, health, inverse, jobs, materials, predict
+from service.routes.pages import install_pages
 from service.settings import ServiceSettings, get_settings
 from service.store_access import ResultWriter
 
@@ -56,7 +57,8 @@ def create_app(settings: ServiceSettings | None = None, *,
             app.state.jobs.shutdown()
 
     app = FastAPI(title="Balloon actuator design service", version=health.VERSION,
-                  description=DESCRIPTION, lifespan=lifespan)
+                  description=DESCRIPTION, lifespan=lifespan,
+                  docs_url=None, redoc_url=None)  # served from local files by install_pages
     app.state.settings = settings
     app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir,
                                      settings.emulator_path)
@@ -72,6 +74,7 @@ def create_app(settings: ServiceSettings | None = None, *,
         app.include_router(module.router)
     # Calibration (POST /v1/calibrate, GET /v1/effects) is included here:
     app.include_router(calibration.router)
+    install_pages(app)  # the explorer at /, /docs and /redoc, all offline (service/static)
 
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     if settings.cors_origins:

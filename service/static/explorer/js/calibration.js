@@ -1,0 +1,202 @@
+// Measured data -> POST /v1/calibrate -> the report as a person reads it: the
+// interpretation, the errors before and after, the selected effects with their values,
+// every candidate, the data with the model as it was and (once saved, or when the report
+// carries them) as augmented, the residuals; download the report; save the model (key).
+//
+// The report format may grow (docs/calibration.md): every field is read defensively and
+// a missing one is left out, never invented.
+
+import { api, clearProblems, showProblem } from "./api.js";
+import { parseMeasured } from "./csv.js";
+import { COLORS, renderPlot } from "./plot.js";
+import { $, download, fmt, fmtSig } from "./util.js";
+
+const DESIGN_KEYS = ["L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "body_material", "membrane_material"];
+
+function designOf(row) {
+  const d = {};
+  for (const k of DESIGN_KEYS) if (row[k] !== undefined) d[k] = row[k];
+  return d;
+}
+
+function groupByDesign(rows) {
+  const groups = new Map();
+  for (const r of rows) {
+    const key = JSON.stringify(designOf(r));
+    if (!groups.has(key)) groups.set(key, { design: designOf(r), rows: [] });
+    groups.get(key).rows.push(r);
+  }
+  return [...groups.values()];
+}
+
+// Per-observation model values the report may carry (a later report format): an array of
+// objects with pressure_pa and a field whose name says "after" (and perhaps "before").
+function reportPoints(report) {
+  for (const key of ["observations", "residuals", "points", "predictions"]) {
+    const v = report[key];
+    if (Array.isArray(v) && v.length && typeof v[0] === "object" && "pressure_pa" in v[0]) {
+      const after = Object.keys(v[0]).find((k) => /after/.test(k) && /deg/.test(k));
+      const before = Object.keys(v[0]).find((k) => /before|model/.test(k) && /deg/.test(k));
+      if (after) return { items: v, after, before };
+    }
+  }
+  return null;
+}
+
+async function modelValues(model, group, pressures) {
+  const res = await api("/v1/predict", { method: "POST", body: { design: group.design, pressures_pa: pressures, model } });
+  return res.angle_deg;
+}
+
+function effectLines(report) {
+  const fitted = (report.fitted && report.fitted.effects) || {};
+  const lines = [];
+  for (const name of report.selected_effects || []) {
+    const params = Object.entries(fitted).filter(([, p]) => p && p.effect === name);
+    const cand = (report.candidates || []).find((c) => c.effect === name);
+    const list = params.length ? params : Object.entries((cand && cand.params) || {});
+    const text = list.map(([pname, p]) => {
+      if (typeof p !== "object" || p === null) return `${pname} = ${fmtSig(p)}`;
+      const range = Array.isArray(p.plausible_range) ? ` (plausible ${p.plausible_range.map((x) => fmtSig(x)).join(" to ")})` : "";
+      return `${pname} = ${fmtSig(p.value)}${typeof p.sd === "number" ? " +/- " + fmtSig(p.sd, 2) : ""} ${p.unit || ""}${range}`;
+    }).join("; ");
+    lines.push(`${name.replaceAll("_", " ")}: ${text || "(no parameters reported)"}`);
+  }
+  return lines;
+}
+
+export function setupCalibration() {
+  const form = $("cal-form");
+  let rows = null, report = null, lastBody = null;
+
+  form.addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    clearProblems(form);
+    const file = $("cal-file").files[0];
+    if (!file) { showProblem(new Error("choose a CSV or JSON file of measured rows"), {}, $("err-cal-rows")); return; }
+    try {
+      rows = parseMeasured(file.name, await file.text());
+    } catch (err) {
+      showProblem(new Error(`${file.name}: ${err.message}`), {}, $("err-cal-rows"));
+      return;
+    }
+    lastBody = { rows, model: $("cal-model").value.trim() || "fitted", folds: Number($("cal-folds").value) || 5 };
+    await run(lastBody, form, { rows: $("err-cal-rows"), model: $("err-cal-model"), folds: $("err-cal-folds") }, $("err-calibrate"));
+  });
+
+  $("save-form").addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    const sf = $("save-form");
+    clearProblems(sf);
+    if (!lastBody) return;
+    const key = $("save-key").value.trim();
+    if (!key) { showProblem(new Error("saving a model needs the server's API key"), {}, $("err-save-key")); return; }
+    sessionStorage.setItem("balloon-api-key", key);
+    await run({ ...lastBody, save: $("save-name").value.trim() }, sf, { save: $("err-save"), rows: $("err-save-form") },
+      $("err-save-form"), key);
+  });
+
+  $("cal-download").addEventListener("click", () => {
+    if (report) download("calibration-report.json", JSON.stringify(report, null, 1), "application/json");
+  });
+
+  async function run(body, root, slots, fallback, key) {
+    $("cal-status").textContent = `Calibrating ${body.rows.length} rows...`;
+    $("cal-run").disabled = true;
+    try {
+      report = await api("/v1/calibrate", { method: "POST", body, key });
+      $("cal-status").textContent = report.saved_model ? `Saved the augmented model as "${report.saved_model}": use it as the model in the design panel.` : "";
+      if (report.saved_model) $("model-list").appendChild(new Option(report.saved_model, report.saved_model));
+      await render(report, body);
+    } catch (err) {
+      $("cal-status").textContent = "";
+      const target = err.status === 401 || err.status === 403 ? ($("err-save-key")) : fallback;
+      showProblem(err, slots, target);
+    } finally {
+      $("cal-run").disabled = false;
+    }
+  }
+
+  async function render(rep, body) {
+    $("cal-report").hidden = false;
+    $("cal-interpretation").textContent = rep.interpretation || "";
+    const errors = $("cal-errors").querySelector("tbody");
+    errors.innerHTML = "";
+    const rowsOut = [
+      ["starting model as is", rep.rmse_model_deg],
+      ["recalibrated constants, cross-validated by curve", rep.rmse_before_deg],
+      ["with the selected effects, cross-validated by curve", rep.rmse_after_deg],
+      [`noise floor${rep.noise_floor_source ? " (" + rep.noise_floor_source + ")" : ""}`, rep.noise_floor_deg],
+    ];
+    for (const [label, v] of rowsOut) {
+      if (v === undefined) continue;
+      const tr = document.createElement("tr");
+      tr.innerHTML = "<th scope=\"row\"></th><td></td>";
+      tr.children[0].textContent = label;
+      tr.children[1].textContent = v === null ? "not available" : fmt(v, 2);
+      errors.appendChild(tr);
+    }
+    const eff = $("cal-effects");
+    eff.innerHTML = "";
+    const lines = effectLines(rep);
+    if (!lines.length) lines.push("none: no catalogued effect explains the data better than the recalibrated model");
+    for (const line of lines) { const li = document.createElement("li"); li.textContent = line; eff.appendChild(li); }
+    if (rep.residual_structured_after) {
+      const li = document.createElement("li");
+      li.className = "warn";
+      li.textContent = "Structure remains in the residuals after the selected effects: an effect outside the catalogue acts.";
+      eff.appendChild(li);
+    }
+    const cand = $("cal-candidates").querySelector("tbody");
+    cand.innerHTML = "";
+    for (const c of rep.candidates || []) {
+      const tr = document.createElement("tr");
+      const params = Object.entries(c.params || {}).map(([k, p]) => (p && typeof p === "object" ? `${k} = ${fmtSig(p.value)} ${p.unit || ""}` : `${k} = ${fmtSig(p)}`)).join("; ");
+      const cells = [c.effect, fmt(c.rmse_cv_deg, 2), fmt(c.delta_bic, 1), params, c.selectable === undefined ? "" : (c.selectable ? "yes" : "no"),
+        Array.isArray(c.why_not) ? c.why_not.join("; ") : (c.why_not || "")];
+      tr.innerHTML = cells.map(() => "<td></td>").join("");
+      cells.forEach((v, i) => { tr.children[i].textContent = String(v); });
+      cand.appendChild(tr);
+    }
+    await plots(rep, body);
+  }
+
+  async function plots(rep, body) {
+    const groups = groupByDesign(body.rows);
+    const start = (rep.model && rep.model.name) || body.model;
+    const after = rep.saved_model || null;
+    const points = reportPoints(rep);
+    const data = [], resid = [];
+    const notes = [];
+    for (const [k, g] of groups.entries()) {
+      const color = COLORS[k % COLORS.length];
+      const label = `L=${fmtSig(g.design.L_mm)} t=${fmtSig(g.design.t_mm)} mm`;
+      data.push({ id: `data-${k}`, label: `measured ${label}`, color, x: g.rows.map((r) => r.pressure_pa), y: g.rows.map((r) => r.angle_deg), markersOnly: true });
+      const pMax = Math.max(...g.rows.map((r) => r.pressure_pa).filter(Number.isFinite));
+      const grid = Array.from({ length: 41 }, (_, i) => (pMax * i) / 40);
+      const measuredP = g.rows.map((r) => r.pressure_pa);
+      try {
+        data.push({ id: `before-${k}`, label: k === 0 ? `model "${start}" as is (dashed, colour of its design)` : "", color, x: grid, y: await modelValues(start, g, grid), dash: "5 4", width: 1.4 });
+        const atData = await modelValues(start, g, measuredP);
+        resid.push({ id: `rb-${k}`, label: k === 0 ? `model "${start}" as is (colour: design as above)` : "", color, x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
+      } catch (err) { notes.push(`model "${start}" for ${label}: ${err.message}`); }
+      if (after) {
+        try {
+          data.push({ id: `after-${k}`, label: k === 0 ? `augmented "${after}" from /v1/predict (solid)` : "", color, x: grid, y: await modelValues(after, g, grid), width: 2 });
+          const atData = await modelValues(after, g, measuredP);
+          resid.push({ id: `ra-${k}`, label: k === 0 ? `augmented "${after}"` : "", color: "#111827", x: measuredP, y: g.rows.map((r, i) => (atData[i] === null ? null : r.angle_deg - atData[i])), markersOnly: true });
+        } catch (err) { notes.push(`augmented model for ${label}: ${err.message}`); }
+      }
+    }
+    if (points) {
+      resid.push({ id: "ra-report", label: "with the selected effects (report)", color: "#111827", x: points.items.map((p) => p.pressure_pa),
+        y: points.items.map((p) => (typeof p.angle_deg === "number" && typeof p[points.after] === "number" ? p.angle_deg - p[points.after] : null)), markersOnly: true });
+    }
+    renderPlot($("cal-plot"), data, { xLabel: "pressure (Pa)", yLabel: "bending angle (deg)", height: 360, legend: "below" });
+    renderPlot($("cal-resid"), resid, { xLabel: "pressure (Pa)", yLabel: "measured - model (deg)", height: 260, legend: "below" });
+    const msg = after
+      ? `The augmented curves come from /v1/predict with model "${after}": quasi-static, at the calibration's median flow rate, so they differ from the report's own fit (${fmt(rep.rmse_after_deg, 2)} deg, each curve at its own flow rate and time) where flow rates or creep matter.`
+      : (points ? "" : "The augmented model's curves are drawn once it is saved (below).");
+    $("cal-status").textContent = [$("cal-status").textContent, msg, ...notes].filter(Boolean).join(" ");
+  }
+}

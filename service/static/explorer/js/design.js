@@ -1,0 +1,80 @@
+// The design box the explorer offers and the request a design becomes.
+//
+// Ranges: the design box of the whole-box emulator (geometry L 4-18 mm, t 0.5-1.2 mm,
+// T 0.6-2.0 mm, b 1.0-2.4 mm, h 0.10-0.30 mm at W = 3 mm; four material pairs; each
+// layer's stiffness scale s in [0.5, 2]). Defaults: the paper's standard design (Table 3),
+// which is also what the API assumes for an omitted field. The server, not this table,
+// decides what it can answer: a design it refuses comes back as a problem document.
+
+export const FIELDS = [
+  { name: "L_mm", label: "Chamber length L", unit: "mm", min: 4, max: 18, step: 0.1, value: 7.1 },
+  { name: "t_mm", label: "Membrane thickness t", unit: "mm", min: 0.5, max: 1.2, step: 0.01, value: 0.5 },
+  { name: "T_mm", label: "Body thickness above chamber T", unit: "mm", min: 0.6, max: 2.0, step: 0.05, value: 1.0 },
+  { name: "b_mm", label: "Chamber width b", unit: "mm", min: 1.0, max: 2.4, step: 0.05, value: 1.8 },
+  { name: "h_mm", label: "Chamber height h", unit: "mm", min: 0.1, max: 0.3, step: 0.01, value: 0.15 },
+  { name: "body_scale", label: "Body stiffness scale s", unit: "x", min: 0.5, max: 2, step: 0.05, value: 1 },
+  { name: "membrane_scale", label: "Membrane stiffness scale s", unit: "x", min: 0.5, max: 2, step: 0.05, value: 1 },
+];
+export const W_MM = 3.0;
+export const PAIRS = [
+  ["pdms_1_10", "ecoflex_00_30"],
+  ["pdms_1_15", "ecoflex_00_30"],
+  ["ecoflex_00_30", "pdms_1_15"],
+  ["ecoflex_00_30", "ecoflex_00_30"],
+];
+export const MATERIAL_NAMES = { pdms_1_10: "PDMS 1:10", pdms_1_15: "PDMS 1:15", ecoflex_00_30: "Ecoflex 00-30" };
+
+export function pairLabel(body, membrane) {
+  return `${MATERIAL_NAMES[body] || body} / ${MATERIAL_NAMES[membrane] || membrane}`;
+}
+
+export function defaultState() {
+  const s = { pair: 0 };
+  for (const f of FIELDS) s[f.name] = f.value;
+  return s;
+}
+
+// "1.5" for 1.5, "0.75" for 0.75: the scale as written in an inline material's id.
+function scaleText(s) {
+  return String(Math.round(s * 1000) / 1000);
+}
+
+// A layer's material: the preset id, or at a stiffness scale s != 1 the inline Ogden
+// material with every modulus times s (same exponents): {id: "<preset>_x<s>", mu_kpa, alpha}.
+export function material(presetId, scale, presets) {
+  if (Math.abs(scale - 1) < 1e-9) return presetId;
+  const preset = presets[presetId];
+  if (!preset) throw new Error(`material ${presetId} is not in GET /v1/materials`);
+  return {
+    id: `${presetId}_x${scaleText(scale)}`,
+    mu_kpa: preset.mu_kpa.map((mu) => mu * scale),
+    alpha: [...preset.alpha],
+  };
+}
+
+export function designBody(state, presets) {
+  const [body, membrane] = PAIRS[state.pair];
+  return {
+    L_mm: state.L_mm, t_mm: state.t_mm, T_mm: state.T_mm, b_mm: state.b_mm, h_mm: state.h_mm,
+    W_mm: W_MM,
+    body_material: material(body, state.body_scale, presets),
+    membrane_material: material(membrane, state.membrane_scale, presets),
+  };
+}
+
+export function materialId(m) {
+  return typeof m === "string" ? m : m.id;
+}
+
+export function designLabel(state) {
+  const [body, membrane] = PAIRS[state.pair];
+  const sc = (s) => (Math.abs(s - 1) < 1e-9 ? "" : ` x${scaleText(s)}`);
+  return `L ${state.L_mm} t ${state.t_mm} T ${state.T_mm} b ${state.b_mm} h ${state.h_mm} mm, ` +
+    `${MATERIAL_NAMES[body] || body}${sc(state.body_scale)} / ${MATERIAL_NAMES[membrane] || membrane}${sc(state.membrane_scale)}`;
+}
+
+// Pressures of a curve request: n points from 0 to pMax (the pressure slider steps on them,
+// so the value it shows is one the server computed, never an interpolation).
+export function pressureGrid(pMaxPa, n = 81) {
+  return Array.from({ length: n }, (_, i) => (pMaxPa * i) / (n - 1));
+}

@@ -1,0 +1,121 @@
+// Inverse design: a target (angle at a pressure, angle within a pressure budget, force at
+// a pressure), bounds on L and t and the allowed material pairs -> POST /v1/inverse ->
+// ranked designs; "Load" puts one in the design panel.
+
+import { api, clearProblems, showProblem } from "./api.js";
+import { PAIRS, pairLabel } from "./design.js";
+import { $, fmt, fmtSig, numberOrNull } from "./util.js";
+
+// "pdms_1_15/ecoflex_00_30 T=1 b=1.8 h=0.15" -> {T_mm: 1, b_mm: 1.8, h_mm: 0.15}
+export function familyGeometry(candidate) {
+  const out = {};
+  for (const k of ["T", "b", "h"]) {
+    if (typeof candidate[`${k}_mm`] === "number") { out[`${k}_mm`] = candidate[`${k}_mm`]; continue; }
+    const m = new RegExp(`\\b${k}=([0-9.eE+-]+)`).exec(candidate.family || "");
+    if (m) out[`${k}_mm`] = Number(m[1]);
+  }
+  return out;
+}
+
+function bounds(lo, hi) {
+  const a = numberOrNull($(lo)), b = numberOrNull($(hi));
+  if (a === null && b === null) return undefined;
+  return [a, b];
+}
+
+export function setupInverse({ loadDesign }) {
+  const form = $("inverse-form");
+  const pairs = $("inv-pairs");
+  PAIRS.forEach(([b, m], k) => {
+    const id = `inv-pair-${k}`;
+    const label = document.createElement("label");
+    label.className = "check";
+    label.innerHTML = `<input type="checkbox" id="${id}" value="${k}" checked> ${pairLabel(b, m)}`;
+    pairs.appendChild(label);
+  });
+  const kind = $("inv-kind");
+  const showKind = () => {
+    const force = kind.value === "force_at_pressure";
+    $("inv-angle-field").hidden = force;
+    $("inv-force-field").hidden = !force;
+    $("inv-value-h").textContent = force ? "force at the pressure (mN)" : "angle at the pressure (deg)";
+  };
+  kind.addEventListener("change", showKind);
+  showKind();
+  let candidates = [];
+
+  form.addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    clearProblems(form);
+    const target = { kind: kind.value, pressure_pa: numberOrNull($("inv-pressure")) };
+    if (kind.value === "force_at_pressure") target.force_mn = numberOrNull($("inv-force"));
+    else target.angle_deg = numberOrNull($("inv-angle"));
+    const body = { target, n_results: numberOrNull($("inv-n")) ?? 5 };
+    const L = bounds("inv-L-lo", "inv-L-hi"), t = bounds("inv-t-lo", "inv-t-hi");
+    if (L) body.L_bounds_mm = L;
+    if (t) body.t_bounds_mm = t;
+    const chosen = [...pairs.querySelectorAll("input:checked")].map((i) => PAIRS[Number(i.value)]);
+    if (chosen.length < PAIRS.length) body.material_pairs = chosen.map(([b, m]) => ({ body_material: b, membrane_material: m }));
+    if ($("inv-objective").value) body.objective = $("inv-objective").value;
+    const slots = {
+      "target.kind": $("err-inv-kind"), "target.pressure_pa": $("err-inv-pressure"),
+      "target.angle_deg": $("err-inv-angle"), "target.force_mn": $("err-inv-force"),
+      L_bounds_mm: $("err-inv-L"), t_bounds_mm: $("err-inv-t"), material_pairs: $("err-inv-pairs"),
+      objective: $("err-inv-objective"), n_results: $("err-inv-n"), target: $("err-inv-kind"),
+    };
+    $("inv-explanation").textContent = "Searching...";
+    $("inv-run").disabled = true;
+    try {
+      const res = await api("/v1/inverse", { method: "POST", body });
+      candidates = res.candidates || [];
+      render(res);
+    } catch (err) {
+      $("inv-explanation").textContent = "";
+      $("inv-table").hidden = true;
+      showProblem(err, slots, $("err-inverse"));
+    } finally {
+      $("inv-run").disabled = false;
+    }
+  });
+
+  function render(res) {
+    let text = res.explanation || (res.feasible ? "" : "No design meets the target.");
+    const best = res.best_reachable || {};
+    if (!res.feasible && typeof best.value === "number") {
+      text += ` Best reachable: ${fmtSig(best.value)} at L = ${fmtSig(best.L_mm)} mm, t = ${fmtSig(best.t_mm)} mm (${best.family || ""}).`;
+    }
+    if (typeof res.n_evaluated === "number") text += ` (${res.n_evaluated} designs evaluated)`;
+    $("inv-explanation").textContent = text;
+    const tbody = $("inv-table").querySelector("tbody");
+    tbody.innerHTML = "";
+    $("inv-table").hidden = candidates.length === 0;
+    candidates.forEach((c, k) => {
+      const tr = document.createElement("tr");
+      const band = c.value_lower !== null && c.value_upper !== null ? ` [${fmt(c.value_lower, 1)}, ${fmt(c.value_upper, 1)}]` : "";
+      const pband = c.pressure_lower_pa !== null && c.pressure_upper_pa !== null && c.pressure_lower_pa !== c.pressure_upper_pa
+        ? ` [${fmt(c.pressure_lower_pa, 0)}, ${fmt(c.pressure_upper_pa, 0)}]` : "";
+      const notes = (c.validity && c.validity.messages) ? c.validity.messages.join(" ") : "";
+      const cells = [c.rank, pairLabel(c.body_material, c.membrane_material), fmt(c.L_mm, 2), fmt(c.t_mm, 3),
+        `${fmt(c.value_at_pressure, 1)}${band}`, `${fmt(c.pressure_needed_pa, 0)}${pband}`, notes || (c.validity?.in_domain === false ? "outside the fitted domain" : "")];
+      tr.innerHTML = cells.map((v) => `<td></td>`).join("") + `<td><button type="button" data-candidate="${k}">Load</button></td>`;
+      cells.forEach((v, i) => { tr.children[i].textContent = String(v); });
+      tbody.appendChild(tr);
+    });
+  }
+
+  $("inv-table").addEventListener("click", (ev) => {
+    const k = ev.target.dataset.candidate;
+    if (k === undefined) return;
+    const c = candidates[Number(k)];
+    const pair = PAIRS.findIndex(([b, m]) => b === c.body_material && m === c.membrane_material);
+    const values = { L_mm: Math.round(c.L_mm * 1e4) / 1e4, t_mm: Math.round(c.t_mm * 1e4) / 1e4,
+      body_scale: 1, membrane_scale: 1, ...familyGeometry(c) };
+    if (pair >= 0) values.pair = pair;
+    loadDesign(values);
+    if (c.target_pressure_pa || c.pressure_needed_pa) {
+      const p = $("p_op");
+      p.value = String(c.pressure_needed_pa ?? c.target_pressure_pa);
+    }
+    $("explore").scrollIntoView({ behavior: "instant", block: "start" });
+  });
+}

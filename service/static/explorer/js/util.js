@@ -1,0 +1,41 @@
+// Small helpers shared by the page's modules: numbers as a person reads them, downloads.
+
+export const $ = (id) => document.getElementById(id);
+
+export function fmt(v, digits = 1) {
+  return typeof v === "number" && Number.isFinite(v) ? v.toFixed(digits) : "-";
+}
+
+export function fmtSig(v, sig = 3) {
+  if (typeof v !== "number" || !Number.isFinite(v)) return "-";
+  if (v === 0) return "0";
+  if (Math.abs(v) < 1e-3 || Math.abs(v) >= 1e6) return v.toExponential(sig - 1);
+  const d = Math.max(0, sig - 1 - Math.floor(Math.log10(Math.abs(v))));
+  return v.toFixed(Math.min(d, 6));
+}
+
+export function download(name, blobOrText, type = "text/plain") {
+  const blob = blobOrText instanceof Blob ? blobOrText : new Blob([blobOrText], { type });
+  const url = URL.createObjectURL(blob);
+  const a = document.createElement("a");
+  a.href = url;
+  a.download = name;
+  document.body.appendChild(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 1000);
+}
+
+export function numberOrNull(input) {
+  const text = String(input.value).trim();
+  if (text === "") return null;
+  const v = Number(text);
+  return Number.isFinite(v) ? v : text;  // a non-number goes to the server, which names it
+}
+
+// One CSV cell: quoted when it holds a comma, a quote or a line break.
+export function csvCell(v) {
+  if (v === null || v === undefined) return "";
+  const s = String(v);
+  return /[",\n]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s;
+}

@@ -1,0 +1,189 @@
+"""The explorer's design tasks in real headless Chromium: inverse design lists ranked
+candidates and loading one updates the design panel; the shipped example CSV gives the
+calibration report, and saving the augmented model (with the key) overlays it; a design the
+predictor refuses offers the FE solve, which queues a job (fake solve in a real worker
+process, stored in a copy of the database), shows its progress and plots the stored curve.
+Screenshots: test-artifacts/explorer/."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import httpx
+import pytest
+from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
+    API_KEY,
+    ROOT,
+    LiveServer,
+    browser_fixture,
+    open_explorer,
+    screenshot,
+    watched_fixture,
+)
+from service_solves import fast_solve
+
+EXAMPLE_CSV = ROOT / "surrogate" / "calibration" / "data" / "example_lab.csv"
+
+
+pytestmark = pytest.mark.timeout(300)  # a browser that hangs fails the test
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    with LiveServer(tmp_path_factory.mktemp("explorer-design"), solve_fn=fast_solve) as live:
+        yield live
+
+
+
+
+def test_inverse_design_lists_candidates_and_loading_one_updates_the_panel(watched, server):
+    page = open_explorer(watched, server.url)
+    page.fill("#inv-pressure", "1500")
+    page.fill("#inv-angle", "45")
+    page.fill("#inv-n", "3")
+    page.click("#inv-run")
+    page.wait_for_selector("#inv-table tbody tr")
+    body = {"target": {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 45},
+            "n_results": 3}
+    api = httpx.post(server.url + "/v1/inverse", json=body).json()
+    rows = page.locator("#inv-table tbody tr")
+    assert rows.count() == len(api["candidates"]) == 3
+    assert api["explanation"] in page.locator("#inv-explanation").inner_text()
+    second = api["candidates"][1]
+    assert f"{second['L_mm']:.2f}" in rows.nth(1).inner_text()
+    page.locator('#inv-table button[data-candidate="1"]').click()
+    page.wait_for_function(f"window.explorer.prediction && Math.abs(window.explorer.prediction"
+                           f".design.L_mm - {second['L_mm']}) < 1e-3")
+    assert float(page.input_value("#L_mm")) == pytest.approx(second["L_mm"], abs=1e-4)
+    assert float(page.input_value("#t_mm")) == pytest.approx(second["t_mm"], abs=1e-4)
+    names = {"pdms_1_10": "PDMS 1:10", "pdms_1_15": "PDMS 1:15", "ecoflex_00_30": "Ecoflex 00-30"}
+    pair = page.locator("#pair option:checked").inner_text()
+    assert pair == f"{names[second['body_material']]} / {names[second['membrane_material']]}"
+    # at the target pressure the panel shows the candidate's angle (45 deg)
+    assert "1500 Pa: angle 45.0 deg" in page.locator("#p_op-out").inner_text()
+    screenshot(page, "explorer-inverse-1280")
+    assert watched.errors == []
+
+
+def test_an_unreachable_target_is_explained_and_a_bad_bound_shown_beside_its_field(watched, server):
+    page = open_explorer(watched, server.url)
+    page.fill("#inv-angle", "300")
+    page.fill("#inv-pressure", "200")
+    page.click("#inv-run")
+    page.wait_for_function("document.getElementById('inv-explanation').textContent.length > 20")
+    assert page.locator("#inv-table").is_hidden()
+    page.fill("#inv-L-lo", "70")
+    page.fill("#inv-L-hi", "80")
+    page.click("#inv-run")
+    page.wait_for_selector("#err-inv-L:not([hidden])")
+    assert "60" in page.locator("#err-inv-L").inner_text()  # the allowed range is named
+    assert page.get_attribute("#inv-L-lo", "aria-invalid") == "true"
+
+
+def test_uploading_the_example_csv_shows_the_report_and_saving_asks_for_the_key(watched, server):
+    page = open_explorer(watched, server.url)
+    page.set_input_files("#cal-file", str(EXAMPLE_CSV))
+    page.fill("#cal-model", "paper")
+    page.click("#cal-run")
+    page.wait_for_selector("#cal-report:not([hidden])", timeout=60_000)
+    with open(EXAMPLE_CSV) as f:
+        rows = [{k: (v if k in ("curve_id", "body_material", "membrane_material") else float(v))
+                 for k, v in r.items()} for r in csv.DictReader(f)]
+    api = httpx.post(server.url + "/v1/calibrate", json={"rows": rows, "model": "paper"},
+                     timeout=60).json()
+    assert page.locator("#cal-interpretation").inner_text() == api["interpretation"]
+    errors = page.locator("#cal-errors").inner_text()
+    assert f"{api['rmse_model_deg']:.2f}" in errors and f"{api['rmse_after_deg']:.2f}" in errors
+    effects = page.locator("#cal-effects").inner_text()
+    for effect in api["selected_effects"]:
+        assert effect.replace("_", " ") in effects
+    assert page.locator("#cal-candidates tbody tr").count() == len(api["candidates"])
+    # data and the model as is are drawn; the residuals of the model as is too
+    assert page.locator('#cal-plot g[data-series^="data-"]').count() == 4
+    assert page.locator('#cal-plot g[data-series^="before-"]').count() == 4
+    assert page.locator('#cal-resid g[data-series^="rb-"] circle').count() == len(rows)
+    with page.expect_download() as d:
+        page.click("#cal-download")
+    assert json.loads(open(d.value.path()).read())["interpretation"] == api["interpretation"]
+    screenshot(page, "explorer-calibration-1280")
+
+    page.fill("#save-name", "lab_example")
+    page.click("#save-run")  # no key: asked for, nothing sent
+    page.wait_for_selector("#err-save-key:not([hidden])")
+    page.fill("#save-key", "wrong")
+    page.click("#save-run")
+    page.wait_for_function("document.getElementById('err-save-key').textContent.length > 0")
+    assert not (server.settings.models_dir / "lab_example.json").exists()
+    page.fill("#save-key", API_KEY)
+    page.click("#save-run")
+    page.wait_for_selector('#cal-plot g[data-series^="after-"]', timeout=60_000)
+    assert "lab_example" in page.locator("#cal-status").inner_text()
+    assert (server.settings.models_dir / "lab_example.json").exists()
+    assert page.locator('#cal-resid g[data-series^="ra-"] circle').count() == len(rows)
+    page.locator("#cal-plot").scroll_into_view_if_needed()
+    screenshot(page, "explorer-calibration-saved-1280")
+
+
+def test_a_refused_design_offers_the_fe_solve_and_plots_the_stored_curve(watched, server):
+    page = open_explorer(watched, server.url)
+    assert page.locator("#refused").is_hidden()
+    page.fill("#T_mm", "1.5")  # no fitted family at T = 1.5 mm today
+    page.wait_for_selector("#refused:not([hidden])")
+    refusal = httpx.post(server.url + "/v1/predict", json={
+        "design": {"T_mm": 1.5}, "pressures_pa": [0, 1000]}).json()
+    assert refusal["status"] == 422
+    # a refusal of the whole design is said once, in the FE solve box beside the plot
+    assert refusal["errors"][0]["field"] == "design"
+    assert refusal["errors"][0]["message"][:60] in page.locator("#refused-detail").inner_text()
+    assert page.locator("#err-design").is_hidden()
+    screenshot(page, "explorer-refused-1280")
+    page.fill("#api_key", "")
+    page.click("#solve")  # no key: asked for beside the key field
+    page.wait_for_selector("#err-api_key:not([hidden])")
+    page.fill("#api_key", API_KEY)
+    page.click("#solve")
+    page.wait_for_function("document.getElementById('job').dataset.status === 'finished'",
+                           timeout=60_000)
+    page.wait_for_selector('#plot g[data-series="fe-solve"]')
+    assert page.locator('#plot g[data-series="fe-progress"] circle').count() >= 1  # progress
+    drawn = json.loads(page.locator('#plot g[data-series="fe-solve"]').get_attribute("data-y"))
+    curve_id = page.locator("#job").inner_text().split("curve ")[1].split(" ")[0]
+    stored = httpx.get(f"{server.url}/v1/curves/{curve_id}").json()
+    assert stored["design"]["T_mm"] == 1.5
+    assert drawn == pytest.approx(stored["curve"]["angle_deg"])
+    # solving it again finds it in the database (409 with the curve id): it is loaded
+    page.click("#solve")
+    page.wait_for_function("document.getElementById('job').textContent.includes('Already')")
+    screenshot(page, "explorer-fe-solve-1280")
+    console = [e for e in watched.errors if "status of 4" not in e]  # the refusals themselves
+    assert console == [], console
+
+
+def test_a_force_target_the_model_cannot_answer_is_said_beside_the_target(watched, server):
+    problem = httpx.post(server.url + "/v1/inverse", json={
+        "target": {"kind": "force_at_pressure", "pressure_pa": 1500, "force_mn": 10}})
+    if problem.status_code == 200:
+        pytest.skip("the served surrogate has force curves: a force target has candidates")
+    page = open_explorer(watched, server.url)
+    page.select_option("#inv-kind", "force_at_pressure")
+    assert page.locator("#inv-force").is_visible() and page.locator("#inv-angle").is_hidden()
+    page.fill("#inv-force", "10")
+    page.click("#inv-run")
+    page.wait_for_selector("#err-inv-kind:not([hidden])")
+    assert problem.json()["errors"][0]["message"] in page.locator("#err-inv-kind").inner_text()
+
+
+def test_an_inline_stiffness_scaled_material_is_sent_with_scaled_moduli(watched, server):
+    page = open_explorer(watched, server.url)
+    sent = []
+    page.on("request", lambda r: (sent.append(r.post_data_json)
+                                  if r.url.endswith("/v1/predict") else None))
+    page.fill("#membrane_scale", "1.5")
+    page.wait_for_selector("#refused:not([hidden])")  # today's server: no such family
+    materials = {m["id"]: m for m in httpx.get(server.url + "/v1/materials").json()["items"]}
+    membrane = sent[-1]["design"]["membrane_material"]
+    assert membrane["id"] == "ecoflex_00_30_x1.5"
+    preset = materials["ecoflex_00_30"]
+    assert membrane["mu_kpa"] == pytest.approx([1.5 * m for m in preset["mu_kpa"]])
+    assert membrane["alpha"] == materials["ecoflex_00_30"]["alpha"]
+    assert sent[-1]["design"]["body_material"] == "pdms_1_10"

@@ -1,0 +1,262 @@
+"""The design explorer at / in real headless Chromium: it loads with no console error and
+no request off the server, redraws the curve with /v1/predict's own numbers as the L slider
+moves, pins and exports curves, says the validity flags in words, and renders the fields
+the predictor is gaining (force, volume, capped angles) when a response carries them.
+Screenshots at 1280 and 800 px: test-artifacts/explorer/."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import httpx
+import pytest
+from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
+    LiveServer,
+    Watched,
+    browser_fixture,
+    open_explorer,
+    screenshot,
+    watched_fixture,
+)
+
+GRID_POINTS = 81  # the page's pressure grid: 0 .. p_max in 80 steps
+
+
+pytestmark = pytest.mark.timeout(300)  # a browser that hangs fails the test
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    with LiveServer(tmp_path_factory.mktemp("explorer-page")) as live:
+        yield live
+
+
+
+
+def grid(p_max: float) -> list[float]:
+    return [p_max * i / (GRID_POINTS - 1) for i in range(GRID_POINTS)]
+
+
+def series(page, name: str) -> dict:
+    g = page.locator(f'#plot g[data-series="{name}"]')
+    return {"x": json.loads(g.get_attribute("data-x")), "y": json.loads(g.get_attribute("data-y"))}
+
+
+def wait_prediction(page, **design):
+    cond = " && ".join(f"p.design.{k} === {v}" for k, v in design.items())
+    page.wait_for_function(
+        f"(() => {{ const p = window.explorer.prediction; return p && {cond}; }})()")
+
+
+def test_page_loads_offline_with_no_console_error_at_both_widths(browser, server):
+    for width in (1280, 800):
+        w = Watched(browser, server.url, width=width)
+        try:
+            page = open_explorer(w, server.url)
+            page.wait_for_selector('#plot g[data-series^="fe-"]')  # nearest FE curves drawn
+            page.wait_for_selector('#plot g[data-series="prediction"] path.line')
+            assert page.locator("#plot polygon.band").count() >= 1
+            assert "angle" in page.locator("#p_op-out").inner_text()
+            assert page.locator("#sketch polygon[data-part=body]").count() == 1
+            overflow = page.evaluate("document.documentElement.scrollWidth")
+            screenshot(page, f"explorer-{width}")
+            assert w.errors == [], w.errors
+            assert w.foreign_requests() == [], w.foreign_requests()
+            assert overflow <= width, f"page is {overflow} px wide at {width} px"
+            assert any("/v1/predict" in u for u in w.requests)
+        finally:
+            w.close()
+
+
+def test_moving_the_L_slider_redraws_the_curve_with_the_numbers_of_v1_predict(watched, server):
+    page = open_explorer(watched, server.url)
+    before = page.locator('#plot g[data-series="prediction"] path.line').get_attribute("d")
+    page.focus("#L_mm-range")
+    for _ in range(10):  # 10 steps of 0.1 mm: 7.1 -> 8.1
+        page.keyboard.press("ArrowRight")
+    wait_prediction(page, L_mm=8.1)
+    page.wait_for_function("window.explorer.timings.length > 0")
+    assert page.input_value("#L_mm") == "8.1"
+    after = page.locator('#plot g[data-series="prediction"] path.line').get_attribute("d")
+    assert after != before
+    drawn = series(page, "prediction")
+    body = {"design": {"L_mm": 8.1, "t_mm": 0.5, "T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15,
+                       "W_mm": 3.0, "body_material": "pdms_1_10",
+                       "membrane_material": "ecoflex_00_30"},
+            "pressures_pa": grid(2000.0), "model": "fitted", "level": 0.95}
+    api = httpx.post(server.url + "/v1/predict", json=body).json()
+    assert drawn["x"] == pytest.approx(api["pressure_pa"], abs=1e-9)
+    assert drawn["y"] == pytest.approx(api["angle_deg"], abs=1e-9)
+    # the pressure readout shows the API's value at the slider's pressure (1000 Pa)
+    i = 40
+    assert f"angle {api['angle_deg'][i]:.1f} deg" in page.locator("#p_op-out").inner_text()
+    assert float(page.locator("#sketch").get_attribute("data-angle")) == pytest.approx(
+        api["angle_deg"][i])
+    assert watched.errors == []
+
+
+def test_a_stale_prediction_is_cancelled_and_never_drawn_over_a_newer_one(watched, server):
+    page = open_explorer(watched, server.url)
+    held, failed = [], []
+    page.on("requestfailed",
+            lambda r: failed.append(r.post_data_json) if "/v1/predict" in r.url else None)
+
+    def hold_the_first(route):
+        if not held:
+            held.append(route)  # answered only after the newer request has been drawn
+        else:
+            route.continue_()
+
+    page.route("**/v1/predict", hold_the_first)
+    page.fill("#L_mm", "9")
+    for _ in range(1000):  # up to ~20 s
+        if held:
+            break
+        page.wait_for_timeout(20)
+    assert held, "the first prediction request was never sent"
+    page.fill("#L_mm", "10")
+    wait_prediction(page, L_mm=10)
+    try:
+        held[0].continue_()
+    except Exception:  # the browser has already given the request up
+        pass
+    page.wait_for_timeout(500)
+    assert page.evaluate("window.explorer.prediction.design.L_mm") == 10
+    assert [b["design"]["L_mm"] for b in failed] == [9]  # aborted by the page
+    api = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 10}, "pressures_pa": grid(2000.0)}).json()
+    assert series(page, "prediction")["y"] == pytest.approx(api["angle_deg"], abs=1e-9)
+
+
+def test_pinned_designs_overlay_and_export_as_csv_json_svg_png(watched, server):
+    page = open_explorer(watched, server.url)
+    page.click("#pin")
+    page.fill("#L_mm", "12")
+    wait_prediction(page, L_mm=12)
+    page.click("#pin")
+    page.fill("#t_mm", "0.8")
+    wait_prediction(page, t_mm=0.8)
+    assert page.locator("#compare-table tbody tr").count() == 2
+    assert page.locator('#plot g[data-series="pin-1"]').count() == 1
+    assert page.locator('#plot g[data-series="pin-2"]').count() == 1
+    pinned = series(page, "pin-2")["y"]
+    api = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 12, "t_mm": 0.5}, "pressures_pa": grid(2000.0)}).json()
+    assert pinned == pytest.approx(api["angle_deg"], abs=1e-9)
+    row = page.locator("#compare-table tbody tr").nth(1).inner_text()
+    assert f"{api['angle_deg'][40]:.1f} deg" in row
+
+    with page.expect_download() as d:
+        page.click("#export-csv")
+    rows = list(csv.DictReader(io.StringIO(open(d.value.path()).read())))
+    labels = {r["series"] for r in rows}
+    assert len([x for x in labels if x.startswith("#")]) == 2 and any("model" in x for x in labels)
+    model = [r for r in rows if "model" in r["series"]]
+    assert len(model) == GRID_POINTS and float(model[-1]["pressure_pa"]) == 2000.0
+    with page.expect_download() as d:
+        page.click("#export-json")
+    data = json.loads(open(d.value.path()).read())
+    assert data["prediction"]["design"]["t_mm"] == 0.8 and len(data["pinned"]) == 2
+    with page.expect_download() as d:
+        page.click("#export-svg")
+    svg = open(d.value.path()).read()
+    assert "<svg" in svg and 'data-series="prediction"' in svg
+    with page.expect_download() as d:
+        page.click("#export-png")
+    png = open(d.value.path(), "rb").read()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 5000
+    page.click('#compare-table button[data-load="1"]')  # loads the first pinned design back
+    wait_prediction(page, L_mm=7.1, t_mm=0.5)
+    for L in (9, 10):  # four pinned at most
+        page.fill("#L_mm", str(L))
+        wait_prediction(page, L_mm=L)
+        page.click("#pin")
+    assert page.locator("#compare-table tbody tr").count() == 4
+    assert page.locator("#pin").is_disabled()
+    page.click('#compare-table button[data-unpin="2"]')
+    assert page.locator("#compare-table tbody tr").count() == 3
+    assert page.locator('#plot g[data-series="pin-2"]').count() == 0
+    assert page.locator("#pin").is_enabled()
+    screenshot(page, "explorer-compare-1280")
+    assert watched.errors == []
+
+
+def test_every_control_is_labelled_and_the_design_panel_works_from_the_keyboard(watched, server):
+    page = open_explorer(watched, server.url)
+    unlabelled = page.evaluate("""[...document.querySelectorAll('input, select, button')]
+        .filter(e => !e.hidden && !(e.labels && e.labels.length) && !e.getAttribute('aria-label')
+                     && !(e.tagName === 'BUTTON' && e.textContent.trim()))
+        .map(e => e.id || e.outerHTML)""")
+    assert unlabelled == []
+    page.focus("#L_mm")
+    page.keyboard.press("Tab")  # L number box -> t slider
+    assert page.evaluate("document.activeElement.id") == "t_mm-range"
+    page.keyboard.press("ArrowRight")  # 0.5 -> 0.51 mm
+    wait_prediction(page, t_mm=0.51)
+    page.focus("#pin")
+    page.keyboard.press("Enter")
+    assert page.locator("#compare-table tbody tr").count() == 1
+
+
+def test_an_out_of_range_field_is_refused_beside_it_with_its_allowed_range(watched, server):
+    page = open_explorer(watched, server.url)
+    page.fill("#L_mm", "70")  # the number box takes any value; the server names the limit
+    page.wait_for_selector("#err-L_mm:not([hidden])")
+    problem = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 70}, "pressures_pa": [0]}).json()
+    allowed = problem["errors"][0]["allowed"]
+    assert allowed in page.locator("#err-L_mm").inner_text()
+    assert page.get_attribute("#L_mm", "aria-invalid") == "true"
+    assert page.locator("#refused").is_hidden()  # a range error is not offered an FE solve
+    page.fill("#L_mm", "7.1")
+    page.wait_for_selector("#err-L_mm", state="hidden")
+    assert page.get_attribute("#L_mm", "aria-invalid") is None
+
+
+def test_validity_flags_and_messages_are_shown_in_words(watched, server):
+    page = open_explorer(watched, server.url)
+    page.fill("#t_mm", "0.55")
+    page.fill("#p_max", "3000")
+    page.dispatch_event("#p_max", "change")
+    page.wait_for_function("window.explorer.prediction"
+                           " && window.explorer.prediction.pressure_pa.at(-1) === 3000")
+    api = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.55}, "pressures_pa": grid(3000.0)}).json()
+    assert api["validity"]["messages"], "the design should be flagged past the FE range"
+    shown = page.locator("#validity li").all_inner_texts()
+    for message in api["validity"]["messages"]:
+        assert message in shown
+    assert "Outside" in page.locator("#validity").inner_text()
+    assert page.locator("#validity .chip").count() == len(api["validity"]["flags"])
+
+
+def test_force_volume_and_capped_angles_are_rendered_when_the_response_has_them(watched, server):
+    """The predictor is gaining force_mn, volume_ul and null angles past the FE's range: the
+    real /v1/predict answer, extended in the browser by route interception, is rendered."""
+    page = watched.page
+
+    def extend(route):
+        body = route.fetch().json()
+        n = len(body["pressure_pa"])
+        body["volume_ul"] = [p / 1000 for p in body["pressure_pa"]]
+        body["force_mn"] = [p / 100 for p in body["pressure_pa"]]
+        body["force_lower_mn"] = [p / 120 for p in body["pressure_pa"]]
+        body["force_upper_mn"] = [p / 80 for p in body["pressure_pa"]]
+        for key in ("angle_deg", "lower_deg", "upper_deg"):
+            body[key] = [None if i > n - 10 else v for i, v in enumerate(body[key])]
+        route.fulfill(json=body)
+
+    page.route("**/v1/predict", extend)
+    open_explorer(watched, server.url)
+    assert "force 10.00 mN" in page.locator("#p_op-out").inner_text()
+    assert "volume 1.00 ul" in page.locator("#p_op-out").inner_text()
+    assert any("capped" in t for t in page.locator("#validity li").all_inner_texts())
+    page.select_option("#x_axis", "volume_ul")
+    assert series(page, "prediction")["x"][-1] == pytest.approx(2.0)
+    page.select_option("#y_axis", "force")
+    assert series(page, "prediction")["y"][-1] == pytest.approx(20.0)
+    # the angle curve is broken, not drawn to zero, where the answer is capped
+    page.select_option("#y_axis", "angle")
+    assert series(page, "prediction")["y"][-1] is None
+    assert watched.errors == []
