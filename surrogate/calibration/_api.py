@@ -7,16 +7,15 @@ from typing import Any
 
 from surrogate.calibration._data import Observations, observations_from_rows
 from surrogate.calibration._loop import Calibration, calibrate
-from surrogate.calibration._start import starting_parameters
+from surrogate.calibration._start import baseline_for
 
 
 def run_calibration(data: Observations | list[dict[str, Any]], model: Any = None,
-                    folds: int = 5, progress=None) -> Calibration:
-    """Validate ``data`` (rows or Observations), take the starting parameters from ``model``
-    (None/"paper" or a surrogate) and run the loop."""
-    obs = data if isinstance(data, Observations) else observations_from_rows(data)
-    nominal, info = starting_parameters(obs.families, model)
-    return calibrate(obs, nominal, info, folds=folds, progress=progress)
+                    folds: int = 5, progress=None, strict: bool = False) -> Calibration:
+    """Validate ``data`` (rows or Observations) and run the loop against ``model``: None
+    or "paper" (the paper's constants), or any ``surrogate.predictor.Predictor``."""
+    obs = data if isinstance(data, Observations) else observations_from_rows(data, strict)
+    return calibrate(obs, baseline_for(model), folds=folds, progress=progress)
 
 
 def jsonable(value: Any) -> Any:

@@ -1,25 +1,21 @@
-"""The noise floor: how far a new specimen scatters around its design's mean curve.
+"""The noise floor: how far a new specimen scatters around its design's mean curve, at the
+same point of its loading history.
 
-Per group (same family, L, t and flow rate), all replicate curves are fitted together by a
-flexible curve in pressure, c0 + c1 p + c2 p^2 + c3 p^3 + c4 exp(p / tau_g) (tau_g by a
-1-D search), which follows any smooth systematic shape the model may miss but not the
-specimen-to-specimen and reading scatter.
+Replicates (curves of one design at one flow rate) are compared where they are in the same
+state: at the same time since the pump started (``time_s``; the other curves interpolated
+linearly in time, within their range), or without ``time_s`` at the same reading number.
+So a loading/unloading loop, a hold with creep or a flow-rate effect is not counted as
+scatter: replicates share it. Each reading y of curve c is compared with the mean of the
+k other replicates there; for independent specimens E[(y - mean_others)^2] =
+sigma^2 (1 + 1/k), so
 
-The pooled fit of m replicates follows their mean, so it absorbs 1/m of the
-specimen-to-specimen part: its residual alone would underestimate that part by (m-1)/m in
-variance (by half for m = 2). The floor therefore separates the two parts (a
-random-effects decomposition):
+    floor^2 = sum (y - mean_others)^2 / (1 + 1/k) / N
 
-    reading   s_r^2 = sum SSE(one flexible curve per curve) / sum (n_i - 6)
-    specimen  s_u^2 = sum_g [SSE_g(one curve per group) - (N_g - 6) s_r^2] m_g/(m_g - 1)
-                      / sum_g N_g                                  (clipped at 0)
-    floor^2   = s_r^2 + s_u^2
-
--- the error a perfect model of the design's mean would make on a specimen it has not
-seen, which is what the cross-validation by curve measures. Where curves are too short
-for a fit of their own (at most 7 points), the pooled residual is used uncorrected
-(``source`` "replicates-uncorrected", an underestimate). Without replicates the
-within-curve fit alone gives the floor (reading scatter only, ``source`` "within-curve").
+counts both reading noise and specimen-to-specimen scatter in full: the error a perfect
+model of the design's mean makes on a specimen it has not seen, which is what the
+cross-validation by curve measures. Without replicates, the within-curve scatter from
+second differences along time (reading noise only: an underestimate, ``source``
+"within-curve").
 """
 
 from __future__ import annotations
@@ -30,76 +26,66 @@ import numpy as np
 
 from surrogate.calibration._data import Observations
 
-N_FLEX = 6
-
 
 @dataclass(frozen=True)
 class NoiseFloor:
     rms_deg: float
     dof: int
-    source: str  # "replicates" | "replicates-uncorrected" | "within-curve" | "none"
+    source: str  # "replicates" | "within-curve" | "none"
     groups: int
-    reading_deg: float = float("nan")   # within-curve part
-    specimen_deg: float = float("nan")  # specimen-to-specimen part
 
 
-def _flex_sse(p: np.ndarray, y: np.ndarray) -> float:
-    scale = max(float(np.max(np.abs(p))), 1.0)
-    q = p / scale
-    best = np.inf
-    for tau in np.geomspace(0.05, 2.0, 40):
-        X = np.column_stack([np.ones_like(q), q, q * q, q**3, np.expm1(q / tau)])
-        coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-        r = y - X @ coef
-        best = min(best, float(r @ r))
-    return best
-
-
-def _pooled(obs: Observations, masks: list[np.ndarray]) -> tuple[float, int, int]:
-    """Sum of flexible-fit SSE and dof over ``masks`` long enough to fit; how many."""
-    sse, dof, used = 0.0, 0, 0
-    for mask in masks:
-        n = int(mask.sum())
-        if n <= N_FLEX + 1:
-            continue
-        sse += _flex_sse(obs.pressure_pa[mask], obs.angle_deg[mask])
-        dof += n - N_FLEX
-        used += 1
-    return sse, dof, used
+def _history(obs: Observations, rows: np.ndarray) -> np.ndarray:
+    return obs.time_s[rows] if obs.has_time else np.arange(rows.size, dtype=float)
 
 
 def noise_floor(obs: Observations) -> NoiseFloor:
-    pairs = np.unique(np.column_stack([obs.group, obs.curve]), axis=0)
-    curves_per_group = np.bincount(pairs[:, 0])
-    replicated = np.flatnonzero(curves_per_group >= 2)
-    if not replicated.size:
-        sse, dof, used = _pooled(obs, [obs.curve == c for c in range(obs.n_curves)])
-        if dof == 0:
-            return NoiseFloor(float("nan"), 0, "none", 0)
-        rms = float(np.sqrt(sse / dof))
-        return NoiseFloor(rms, dof, "within-curve", used, rms, float("nan"))
-
-    rep_curves = pairs[np.isin(pairs[:, 0], replicated), 1]
-    sse_r, dof_r, _ = _pooled(obs, [obs.curve == c for c in rep_curves])
-    between, n_points, dof_g, groups, sse_g_all = 0.0, 0, 0, 0, 0.0
-    for g in replicated:
-        mask = obs.group == g
-        sse_g, dof_one, used = _pooled(obs, [mask])
-        if not used:
+    sq, n_used, groups = 0.0, 0, 0
+    for g in np.unique(obs.group):
+        curves = np.unique(obs.curve[obs.group == g])
+        if curves.size < 2:
             continue
-        m = int(curves_per_group[g])
-        groups += 1
-        sse_g_all += sse_g
-        dof_g += dof_one
-        n_points += int(mask.sum())
-        if dof_r:
-            between += (sse_g - dof_one * sse_r / dof_r) * m / (m - 1)
-    if groups == 0:
+        rows_of = {int(c): np.flatnonzero(obs.curve == c) for c in curves}
+        used_here = 0
+        for c, rows in rows_of.items():
+            t = _history(obs, rows)
+            others = []
+            for c2, rows2 in rows_of.items():
+                if c2 == c:
+                    continue
+                t2 = _history(obs, rows2)
+                y2 = np.interp(t, t2, obs.angle_deg[rows2], left=np.nan, right=np.nan)
+                others.append(y2)
+            o = np.array(others)
+            k = np.sum(np.isfinite(o), axis=0)
+            ok = k >= 1
+            if not np.any(ok):
+                continue
+            mean = np.nanmean(o[:, ok], axis=0)
+            d = obs.angle_deg[rows][ok] - mean
+            sq += float(np.sum(d**2 / (1.0 + 1.0 / k[ok])))
+            n_used += int(ok.sum())
+            used_here += 1
+        groups += used_here > 0
+    if n_used >= 4:
+        return NoiseFloor(float(np.sqrt(sq / n_used)), n_used, "replicates", groups)
+    return _within_curve(obs)
+
+
+def _within_curve(obs: Observations) -> NoiseFloor:
+    """Reading scatter from second differences along each curve's history:
+    d = y_i - (w y_{i-1} + (1 - w) y_{i+1}), Var d = sigma^2 (1 + w^2 + (1 - w)^2)."""
+    sq, n = 0.0, 0
+    for c in range(obs.n_curves):
+        rows = np.flatnonzero(obs.curve == c)
+        if rows.size < 3:
+            continue
+        t = _history(obs, rows)
+        y = obs.angle_deg[rows]
+        w = (t[2:] - t[1:-1]) / np.maximum(t[2:] - t[:-2], 1e-12)
+        d = y[1:-1] - (w * y[:-2] + (1 - w) * y[2:])
+        sq += float(np.sum(d**2 / (1 + w**2 + (1 - w) ** 2)))
+        n += d.size
+    if n == 0:
         return NoiseFloor(float("nan"), 0, "none", 0)
-    if dof_r == 0:  # curves too short for a fit of their own: pooled residual as is
-        rms = float(np.sqrt(sse_g_all / dof_g))
-        return NoiseFloor(rms, dof_g, "replicates-uncorrected", groups)
-    reading2 = sse_r / dof_r
-    specimen2 = max(between, 0.0) / n_points
-    return NoiseFloor(float(np.sqrt(reading2 + specimen2)), dof_g, "replicates", groups,
-                      float(np.sqrt(reading2)), float(np.sqrt(specimen2)))
+    return NoiseFloor(float(np.sqrt(sq / n)), n, "within-curve", 0)

@@ -1,0 +1,42 @@
+"""How each reading was taken: loading, unloading or hold, from the pressure sequence.
+
+Labs record a curve in time (or file) order; the pressure's change from the previous
+reading says what the pump did: rising = loading (fluid in, direction +1), falling =
+unloading (withdrawn, -1), unchanged within ``HOLD_FRACTION`` of the curve's pressure
+range = hold (pump stopped, 0). The first reading takes the direction of the next
+interval. The noise floor, the time effects' identifiability and the inlet pressure drop
+(R Q x direction) use it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+HOLD_FRACTION = 0.02
+HOLD_MIN_PA = 5.0
+#: holds below this fraction of a curve's top pressure are the actuator at rest, not holds
+REST_FRACTION = 0.1
+
+
+def directions(curve: np.ndarray, pressure_pa: np.ndarray) -> np.ndarray:
+    """+1 / -1 / 0 per row; rows sorted by curve, then history."""
+    out = np.zeros(pressure_pa.size)
+    for c in np.unique(curve):
+        rows = np.flatnonzero(curve == c)
+        p = pressure_pa[rows]
+        tol = max(HOLD_FRACTION * float(np.ptp(p)), HOLD_MIN_PA)
+        dp = np.diff(p)
+        d = np.where(dp > tol, 1.0, np.where(dp < -tol, -1.0, 0.0))
+        out[rows[1:]] = d
+        out[rows[0]] = d[0] if d.size else 0.0
+    return out
+
+
+def history_traits(curve: np.ndarray, pressure_pa: np.ndarray, direction: np.ndarray
+                   ) -> dict[str, int]:
+    """Counts of loading, unloading and hold readings (holds at rest not counted)."""
+    top = np.zeros(int(curve.max()) + 1)
+    np.maximum.at(top, curve, pressure_pa)
+    hold = (direction == 0) & (pressure_pa > REST_FRACTION * top[curve])
+    return {"loading": int(np.sum(direction > 0)), "unloading": int(np.sum(direction < 0)),
+            "hold": int(np.sum(hold))}
