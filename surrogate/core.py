@@ -44,7 +44,8 @@ def _array(values: object, field_name: str, unit: str) -> np.ndarray:
 @dataclass(frozen=True)
 class Prediction:
     """Angles (deg) at ``pressure_pa`` (Pa) with a band at ``level`` (lower_deg, upper_deg);
-    force_mn (mN) and its band when the family has a force model, else None."""
+    force_mn (mN) and its band when the model has force, else None; volume_ul (injected
+    volume, ul) when the model has it. NaN where the answer is past the FE's range."""
 
     design: Design
     pressure_pa: np.ndarray
@@ -60,6 +61,7 @@ class Prediction:
     force_mn: np.ndarray | None = None
     force_lower_mn: np.ndarray | None = None
     force_upper_mn: np.ndarray | None = None
+    volume_ul: np.ndarray | None = None
 
     def as_dict(self) -> dict[str, object]:
         def lst(a: np.ndarray | None) -> list | None:
@@ -69,7 +71,8 @@ class Prediction:
                 "angle_deg": lst(self.angle_deg), "lower_deg": lst(self.lower_deg),
                 "upper_deg": lst(self.upper_deg), "level": self.level,
                 "force_mn": lst(self.force_mn), "force_lower_mn": lst(self.force_lower_mn),
-                "force_upper_mn": lst(self.force_upper_mn), "validity": dict(self.validity),
+                "force_upper_mn": lst(self.force_upper_mn), "volume_ul": lst(self.volume_ul),
+                "validity": dict(self.validity),
                 "model": self.model, "form": self.form, "parameters": dict(self.parameters),
                 "provenance": dict(self.provenance)}
 

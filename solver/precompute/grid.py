@@ -32,7 +32,7 @@ import hashlib
 import itertools
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from solver.design import LIMITS_MM, Design
@@ -44,7 +44,9 @@ from solver.store.keys import canonical_number, record_key
 
 PARAMETERS = tuple(LIMITS_MM)
 SWEEP_KEYS = ("pairs", "name", *PARAMETERS)
-TOP_KEYS = ("description", "materials", "settings", "sweep", *SWEEP_KEYS)
+SAMPLE_KEYS = ("pairs", "name", "n", "seed", "skip", "tips", "blocked_max_pressure_pa")
+TOP_KEYS = ("description", "materials", "settings", "sweep", "sample", *SWEEP_KEYS)
+BLOCKED_MAX_PRESSURE_PA = 6000.0   # blocked-tip force curves: to this chamber pressure
 RANGE_KEYS = ("start", "stop", "num")
 MAX_POINTS = 100_000
 
@@ -222,12 +224,20 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     except InputError as exc:
         raise reader.fail(("settings", exc.field), f"settings.{exc.field}", exc.detail,
                           exc.allowed) from None
+    points: dict[str, GridPoint] = {}
+    samples = data.get("sample", [])
+    if not isinstance(samples, list) or not all(isinstance(t, dict) for t in samples):
+        raise reader.fail(("sample",), "sample", "must be [[sample]] tables", "[[sample]]")
+    for index, sample in enumerate(samples):
+        for point in _sample(reader, ("sample", index), sample, settings):
+            points.setdefault(point.key, point)
+    if samples and "sweep" not in data:
+        return Grid(source, text, settings, tuple(points.values()))
     sweeps = data.get("sweep", [{}])
     if not isinstance(sweeps, list) or not sweeps:
         raise reader.fail(("sweep",), "sweep", "must be one or more [[sweep]] tables",
                           "[[sweep]]")
     defaults = {k: v for k, v in data.items() if k in SWEEP_KEYS}
-    points: dict[str, GridPoint] = {}
     for index, sweep in enumerate(sweeps):
         where: tuple = ("sweep", index) if "sweep" in data else ()
         if not isinstance(sweep, dict):
@@ -292,6 +302,48 @@ def _expand(reader: _Reader, where: tuple, merged: dict, own: dict,
                               f"design {values} does not fit: {exc.detail}",
                               exc.allowed) from None
         out.append(GridPoint(record_key(design, settings), design, settings))
+    return out
+
+
+def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
+            ) -> list[GridPoint]:
+    """A [[sample]] table: ``n`` scrambled Sobol designs of the emulator's box
+    (solver/design_space.py) per pair, each solved with every tip in ``tips``
+    ("free": the settings as given; "blocked": the tip held, to
+    ``blocked_max_pressure_pa``, for the force curve)."""
+    from solver.design_space import PAIRS, sample_designs
+
+    reader.check_keys(table, where, SAMPLE_KEYS)
+    ints = {}
+    for key, default, lo, hi in (("n", None, 1, MAX_POINTS), ("seed", 0, 0, 2**31 - 1),
+                                 ("skip", 0, 0, 2**31 - 1)):
+        value = table.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            raise reader.fail((*where, key), key, f"{value!r} is not an integer in range",
+                              f"an integer {lo} <= {key} <= {hi}")
+        ints[key] = value
+    pairs = table.get("pairs", [list(p) for p in PAIRS])
+    if (not isinstance(pairs, list) or not pairs
+            or any(not isinstance(p, list) or tuple(p) not in PAIRS for p in pairs)):
+        raise reader.fail((*where, "pairs"), "pairs", f"{pairs!r} are not box pairs",
+                          ", ".join(f'["{b}", "{m}"]' for b, m in PAIRS))
+    tips = table.get("tips", ["free"])
+    if (not isinstance(tips, list) or not tips
+            or any(t not in ("free", "blocked") for t in tips)):
+        raise reader.fail((*where, "tips"), "tips", f"{tips!r}", '["free"], ["free", "blocked"]')
+    p_max = table.get("blocked_max_pressure_pa", BLOCKED_MAX_PRESSURE_PA)
+    if isinstance(p_max, bool) or not isinstance(p_max, (int, float)) or not 1 <= p_max <= 1e6:
+        raise reader.fail((*where, "blocked_max_pressure_pa"), "blocked_max_pressure_pa",
+                          f"{p_max!r}", "a number 1 <= p <= 1e6 (Pa)")
+    variants = {"free": settings,
+                "blocked": replace(settings, tip="blocked", max_pressure_pa=float(p_max))}
+    out = []
+    for pair in pairs:
+        for design in sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"],
+                                     ints["skip"]):
+            for tip in tips:
+                s = variants[tip]
+                out.append(GridPoint(record_key(design, s), design, s))
     return out
 
 

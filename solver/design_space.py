@@ -1,0 +1,225 @@
+"""The design space labs vary: the box the emulator covers, defined once.
+
+Geometry at W = 3 mm (the paper's width), lengths in mm:
+
+    L 4-18, t 0.5-1.2, T 0.6-2.0, b 1.0-2.4, h 0.10-0.30
+
+body length and chamber position by the solver's rules (``Design``), the paper's four
+material pairs (body, membrane), each layer's Ogden mu optionally scaled by
+s in [0.5, 2] (an inline material with mu_kpa = s x the preset's and the preset's alpha).
+
+Two invariances of the quasi-static hyperelastic problem are exact and used:
+
+* scaling every length by k leaves angle(p) unchanged (the equations have no length
+  scale), so a design at any W whose lengths are k x a box design's is in the box;
+* scaling both layers' mu by s scales the pressure axis by s (stress is linear in mu at
+  a fixed deformation), so only the ratio s_body / s_membrane changes the curve's shape:
+  the database holds membranes at s = 1 and bodies at r = s_body / s_membrane in
+  [1/4, 4] (the reduced box, ``REDUCED_RATIO_RANGE``).
+
+Sampling: a scrambled Sobol sequence in the reduced box, lengths and the ratio in log
+coordinates (relative changes matter, and the ratio's range is symmetric in log).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from solver.design import Design
+from solver.errors import InputError
+from solver.materials import MATERIALS, OgdenMaterial, make_material
+
+BOX_WIDTH_MM = 3.0
+BOX_MM: dict[str, tuple[float, float]] = {
+    "L_mm": (4.0, 18.0),
+    "t_mm": (0.5, 1.2),
+    "T_mm": (0.6, 2.0),
+    "b_mm": (1.0, 2.4),
+    "h_mm": (0.10, 0.30),
+}
+GEOMETRY = tuple(BOX_MM)
+PAIRS: tuple[tuple[str, str], ...] = (
+    ("pdms_1_10", "ecoflex_00_30"),
+    ("pdms_1_15", "ecoflex_00_30"),
+    ("ecoflex_00_30", "pdms_1_15"),
+    ("ecoflex_00_30", "ecoflex_00_30"),
+)
+STIFFNESS_SCALE_RANGE = (0.5, 2.0)
+REDUCED_RATIO_RANGE = (STIFFNESS_SCALE_RANGE[0] / STIFFNESS_SCALE_RANGE[1],
+                       STIFFNESS_SCALE_RANGE[1] / STIFFNESS_SCALE_RANGE[0])
+# A material is "preset p scaled by s" when its alpha equal p's and every mu_kpa is s x
+# p's within this relative tolerance (JSON round trips and 4-digit inputs stay inside).
+SCALE_TOLERANCE = 1e-3
+SAMPLED = (*GEOMETRY, "stiffness_ratio")   # coordinates of the reduced box, in order
+
+
+def scaled_material(preset_id: str, scale: float) -> OgdenMaterial:
+    """``preset_id``'s Ogden material with every mu multiplied by ``scale``; its id says
+    so (``pdms_1_10*1.25``), so that its records never pass for the preset's."""
+    base = MATERIALS[preset_id]
+    if scale == 1.0:
+        return base
+    return make_material(f"{preset_id}*{scale:.6g}", [scale * m for m in base.mu_kpa],
+                         list(base.alpha))
+
+
+def recognise(material: OgdenMaterial) -> tuple[str, float] | None:
+    """(preset id, s) when ``material`` is a preset with mu scaled by s (alpha equal,
+    mu ratios equal within SCALE_TOLERANCE); None otherwise."""
+    for preset_id, base in MATERIALS.items():
+        if len(base.alpha) != len(material.alpha):
+            continue
+        if any(abs(a - b) > 1e-9 * max(1.0, abs(b))
+               for a, b in zip(material.alpha, base.alpha)):
+            continue
+        ratios = [m / b for m, b in zip(material.mu_kpa, base.mu_kpa)]
+        s = ratios[0]
+        if s > 0 and all(abs(r / s - 1.0) <= SCALE_TOLERANCE for r in ratios):
+            return preset_id, float(s)
+    return None
+
+
+@dataclass(frozen=True)
+class BoxPoint:
+    """A design expressed in the box's terms.
+
+    pair              (body preset, membrane preset)
+    geometry_mm       L, t, T, b, h scaled to W = 3 mm
+    stiffness_ratio   s_body / s_membrane
+    pressure_scale    s_membrane: the design's pressures are this times the reduced
+                      design's (membrane at its preset)
+    length_scale      W / 3 mm
+    """
+
+    pair: tuple[str, str]
+    geometry_mm: dict[str, float]
+    stiffness_ratio: float
+    pressure_scale: float
+    length_scale: float
+
+    def reduced_design(self) -> Design:
+        """The database design with the same angle(p / pressure_scale)."""
+        body, membrane = self.pair
+        return Design(body_material=scaled_material(body, self.stiffness_ratio),
+                      membrane_material=MATERIALS[membrane], W_mm=BOX_WIDTH_MM,
+                      **self.geometry_mm).validated()
+
+    def coordinates(self) -> np.ndarray:
+        """Unit-cube coordinates (log scale) of the reduced design, in SAMPLED order."""
+        return unit_coordinates(self.geometry_mm, self.stiffness_ratio)
+
+
+def _log_unit(value: float, lo: float, hi: float) -> float:
+    return (math.log(value) - math.log(lo)) / (math.log(hi) - math.log(lo))
+
+
+def unit_coordinates(geometry_mm: dict[str, float], stiffness_ratio: float) -> np.ndarray:
+    """Unit-cube coordinates (0..1 inside the box) on a log scale."""
+    u = [_log_unit(geometry_mm[n], *BOX_MM[n]) for n in GEOMETRY]
+    u.append(_log_unit(stiffness_ratio, *REDUCED_RATIO_RANGE))
+    return np.array(u)
+
+
+def from_unit(u: np.ndarray) -> tuple[dict[str, float], float]:
+    """Inverse of ``unit_coordinates``: (geometry_mm, stiffness_ratio)."""
+    def val(x: float, lo: float, hi: float) -> float:
+        return float(round(math.exp(math.log(lo) + x * (math.log(hi) - math.log(lo))), 6))
+
+    geometry = {n: val(float(u[i]), *BOX_MM[n]) for i, n in enumerate(GEOMETRY)}
+    return geometry, val(float(u[-1]), *REDUCED_RATIO_RANGE)
+
+
+class OutOfBoxError(InputError):
+    """A design outside the box; ``nearest`` is the closest design inside it."""
+
+    def __init__(self, field: str, detail: str, allowed: str, nearest: Design | None):
+        super().__init__(field, detail, allowed)
+        self.nearest = nearest
+
+
+def _preset_and_scale(material: OgdenMaterial, field: str) -> tuple[str, float]:
+    found = recognise(material)
+    if found is None:
+        raise OutOfBoxError(field, f"material {material.id!r} is neither a preset nor a "
+                            "preset with its mu scaled", "one of " + ", ".join(MATERIALS)
+                            + " or one with every mu_kpa scaled by one factor s "
+                            f"(alpha unchanged, tolerance {SCALE_TOLERANCE:g})", None)
+    return found
+
+
+def locate(design: Design) -> BoxPoint:
+    """The design in the box's terms; OutOfBoxError (naming the field, the range and the
+    nearest in-box design) when it is outside."""
+    design = design.validated()
+    body, s_body = _preset_and_scale(design.body_material, "body_material")
+    membrane, s_membrane = _preset_and_scale(design.membrane_material, "membrane_material")
+    k = design.W_mm / BOX_WIDTH_MM
+    geometry = {n: getattr(design, n) / k for n in GEOMETRY}
+    nearest_geometry = {n: min(max(v, BOX_MM[n][0]), BOX_MM[n][1])
+                        for n, v in geometry.items()}
+    lo_s, hi_s = STIFFNESS_SCALE_RANGE
+    near_sb, near_sm = (min(max(s, lo_s), hi_s) for s in (s_body, s_membrane))
+
+    def nearest(pair: tuple[str, str] = (body, membrane)) -> Design:
+        return Design(body_material=scaled_material(pair[0], near_sb),
+                      membrane_material=scaled_material(pair[1], near_sm),
+                      W_mm=BOX_WIDTH_MM, **{n: round(v, 6) for n, v in
+                                            nearest_geometry.items()}).validated()
+
+    if (body, membrane) not in PAIRS:
+        allowed = ", ".join(f"{b}/{m}" for b, m in PAIRS)
+        raise OutOfBoxError("body_material", f"pair {body}/{membrane} is not in the box",
+                            allowed, nearest(PAIRS[0]))
+    for n, v in geometry.items():
+        lo, hi = BOX_MM[n]
+        if not lo * (1 - 1e-9) <= v <= hi * (1 + 1e-9):
+            scaled = "" if k == 1 else f" (scaled to W = 3 mm: {v:.4g} mm)"
+            raise OutOfBoxError(n, f"{n} = {getattr(design, n):g} mm{scaled} is outside "
+                                "the emulator's box",
+                                f"{lo:g} <= {n} <= {hi:g} mm at W = 3 mm (or the same "
+                                "ratios to W)", nearest())
+    for field, s in (("body_material", s_body), ("membrane_material", s_membrane)):
+        if not lo_s * (1 - SCALE_TOLERANCE) <= s <= hi_s * (1 + SCALE_TOLERANCE):
+            raise OutOfBoxError(field, f"stiffness scale {s:.4g} is outside the box",
+                                f"{lo_s:g} <= s <= {hi_s:g} (mu_kpa = s x the preset's)",
+                                nearest())
+    rule = replace(Design(W_mm=BOX_WIDTH_MM, **geometry), body_length_mm=None,
+                   chamber_offset_mm=None).validated()
+    for name in ("body_length_mm", "chamber_offset_mm"):
+        expected = getattr(rule, name) * k
+        if abs(getattr(design, name) - expected) > 1e-6 * max(1.0, expected):
+            raise OutOfBoxError(name, f"{name} = {getattr(design, name):g} mm differs from "
+                                "the solver's rule that the emulator was built with",
+                                f"{name} = {expected:.6g} mm for this design (the rule: body "
+                                "max(12, L + 2) mm at W = 3, chamber centred, scaled with W)",
+                                nearest())
+    return BoxPoint((body, membrane), geometry, s_body / s_membrane, s_membrane, k)
+
+
+def sobol_points(n: int, seed: int = 0, skip: int = 0) -> np.ndarray:
+    """``n`` scrambled Sobol points in the reduced box's unit cube (rows, SAMPLED order),
+    after skipping the first ``skip`` (so that a later call continues the sequence)."""
+    from scipy.stats import qmc
+
+    if not 1 <= n <= 100_000:
+        raise InputError("n", f"got {n}", "1 <= n <= 100000")
+    engine = qmc.Sobol(d=len(SAMPLED), scramble=True, seed=seed)
+    if skip:
+        engine.fast_forward(skip)
+    return engine.random(n)
+
+
+def sample_designs(n: int, pair: tuple[str, str], seed: int = 0, skip: int = 0
+                   ) -> list[Design]:
+    """``n`` space-filling database designs of ``pair`` (membrane at its preset, body at
+    the sampled stiffness ratio)."""
+    out = []
+    for u in sobol_points(n, seed, skip):
+        geometry, ratio = from_unit(u)
+        out.append(Design(body_material=scaled_material(pair[0], ratio),
+                          membrane_material=MATERIALS[pair[1]], W_mm=BOX_WIDTH_MM,
+                          **geometry).validated())
+    return out

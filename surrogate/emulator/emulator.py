@@ -1,0 +1,259 @@
+"""The design-space emulator: FE curves interpolated across the box, with bands.
+
+For each material pair, every free-tip FE curve of the database is a vector of node
+values (``features``: secant stiffness log(p/theta) and secant volume log(V/theta) at
+fixed angles); a PCA + Gaussian-process emulator (``vector_gp``) interpolates that
+vector over the box's unit-cube coordinates (``solver.design_space``). A query
+
+1. maps the design to the reduced box (lengths / (W / 3 mm), body stiffness relative
+   to the membrane's; pressure scale = the membrane's stiffness scale),
+2. predicts the node values and their variance, draws p(theta) through them (a linear
+   spline map), and reads angle(p) off the monotone curve,
+3. gives the band as the horizontal band of the p(theta) curves at +-z sd (scaled by
+   ``band_scale``, calibrated on leave-one-out FE curves), so it is monotone too,
+4. refuses every pressure past the FE's range: the database curves end at the FE's
+   stop (``fe_limit_angle_deg``, 90 deg unless a curve failed earlier) and past it the
+   answer is NaN with the flag ``past_fe_range``.
+
+Force: blocked-tip FE curves, log(|F| / p) at fixed pressures, emulated the same way;
+F scales with the membrane's stiffness scale s (p / s fixed) and with the square of
+the length scale. Volume scales with the cube of the length scale.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from solver.design import Design
+from solver.design_space import PAIRS, BoxPoint, locate
+from solver.errors import InputError
+from surrogate.bands import z_value
+from surrogate.core import InversePrediction, Prediction, _array
+from surrogate.emulator.features import (
+    ANGLE_NODES_DEG,
+    FINE_ANGLES_DEG,
+    FORCE_PRESSURE_NODES_PA,
+    spline_matrix,
+)
+from surrogate.emulator.vector_gp import VectorGP
+
+N_NODES = len(ANGLE_NODES_DEG)
+FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE curve limits
+_B_ANGLE = spline_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
+_FINE_FORCE_PA = np.geomspace(FORCE_PRESSURE_NODES_PA[0], FORCE_PRESSURE_NODES_PA[-1], 200)
+_B_FORCE = spline_matrix(FORCE_PRESSURE_NODES_PA, _FINE_FORCE_PA)
+
+
+@dataclass(frozen=True)
+class PairEmulator:
+    """The emulator of one material pair (body, membrane).
+
+    sign                 +1 bends away from the membrane, -1 towards it (reversed pair)
+    curves               VectorGP of (log p_k/theta_k, log V_k/theta_k), k over nodes
+    band_scale           multiplies the GP sd so that LOO bands cover ``level``
+    fe_limit_angle_deg   the FE's last angle on every database curve of the pair
+    fe_stop_reason       why the FE curves end there
+    force                VectorGP of log(|F_j| / p_j) at FORCE_PRESSURE_NODES_PA, or None
+    force_band_scale     as band_scale, for force
+    coordinates          (n, 6) unit-cube coordinates of the database designs
+    keys                 their record keys (nearest FE curves)
+    """
+
+    pair: tuple[str, str]
+    sign: float
+    curves: VectorGP
+    band_scale: float
+    fe_limit_angle_deg: float
+    fe_stop_reason: str
+    coordinates: np.ndarray
+    keys: tuple[str, ...]
+    force: VectorGP | None = None
+    force_band_scale: float = 1.0
+    force_limit_pa: float = float(FORCE_PRESSURE_NODES_PA[-1])
+    failed: tuple = ()      # (unit coordinates, end angle deg, reason) of curves ended early
+
+
+@dataclass(frozen=True)
+class CurveBand:
+    """p(theta) on FINE_ANGLES_DEG for one design, reduced pressure (membrane at s = 1):
+    mean and the band's lower/upper pressure curves, and V(theta) (ul, reduced)."""
+
+    pressure_pa: np.ndarray
+    pressure_lower_pa: np.ndarray
+    pressure_upper_pa: np.ndarray
+    volume_ul: np.ndarray
+    limit_angle_deg: float
+    stop_reason: str
+
+    @property
+    def limit_pressure_pa(self) -> float:
+        return float(np.interp(self.limit_angle_deg, FINE_ANGLES_DEG, self.pressure_pa))
+
+
+def _monotone(p: np.ndarray) -> np.ndarray:
+    return np.maximum.accumulate(p)
+
+
+def _with_origin(x: np.ndarray) -> np.ndarray:
+    return np.concatenate(([0.0], x))
+
+
+ANGLES0 = _with_origin(FINE_ANGLES_DEG)
+
+
+@dataclass(frozen=True)
+class Emulator:
+    """The default predictor: implements ``surrogate.predictor.Predictor``."""
+
+    name: str
+    pairs: dict[tuple[str, str], PairEmulator]
+    provenance: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
+
+    # -- the curve of one design --------------------------------------------------------
+    def _pair(self, point: BoxPoint) -> PairEmulator:
+        try:
+            return self.pairs[point.pair]
+        except KeyError:
+            raise InputError("body_material", f"the emulator '{self.name}' has no data for "
+                             f"the pair {point.pair[0]}/{point.pair[1]}",
+                             ", ".join(f"{b}/{m}" for b, m in self.pairs)) from None
+
+    def curve_band(self, point: BoxPoint, z: float) -> tuple[PairEmulator, CurveBand]:
+        pe = self._pair(point)
+        mean, var = pe.curves.predict(point.coordinates())
+        sd = np.sqrt(var[:N_NODES]) * pe.band_scale
+        theta = FINE_ANGLES_DEG
+        p = _monotone(theta * np.exp(_B_ANGLE @ mean[:N_NODES]))
+        lo = _monotone(theta * np.exp(_B_ANGLE @ (mean[:N_NODES] - z * sd)))
+        hi = _monotone(theta * np.exp(_B_ANGLE @ (mean[:N_NODES] + z * sd)))
+        v = theta * np.exp(_B_ANGLE @ mean[N_NODES:])
+        limit, reason = pe.fe_limit_angle_deg, pe.fe_stop_reason
+        u = point.coordinates()
+        for fu, angle, why in pe.failed:
+            if np.linalg.norm(np.asarray(fu) - u) < FAILED_RADIUS and angle < limit:
+                limit = float(angle)
+                reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
+        return pe, CurveBand(p, lo, hi, v, limit, reason)
+
+    # -- Predictor -----------------------------------------------------------------------
+    def predict(self, design: Design, pressures_pa: object, level: float = 0.95
+                ) -> Prediction:
+        """Angle (deg) at each chamber pressure (Pa), band at ``level``, force (mN) of the
+        blocked tip, injected volume (ul); NaN past the FE's range (flagged)."""
+        z = z_value(level)
+        p = _array(pressures_pa, "pressures_pa", "Pa")
+        if (p < 0).any():
+            raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
+                             "pressures >= 0 Pa")
+        point = locate(design)
+        pe, cb = self.curve_band(point, z)
+        p_red = p / point.pressure_scale
+        p_lim = cb.limit_pressure_pa
+        past = p_red > p_lim * (1 + 1e-12)
+        p0 = _with_origin(cb.pressure_pa)
+        angle = np.interp(p_red, p0, ANGLES0)
+        upper = np.interp(p_red, _with_origin(cb.pressure_lower_pa), ANGLES0)
+        lower = np.interp(p_red, _with_origin(cb.pressure_upper_pa), ANGLES0)
+        volume = (np.interp(angle, ANGLES0, _with_origin(cb.volume_ul))
+                  * point.length_scale**3)
+        for a in (angle, upper, lower, volume):
+            a[past] = np.nan
+        if pe.sign < 0:
+            angle, lower, upper = -angle, -upper, -lower
+        force = self._force(pe, point, p_red, z)
+        validity = self._validity(pe, cb, point, p, past, force)
+        return Prediction(design=design, pressure_pa=p, angle_deg=angle, lower_deg=lower,
+                          upper_deg=upper, level=level, validity=validity, model=self.name,
+                          form="emulator", provenance=dict(self.provenance),
+                          parameters={"pair": "/".join(point.pair),
+                                      "stiffness_ratio": point.stiffness_ratio,
+                                      "pressure_scale": point.pressure_scale,
+                                      "length_scale": point.length_scale},
+                          force_mn=None if force is None else force[0],
+                          force_lower_mn=None if force is None else force[1],
+                          force_upper_mn=None if force is None else force[2],
+                          volume_ul=volume)
+
+    def _force(self, pe: PairEmulator, point: BoxPoint, p_red: np.ndarray, z: float
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        if pe.force is None:
+            return None
+        mean, var = pe.force.predict(point.coordinates())
+        sd = np.sqrt(var) * pe.force_band_scale
+        scale = point.pressure_scale * point.length_scale**2
+        out = []
+        for y in (mean, mean - z * sd, mean + z * sd):
+            lf = np.interp(np.log(np.maximum(p_red, 1e-300)), np.log(_FINE_FORCE_PA),
+                           _B_FORCE @ y)
+            f = pe.sign * scale * p_red * np.exp(lf)
+            f[p_red > pe.force_limit_pa * (1 + 1e-12)] = np.nan
+            out.append(f)
+        lo, hi = (out[1], out[2]) if pe.sign > 0 else (out[2], out[1])
+        return out[0], lo, hi
+
+    def _validity(self, pe: PairEmulator, cb: CurveBand, point: BoxPoint, p: np.ndarray,
+                  past: np.ndarray, force: object) -> dict[str, object]:
+        flags: list[str] = []
+        messages: list[str] = []
+        fe_limit_pa = cb.limit_pressure_pa * point.pressure_scale
+        if past.any():
+            flags.append("past_fe_range")
+            messages.append(
+                f"{int(past.sum())} pressure(s) above {fe_limit_pa:.0f} Pa are past the FE's "
+                f"range for this design ({cb.stop_reason}; "
+                f"{cb.limit_angle_deg:g} deg): no angle is given there; an FE solve "
+                "(POST /v1/solve) with a larger max_angle_deg can go further")
+        if force is not None:
+            f_lim = pe.force_limit_pa * point.pressure_scale
+            if (p > f_lim * (1 + 1e-12)).any():
+                flags.append("force_past_fe_range")
+                messages.append(f"force is given up to {f_lim:.0f} Pa, the end of the "
+                                "blocked-tip FE curves")
+        return {"in_domain": not past.any(), "flags": flags, "messages": messages,
+                "fe_limit_pa": fe_limit_pa, "fe_limit_angle_deg": cb.limit_angle_deg,
+                "fe_stop_reason": cb.stop_reason}
+
+    def inverse(self, design: Design, angle_deg: object, level: float = 0.95
+                ) -> InversePrediction:
+        """Chamber pressure (Pa) that gives each angle (deg), with a band at ``level``."""
+        z = z_value(level)
+        ang = _array(angle_deg, "angle_deg", "deg")
+        point = locate(design)
+        pe, cb = self.curve_band(point, z)
+        signed = ang * pe.sign
+        if (signed < 0).any():
+            bad = float(ang[signed < 0][0])
+            direction = "positive" if pe.sign > 0 else "negative"
+            raise InputError("angle_deg", f"{bad:g} deg: this design bends the other way",
+                             f"{direction} angles (sign of the pair's bending)")
+        if (signed > cb.limit_angle_deg + 1e-9).any():
+            bad = float(ang[signed > cb.limit_angle_deg + 1e-9][0])
+            raise InputError("angle_deg", f"{bad:g} deg is past the FE's range "
+                             f"({cb.stop_reason})",
+                             f"|angle| <= {cb.limit_angle_deg:g} deg")
+        s = point.pressure_scale
+        p = np.interp(signed, ANGLES0, _with_origin(cb.pressure_pa)) * s
+        lo = np.interp(signed, ANGLES0, _with_origin(cb.pressure_lower_pa)) * s
+        hi = np.interp(signed, ANGLES0, _with_origin(cb.pressure_upper_pa)) * s
+        validity = {"in_domain": True, "flags": [], "messages": [],
+                    "fe_limit_pa": cb.limit_pressure_pa * s,
+                    "fe_limit_angle_deg": cb.limit_angle_deg,
+                    "fe_stop_reason": cb.stop_reason}
+        return InversePrediction(design=design, angle_deg=ang, pressure_pa=p, lower_pa=lo,
+                                 upper_pa=hi, level=level, validity=validity,
+                                 model=self.name, form="emulator",
+                                 provenance=dict(self.provenance))
+
+    def nearest_records(self, design: Design, count: int = 3) -> list[str]:
+        """Keys of the database curves nearest to ``design`` in the unit box."""
+        point = locate(design)
+        pe = self._pair(point)
+        d = np.linalg.norm(pe.coordinates - point.coordinates(), axis=1)
+        return [pe.keys[i] for i in np.argsort(d)[:count]]
+
+
+def pairs_in_box() -> tuple[tuple[str, str], ...]:
+    return PAIRS

@@ -1,0 +1,127 @@
+"""An FE curve as a fixed-length vector, and back.
+
+A free-tip curve is read as chamber pressure and injected volume at fixed bending angles
+(``ANGLE_NODES_DEG``), on its rising branch (angle and pressure both increasing, i.e. up
+to a pressure maximum if there is one). The vector is
+
+    y = (log(p_k / theta_k), log(V_k / theta_k))   k over the nodes reached
+
+(secant stiffness and secant volume per degree: both finite at theta -> 0 and smooth).
+Values between FE points come from monotone cubic (PCHIP) interpolation in
+(log theta, log p) and (log theta, log V), so a power-law stretch of the curve is exact.
+
+A blocked-tip curve is read as force per pressure at fixed pressures
+(``FORCE_PRESSURE_NODES_PA``): y = log(|F_j| / p_j).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline, PchipInterpolator
+
+ANGLE_NODES_DEG = np.array([0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.5, 8.0, 10.0, 12.5, 15.0,
+                            18.0, 21.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 55.0, 60.0,
+                            65.0, 70.0, 75.0, 80.0, 85.0, 90.0])
+FORCE_PRESSURE_NODES_PA = np.array([25.0, 50.0, 100.0, 200.0, 300.0, 400.0, 500.0, 750.0,
+                                    1000.0, 1250.0, 1500.0, 2000.0, 2500.0, 3000.0,
+                                    3500.0, 4000.0, 5000.0, 6000.0])
+FINE_ANGLES_DEG = np.concatenate((np.linspace(0.01, 0.5, 50),
+                                  np.linspace(0.5, 90.0, 359)[1:]))
+
+
+@dataclass(frozen=True)
+class CurveFeatures:
+    """One free-tip FE curve as node values (NaN past the rising branch).
+
+    sign              +1 bends away from the membrane, -1 towards it
+    log_p, log_v      log(p_k / theta_k), log(V_k / theta_k) per node (Pa/deg, ul/deg)
+    end_angle_deg     last angle of the rising branch (|angle|)
+    end_pressure_pa   its pressure
+    """
+
+    sign: float
+    log_p: np.ndarray
+    log_v: np.ndarray
+    end_angle_deg: float
+    end_pressure_pa: float
+
+
+def bending_sign(angle_deg: np.ndarray) -> float:
+    """+1 or -1: the sign of the curve's largest-magnitude angle."""
+    a = np.asarray(angle_deg, float)
+    return 1.0 if a[int(np.argmax(np.abs(a)))] >= 0 else -1.0
+
+
+def rising_branch(pressure_pa: np.ndarray, angle_deg: np.ndarray) -> tuple[int, int]:
+    """(start, stop): the points on which sign x angle is positive and it and the pressure
+    both increase. ``start`` skips a small initial bend the other way (a coarse-mesh
+    artefact near p = 0, docs/verification.md); ``stop`` is a pressure maximum or the
+    curve's end."""
+    a = bending_sign(angle_deg) * np.asarray(angle_deg, float)
+    p = np.asarray(pressure_pa, float)
+    start = 1
+    while start < len(a) and a[start] <= 0:
+        start += 1
+    n = min(start + 1, len(a))
+    while n < len(a) and a[n] > a[n - 1] and p[n] > p[n - 1]:
+        n += 1
+    return start, n
+
+
+def curve_features(pressure_pa: np.ndarray, volume_ul: np.ndarray,
+                   angle_deg: np.ndarray) -> CurveFeatures:
+    """Node values of one curve (see the module docstring)."""
+    p = np.asarray(pressure_pa, float)
+    v = np.asarray(volume_ul, float)
+    a = np.asarray(angle_deg, float)
+    start, n = rising_branch(p, a)
+    sign = bending_sign(a)
+    a_abs, p, v = sign * a[start:n], p[start:n], v[start:n]
+    keep = (a_abs > 1e-6) & (p > 0) & (v > 0)
+    la, lp, lv = np.log(a_abs[keep]), np.log(p[keep]), np.log(v[keep])
+    log_p = np.full(len(ANGLE_NODES_DEG), np.nan)
+    log_v = np.full(len(ANGLE_NODES_DEG), np.nan)
+    if len(la) >= 2:
+        end = float(a_abs[keep][-1])
+        nodes = ANGLE_NODES_DEG <= end + 1e-9
+        ln = np.log(ANGLE_NODES_DEG[nodes])
+        # below the first FE point: the linear regime, p and V proportional to the angle
+        ln_c = np.maximum(ln, la[0])
+        lp_n = PchipInterpolator(la, lp)(ln_c) + np.where(ln < la[0], ln - la[0], 0.0)
+        lv_n = PchipInterpolator(la, lv)(ln_c) + np.where(ln < la[0], ln - la[0], 0.0)
+        log_p[nodes] = lp_n - ln
+        log_v[nodes] = lv_n - ln
+    end_angle, end_pressure = (float(a_abs[-1]), float(p[-1])) if len(a_abs) else (0.0, 0.0)
+    return CurveFeatures(sign, log_p, log_v, end_angle, end_pressure)
+
+
+def force_features(pressure_pa: np.ndarray, force_mn: np.ndarray) -> np.ndarray:
+    """log(|F| / p) at FORCE_PRESSURE_NODES_PA (mN/Pa), NaN beyond the curve's end."""
+    p = np.asarray(pressure_pa, float)
+    f = np.abs(np.asarray(force_mn, float))
+    n = 1
+    while n < len(p) and p[n] > p[n - 1] and np.isfinite(f[n]):
+        n += 1
+    keep = (p[:n] > 0) & (f[:n] > 0)
+    out = np.full(len(FORCE_PRESSURE_NODES_PA), np.nan)
+    if keep.sum() >= 2:
+        lp, lf = np.log(p[:n][keep]), np.log(f[:n][keep])
+        nodes = FORCE_PRESSURE_NODES_PA <= p[:n][keep][-1] * (1 + 1e-9)
+        ln = np.log(FORCE_PRESSURE_NODES_PA[nodes])
+        ln_c = np.maximum(ln, lp[0])
+        lf_n = PchipInterpolator(lp, lf)(ln_c) + np.where(ln < lp[0], ln - lp[0], 0.0)
+        out[nodes] = lf_n - ln
+    return out
+
+
+def spline_matrix(nodes: np.ndarray, fine: np.ndarray) -> np.ndarray:
+    """Matrix B with B @ f(log nodes) = the natural cubic spline through those values,
+    evaluated at log ``fine`` (clamped to the node range): a linear map, so that a
+    predicted curve is one matrix product."""
+    ln = np.log(nodes)
+    lf = np.clip(np.log(fine), ln[0], ln[-1])
+    eye = np.eye(len(nodes))
+    return np.column_stack([CubicSpline(ln, eye[i], bc_type="natural")(lf)
+                            for i in range(len(nodes))])

@@ -1,0 +1,185 @@
+"""Gaussian-process regression with a linear mean (universal kriging), in numpy.
+
+    gp = fit_gp(x, y)                 # x (n, d) in the unit cube, y (n,)
+    mean, var = gp.predict(xq)        # var: of the latent function, basis included
+    r, v = gp.loo()                   # leave-one-out residuals and variances (closed form)
+
+Kernel: Matern 5/2 with one length scale per input (ARD),
+
+    k(x, x') = s2 (1 + sqrt5 r + 5 r^2 / 3) exp(-sqrt5 r),  r^2 = sum ((x - x') / l)^2
+
+plus a nugget g s2 on the diagonal. The mean is h(x)^T beta with h = (1, x) and beta
+integrated out under a flat prior (generalised least squares), so the variance includes
+the mean's uncertainty. Hyperparameters (log l, log s2, log g) maximise the restricted
+(REML) log likelihood, from several starts with L-BFGS-B.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve, solve_triangular
+from scipy.optimize import minimize
+
+SQRT5 = np.sqrt(5.0)
+NUGGET_BOUNDS = (1e-10, 1e-2)        # relative to the signal variance
+LENGTH_BOUNDS = (0.05, 20.0)         # in unit-cube coordinates
+
+
+def matern52(xa: np.ndarray, xb: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Matern 5/2 correlation between rows of xa and xb (unit signal variance)."""
+    d = (xa[:, None, :] - xb[None, :, :]) / lengths
+    r = np.sqrt(np.maximum((d * d).sum(-1), 0.0))
+    return (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * np.exp(-SQRT5 * r)
+
+
+def basis(x: np.ndarray, varying: np.ndarray | None = None) -> np.ndarray:
+    """Mean-function basis h(x) = (1, x_i for the inputs that vary in the training set)."""
+    cols = x if varying is None else x[:, varying]
+    return np.column_stack((np.ones(len(x)), cols))
+
+
+def varying_inputs(x: np.ndarray) -> np.ndarray:
+    """Mask of the inputs that are not constant over the training rows."""
+    return np.ptp(x, axis=0) > 1e-9
+
+
+@dataclass(frozen=True)
+class GaussianProcess:
+    """A fitted GP; arrays are what prediction needs (see the module docstring)."""
+
+    x: np.ndarray            # (n, d) training inputs
+    y: np.ndarray            # (n,) training outputs
+    lengths: np.ndarray      # (d,)
+    signal_var: float
+    nugget: float            # relative to signal_var
+    beta: np.ndarray         # GLS mean coefficients
+    alpha: np.ndarray        # K^-1 (y - H beta), K in units of signal_var
+    chol: np.ndarray         # lower Cholesky factor of K (correlation + nugget)
+    hk_chol: np.ndarray      # lower Cholesky factor of H^T K^-1 H
+    varying: np.ndarray      # inputs in the mean's basis (those that vary in x)
+
+    def predict(self, xq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and variance of the latent function at rows of ``xq``."""
+        xq = np.atleast_2d(xq)
+        kq = matern52(xq, self.x, self.lengths)                   # (m, n)
+        hq = basis(xq, self.varying)
+        mean = hq @ self.beta + kq @ self.alpha
+        v = solve_triangular(self.chol, kq.T, lower=True)         # (n, m)
+        h = basis(self.x, self.varying)
+        w = solve_triangular(self.chol, h, lower=True)            # (n, p)
+        r = hq.T - w.T @ v                                        # (p, m)
+        s = solve_triangular(self.hk_chol, r, lower=True)
+        var = 1.0 - (v * v).sum(0) + (s * s).sum(0)
+        return mean, self.signal_var * np.maximum(var, 0.0)
+
+    def loo(self) -> tuple[np.ndarray, np.ndarray]:
+        """Leave-one-out residuals y_i - mean_{-i}(x_i) and predictive variances (the
+        nugget included), exact for fixed hyperparameters (restricted form)."""
+        n = len(self.y)
+        h = basis(self.x, self.varying)
+        kinv = cho_solve((self.chol, True), np.eye(n))
+        kh = kinv @ h
+        hk = h.T @ kh
+        p = kinv - kh @ np.linalg.solve(hk, kh.T)
+        d = np.diag(p)
+        resid = (p @ self.y) / d
+        return resid, self.signal_var / d
+
+    def as_dict(self) -> dict[str, object]:
+        return {"x": self.x.tolist(), "y": self.y.tolist(), "lengths": self.lengths.tolist(),
+                "signal_var": self.signal_var, "nugget": self.nugget}
+
+
+def _factor(x: np.ndarray, y: np.ndarray, lengths: np.ndarray, nugget: float):
+    n = len(y)
+    k = matern52(x, x, lengths) + nugget * np.eye(n)
+    chol = np.linalg.cholesky(k)
+    h = basis(x, varying_inputs(x))
+    w = solve_triangular(chol, h, lower=True)
+    z = solve_triangular(chol, y, lower=True)
+    hk = w.T @ w
+    hk_chol = np.linalg.cholesky(hk)
+    beta = cho_solve((hk_chol, True), w.T @ z)
+    resid = z - w @ beta
+    return chol, hk_chol, beta, resid
+
+
+def _neg_reml(params: np.ndarray, x: np.ndarray, y: np.ndarray
+              ) -> tuple[float, np.ndarray]:
+    """Negative restricted log likelihood (signal variance profiled out) and its
+    gradient in (log lengths, log nugget): with P = K^-1 - K^-1 H (H^T K^-1 H)^-1 H^T K^-1
+    and a = P y, d(-log L) = 1/2 tr((P - a a^T / s2) dK), s2 = y^T P y / (n - p)."""
+    n, d = x.shape
+    lengths = np.exp(params[:d])
+    nugget = float(np.exp(params[d]))
+    diff2 = ((x[:, None, :] - x[None, :, :]) / lengths) ** 2          # (n, n, d)
+    r = np.sqrt(diff2.sum(-1))
+    e = np.exp(-SQRT5 * r)
+    k = (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * e + nugget * np.eye(n)
+    try:
+        chol = np.linalg.cholesky(k)
+    except np.linalg.LinAlgError:
+        return 1e12, np.zeros_like(params)
+    h = basis(x, varying_inputs(x))
+    p_dim = h.shape[1]
+    kinv = cho_solve((chol, True), np.eye(n))
+    kh = kinv @ h
+    hk = h.T @ kh
+    try:
+        hk_chol = np.linalg.cholesky(hk)
+    except np.linalg.LinAlgError:
+        return 1e12, np.zeros_like(params)
+    pm = kinv - kh @ cho_solve((hk_chol, True), kh.T)
+    a = pm @ y
+    s2 = float(y @ a) / (n - p_dim)
+    if not s2 > 0:
+        return 1e12, np.zeros_like(params)
+    logdet = 2 * np.log(np.diag(chol)).sum() + 2 * np.log(np.diag(hk_chol)).sum()
+    value = 0.5 * ((n - p_dim) * np.log(s2) + logdet)
+    w = pm - np.outer(a, a) / s2
+    dk_dr_over = (5.0 / 3.0) * (1.0 + SQRT5 * r) * e                   # dk/dlog l_j / d_j^2
+    grad = np.empty_like(params)
+    for j in range(d):
+        grad[j] = 0.5 * float((w * (dk_dr_over * diff2[:, :, j])).sum())
+    grad[d] = 0.5 * nugget * float(np.trace(w))
+    return value, grad
+
+
+def from_hyperparameters(x: np.ndarray, y: np.ndarray, lengths: np.ndarray,
+                         nugget: float) -> GaussianProcess:
+    """The GP conditioned on (x, y) for given length scales and nugget (the signal
+    variance profiled out)."""
+    chol, hk_chol, beta, resid = _factor(x, y, lengths, nugget)
+    varying = varying_inputs(x)
+    n, p = len(y), int(varying.sum()) + 1
+    s2 = float(resid @ resid) / max(n - p, 1)
+    alpha = cho_solve((chol, True), y - basis(x, varying) @ beta)
+    return GaussianProcess(x=x, y=y, lengths=lengths, signal_var=s2, nugget=nugget,
+                           beta=beta, alpha=alpha, chol=chol, hk_chol=hk_chol,
+                           varying=varying)
+
+
+def fit_gp(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
+           min_nugget: float = NUGGET_BOUNDS[0]) -> GaussianProcess:
+    """Maximise the restricted likelihood over (log lengths, log nugget)."""
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    n, d = x.shape
+    if n < int(varying_inputs(x).sum()) + 3:
+        raise ValueError(f"{n} training points for {d} inputs: too few")
+    rng = np.random.default_rng(seed)
+    bounds = ([tuple(np.log(LENGTH_BOUNDS))] * d
+              + [(np.log(max(min_nugget, NUGGET_BOUNDS[0])), np.log(NUGGET_BOUNDS[1]))])
+    best = None
+    for i in range(starts):
+        lengths0 = np.full(d, 0.6) if i == 0 else np.exp(rng.uniform(np.log(0.2),
+                                                                      np.log(3.0), d))
+        x0 = np.concatenate((np.log(lengths0), [np.log(max(1e-6, min_nugget))]))
+        res = minimize(_neg_reml, x0, args=(x, y), jac=True, method="L-BFGS-B",
+                       bounds=bounds, options={"maxiter": 300})
+        if best is None or res.fun < best.fun:
+            best = res
+    assert best is not None
+    return from_hyperparameters(x, y, np.exp(best.x[:d]), float(np.exp(best.x[d])))

@@ -1,0 +1,98 @@
+"""A vector-valued emulator: principal components of the outputs, one GP per component.
+
+Rows of Y (n designs x c outputs) are standardised per column, decomposed by SVD, and
+the leading m component scores are each interpolated over the inputs by a GP
+(``surrogate.emulator.gp``). m is the smallest count whose reconstruction error on the
+training rows is below ``tolerance`` (in output units) everywhere; the variance left in
+the dropped components is kept per column and added to the predictive variance.
+
+    vgp = fit_vector_gp(U, Y)
+    mean, var = vgp.predict(u)        # (c,), (c,) for one input row
+    loo_mean, loo_var = vgp.loo()     # (n, c) leave-one-out, per training row
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from surrogate.emulator.gp import GaussianProcess, fit_gp, from_hyperparameters
+
+MAX_COMPONENTS = 12
+
+
+@dataclass(frozen=True)
+class VectorGP:
+    center: np.ndarray          # (c,) column means
+    scale: np.ndarray           # (c,) column standard deviations (1 where constant)
+    components: np.ndarray      # (m, c) orthonormal rows, standardised units
+    gps: tuple[GaussianProcess, ...]
+    residual_var: np.ndarray    # (c,) variance of the dropped components, output units
+
+    def predict(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and variance of every output at one input row ``u``."""
+        u = np.atleast_2d(u)
+        means = np.empty(len(self.gps))
+        variances = np.empty(len(self.gps))
+        for j, gp in enumerate(self.gps):
+            m, v = gp.predict(u)
+            means[j], variances[j] = m[0], v[0]
+        mean = self.center + self.scale * (means @ self.components)
+        var = self.scale**2 * (variances @ self.components**2) + self.residual_var
+        return mean, var
+
+    def loo(self) -> tuple[np.ndarray, np.ndarray]:
+        """Leave-one-out mean and variance of every output at every training row."""
+        n = len(self.gps[0].y)
+        scores = np.empty((n, len(self.gps)))
+        variances = np.empty((n, len(self.gps)))
+        for j, gp in enumerate(self.gps):
+            r, v = gp.loo()
+            scores[:, j] = gp.y - r
+            variances[:, j] = v
+        mean = self.center + self.scale * (scores @ self.components)
+        var = self.scale**2 * (variances @ self.components**2) + self.residual_var
+        return mean, var
+
+    def as_dict(self) -> dict[str, object]:
+        return {"center": self.center.tolist(), "scale": self.scale.tolist(),
+                "components": self.components.tolist(),
+                "residual_var": self.residual_var.tolist(),
+                "gps": [gp.as_dict() for gp in self.gps]}
+
+
+def vector_gp_from_dict(d: dict) -> VectorGP:
+    """Rebuild from ``as_dict`` (the factorisations are recomputed, not stored)."""
+    gps = tuple(from_hyperparameters(np.array(g["x"], float), np.array(g["y"], float),
+                                     np.array(g["lengths"], float), float(g["nugget"]))
+                for g in d["gps"])
+    return VectorGP(np.array(d["center"], float), np.array(d["scale"], float),
+                    np.array(d["components"], float), gps,
+                    np.array(d["residual_var"], float))
+
+
+def fit_vector_gp(u: np.ndarray, y: np.ndarray, tolerance: float = 1e-3,
+                  seed: int = 0) -> VectorGP:
+    """Fit to inputs ``u`` (n, d) and complete outputs ``y`` (n, c)."""
+    u = np.asarray(u, float)
+    y = np.asarray(y, float)
+    if not np.isfinite(y).all():
+        raise ValueError("outputs must be complete (no NaN)")
+    center = y.mean(0)
+    scale = y.std(0)
+    scale = np.where(scale > 1e-12, scale, 1.0)
+    z = (y - center) / scale
+    _, sv, vt = np.linalg.svd(z, full_matrices=False)
+    m = 1
+    while m < min(MAX_COMPONENTS, len(sv)):
+        recon = (z @ vt[:m].T) @ vt[:m]
+        if np.max(np.abs(recon - z) * scale) < tolerance:
+            break
+        m += 1
+    comps = vt[:m]
+    scores = z @ comps.T
+    recon = scores @ comps
+    residual_var = ((z - recon) * scale).var(0) + ((z - recon) * scale).mean(0) ** 2
+    gps = tuple(fit_gp(u, scores[:, j], seed=seed + j) for j in range(m))
+    return VectorGP(center, scale, comps, gps, residual_var)
