@@ -123,6 +123,7 @@ def measure(lab: Lab, truth: Truth = Truth()) -> list[dict]:
                     peak = max(float(np.max(np.abs(static))), 1e-9)
                     angle = angle + (d < 0) * truth.hysteresis_deg * np.sin(
                         np.pi * np.clip(np.abs(static) / peak, 0, 1))
+                p_noise = 0.0 if lab.extra.get("exact") else PRESSURE_NOISE_PA
                 gauge = truth.k_pressure * (p_ch + truth.R_pa_per_ul_s * q * d) + truth.p0_pa
                 read = truth.k_angle * angle + truth.offset_deg
                 idx = np.searchsorted(tt, reads - 1e-9)
@@ -131,7 +132,7 @@ def measure(lab: Lab, truth: Truth = Truth()) -> list[dict]:
                         "curve_id": f"L{L:g}-t{t_mm:g}-q{q:g}-s{s + 1}",
                         "L_mm": L, "t_mm": t_mm, "body_material": lab.materials[0],
                         "membrane_material": lab.materials[1],
-                        "pressure_pa": round(float(gauge[i] + PRESSURE_NOISE_PA
+                        "pressure_pa": round(float(gauge[i] + p_noise
                                                    * rng.standard_normal()), 1),
                         "angle_deg": round(float(read[i] + lab.noise_deg
                                                  * rng.standard_normal()), 2),
@@ -140,18 +141,55 @@ def measure(lab: Lab, truth: Truth = Truth()) -> list[dict]:
 
 
 def true_floor(lab: Lab, truth: Truth = Truth(), seeds: int = 1) -> float:
-    """RMS of (reading - the design's mean reading at that instant) over specimens and
-    noise: the scatter the noise floor must find (Monte Carlo, noise-free mean curve)."""
+    """RMS of (reading - the design's mean angle at the reading's pressure, in the same
+    segment of the protocol; at the same time for a hold) over specimens and noise: the
+    scatter the noise floor must find. The mean is the noise- and scatter-free reading
+    on the 1 ms grid."""
     clean = Lab(**{**lab.__dict__, "specimen_sd": 0.0, "noise_deg": 0.0, "specimens": 1})
-    ref = {(r["L_mm"], r["t_mm"], r["flow_ul_s"], r["time_s"]): r["angle_deg"]
-           for r in measure(clean, truth)}
+    ref = {}
+    for L, t_mm in lab.designs:
+        c = truth_curve(L, t_mm, lab.materials, truth)
+        for q in lab.flows_ul_s:
+            ref[(L, t_mm, q)] = _reference(clean, c, truth, q)
     sq, n = 0.0, 0
     for s in range(seeds):
-        for r in measure(Lab(**{**lab.__dict__, "seed": lab.seed + 100 + s}), truth):
-            sq += (r["angle_deg"] - ref[(r["L_mm"], r["t_mm"], r["flow_ul_s"],
-                                         r["time_s"])]) ** 2
+        for r in measure(Lab(**{**lab.__dict__, "seed": lab.seed + s}), truth):
+            tt, p, a, seg, kind, slope = ref[(r["L_mm"], r["t_mm"], r["flow_ul_s"])]
+            k = int(seg[np.searchsorted(tt, r["time_s"] - 1e-9)])
+            m = seg == k
+            if kind[k] == "hold":  # at this time, moved to this pressure along the FE curve
+                p_here = np.interp(r["time_s"], tt[m], p[m])
+                expected = (np.interp(r["time_s"], tt[m], a[m])
+                            + slope(p_here) * (r["pressure_pa"] - p_here))
+            else:
+                o = np.argsort(p[m])
+                expected = np.interp(r["pressure_pa"], p[m][o], a[m][o])
+            sq += (r["angle_deg"] - expected) ** 2
             n += 1
     return float(np.sqrt(sq / n))
+
+
+def _reference(clean: Lab, c, truth: Truth, q: float):
+    """Noise-free gauge pressure and read angle on the pump's 1 ms grid, with the
+    protocol segment of each instant."""
+    rows = measure(Lab(**{**clean.__dict__, "read_s": 1e-3, "flows_ul_s": (q,),
+                          "designs": ((c.case.L_mm - truth.dL_mm, c.case.t_mm - truth.dt_mm),),
+                          "extra": {"exact": True}}), truth)
+    tt = np.array([r["time_s"] for r in rows])
+    p = np.array([r["pressure_pa"] for r in rows])
+    a = np.array([r["angle_deg"] for r in rows])
+    bounds = np.cumsum([d for _, d in clean.protocol])
+    seg = np.searchsorted(bounds, tt - 1e-9)
+    kind = [k for k, _ in clean.protocol]
+    order = np.argsort(c.pressure_pa)
+    pc, ac = c.pressure_pa[order], c.angle_deg[order]
+
+    def slope(x: float) -> float:  # d angle / d p of the FE curve (read angle per Pa)
+        h = 5.0
+        return truth.k_angle * float(np.interp(x + h, pc, ac) - np.interp(x - h, pc, ac)) / (
+            2 * h * truth.k_pressure)
+
+    return tt, p, a, seg, kind, slope
 
 
 class FEStandIn:
@@ -168,13 +206,10 @@ class FEStandIn:
 
     @staticmethod
     def _axes(design) -> tuple[tuple[str, str], dict[str, float]]:
-        from solver.materials import get_material
+        from solver.design_space import recognise
 
-        b, m = design.body_material, design.membrane_material
-        return (b.id, m.id), {
-            "membrane": m.mu_kpa[-1] / get_material(m.id).mu_kpa[-1],
-            "body": b.mu_kpa[-1] / get_material(b.id).mu_kpa[-1],
-            "t": design.t_mm, "L": design.L_mm}
+        (b, sb), (m, sm) = recognise(design.body_material), recognise(design.membrane_material)
+        return (b, m), {"membrane": sm, "body": sb, "t": design.t_mm, "L": design.L_mm}
 
     def _angle(self, case: fe.CaseSpec, p: np.ndarray) -> np.ndarray | None:
         c = self.curves.get(case.key)

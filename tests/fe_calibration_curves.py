@@ -65,18 +65,9 @@ def cases() -> list[CaseSpec]:
     return list(dict.fromkeys(out))
 
 
-def scaled_material(material_id: str, scale: float):
-    """The preset with every mu_p x ``scale`` (same alpha): a stiffer or softer batch."""
-    from solver.materials import OgdenMaterial, get_material
-
-    m = get_material(material_id)
-    if scale == 1.0:
-        return m
-    return OgdenMaterial(m.id, tuple(scale * v for v in m.mu_kpa), m.alpha)
-
-
 def design_of(case: CaseSpec):
     from solver.design import Design
+    from solver.design_space import scaled_material
 
     return Design(L_mm=case.L_mm, t_mm=case.t_mm,
                   body_material=scaled_material(case.body, case.body_mu_scale),

@@ -1,21 +1,21 @@
-"""The noise floor: how far a new specimen scatters around its design's mean curve, at the
-same point of its loading history.
+"""The noise floor: how far a new specimen scatters around its design's mean, in the
+model's terms (angle at the measured pressure), at the same point of its loading history.
 
-Replicates (curves of one design at one flow rate) are compared where they are in the same
-state: at the same time since the pump started (``time_s``; the other curves interpolated
-linearly in time, within their range), or without ``time_s`` at the same reading number.
-So a loading/unloading loop, a hold with creep or a flow-rate effect is not counted as
-scatter: replicates share it. Each reading y of curve c is compared with the mean of the
-k other replicates there; for independent specimens E[(y - mean_others)^2] =
-sigma^2 (1 + 1/k), so
+Replicates (curves of one design at one flow rate, taken with one protocol) are compared
+in the same state: each curve is cut into segments of one direction (loading, hold,
+unloading: _history.py), and a reading in the k-th segment is compared with the other
+replicates' k-th segment -- at the same pressure (their angle interpolated linearly in
+pressure within the segment's range) for loading and unloading, at the same time since
+the segment began for a hold. So a loading/unloading loop, creep during a hold or a
+flow-rate effect is not counted as scatter (replicates share it), while the specimen's
+own pressure-angle scatter is, as the model's cross-validated error counts it. For
+independent specimens E[(y - mean_others)^2] = sigma^2 (1 + 1/k), k the number of others:
 
     floor^2 = sum (y - mean_others)^2 / (1 + 1/k) / N
 
-counts both reading noise and specimen-to-specimen scatter in full: the error a perfect
-model of the design's mean makes on a specimen it has not seen, which is what the
-cross-validation by curve measures. Without replicates, the within-curve scatter from
-second differences along time (reading noise only: an underestimate, ``source``
-"within-curve").
+the error a perfect model of the design's mean makes on a specimen it has not seen.
+Without replicates: second differences along each curve (reading noise only, an
+underestimate, ``source`` "within-curve").
 """
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate.calibration._data import Observations
+
+MIN_READINGS = 4
 
 
 @dataclass(frozen=True)
@@ -39,6 +41,55 @@ def _history(obs: Observations, rows: np.ndarray) -> np.ndarray:
     return obs.time_s[rows] if obs.has_time else np.arange(rows.size, dtype=float)
 
 
+def segments(direction: np.ndarray) -> np.ndarray:
+    """Run index of each reading along one curve (a new run where the direction changes)."""
+    return np.concatenate([[0], np.cumsum(direction[1:] != direction[:-1])]).astype(int)
+
+
+EXTRAPOLATE_FRACTION = 0.15
+
+
+def _other_at(obs: Observations, rows: np.ndarray, seg: np.ndarray, d: float, k: int,
+              p: np.ndarray, t_rel: np.ndarray) -> np.ndarray:
+    """The other curve's angle in its segment ``k`` at pressures ``p``; NaN when its
+    segment differs. Loading/unloading: linear in pressure, extended with the end slopes
+    up to EXTRAPOLATE_FRACTION of the segment's span. Hold: its angle at the same time
+    since the hold began, moved to pressure ``p`` with the slope d angle/d p at the end
+    of its previous segment (a specimen that holds at a higher pressure holds at a
+    larger angle)."""
+    m = seg == k
+    nan = np.full(p.size, np.nan)
+    if not np.any(m) or obs.direction[rows[m]][0] != d:
+        return nan
+    r = rows[m]
+    if d == 0:
+        t = _history(obs, rows)[m]
+        y = np.interp(t_rel, t - t[0], obs.angle_deg[r], right=np.nan)
+        if t.size < 2:
+            y = np.full(p.size, obs.angle_deg[r][0])
+        prev = rows[seg == k - 1]
+        slope = _end_slope(obs, prev[-2:]) if prev.size >= 2 else 0.0
+        return y + slope * (p - np.mean(obs.pressure_pa[r]))
+    x, y = obs.pressure_pa[r], obs.angle_deg[r]
+    order = np.argsort(x)
+    x, y = x[order], y[order]
+    if x.size < 2 or x[-1] - x[0] <= 0:
+        return nan
+    out = np.interp(p, x, y)
+    lo_slope = (y[1] - y[0]) / max(x[1] - x[0], 1e-9)
+    hi_slope = (y[-1] - y[-2]) / max(x[-1] - x[-2], 1e-9)
+    out = np.where(p < x[0], y[0] + lo_slope * (p - x[0]), out)
+    out = np.where(p > x[-1], y[-1] + hi_slope * (p - x[-1]), out)
+    reach = EXTRAPOLATE_FRACTION * (x[-1] - x[0])
+    return np.where((p >= x[0] - reach) & (p <= x[-1] + reach), out, np.nan)
+
+
+def _end_slope(obs: Observations, rows: np.ndarray) -> float:
+    dp = obs.pressure_pa[rows[1]] - obs.pressure_pa[rows[0]]
+    return float((obs.angle_deg[rows[1]] - obs.angle_deg[rows[0]]) / dp) if abs(dp) > 1e-9 \
+        else 0.0
+
+
 def noise_floor(obs: Observations) -> NoiseFloor:
     sq, n_used, groups = 0.0, 0, 0
     for g in np.unique(obs.group):
@@ -46,28 +97,29 @@ def noise_floor(obs: Observations) -> NoiseFloor:
         if curves.size < 2:
             continue
         rows_of = {int(c): np.flatnonzero(obs.curve == c) for c in curves}
+        seg_of = {c: segments(obs.direction[r]) for c, r in rows_of.items()}
         used_here = 0
         for c, rows in rows_of.items():
+            seg = seg_of[c]
             t = _history(obs, rows)
-            others = []
-            for c2, rows2 in rows_of.items():
-                if c2 == c:
+            for k in np.unique(seg):
+                m = seg == k
+                d = obs.direction[rows[m]][0]
+                p = obs.pressure_pa[rows[m]]
+                t_rel = t[m] - t[m][0]
+                o = np.array([_other_at(obs, rows2, seg_of[c2], d, k, p, t_rel)
+                              for c2, rows2 in rows_of.items() if c2 != c])
+                n_others = np.sum(np.isfinite(o), axis=0)
+                ok = n_others >= 1
+                if not np.any(ok):
                     continue
-                t2 = _history(obs, rows2)
-                y2 = np.interp(t, t2, obs.angle_deg[rows2], left=np.nan, right=np.nan)
-                others.append(y2)
-            o = np.array(others)
-            k = np.sum(np.isfinite(o), axis=0)
-            ok = k >= 1
-            if not np.any(ok):
-                continue
-            mean = np.nanmean(o[:, ok], axis=0)
-            d = obs.angle_deg[rows][ok] - mean
-            sq += float(np.sum(d**2 / (1.0 + 1.0 / k[ok])))
-            n_used += int(ok.sum())
-            used_here += 1
+                mean = np.nanmean(o[:, ok], axis=0)
+                diff = obs.angle_deg[rows[m]][ok] - mean
+                sq += float(np.sum(diff**2 / (1.0 + 1.0 / n_others[ok])))
+                n_used += int(ok.sum())
+                used_here += 1
         groups += used_here > 0
-    if n_used >= 4:
+    if n_used >= MIN_READINGS:
         return NoiseFloor(float(np.sqrt(sq / n_used)), n_used, "replicates", groups)
     return _within_curve(obs)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from surrogate.calibration.effects._base import Effect, EffectParameter
-from surrogate.calibration.effects._materials import scaled_material
+from surrogate.calibration.effects._materials import scale_layer
 
 
 class BodyStiffness(Effect):
@@ -21,7 +21,7 @@ class BodyStiffness(Effect):
                    "mostly the pressure scale of the bend, through the FE.")
 
     def design(self, design, value):
-        return replace(design, body_material=scaled_material(design.body_material, value))
+        return replace(design, body_material=scale_layer(design.body_material, value))
 
     def interpret(self, params, data):
         v = params["body_mu_scale"]

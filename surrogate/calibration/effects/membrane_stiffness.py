@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from surrogate.calibration.effects._base import Effect, EffectParameter
-from surrogate.calibration.effects._materials import scaled_material
+from surrogate.calibration.effects._materials import scale_layer
 
 
 class MembraneStiffness(Effect):
@@ -22,7 +22,7 @@ class MembraneStiffness(Effect):
                    "amplitude of the curve.")
 
     def design(self, design, value):
-        return replace(design, membrane_material=scaled_material(design.membrane_material,
+        return replace(design, membrane_material=scale_layer(design.membrane_material,
                                                                  value))
 
     def interpret(self, params, data):
