@@ -33,6 +33,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="where --save writes (default: the service's models_dir)")
     parser.add_argument("--folds", type=int, default=5,
                         help="folds of the grouped cross-validation by curve (default 5)")
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse data that only get a warning otherwise (pressures that "
+                             "look like kPa, duplicated rows)")
     parser.set_defaults(func=run)
 
 
@@ -62,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
 
     if not 2 <= args.folds <= 50:
         raise InputError("--folds", f"got {args.folds}", "2 <= folds <= 50")
-    obs = load_observations(args.data)  # validates everything before any work
+    obs = load_observations(args.data, strict=args.strict)  # validates before any work
     if args.save:
         from surrogate.calibration._saved import _check_name
 
@@ -71,6 +74,10 @@ def run(args: argparse.Namespace) -> int:
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
     report = jsonable(cal.report)
+    if args.save:
+        from surrogate.calibration import saveable
+
+        saveable(cal)
     args.report.parent.mkdir(parents=True, exist_ok=True)
     args.report.write_text(json.dumps(report, indent=1) + "\n")
     if args.plot:
@@ -82,9 +89,15 @@ def run(args: argparse.Namespace) -> int:
             args.models_dir = get_settings().models_dir
         path = save_model(cal, args.save, args.models_dir)
         print(f"saved model {args.save!r} to {path}", file=sys.stderr)
-    print(f"rmse model {report['rmse_model_deg']:.2f} deg, before {report['rmse_before_deg']:.2f}"
-          f", after {report['rmse_after_deg']:.2f} (noise floor {report['noise_floor_deg']:.2f})"
-          f"; selected: {', '.join(report['selected_effects']) or 'none'}"
+    def deg(x: float | None) -> str:
+        return "n/a" if x is None else f"{x:.2f}"
+
+    for w in report["warnings"]:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"rmse model {deg(report['rmse_model_deg'])} deg, before "
+          f"{deg(report['rmse_before_deg'])}, after {deg(report['rmse_after_deg'])} (noise "
+          f"floor {deg(report['noise_floor_deg'])}); selected: "
+          f"{', '.join(report['selected_effects']) or 'none'}"
           f"{'; RESIDUAL STRUCTURE REMAINS' if report['residual_structured_after'] else ''}")
     print(report["interpretation"])
     return 0

@@ -42,6 +42,8 @@ class CalibrateRequest(BaseModel):
                                          "(needs X-API-Key; a new name, not fitted or paper)")
     folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve "
                        "(reduced to the number of curves when there are fewer)")
+    strict: bool = Field(False, description="refuse data that otherwise only get a warning "
+                         "(pressures that look like kPa, duplicated rows)")
 
 
 class Candidate(BaseModel):
@@ -92,12 +94,13 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
         observations_from_rows,
         run_calibration,
         save_model,
+        saveable,
     )
 
     if request.save is not None:
         require_api_key(settings, key)
     try:  # the data's errors: the loader's, then the loop's (e.g. fewer than 2 curves)
-        obs = observations_from_rows(request.rows)
+        obs = observations_from_rows(request.rows, strict=request.strict)
         start = "paper" if request.model == "paper" else models.get(request.model)
         cal = run_calibration(obs, start, folds=request.folds)
     except DataError as exc:
@@ -108,7 +111,8 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
     report = jsonable(cal.report)
     report["model"]["name"] = request.model
     if request.save is not None:
-        try:  # a reserved or already used name
+        try:  # a reserved or already used name, or a calibration the format cannot hold
+            saveable(cal)
             save_model(cal, request.save, settings.models_dir)
         except InputError as exc:
             raise located(exc, ("body",), {"name": ("save",)}) from None

@@ -29,3 +29,24 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+# Effects a saved model (_saved.py: the exponential model's quasi-static form) carries.
+SAVEABLE_EFFECTS = ("pressure_offset", "hydraulic_resistance", "angle_offset",
+                    "membrane_thickness", "viscoelastic_creep")
+
+
+def saveable(cal: Calibration) -> None:
+    """Raise InputError (field ``save``) when the saved-model format cannot hold this
+    calibration: it stores per-family exponential constants, so a design-space baseline
+    or an effect outside SAVEABLE_EFFECTS would be saved wrongly."""
+    from solver.errors import InputError
+
+    if "families" not in cal.report["fitted"]:
+        raise InputError("save", f"a calibration against {cal.baseline.name!r} cannot be "
+                         "saved yet (saved models hold per-family exponential constants)",
+                         "--model paper, fitted or a surrogate file, to save")
+    other = [e for e in cal.report["selected_effects"] if e not in SAVEABLE_EFFECTS]
+    if other:
+        raise InputError("save", f"effect {other[0]} cannot be saved in a calibrated model "
+                         "yet", "calibrations selecting only " + ", ".join(SAVEABLE_EFFECTS))

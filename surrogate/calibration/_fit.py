@@ -49,7 +49,9 @@ class FitResult:
     def rms_deg(self) -> float:
         return float(np.sqrt(self.sse / self.n))
 
+    @property
     def values(self) -> dict[str, float]:
+        """The effects' parameters by name (physical units)."""
         return self.model.values(self.x)
 
     def sd(self) -> dict[str, float]:

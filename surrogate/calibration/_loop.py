@@ -189,7 +189,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "not_identifiable": not_identifiable,
         "confounded": [{"effects": [c["effect"]], "reason": c["reason"]}
                        for c in not_identifiable if "exactly" in c["reason"]],
-        "fitted": {"open": _open_table(obs, base, after), "effects": _params(after)},
+        "fitted": {"open": _open_table(obs, base, after), "effects": _params(after),
+                   **_family_constants(obs, baseline, base, after)},
         "residual_structured_after": left["structured"],
         "unexplained_rms_deg": left["unexplained_rms_deg"],
         "unexplained_where": left["where"],
@@ -205,23 +206,32 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
 def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                  warnings: list[str]) -> Observations:
-    """Refuse a design the baseline cannot answer; drop (with a warning) readings past
-    the end of its range (the FE stopped there: no number to compare with)."""
-    curves = responses.curves((), [])
-    di = np.array([responses.index[design_key(obs.design(int(c)))] for c in obs.curve])
-    pred = responses.lookup(curves, di, np.clip(obs.pressure_pa, 0.0, None))
-    bad_design = [i for i in range(len(responses.keys)) if not np.any(np.isfinite(curves[i]))]
-    if bad_design:
-        d = responses.designs[responses.keys[bad_design[0]]]
+    """Refuse a design the baseline cannot answer and pressures where it overflows; drop
+    (with a warning) readings past the end of its range (the FE stopped there: no number
+    to compare with)."""
+    pred = np.empty(obs.n)
+    for c in range(obs.n_curves):
+        rows = np.flatnonzero(obs.curve == c)
+        d = obs.design(c)
         try:
-            baseline.predictor.predict(d, [0.0, 100.0])
-            why = "no finite angle at any pressure"
+            out = baseline.predictor.predict(d, np.clip(obs.pressure_pa[rows], 0.0, None))
         except InputError as exc:
-            why = str(exc)
-        raise DataError("model", f"the baseline {baseline.name!r} has no answer for the "
-                        f"design L_mm = {d.L_mm:g}, t_mm = {d.t_mm:g}, "
-                        f"{d.body_material.id}/{d.membrane_material.id}: {why}", None,
-                        "a model covering every design of the data (--model)")
+            raise InputError("model", f"the baseline {baseline.name!r} has no answer for "
+                             f"curve {obs.curve_ids[c]!r} (L_mm = {d.L_mm:g}, t_mm = "
+                             f"{d.t_mm:g}, {d.body_material.id}/{d.membrane_material.id}): "
+                             f"{exc}", "a model covering every design of the data "
+                             "(--model)") from None
+        pred[rows] = np.asarray(out.angle_deg, dtype=float)
+    inf = np.isinf(pred)
+    if np.any(inf):
+        i = int(np.flatnonzero(inf)[np.argmin(obs.pressure_pa[inf])])
+        c = int(obs.curve[i])
+        p_ok = np.abs(obs.pressure_pa[~inf & (obs.curve == c)])
+        raise DataError("pressure_pa", f"curve {obs.curve_ids[c]!r}: the baseline "
+                        f"{baseline.name!r} has no finite angle at {obs.pressure_pa[i]:g} Pa "
+                        "(its exponential overflows)", None,
+                        "pressures where the baseline is finite"
+                        + (f" (up to {p_ok.max():.0f} Pa in this curve)" if p_ok.size else ""))
     ok = np.isfinite(pred)
     if not np.all(ok):
         warnings.append(f"pressure_pa: {int((~ok).sum())} readings lie past the end of the "
@@ -229,6 +239,11 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                         "not used")
         keep_curves = [c for c in range(obs.n_curves) if np.sum(ok[obs.curve == c]) >= 4]
         obs = obs.rows(ok & np.isin(obs.curve, keep_curves))
+        if obs.n_curves < MIN_CURVES:
+            raise DataError("pressure_pa", f"only {obs.n_curves} curve keeps 4 readings "
+                            "within the baseline's range (the FE's converged range)", None,
+                            "at least 2 curves with 4 readings each below the end of the "
+                            "FE's range")
     return obs
 
 
@@ -250,7 +265,7 @@ def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
 
 def _params(f: FitResult) -> dict[str, dict]:
     out = {}
-    values, sd = f.values(), f.sd()
+    values, sd = f.values, f.sd()
     for e in f.model.effects:
         for p in e.parameters:
             v = values[p.name]
@@ -266,7 +281,7 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float) -> dic
     cv, _ = get_cv(effects)
     params = _params(f)
     plausible = all(p["plausible"] for p in params.values())
-    values, sd = f.values(), f.sd()
+    values, sd = f.values, f.sd()
     z = {}
     for eid in effects:
         for p in EFFECTS[eid].parameters:
@@ -321,6 +336,35 @@ def _open_table(obs: Observations, base: FitResult, after: FitResult) -> list[di
             out.append({"fit": name, "parameter": n[4:n.index("[")], "family":
                         "/".join(map(str, fam[:2])), "scale": float(np.exp(v)),
                         "sd_log": _num(s)})
+    return out
+
+
+def _family_constants(obs: Observations, baseline: Baseline, base: FitResult,
+                      after: FitResult) -> dict:
+    """For a per-family exponential baseline, the refitted constants: a' = k_A a and
+    a_t' = k_p a_t (angle k_A f(p / k_p) is the model with tau x k_p), b_t and c as they
+    were ("families", after; "baseline_before", before). Empty for other baselines."""
+    fp = getattr(baseline.predictor, "family_parameters", None)
+    if not baseline.open_parameters or not callable(fp):
+        return {}
+    out = {}
+    for key, f in (("families", after), ("baseline_before", base)):
+        k_a, k_p = f.model._scales(f.x)
+        rows = []
+        for i, fam in enumerate(obs.families):
+            here = np.flatnonzero(obs.family == i)
+            if not here.size:
+                continue
+            c = int(obs.curve[here[0]])
+            par = fp(obs.design(c))
+            rows.append({"body_material": fam[0], "membrane_material": fam[1],
+                         "T_mm": fam[2], "b_mm": fam[3], "h_mm": fam[4],
+                         "a_deg_per_mm": float(par["a_deg_per_mm"]) * float(k_a[here[0]]),
+                         "a_t_pa": float(par["a_t_pa"]) * float(k_p[here[0]]),
+                         "b_t_per_mm": float(par["b_t_per_mm"]),
+                         "c": float(par.get("c", 0.0) or 0.0),
+                         "tau_form": "tau_pa = a_t_pa * log10(b_t_per_mm * t_mm)"})
+        out[key] = rows
     return out
 
 

@@ -14,8 +14,9 @@ independent specimens E[(y - mean_others)^2] = sigma^2 (1 + 1/k), k the number o
     floor^2 = sum (y - mean_others)^2 / (1 + 1/k) / N
 
 the error a perfect model of the design's mean makes on a specimen it has not seen.
-Without replicates: second differences along each curve (reading noise only, an
-underestimate, ``source`` "within-curve").
+Without replicates: second differences along each curve of at least 8 readings (reading
+noise only, no specimen scatter; the curvature between sparse readings adds to it:
+``source`` "within-curve", a rough figure).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import numpy as np
 from surrogate.calibration._data import Observations
 
 MIN_READINGS = 4
+WITHIN_CURVE_MIN_POINTS = 8  # sparser curves: second differences measure curvature
 
 
 @dataclass(frozen=True)
@@ -130,7 +132,7 @@ def _within_curve(obs: Observations) -> NoiseFloor:
     sq, n = 0.0, 0
     for c in range(obs.n_curves):
         rows = np.flatnonzero(obs.curve == c)
-        if rows.size < 3:
+        if rows.size < WITHIN_CURVE_MIN_POINTS:
             continue
         t = _history(obs, rows)
         y = obs.angle_deg[rows]
