@@ -250,24 +250,36 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
     """Drop exact duplicate rows and flag kPa-looking pressures: warnings, or DataError
     when ``strict``."""
     warnings: list[tuple[str, str, int | None]] = []
-    seen: dict[str, int] = {}
-    kept, copies = [], {}
+    keys = [json.dumps(rec, sort_keys=True, default=str) for rec in parsed]
+    rows_of: dict[str, list[int]] = {}
     for i, rec in enumerate(parsed):
-        key = json.dumps(rec, sort_keys=True, default=str)
-        if key in seen:
-            copies[seen[key]] = copies.get(seen[key], 1) + 1
+        rows_of.setdefault(str(rec["curve_id"]), []).append(i)
+    drop: set[int] = set()
+    factors: dict[str, int] = {}
+    for cid, idx in rows_of.items():
+        if "time_s" in present:  # the same reading at the same time: a copy
+            seen: set[str] = set()
+            for i in idx:
+                if keys[i] in seen:
+                    drop.add(i)
+                seen.add(keys[i])
+            if len(seen) < len(idx):
+                factors[cid] = round(len(idx) / len(seen))
             continue
-        seen[key] = i
-        kept.append(rec)
-    if copies:
-        factor = max(copies.values())
-        first = min(copies)
-        curves = sorted({str(parsed[i]["curve_id"]) for i in copies})
-        warnings.append(("rows", f"{sum(copies.values()) - len(copies)} duplicated rows "
-                         f"(every column equal; up to x{factor}, first at row {first + 1}, "
-                         f"curve_id {', '.join(map(repr, curves[:3]))}"
-                         f"{' ...' if len(curves) > 3 else ''}): duplicates dropped",
-                         first + 1))
+        seq = [keys[i] for i in idx]  # without time: the curve repeats as a whole
+        for k in range(len(seq) // MIN_POINTS_PER_CURVE, 1, -1):
+            if len(seq) % k == 0 and seq == seq[:len(seq) // k] * k:
+                drop.update(idx[len(seq) // k:])
+                factors[cid] = k
+                break
+    kept = [rec for i, rec in enumerate(parsed) if i not in drop]
+    if drop:
+        first = min(drop)
+        curves = sorted(factors)
+        warnings.append(("rows", f"{len(drop)} duplicated rows (every column equal; x"
+                         f"{max(factors.values())} in curve_id "
+                         f"{', '.join(map(repr, curves[:3]))}{' ...' if len(curves) > 3 else ''}"
+                         f", first copy at row {first + 1}): duplicates dropped", first + 1))
     by_curve: dict[str, list[dict[str, object]]] = {}
     for rec in kept:
         by_curve.setdefault(str(rec["curve_id"]), []).append(rec)
@@ -408,6 +420,11 @@ def decode_text(data: bytes, name: str) -> str:
                                               "\n".encode(encoding)[2:]) + 1
                 raise DataError("file", f"{name}: line {line}: not valid {encoding} after "
                                 "its byte-order mark", None, "UTF-8 text") from None
+    if b"\x00" in data[:4096]:
+        line = data[:data.index(b"\x00")].count(b"\n") + 1
+        raise DataError("file", f"{name}: line {line}: it looks like UTF-16 without a "
+                        "byte-order mark", None, "UTF-8 text (or UTF-16 with a byte-order "
+                        "mark): save the file as CSV UTF-8")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
