@@ -88,7 +88,7 @@ def _pump(protocol, flow: float, read_s: float):
     d = np.zeros_like(t)
     t0, v0 = 0.0, 0.0
     for kind, dur in protocol:
-        m = (t > t0 - 1e-12) & (t <= t0 + dur + 1e-12)
+        m = (t > t0 + 1e-12) & (t <= t0 + dur + 1e-12)  # a reading at a switch: before it
         rate = {"load": flow, "hold": 0.0, "unload": -flow}[kind]
         v[m] = v0 + rate * (t[m] - t0)
         d[m] = np.sign(rate)
@@ -197,7 +197,8 @@ class FEStandIn:
     emulator in tests): angle(pressure) of the nominal design, plus for each physical
     axis (membrane / body mu scale, t, L) the change between the cached solves along that
     axis (linear between nodes, extrapolated from the end segment), taken from the
-    nearest base design that has solves along the axis."""
+    nearest base design that has solves along the axis. Its band is nil: it is the FE
+    at the cached designs."""
 
     name = "fe-stand-in"
 
@@ -231,7 +232,7 @@ class FEStandIn:
             if abs(value - ref) < 1e-9:
                 continue
             total = total + self._axis_change(base, axis, value - ref, p)
-        return Prediction(design, p, total, total - 1.0, total + 1.0, level, {}, self.name,
+        return Prediction(design, p, total, total, total, level, {}, self.name,
                           "fe-stand-in", {}, {})
 
     def _axis_change(self, base: fe.CaseSpec, axis: str, delta: float, p: np.ndarray):

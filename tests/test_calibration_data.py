@@ -156,7 +156,7 @@ def test_duplicated_rows_warn_with_the_factor_and_are_dropped():
 
 def test_history_order_is_kept_and_unloading_recognised():
     # one curve loaded then unloaded, no time column: file order is the history
-    ps = [0, 400, 800, 1200, 1200, 1200, 800, 400, 0]
+    ps = [0, 400, 800, 1200, 1100, 1100, 800, 400, 0]  # 100 Pa inlet drop into the hold
     data = [{"curve_id": c, "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
              "membrane_material": "ecoflex_00_30", "pressure_pa": p,
              "angle_deg": -0.1 * p / 100.0} for c in ("a", "b") for p in ps]

@@ -61,6 +61,19 @@ class FitResult:
     def angles(self) -> np.ndarray:
         return self.model.angles(self.x)
 
+    def conditional_sd(self, name: str, given: tuple[str, ...]) -> float:
+        """Standard error of ``name`` with the parameters ``given`` held at their fitted
+        values (a shape parameter such as a retardation time is undefined when its effect
+        is off, so its trade-off with the size must not dilute the test of the size)."""
+        names = list(self.model.layout.names)
+        idx = [names.index(name)] + [names.index(g) for g in given]
+        sub = self.cov[np.ix_(idx, idx)]
+        try:
+            precision = np.linalg.inv(sub)
+        except np.linalg.LinAlgError:
+            return float(np.sqrt(max(sub[0, 0], 0.0)))
+        return float(1.0 / np.sqrt(precision[0, 0])) if precision[0, 0] > 0 else np.inf
+
 
 def _residual_fn(model: AugmentedModel) -> Callable[[np.ndarray], np.ndarray]:
     y = model.obs.angle_deg
@@ -123,8 +136,9 @@ def cross_validate(obs: Observations, make: Callable[[Observations], AugmentedMo
         x = _transfer(f, m_test)
         rows = np.isin(obs.curve, held)
         resid[rows] = m_test.angles(x) - test.angle_deg
-    finite = np.where(np.isfinite(resid), resid, R_CAP_DEG)
-    return float(np.sqrt(np.mean(finite**2))), finite
+    if not np.all(np.isfinite(resid)):  # a held-out curve past the baseline's range
+        return float("inf"), np.where(np.isfinite(resid), resid, np.nan)
+    return float(np.sqrt(np.mean(resid**2))), resid
 
 
 def _transfer(f: FitResult, target: AugmentedModel) -> np.ndarray:

@@ -4,7 +4,8 @@ Labs record a curve in time (or file) order; the pressure's change from the prev
 reading says what the pump did: rising = loading (fluid in, direction +1), falling =
 unloading (withdrawn, -1), unchanged within ``HOLD_FRACTION`` of the curve's pressure
 range = hold (pump stopped, 0). The first reading takes the direction of the next
-interval. The noise floor, the time effects' identifiability and the inlet pressure drop
+interval; a drop into a flat stretch is the start of a hold (the gauge loses the inlet's
+R Q when the pump stops). The noise floor, the time effects' identifiability and the inlet pressure drop
 (R Q x direction) use it.
 """
 
@@ -19,14 +20,19 @@ REST_FRACTION = 0.1
 
 
 def directions(curve: np.ndarray, pressure_pa: np.ndarray) -> np.ndarray:
-    """+1 / -1 / 0 per row; rows sorted by curve, then history."""
+    """+1 / -1 / 0 per row; rows sorted by curve, then history. A reading is classified
+    by the change from the previous one (the pump's state since then); a drop followed
+    by a flat interval is the step into a hold (the inlet's R Q vanishing when the pump
+    stops), not unloading."""
     out = np.zeros(pressure_pa.size)
     for c in np.unique(curve):
         rows = np.flatnonzero(curve == c)
         p = pressure_pa[rows]
         tol = max(HOLD_FRACTION * float(np.ptp(p)), HOLD_MIN_PA)
         dp = np.diff(p)
-        d = np.where(dp > tol, 1.0, np.where(dp < -tol, -1.0, 0.0))
+        back = np.where(dp > tol, 1.0, np.where(dp < -tol, -1.0, 0.0))
+        fwd_flat = np.append(np.abs(dp[1:]) <= tol, False)
+        d = np.where((back < 0) & fwd_flat, 0.0, back)
         out[rows[1:]] = d
         out[rows[0]] = d[0] if d.size else 0.0
     return out

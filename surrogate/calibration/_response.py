@@ -23,6 +23,8 @@ from surrogate.calibration.effects._base import physical_nodes
 
 NODES = 9
 PRESSURE_POINTS = 241
+BAND_LEVEL = 0.95
+BAND_Z = 1.959964  # two-sided 95 %
 
 
 def design_key(design) -> str:
@@ -41,15 +43,28 @@ class Responses:
         self.p_grid = np.linspace(0.0, p_max_pa, PRESSURE_POINTS)
         self.dp = self.p_grid[1] - self.p_grid[0]
         self._tables: dict[tuple[str, ...], tuple[list[np.ndarray], np.ndarray]] = {}
+        self._sd: np.ndarray | None = None
         self.calls = 0
 
-    def _predict(self, design) -> np.ndarray:
+    def _predict(self, design, with_sd: bool = False):
         self.calls += 1
+        nan = np.full(self.p_grid.size, np.nan)
         try:
-            out = self.predictor.predict(design, self.p_grid)
+            out = self.predictor.predict(design, self.p_grid, level=BAND_LEVEL)
         except InputError:
-            return np.full(self.p_grid.size, np.nan)
-        return np.asarray(out.angle_deg, dtype=float)
+            return (nan, nan) if with_sd else nan
+        angle = np.asarray(out.angle_deg, dtype=float)
+        if not with_sd:
+            return angle
+        half = 0.5 * (np.asarray(out.upper_deg, float) - np.asarray(out.lower_deg, float))
+        return angle, np.abs(half) / BAND_Z
+
+    def nominal_sd(self) -> np.ndarray:
+        """(n_designs, pressures): the baseline's own standard deviation for an FE solve
+        of each nominal design (its band at BAND_LEVEL / z)."""
+        if self._sd is None:
+            self._sd = np.array([self._predict(self.designs[k], True)[1] for k in self.keys])
+        return self._sd
 
     def table(self, effects: tuple[Effect, ...]) -> tuple[list[np.ndarray], np.ndarray]:
         """(nodes per effect, values (n_designs, n_1, ..., n_k, pressures))."""
