@@ -57,7 +57,8 @@ def create_app(settings: ServiceSettings | None = None, *,
     app = FastAPI(title="Balloon actuator design service", version=health.VERSION,
                   description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
-    app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir)
+    app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir,
+                                     settings.emulator_path)
     app.state.jobs = JobManager(
         solve_fn or default_solve, write_fn or ResultWriter(settings.db_path),
         workers=settings.workers, queue_size=settings.queue_size,

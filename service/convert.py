@@ -64,3 +64,44 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def prediction_body(prediction: Any, model: str, level: float | None = None
+                    ) -> dict[str, Any]:
+    """The one plain-data form of a ``surrogate.core.Prediction``, for HTTP and the CLI:
+    angles (deg) with the band, force (mN, blocked tip) and injected volume (ul) when the
+    model has them, validity and provenance. NaN (past the FE's range) becomes null."""
+    validity = dict(prediction.validity or {})
+
+    def opt(values: Any) -> list[float | None] | None:
+        return None if values is None else finite_list(values)
+
+    return {"model": model, "level": getattr(prediction, "level", level),
+            "design": design_dict(prediction.design),
+            "pressure_pa": finite_list(prediction.pressure_pa),
+            "angle_deg": finite_list(prediction.angle_deg),
+            "lower_deg": finite_list(prediction.lower_deg),
+            "upper_deg": finite_list(prediction.upper_deg),
+            "force_mn": opt(getattr(prediction, "force_mn", None)),
+            "force_lower_mn": opt(getattr(prediction, "force_lower_mn", None)),
+            "force_upper_mn": opt(getattr(prediction, "force_upper_mn", None)),
+            "volume_ul": opt(getattr(prediction, "volume_ul", None)),
+            "validity": jsonable({
+                "in_domain": bool(validity.get("in_domain", False)),
+                "flags": [str(f) for f in validity.get("flags", [])],
+                "messages": [str(m) for m in validity.get("messages", [])],
+                **{k: validity[k] for k in ("fe_limit_pa", "fe_limit_angle_deg",
+                                            "fe_stop_reason") if k in validity}}),
+            "form": getattr(prediction, "form", None),
+            "provenance": jsonable(_public_provenance(dict(prediction.provenance or {})))}
+
+
+def _public_provenance(provenance: dict[str, Any]) -> dict[str, Any]:
+    """Provenance without local paths: files are named by their logical name."""
+    out = {}
+    for key, value in provenance.items():
+        if key.endswith("_path") and isinstance(value, str):
+            out[key.removesuffix("_path") + "_name"] = value.rsplit("/", 1)[-1]
+        else:
+            out[key] = value
+    return out

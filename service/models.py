@@ -1,9 +1,14 @@
-"""Which surrogate answers a request: the ``model`` field of /v1/predict and /v1/inverse.
+"""Which model answers a request: the ``model`` field of /v1/predict and /v1/inverse.
 
-    "fitted"    the surrogate loaded once at start-up from ``surrogate_path``
-    "paper"     the paper's published constants (``surrogate.paper_surrogate()``)
-    any other   a saved calibrated model in ``models_dir``, loaded through
-                ``surrogate.calibration.load_model(name, models_dir)`` (the one hook)
+    "emulator"     the design-space emulator (the default), loaded once at start-up
+                   from ``emulator_path``
+    "exponential"  the paper's exponential form fitted to the same database (loaded from
+                   ``surrogate_path``); "fitted" is its older name
+    "paper"        the paper's published constants (``surrogate.paper_surrogate()``)
+    any other      a saved calibrated model in ``models_dir``, loaded through
+                   ``surrogate.calibration.load_model(name, models_dir)`` (the one hook)
+
+Every one implements ``surrogate.predictor.Predictor``: callers never branch on kind.
 """
 
 from __future__ import annotations
@@ -22,12 +27,16 @@ class ModelRegistry:
 
     surrogate_path: Path
     models_dir: Path
+    emulator_path: Path | None = None
     fitted: Any = None
     fitted_error: str | None = None
+    emulator: Any = None
+    emulator_error: str | None = None
     _paper: Any = field(default=None, repr=False)
 
     def load_fitted(self) -> None:
-        """Load the fitted surrogate (at start-up); a failure is kept, not raised."""
+        """Load the emulator and the fitted exponential surrogate (at start-up); a failure
+        is kept (reported by /v1/health and on use), not raised."""
         try:
             from surrogate import load_surrogate
 
@@ -35,10 +44,27 @@ class ModelRegistry:
             self.fitted_error = None
         except Exception as exc:  # noqa: BLE001 - reported by /v1/health and on use
             self.fitted = None
-            self.fitted_error = f"{type(exc).__name__}: {exc}"
+            self.fitted_error = f"{type(exc).__name__}: {_plain_error(exc)}"
+        if self.emulator_path is None:
+            return
+        try:
+            from surrogate.emulator import load_emulator
+
+            self.emulator = load_emulator(self.emulator_path)
+            self.emulator_error = None
+        except Exception as exc:  # noqa: BLE001 - reported by /v1/health and on use
+            self.emulator = None
+            self.emulator_error = f"{type(exc).__name__}: {_plain_error(exc)}"
 
     def get(self, name: str) -> Any:
-        if name == "fitted":
+        if name == "emulator":
+            if self.emulator is None:
+                raise UnavailableError(
+                    f"the emulator is not loaded ({self.emulator_error or 'no file'}); use "
+                    'model "exponential" or "paper", or set BALLOON_EMULATOR_PATH and '
+                    "restart")
+            return self.emulator
+        if name in ("fitted", "exponential"):
             if self.fitted is None:
                 raise UnavailableError(
                     f"no fitted surrogate is loaded ({self.fitted_error}); use "
@@ -54,6 +80,12 @@ class ModelRegistry:
                 self._paper = paper_surrogate()
             return self._paper
         return load_calibrated(name, self.models_dir)
+
+
+def _plain_error(exc: BaseException) -> str:
+    """An error's message without local directories (answers name files by their name)."""
+    text = str(exc)
+    return text.replace(str(Path.home()), "~")
 
 
 def load_calibrated(name: str, models_dir: Path) -> Any:

@@ -30,7 +30,11 @@ class ServiceSettings(BaseSettings):
 
     db_path: Path = Field(DATA_DIR / "curves.h5", description="FE curve database (HDF5)")
     surrogate_path: Path = Field(DATA_DIR / "surrogate.json",
-                                 description="fitted surrogate (JSON), loaded once at start-up")
+                                 description="fitted exponential model (JSON), loaded once at "
+                                 "start-up")
+    emulator_path: Path = Field(DATA_DIR / "emulator.json",
+                                description="design-space emulator (JSON), the default model, "
+                                "loaded once at start-up")
     models_dir: Path = Field(Path.home() / ".balloon" / "models",
                              description="saved calibrated models, selectable by name")
     api_key: SecretStr | None = Field(

@@ -131,6 +131,19 @@ class Surrogate:
             raise InputError("form", f"unknown model form {form!r}", " | ".join(model.FORMS))
         return replace(self, form=form)
 
+    def covered_slices(self, pair: tuple[str, str]) -> list[dict[str, float]]:
+        """The (T_mm, b_mm, h_mm) of every family of ``pair`` (preset materials): the
+        exponential model answers only there (``surrogate.design_search``)."""
+        from solver.materials import MATERIALS
+
+        out = []
+        for fam in self.family_fits:
+            if (fam.body_material == MATERIALS.get(pair[0])
+                    and fam.membrane_material == MATERIALS.get(pair[1])):
+                _, _, T, b, h = fam.key
+                out.append({"T_mm": T, "b_mm": b, "h_mm": h})
+        return out
+
     def family_for(self, design: Design) -> Family:
         """The family covering ``design``; OutOfFamilyError (with the fix) otherwise."""
         for fam in self.family_fits:

@@ -113,9 +113,19 @@ class DesignCandidate:
     curve: Prediction
 
     def as_dict(self) -> dict[str, object]:
+        from solver.design_space import recognise
+
+        def preset_and_scale(material: object) -> tuple[str, float]:
+            found = recognise(material)  # type: ignore[arg-type]
+            return found if found is not None else (material.id, 1.0)  # type: ignore
+
+        body, s_body = preset_and_scale(self.design.body_material)
+        membrane, s_membrane = preset_and_scale(self.design.membrane_material)
         return {"rank": self.rank, "L_mm": self.design.L_mm, "t_mm": self.design.t_mm,
-                "body_material": self.design.body_material.id,
-                "membrane_material": self.design.membrane_material.id,
+                "T_mm": self.design.T_mm, "b_mm": self.design.b_mm, "h_mm": self.design.h_mm,
+                "body_material": body, "membrane_material": membrane,
+                "body_stiffness_scale": s_body, "membrane_stiffness_scale": s_membrane,
+                "design": self.design.as_dict(),
                 "family": self.family, "score": self.score,
                 "pressure_needed_pa": self.pressure_needed_pa,
                 "pressure_lower_pa": self.pressure_lower_pa,
@@ -124,7 +134,8 @@ class DesignCandidate:
                 "value_upper": self.value_upper, "validity": self.curve.validity,
                 "curve": {k: v for k, v in self.curve.as_dict().items()
                           if k in ("pressure_pa", "angle_deg", "lower_deg", "upper_deg",
-                                   "force_mn", "force_lower_mn", "force_upper_mn")}}
+                                   "force_mn", "force_lower_mn", "force_upper_mn",
+                                   "volume_ul")}}
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,7 @@ from surrogate import OutOfFamilyError
 
 @dataclass
 class FakePrediction:
+    design: object
     pressure_pa: np.ndarray
     angle_deg: np.ndarray
     lower_deg: np.ndarray
@@ -63,7 +64,7 @@ class FakeSurrogate:
         p = np.asarray(pressures_pa, float)
         angle = a * np.expm1(p / tau)
         flags = ["pressure_beyond_fe"] if p.max() > 2500 else []
-        return FakePrediction(p, angle, angle - 1.0, angle + 1.0,
+        return FakePrediction(design, p, angle, angle - 1.0, angle + 1.0,
                               {"in_domain": not flags, "flags": flags, "messages": []})
 
     def inverse(self, design, angle_deg, level=0.95):

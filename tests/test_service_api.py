@@ -22,6 +22,7 @@ def client(tmp_path):
     app = create_app(settings_for(tmp_path), solve_fn=fast_solve,
                      write_fn=lambda d, s, c: "k" * 32, load_surrogate=False)
     app.state.models.fitted = FakeSurrogate()
+    app.state.models.emulator = app.state.models.fitted
     with TestClient(app, raise_server_exceptions=False) as c:
         yield c
 
@@ -59,7 +60,7 @@ def test_predict_returns_the_surrogates_angles_and_band(client):
     expected = [0.101 * 7.1 * math.expm1(p / tau) for p in (0, 1000, 2000)]
     assert body["angle_deg"] == pytest.approx(expected)
     assert body["lower_deg"] == pytest.approx([a - 1 for a in expected])
-    assert body["model"] == "fitted" and body["level"] == 0.95
+    assert body["model"] == "emulator" and body["level"] == 0.95
     assert body["design"]["body_length_mm"] == 12.0
     assert body["validity"] == {"in_domain": True, "flags": [], "messages": []}
 
@@ -132,6 +133,7 @@ def test_predict_without_a_fitted_surrogate_is_503(tmp_path):
 def test_unexpected_errors_are_500_problems_without_internals(tmp_path):
     app = create_app(settings_for(tmp_path), load_surrogate=False)
     app.state.models.fitted = BrokenSurrogate()
+    app.state.models.emulator = app.state.models.fitted
     with TestClient(app, raise_server_exceptions=False) as c:
         r = c.post("/v1/predict", json={"pressures_pa": [1]})
     body = assert_problem(r, 500)

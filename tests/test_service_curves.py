@@ -43,6 +43,7 @@ def client(tmp_path, db_path):
     app = create_app(settings_for(tmp_path, db_path=db_path), solve_fn=fast_solve,
                      load_surrogate=False)
     app.state.models.fitted = FakeSurrogate()
+    app.state.models.emulator = app.state.models.fitted
     with TestClient(app, raise_server_exceptions=False) as c:
         yield c
 

@@ -35,6 +35,7 @@ def build_schema():
                      solve_fn=fast_solve,
                      write_fn=lambda d, s, c: "0" * 32, load_surrogate=False)
     app.state.models.fitted = paper_surrogate()  # real code paths, shipped constants
+    app.state.models.emulator = app.state.models.fitted
     return schemathesis.openapi.from_asgi("/openapi.json", app)
 
 

@@ -1,6 +1,9 @@
-"""``balloon fit --db curves.h5 -o surrogate.json [--report-dir DIR]``: fit the surrogate.
+"""``balloon fit --db curves.h5 -o surrogate.json [--emulator-output emulator.json]``: fit
+the models.
 
-Fits the paper's exponential model (and the extended form) to every family of the
+With ``--emulator-output``, fits the design-space emulator (the default predictor) to every
+default-FE curve of the database in the box, with leave-one-out errors and calibrated
+bands (docs/surrogate.md). Always fits the paper's exponential model (and the extended form) to every family of the
 curve database, with leave-one-design-out errors and band coverage; writes the versioned
 surrogate JSON (which embeds the full fit report) and, with ``--report-dir``, report.json
 and PNG plots (FE curves against the models, A against L, tau against t).
@@ -18,6 +21,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--db", required=True, metavar="PATH", help="curve database (HDF5)")
     parser.add_argument("-o", "--output", required=True, metavar="PATH",
                         help="surrogate file to write (JSON)")
+    parser.add_argument("--emulator-output", metavar="PATH",
+                        help="also fit the design-space emulator and write it here (JSON)")
     parser.add_argument("--report-dir", metavar="DIR", help="also write report.json and PNGs")
     parser.add_argument("--name", default="fe-fit", help="the surrogate's name")
     parser.add_argument("--level", type=float, default=0.95,
@@ -36,6 +41,11 @@ def run(args: argparse.Namespace) -> int:
     path = save_surrogate(s, args.output)
     print(summary_table(s))
     print(f"\nwrote {path}")
+    if args.emulator_output:
+        from surrogate.emulator.command import fit_and_save
+
+        for line in fit_and_save(args.db, args.emulator_output, args.level):
+            print(line)
     if args.report_dir:
         from surrogate.plots import write_report
 

@@ -1,7 +1,9 @@
-"""``balloon predict --L-mm 7.1 --t-mm 0.5 --pressures 500 1000 1500 [--model paper|PATH]``:
-bending angle (deg) with a prediction band from the surrogate, and validity flags.
+"""``balloon predict --L-mm 7.1 --t-mm 0.5 --pressures 500 1000 1500 [--model NAME|PATH]``:
+bending angle (deg) with a prediction band, force and injected volume, and validity flags.
 
-The default model is service/data/surrogate.json when it exists, else the paper preset.
+The default model is the design-space emulator (service/data/emulator.json, or
+BALLOON_EMULATOR_PATH); ``--model exponential``, ``paper``, a saved calibrated model's
+name, or a model file's path select another. Pressures past the FE's range get no angle.
 """
 
 from __future__ import annotations
@@ -9,6 +11,8 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+
+from service.convert import prediction_body
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
@@ -27,12 +31,16 @@ def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True)
     parser.add_argument("--body", default=None, help="body material id (default pdms_1_10)")
     parser.add_argument("--membrane", default=None,
                         help="membrane material id (default ecoflex_00_30)")
+    parser.add_argument("--body-stiffness-scale", type=float, default=None, metavar="S",
+                        help="body mu = S x the preset's (0.5..2 in the emulator's box)")
+    parser.add_argument("--membrane-stiffness-scale", type=float, default=None, metavar="S",
+                        help="membrane mu = S x the preset's (0.5..2 in the emulator's box)")
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--model", default=None, metavar="paper|PATH",
-                        help="`paper` or a surrogate file (default: the bundled fit if "
-                             "present, else paper)")
+    parser.add_argument("--model", default="emulator", metavar="NAME|PATH",
+                        help="emulator (default), exponential, paper, a saved calibrated "
+                             "model's name, or a model file")
     parser.add_argument("--form", choices=("exponential", "extended"), default=None,
                         help="model form (default: each family's fitted default)")
     parser.add_argument("--level", type=float, default=0.95, help="band level (0.95)")
@@ -41,21 +49,61 @@ def add_model_arguments(parser: argparse.ArgumentParser) -> None:
 
 def design_from_args(args: argparse.Namespace) -> object:
     from solver.design import design_from_dict
+    from solver.design_space import STIFFNESS_SCALE_RANGE, scaled_material
+    from solver.errors import InputError
 
-    data = {k: getattr(args, k) for k in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
-            if getattr(args, k, None) is not None}
-    if args.body:
-        data["body_material"] = args.body
-    if args.membrane:
-        data["membrane_material"] = args.membrane
+    data: dict[str, object] = {k: getattr(args, k) for k in ("L_mm", "t_mm", "T_mm", "b_mm",
+                                                              "h_mm")
+                               if getattr(args, k, None) is not None}
+    for layer, default in (("body", "pdms_1_10"), ("membrane", "ecoflex_00_30")):
+        preset = getattr(args, layer, None) or default
+        scale = getattr(args, f"{layer}_stiffness_scale", None)
+        if scale is None:
+            data[f"{layer}_material"] = preset
+            continue
+        lo, hi = 0.01, 100.0
+        if not lo <= scale <= hi:
+            raise InputError(f"--{layer}-stiffness-scale", f"got {scale:g}",
+                             f"{lo:g} <= S <= {hi:g} (the emulator's box: "
+                             f"{STIFFNESS_SCALE_RANGE[0]:g}..{STIFFNESS_SCALE_RANGE[1]:g})")
+        try:
+            data[f"{layer}_material"] = scaled_material(preset, scale)
+        except KeyError:
+            raise InputError(f"--{layer}", f"unknown material {preset!r}",
+                             "pdms_1_10, pdms_1_15, ecoflex_00_30") from None
     return design_from_dict(data)
 
 
 def surrogate_from_args(args: argparse.Namespace) -> object:
+    """The model named by --model: the service's own names first, then a file path."""
+    from service.models import ModelRegistry
+    from service.settings import get_settings
     from surrogate import open_surrogate
 
-    spec = args.model or (str(DEFAULT_SURROGATE) if DEFAULT_SURROGATE.is_file() else "paper")
-    return open_surrogate(spec).with_form(args.form)
+    spec = args.model or "emulator"
+    if Path(spec).suffix == ".json" and Path(spec).is_file():
+        return open_model_file(Path(spec), getattr(args, "form", None))
+    settings = get_settings()
+    registry = ModelRegistry(settings.surrogate_path, settings.models_dir,
+                             settings.emulator_path)
+    if spec in ("emulator", "fitted", "exponential"):
+        registry.load_fitted()
+    model = registry.get(spec) if spec != "paper" else open_surrogate("paper")
+    form = getattr(args, "form", None)
+    if form is not None and hasattr(model, "with_form"):
+        model = model.with_form(form)
+    return model
+
+
+def open_model_file(path: Path, form: str | None) -> object:
+    """An emulator or exponential-model JSON file, told apart by its ``format``."""
+    from surrogate import open_surrogate
+    from surrogate.emulator import load_emulator
+
+    head = path.read_text(encoding="utf-8", errors="replace")[:200]
+    if '"balloon-emulator"' in head:
+        return load_emulator(path)
+    return open_surrogate(str(path)).with_form(form)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -86,28 +134,28 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("--pressure-range", f"NUM = {num:g}", "an integer 1..100000")
         pressures = np.linspace(start, stop, int(num))
     pred = s.predict(design, pressures, level=args.level)  # type: ignore[attr-defined]
+    body = prediction_body(pred, args.model or "emulator")
     if args.json:
-        print(json.dumps(pred.as_dict(), indent=1))
+        print(json.dumps(body, indent=1))
         return 0
-    print(f"model {pred.model} ({pred.form}), L = {design.L_mm:g} mm, "  # type: ignore
+    print(f"model {body['model']} ({body['form']}), L = {design.L_mm:g} mm, "  # type: ignore
           f"t = {design.t_mm:g} mm, band {100 * pred.level:g} %")  # type: ignore
-    head = f"{'pressure_pa':>12s} {'angle_deg':>10s} {'lower_deg':>10s} {'upper_deg':>10s}"
-    if pred.force_mn is not None:
-        head += f" {'force_mn':>9s} {'lower_mn':>9s} {'upper_mn':>9s}"
-    print(head)
-    for i, p in enumerate(pred.pressure_pa):
-        line = (f"{p:12.1f} {pred.angle_deg[i]:10.2f} {pred.lower_deg[i]:10.2f} "
-                f"{pred.upper_deg[i]:10.2f}")
-        if pred.force_mn is not None:
-            line += (f" {pred.force_mn[i]:9.3f} {pred.force_lower_mn[i]:9.3f} "
-                     f"{pred.force_upper_mn[i]:9.3f}")
-        print(line)
+    columns = [c for c in ("pressure_pa", "angle_deg", "lower_deg", "upper_deg", "force_mn",
+                           "force_lower_mn", "force_upper_mn", "volume_ul")
+               if body.get(c) is not None]
+    print(" ".join(f"{c:>14s}" for c in columns))
+    for i in range(len(body["pressure_pa"])):
+        print(" ".join(_cell(body[c][i]) for c in columns))
     print_validity(pred.validity)
     return 0
 
 
+def _cell(value: float | None) -> str:
+    return f"{'--':>14s}" if value is None else f"{value:14.3f}"
+
+
 def print_validity(validity: dict) -> None:
-    if validity["in_domain"]:
+    if validity["in_domain"] and not validity.get("flags"):
         print("validity: inside the fitted domain")
     else:
         print("validity: " + ", ".join(validity["flags"]))

@@ -18,7 +18,11 @@ router = APIRouter(prefix="/v1", tags=["inverse"])
 DESIGN_FIELDS: dict[str, tuple[str | int, ...]] = {
     "pressure_pa": ("target", "pressure_pa"), "angle_deg": ("target", "angle_deg"),
     "force_mn": ("target", "force_mn"), "kind": ("target", "kind"),
-    "L_mm": ("L_bounds_mm",), "t_mm": ("t_bounds_mm",), "target": ("target",),
+    "L_mm": ("L_bounds_mm",), "t_mm": ("t_bounds_mm",), "T_mm": ("T_bounds_mm",),
+    "b_mm": ("b_bounds_mm",), "h_mm": ("h_bounds_mm",), "target": ("target",),
+    "body_stiffness_scale": ("body_stiffness_scale_bounds",),
+    "membrane_stiffness_scale": ("membrane_stiffness_scale_bounds",),
+    "material_pairs": ("material_pairs",),
 }
 PRESSURE_FIELDS: dict[str, tuple[str | int, ...]] = {
     "angle_deg": ("angles_deg",), "t_mm": ("design", "t_mm"),
@@ -32,19 +36,25 @@ def _pair(values: list[float] | None) -> tuple[float, float] | None:
 @router.post("/inverse", response_model=InverseResponse,
              summary="Designs that meet a target, ranked; or why none can")
 def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
-    """Searches chamber length and membrane thickness within the bounds, for every
-    allowed material pair the surrogate covers (vectorised; milliseconds)."""
-    from surrogate import DesignBounds, DesignTarget, inverse_design
+    """Searches L, t, T, b, h (and the stiffness scales when bounded) within the bounds,
+    for every allowed material pair the model covers (surrogate.design_search)."""
+    from surrogate import DesignTarget
+    from surrogate.design_search import SearchBounds, search_designs
 
-    surrogate = require(models.get(request.model), request.model, "family_fits")
+    model = models.get(request.model)
     t = request.target
     pairs = (tuple((p.body_material, p.membrane_material) for p in request.material_pairs)
              if request.material_pairs else None)
     try:
-        result = inverse_design(
-            surrogate, DesignTarget(t.kind, t.pressure_pa, t.angle_deg, t.force_mn),
-            DesignBounds(L_mm=_pair(request.L_bounds_mm), t_mm=_pair(request.t_bounds_mm),
-                         material_pairs=pairs),
+        result = search_designs(
+            model, DesignTarget(t.kind, t.pressure_pa, t.angle_deg, t.force_mn),
+            SearchBounds(L_mm=_pair(request.L_bounds_mm), t_mm=_pair(request.t_bounds_mm),
+                         T_mm=_pair(request.T_bounds_mm), b_mm=_pair(request.b_bounds_mm),
+                         h_mm=_pair(request.h_bounds_mm),
+                         body_stiffness_scale=_pair(request.body_stiffness_scale_bounds),
+                         membrane_stiffness_scale=_pair(
+                             request.membrane_stiffness_scale_bounds),
+                         pairs=pairs),
             objective=request.objective, n_results=request.n_results, level=request.level)
     except InputError as exc:
         raise located(exc, ("body",), DESIGN_FIELDS) from None

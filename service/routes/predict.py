@@ -9,7 +9,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import Response
 from pydantic_core import to_json
 
-from service.convert import design_dict, finite_list, jsonable, to_design
+from service.convert import prediction_body, to_design
 from service.deps import ModelsDep, SettingsDep
 from service.errors import FieldError, located
 from service.schemas import PlotQuery, PredictRequest, PredictResponse
@@ -23,20 +23,12 @@ PNG: dict[int | str, dict[str, Any]] = {
 
 def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
                  model: str, loc: tuple[str, ...] = ("body",)) -> dict[str, Any]:
-    """Run the surrogate and convert its Prediction to the response's plain data."""
+    """Run the model and convert its Prediction to the response's plain data."""
     try:
         p = surrogate.predict(design, np.asarray(pressures_pa, float), level=level)
-    except InputError as exc:  # e.g. OutOfFamilyError (field "design")
+    except InputError as exc:  # e.g. OutOfFamilyError / OutOfBoxError (field "design")
         raise located(exc, loc) from None
-    validity = p.validity
-    return {"model": model, "level": level, "design": design_dict(design),
-            "pressure_pa": finite_list(p.pressure_pa), "angle_deg": finite_list(p.angle_deg),
-            "lower_deg": finite_list(p.lower_deg), "upper_deg": finite_list(p.upper_deg),
-            "validity": {"in_domain": bool(validity.get("in_domain", False)),
-                         "flags": [str(f) for f in validity.get("flags", [])],
-                         "messages": [str(m) for m in validity.get("messages", [])]},
-            "form": getattr(p, "form", None),
-            "provenance": jsonable(dict(p.provenance or {}))}
+    return prediction_body(p, model, level)
 
 
 @router.post("/predict", response_model=PredictResponse,

@@ -39,10 +39,25 @@ class InverseRequest(Schema):
     target: TargetIn
     L_bounds_mm: list[Annotated[float, Field(ge=0.5, le=60.0)]] | None = Field(
         None, min_length=2, max_length=2, description="[low, high] chamber length, mm "
-        "(default: each family's fitted range)")
+        "(default: the emulator's box, 4..18)")
     t_bounds_mm: list[Annotated[float, Field(ge=0.05, le=5.0)]] | None = Field(
         None, min_length=2, max_length=2, description="[low, high] membrane thickness, mm "
-        "(default: each family's fitted range, from 0.5 mm)")
+        "(default: the box, 0.5..1.2)")
+    T_bounds_mm: list[Annotated[float, Field(ge=0.1, le=10.0)]] | None = Field(
+        None, min_length=2, max_length=2, description="[low, high] body thickness above "
+        "the chamber, mm (default: the box, 0.6..2)")
+    b_bounds_mm: list[Annotated[float, Field(ge=0.1, le=20.0)]] | None = Field(
+        None, min_length=2, max_length=2, description="[low, high] chamber width, mm "
+        "(default: the box, 1..2.4)")
+    h_bounds_mm: list[Annotated[float, Field(ge=0.02, le=5.0)]] | None = Field(
+        None, min_length=2, max_length=2, description="[low, high] chamber height, mm "
+        "(default: the box, 0.1..0.3)")
+    body_stiffness_scale_bounds: list[Annotated[float, Field(ge=0.01, le=100.0)]] | None = (
+        Field(None, min_length=2, max_length=2, description="[low, high] body mu / preset "
+              "mu (default [1, 1]: the preset; the box allows 0.5..2)"))
+    membrane_stiffness_scale_bounds: list[Annotated[float, Field(ge=0.01, le=100.0)]] | None = (
+        Field(None, min_length=2, max_length=2, description="[low, high] membrane mu / "
+              "preset mu (default [1, 1])"))
     material_pairs: list[MaterialPair] | None = Field(
         None, min_length=1, max_length=20, description="allowed pairs (default: all fitted)")
     objective: Literal["pressure", "margin", "compact", "certainty"] | None = Field(
@@ -56,8 +71,15 @@ class Candidate(BaseModel):
     rank: int
     L_mm: float
     t_mm: float
+    T_mm: float | None = None
+    b_mm: float | None = None
+    h_mm: float | None = None
     body_material: str
     membrane_material: str
+    body_stiffness_scale: float | None = None
+    membrane_stiffness_scale: float | None = None
+    design: dict[str, Any] | None = Field(None, description="the design, as /v1/predict "
+                                          "takes it (lengths mm, materials inline)")
     family: str
     score: float | None = Field(description="the objective's value (lower ranks first)")
     pressure_needed_pa: float | None

@@ -10,8 +10,10 @@ from service.schemas.common import MATERIAL_ID, DesignIn, Schema
 
 MAX_PRESSURE_PA = 20000.0
 Pressure = Annotated[float, Field(ge=0.0, le=MAX_PRESSURE_PA)]
-MODEL = Field("fitted", pattern=MATERIAL_ID,
-              description='"fitted" (the loaded surrogate), "paper", or a saved model name')
+MODEL = Field("emulator", pattern=MATERIAL_ID,
+              description='"emulator" (the design-space emulator, default), "exponential" '
+                          '(the paper\'s form fitted to the FE database; "fitted" is its old '
+                          'name), "paper", or a saved calibrated model\'s name')
 LEVEL = Field(0.95, ge=0.5, le=0.999, description="prediction band's coverage probability")
 
 
@@ -28,19 +30,32 @@ class PredictRequest(Schema):
 
 
 class Validity(BaseModel):
-    in_domain: bool
-    flags: list[str] = []
-    messages: list[str] = []
+    in_domain: bool = Field(description="no flag raised: every answer is inside the FE data")
+    flags: list[str] = Field([], description="machine-readable flags, e.g. past_fe_range")
+    messages: list[str] = Field([], description="the flags in words")
+    fe_limit_pa: float | None = Field(None, description="end of the FE's converged, stable "
+                                      "range for this design, Pa (emulator)")
+    fe_limit_angle_deg: float | None = Field(None, description="angle there, degrees")
+    fe_stop_reason: str | None = Field(None, description="why the FE curves end there")
+
+
+OptFloats = list[float | None] | None
 
 
 class PredictResponse(BaseModel):
     model: str
     level: float
     design: dict[str, Any] = Field(description="the design as resolved (all lengths, mm)")
-    pressure_pa: list[float]
-    angle_deg: list[float]
-    lower_deg: list[float]
-    upper_deg: list[float]
+    pressure_pa: list[float] = Field(description="chamber pressures, Pa")
+    angle_deg: list[float | None] = Field(description="bending angle, degrees (null past "
+                                          "the FE's range)")
+    lower_deg: list[float | None] = Field(description="band's lower end, degrees")
+    upper_deg: list[float | None] = Field(description="band's upper end, degrees")
+    force_mn: OptFloats = Field(None, description="blocked-tip force, mN (null when the "
+                                "model has none)")
+    force_lower_mn: OptFloats = Field(None, description="force band's lower end, mN")
+    force_upper_mn: OptFloats = Field(None, description="force band's upper end, mN")
+    volume_ul: OptFloats = Field(None, description="injected volume at each pressure, ul")
     validity: Validity
     form: str | None = Field(None, description='model form: "exponential" (the paper\'s) '
                              'or "extended"')

@@ -337,13 +337,14 @@ def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
                           f"{p_max!r}", "a number 1 <= p <= 1e6 (Pa)")
     variants = {"free": settings,
                 "blocked": replace(settings, tip="blocked", max_pressure_pa=float(p_max))}
+    per_pair = [sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"], ints["skip"])
+                for pair in pairs]
     out = []
-    for pair in pairs:
-        for design in sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"],
-                                     ints["skip"]):
+    for i in range(ints["n"]):      # point-major: an interrupted job leaves every pair even
+        for designs in per_pair:
             for tip in tips:
                 s = variants[tip]
-                out.append(GridPoint(record_key(design, s), design, s))
+                out.append(GridPoint(record_key(designs[i], s), designs[i], s))
     return out
 
 

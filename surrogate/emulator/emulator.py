@@ -247,6 +247,60 @@ class Emulator:
                                  model=self.name, form="emulator",
                                  provenance=dict(self.provenance))
 
+    def evaluate_designs(self, designs: list[Design], pressure_pa: float,
+                         angle_deg: float | None, level: float = 0.95) -> dict[str, np.ndarray]:
+        """Many designs at once (inverse design): |angle| (deg) with its band at
+        ``pressure_pa``, and the pressure needed for |``angle_deg``| with its band (NaN
+        past the FE's range); arrays in the order of ``designs``. Raises InputError for a
+        design outside the box."""
+        z = z_value(level)
+        points = [locate(d) for d in designs]
+        out = {k: np.full(len(designs), np.nan) for k in (
+            "angle", "angle_lo", "angle_hi", "needed", "needed_lo", "needed_hi", "force",
+            "force_lo", "force_hi")}
+        by_pair: dict[tuple[str, str], list[int]] = {}
+        for i, pt in enumerate(points):
+            by_pair.setdefault(pt.pair, []).append(i)
+        theta = FINE_ANGLES_DEG
+        for pair, idx in by_pair.items():
+            pe = self._pair(points[idx[0]])
+            u = np.array([points[i].coordinates() for i in idx])
+            mean, var = pe.curves.predict_many(u)
+            y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * pe.band_scale
+            curves = [np.maximum.accumulate(theta * np.exp(m @ _B_ANGLE.T), axis=1)
+                      for m in (y, y - z * sd, y + z * sd)]
+            fmean = fsd = None
+            if pe.force is not None:
+                fmean, fvar = pe.force.predict_many(u)
+                fsd = np.sqrt(fvar) * pe.force_band_scale
+            for row, i in enumerate(idx):
+                pt = points[i]
+                limit = pe.fe_limit_angle_deg
+                for fu, ang, _ in pe.failed:
+                    if np.linalg.norm(np.asarray(fu) - u[row]) < FAILED_RADIUS:
+                        limit = min(limit, ang)
+                pm, pl, pu = (_with_origin(c[row]) for c in curves)
+                p_lim = float(np.interp(limit, ANGLES0, pm))
+                q = pressure_pa / pt.pressure_scale
+                if q <= p_lim:
+                    out["angle"][i] = np.interp(q, pm, ANGLES0)
+                    out["angle_lo"][i] = np.interp(q, pu, ANGLES0)
+                    out["angle_hi"][i] = np.interp(q, pl, ANGLES0)
+                if angle_deg is not None and abs(angle_deg) <= limit:
+                    a = abs(angle_deg)
+                    s = pt.pressure_scale
+                    out["needed"][i] = np.interp(a, ANGLES0, pm) * s
+                    out["needed_lo"][i] = np.interp(a, ANGLES0, pl) * s
+                    out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
+                if fmean is not None and q <= pe.force_limit_pa:
+                    scale = pt.pressure_scale * pt.length_scale**2
+                    lq = np.log(max(q, 1e-300))
+                    for key, yy in (("force", fmean[row]), ("force_lo", fmean[row] - z * fsd[row]),
+                                    ("force_hi", fmean[row] + z * fsd[row])):
+                        lf = np.interp(lq, np.log(_FINE_FORCE_PA), _B_FORCE @ yy)
+                        out[key][i] = scale * q * np.exp(lf)
+        return out
+
     def nearest_records(self, design: Design, count: int = 3) -> list[str]:
         """Keys of the database curves nearest to ``design`` in the unit box."""
         point = locate(design)

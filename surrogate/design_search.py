@@ -1,0 +1,340 @@
+"""Inverse design over the box, for any Predictor: which design meets a target, ranked.
+
+    result = search_designs(model, DesignTarget("angle_at_pressure", 1500, 45),
+                            SearchBounds(L_mm=(4, 12)), objective="certainty")
+
+Search space: L, t, T, b, h within the user's bounds (default: the box of
+``solver.design_space``), the allowed material pairs (default: all four) and each layer's
+stiffness scale (default 1: the presets as sold; give bounds to search them too). A
+model that covers only slices of the box (the exponential model: fixed T, b, h per
+family) lists them with ``covered_slices()``; the search then pins those values.
+
+Method: 512 scrambled Sobol candidates per pair (log-uniform in every bound), each
+evaluated by the model's own inverse (the pressure that gives the target angle) or
+forward prediction (force); for targets hit exactly (angle or force at a pressure), the
+chamber length of the best candidates is then solved by bisection so that the target is
+met to 0.1 %. Ranking (lower score first):
+
+    pressure    pressure needed (pressure_budget)
+    margin      the band's upper end of the pressure needed
+    compact     chamber length L
+    certainty   the band's width relative to the value at the target pressure
+
+Candidates closer than MIN_SPACING (unit-cube distance) to a better one are dropped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver.design import Design
+from solver.design_space import (
+    BOX_MM,
+    BOX_WIDTH_MM,
+    GEOMETRY,
+    PAIRS,
+    STIFFNESS_SCALE_RANGE,
+    scaled_material,
+)
+from solver.errors import InputError
+from surrogate.inverse_design import (
+    DEFAULT_OBJECTIVE,
+    OBJECTIVES,
+    DesignCandidate,
+    DesignTarget,
+    InverseDesignResult,
+)
+
+CANDIDATES_PER_PAIR = 512
+MIN_SPACING = 0.08
+CURVE_POINTS = 41
+
+
+@dataclass(frozen=True)
+class SearchBounds:
+    """(low, high) per geometry field (mm) and per layer's stiffness scale; None = the
+    box for geometry, (1, 1) for the scales. ``pairs``: allowed (body, membrane) ids."""
+
+    L_mm: tuple[float, float] | None = None
+    t_mm: tuple[float, float] | None = None
+    T_mm: tuple[float, float] | None = None
+    b_mm: tuple[float, float] | None = None
+    h_mm: tuple[float, float] | None = None
+    body_stiffness_scale: tuple[float, float] | None = None
+    membrane_stiffness_scale: tuple[float, float] | None = None
+    pairs: tuple[tuple[str, str], ...] | None = None
+
+    def ranges(self) -> dict[str, tuple[float, float]]:
+        """Validated ranges of every searched variable, clipped to the box."""
+        out: dict[str, tuple[float, float]] = {}
+        for name in GEOMETRY:
+            out[name] = self._range(name, getattr(self, name), BOX_MM[name], "mm")
+        for name in ("body_stiffness_scale", "membrane_stiffness_scale"):
+            out[name] = self._range(name, getattr(self, name), STIFFNESS_SCALE_RANGE, "",
+                                    default=(1.0, 1.0))
+        return out
+
+    @staticmethod
+    def _range(name: str, value: tuple[float, float] | None, box: tuple[float, float],
+               unit: str, default: tuple[float, float] | None = None
+               ) -> tuple[float, float]:
+        if value is None:
+            return default or box
+        lo, hi = (float(v) for v in value)
+        if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+            raise InputError(name, f"bounds {list(value)!r}", "[low, high] with low <= high")
+        if hi < box[0] or lo > box[1]:
+            raise InputError(name, f"bounds {list(value)!r} lie outside the box",
+                             f"within {box[0]:g}..{box[1]:g} {unit}".rstrip())
+        return max(lo, box[0]), min(hi, box[1])
+
+    def allowed_pairs(self) -> tuple[tuple[str, str], ...]:
+        if self.pairs is None:
+            return PAIRS
+        for pair in self.pairs:
+            if tuple(pair) not in PAIRS:
+                raise InputError("material_pairs", f"pair {pair[0]}/{pair[1]} is not in the "
+                                 "box", ", ".join(f"{b}/{m}" for b, m in PAIRS))
+        return tuple(tuple(p) for p in self.pairs)  # type: ignore[misc]
+
+
+VARIABLES = (*GEOMETRY, "body_stiffness_scale", "membrane_stiffness_scale")
+
+
+def _design(pair: tuple[str, str], values: dict[str, float]) -> Design:
+    return Design(body_material=scaled_material(pair[0], values["body_stiffness_scale"]),
+                  membrane_material=scaled_material(pair[1],
+                                                    values["membrane_stiffness_scale"]),
+                  W_mm=BOX_WIDTH_MM, **{n: values[n] for n in GEOMETRY}).validated()
+
+
+def _candidates(ranges: dict[str, tuple[float, float]], slices: list[dict] | None,
+                seed: int, count: int = CANDIDATES_PER_PAIR) -> list[dict[str, float]]:
+    from scipy.stats import qmc
+
+    u = qmc.Sobol(d=len(VARIABLES), scramble=True, seed=seed).random(count)
+    out = []
+    for row in u:
+        values = {}
+        for x, name in zip(row, VARIABLES):
+            lo, hi = ranges[name]
+            values[name] = float(lo * (hi / lo) ** x) if hi > lo else lo
+        out.append(values)
+    if slices is None:
+        return out
+    pinned = []
+    for sl in slices:  # a model that covers slices: pin T, b, h (and the scales to 1)
+        if not all(ranges[n][0] - 1e-9 <= sl[n] <= ranges[n][1] + 1e-9
+                   for n in ("T_mm", "b_mm", "h_mm")):
+            continue
+        for v in out[: max(count // max(len(slices), 1), 16)]:
+            pinned.append({**v, "T_mm": sl["T_mm"], "b_mm": sl["b_mm"], "h_mm": sl["h_mm"],
+                           "body_stiffness_scale": 1.0, "membrane_stiffness_scale": 1.0})
+    return pinned
+
+
+@dataclass
+class _Eval:
+    pair: tuple[str, str]
+    values: dict[str, float]
+    design: Design
+    needed: float = np.nan       # pressure needed for the angle (Pa)
+    needed_lo: float = np.nan
+    needed_hi: float = np.nan
+    value: float = np.nan        # |angle| (deg) or |force| (mN) at the target pressure
+    value_lo: float = np.nan
+    value_hi: float = np.nan
+
+
+def _screen(model: object, designs: list[Design], target: DesignTarget, level: float
+            ) -> dict[str, np.ndarray]:
+    """|value| at the target pressure with its band, and the pressure needed for the
+    target angle with its band, for every design (NaN where the model has no answer).
+    Uses the model's batch ``evaluate_designs`` when it has one (the emulator), else its
+    ``predict`` and ``inverse`` per design."""
+    angle = None if target.kind == "force_at_pressure" else target.value
+    batch = getattr(model, "evaluate_designs", None)
+    if batch is not None:
+        out = batch(designs, target.pressure_pa, angle, level)
+        if target.kind == "force_at_pressure":
+            out = {**out, "angle": np.abs(out["force"]), "angle_lo": np.abs(out["force_lo"]),
+                   "angle_hi": np.abs(out["force_hi"])}
+        lo = np.fmin(out["angle_lo"], out["angle_hi"])
+        hi = np.fmax(out["angle_lo"], out["angle_hi"])
+        return {"value": np.abs(out["angle"]), "value_lo": lo, "value_hi": hi,
+                "needed": out["needed"], "needed_lo": out["needed_lo"],
+                "needed_hi": out["needed_hi"]}
+    keys = ("value", "value_lo", "value_hi", "needed", "needed_lo", "needed_hi")
+    res = {k: np.full(len(designs), np.nan) for k in keys}
+    for i, design in enumerate(designs):
+        try:
+            pred = model.predict(design, [target.pressure_pa], level=level)  # type: ignore
+        except InputError:
+            continue
+        if target.kind == "force_at_pressure":
+            if pred.force_mn is None:
+                continue
+            vals = np.abs([pred.force_mn[0], pred.force_lower_mn[0], pred.force_upper_mn[0]])
+        else:
+            vals = np.abs([pred.angle_deg[0], pred.lower_deg[0], pred.upper_deg[0]])
+            sign = np.sign(pred.angle_deg[0]) if np.isfinite(pred.angle_deg[0]) else 1.0
+            try:
+                inv = model.inverse(design, [(sign or 1.0) * target.value],  # type: ignore
+                                    level=level)
+                res["needed"][i] = inv.pressure_pa[0]
+                res["needed_lo"][i], res["needed_hi"][i] = inv.lower_pa[0], inv.upper_pa[0]
+            except InputError:
+                pass
+        res["value"][i], res["value_lo"][i], res["value_hi"][i] = (
+            vals[0], np.nanmin(vals), np.nanmax(vals))
+    return res
+
+
+def _solve_lengths(model: object, evals: list[_Eval], target: DesignTarget, level: float,
+                   L_range: tuple[float, float]) -> list[_Eval]:
+    """Bisection in L (all candidates at once) so that the value at the target pressure
+    equals the target; a value past the FE's range counts as too large."""
+    if not evals:
+        return []
+    lo = np.full(len(evals), L_range[0])
+    hi = np.full(len(evals), L_range[1])
+
+    def f(L: np.ndarray) -> tuple[np.ndarray, list[Design], dict]:
+        designs = []
+        for e, length in zip(evals, L):
+            designs.append(_design(e.pair, {**e.values, "L_mm": float(length)}))
+        r = _screen(model, designs, target, level)
+        v = np.where(np.isfinite(r["value"]), r["value"] - target.value, np.inf)
+        return v, designs, r
+
+    f_lo, _, _ = f(lo)
+    f_hi, _, _ = f(hi)
+    ok = (f_lo <= 0) & (f_hi >= 0) & np.isfinite(f_lo)
+    for _ in range(30):
+        mid = np.sqrt(lo * hi)
+        f_mid, _, _ = f(mid)
+        up = f_mid > 0
+        hi = np.where(up, mid, hi)
+        lo = np.where(up, lo, mid)
+    mid = np.sqrt(lo * hi)
+    f_mid, designs, r = f(mid)
+    out = []
+    for i, e in enumerate(evals):
+        if ok[i] and np.isfinite(f_mid[i]) and abs(f_mid[i]) <= 0.01 * target.value:
+            out.append(_Eval(e.pair, {**e.values, "L_mm": float(mid[i])}, designs[i],
+                             *(float(r[k][i]) for k in ("needed", "needed_lo", "needed_hi",
+                                                         "value", "value_lo", "value_hi"))))
+    return out
+
+
+def _score(e: _Eval, objective: str, target: DesignTarget) -> float:
+    if objective == "pressure":
+        return e.needed
+    if objective == "margin":
+        return e.needed_hi
+    if objective == "compact":
+        return e.values["L_mm"]
+    width = e.value_hi - e.value_lo
+    return width / max(e.value, 1e-9)
+
+
+def _unit(e: _Eval, ranges: dict[str, tuple[float, float]]) -> np.ndarray:
+    out = []
+    for name in VARIABLES:
+        lo, hi = ranges[name]
+        out.append(0.0 if hi <= lo else np.log(e.values[name] / lo) / np.log(hi / lo))
+    return np.array(out)
+
+
+def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
+                   objective: str | None = None, n_results: int = 5, level: float = 0.95,
+                   seed: int = 0) -> InverseDesignResult:
+    """Ranked designs meeting ``target`` (see the module docstring)."""
+    target = target.validated()
+    objective = objective or DEFAULT_OBJECTIVE[target.kind]
+    if objective not in OBJECTIVES:
+        raise InputError("objective", f"unknown objective {objective!r}", " | ".join(OBJECTIVES))
+    if objective in ("pressure", "margin") and target.kind != "pressure_budget":
+        raise InputError("objective", f"{objective!r} ranks by the pressure needed",
+                         "compact | certainty for this target")
+    ranges = bounds.ranges()
+    slices_fn = getattr(model, "covered_slices", None)
+    n_evaluated = 0
+    feasible: list[_Eval] = []
+    best_reach: dict[str, object] = {}
+    for pair in bounds.allowed_pairs():
+        slices = slices_fn(pair) if slices_fn is not None else None
+        if slices is not None and not slices:
+            continue
+        designs, kept = [], []
+        count = (CANDIDATES_PER_PAIR if hasattr(model, "evaluate_designs")
+                 else CANDIDATES_PER_PAIR // 4)   # one predict per design: fewer
+        for values in _candidates(ranges, slices, seed, count):
+            try:
+                designs.append(_design(pair, values))
+                kept.append(values)
+            except InputError:
+                continue
+        if not designs:
+            continue
+        r = _screen(model, designs, target, level)
+        n_evaluated += len(designs)
+        evals = [_Eval(pair, v, d, *(float(r[k][i]) for k in (
+                     "needed", "needed_lo", "needed_hi", "value", "value_lo", "value_hi")))
+                 for i, (v, d) in enumerate(zip(kept, designs)) if np.isfinite(r["value"][i])
+                 or np.isfinite(r["needed"][i])]
+        if not evals:
+            continue
+        reachable = [e for e in evals if np.isfinite(e.value)]
+        if reachable:
+            top = max(reachable, key=lambda e: e.value)
+            if not best_reach or top.value > best_reach["largest_value"]:  # type: ignore
+                best_reach = {"largest_value": top.value, "design": top.design.as_dict(),
+                              "pair": "/".join(pair), "at_pressure_pa": target.pressure_pa}
+        if target.kind == "pressure_budget":
+            feasible += [e for e in evals if np.isfinite(e.needed)
+                         and e.needed <= target.pressure_pa]
+            continue
+        # exact targets: the candidates nearest the target, then L solved to hit it
+        near = sorted(reachable, key=lambda e: abs(np.log(max(e.value, 1e-12) / target.value)))
+        hits = _solve_lengths(model, near[: 6 * n_results], target, level, ranges["L_mm"])
+        n_evaluated += 32 * len(near[: 6 * n_results])
+        feasible += hits
+    feasible = [e for e in feasible if np.isfinite(_score(e, objective, target))]
+    feasible.sort(key=lambda e: _score(e, objective, target))
+    chosen: list[_Eval] = []
+    for e in feasible:
+        u = _unit(e, ranges)
+        if all(e.pair != c.pair or np.linalg.norm(u - _unit(c, ranges)) >= MIN_SPACING
+               for c in chosen):
+            chosen.append(e)
+        if len(chosen) == n_results:
+            break
+    candidates = []
+    for rank, e in enumerate(chosen, 1):
+        p_max = max(target.pressure_pa, e.needed if np.isfinite(e.needed) else 0.0)
+        curve = model.predict(e.design, np.linspace(0.0, p_max, CURVE_POINTS),  # type: ignore
+                              level=level)
+        candidates.append(DesignCandidate(
+            rank=rank, design=e.design, family="/".join(e.pair),
+            score=float(_score(e, objective, target)), pressure_needed_pa=e.needed,
+            pressure_lower_pa=e.needed_lo, pressure_upper_pa=e.needed_hi,
+            value_at_pressure=e.value, value_lower=e.value_lo, value_upper=e.value_hi,
+            curve=curve))
+    if candidates:
+        explanation = (f"{len(feasible)} of {n_evaluated} evaluated designs meet the target; "
+                       f"the {len(candidates)} best by {objective} are listed")
+    else:
+        what = "force" if target.kind == "force_at_pressure" else "angle"
+        reach = best_reach.get("largest_value")
+        explanation = (f"no design inside the bounds reaches the target {what} "
+                       f"{target.value:g} at {target.pressure_pa:g} Pa"
+                       + (f"; the largest reachable is {reach:.3g}" if reach else "")
+                       + ": widen the bounds (longer chamber, thinner membrane, softer "
+                       "membrane) or raise the pressure")
+    return InverseDesignResult(target=target, objective=objective,
+                               feasible=bool(candidates), candidates=tuple(candidates),
+                               explanation=explanation, best_reachable=best_reach,
+                               n_evaluated=n_evaluated)
