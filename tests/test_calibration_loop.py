@@ -72,20 +72,23 @@ def test_the_reversed_pair_bends_negative_and_selects_nothing():
 
 
 MEASUREMENT_CASES = [
-    ("pressure_offset", Truth(p0_pa=120.0), {"p0_pa": 120.0}, LOADING),
-    ("hydraulic_resistance", Truth(R_pa_per_ul_s=60.0), {"R_pa_per_ul_s": 60.0}, LOOP),
-    ("angle_offset", Truth(offset_deg=2.0), {"offset_deg": 2.0}, LOADING),
-    ("camera_gain", Truth(k_angle=1.08), {"k_angle": 1.08}, LOOP),
-    ("pressure_gain", Truth(k_pressure=1.06), {"k_pressure": 1.06}, LOOP),
+    ("pressure_offset", Truth(p0_pa=120.0), {"p0_pa": 120.0}, LOADING, (2.5,)),
+    ("hydraulic_resistance", Truth(R_pa_per_ul_s=60.0), {"R_pa_per_ul_s": 60.0}, LOOP,
+     (2.5,)),
+    ("angle_offset", Truth(offset_deg=2.0), {"offset_deg": 2.0}, LOADING, (2.5,)),
+    ("camera_gain", Truth(k_angle=1.08), {"k_angle": 1.08}, LOOP, (2.5,)),
+    ("pressure_gain", Truth(k_pressure=1.06), {"k_pressure": 1.06}, LOOP, (2.5,)),
     ("viscoelastic_creep", Truth(g_retarded=0.25, tau_retardation_s=2.0),
-     {"g_retarded": 0.25, "tau_retardation_s": 2.0}, LOOP),
+     {"g_retarded": 0.25, "tau_retardation_s": 2.0}, LOOP, (1.25, 2.5)),
 ]
 
 
-@pytest.mark.parametrize("effect, truth, values, protocol", MEASUREMENT_CASES,
+@pytest.mark.parametrize("effect, truth, values, protocol, flows", MEASUREMENT_CASES,
                          ids=[c[0] for c in MEASUREMENT_CASES])
-def test_each_measurement_and_time_effect_is_found_and_sized(effect, truth, values, protocol):
-    assert_recovers(calibrate(Lab(designs=BASES, protocol=protocol), truth), effect, values)
+def test_each_measurement_and_time_effect_is_found_and_sized(effect, truth, values, protocol,
+                                                             flows):
+    lab = Lab(designs=BASES, protocol=protocol, flows_ul_s=flows)
+    assert_recovers(calibrate(lab, truth), effect, values)
 
 
 PHYSICAL_CASES = [

@@ -67,7 +67,8 @@ class Observations:
 
     def __post_init__(self) -> None:
         if self.direction is None:
-            object.__setattr__(self, "direction", directions(self.curve, self.pressure_pa))
+            object.__setattr__(self, "direction",
+                               directions(self.curve, self.pressure_pa, self.angle_deg))
 
     @property
     def n(self) -> int:

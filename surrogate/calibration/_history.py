@@ -2,8 +2,7 @@
 
 Labs record a curve in time (or file) order; the pressure's change from the previous
 reading says what the pump did: rising = loading (fluid in, direction +1), falling =
-unloading (withdrawn, -1), unchanged within ``HOLD_FRACTION`` of the curve's pressure
-range = hold (pump stopped, 0). The first reading takes the direction of the next
+unloading (withdrawn, -1), pressure and angle unchanged = hold (pump stopped, 0). The first reading takes the direction of the next
 interval; a drop into a flat stretch is the start of a hold (the gauge loses the inlet's
 R Q when the pump stops). The noise floor, the time effects' identifiability and the inlet pressure drop
 (R Q x direction) use it.
@@ -15,24 +14,34 @@ import numpy as np
 
 HOLD_FRACTION = 0.02
 HOLD_MIN_PA = 5.0
+HOLD_ANGLE_FRACTION = 0.05
+HOLD_MIN_DEG = 1.0
 #: holds below this fraction of a curve's top pressure are the actuator at rest, not holds
 REST_FRACTION = 0.1
 
 
-def directions(curve: np.ndarray, pressure_pa: np.ndarray) -> np.ndarray:
+def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray
+               ) -> np.ndarray:
     """+1 / -1 / 0 per row; rows sorted by curve, then history. A reading is classified
-    by the change from the previous one (the pump's state since then); a drop followed
-    by a flat interval is the step into a hold (the inlet's R Q vanishing when the pump
-    stops), not unloading."""
+    by the change from the previous one (the pump's state since then). Hold: pressure and
+    angle both unchanged (within HOLD_FRACTION of the curve's pressure range and
+    HOLD_ANGLE_FRACTION of its angle range: near the pressure maximum of a constant-flow
+    inflation the pressure is flat while the angle still rises, which is loading). A drop
+    followed by a flat interval is the step into a hold (the inlet's R Q vanishing when
+    the pump stops), not unloading."""
     out = np.zeros(pressure_pa.size)
     for c in np.unique(curve):
         rows = np.flatnonzero(curve == c)
-        p = pressure_pa[rows]
+        p, a = pressure_pa[rows], angle_deg[rows]
         tol = max(HOLD_FRACTION * float(np.ptp(p)), HOLD_MIN_PA)
-        dp = np.diff(p)
-        back = np.where(dp > tol, 1.0, np.where(dp < -tol, -1.0, 0.0))
-        fwd_flat = np.append(np.abs(dp[1:]) <= tol, False)
-        d = np.where((back < 0) & fwd_flat, 0.0, back)
+        tol_a = max(HOLD_ANGLE_FRACTION * float(np.ptp(a)), HOLD_MIN_DEG)
+        dp, da = np.diff(p), np.diff(a)
+        flat = (np.abs(dp) <= tol) & (np.abs(da) <= tol_a)
+        # pressure flat, bend growing (in magnitude: reversed pairs bend negative): loading
+        back = np.where(flat, 0.0, np.where(np.abs(dp) > tol, np.sign(dp),
+                                            np.sign(np.diff(np.abs(a)))))
+        fwd_flat = np.append(flat[1:], False)
+        d = np.where((back < 0) & fwd_flat & (np.abs(da) <= tol_a), 0.0, back)
         out[rows[1:]] = d
         out[rows[0]] = d[0] if d.size else 0.0
     return out

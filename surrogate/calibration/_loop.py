@@ -16,7 +16,8 @@ candidate set E (one effect, or a pair) is selectable when
 7. it explains the data: what replicates still share after it (_residual.py) is within
    the baseline's own uncertainty and replicate scatter. A set that lowers the error
    but leaves structure is reported, not selected: an effect outside the catalogue acts.
-Among selectable sets the lowest BIC wins; none -> nothing selected, and then
+Pairs are tried when at least one member alone passes rule 4. Among selectable sets the
+lowest BIC wins; none -> nothing selected, and then
 ``rmse_after_deg`` = ``rmse_before_deg``: a selection never makes the error worse.
 """
 
@@ -134,8 +135,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     singles = [e.id for e in CATALOGUE if status[e.id]["reason"] is None]
     for eid in singles:
         get_fit((eid,))
-    pairs = [p for p in itertools.combinations(singles, 2)
-             if not (EFFECTS[p[0]].stage == EFFECTS[p[1]].stage == "time")]
+    promising = {e for e in singles if get_fit((e,)).bic < base.bic + DELTA_BIC}
+    pairs = [p for p in itertools.combinations(singles, 2) if promising & set(p)
+             and not (EFFECTS[p[0]].stage == EFFECTS[p[1]].stage == "time")]
     for p in pairs:
         get_fit(p)
     pairs.sort(key=lambda p: get_fit(p).bic)

@@ -72,8 +72,9 @@ class AugmentedModel:
                 x0.append(p.start)
         self.layout = Layout(tuple(names), tuple(units), np.array(lo, float),
                              np.array(hi, float), np.array(x0, float), n_open)
-        self.design_index = np.array([responses.index[design_key(obs.design(int(c)))]
-                                      for c in obs.curve])
+        per_curve = np.array([responses.index[design_key(obs.design(c))]
+                              for c in range(obs.n_curves)], dtype=int)
+        self.design_index = per_curve[obs.curve]
         fam_pos = {f: i for i, f in enumerate(self.families)}
         self.family_pos = np.array([fam_pos[f] for f in obs.family])
         if self.time:

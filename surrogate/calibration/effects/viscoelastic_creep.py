@@ -14,19 +14,19 @@ def prony_lag(static_deg: np.ndarray, time_s: np.ndarray, valid: np.ndarray,
     curve starts at rest); arrays (n_curves, m) along each curve's time, ``valid`` marks
     real entries (padding after the last). Exact for a static angle linear between the
     given instants."""
+    dt = np.where(valid[:, 1:], np.diff(time_s, axis=1), 1.0)
+    dt = np.maximum(dt, 1e-9)
+    decay = np.exp(-dt / tau_s)
+    gain = tau_s / dt * (1.0 - decay)  # exact response to a ramp over the interval
     y = static_deg[:, 0].copy()
     out = np.empty_like(static_deg)
     out[:, 0] = static_deg[:, 0]
     for j in range(1, static_deg.shape[1]):
-        dt = np.where(valid[:, j], time_s[:, j] - time_s[:, j - 1], 1.0)
-        dt = np.maximum(dt, 1e-9)
-        e = np.exp(-dt / tau_s)
-        gain = tau_s / dt * (1.0 - e)  # exact response to a ramp over the interval
         u0, u1 = static_deg[:, j - 1], static_deg[:, j]
-        y_new = u1 - (u1 - u0) * gain + (y - u0) * e
-        y = np.where(valid[:, j], y_new, y)
-        out[:, j] = (1.0 - g) * u1 + g * y
-    return out
+        y = np.where(valid[:, j], u1 - (u1 - u0) * gain[:, j - 1]
+                     + (y - u0) * decay[:, j - 1], y)
+        out[:, j] = y
+    return (1.0 - g) * static_deg + g * out
 
 
 class ViscoelasticCreep(Effect):
