@@ -146,3 +146,21 @@ def test_unpredictable_held_out_curve_is_null_not_500(client):
              for i, p in enumerate([-1566.3, 1088.3, 12630.6, 19073.1])]
     r = client.post("/v1/calibrate", json={"rows": rows, "model": "paper", "folds": 20})
     assert r.status_code in (200, 422), r.text
+
+
+def test_warnings_reach_the_report_and_its_interpretation():
+    rows = curve("s1") + curve("s2", 1.03) + curve("s3", 0.98)
+    report = run_calibration(rows + rows[:6], "paper").report  # curve s1 pasted twice
+    assert any("duplicated rows" in w and "x2" in w for w in report["warnings"])
+    assert "Warning: rows: 6 duplicated rows" in report["interpretation"]
+
+
+def test_a_per_family_baseline_states_what_it_leaves_open():
+    rows = curve("s1") + curve("s2", 1.03) + curve("s3", 0.98)
+    r = run_calibration(rows, "paper").report
+    assert r["baseline"]["open_parameters"] == ["amplitude", "pressure_scale"]
+    assert "b_t" in r["baseline"]["why"]
+    gains = {c["effect"]: c for c in r["not_identifiable"]}
+    assert "amplitude" in gains["camera_gain"]["reason"]
+    assert "pressure scale" in gains["pressure_gain"]["reason"]
+    assert "does not respond" in gains["membrane_stiffness"]["reason"]

@@ -1,9 +1,10 @@
 """``balloon calibrate DATA.csv --report report.json [--plot report.png] [--save NAME]
-[--model fitted|paper|PATH]``: close the loop with measured data.
+[--model emulator|exponential|paper|PATH] [--strict]``: close the loop with measured
+data.
 
 Runs the calibration loop of ``surrogate.calibration`` (docs/calibration.md): the model
 as is, the recalibrated baseline (cross-validated by curve), the candidate effects, the
-selection and the residual structure test; writes the JSON report, optionally the plot,
+selection and what is left; writes the JSON report, optionally the plot,
 and optionally saves the augmented model under NAME in the models directory (usable as
 ``model`` in /v1/predict).
 """
@@ -26,9 +27,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--report", type=Path, required=True, help="report JSON to write")
     parser.add_argument("--plot", type=Path, help="PNG: data, model before/after, residuals")
     parser.add_argument("--save", metavar="NAME", help="save the augmented model as NAME")
-    parser.add_argument("--model", default="fitted",
-                        help="starting model: 'fitted' (the service's surrogate), 'paper' "
-                             "(the paper's constants) or a surrogate JSON path")
+    parser.add_argument("--model", default="emulator",
+                        help="baseline: 'emulator' (default: the design-space emulator, "
+                             "nothing left open), 'exponential' / 'fitted' (the fitted "
+                             "exponential model), 'paper' (the paper's constants), a saved "
+                             "model's name, or a model file")
     parser.add_argument("--models-dir", type=Path,
                         help="where --save writes (default: the service's models_dir)")
     parser.add_argument("--folds", type=int, default=5,
@@ -40,15 +43,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _starting_model(name: str):
-    if name == "paper":
-        return "paper"
-    from surrogate import load_surrogate
+    """The baseline named by --model, resolved as ``balloon predict`` resolves it."""
+    from service.commands.predict import surrogate_from_args
 
-    if name == "fitted":
-        from service.settings import get_settings
-
-        return load_surrogate(get_settings().surrogate_path)
-    return load_surrogate(Path(name))
+    return surrogate_from_args(argparse.Namespace(model=name, form=None))
 
 
 def run(args: argparse.Namespace) -> int:

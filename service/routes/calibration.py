@@ -34,8 +34,9 @@ class CalibrateRequest(BaseModel):
     rows: list[dict[str, Any]] = Field(..., min_length=1, max_length=20_000,
                                        description="one object per observation",
                                        examples=[EXAMPLE_ROWS])
-    model: str = Field("fitted", min_length=1, max_length=64,
-                       description="starting model: fitted, paper, or a saved model name")
+    model: str = Field("emulator", min_length=1, max_length=64,
+                       description="baseline: emulator (nothing left open), exponential / "
+                       "fitted, paper, or a saved model name")
     save: str | None = Field(None, min_length=1, max_length=64,
                              pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$",
                              description="save the augmented model under this name "

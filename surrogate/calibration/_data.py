@@ -109,17 +109,7 @@ class Observations:
 
     def subset(self, curves: np.ndarray) -> Observations:
         """The observations of the given curve indices (families keep their indices)."""
-        keep = np.isin(self.curve, curves)
-        old = np.unique(self.curve[keep])
-        remap = np.full(self.n_curves, -1)
-        remap[old] = np.arange(old.size)
-        groups, group = np.unique(self.group[keep], return_inverse=True)
-        return Observations(
-            tuple(self.curve_ids[i] for i in old), self.families, remap[self.curve[keep]],
-            self.family[keep], group, self.L_mm[keep], self.t_mm[keep],
-            self.pressure_pa[keep], self.angle_deg[keep], self.time_s[keep],
-            self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
-            self.direction[keep], self.warnings)
+        return self.rows(np.isin(self.curve, curves))
 
     def rows(self, keep: np.ndarray) -> Observations:
         """The observations of the rows where ``keep`` (curves left empty vanish)."""
