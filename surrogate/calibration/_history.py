@@ -12,10 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-HOLD_FRACTION = 0.02
-HOLD_MIN_PA = 5.0
-HOLD_ANGLE_FRACTION = 0.05
-HOLD_MIN_DEG = 1.0
+HOLD_FRACTION = 0.01  # a constant-flow inflation near its pressure maximum still rises
+HOLD_MIN_PA = 8.0     # faster (1 % of the range per reading at 1 s, 2.5 ul/s)
 #: holds below this fraction of a curve's top pressure are the actuator at rest, not holds
 REST_FRACTION = 0.1
 
@@ -23,25 +21,21 @@ REST_FRACTION = 0.1
 def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray
                ) -> np.ndarray:
     """+1 / -1 / 0 per row; rows sorted by curve, then history. A reading is classified
-    by the change from the previous one (the pump's state since then). Hold: pressure and
-    angle both unchanged (within HOLD_FRACTION of the curve's pressure range and
-    HOLD_ANGLE_FRACTION of its angle range: near the pressure maximum of a constant-flow
-    inflation the pressure is flat while the angle still rises, which is loading). A drop
-    followed by a flat interval is the step into a hold (the inlet's R Q vanishing when
-    the pump stops), not unloading."""
+    by the pressure's change from the previous one (the pump's state since then): within
+    HOLD_FRACTION of the curve's pressure range (at least HOLD_MIN_PA, above a pressure
+    sensor's noise) it is a hold. A drop followed by a flat interval is the step into a
+    hold (the inlet's R Q vanishing when the pump stops), not unloading. Pressure alone
+    decides: angles are noisier, and creep moves them during a hold."""
     out = np.zeros(pressure_pa.size)
     for c in np.unique(curve):
         rows = np.flatnonzero(curve == c)
-        p, a = pressure_pa[rows], angle_deg[rows]
+        p = pressure_pa[rows]
         tol = max(HOLD_FRACTION * float(np.ptp(p)), HOLD_MIN_PA)
-        tol_a = max(HOLD_ANGLE_FRACTION * float(np.ptp(a)), HOLD_MIN_DEG)
-        dp, da = np.diff(p), np.diff(a)
-        flat = (np.abs(dp) <= tol) & (np.abs(da) <= tol_a)
-        # pressure flat, bend growing (in magnitude: reversed pairs bend negative): loading
-        back = np.where(flat, 0.0, np.where(np.abs(dp) > tol, np.sign(dp),
-                                            np.sign(np.diff(np.abs(a)))))
+        dp = np.diff(p)
+        flat = np.abs(dp) <= tol
+        back = np.where(flat, 0.0, np.sign(dp))
         fwd_flat = np.append(flat[1:], False)
-        d = np.where((back < 0) & fwd_flat & (np.abs(da) <= tol_a), 0.0, back)
+        d = np.where((back < 0) & fwd_flat, 0.0, back)
         out[rows[1:]] = d
         out[rows[0]] = d[0] if d.size else 0.0
     return out

@@ -14,7 +14,9 @@ candidate set E (one effect, or a pair) is selectable when
 6. (pairs) each member earns its place: BIC(pair) < BIC(each member alone) - 6 and the
    pair's cross-validated error is below each member's alone;
 7. it explains the data: what replicates still share after it (_residual.py) is within
-   the baseline's own uncertainty and replicate scatter. A set that lowers the error
+   the baseline's own uncertainty and replicate scatter; and for a physical effect the
+   baseline's own uncertainty at the fitted design (its band) is below the noise floor
+   (an emulator far from its training designs cannot back a size). A set that lowers the error
    but leaves structure is reported, not selected: an effect outside the catalogue acts.
 Pairs are tried when at least one member alone passes rule 4. Among selectable sets the
 lowest BIC wins; none -> nothing selected, and then
@@ -152,9 +154,29 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         return residual_summary(obs, resid, cv, noise, {"structured": False, "z_lag1": 0.0,
                                                          "z_runs": 0.0}, baseline_var)
 
+    def baseline_sd_at(effects: tuple[str, ...]) -> float | None:
+        """RMS of the baseline's own sd at the fitted physical change (None: none)."""
+        phys = tuple(EFFECTS[e] for e in effects if EFFECTS[e].stage == "design")
+        if not phys:
+            return None
+        values = get_fit(effects).values
+        sd = responses.lookup(responses.sd_at(phys, [values[e.parameters[0].name]
+                                                     for e in phys]),
+                              as_is.design_index, np.clip(obs.pressure_pa, 0.0, None))
+        return float(np.sqrt(np.nanmean(sd**2))) if np.any(np.isfinite(sd)) else None
+
     candidates, selectable = [], []
     for effects in evaluated:
         cand = _judge(effects, get_fit, get_cv, base, rmse_before)
+        sd_here = baseline_sd_at(effects) if cand["selectable"] else None
+        if sd_here is not None:
+            cand["baseline_sd_at_fit_deg"] = sd_here
+            limit = noise.rms_deg if math.isfinite(noise.rms_deg) else math.inf
+            if sd_here > limit:
+                cand["selectable"] = False
+                cand["why_not"].append(
+                    f"the baseline's own uncertainty at the fitted design ({sd_here:.2f} "
+                    f"deg) exceeds the noise floor: it cannot back this size")
         if cand["selectable"] or not cand["why_not"]:
             rest = leaves(effects)
             cand["unexplained_rms_deg"] = rest["unexplained_rms_deg"]

@@ -10,7 +10,8 @@ tests/test_calibration_loop.py). So with a replicate floor:
 
 (sd_baseline: the baseline's own uncertainty for an FE solve, from its band -- an
 emulator's interpolation error is not a missing effect), and what remains is *structured*
-when sqrt(rmse^2 - sd_baseline^2) exceeds ``EXCESS_RATIO`` x the floor, or when replicates
+when sqrt(rmse^2 - sd_baseline^2) exceeds the floor by more than ``EXCESS_RATIO`` (or 2
+relative standard errors of the floor, when larger: ``excess_limit``), or when replicates
 share a residual: for readings of curve c and the mean out-of-fold residual of the other
 replicates at the same time,
 
@@ -78,9 +79,11 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
         model_part2 = max(rmse_after**2 - baseline_var, 0.0)
         unexplained = math.sqrt(max(model_part2 - floor**2, 0.0))
         ratio = math.sqrt(model_part2) / floor
-        excess = ratio > EXCESS_RATIO
+        limit = excess_limit(noise)
+        excess = ratio > limit
         if excess:
-            why.append(f"the cross-validated error is {ratio:.2f} x the replicate floor"
+            why.append(f"the cross-validated error is {ratio:.2f} x the replicate floor, "
+                       f"beyond its {limit:.2f} x allowance"
                        + (" net of the baseline's own uncertainty" if baseline_var else ""))
         shared = bool(sys_ is not None and sys_["s2_deg2"] - baseline_var
                       > Z_SYSTEMATIC * sys_["se_deg2"]
@@ -111,6 +114,13 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
                     "trusting the model.")
     return {"structured": structured, "unexplained_rms_deg": unexplained, "where": bins,
             "systematic": sys_, "sentence": sentence}
+
+
+def excess_limit(noise: NoiseFloor) -> float:
+    """How far above the floor a right model's cross-validated error may be: EXCESS_RATIO,
+    or 1 + 2 relative standard errors of the floor when that is larger."""
+    rel = noise.rel_se if math.isfinite(noise.rel_se) else 0.0
+    return max(EXCESS_RATIO, 1.0 + 2.0 * rel)
 
 
 def where(obs: Observations, resid: np.ndarray) -> list[dict]:

@@ -59,6 +59,17 @@ class Responses:
         half = 0.5 * (np.asarray(out.upper_deg, float) - np.asarray(out.lower_deg, float))
         return angle, np.abs(half) / BAND_Z
 
+    def sd_at(self, effects: tuple[Effect, ...], thetas: list[float]) -> np.ndarray:
+        """(n_designs, pressures): the baseline's own sd at the designs changed by the
+        physical ``effects`` at ``thetas`` (asked afresh, not interpolated)."""
+        out = []
+        for k in self.keys:
+            d = self.designs[k]
+            for e, theta in zip(effects, thetas, strict=True):
+                d = e.design(d, float(theta))
+            out.append(self._predict(d, True)[1])
+        return np.array(out)
+
     def nominal_sd(self) -> np.ndarray:
         """(n_designs, pressures): the baseline's own standard deviation for an FE solve
         of each nominal design (its band at BAND_LEVEL / z)."""
