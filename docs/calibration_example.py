@@ -1,54 +1,63 @@
-"""Make the worked example's data (docs/calibration.md): SYNTHETIC measurements.
+"""The worked example of docs/calibration.md: lab-like data made from FE curves, then the
+calibration, its report and its plot.
 
-Truth: the paper's constants (a = 0.101 deg/mm, a_t = 731.2 Pa, b_t = 7.179 /mm, log10),
-an inlet resistance of 70 Pa per ul/s and a 1.5 deg pre-curvature; four designs of the
-paper's Table 2 at 1.0 and 2.5 ul/s, three specimens each (2 % scatter of A), angle read
-every 1 s for 10 s with 0.4 deg noise. Run from the repository root:
+Data: the cached FE solves of the project's own solver (tests/data/
+fe_calibration_curves.npz) read the way a lab reads an actuator (tests/calibration_lab.py):
+three of the paper's designs (L 7.1 / t 0.75, L 11.1 / t 0.5, L 4.1 / t 0.5 mm), 3
+specimens each with 2 % specimen scatter, pumped at 1.25 and 2.5 ul/s for 6 s, held 4 s
+and withdrawn 6 s, angle and pressure read every 1 s (0.7 deg, 3 Pa noise). Truth: an
+inlet resistance of 60 Pa per ul/s and a 1.5 deg pre-curvature. Run from the repository
+root:
 
-    .venv/bin/python docs/calibration_example.py surrogate/calibration/data/example_lab.csv
+    .venv/bin/python docs/calibration_example.py
+
+writes surrogate/calibration/data/example_lab.csv, docs/calibration-example-report.json
+and docs/calibration-example.png. The baseline is the FE stand-in of the tests (the cached
+curves interpolated); ``balloon calibrate surrogate/calibration/data/example_lab.csv
+--model paper`` runs the same data against the paper's exponential model.
 """
 
 from __future__ import annotations
 
 import csv
-import math
+import json
 import sys
+from pathlib import Path
 
-import numpy as np
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))
 
-DESIGNS = ((4.1, 0.5), (7.1, 0.5), (11.1, 0.5), (7.1, 1.0))
-R_TRUE, OFFSET_TRUE = 70.0, 1.5
+import calibration_lab as lab  # noqa: E402
+
+from surrogate.calibration import jsonable, plot_calibration, run_calibration  # noqa: E402
+
+TRUTH = lab.Truth(R_pa_per_ul_s=60.0, offset_deg=1.5)
+LAB = lab.Lab(flows_ul_s=(1.25, 2.5), protocol=lab.LOOP, seed=7)
 
 
-def rows(seed: int = 7) -> list[dict]:
-    rng = np.random.default_rng(seed)
-    times = np.arange(0.0, 11.0)
-    out, k = [], 0
-    for L, t in DESIGNS:
-        tau = 731.2 * math.log10(7.179 * t)
-        A = 0.101 * L
-        for q in (1.0, 2.5):
-            for _ in range(3):
-                k += 1
-                spec = 1 + 0.02 * rng.standard_normal()
-                t_c = 8.0 * (1 + 0.1 * rng.standard_normal())
-                p_end = tau * math.log(1 + 80.0 / A) * (1 + 0.03 * rng.standard_normal())
-                pc = p_end * (1 - np.exp(-times / t_c)) / (1 - math.exp(-10 / t_c))
-                angle = spec * A * np.expm1(pc / tau) + OFFSET_TRUE
-                angle += 0.4 * rng.standard_normal(times.size)
-                for ts, p, a in zip(times, pc + R_TRUE * q, angle, strict=True):
-                    out.append({"curve_id": f"spec{k:02d}", "L_mm": L, "t_mm": t,
-                                "body_material": "pdms_1_10",
-                                "membrane_material": "ecoflex_00_30",
-                                "pressure_pa": round(float(p), 1),
-                                "angle_deg": round(float(a), 2), "time_s": ts,
-                                "flow_ul_s": q})
-    return out
+def main() -> int:
+    rows = lab.measure(LAB, TRUTH)
+    data = ROOT / "surrogate" / "calibration" / "data" / "example_lab.csv"
+    with open(data, "w", newline="") as fh:
+        fh.write("# made by docs/calibration_example.py from FE curves: inlet resistance "
+                 "60 Pa per ul/s, angle offset 1.5 deg\n")
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    cal = run_calibration(rows, lab.FEStandIn())
+    report = jsonable(cal.report)
+    (ROOT / "docs" / "calibration-example-report.json").write_text(
+        json.dumps(report, indent=1) + "\n")
+    plot_calibration(cal, ROOT / "docs" / "calibration-example.png")
+    print(f"true floor {lab.true_floor(LAB, TRUTH):.2f} deg")
+    for k in ("rmse_model_deg", "rmse_before_deg", "rmse_after_deg", "noise_floor_deg",
+              "selected_effects", "unexplained_rms_deg", "residual_structured_after"):
+        print(k, report[k])
+    print(json.dumps(report["fitted"]["effects"], indent=1))
+    print(report["interpretation"])
+    return 0
 
 
 if __name__ == "__main__":
-    data = rows()
-    with open(sys.argv[1], "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(data[0]))
-        w.writeheader()
-        w.writerows(data)
+    raise SystemExit(main())

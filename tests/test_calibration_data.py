@@ -78,3 +78,94 @@ def test_bad_file_is_not_half_loaded(tmp_path):
     path.write_text(csv_text(data))
     with pytest.raises(DataError, match="row 10"):
         load_observations(path)
+
+
+# ---- files as labs save them ------------------------------------------------------------
+
+def test_utf16_and_utf8_bom_files_load_like_utf8(tmp_path):
+    text = "# specimen notes: 25 \u00b0C\n" + csv_text(rows())
+    ref = load_observations(_write(tmp_path / "plain.csv", text.encode("utf-8")))
+    for name, data in (("bom8.csv", b"\xef\xbb\xbf" + text.encode("utf-8")),
+                       ("utf16.csv", text.encode("utf-16")),          # BOM + LE
+                       ("utf16be.csv", b"\xfe\xff" + text.encode("utf-16-be"))):
+        assert load_observations(_write(tmp_path / name, data)).sha256 == ref.sha256
+
+
+def test_latin1_file_is_one_line_naming_file_line_and_encoding(tmp_path):
+    text = csv_text(rows()).replace("s1", "s\u00e91", 1)  # 'é' in a curve id, row 6
+    path = _write(tmp_path / "lab.csv", text.encode("latin-1"))
+    with pytest.raises(DataError) as err:
+        load_observations(path)
+    msg = str(err.value)
+    assert "lab.csv" in msg and "line 7" in msg and "UTF-8" in err.value.allowed
+    assert str(tmp_path) not in msg and "\n" not in msg
+
+
+def test_utf16_without_bom_is_named(tmp_path):
+    path = _write(tmp_path / "x.csv", csv_text(rows()).encode("utf-16-le"))
+    with pytest.raises(DataError, match="UTF-16 without a byte-order mark"):
+        load_observations(path)
+
+
+def test_a_field_beyond_the_csv_size_limit_names_row_and_column(tmp_path):
+    data = rows()
+    data[3]["angle_deg"] = '"' + "1" * 200_000 + '"'
+    path = _write(tmp_path / "big.csv", csv_text(data).encode())
+    with pytest.raises(DataError) as err:
+        load_observations(path)
+    assert err.value.column == "angle_deg" and err.value.row == 4
+    assert len(str(err.value)) < 300
+
+
+@pytest.mark.parametrize("value", ["1e400", "9" * 500, 10**400])
+def test_very_large_numbers_are_an_input_error_naming_row_and_column(value):
+    data = rows()
+    data[2]["pressure_pa"] = value
+    with pytest.raises(DataError) as err:
+        observations_from_rows(data)
+    assert err.value.column == "pressure_pa" and err.value.row == 3
+    assert len(str(err.value)) < 200
+
+
+def test_a_json_integer_too_long_to_parse_is_a_data_error(tmp_path):
+    text = json.dumps({"rows": rows()}).replace('"300.0"', "1" + "0" * 5000, 1)
+    with pytest.raises(DataError, match="not valid JSON"):
+        load_observations(_write(tmp_path / "d.json", text.encode()))
+
+
+def test_kpa_looking_pressures_warn_naming_column_and_factor():
+    data = [{**r, "pressure_pa": str(float(r["pressure_pa"]) / 1000.0),
+             "angle_deg": str(3.0 * float(r["angle_deg"]))} for r in rows()]
+    obs = observations_from_rows(data)
+    assert any("pressure_pa" in w and "x1000" in w for w in obs.warnings)
+    with pytest.raises(DataError) as err:
+        observations_from_rows(data, strict=True)
+    assert err.value.column == "pressure_pa" and "strict" in str(err.value)
+
+
+def test_duplicated_rows_warn_with_the_factor_and_are_dropped():
+    data = rows()
+    obs = observations_from_rows(data + data)  # the file pasted twice
+    assert obs.n == 10
+    assert any(w.startswith("rows:") and "x2" in w and "10 duplicated rows" in w
+               for w in obs.warnings)
+    with pytest.raises(DataError, match="strict"):
+        observations_from_rows(data + data, strict=True)
+    assert observations_from_rows(data).warnings == ()
+
+
+def test_history_order_is_kept_and_unloading_recognised():
+    # one curve loaded then unloaded, no time column: file order is the history
+    ps = [0, 400, 800, 1200, 1100, 1100, 800, 400, 0]  # 100 Pa inlet drop into the hold
+    data = [{"curve_id": c, "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
+             "membrane_material": "ecoflex_00_30", "pressure_pa": p,
+             "angle_deg": -0.1 * p / 100.0} for c in ("a", "b") for p in ps]
+    obs = observations_from_rows(data)
+    assert obs.pressure_pa[:9].tolist() == ps                       # not sorted by pressure
+    assert obs.direction[:9].tolist() == [1, 1, 1, 1, 0, 0, -1, -1, -1]
+    assert obs.angle_deg.min() < 0                                 # negative angles accepted
+
+
+def _write(path, data: bytes):
+    path.write_bytes(data)
+    return path

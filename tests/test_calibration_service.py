@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 from service_fakes import assert_problem, settings_for
-from test_calibration_loop import measured_rows
 
 import service.cli
 from service.app import create_app
@@ -24,6 +23,29 @@ from surrogate.calibration import (
 )
 
 
+def measured_rows(offset_deg: float = 0.0, seed: int = 3) -> list[dict]:
+    """Shell-test data: the paper's model itself (the baseline these tests save and
+    reload) at three designs, 3 specimens (2 % scatter), 0.3 deg noise, plus an angle
+    offset. The calibration's quality is tested on FE data in test_calibration_loop."""
+    from surrogate import paper_surrogate
+
+    rng = np.random.default_rng(seed)
+    model = paper_surrogate()
+    rows = []
+    for L in (4.1, 7.1, 11.1):
+        p = np.linspace(100.0, 1600.0, 10)
+        for s in range(3):
+            a = model.predict(Design(L_mm=L, t_mm=0.5), p).angle_deg
+            a = a * (1 + 0.02 * rng.standard_normal()) + offset_deg
+            a = a + 0.3 * rng.standard_normal(p.size)
+            rows += [{"curve_id": f"L{L}-s{s}", "L_mm": L, "t_mm": 0.5,
+                      "body_material": "pdms_1_10", "membrane_material": "ecoflex_00_30",
+                      "pressure_pa": float(pi), "angle_deg": round(float(ai), 3),
+                      "time_s": float(i), "flow_ul_s": 2.5}
+                     for i, (pi, ai) in enumerate(zip(p, a, strict=True))]
+    return rows
+
+
 def main(argv: list[str]) -> int:
     """``balloon`` with only this command registered (others may not import yet)."""
     saved = service.cli.COMMAND_MODULES
@@ -36,8 +58,8 @@ def main(argv: list[str]) -> int:
 
 @pytest.fixture(scope="module")
 def offset_calibration():
-    """2 deg angle offset (see test_calibration_loop): selected and saved below."""
-    return run_calibration(measured_rows({"offset": 2.0}), "paper")
+    """2 deg angle offset: selected and saved below."""
+    return run_calibration(measured_rows(2.0), "paper")
 
 
 def test_saved_model_predicts_with_the_effect(tmp_path, offset_calibration):
@@ -58,7 +80,7 @@ def test_saved_model_predicts_with_the_effect(tmp_path, offset_calibration):
 
 
 def test_cli_writes_report_plot_and_model(tmp_path, capsys):
-    rows = measured_rows({"offset": 2.0})
+    rows = measured_rows(2.0)
     cols = list(rows[0])
     data = tmp_path / "data.csv"
     data.write_text("\n".join([",".join(cols)] + [",".join(str(r[c]) for c in cols)
@@ -102,7 +124,7 @@ def test_effects_lists_the_catalogue(client):
 
 
 def test_calibrate_endpoint_and_saved_model_in_predict(client):
-    rows = measured_rows({"offset": 2.0})
+    rows = measured_rows(2.0)
     r = client.post("/v1/calibrate", json={"rows": rows, "model": "paper"})
     assert r.status_code == 200, r.text
     body = r.json()

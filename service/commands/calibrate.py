@@ -1,9 +1,10 @@
 """``balloon calibrate DATA.csv --report report.json [--plot report.png] [--save NAME]
-[--model fitted|paper|PATH]``: close the loop with measured data.
+[--model emulator|exponential|paper|PATH] [--strict]``: close the loop with measured
+data.
 
 Runs the calibration loop of ``surrogate.calibration`` (docs/calibration.md): the model
 as is, the recalibrated baseline (cross-validated by curve), the candidate effects, the
-selection and the residual structure test; writes the JSON report, optionally the plot,
+selection and what is left; writes the JSON report, optionally the plot,
 and optionally saves the augmented model under NAME in the models directory (usable as
 ``model`` in /v1/predict).
 """
@@ -26,26 +27,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--report", type=Path, required=True, help="report JSON to write")
     parser.add_argument("--plot", type=Path, help="PNG: data, model before/after, residuals")
     parser.add_argument("--save", metavar="NAME", help="save the augmented model as NAME")
-    parser.add_argument("--model", default="fitted",
-                        help="starting model: 'fitted' (the service's surrogate), 'paper' "
-                             "(the paper's constants) or a surrogate JSON path")
+    parser.add_argument("--model", default="emulator",
+                        help="baseline: 'emulator' (default: the design-space emulator, "
+                             "nothing left open), 'exponential' / 'fitted' (the fitted "
+                             "exponential model), 'paper' (the paper's constants), a saved "
+                             "model's name, or a model file")
     parser.add_argument("--models-dir", type=Path,
                         help="where --save writes (default: the service's models_dir)")
     parser.add_argument("--folds", type=int, default=5,
                         help="folds of the grouped cross-validation by curve (default 5)")
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse data that only get a warning otherwise (pressures that "
+                             "look like kPa, duplicated rows)")
     parser.set_defaults(func=run)
 
 
 def _starting_model(name: str):
-    if name == "paper":
-        return "paper"
-    from surrogate import load_surrogate
+    """The baseline named by --model, resolved as ``balloon predict`` resolves it."""
+    from service.commands.predict import surrogate_from_args
 
-    if name == "fitted":
-        from service.settings import get_settings
-
-        return load_surrogate(get_settings().surrogate_path)
-    return load_surrogate(Path(name))
+    return surrogate_from_args(argparse.Namespace(model=name, form=None))
 
 
 def _deg(value: float | None, missing: str = "n/a") -> str:
@@ -68,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
 
     if not 2 <= args.folds <= 50:
         raise InputError("--folds", f"got {args.folds}", "2 <= folds <= 50")
-    obs = load_observations(args.data)  # validates everything before any work
+    obs = load_observations(args.data, strict=args.strict)  # validates before any work
     if args.save:
         from surrogate.calibration._saved import _check_name
 
@@ -77,6 +78,10 @@ def run(args: argparse.Namespace) -> int:
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
     report = jsonable(cal.report)
+    if args.save:
+        from surrogate.calibration import saveable
+
+        saveable(cal)
     args.report.parent.mkdir(parents=True, exist_ok=True)
     args.report.write_text(json.dumps(report, indent=1) + "\n")
     if args.plot:
@@ -88,10 +93,15 @@ def run(args: argparse.Namespace) -> int:
             args.models_dir = get_settings().models_dir
         path = save_model(cal, args.save, args.models_dir)
         print(f"saved model {args.save!r} to {path}", file=sys.stderr)
-    print(f"rmse model {_deg(report['rmse_model_deg'])} deg, before "
-          f"{_deg(report['rmse_before_deg'])}, after {_deg(report['rmse_after_deg'])} "
-          f"(noise floor {_deg(report['noise_floor_deg'], 'n/a: no replicate curves')})"
-          f"; selected: {', '.join(report['selected_effects']) or 'none'}"
+    def deg(x: float | None) -> str:
+        return "n/a" if x is None else f"{x:.2f}"
+
+    for w in report["warnings"]:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"rmse model {deg(report['rmse_model_deg'])} deg, before "
+          f"{deg(report['rmse_before_deg'])}, after {deg(report['rmse_after_deg'])} (noise "
+          f"floor {deg(report['noise_floor_deg'])}); selected: "
+          f"{', '.join(report['selected_effects']) or 'none'}"
           f"{'; RESIDUAL STRUCTURE REMAINS' if report['residual_structured_after'] else ''}")
     print(report["interpretation"])
     return 0

@@ -61,14 +61,17 @@ class CalibrateRequest(Schema):
     rows: list[dict[str, Cell]] = Field(..., min_length=1, max_length=20_000,
                                        description="one object per observation",
                                        examples=[EXAMPLE_ROWS])
-    model: str = Field("fitted", min_length=1, max_length=64,
-                       description="starting model: fitted, paper, or a saved model name")
+    model: str = Field("emulator", min_length=1, max_length=64,
+                       description="baseline: emulator (nothing left open), exponential / "
+                       "fitted, paper, or a saved model name")
     save: str | None = Field(None, min_length=1, max_length=64,
                              pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$",
                              description="save the augmented model under this name "
                                          "(needs X-API-Key; a new name, not fitted or paper)")
     folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve "
                        "(reduced to the number of curves when there are fewer)")
+    strict: bool = Field(False, description="refuse data that otherwise only get a warning "
+                         "(pressures that look like kPa, duplicated rows)")
 
 
 class Candidate(BaseModel):
@@ -122,12 +125,13 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
         observations_from_rows,
         run_calibration,
         save_model,
+        saveable,
     )
 
     if request.save is not None:
         require_api_key(settings, key)
     try:  # the data's errors: the loader's, then the loop's (e.g. fewer than 2 curves)
-        obs = observations_from_rows(request.rows)
+        obs = observations_from_rows(request.rows, strict=request.strict)
         start = "paper" if request.model == "paper" else models.get(request.model)
         cal = run_calibration(obs, start, folds=request.folds)
     except DataError as exc:
@@ -138,7 +142,9 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
     report = jsonable(cal.report)
     report["model"]["name"] = request.model
     if request.save is not None:
-        try:  # a reserved or already used name (atomic create: one of two saves wins)
+        try:  # a reserved or already used name (atomic create: one of two saves wins),
+              # or a calibration the saved format cannot hold
+            saveable(cal)
             save_model(cal, request.save, settings.models_dir)
         except ExistsError:
             raise ConflictError(f"save: a model named {request.save!r} already exists; "

@@ -7,16 +7,15 @@ from typing import Any
 
 from surrogate.calibration._data import Observations, observations_from_rows
 from surrogate.calibration._loop import Calibration, calibrate
-from surrogate.calibration._start import starting_parameters
+from surrogate.calibration._start import baseline_for
 
 
 def run_calibration(data: Observations | list[dict[str, Any]], model: Any = None,
-                    folds: int = 5, progress=None) -> Calibration:
-    """Validate ``data`` (rows or Observations), take the starting parameters from ``model``
-    (None/"paper" or a surrogate) and run the loop."""
-    obs = data if isinstance(data, Observations) else observations_from_rows(data)
-    nominal, info = starting_parameters(obs.families, model)
-    return calibrate(obs, nominal, info, folds=folds, progress=progress)
+                    folds: int = 5, progress=None, strict: bool = False) -> Calibration:
+    """Validate ``data`` (rows or Observations) and run the loop against ``model``: None
+    or "paper" (the paper's constants), or any ``surrogate.predictor.Predictor``."""
+    obs = data if isinstance(data, Observations) else observations_from_rows(data, strict)
+    return calibrate(obs, baseline_for(model), folds=folds, progress=progress)
 
 
 def jsonable(value: Any) -> Any:
@@ -30,3 +29,24 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+# Effects a saved model (_saved.py: the exponential model's quasi-static form) carries.
+SAVEABLE_EFFECTS = ("pressure_offset", "hydraulic_resistance", "angle_offset",
+                    "membrane_thickness", "viscoelastic_creep")
+
+
+def saveable(cal: Calibration) -> None:
+    """Raise InputError (field ``save``) when the saved-model format cannot hold this
+    calibration: it stores per-family exponential constants, so a design-space baseline
+    or an effect outside SAVEABLE_EFFECTS would be saved wrongly."""
+    from solver.errors import InputError
+
+    if "families" not in cal.report["fitted"]:
+        raise InputError("save", f"a calibration against {cal.baseline.name!r} cannot be "
+                         "saved yet (saved models hold per-family exponential constants)",
+                         "--model paper, fitted or a surrogate file, to save")
+    other = [e for e in cal.report["selected_effects"] if e not in SAVEABLE_EFFECTS]
+    if other:
+        raise InputError("save", f"effect {other[0]} cannot be saved in a calibrated model "
+                         "yet", "calibrations selecting only " + ", ".join(SAVEABLE_EFFECTS))

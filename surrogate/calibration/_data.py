@@ -20,6 +20,7 @@ import numpy as np
 
 from solver.materials import MATERIALS
 from surrogate.calibration._errors import DataError
+from surrogate.calibration._history import directions
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
             "pressure_pa", "angle_deg")
@@ -41,8 +42,11 @@ RANGES: dict[str, tuple[float, float, bool]] = {
 @dataclass(frozen=True, eq=False)
 class Observations:
     """Validated measurements; arrays have one entry per row, sorted by curve then by time
-    (or pressure when there is no time_s). ``curve`` and ``family`` index ``curve_ids`` and
-    ``families``; ``group`` indexes design+flow groups (replicates share a group)."""
+    (or file order when there is no time_s: a lab writes a curve in the order it took it,
+    loading, holds and unloading included). ``curve`` and ``family`` index ``curve_ids``
+    and ``families``; ``group`` indexes design+flow groups (replicates share a group);
+    ``direction`` is +1 loading, -1 unloading, 0 hold (_history.py); ``warnings`` what
+    looked wrong but was accepted (kPa-looking pressures, duplicated rows)."""
 
     curve_ids: tuple[str, ...]
     families: tuple[tuple[str, str, float, float, float], ...]
@@ -58,6 +62,13 @@ class Observations:
     angle_sd_deg: np.ndarray
     force_mn: np.ndarray
     sha256: str
+    direction: np.ndarray = None  # type: ignore[assignment]
+    warnings: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.direction is None:
+            object.__setattr__(self, "direction",
+                               directions(self.curve, self.pressure_pa, self.angle_deg))
 
     @property
     def n(self) -> int:
@@ -98,16 +109,31 @@ class Observations:
 
     def subset(self, curves: np.ndarray) -> Observations:
         """The observations of the given curve indices (families keep their indices)."""
-        keep = np.isin(self.curve, curves)
+        return self.rows(np.isin(self.curve, curves))
+
+    def rows(self, keep: np.ndarray) -> Observations:
+        """The observations of the rows where ``keep`` (curves left empty vanish)."""
+        keep = np.asarray(keep, bool)
         old = np.unique(self.curve[keep])
         remap = np.full(self.n_curves, -1)
         remap[old] = np.arange(old.size)
-        groups, group = np.unique(self.group[keep], return_inverse=True)
+        _, group = np.unique(self.group[keep], return_inverse=True)
         return Observations(
             tuple(self.curve_ids[i] for i in old), self.families, remap[self.curve[keep]],
             self.family[keep], group, self.L_mm[keep], self.t_mm[keep],
             self.pressure_pa[keep], self.angle_deg[keep], self.time_s[keep],
-            self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256)
+            self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
+            self.direction[keep], self.warnings)
+
+    def design(self, i: int):
+        """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
+        from solver.design import Design
+        from solver.materials import get_material
+
+        d = self.curve_design(i)
+        return Design(L_mm=d["L_mm"], t_mm=d["t_mm"], T_mm=d["T_mm"], b_mm=d["b_mm"],
+                      h_mm=d["h_mm"], body_material=get_material(d["body_material"]),
+                      membrane_material=get_material(d["membrane_material"]))
 
     def padded_order(self) -> np.ndarray:
         """(n_curves, max points) row indices in curve order, -1 padded (rows are sorted)."""
@@ -126,11 +152,18 @@ def _number(value: object, column: str, row: int) -> float:
         return math.nan
     try:
         x = float(value)  # type: ignore[arg-type]
+    except OverflowError:
+        raise DataError(column, "number too large: " + _short(value), row) from None
     except (TypeError, ValueError):
-        raise DataError(column, f"not a number: {value!r}", row) from None
+        raise DataError(column, "not a number: " + _short(value), row) from None
     if not math.isfinite(x):
-        raise DataError(column, f"not a finite number: {value!r}", row)
+        raise DataError(column, "not a finite number: " + _short(value), row)
     return x
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:30]}... ({len(text)} characters)"
 
 
 def _check_range(x: float, column: str, row: int) -> None:
@@ -142,9 +175,12 @@ def _check_range(x: float, column: str, row: int) -> None:
         raise DataError(column, f"{what}: {x:g}", row, f"{lo:g} {sign} {column} <= {hi:g}")
 
 
-def observations_from_rows(rows: list[dict[str, object]]) -> Observations:
+def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
+                           ) -> Observations:
     """Validate rows (dicts of column -> value, as read from CSV or JSON) and build the
-    arrays. Raises DataError naming the row (1-based) and the column."""
+    arrays. Raises DataError naming the row (1-based) and the column. What looks wrong
+    but is usable (pressures that look like kPa, duplicated rows) is a warning in
+    ``Observations.warnings``; with ``strict`` it is a DataError instead."""
     if not isinstance(rows, list) or not rows:
         raise DataError("rows", "no data rows", None, "at least one curve of "
                         f"{MIN_POINTS_PER_CURVE} points")
@@ -192,10 +228,67 @@ def observations_from_rows(rows: list[dict[str, object]]) -> Observations:
                 _check_range(x, name, i)
             rec[name] = x
         parsed.append(rec)
-    return _build(parsed, present)
+    parsed, warnings = _suspicious(parsed, present, strict)
+    return _build(parsed, present, tuple(warnings))
 
 
-def _build(parsed: list[dict[str, object]], present: list[str]) -> Observations:
+KPA_MAX_PA = 30.0   # no actuator of this kind bends visibly below 30 Pa
+KPA_MIN_ANGLE_DEG = 3.0
+
+
+def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: bool
+                ) -> tuple[list[dict[str, object]], list[str]]:
+    """Drop exact duplicate rows and flag kPa-looking pressures: warnings, or DataError
+    when ``strict``."""
+    warnings: list[tuple[str, str, int | None]] = []
+    keys = [json.dumps(rec, sort_keys=True, default=str) for rec in parsed]
+    rows_of: dict[str, list[int]] = {}
+    for i, rec in enumerate(parsed):
+        rows_of.setdefault(str(rec["curve_id"]), []).append(i)
+    drop: set[int] = set()
+    factors: dict[str, int] = {}
+    for cid, idx in rows_of.items():
+        if "time_s" in present:  # the same reading at the same time: a copy
+            seen: set[str] = set()
+            for i in idx:
+                if keys[i] in seen:
+                    drop.add(i)
+                seen.add(keys[i])
+            if len(seen) < len(idx):
+                factors[cid] = round(len(idx) / len(seen))
+            continue
+        seq = [keys[i] for i in idx]  # without time: the curve repeats as a whole
+        for k in range(len(seq) // MIN_POINTS_PER_CURVE, 1, -1):
+            if len(seq) % k == 0 and seq == seq[:len(seq) // k] * k:
+                drop.update(idx[len(seq) // k:])
+                factors[cid] = k
+                break
+    kept = [rec for i, rec in enumerate(parsed) if i not in drop]
+    if drop:
+        first = min(drop)
+        curves = sorted(factors)
+        warnings.append(("rows", f"{len(drop)} duplicated rows (every column equal; x"
+                         f"{max(factors.values())} in curve_id "
+                         f"{', '.join(map(repr, curves[:3]))}{' ...' if len(curves) > 3 else ''}"
+                         f", first copy at row {first + 1}): duplicates dropped", first + 1))
+    by_curve: dict[str, list[dict[str, object]]] = {}
+    for rec in kept:
+        by_curve.setdefault(str(rec["curve_id"]), []).append(rec)
+    p_max = max(abs(float(r["pressure_pa"])) for r in kept)  # type: ignore[arg-type]
+    a_max = max(abs(float(r["angle_deg"])) for r in kept)  # type: ignore[arg-type]
+    if 0.0 < p_max < KPA_MAX_PA and a_max > KPA_MIN_ANGLE_DEG:
+        warnings.append(("pressure_pa", f"pressures reach only {p_max:g} Pa while angles "
+                         f"reach {a_max:.1f} deg: they look like kPa (x1000 gives "
+                         f"{1000 * p_max:g} Pa); convert pressure_pa to Pa", None))
+    if strict and warnings:
+        column, message, row = warnings[0]
+        raise DataError(column, message + " (refused: strict)", row,
+                        "data without warnings (drop --strict to accept with a warning)")
+    return kept, [f"{c}: {m}" for c, m, _ in warnings]
+
+
+def _build(parsed: list[dict[str, object]], present: list[str],
+           warnings: tuple[str, ...] = ()) -> Observations:
     by_curve: dict[str, list[int]] = {}
     for i, rec in enumerate(parsed):
         by_curve.setdefault(str(rec["curve_id"]), []).append(i)
@@ -220,10 +313,11 @@ def _build(parsed: list[dict[str, object]], present: list[str]) -> Observations:
     curve_ids = tuple(by_curve)
     families: dict[tuple, int] = {}
     groups: dict[tuple, int] = {}
-    order_key = "time_s" if "time_s" in present else "pressure_pa"
     rows_sorted: list[tuple[int, int, int, dict]] = []
     for ci, cid in enumerate(curve_ids):
-        idx = sorted(by_curve[cid], key=lambda j: float(parsed[j][order_key]))  # type: ignore
+        idx = by_curve[cid]  # file order = history order without time_s
+        if "time_s" in present:
+            idx = sorted(idx, key=lambda j: float(parsed[j]["time_s"]))  # type: ignore
         rec = parsed[idx[0]]
         fam = (str(rec["body_material"]), str(rec["membrane_material"]),
                round(float(rec["T_mm"]), 6), round(float(rec["b_mm"]), 6),  # type: ignore
@@ -242,7 +336,8 @@ def _build(parsed: list[dict[str, object]], present: list[str]) -> Observations:
         curve_ids, tuple(families), np.array([c for c, _, _, _ in rows_sorted]),
         np.array([f for _, f, _, _ in rows_sorted]), np.array([g for _, _, g, _ in rows_sorted]),
         col("L_mm"), col("t_mm"), col("pressure_pa"), col("angle_deg"), col("time_s"),
-        col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed))
+        col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed),
+        warnings=warnings)
 
 
 def _hash(parsed: list[dict[str, object]]) -> str:
@@ -254,12 +349,17 @@ def _hash(parsed: list[dict[str, object]]) -> str:
 
 
 def read_csv_rows(text: str) -> list[dict[str, object]]:
-    """Rows of a CSV text (header line first; '#' comment lines are skipped)."""
+    """Rows of a CSV text (header line first; '#' comment lines are skipped). A field
+    beyond the csv module's size limit is a DataError naming its row and column."""
     lines = [ln for ln in io.StringIO(text) if not ln.lstrip().startswith("#")]
     reader = csv.DictReader(lines)
-    if reader.fieldnames is None:
+    try:
+        fieldnames = reader.fieldnames
+    except csv.Error as exc:
+        raise _csv_error(exc, lines, 0) from None
+    if fieldnames is None:
         raise DataError("header", "the file is empty", None)
-    names = [n.strip() for n in reader.fieldnames]
+    names = [n.strip() for n in fieldnames]
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0)
     for name in REQUIRED:
@@ -267,22 +367,77 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
             raise DataError(name, "required column is missing", None,
                             "columns " + ", ".join(REQUIRED))
     out = []
-    for i, raw in enumerate(reader, start=1):
+    i = 0
+    while True:
+        try:
+            raw = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            raise _csv_error(exc, lines, i + 1) from None
+        i += 1
         if None in raw:
             raise DataError("row", "more values than columns", i)
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
     return out
 
 
-def load_observations(path: str | Path) -> Observations:
+def _csv_error(exc: csv.Error, lines: list[str], row: int) -> DataError:
+    """One line for an unreadable CSV row: its number and the column of its longest
+    field (the csv module's field size limit is what usually fails)."""
+    header = [h.strip() for h in lines[0].split(",")] if lines else []
+    fields = lines[row].split(",") if row < len(lines) else [""]
+    k = max(range(len(fields)), key=lambda j: len(fields[j]))
+    column = header[k] if k < len(header) else f"column {k + 1}"
+    return DataError(column, f"unreadable CSV field of {len(fields[k].strip())} "
+                     f"characters ({exc})", row or None,
+                     f"fields of at most {csv.field_size_limit()} characters")
+
+
+BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe\x00\x00", "utf-32"),
+        (b"\x00\x00\xfe\xff", "utf-32"), (b"\xff\xfe", "utf-16"), (b"\xfe\xff", "utf-16"))
+
+
+def decode_text(data: bytes, name: str) -> str:
+    """Text of a measured-data file: UTF-8, or UTF-16/32 with a byte-order mark. Anything
+    else (latin-1 from a spreadsheet, UTF-16 without BOM) is one DataError naming the
+    file, the line and the expected encoding."""
+    for bom, encoding in BOMS:
+        if data.startswith(bom):
+            try:
+                return data.decode(encoding)
+            except UnicodeDecodeError as exc:
+                line = data[:exc.start].count(b"\n" if encoding == "utf-8-sig" else
+                                              "\n".encode(encoding)[2:]) + 1
+                raise DataError("file", f"{name}: line {line}: not valid {encoding} after "
+                                "its byte-order mark", None, "UTF-8 text") from None
+    if b"\x00" in data[:4096]:
+        line = data[:data.index(b"\x00")].count(b"\n") + 1
+        raise DataError("file", f"{name}: line {line}: it looks like UTF-16 without a "
+                        "byte-order mark", None, "UTF-8 text (or UTF-16 with a byte-order "
+                        "mark): save the file as CSV UTF-8")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        hint = ("it looks like UTF-16 without a byte-order mark" if b"\x00" in data[:200]
+                else f"byte 0x{data[exc.start]:02x} is not UTF-8 (latin-1 or Windows-1252 "
+                "from a spreadsheet?)")
+        raise DataError("file", f"{name}: line {line} (data row {line - 1}): {hint}", None,
+                        "UTF-8 text (or UTF-16 with a byte-order mark): save the file as "
+                        "CSV UTF-8") from None
+
+
+def load_observations(path: str | Path, strict: bool = False) -> Observations:
     """Read a CSV file (or JSON: a list of row objects, or {"rows": [...]}) and validate."""
     path = Path(path)
-    text = path.read_text(encoding="utf-8-sig")
+    text = decode_text(path.read_bytes(), path.name)
     if path.suffix.lower() == ".json":
         try:
             data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise DataError("file", f"not valid JSON: {exc}", None) from None
+        except ValueError as exc:  # JSONDecodeError, or an integer of > 4300 digits
+            raise DataError("file", f"{path.name}: not valid JSON: {_short(str(exc))}",
+                            None) from None
         rows = data.get("rows") if isinstance(data, dict) else data
-        return observations_from_rows(rows)  # type: ignore[arg-type]
-    return observations_from_rows(read_csv_rows(text))
+        return observations_from_rows(rows, strict)  # type: ignore[arg-type]
+    return observations_from_rows(read_csv_rows(text), strict)

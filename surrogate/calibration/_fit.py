@@ -1,168 +1,108 @@
-"""Least-squares fit of the baseline (per family) together with a set of effects.
+"""Least squares of an augmented model, its clustered standard errors, BIC, and the
+cross-validation by curve.
 
-Free baseline parameters per family: a (deg/mm), and the tau law as (tau_ref, a_t) with
-tau_ref = a_t log10(b_t t_ref) at the family's geometric-mean thickness t_ref (better
-conditioned than (a_t, b_t)). With one thickness in a family only tau_ref is free (a_t
-stays at the starting value: a_t and b_t are not separately identifiable). When a
-"parameter" effect (stiffness_scale, membrane_thickness_bias) is in the set, a_t and b_t
-are pinned at the starting values: that effect then carries the change of tau.
+Standard errors are the sandwich estimator clustered by curve (specimen-to-specimen
+scatter is shared along a curve, so it counts in full); BIC = n ln(SSE/n) + k ln n.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from surrogate.calibration._data import Observations
-from surrogate.calibration._effects import EFFECTS
-from surrogate.calibration._forward import angle_model
+from surrogate.calibration._model import AugmentedModel
 
-# Internal (fit) name, physical name, and transforms for reparametrised parameters.
-INTERNAL = {"theta_max_deg": "inv_theta_max_per_deg"}
-# Residuals are capped at +/- this (deg) while fitting: a trial step into a region where
-# the exponential overflows then stays a large finite penalty with a finite Jacobian.
-R_CAP_DEG = 1e6
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where each free number lives in the parameter vector."""
-
-    effects: tuple[str, ...]
-    pinned_tau: bool
-    fam_free_a: tuple[int, ...]
-    fam_free_tau: tuple[int, ...]
-    fam_free_at: tuple[int, ...]
-    t_ref: np.ndarray
-    effect_names: tuple[str, ...]
-    lower: np.ndarray
-    upper: np.ndarray
-
-    @property
-    def k(self) -> int:
-        return self.lower.size
-
-
-def _effect_params(effects: tuple[str, ...]):
-    out = []
-    for eid in effects:
-        for p in EFFECTS[eid].parameters:
-            if p.name == "theta_max_deg":
-                out.append((INTERNAL[p.name], 0.0, 1.0 / p.fit_bounds[0], 1e-3))
-            else:
-                out.append((p.name, p.fit_bounds[0], p.fit_bounds[1], p.start))
-    return out
-
-
-def make_layout(obs: Observations, effects: tuple[str, ...], nominal: np.ndarray,
-                pin_tau: bool = False) -> Layout:
-    pinned = pin_tau or any(EFFECTS[e].kind == "parameter" for e in effects)
-    present = sorted(set(obs.family.tolist()))
-    t_ref = np.ones(nominal.shape[0])
-    free_at = []
-    for f in present:
-        ts = np.unique(obs.t_mm[obs.family == f])
-        t_ref[f] = float(np.exp(np.mean(np.log(ts))))
-        if ts.size >= 2 and not pinned:
-            free_at.append(f)
-    lower = [-np.inf] * len(present)
-    upper = [np.inf] * len(present)
-    free_tau = [] if pinned else present
-    lower += [1.0] * len(free_tau) + [1.0] * len(free_at)
-    upper += [1e6] * len(free_tau) + [1e6] * len(free_at)
-    eps = _effect_params(effects)
-    lower += [lo for _, lo, _, _ in eps]
-    upper += [hi for _, _, hi, _ in eps]
-    return Layout(effects, pinned, tuple(present), tuple(free_tau), tuple(free_at), t_ref,
-                  tuple(n for n, _, _, _ in eps), np.array(lower, float), np.array(upper, float))
-
-
-def start_vector(layout: Layout, nominal: np.ndarray) -> np.ndarray:
-    x = [nominal[f, 0] for f in layout.fam_free_a]
-    x += [nominal[f, 1] * np.log10(nominal[f, 2] * layout.t_ref[f]) for f in layout.fam_free_tau]
-    x += [nominal[f, 1] for f in layout.fam_free_at]
-    x += [s for _, _, _, s in _effect_params(layout.effects)]
-    return np.clip(np.array(x, float), layout.lower, layout.upper)
-
-
-def unpack(layout: Layout, nominal: np.ndarray, x: np.ndarray
-           ) -> tuple[np.ndarray, dict[str, float]]:
-    fam = nominal.copy()
-    i = 0
-    for f in layout.fam_free_a:
-        fam[f, 0] = x[i]
-        i += 1
-    tau_ref = {}
-    for f in layout.fam_free_tau:
-        tau_ref[f] = x[i]
-        i += 1
-    for f in layout.fam_free_at:
-        fam[f, 1] = x[i]
-        i += 1
-    for f, tr in tau_ref.items():  # tau_ref = a_t log10(b_t t_ref) -> b_t
-        fam[f, 2] = 10.0 ** (tr / fam[f, 1]) / layout.t_ref[f]
-    values = {name: float(v) for name, v in zip(layout.effect_names, x[i:], strict=False)}
-    return fam, values
+# Residuals are capped while fitting: a trial step where the baseline has no answer (past
+# the FE range: NaN) stays a large finite penalty with a finite Jacobian.
+R_CAP_DEG = 1e3
 
 
 @dataclass
 class FitResult:
-    """A fitted model: family parameters, effect values, and the statistics of the fit."""
+    """A fitted augmented model and the statistics of the fit."""
 
-    effects: tuple[str, ...]
-    families: np.ndarray
-    values: dict[str, float]
+    model: AugmentedModel
     x: np.ndarray
     sse: float
     n: int
-    k: int
     cov: np.ndarray
-    layout: Layout
     success: bool
-    pinned: bool
     residual: np.ndarray = field(repr=False)
+
+    @property
+    def k(self) -> int:
+        return self.model.layout.k
+
+    @property
+    def effects(self) -> tuple[str, ...]:
+        return tuple(e.id for e in self.model.effects)
 
     @property
     def bic(self) -> float:
         return self.n * float(np.log(max(self.sse, 1e-300) / self.n)) + self.k * np.log(self.n)
 
-    def effect_sd(self) -> dict[str, float]:
-        """Standard errors of the effect parameters (physical names)."""
-        n_eff = len(self.layout.effect_names)
-        sd = np.sqrt(np.clip(np.diag(self.cov), 0.0, np.inf))[self.k - n_eff:]
-        return dict(zip(self.layout.effect_names, sd.tolist(), strict=False))
+    @property
+    def rms_deg(self) -> float:
+        return float(np.sqrt(self.sse / self.n))
+
+    @property
+    def values(self) -> dict[str, float]:
+        """The effects' parameters by name (physical units)."""
+        return self.model.values(self.x)
+
+    def sd(self) -> dict[str, float]:
+        s = np.sqrt(np.clip(np.diag(self.cov), 0.0, np.inf))
+        return dict(zip(self.model.layout.names, s.tolist(), strict=True))
+
+    def angles(self) -> np.ndarray:
+        return self.model.angles(self.x)
+
+    def conditional_sd(self, name: str, given: tuple[str, ...]) -> float:
+        """Standard error of ``name`` with the parameters ``given`` held at their fitted
+        values (a shape parameter such as a retardation time is undefined when its effect
+        is off, so its trade-off with the size must not dilute the test of the size)."""
+        names = list(self.model.layout.names)
+        idx = [names.index(name)] + [names.index(g) for g in given]
+        sub = self.cov[np.ix_(idx, idx)]
+        try:
+            precision = np.linalg.inv(sub)
+        except np.linalg.LinAlgError:
+            return float(np.sqrt(max(sub[0, 0], 0.0)))
+        return float(1.0 / np.sqrt(precision[0, 0])) if precision[0, 0] > 0 else np.inf
 
 
-def fit(obs: Observations, effects: tuple[str, ...], nominal: np.ndarray,
-        x0: np.ndarray | None = None, pin_tau: bool = False) -> FitResult:
-    """Least squares over the baseline and the effects' parameters (``pin_tau``: keep
-    every family's a_t, b_t at the starting values)."""
-    layout = make_layout(obs, effects, nominal, pin_tau)
-    if x0 is None or x0.size != layout.k:
-        x0 = start_vector(layout, nominal)
-    x0 = np.clip(x0, layout.lower, layout.upper)
+def _residual_fn(model: AugmentedModel) -> Callable[[np.ndarray], np.ndarray]:
+    y = model.obs.angle_deg
 
     def residual(x: np.ndarray) -> np.ndarray:
-        fam, values = unpack(layout, nominal, x)
-        r = angle_model(obs, fam, values) - obs.angle_deg
+        r = model.angles(x) - y
         return np.clip(np.nan_to_num(r, nan=R_CAP_DEG), -R_CAP_DEG, R_CAP_DEG)
 
-    res = least_squares(residual, x0, bounds=(layout.lower, layout.upper), x_scale="jac",
-                        method="trf", max_nfev=400 * max(layout.k, 1))
-    fam, values = unpack(layout, nominal, res.x)
+    return residual
+
+
+def fit(model: AugmentedModel, x0: np.ndarray | None = None) -> FitResult:
+    lay = model.layout
+    residual = _residual_fn(model)
+    if lay.k == 0:
+        r = residual(np.zeros(0))
+        return FitResult(model, np.zeros(0), float(r @ r), r.size, np.zeros((0, 0)), True, r)
+    start = lay.start if x0 is None else x0
+    start = np.clip(start, lay.lower, lay.upper)
+    res = least_squares(residual, start, bounds=(lay.lower, lay.upper), x_scale="jac",
+                        method="trf", diff_step=1e-4, max_nfev=60 * max(lay.k, 1))
     r = res.fun
-    sse = float(r @ r)
-    cov = _cluster_covariance(res.jac, r, obs.curve)
-    return FitResult(effects, fam, values, res.x, sse, obs.n, layout.k, cov, layout,
-                     bool(res.success), layout.pinned_tau, r)
+    cov = cluster_covariance(res.jac, r, model.obs.curve)
+    return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r)
 
 
-def _cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np.ndarray:
-    """Covariance of the fitted parameters, robust to scatter shared within a curve
-    (specimen-to-specimen variation): the sandwich estimator clustered by curve,
-    (J'J)^-1 [sum_c (J_c' r_c)(J_c' r_c)'] (J'J)^-1 x G/(G-1)."""
+def cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np.ndarray:
+    """(J'J)^-1 [sum_c (J_c' r_c)(J_c' r_c)'] (J'J)^-1 x G/(G-1): covariance of the fitted
+    parameters robust to scatter shared within a curve."""
     bread = np.linalg.pinv(jac.T @ jac)
     g = np.zeros((int(curve.max()) + 1, jac.shape[1]))
     np.add.at(g, curve, jac * r[:, None])
@@ -172,9 +112,8 @@ def _cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np
 
 
 def curve_folds(n_curves: int, k: int = 5) -> list[np.ndarray]:
-    """Grouped K-fold by curve: curve i is held out in fold i mod K (replicates, which
-    are usually listed together, land in different folds). K is reduced to ``n_curves``
-    (leave-one-curve-out), so no fold is empty and every fit sees at least one curve."""
+    """Grouped K-fold by curve: curve i is held out in fold i mod K (replicates, usually
+    listed together, land in different folds); K is reduced to ``n_curves``."""
     if n_curves < 2 or k < 2:
         raise ValueError(f"cross-validation by curve needs >= 2 curves and folds, got "
                          f"{n_curves} curves, {k} folds (check_calibratable says so first)")
@@ -182,20 +121,29 @@ def curve_folds(n_curves: int, k: int = 5) -> list[np.ndarray]:
     return [np.arange(i, n_curves, k) for i in range(k)]
 
 
-def cross_validate(obs: Observations, effects: tuple[str, ...], nominal: np.ndarray,
-                   full: FitResult | None = None, k: int = 5, pin_tau: bool = False
-                   ) -> tuple[float, np.ndarray]:
-    """RMS error (deg) of predicting each held-out curve from a fit that did not see it;
-    returns (rmse, per-row out-of-fold residual). Families absent from a training set
-    are predicted with the starting (nominal) parameters."""
+def cross_validate(obs: Observations, make: Callable[[Observations], AugmentedModel],
+                   full: FitResult, k: int = 5) -> tuple[float, np.ndarray]:
+    """RMS error (deg) of predicting each held-out curve from a fit that did not see it,
+    and the per-row out-of-fold residual. A family absent from a training set keeps its
+    open scales at 1 (the baseline as is)."""
     resid = np.empty(obs.n)
     for held in curve_folds(obs.n_curves, k):
         train = obs.subset(np.setdiff1d(np.arange(obs.n_curves), held))
-        test_rows = np.isin(obs.curve, held)
         test = obs.subset(held)
-        x0 = None
-        if full is not None and make_layout(train, effects, nominal, pin_tau).k == full.k:
-            x0 = full.x
-        f = fit(train, effects, nominal, x0, pin_tau)
-        resid[test_rows] = angle_model(test, f.families, f.values) - test.angle_deg
+        m_train = make(train)
+        f = fit(m_train, _transfer(full, m_train))
+        m_test = make(test)
+        x = _transfer(f, m_test)
+        rows = np.isin(obs.curve, held)
+        resid[rows] = m_test.angles(x) - test.angle_deg
+    if not np.all(np.isfinite(resid)):  # a held-out curve past the baseline's range
+        return float("inf"), np.where(np.isfinite(resid), resid, np.nan)
     return float(np.sqrt(np.mean(resid**2))), resid
+
+
+def _transfer(f: FitResult, target: AugmentedModel) -> np.ndarray:
+    """The fitted numbers of ``f`` in ``target``'s layout (by name; absent -> start)."""
+    by_name = dict(zip(f.model.layout.names, f.x.tolist(), strict=True))
+    lay = target.layout
+    x = np.array([by_name.get(n, s) for n, s in zip(lay.names, lay.start, strict=True)])
+    return x if lay.k else np.zeros(0)

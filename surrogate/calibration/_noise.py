@@ -1,25 +1,24 @@
-"""The noise floor: how far a new specimen scatters around its design's mean curve.
+"""The noise floor: how far a new specimen scatters around its design's mean, in the
+model's terms (angle at the measured pressure), at the same point of its loading history.
 
-Per group (same family, L, t and flow rate), all replicate curves are fitted together by a
-flexible curve in pressure, c0 + c1 p + c2 p^2 + c3 p^3 + c4 exp(p / tau_g) (tau_g by a
-1-D search), which follows any smooth systematic shape the model may miss but not the
-specimen-to-specimen and reading scatter.
+Replicates (curves of one design at one flow rate, taken with one protocol) are compared
+in the same state: each curve is cut into segments of one direction (loading, hold,
+unloading: _history.py), and a reading in the k-th segment is compared with the other
+replicates' k-th segment -- at the same pressure (their angle interpolated linearly in
+pressure within the segment's range) for loading and unloading, at the same time since
+the segment began for a hold. So a loading/unloading loop, creep during a hold or a
+flow-rate effect is not counted as scatter (replicates share it), while the specimen's
+own pressure-angle scatter is, as the model's cross-validated error counts it. For
+independent specimens E[(y - mean_others)^2] = sigma^2 (1 + 1/k), k the number of others:
 
-The pooled fit of m replicates follows their mean, so it absorbs 1/m of the
-specimen-to-specimen part: its residual alone would underestimate that part by (m-1)/m in
-variance (by half for m = 2). The floor therefore separates the two parts (a
-random-effects decomposition):
+    floor^2 = sum (y - mean_others)^2 / (1 + 1/k) / N
 
-    reading   s_r^2 = sum SSE(one flexible curve per curve) / sum (n_i - 6)
-    specimen  s_u^2 = sum_g [SSE_g(one curve per group) - (N_g - 6) s_r^2] m_g/(m_g - 1)
-                      / sum_g N_g                                  (clipped at 0)
-    floor^2   = s_r^2 + s_u^2
-
--- the error a perfect model of the design's mean would make on a specimen it has not
-seen, which is what the cross-validation by curve measures. Where curves are too short
-for a fit of their own (at most 7 points), the pooled residual is used uncorrected
-(``source`` "replicates-uncorrected", an underestimate). Without replicates the
-within-curve fit alone gives the floor (reading scatter only, ``source`` "within-curve").
+the error a perfect model of the design's mean makes on a specimen it has not seen.
+``rel_se``: its relative standard error, from the spread of the per-curve mean squares
+(specimen scatter makes it 5-15 % with 3 specimens of 3-6 designs).
+Without replicates: second differences along each curve of at least 8 readings (reading
+noise only, no specimen scatter; the curvature between sparse readings adds to it:
+``source`` "within-curve", a rough figure).
 """
 
 from __future__ import annotations
@@ -30,76 +29,129 @@ import numpy as np
 
 from surrogate.calibration._data import Observations
 
-N_FLEX = 6
+MIN_READINGS = 4
+WITHIN_CURVE_MIN_POINTS = 8  # sparser curves: second differences measure curvature
 
 
 @dataclass(frozen=True)
 class NoiseFloor:
     rms_deg: float
     dof: int
-    source: str  # "replicates" | "replicates-uncorrected" | "within-curve" | "none"
+    source: str  # "replicates" | "within-curve" | "none"
     groups: int
-    reading_deg: float = float("nan")   # within-curve part
-    specimen_deg: float = float("nan")  # specimen-to-specimen part
+    rel_se: float = float("nan")  # relative standard error of rms_deg (replicates)
 
 
-def _flex_sse(p: np.ndarray, y: np.ndarray) -> float:
-    scale = max(float(np.max(np.abs(p))), 1.0)
-    q = p / scale
-    best = np.inf
-    for tau in np.geomspace(0.05, 2.0, 40):
-        X = np.column_stack([np.ones_like(q), q, q * q, q**3, np.expm1(q / tau)])
-        coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-        r = y - X @ coef
-        best = min(best, float(r @ r))
-    return best
+def _history(obs: Observations, rows: np.ndarray) -> np.ndarray:
+    return obs.time_s[rows] if obs.has_time else np.arange(rows.size, dtype=float)
 
 
-def _pooled(obs: Observations, masks: list[np.ndarray]) -> tuple[float, int, int]:
-    """Sum of flexible-fit SSE and dof over ``masks`` long enough to fit; how many."""
-    sse, dof, used = 0.0, 0, 0
-    for mask in masks:
-        n = int(mask.sum())
-        if n <= N_FLEX + 1:
-            continue
-        sse += _flex_sse(obs.pressure_pa[mask], obs.angle_deg[mask])
-        dof += n - N_FLEX
-        used += 1
-    return sse, dof, used
+def segments(direction: np.ndarray) -> np.ndarray:
+    """Run index of each reading along one curve (a new run where the direction changes)."""
+    return np.concatenate([[0], np.cumsum(direction[1:] != direction[:-1])]).astype(int)
+
+
+EXTRAPOLATE_FRACTION = 0.15
+
+
+def _other_at(obs: Observations, rows: np.ndarray, seg: np.ndarray, d: float, k: int,
+              p: np.ndarray, t_rel: np.ndarray) -> np.ndarray:
+    """The other curve's angle in its segment ``k`` at pressures ``p``; NaN when its
+    segment differs. Loading/unloading: linear in pressure, extended with the end slopes
+    up to EXTRAPOLATE_FRACTION of the segment's span. Hold: its angle at the same time
+    since the hold began, moved to pressure ``p`` with the slope d angle/d p at the end
+    of its previous segment (a specimen that holds at a higher pressure holds at a
+    larger angle)."""
+    m = seg == k
+    nan = np.full(p.size, np.nan)
+    if not np.any(m) or obs.direction[rows[m]][0] != d:
+        return nan
+    r = rows[m]
+    if d == 0:
+        t = _history(obs, rows)[m]
+        y = np.interp(t_rel, t - t[0], obs.angle_deg[r], right=np.nan)
+        if t.size < 2:
+            y = np.full(p.size, obs.angle_deg[r][0])
+        prev = rows[seg == k - 1]
+        slope = _end_slope(obs, prev[-2:]) if prev.size >= 2 else 0.0
+        return y + slope * (p - np.mean(obs.pressure_pa[r]))
+    x, y = obs.pressure_pa[r], obs.angle_deg[r]
+    order = np.argsort(x)
+    x, y = x[order], y[order]
+    if x.size < 2 or x[-1] - x[0] <= 0:
+        return nan
+    out = np.interp(p, x, y)
+    lo_slope = (y[1] - y[0]) / max(x[1] - x[0], 1e-9)
+    hi_slope = (y[-1] - y[-2]) / max(x[-1] - x[-2], 1e-9)
+    out = np.where(p < x[0], y[0] + lo_slope * (p - x[0]), out)
+    out = np.where(p > x[-1], y[-1] + hi_slope * (p - x[-1]), out)
+    reach = EXTRAPOLATE_FRACTION * (x[-1] - x[0])
+    return np.where((p >= x[0] - reach) & (p <= x[-1] + reach), out, np.nan)
+
+
+def _end_slope(obs: Observations, rows: np.ndarray) -> float:
+    dp = obs.pressure_pa[rows[1]] - obs.pressure_pa[rows[0]]
+    return float((obs.angle_deg[rows[1]] - obs.angle_deg[rows[0]]) / dp) if abs(dp) > 1e-9 \
+        else 0.0
 
 
 def noise_floor(obs: Observations) -> NoiseFloor:
-    pairs = np.unique(np.column_stack([obs.group, obs.curve]), axis=0)
-    curves_per_group = np.bincount(pairs[:, 0])
-    replicated = np.flatnonzero(curves_per_group >= 2)
-    if not replicated.size:
-        sse, dof, used = _pooled(obs, [obs.curve == c for c in range(obs.n_curves)])
-        if dof == 0:
-            return NoiseFloor(float("nan"), 0, "none", 0)
-        rms = float(np.sqrt(sse / dof))
-        return NoiseFloor(rms, dof, "within-curve", used, rms, float("nan"))
-
-    rep_curves = pairs[np.isin(pairs[:, 0], replicated), 1]
-    sse_r, dof_r, _ = _pooled(obs, [obs.curve == c for c in rep_curves])
-    between, n_points, dof_g, groups, sse_g_all = 0.0, 0, 0, 0, 0.0
-    for g in replicated:
-        mask = obs.group == g
-        sse_g, dof_one, used = _pooled(obs, [mask])
-        if not used:
+    sq, n_used, groups = 0.0, 0, 0
+    per_curve: dict[int, list[float]] = {}
+    for g in np.unique(obs.group):
+        curves = np.unique(obs.curve[obs.group == g])
+        if curves.size < 2:
             continue
-        m = int(curves_per_group[g])
-        groups += 1
-        sse_g_all += sse_g
-        dof_g += dof_one
-        n_points += int(mask.sum())
-        if dof_r:
-            between += (sse_g - dof_one * sse_r / dof_r) * m / (m - 1)
-    if groups == 0:
+        rows_of = {int(c): np.flatnonzero(obs.curve == c) for c in curves}
+        seg_of = {c: segments(obs.direction[r]) for c, r in rows_of.items()}
+        used_here = 0
+        for c, rows in rows_of.items():
+            seg = seg_of[c]
+            t = _history(obs, rows)
+            for k in np.unique(seg):
+                m = seg == k
+                d = obs.direction[rows[m]][0]
+                p = obs.pressure_pa[rows[m]]
+                t_rel = t[m] - t[m][0]
+                o = np.array([_other_at(obs, rows2, seg_of[c2], d, k, p, t_rel)
+                              for c2, rows2 in rows_of.items() if c2 != c])
+                n_others = np.sum(np.isfinite(o), axis=0)
+                ok = n_others >= 1
+                if not np.any(ok):
+                    continue
+                mean = np.nanmean(o[:, ok], axis=0)
+                diff = obs.angle_deg[rows[m]][ok] - mean
+                term = float(np.sum(diff**2 / (1.0 + 1.0 / n_others[ok])))
+                sq += term
+                n_used += int(ok.sum())
+                acc = per_curve.setdefault(c, [0.0, 0])
+                acc[0] += term
+                acc[1] += int(ok.sum())
+                used_here += 1
+        groups += used_here > 0
+    if n_used >= MIN_READINGS:
+        floor2 = sq / n_used
+        means = np.array([a / n for a, n in per_curve.values() if n])
+        rel = (0.5 * float(np.std(means, ddof=1)) / np.sqrt(means.size) / floor2
+               if means.size >= 2 and floor2 > 0 else float("nan"))
+        return NoiseFloor(float(np.sqrt(floor2)), n_used, "replicates", groups, rel)
+    return _within_curve(obs)
+
+
+def _within_curve(obs: Observations) -> NoiseFloor:
+    """Reading scatter from second differences along each curve's history:
+    d = y_i - (w y_{i-1} + (1 - w) y_{i+1}), Var d = sigma^2 (1 + w^2 + (1 - w)^2)."""
+    sq, n = 0.0, 0
+    for c in range(obs.n_curves):
+        rows = np.flatnonzero(obs.curve == c)
+        if rows.size < WITHIN_CURVE_MIN_POINTS:
+            continue
+        t = _history(obs, rows)
+        y = obs.angle_deg[rows]
+        w = (t[2:] - t[1:-1]) / np.maximum(t[2:] - t[:-2], 1e-12)
+        d = y[1:-1] - (w * y[:-2] + (1 - w) * y[2:])
+        sq += float(np.sum(d**2 / (1 + w**2 + (1 - w) ** 2)))
+        n += d.size
+    if n == 0:
         return NoiseFloor(float("nan"), 0, "none", 0)
-    if dof_r == 0:  # curves too short for a fit of their own: pooled residual as is
-        rms = float(np.sqrt(sse_g_all / dof_g))
-        return NoiseFloor(rms, dof_g, "replicates-uncorrected", groups)
-    reading2 = sse_r / dof_r
-    specimen2 = max(between, 0.0) / n_points
-    return NoiseFloor(float(np.sqrt(reading2 + specimen2)), dof_g, "replicates", groups,
-                      float(np.sqrt(reading2)), float(np.sqrt(specimen2)))
+    return NoiseFloor(float(np.sqrt(sq / n)), n, "within-curve", 0)

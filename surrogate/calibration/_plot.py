@@ -6,21 +6,22 @@ from pathlib import Path
 
 import numpy as np
 
-from surrogate.calibration._forward import angle_model
 
 
 def plot_calibration(cal, path: str | Path) -> Path:
     """Write a PNG: left, angle against gauge pressure (points: data; dashed: recalibrated
-    baseline; solid: after the selected effects); right, out-of-fold residuals (each curve
-    predicted by a fit that did not see it) before and after, with the noise floor band."""
+    baseline; solid: after the selected effects; lines in the order the readings were
+    taken, so loading/unloading loops and holds show); right, out-of-fold residuals (each
+    curve predicted by a fit that did not see it) before and after, with the noise floor
+    band."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     obs, r = cal.obs, cal.report
-    before = angle_model(obs, cal.before.families, cal.before.values)
-    after = angle_model(obs, cal.after.families, cal.after.values)
+    before = cal.before.angles()
+    after = cal.after.angles()
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.8))
     cmap = plt.get_cmap("tab10")
     groups = np.unique(obs.group)
@@ -28,14 +29,14 @@ def plot_calibration(cal, path: str | Path) -> Path:
         color = cmap(gi % 10)
         for c in np.unique(obs.curve[obs.group == g]):
             rows = np.flatnonzero(obs.curve == c)
-            k = rows[np.argsort(obs.pressure_pa[rows])]
+            k = rows  # history order
             ax.plot(obs.pressure_pa[k], obs.angle_deg[k], "o", ms=3, color=color)
             ax.plot(obs.pressure_pa[k], before[k], "--", lw=0.8, color=color)
             ax.plot(obs.pressure_pa[k], after[k], "-", lw=1.2, color=color)
         d = obs.curve_design(int(obs.curve[obs.group == g][0]))
         ax.plot([], [], "o-", color=color, label=f"L {d['L_mm']:g}, t {d['t_mm']:g} mm"
                 + (f", {d['flow_ul_s']:g} ul/s" if d["flow_ul_s"] == d["flow_ul_s"] else ""))
-    ax.plot([], [], "k--", lw=0.8, label="recalibrated baseline")
+    ax.plot([], [], "k--", lw=0.8, label=f"baseline {r['baseline']['name']} (recalibrated)")
     ax.plot([], [], "k-", lw=1.2, label="after: " + (", ".join(r["selected_effects"]) or
                                                        "no effect"))
     ax.set_xlabel("gauge pressure (Pa)")

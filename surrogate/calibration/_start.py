@@ -1,58 +1,52 @@
-"""Starting (nominal) parameters per family: the model as it is.
+"""The baseline of a calibration: a Predictor, and what it leaves open.
 
-``starting_parameters(families, model)``: ``model`` is None or "paper" (the paper's
-constants, which describe the standard family), or a surrogate with
-``family_parameters(design)`` (issue 5's API). A family the surrogate does not cover
-starts from the paper's constants, with a warning in the report.
+``baseline_for(model)``: ``model`` is None or "paper" (the paper's constants), or any
+object implementing ``surrogate.predictor.Predictor`` (the design-space emulator, a fitted
+exponential surrogate, a saved model). The loop calls only ``predict``.
+
+What the baseline leaves open is what the recalibrated baseline frees:
+
+* a model with per-family constants (it answers ``family_parameters``: the exponential
+  and paper models) leaves them open: per family an amplitude scale (its a) and a
+  pressure scale (its a_t); the thickness law (b_t) stays. Camera gain and pressure gain
+  are then exactly these and are not fitted.
+* a design-space model (the emulator) leaves nothing open: every input is the design, and
+  what differs in a lab's actuators (stiffness, thickness, length) is an effect acting
+  through those inputs.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
-from surrogate.calibration._baseline import PAPER_PARAMETERS
-
-STANDARD_FAMILY = ("pdms_1_10", "ecoflex_00_30", 1.0, 1.8, 0.15)
+OPEN_EXPONENTIAL = ("amplitude", "pressure_scale")
 
 
-def _paper_row() -> list[float]:
-    p = PAPER_PARAMETERS
-    return [p.a_deg_per_mm, p.a_t_pa, p.b_t_per_mm, p.c]
+@dataclass(frozen=True)
+class Baseline:
+    predictor: Any
+    name: str
+    open_parameters: tuple[str, ...]
+    why: str
+
+    def as_dict(self) -> dict[str, object]:
+        return {"name": self.name, "open_parameters": list(self.open_parameters),
+                "why": self.why}
 
 
-def starting_parameters(families: tuple[tuple, ...], model: Any = None
-                        ) -> tuple[np.ndarray, dict[str, Any]]:
-    """(n_families, 4) array of (a, a_t, b_t, c) and a description of the model used."""
-    rows, warnings = [], []
+def baseline_for(model: Any = None) -> Baseline:
     if model is None or model == "paper":
-        for fam in families:
-            rows.append(_paper_row())
-            if tuple(fam) != STANDARD_FAMILY:
-                warnings.append(f"family {fam} is not the paper's standard family; its "
-                                "starting parameters are the paper's constants anyway")
-        return np.array(rows, float), {"name": "paper", "warnings": warnings,
-                                       "source": "paper constants a = 0.101 deg/mm, "
-                                       "a_t = 731.2 Pa, b_t = 7.179 /mm (log10)"}
-    from solver.design import Design
-    from solver.materials import get_material
+        from surrogate import paper_surrogate
 
-    for fam in families:
-        design = Design(body_material=get_material(fam[0]),
-                        membrane_material=get_material(fam[1]), T_mm=fam[2], b_mm=fam[3],
-                        h_mm=fam[4])
-        try:
-            p = model.family_parameters(design)
-        except Exception as exc:  # noqa: BLE001 - e.g. OutOfFamilyError
-            rows.append(_paper_row())
-            warnings.append(f"family {fam}: {exc}; starting from the paper's constants")
-            continue
-        form = str(p.get("tau_form", p.get("tau", "log10")))
-        if "log10" not in form and "ln" in form:
-            warnings.append(f"family {fam}: tau form {form!r} read as log10")
-        rows.append([float(p["a_deg_per_mm"]), float(p["a_t_pa"]), float(p["b_t_per_mm"]),
-                     float(p.get("c", 0.0) or 0.0)])
-    name = getattr(model, "name", "surrogate")
-    return np.array(rows, float), {"name": name, "warnings": warnings,
-                                   "provenance": dict(getattr(model, "provenance", {}) or {})}
+        model = paper_surrogate()
+    name = str(getattr(model, "name", type(model).__name__))
+    if callable(getattr(model, "family_parameters", None)):
+        return Baseline(model, name, OPEN_EXPONENTIAL,
+                        "a per-family model: its constants are fitted to each family's data "
+                        "by construction, so the recalibration frees per family the "
+                        "amplitude (a) and the pressure scale (a_t); b_t (thickness law) "
+                        "stays")
+    return Baseline(model, name, (), "a design-space model: every input is the design "
+                    "(materials, L, t, ...), so nothing is left open; what differs in the "
+                    "lab's actuators is an effect acting through those inputs")

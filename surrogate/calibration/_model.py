@@ -1,0 +1,166 @@
+"""The augmented model at every observation: baseline + effects, stage by stage.
+
+    p_chamber = pressure effects (p_gauge, flow, direction)
+    static    = k_A,f x baseline(design + physical effects, p_chamber / k_p,f)
+    angle     = time effects (static along each curve's time; 4 substeps per interval)
+    observed  = angle effects (angle)
+
+k_A,f and k_p,f (amplitude and pressure scale per family) exist only when the baseline
+leaves them open (the exponential and paper models: their per-family constants); the
+emulator leaves nothing open (its material constants are the stiffness effects).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from surrogate.calibration._data import Observations
+from surrogate.calibration._response import Responses, design_key
+from surrogate.calibration.effects import Effect
+
+SUBSTEPS = 4
+OPEN_BOUND = 0.7  # |log k| for the open amplitude and pressure scales
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The free numbers: open baseline scales per family, then the effects' parameters."""
+
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    lower: np.ndarray
+    upper: np.ndarray
+    start: np.ndarray
+    n_open: int
+
+    @property
+    def k(self) -> int:
+        return len(self.names)
+
+
+class AugmentedModel:
+    """Evaluates angles at the rows of ``obs`` for parameter vectors of ``layout``."""
+
+    def __init__(self, obs: Observations, responses: Responses, effects: tuple[Effect, ...],
+                 open_parameters: tuple[str, ...]) -> None:
+        self.obs = obs
+        self.responses = responses
+        self.effects = effects
+        self.physical = tuple(e for e in effects if e.stage == "design")
+        self.pressure = tuple(e for e in effects if e.stage == "pressure")
+        self.time = tuple(e for e in effects if e.stage == "time")
+        self.angle = tuple(e for e in effects if e.stage == "angle")
+        self.families = sorted(set(obs.family.tolist()))
+        self.open = open_parameters
+        names, units, lo, hi, x0 = [], [], [], [], []
+        for f in self.families:
+            for o in open_parameters:
+                names.append(f"log_{o}[{f}]")
+                units.append("-")
+                lo.append(-OPEN_BOUND)
+                hi.append(OPEN_BOUND)
+                x0.append(0.0)
+        n_open = len(names)
+        for e in effects:
+            for p in e.parameters:
+                names.append(p.name)
+                units.append(p.unit)
+                lo.append(p.fit_bounds[0])
+                hi.append(p.fit_bounds[1])
+                x0.append(p.start)
+        self.layout = Layout(tuple(names), tuple(units), np.array(lo, float),
+                             np.array(hi, float), np.array(x0, float), n_open)
+        per_curve = np.array([responses.index[design_key(obs.design(c))]
+                              for c in range(obs.n_curves)], dtype=int)
+        self.design_index = per_curve[obs.curve]
+        fam_pos = {f: i for i, f in enumerate(self.families)}
+        self.family_pos = np.array([fam_pos[f] for f in obs.family])
+        if self.time:
+            self._prepare_substeps()
+
+    def values(self, x: np.ndarray) -> dict[str, float]:
+        n = self.layout.n_open
+        return {name: float(v) for name, v in zip(self.layout.names[n:], x[n:], strict=True)}
+
+    def _scales(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        k_a = np.ones(len(self.families))
+        k_p = np.ones(len(self.families))
+        i = 0
+        for fi in range(len(self.families)):
+            for o in self.open:
+                if o == "amplitude":
+                    k_a[fi] = np.exp(x[i])
+                else:
+                    k_p[fi] = np.exp(x[i])
+                i += 1
+        return k_a[self.family_pos], k_p[self.family_pos]
+
+    def _static(self, values, design_index, p_gauge, flow, direction, k_a, k_p):
+        p = p_gauge
+        for e in self.pressure:
+            p = e.chamber_pressure(p, flow, direction, values)
+        curves = self.responses.curves(self.physical,
+                                       [values[e.parameters[0].name] for e in self.physical])
+        return k_a * self.responses.lookup(curves, design_index, p / k_p)
+
+    def angles(self, x: np.ndarray, amp: float = 1.0, pscale: float = 1.0) -> np.ndarray:
+        """Predicted angle (deg) at every row; ``amp``/``pscale`` multiply every curve's
+        amplitude / pressure scale (for the structure test's nuisance directions)."""
+        values = self.values(x)
+        k_a, k_p = self._scales(x)
+        k_a, k_p = k_a * amp, k_p * pscale
+        o = self.obs
+        if not self.time:
+            out = self._static(values, self.design_index, o.pressure_pa, o.flow_ul_s,
+                               o.direction, k_a, k_p)
+        else:
+            s = self._sub
+            static = self._static(values, self.design_index[s["rows"]], s["p"], s["q"],
+                                  s["d"], k_a[s["rows"]], k_p[s["rows"]])
+            grid = np.full(s["shape"], np.nan)
+            grid[s["valid"]] = static
+            tgrid = np.zeros(s["shape"])
+            tgrid[s["valid"]] = s["t"]
+            for e in self.time:
+                grid = e.lag(np.nan_to_num(grid), tgrid, s["valid"], values)
+            out = np.empty(o.n)
+            out[s["sample_rows"]] = grid[s["sample_pos"]]
+        for e in self.angle:
+            out = e.observed(out, values)
+        return out
+
+    def _prepare_substeps(self) -> None:
+        """Pressure linear in time between readings, SUBSTEPS per interval; the lag is
+        integrated exactly for a static angle linear between substeps."""
+        o = self.obs
+        order = o.padded_order()
+        n_curves, m = order.shape
+        width = (m - 1) * SUBSTEPS + 1
+        valid = np.zeros((n_curves, width), bool)
+        rows, p, q, d, t = [], [], [], [], []
+        sample_rows, sample_pos = [], []
+        for c in range(n_curves):
+            idx = order[c][order[c] >= 0]
+            for j, r in enumerate(idx):
+                if j == 0:
+                    fr = [0.0]
+                else:
+                    fr = list(np.arange(1, SUBSTEPS + 1) / SUBSTEPS)
+                prev = idx[j - 1] if j else r
+                for k, w in enumerate(fr):
+                    pos = 0 if j == 0 else (j - 1) * SUBSTEPS + k + 1
+                    valid[c, pos] = True
+                    rows.append(r)
+                    p.append(o.pressure_pa[prev] + w * (o.pressure_pa[r] - o.pressure_pa[prev]))
+                    t.append(o.time_s[prev] + w * (o.time_s[r] - o.time_s[prev]))
+                    q.append(o.flow_ul_s[r])
+                    d.append(o.direction[r])
+                sample_rows.append(r)
+                sample_pos.append((c, 0 if j == 0 else j * SUBSTEPS))
+        # rows of a curve fill its first positions contiguously
+        self._sub = {"rows": np.array(rows), "p": np.array(p), "q": np.nan_to_num(np.array(q)),
+                     "d": np.array(d), "t": np.array(t), "valid": valid,
+                     "shape": (n_curves, width), "sample_rows": np.array(sample_rows),
+                     "sample_pos": tuple(np.array(sample_pos).T)}

@@ -1,0 +1,148 @@
+"""The baseline's answers, tabulated: angle(pressure) of every nominal design of the data
+at a grid of the physical effects' values, from any ``surrogate.predictor.Predictor``.
+
+A physical effect acts through the predictor's inputs (a stiffer membrane is a design with
+the membrane's mu scaled), so the fit needs the predictor at many designs near the
+nominal ones. Calling it inside the optimiser would be slow for an FE-trained emulator;
+instead it is asked once per design at ``NODES`` values of each physical parameter (a
+tensor grid for two) on a pressure grid, and the fit interpolates: 4-point Lagrange
+(cubic) along each parameter, linear along pressure. A pressure past the end of the FE's
+range (the predictor's NaN) stays NaN; a design the predictor refuses (outside its box)
+is NaN at that node.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from solver.errors import InputError
+from surrogate.calibration.effects import Effect
+from surrogate.calibration.effects._base import physical_nodes
+
+NODES = 9
+PRESSURE_POINTS = 241
+BAND_LEVEL = 0.95
+BAND_Z = 1.959964  # two-sided 95 %
+
+
+def design_key(design) -> str:
+    return repr(design)
+
+
+class Responses:
+    """Tables of ``predictor`` at the nominal ``designs`` (one per key), pressures
+    0 .. ``p_max_pa``."""
+
+    def __init__(self, predictor, designs: dict[str, object], p_max_pa: float) -> None:
+        self.predictor = predictor
+        self.keys = tuple(designs)
+        self.designs = designs
+        self.index = {k: i for i, k in enumerate(self.keys)}
+        self.p_grid = np.linspace(0.0, p_max_pa, PRESSURE_POINTS)
+        self.dp = self.p_grid[1] - self.p_grid[0]
+        self._tables: dict[tuple[str, ...], tuple[list[np.ndarray], np.ndarray]] = {}
+        self._sd: np.ndarray | None = None
+        self.calls = 0
+
+    def _predict(self, design, with_sd: bool = False):
+        self.calls += 1
+        nan = np.full(self.p_grid.size, np.nan)
+        try:
+            out = self.predictor.predict(design, self.p_grid, level=BAND_LEVEL)
+        except InputError:
+            return (nan, nan) if with_sd else nan
+        angle = np.asarray(out.angle_deg, dtype=float)
+        if not with_sd:
+            return angle
+        half = 0.5 * (np.asarray(out.upper_deg, float) - np.asarray(out.lower_deg, float))
+        return angle, np.abs(half) / BAND_Z
+
+    def sd_at(self, effects: tuple[Effect, ...], thetas: list[float]) -> np.ndarray:
+        """(n_designs, pressures): the baseline's own sd at the designs changed by the
+        physical ``effects`` at ``thetas`` (asked afresh, not interpolated)."""
+        out = []
+        for k in self.keys:
+            d = self.designs[k]
+            for e, theta in zip(effects, thetas, strict=True):
+                d = e.design(d, float(theta))
+            out.append(self._predict(d, True)[1])
+        return np.array(out)
+
+    def nominal_sd(self) -> np.ndarray:
+        """(n_designs, pressures): the baseline's own standard deviation for an FE solve
+        of each nominal design (its band at BAND_LEVEL / z)."""
+        if self._sd is None:
+            self._sd = np.array([self._predict(self.designs[k], True)[1] for k in self.keys])
+        return self._sd
+
+    def table(self, effects: tuple[Effect, ...]) -> tuple[list[np.ndarray], np.ndarray]:
+        """(nodes per effect, values (n_designs, n_1, ..., n_k, pressures))."""
+        key = tuple(e.id for e in effects)
+        if key not in self._tables:
+            nodes = [physical_nodes(e.parameters[0], NODES) for e in effects]
+            shape = (len(self.keys),) + tuple(n.size for n in nodes) + (self.p_grid.size,)
+            values = np.empty(shape)
+            for di, k in enumerate(self.keys):
+                for idx in np.ndindex(*shape[1:-1]):
+                    d = self.designs[k]
+                    for e, n, j in zip(effects, nodes, idx, strict=True):
+                        d = e.design(d, float(n[j]))
+                    values[(di,) + idx] = self._predict(d)
+            self._tables[key] = (nodes, values)
+        return self._tables[key]
+
+    def responsive(self, effect: Effect) -> bool:
+        """Does the predictor's answer change with this physical effect at all?"""
+        _, values = self.table((effect,))
+        mid = values.shape[1] // 2
+        ref = values[:, mid]
+        for j in (mid - 2, mid + 2):
+            diff = np.abs(values[:, j] - ref)
+            if np.nanmax(diff, initial=0.0) > 1e-6:
+                return True
+        return False
+
+    def curves(self, effects: tuple[Effect, ...], thetas: list[float]) -> np.ndarray:
+        """(n_designs, pressures) at the effects' values ``thetas`` (interpolated)."""
+        if not effects:
+            return self.table(())[1]
+        nodes, values = self.table(effects)
+        out = values
+        for axis_nodes, theta in zip(nodes, thetas, strict=True):
+            idx, w = lagrange_weights(axis_nodes, theta)
+            out = np.tensordot(w, np.take(out, idx, axis=1), axes=([0], [1]))
+        return out
+
+    def lookup(self, curves: np.ndarray, design_index: np.ndarray, p_pa: np.ndarray
+               ) -> np.ndarray:
+        """Angle at chamber pressure ``p_pa`` of each row's design (linear in p; below 0
+        the angle at 0; past the grid NaN)."""
+        f = np.clip(p_pa, 0.0, None) / self.dp
+        i0 = np.floor(f).astype(int)
+        inside = i0 < self.p_grid.size - 1
+        i0 = np.where(inside, i0, self.p_grid.size - 2)
+        frac = f - i0
+        a = curves[design_index, i0]
+        b = curves[design_index, i0 + 1]
+        out = a + frac * (b - a)
+        return np.where(inside | (f <= self.p_grid.size - 1), out, np.nan)
+
+
+def lagrange_weights(nodes: np.ndarray, x: float) -> tuple[np.ndarray, np.ndarray]:
+    """Indices and weights of the 4-point (cubic) Lagrange interpolant at ``x`` (clamped
+    to the nodes' range)."""
+    n = nodes.size
+    x = min(max(float(x), float(nodes[0])), float(nodes[-1]))
+    j = int(np.clip(np.searchsorted(nodes, x) - 2, 0, max(n - 4, 0)))
+    idx = np.arange(j, min(j + 4, n))
+    xs = nodes[idx]
+    w = np.ones(idx.size)
+    for a in range(idx.size):
+        for b in range(idx.size):
+            if a != b:
+                w[a] *= (x - xs[b]) / (xs[a] - xs[b])
+    if not math.isfinite(float(w.sum())):
+        raise ValueError("degenerate interpolation nodes")
+    return idx, w

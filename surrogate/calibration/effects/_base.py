@@ -1,0 +1,121 @@
+"""What every effect of the catalogue is: parameters with units, a forward transform at
+one stage of the model, a plausible range, identifiability conditions and a sentence.
+
+The augmented model, in the order it is evaluated (docs/calibration.md):
+
+    p_chamber = pressure stage (p_gauge, flow, direction)     pressure effects
+    design'   = design stage (nominal design)                 physical effects
+    static    = baseline.predict(design', p_chamber)          the Predictor
+    angle     = time stage (static along each curve's time)   time effects
+    observed  = angle stage (angle)                           measurement effects
+
+Adding an effect is one file in this package (a subclass with its transform) plus its
+test; ``effects/__init__.py`` lists the instances.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+STAGES = ("pressure", "design", "time", "angle")
+
+
+@dataclass(frozen=True)
+class EffectParameter:
+    """One parameter. ``fit_bounds`` are hard limits of the optimiser; ``plausible`` the
+    range expected for this device; ``null`` the value that switches the effect off."""
+
+    name: str
+    unit: str
+    null: float
+    fit_bounds: tuple[float, float]
+    plausible: tuple[float, float]
+    start: float
+    description: str
+    tested: bool = True  # False: a shape parameter, undefined when the effect is off
+
+    def as_dict(self) -> dict[str, object]:
+        return {"name": self.name, "unit": self.unit, "null": _finite(self.null),
+                "bounds": [_finite(b) for b in self.fit_bounds],
+                "plausible": list(self.plausible), "description": self.description}
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+@dataclass(frozen=True)
+class DataTraits:
+    """What the data allow, for identifiability: see ``surrogate.calibration._history``."""
+
+    has_time: bool
+    has_flow: bool
+    n_flow_rates: int
+    has_unloading: bool
+    has_holds: bool
+    n_thicknesses_max: int  # most membrane thicknesses in one family
+    n_lengths_max: int
+    open_parameters: tuple[str, ...]  # what the baseline leaves open ("amplitude", ...)
+
+
+class Effect:
+    """Base class. Subclasses set the class attributes and implement their stage's
+    transform (one of ``chamber_pressure``, ``design``, ``lag``, ``observed``)."""
+
+    id: str = ""
+    title: str = ""
+    stage: str = ""
+    kind: str = ""  # "physical" | "measurement" | "time"
+    parameters: tuple[EffectParameter, ...] = ()
+    description: str = ""
+    #: open baseline parameters this effect is exactly (then it is not fitted)
+    same_as_open: tuple[str, ...] = ()
+
+    # ---- identifiability -------------------------------------------------------------
+    def not_identifiable(self, data: DataTraits) -> tuple[str, str] | None:
+        """None when the data can tell this effect from the baseline's misfit, else
+        (reason, what to measure)."""
+        for name in self.same_as_open:
+            if name in data.open_parameters:
+                return (f"exactly a change of the baseline's open {name.replace('_', ' ')}",
+                        "use a baseline that fixes it (the emulator, --model emulator)")
+        return None
+
+    # ---- transforms (one per stage; the default is the identity) ---------------------
+    def chamber_pressure(self, p_pa: np.ndarray, flow_ul_s: np.ndarray,
+                         direction: np.ndarray, values: dict[str, float]) -> np.ndarray:
+        return p_pa
+
+    def design(self, design, value: float):
+        return design
+
+    def lag(self, static_deg: np.ndarray, time_s: np.ndarray, valid: np.ndarray,
+            values: dict[str, float]) -> np.ndarray:
+        return static_deg
+
+    def observed(self, angle_deg: np.ndarray, values: dict[str, float]) -> np.ndarray:
+        return angle_deg
+
+    # ---- words ----------------------------------------------------------------------
+    def interpret(self, params: dict[str, dict], data: dict) -> str:
+        """One or two sentences a lab can act on; ``params`` {name: {value, sd, unit}}."""
+        return self.title + ": " + ", ".join(
+            f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}" for n, p in params.items())
+
+    def as_dict(self) -> dict[str, object]:
+        return {"id": self.id, "title": self.title, "kind": self.kind, "stage": self.stage,
+                "needs": list(self.needs), "description": self.description,
+                "parameters": [p.as_dict() for p in self.parameters]}
+
+    needs: tuple[str, ...] = ()  # optional data columns it needs
+
+
+def physical_nodes(p: EffectParameter, n: int) -> np.ndarray:
+    """Grid of a design-stage parameter's values at which the baseline is tabulated."""
+    lo, hi = p.fit_bounds
+    if lo > 0 and hi / lo > 2.5:
+        return np.geomspace(lo, hi, n)
+    return np.linspace(lo, hi, n)

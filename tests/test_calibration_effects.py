@@ -1,0 +1,124 @@
+"""The catalogue's contract: every effect is one object with parameters in units, a
+plausible range inside its fit bounds, a null value that switches it off, a forward
+transform at one stage, identifiability conditions and a sentence; and each transform
+does what its docstring says (numbers from the transforms' own definitions)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from solver.design import Design
+from solver.design_space import recognise
+from surrogate.calibration.effects import CATALOGUE, EFFECTS, STAGES, DataTraits
+from surrogate.calibration.effects.hydraulic_resistance import (
+    R_CHANNEL,
+    rectangular_channel_resistance_pa_per_ul_s,
+)
+from surrogate.calibration.effects.viscoelastic_creep import prony_lag
+
+TRAITS = DataTraits(has_time=True, has_flow=True, n_flow_rates=1, has_unloading=False,
+                    has_holds=False, n_thicknesses_max=1, n_lengths_max=1,
+                    open_parameters=())
+
+
+@pytest.mark.parametrize("effect", CATALOGUE, ids=lambda e: e.id)
+def test_every_effect_keeps_the_contract(effect):
+    assert effect.stage in STAGES and effect.kind in ("physical", "measurement", "time")
+    assert effect.parameters and effect.title and effect.description
+    for p in effect.parameters:
+        lo, hi = p.fit_bounds
+        assert lo <= p.plausible[0] <= p.plausible[1] <= hi, p.name
+        assert lo <= p.start <= hi
+        assert p.unit
+        if p.tested:
+            assert lo <= p.null <= hi
+    params = {p.name: {"value": p.start if not p.tested else p.plausible[1], "sd": 0.1,
+                       "unit": p.unit} for p in effect.parameters}
+    sentence = effect.interpret(params, {"flow_rates_ul_s": [2.5]})
+    assert isinstance(sentence, str) and len(sentence) > 40
+    d = effect.as_dict()
+    assert d["id"] == effect.id and len(d["parameters"]) == len(effect.parameters)
+
+
+@pytest.mark.parametrize("effect", [e for e in CATALOGUE if e.stage != "design"],
+                         ids=lambda e: e.id)
+def test_the_null_value_switches_a_transform_off(effect):
+    values = {p.name: (p.null if p.tested else p.start) for p in effect.parameters}
+    p = np.array([0.0, 500.0, 1500.0])
+    a = np.array([[0.0, 5.0, 30.0, 30.0]])
+    t = np.array([[0.0, 1.0, 2.0, 3.0]])
+    if effect.stage == "pressure":
+        out = effect.chamber_pressure(p, np.full(3, 2.5), np.ones(3), values)
+        np.testing.assert_allclose(out, p)
+    elif effect.stage == "angle":
+        np.testing.assert_allclose(effect.observed(a, values), a)
+    else:
+        np.testing.assert_allclose(effect.lag(a, t, np.ones_like(a, bool), values), a)
+
+
+def test_physical_effects_change_the_design_the_baseline_is_asked_for():
+    d = Design(L_mm=7.1, t_mm=0.75)
+    m = EFFECTS["membrane_stiffness"].design(d, 1.3)
+    assert recognise(m.membrane_material) == ("ecoflex_00_30", pytest.approx(1.3))
+    assert m.body_material == d.body_material
+    b = EFFECTS["body_stiffness"].design(EFFECTS["body_stiffness"].design(d, 1.5), 0.8)
+    assert recognise(b.body_material) == ("pdms_1_10", pytest.approx(1.2))
+    assert EFFECTS["membrane_thickness"].design(d, -0.05).t_mm == pytest.approx(0.7)
+    assert EFFECTS["chamber_length"].design(d, 0.5).L_mm == pytest.approx(7.6)
+
+
+def test_hydraulic_drop_follows_the_flow_direction():
+    e = EFFECTS["hydraulic_resistance"]
+    out = e.chamber_pressure(np.full(3, 1000.0), np.full(3, 2.5), np.array([1.0, 0.0, -1.0]),
+                             {"R_pa_per_ul_s": 40.0})
+    np.testing.assert_allclose(out, [900.0, 1000.0, 1100.0])
+    # Hagen-Poiseuille for the paper's channel, by hand: 12 mu L / (w h^3 (1 - 0.63 h/w))
+    r = 12e-3 * 3e-3 / (0.5e-3 * 0.15e-3**3 * (1 - 0.63 * 0.3)) * 1e-9
+    assert R_CHANNEL == pytest.approx(r) == rectangular_channel_resistance_pa_per_ul_s(3, 0.5,
+                                                                                    0.15)
+
+
+def test_hydraulic_resistance_is_identifiable_only_when_the_flow_changes():
+    e = EFFECTS["hydraulic_resistance"]
+    assert "pressure offset" in e.not_identifiable(TRAITS)[0]
+    for change in ({"n_flow_rates": 2}, {"has_unloading": True}, {"has_holds": True}):
+        assert e.not_identifiable(DataTraits(**{**TRAITS.__dict__, **change})) is None
+
+
+def test_creep_needs_holds_unloading_or_two_flow_rates():
+    e = EFFECTS["viscoelastic_creep"]
+    reason, measure = e.not_identifiable(TRAITS)
+    assert "one flow rate" in reason and "hold" in measure
+    for change in ({"n_flow_rates": 2}, {"has_unloading": True}, {"has_holds": True}):
+        assert e.not_identifiable(DataTraits(**{**TRAITS.__dict__, **change})) is None
+    no_time = DataTraits(**{**TRAITS.__dict__, "has_time": False, "has_holds": True})
+    assert "time" in e.not_identifiable(no_time)[0]
+
+
+def test_gains_are_not_fitted_against_a_baseline_that_leaves_them_open():
+    open_ = DataTraits(**{**TRAITS.__dict__, "open_parameters": ("amplitude",
+                                                                "pressure_scale")})
+    assert "amplitude" in EFFECTS["camera_gain"].not_identifiable(open_)[0]
+    assert "pressure scale" in EFFECTS["pressure_gain"].not_identifiable(open_)[0]
+    assert EFFECTS["camera_gain"].not_identifiable(TRAITS) is None
+
+
+def test_prony_lag_matches_a_fine_euler_integration():
+    # static angle rising linearly for 4 s, then held: the delayed part creeps on.
+    t = np.linspace(0.0, 10.0, 11)
+    static = np.minimum(t, 4.0) * 5.0
+    g, tau = 0.3, 2.0
+    out = prony_lag(static[None], t[None], np.ones((1, 11), bool), g, tau)[0]
+    tf = np.linspace(0.0, 10.0, 100001)
+    sf = np.minimum(tf, 4.0) * 5.0
+    y = np.empty_like(tf)
+    y[0] = sf[0]
+    e = math.exp(-(tf[1] - tf[0]) / tau)
+    for i in range(1, tf.size):
+        y[i] = sf[i] + (y[i - 1] - sf[i]) * e
+    ref = (1 - g) * sf + g * y
+    np.testing.assert_allclose(out, ref[::10000], atol=2e-3)
+    assert out[4] < static[4] and 19.5 < out[-1] < 20.0  # creeps on towards 20 deg
