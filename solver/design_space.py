@@ -166,6 +166,13 @@ class OutOfBoxError(InputError):
     """A design outside the box; ``nearest`` is the closest design inside it."""
 
     def __init__(self, field: str, detail: str, allowed: str, nearest: Design | None):
+        offer = "or solve this design with the FE (POST /v1/solve, `balloon solve`)"
+        if nearest is not None:
+            lengths = ", ".join(f"{n}={getattr(nearest, n):g}" for n in GEOMETRY)
+            detail = (f"{detail}; the nearest design inside the box: {lengths} mm, "
+                      f"{nearest.body_material.id}/{nearest.membrane_material.id}; {offer}")
+        else:
+            detail = f"{detail}; {offer}"
         super().__init__(field, detail, allowed)
         self.nearest = nearest
 

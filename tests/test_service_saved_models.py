@@ -10,7 +10,15 @@ import threading
 import pytest
 from fastapi.testclient import TestClient
 from service_fakes import assert_problem, settings_for
-from test_calibration_loop import measured_rows
+from test_calibration_service import measured_rows as _shell_rows
+
+
+def measured_rows(effect: dict | None = None, reps: int = 3) -> list[dict]:
+    """Shell-test rows (test_calibration_service): an angle offset, ``reps`` specimens
+    per design; these tests check saving and loading, not the calibration's science."""
+    rows = _shell_rows((effect or {}).get("offset", 0.0))
+    keep = {f"-s{s}" for s in range(reps)}
+    return [r for r in rows if any(r["curve_id"].endswith(k) for k in keep)]
 
 import surrogate.calibration._saved as saved
 from service.app import create_app

@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 
 
-
 def plot_calibration(cal, path: str | Path) -> Path:
     """Write a PNG: left, angle against gauge pressure (points: data; dashed: recalibrated
     baseline; solid: after the selected effects; lines in the order the readings were

@@ -164,7 +164,7 @@ class Emulator:
         if (p < 0).any():
             raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
                              "pressures >= 0 Pa")
-        point = locate(design)
+        point = locate(design, reduced=True)
         pe, cb = self.curve_band(point, z)
         p_red = p / point.pressure_scale
         p_lim = cb.limit_pressure_pa
@@ -238,7 +238,7 @@ class Emulator:
         """Chamber pressure (Pa) that gives each angle (deg), with a band at ``level``."""
         z = z_value(level)
         ang = _array(angle_deg, "angle_deg", "deg")
-        point = locate(design)
+        point = locate(design, reduced=True)
         pe, cb = self.curve_band(point, z)
         signed = ang * pe.sign
         if (signed < 0).any():
@@ -271,7 +271,7 @@ class Emulator:
         past the FE's range); arrays in the order of ``designs``. Raises InputError for a
         design outside the box."""
         z = z_value(level)
-        points = [locate(d) for d in designs]
+        points = [locate(d, reduced=True) for d in designs]
         out = {k: np.full(len(designs), np.nan) for k in (
             "angle", "angle_lo", "angle_hi", "needed", "needed_lo", "needed_hi", "force",
             "force_lo", "force_hi")}
@@ -327,7 +327,7 @@ class Emulator:
 
     def nearest_records(self, design: Design, count: int = 3) -> list[str]:
         """Keys of the database curves nearest to ``design`` in the unit box."""
-        point = locate(design)
+        point = locate(design, reduced=True)
         pe = self._pair(point)
         d = np.linalg.norm(pe.coordinates - point.coordinates(), axis=1)
         return [pe.keys[i] for i in np.argsort(d)[:count]]

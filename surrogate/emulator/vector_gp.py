@@ -26,7 +26,7 @@ from surrogate.emulator.gp import (
     from_hyperparameters,
 )
 
-MAX_COMPONENTS = 12
+MAX_COMPONENTS = 20
 
 
 @dataclass(frozen=True)

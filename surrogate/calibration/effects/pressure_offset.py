@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 from surrogate.calibration.effects._base import Effect, EffectParameter
 
 

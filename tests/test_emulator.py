@@ -1,0 +1,135 @@
+"""The shipped design-space emulator against the shipped FE database and over HTTP.
+
+Reference numbers: the FE curves of service/data/curves.h5 (made by
+`balloon precompute grids/emulator.toml`, the command is in the file) and the FE's own
+invariances; nothing here is computed by the emulator's fitting forms.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from service_fakes import settings_for
+
+from service.app import create_app
+from service.settings import DATA_DIR
+from solver.design import Design
+from solver.design_space import OutOfBoxError, locate, scaled_material
+from solver.errors import InputError
+from solver.materials import MATERIALS
+from solver.store import CurveStore
+from surrogate.emulator import load_emulator
+from surrogate.predictor import Predictor
+
+EMULATOR = DATA_DIR / "emulator.json"
+DB = DATA_DIR / "curves.h5"
+
+
+@pytest.fixture(scope="module")
+def emulator():
+    return load_emulator(EMULATOR)
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("emu")
+    app = create_app(settings_for(tmp, emulator_path=EMULATOR, db_path=DB))
+    with TestClient(app) as c:
+        yield c
+
+
+def test_the_emulator_is_a_predictor(emulator):
+    assert isinstance(emulator, Predictor)
+
+
+def test_database_designs_are_reproduced_within_0_2_deg(emulator):
+    keys = {k for pe in emulator.pairs.values() for k in pe.keys}
+    worst = 0.0
+    checked = 0
+    with CurveStore(DB) as db:
+        for key in sorted(keys)[:: max(1, len(keys) // 12)]:
+            rec = db.get(key)
+            c = rec.curve
+            inside = (np.abs(c.angle_deg) <= 89.0) & (c.pressure_pa > 0)
+            pred = emulator.predict(rec.design, c.pressure_pa[inside])
+            worst = max(worst, float(np.nanmax(np.abs(pred.angle_deg - c.angle_deg[inside]))))
+            assert np.isfinite(pred.angle_deg).all()
+            checked += 1
+    assert checked >= 10
+    assert worst <= 0.2, worst
+
+
+def test_angle_is_monotone_in_pressure_and_signed(emulator):
+    p = np.linspace(0, 4000, 200)
+    standard = emulator.predict(Design(), p)
+    a = standard.angle_deg[np.isfinite(standard.angle_deg)]
+    assert (np.diff(a) >= -1e-9).all() and a[-1] > 45
+    reversed_pair = emulator.predict(Design(body_material=MATERIALS["ecoflex_00_30"],
+                                            membrane_material=MATERIALS["pdms_1_15"]), p)
+    r = reversed_pair.angle_deg[np.isfinite(reversed_pair.angle_deg)]
+    assert (np.diff(r) <= 1e-9).all() and r[-1] < -45     # bends towards the membrane
+    finite = np.isfinite(standard.angle_deg)
+    assert (standard.lower_deg[finite] <= standard.angle_deg[finite] + 1e-9).all()
+    assert (standard.upper_deg[finite] >= standard.angle_deg[finite] - 1e-9).all()
+
+
+def test_both_moduli_scaled_scale_the_pressure_axis(emulator):
+    s = 1.6
+    base = emulator.predict(Design(L_mm=9.0, t_mm=0.7), [400, 900, 1400])
+    stiff = Design(L_mm=9.0, t_mm=0.7, body_material=scaled_material("pdms_1_10", s),
+                   membrane_material=scaled_material("ecoflex_00_30", s))
+    scaled = emulator.predict(stiff, [400 * s, 900 * s, 1400 * s])
+    np.testing.assert_allclose(scaled.angle_deg, base.angle_deg, atol=1e-9)
+
+
+def test_a_scaled_inline_material_is_recognised_and_other_inline_ones_are_refused():
+    mu = [1.3 * m for m in MATERIALS["ecoflex_00_30"].mu_kpa]
+    ok = Design(membrane_material=MATERIALS["ecoflex_00_30"].__class__(
+        "my_eco", tuple(mu), MATERIALS["ecoflex_00_30"].alpha))
+    assert locate(ok).pressure_scale == pytest.approx(1.3)
+    other = MATERIALS["ecoflex_00_30"].__class__("odd", (1.0,), (2.0,))
+    with pytest.raises(OutOfBoxError) as info:
+        locate(Design(membrane_material=other))
+    assert info.value.field == "membrane_material"
+
+
+def test_past_the_fe_range_no_number_is_given(client):
+    r = client.post("/v1/predict", json={"pressures_pa": [1000, 2500, 5000, 20000]})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["model"] == "emulator"
+    assert body["angle_deg"][0] is not None and 0 < body["angle_deg"][0] < 90
+    assert body["angle_deg"][1:] == [None, None, None]
+    assert body["upper_deg"][1:] == [None, None, None]
+    v = body["validity"]
+    assert "past_fe_range" in v["flags"] and v["in_domain"] is False
+    assert 1000 < v["fe_limit_pa"] < 2500 and v["fe_limit_angle_deg"] == 90
+    assert "FE" in " ".join(v["messages"])
+
+
+def test_outside_the_box_is_refused_with_the_nearest_design(client):
+    r = client.post("/v1/predict", json={"design": {"L_mm": 3.0}, "pressures_pa": [500]})
+    assert r.status_code == 422, r.text
+    body = r.json()
+    assert r.headers["content-type"] == "application/problem+json"
+    assert any(e["field"].endswith("L_mm") for e in body["errors"])
+    text = r.text
+    assert "4 <= L_mm <= 18" in text
+    assert "nearest" in text and "/v1/solve" in text
+
+
+def test_refusal_names_the_nearest_in_box_design(emulator):
+    with pytest.raises(InputError) as info:
+        emulator.predict(Design(L_mm=20.0, body_length_mm=24.0), [100])
+    assert info.value.field == "L_mm"
+    assert info.value.nearest is not None and info.value.nearest.L_mm == 18.0
+
+
+def test_inverse_round_trip(emulator):
+    d = Design(L_mm=11.0, t_mm=0.8, T_mm=1.4, b_mm=2.0, h_mm=0.2)
+    inv = emulator.inverse(d, [10.0, 45.0, 80.0])
+    fwd = emulator.predict(d, inv.pressure_pa)
+    np.testing.assert_allclose(fwd.angle_deg, [10.0, 45.0, 80.0], atol=0.05)
+    with pytest.raises(InputError):
+        emulator.inverse(d, [120.0])     # past the FE's 90 deg
