@@ -33,7 +33,7 @@ def measured_rows(offset_deg: float = 0.0, seed: int = 3) -> list[dict]:
     model = paper_surrogate()
     rows = []
     for L in (4.1, 7.1, 11.1):
-        p = np.linspace(100.0, 1600.0, 10)
+        p = np.linspace(0.0, 1600.0, 10)
         for s in range(3):
             a = model.predict(Design(L_mm=L, t_mm=0.5), p).angle_deg
             a = a * (1 + 0.02 * rng.standard_normal()) + offset_deg

@@ -38,7 +38,7 @@ from surrogate.calibration._fit import FitResult, cross_validate, fit
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._model import AugmentedModel
 from surrogate.calibration._noise import noise_floor
-from surrogate.calibration._residual import residual_summary
+from surrogate.calibration._residual import excess_limit, residual_summary
 from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._start import Baseline
 from surrogate.calibration._structure import structure_test
@@ -240,6 +240,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "unexplained_where": left["where"],
         "systematic_residual": left["systematic"],
         "baseline_sd_deg": math.sqrt(baseline_var),
+        "noise_floor_rel_se": _num(noise.rel_se),
+        "excess_allowance": excess_limit(noise) if noise.source == "replicates" else None,
         "structure_after": structure,
         "selection_rule": {"z_significant": Z_SIGNIFICANT, "delta_bic_below": DELTA_BIC,
                            "cv_below": "rmse_before_deg", "pairs": "each member earns its "
@@ -304,8 +306,9 @@ def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
         return {"applicable": True, "reason": why[0], "measure": why[1]}
     if e.stage == "design" and not responses.responsive(e):
         return {"applicable": True, "reason": "the baseline does not respond to it (a "
-                "per-family model ignores material constants)", "measure": "calibrate "
-                "against the design-space emulator"}
+                "per-family model ignores material constants; a model without data along "
+                "it answers the same)", "measure": "calibrate against the design-space "
+                "emulator built over this change"}
     return {"applicable": True, "reason": None, "measure": None}
 
 

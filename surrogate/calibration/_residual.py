@@ -54,7 +54,7 @@ def systematic_residual(obs: Observations, resid: np.ndarray) -> dict | None:
             for c2, rows2 in rows_of.items():
                 if c2 == c:
                     continue
-                x2 = obs.time_s[rows2] if obs.has_time else np.arange(rows2.size, float)
+                x2 = obs.time_s[rows2] if obs.has_time else np.arange(rows2.size, dtype=float)
                 others.append(np.interp(x, x2, resid[rows2], left=np.nan, right=np.nan))
             o = np.array(others)
             ok = np.any(np.isfinite(o), axis=0) & np.isfinite(resid[rows])
