@@ -133,3 +133,30 @@ def test_inverse_round_trip(emulator):
     np.testing.assert_allclose(fwd.angle_deg, [10.0, 45.0, 80.0], atol=0.05)
     with pytest.raises(InputError):
         emulator.inverse(d, [120.0])     # past the FE's 90 deg
+
+
+def test_by_volume_the_fe_records_own_volume_column_is_reproduced(emulator):
+    """The syringe-pump view: angle and pressure at the FE's own injected volumes."""
+    keys = {k for pe in emulator.pairs.values() for k in pe.keys}
+    with CurveStore(DB) as db:
+        for key in sorted(keys)[::20]:
+            c = db.get(key).curve
+            inside = (np.abs(c.angle_deg) <= 89.0) & (c.volume_ul > 0)
+            pred = emulator.predict_volume(db.get(key).design, c.volume_ul[inside])
+            assert np.nanmax(np.abs(pred.angle_deg - c.angle_deg[inside])) < 0.5
+            rel = np.abs(pred.pressure_pa / c.pressure_pa[inside] - 1)
+            assert np.nanmax(rel[np.abs(c.angle_deg[inside]) > 1]) < 0.01
+
+
+def test_predict_by_volume_or_time_over_http(client):
+    by_v = client.post("/v1/predict", json={"volumes_ul": [5, 10, 20, 400]}).json()
+    by_t = client.post("/v1/predict", json={"times_s": [2, 4, 8, 160],
+                                            "flow_ul_s": 2.5}).json()
+    assert by_v["angle_deg"][:3] == pytest.approx(by_t["angle_deg"][:3])
+    assert by_t["time_s"] == [2, 4, 8, 160] and by_v["volume_ul"] == [5, 10, 20, 400]
+    assert by_v["angle_deg"][3] is None and "past_fe_range" in by_v["validity"]["flags"]
+    assert 0 < by_v["pressure_pa"][0] < by_v["pressure_pa"][2]
+    both = client.post("/v1/predict", json={"volumes_ul": [5], "pressures_pa": [100]})
+    assert both.status_code == 422 and "exactly one" in both.text
+    lone = client.post("/v1/predict", json={"times_s": [5]})
+    assert lone.status_code == 422 and "flow_ul_s" in lone.text

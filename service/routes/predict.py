@@ -40,7 +40,24 @@ async def predict(request: PredictRequest, models: ModelsDep) -> Response:
     thread-pool hand-off (benchmarks/bench_service.py)."""
     design = to_design(request.design)
     surrogate = models.get(request.model)
-    body = predict_dict(surrogate, design, request.pressures_pa, request.level, request.model)
+    if request.pressures_pa is not None:
+        body = predict_dict(surrogate, design, request.pressures_pa, request.level,
+                            request.model)
+    else:
+        volumes = (np.asarray(request.volumes_ul, float) if request.volumes_ul is not None
+                   else np.asarray(request.times_s, float) * float(request.flow_ul_s or 0))
+        by_volume = getattr(surrogate, "predict_volume", None)
+        if by_volume is None:
+            raise FieldError(("body", "volumes_ul" if request.volumes_ul else "times_s"),
+                             f"model {request.model!r} answers by pressure only",
+                             'model "emulator" for volumes and times')
+        try:
+            p = by_volume(design, volumes, level=request.level)
+        except InputError as exc:
+            raise located(exc, ("body",)) from None
+        body = prediction_body(p, request.model, request.level)
+        if request.times_s is not None:
+            body["time_s"] = [float(t) for t in request.times_s]
     # plain JSON of plain data: the schema is PredictResponse (response_model, for the docs)
     return Response(to_json(body), media_type="application/json")
 

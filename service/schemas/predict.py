@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from service.schemas.common import MATERIAL_ID, DesignIn, Schema
 
@@ -23,10 +23,30 @@ class PredictRequest(Schema):
          "model": "fitted", "level": 0.95}]})
 
     design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
-    pressures_pa: list[Pressure] = Field(min_length=1, max_length=1000,
-                                         description="cavity pressures, Pa")
+    pressures_pa: list[Pressure] | None = Field(
+        None, min_length=1, max_length=1000, description="chamber pressures, Pa (give "
+        "exactly one of pressures_pa, volumes_ul, or times_s with flow_ul_s)")
+    volumes_ul: list[Annotated[float, Field(ge=0.0, le=10000.0)]] | None = Field(
+        None, min_length=1, max_length=1000, description="injected volumes, ul (the "
+        "syringe pump's view; the emulator)")
+    times_s: list[Annotated[float, Field(ge=0.0, le=1e5)]] | None = Field(
+        None, min_length=1, max_length=1000, description="times since the pump started, "
+        "s (with flow_ul_s)")
+    flow_ul_s: float | None = Field(None, gt=0.0, le=1000.0, description="the pump's flow "
+                                    "rate, ul/s (with times_s)")
     model: str = MODEL
     level: float = LEVEL
+
+    @model_validator(mode="after")
+    def _one_axis(self) -> PredictRequest:
+        given = [n for n in ("pressures_pa", "volumes_ul", "times_s")
+                 if getattr(self, n) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of pressures_pa, volumes_ul, or times_s "
+                             f"(with flow_ul_s); got {', '.join(given) or 'none'}")
+        if (self.times_s is None) != (self.flow_ul_s is None):
+            raise ValueError("times_s and flow_ul_s go together")
+        return self
 
 
 class Validity(BaseModel):
@@ -55,7 +75,8 @@ class PredictResponse(BaseModel):
                                 "model has none)")
     force_lower_mn: OptFloats = Field(None, description="force band's lower end, mN")
     force_upper_mn: OptFloats = Field(None, description="force band's upper end, mN")
-    volume_ul: OptFloats = Field(None, description="injected volume at each pressure, ul")
+    volume_ul: OptFloats = Field(None, description="injected volume at each point, ul")
+    time_s: OptFloats = Field(None, description="time at the flow rate, s (times_s asked)")
     validity: Validity = Field(description="whether the answer is inside the model's domain")
     form: str | None = Field(None, description='model form: "exponential" (the paper\'s) '
                              'or "extended"')

@@ -193,6 +193,47 @@ class Emulator:
                           force_upper_mn=None if force is None else force[2],
                           volume_ul=volume)
 
+    def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95
+                       ) -> Prediction:
+        """The syringe-pump view: angle (deg) with its band and chamber pressure (Pa) at
+        each injected volume (ul, whole actuator), read off the emulated V(theta) and
+        p(theta) of the same design; NaN past the FE's range (flagged). Under volume
+        control the answer stays defined where the pressure would fall (none of the
+        database curves has a pressure maximum before 90 deg)."""
+        z = z_value(level)
+        v = _array(volumes_ul, "volumes_ul", "ul")
+        if (v < 0).any():
+            raise InputError("volumes_ul", f"negative volume {v.min():g} ul", "volumes >= 0 ul")
+        point = locate(design, reduced=True)
+        pe, cb = self.curve_band(point, z)
+        mean, var = pe.curves.predict(point.coordinates())
+        sd = np.sqrt(var[N_NODES:]) * pe.band_scale
+        theta = FINE_ANGLES_DEG
+        vm = _monotone(theta * np.exp(_B_ANGLE @ mean[N_NODES:]))
+        vl = _monotone(theta * np.exp(_B_ANGLE @ (mean[N_NODES:] - z * sd)))
+        vh = _monotone(theta * np.exp(_B_ANGLE @ (mean[N_NODES:] + z * sd)))
+        v_red = v / point.length_scale**3
+        v_lim = float(np.interp(cb.limit_angle_deg, theta, vm))
+        past = v_red > v_lim * (1 + 1e-12)
+        angle = np.interp(v_red, _with_origin(vm), ANGLES0)
+        upper = np.interp(v_red, _with_origin(vl), ANGLES0)
+        lower = np.interp(v_red, _with_origin(vh), ANGLES0)
+        pressure = np.interp(angle, ANGLES0, _with_origin(cb.pressure_pa)) * point.pressure_scale
+        for a in (angle, upper, lower, pressure):
+            a[past] = np.nan
+        if pe.sign < 0:
+            angle, lower, upper = -angle, -upper, -lower
+        validity = self._validity(pe, cb, point, np.nan_to_num(pressure), past, None)
+        if past.any():
+            validity["messages"][0] = (
+                f"{int(past.sum())} volume(s) above {v_lim * point.length_scale**3:.1f} ul are "
+                f"past the FE's range for this design ({cb.stop_reason}): no angle is given")
+        validity["fe_limit_volume_ul"] = v_lim * point.length_scale**3
+        return Prediction(design=design, pressure_pa=pressure, angle_deg=angle,
+                          lower_deg=lower, upper_deg=upper, level=level, validity=validity,
+                          model=self.name, form="emulator", provenance=dict(self.provenance),
+                          parameters={"pair": "/".join(point.pair)}, volume_ul=v)
+
     def _force(self, pe: PairEmulator, point: BoxPoint, p_red: np.ndarray, z: float
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Blocked-tip force (mN) with its band: F = p x (F/p emulated at the pressure
