@@ -47,7 +47,11 @@ class ModelRegistry:
             path = Path(self.surrogate_path)  # clients see the file's name, not its place
             text = str(exc).replace(str(path), path.name)
             self.fitted_error = f"{type(exc).__name__}: {text}"
+        self._load_emulator()
+
+    def _load_emulator(self) -> None:
         if self.emulator_path is None:
+            self.emulator_error = "no emulator file configured"
             return
         try:
             from surrogate.emulator import load_emulator
@@ -60,6 +64,8 @@ class ModelRegistry:
 
     def get(self, name: str) -> Any:
         if name == "emulator":
+            if self.emulator is None and self.emulator_error is None:
+                self._load_emulator()      # an app built without start-up loading
             if self.emulator is None:
                 raise UnavailableError(
                     f"the emulator is not loaded ({self.emulator_error or 'no file'}); use "

@@ -329,8 +329,8 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     else:
         what = "force" if target.kind == "force_at_pressure" else "angle"
         reach = best_reach.get("largest_value")
-        explanation = (f"no design inside the bounds reaches the target {what} "
-                       f"{target.value:g} at {target.pressure_pa:g} Pa"
+        explanation = (f"the target {what} {target.value:g} at {target.pressure_pa:g} Pa is "
+                       "not reachable by any design inside the bounds"
                        + (f"; the largest reachable is {reach:.3g}" if reach else "")
                        + ": widen the bounds (longer chamber, thinner membrane, softer "
                        "membrane) or raise the pressure")

@@ -91,6 +91,7 @@ PROBLEM = "application/problem+json"
 
 def settings_for(tmp_path, **overrides) -> ServiceSettings:
     values = dict(db_path=tmp_path / "curves.h5", surrogate_path=tmp_path / "none.json",
+                  emulator_path=tmp_path / "no-emulator.json",
                   models_dir=tmp_path / "models", api_key="test-key", queue_size=2,
                   job_time_limit_s=30)
     values.update(overrides)

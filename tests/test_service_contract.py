@@ -26,6 +26,8 @@ def client(tmp_path_factory):
     from surrogate import paper_surrogate
 
     app.state.models.fitted = paper_surrogate()
+
+    app.state.models.emulator = app.state.models.fitted
     with TestClient(app, raise_server_exceptions=False) as c:
         yield c
 

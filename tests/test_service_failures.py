@@ -18,6 +18,7 @@ def make_client(tmp_path, **overrides):
     app = create_app(settings_for(tmp_path, **overrides), solve_fn=fast_solve,
                      write_fn=lambda d, s, c: "k" * 32, load_surrogate=False)
     app.state.models.fitted = FakeSurrogate()
+    app.state.models.emulator = app.state.models.fitted
     return TestClient(app, raise_server_exceptions=False)
 
 
@@ -139,6 +140,7 @@ def test_predict_provenance_names_the_database_not_its_path(client):
             return p
 
     client.app.state.models.fitted = Fitted()
+    client.app.state.models.emulator = client.app.state.models.fitted
     r = client.post("/v1/predict", json={"design": DESIGN, "pressures_pa": [500]})
     assert r.status_code == 200 and "/home/someone" not in r.text
     assert r.json()["provenance"] == {"database": "curves.h5", "git_commit": "abc"}

@@ -102,7 +102,7 @@ def test_curl_snippets(server):
     import json
 
     body = json.loads(run_snippet(server, "predict.sh", ["bash"]))
-    assert body["pressure_pa"] == [500, 1000, 1500, 2000] and body["model"] == "fitted"
+    assert body["pressure_pa"] == [500, 1000, 1500, 2000] and body["model"] == "emulator"
     job, polled = run_snippet(server, "solve.sh", ["bash"]).splitlines()
     assert json.loads(job)["status"] in ("queued", "running")
     assert json.loads(polled)["id"] == json.loads(job)["id"]

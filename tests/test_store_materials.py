@@ -28,6 +28,7 @@ def client(tmp_path):
     app = create_app(settings_for(tmp_path), solve_fn=fast_solve,
                      write_fn=lambda d, s, c: "k" * 32, load_surrogate=False)
     app.state.models.fitted = FakeSurrogate()
+    app.state.models.emulator = app.state.models.fitted
     with TestClient(app, raise_server_exceptions=False) as c:
         yield c
 

@@ -42,6 +42,8 @@ def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
     from surrogate.design_search import SearchBounds, search_designs
 
     model = models.get(request.model)
+    if not (hasattr(model, "evaluate_designs") or hasattr(model, "covered_slices")):
+        require(model, request.model, "covered_slices")   # 422: this model cannot search
     t = request.target
     pairs = (tuple((p.body_material, p.membrane_material) for p in request.material_pairs)
              if request.material_pairs else None)

@@ -38,6 +38,17 @@ async def predict(request: PredictRequest, models: ModelsDep) -> Response:
 
     Runs on the event loop: the model evaluation takes about 0.1 ms, less than a
     thread-pool hand-off (benchmarks/bench_service.py)."""
+    given = [n for n in ("pressures_pa", "volumes_ul", "times_s")
+             if getattr(request, n) is not None]
+    if len(given) != 1:
+        raise FieldError(("body", given[1] if given else "pressures_pa"),
+                         f"give exactly one of pressures_pa, volumes_ul, or times_s; got "
+                         f"{', '.join(given) or 'none'}",
+                         "each 0 <= pressures_pa <= 20000 (Pa); or volumes_ul (ul); or "
+                         "times_s (s) with flow_ul_s (ul/s)")
+    if (request.times_s is None) != (request.flow_ul_s is None):
+        raise FieldError(("body", "flow_ul_s"), "times_s and flow_ul_s go together",
+                         "0 < flow_ul_s <= 1000 (ul/s) with times_s")
     design = to_design(request.design)
     surrogate = models.get(request.model)
     if request.pressures_pa is not None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field
 
 from service.schemas.common import MATERIAL_ID, DesignIn, Schema
 
@@ -36,17 +36,6 @@ class PredictRequest(Schema):
                                     "rate, ul/s (with times_s)")
     model: str = MODEL
     level: float = LEVEL
-
-    @model_validator(mode="after")
-    def _one_axis(self) -> PredictRequest:
-        given = [n for n in ("pressures_pa", "volumes_ul", "times_s")
-                 if getattr(self, n) is not None]
-        if len(given) != 1:
-            raise ValueError("give exactly one of pressures_pa, volumes_ul, or times_s "
-                             f"(with flow_ul_s); got {', '.join(given) or 'none'}")
-        if (self.times_s is None) != (self.flow_ul_s is None):
-            raise ValueError("times_s and flow_ul_s go together")
-        return self
 
 
 class Validity(BaseModel):
