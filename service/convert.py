@@ -77,8 +77,8 @@ def jsonable(value: Any) -> Any:
     return value
 
 
-def prediction_body(prediction: Any, model: str, level: float | None = None
-                    ) -> dict[str, Any]:
+def prediction_body(prediction: Any, model: str, level: float | None = None,
+                    design: Design | None = None) -> dict[str, Any]:
     """The one plain-data form of a ``surrogate.core.Prediction``, for HTTP and the CLI:
     angles (deg) with the band, force (mN, blocked tip) and injected volume (ul) when the
     model has them, validity and provenance. NaN (past the FE's range) becomes null."""
@@ -88,7 +88,7 @@ def prediction_body(prediction: Any, model: str, level: float | None = None
         return None if values is None else finite_list(values)
 
     return {"model": model, "level": getattr(prediction, "level", level),
-            "design": design_dict(prediction.design),
+            "design": design_dict(getattr(prediction, "design", None) or design),
             "pressure_pa": finite_list(prediction.pressure_pa),
             "angle_deg": finite_list(prediction.angle_deg),
             "lower_deg": finite_list(prediction.lower_deg),

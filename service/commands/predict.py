@@ -151,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("--pressure-range", f"NUM = {num:g}", "an integer 1..100000")
         pressures = np.linspace(start, stop, int(num))
     pred = s.predict(design, pressures, level=args.level)  # type: ignore[attr-defined]
-    body = prediction_body(pred, args.model or "emulator")
+    body = prediction_body(pred, args.model or "emulator", args.level, design)
     if args.json:
         print(json.dumps(body, indent=1))
         return 0

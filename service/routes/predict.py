@@ -28,7 +28,7 @@ def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
         p = surrogate.predict(design, np.asarray(pressures_pa, float), level=level)
     except InputError as exc:  # e.g. OutOfFamilyError / OutOfBoxError (field "design")
         raise located(exc, loc) from None
-    return prediction_body(p, model, level)
+    return prediction_body(p, model, level, design)
 
 
 @router.post("/predict", response_model=PredictResponse,
@@ -66,7 +66,7 @@ async def predict(request: PredictRequest, models: ModelsDep) -> Response:
             p = by_volume(design, volumes, level=request.level)
         except InputError as exc:
             raise located(exc, ("body",)) from None
-        body = prediction_body(p, request.model, request.level)
+        body = prediction_body(p, request.model, request.level, design)
         if request.times_s is not None:
             body["time_s"] = [float(t) for t in request.times_s]
     # plain JSON of plain data: the schema is PredictResponse (response_model, for the docs)
