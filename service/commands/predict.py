@@ -155,8 +155,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(body, indent=1))
         return 0
-    print(f"model {body['model']} ({body['form']}), L = {design.L_mm:g} mm, "  # type: ignore
-          f"t = {design.t_mm:g} mm, band {100 * pred.level:g} %")  # type: ignore
+    print(f"model {body['model']} ({body['form'] or 'calibrated'}), L = {design.L_mm:g} mm, "  # type: ignore
+          f"t = {design.t_mm:g} mm, band {100 * args.level:g} %")  # type: ignore
     columns = [c for c in ("pressure_pa", "angle_deg", "lower_deg", "upper_deg", "force_mn",
                            "force_lower_mn", "force_upper_mn", "volume_ul")
                if body.get(c) is not None]
