@@ -58,9 +58,17 @@ class ModelRegistry:
 
             self.emulator = load_emulator(self.emulator_path)
             self.emulator_error = None
+        except FileNotFoundError:
+            self.emulator = None
+            self.emulator_error = (f"emulator file {Path(self.emulator_path).name} does not "
+                                   "exist (make one with `balloon fit --db DB -o FILE "
+                                   "--emulator-output EMULATOR`)")
         except Exception as exc:  # noqa: BLE001 - reported by /v1/health and on use
             self.emulator = None
-            self.emulator_error = f"{type(exc).__name__}: {_plain_error(exc)}"
+            path = Path(self.emulator_path)   # clients see the file's name, not its place
+            text = _plain_error(exc).replace(str(path), path.name).replace(
+                str(path.parent), "")
+            self.emulator_error = f"{type(exc).__name__}: {text}"
 
     def get(self, name: str) -> Any:
         if name == "emulator":

@@ -38,8 +38,12 @@ async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Hea
     elif db_error:
         problems.append(f"{db_error}: /v1/curves answers 503")
     if fitted is None:
-        problems.append(f"no fitted surrogate ({models.fitted_error}): model \"fitted\" "
+        problems.append(f"no fitted surrogate ({models.fitted_error}): model \"exponential\" "
                         "answers 503; \"paper\" answers")
+    emulator = models.emulator
+    if emulator is None:
+        problems.append(f"no emulator ({models.emulator_error or 'not loaded'}): the default "
+                        "model \"emulator\" answers 503")
     return Health(
         status="degraded" if problems else "ok", problems=problems, version=VERSION,
         database=DatabaseStatus(name=settings.db_path.name, present=present,
@@ -48,4 +52,9 @@ async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Hea
             loaded=fitted is not None, file=settings.surrogate_path.name,
             name=getattr(fitted, "name", None), error=models.fitted_error,
             families=len(getattr(fitted, "families", []) or [])),
+        emulator=SurrogateStatus(
+            loaded=emulator is not None,
+            file=models.emulator_path.name if models.emulator_path else "",
+            name=getattr(emulator, "name", None), error=models.emulator_error,
+            families=len(getattr(emulator, "pairs", {}) or {})),
         jobs=JobsStatus(**jobs.stats()))

@@ -38,5 +38,7 @@ class Health(BaseModel):
     problems: list[str] = Field([], description="what is degraded, one sentence each")
     version: str = Field(description="balloon-actuator package version")
     database: DatabaseStatus
-    surrogate: SurrogateStatus
+    surrogate: SurrogateStatus = Field(description="the fitted exponential model")
+    emulator: SurrogateStatus | None = Field(None, description="the design-space emulator "
+                                             "(the default model); families = its groups")
     jobs: JobsStatus
