@@ -19,8 +19,8 @@ from service._worker import default_solve
 from service.errors import install_error_handlers
 from service.jobs import JobManager
 from service.middleware import BodyLimitMiddleware
-from service.openapi import install_contract
 from service.models import ModelRegistry
+from service.openapi import install_contract
 from service.routes import calibration, curves, health, inverse, jobs, materials, predict
 from service.settings import ServiceSettings, get_settings
 from service.store_access import ResultWriter

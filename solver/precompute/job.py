@@ -31,8 +31,8 @@ from typing import Any
 from solver.curve import Curve
 from solver.design import Design
 from solver.precompute.grid import GridPoint
-from solver.settings import SolverSettings
 from solver.precompute.parking import park, unpark
+from solver.settings import SolverSettings
 from solver.store import CurveStore, Record, StoreWriteError, failed_curve, make_record
 from solver.store.locking import WriterLock
 from solver.store.record import git_commit, package_version, utc_now
