@@ -171,7 +171,8 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
     for err in exc.errors():
         loc = [p for p in err.get("loc", ()) if isinstance(p, str | int)]
         names = [p for p in loc[1:] if isinstance(p, str)]
-        item: dict[str, Any] = {"loc": loc, "field": ".".join(str(p) for p in loc[1:]),
+        item: dict[str, Any] = {"loc": loc,
+                                "field": ".".join(str(p) for p in loc[1:]) or str(loc[0]),
                                 "message": str(err.get("msg", "invalid value"))}
         allowed = FIELD_RANGES.get(names[-1]) if names else None
         if allowed:

@@ -317,8 +317,9 @@ def test_balloon_precompute_on_a_full_file_system_says_where_and_why(tmp_path):
     grid_path.write_text(grid_text.replace("[4.1, 7.1, 11.1]", "[4.1, 5.1, 6.1, 7.1, 8.1]"))
     runner = tmp_path / "runner.py"
     runner.write_text(textwrap.dedent(FULL_DISK_RUNNER))
-    job = subprocess.run([sys.executable, "-X", "faulthandler", str(runner), grid_path, db_path, str(limit)],
-                         env=ENV, capture_output=True, text=True, timeout=120)
+    job = subprocess.run([sys.executable, "-X", "faulthandler", str(runner), grid_path,
+                          db_path, str(limit)], env=ENV, capture_output=True, text=True,
+                         timeout=120)
     assert job.returncode == 1, job.stderr
     assert "Traceback" not in job.stderr
     stopped = [ln for ln in job.stderr.splitlines() if ln.startswith("stopped: ")]

@@ -9,7 +9,7 @@ import re
 import jsonschema_rs
 import pytest
 from fastapi.testclient import TestClient
-from service_fakes import FakeSurrogate, fast_solve, settings_for
+from service_fakes import fast_solve, settings_for
 
 from service.app import create_app
 from service.openapi import OPERATION_ERRORS, PROBLEM_JSON
@@ -66,7 +66,7 @@ def _response_schemas(spec):
     schemas = spec["components"]["schemas"]
     names, todo = set(), []
     for _, _, op in operations(spec):
-        for status, response in op["responses"].items():
+        for response in op["responses"].values():
             for media in response.get("content", {}).values():
                 ref = media.get("schema", {}).get("$ref")
                 if ref:

@@ -139,7 +139,7 @@ def test_solve_and_job_errors(tmp_path):
         r = client.post("/v1/solve", json={"settings": {"tip": "spring"}}, headers=KEY)
         assert_problem(r, 422, "settings.spring_k_n_per_m")  # a spring needs a stiffness
         assert_problem(client.get("/v1/jobs/" + "a" * 32), 404)
-        assert_problem(client.get("/v1/jobs/nope"), 404)
+        assert_problem(client.get("/v1/jobs/nope"), 404)  # an id that cannot exist: not found
 
 
 def test_manager_write_failure_keeps_the_error(tmp_path):

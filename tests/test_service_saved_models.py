@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import threading
+from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
@@ -211,3 +212,15 @@ def test_balloon_calibrate_on_thin_data_without_replicates_finishes(tmp_path, ca
     assert json.loads((tmp_path / "r.json").read_text())["noise_floor_deg"] is None
     assert "noise floor n/a" in out
     assert load_model("thin", tmp_path / "models").name == "thin"
+
+
+def test_balloon_calibrate_refuses_a_taken_name_before_the_work(tmp_path, calibration,
+                                                                capsys):
+    save_model(calibration, "lab1", tmp_path / "models")
+    data = Path(__file__).resolve().parents[1] / "surrogate/calibration/data/example_lab.csv"
+    code = balloon(["calibrate", str(data), "--report",
+                    str(tmp_path / "r.json"), "--model", "paper", "--save", "lab1",
+                    "--models-dir", str(tmp_path / "models")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "'lab1' already exists" in err, err
+    assert not (tmp_path / "r.json").exists()  # nothing was run

@@ -70,10 +70,16 @@ def run(args: argparse.Namespace) -> int:
     if not 2 <= args.folds <= 50:
         raise InputError("--folds", f"got {args.folds}", "2 <= folds <= 50")
     obs = load_observations(args.data, strict=args.strict)  # validates before any work
-    if args.save:
-        from surrogate.calibration._saved import _check_name
+    if args.save:  # a bad or taken name is refused before the work, not after it
+        from surrogate.calibration._saved import ModelExistsError, _check_name
 
         _check_name(args.save)
+        if args.models_dir is None:
+            from service.settings import get_settings
+
+            args.models_dir = get_settings().models_dir
+        if (args.models_dir / f"{args.save}.json").exists():
+            raise ModelExistsError(args.save)
     model = _starting_model(args.model)
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
@@ -87,10 +93,6 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         plot_calibration(cal, args.plot)
     if args.save:
-        if args.models_dir is None:
-            from service.settings import get_settings
-
-            args.models_dir = get_settings().models_dir
         path = save_model(cal, args.save, args.models_dir)
         print(f"saved model {args.save!r} to {path}", file=sys.stderr)
     def deg(x: float | None) -> str:

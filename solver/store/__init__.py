@@ -28,6 +28,5 @@ from solver.store.schema import SCHEMA_VERSION
 __all__ = [
     "SCHEMA_VERSION", "CurveStore", "DamagedStoreError", "NotACurveStoreError", "Record",
     "SchemaVersionError", "StoreBusyError", "StoreWriteError", "canonical_json", "failed_curve",
-    "make_provenance", "make_record",
-    "record_key",
+    "make_provenance", "make_record", "record_key",
 ]
