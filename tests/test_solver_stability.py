@@ -84,3 +84,29 @@ def test_sphere_past_its_pressure_maximum_is_stable_under_volume_control():
     assert all(classify(neg, gkg, True) == "limit point passed" for neg, gkg in late)
     early = [(neg, gkg) for lam, neg, gkg in seen if lam < 1.4]
     assert all(neg == 0 and gkg > 0 for neg, gkg in early)
+
+
+def test_stability_fields_survive_the_store(tmp_path):
+    # The two optional Curve members of issue 12 are stored and read back; a record
+    # written without them (as every older one) reads as None / -1.
+    from dataclasses import replace
+
+    from test_precompute_fakes import fake_curve
+
+    from solver.design import Design
+    from solver.store import CurveStore, make_record
+
+    design = Design().validated()
+    plain = fake_curve(design)
+    flagged = replace(plain, volume_control_negative_eigenvalues=np.array([0, 0, 0, 1, 1, 2]),
+                      branch_switch_index=4)
+    settings = SolverSettings(mesh_level=0, element="hex1")
+    with CurveStore(tmp_path / "db.h5", mode="a") as db:
+        db.put(make_record(design, settings, flagged))
+        db.put(make_record(Design(L_mm=5.0).validated(), settings, plain))
+    with CurveStore(tmp_path / "db.h5") as db:
+        back = {r.design.L_mm: r.curve for r in db.records()}
+    assert back[design.L_mm].volume_control_negative_eigenvalues.tolist() == [0, 0, 0, 1, 1, 2]
+    assert back[design.L_mm].branch_switch_index == 4
+    assert back[5.0].volume_control_negative_eigenvalues is None
+    assert back[5.0].branch_switch_index == -1
