@@ -93,8 +93,8 @@ MEASUREMENT_CASES = [
 
 
 @pytest.mark.parametrize("effect, truth, values, protocol, flows", MEASUREMENT_CASES,
-                         ids=[c[0] if isinstance(c, tuple) else c.values[0]
-                              for c in MEASUREMENT_CASES])
+                         ids=["pressure_offset", "hydraulic_resistance", "angle_offset",
+                              "camera_gain", "pressure_gain", "viscoelastic_creep"])
 def test_each_measurement_and_time_effect_is_found_and_sized(effect, truth, values, protocol,
                                                              flows):
     lab = Lab(designs=BASES, protocol=protocol, flows_ul_s=flows)
