@@ -196,7 +196,7 @@ class FEStandIn:
     """A Predictor interpolating the cached FE curves (stand-in for the design-space
     emulator in tests): angle(pressure) of the nominal design, plus for each physical
     axis (membrane / body mu scale, t, L) the change between the cached solves along that
-    axis (linear between nodes, extrapolated from the end segment), taken from the
+    axis (quadratic through the three nearest solves, else linear), taken from the
     nearest base design that has solves along the axis. Its band is nil: it is the FE
     at the cached designs."""
 
@@ -266,6 +266,11 @@ class FEStandIn:
         xs = np.array([x for x, _ in nodes])
         a_src = self._angle(src, p)
         ys = np.array([self._angle(k, p) - a_src for _, k in nodes])
+        if xs.size >= 3:  # smooth through the three nodes nearest delta (quadratic)
+            near = np.sort(np.argsort(np.abs(xs - delta))[:3])
+            w = [np.prod([(delta - xs[b]) / (xs[a] - xs[b]) for b in near if b != a])
+                 for a in near]
+            return sum(wi * ys[a] for wi, a in zip(w, near, strict=True))
         j = int(np.clip(np.searchsorted(xs, delta) - 1, 0, xs.size - 2))
         w = (delta - xs[j]) / (xs[j + 1] - xs[j])
         return ys[j] + w * (ys[j + 1] - ys[j])
