@@ -80,7 +80,7 @@ export function setupCalibration() {
       showProblem(new Error(`${file.name}: ${err.message}`), {}, $("err-cal-rows"));
       return;
     }
-    lastBody = { rows, model: $("cal-model").value.trim() || "fitted", folds: Number($("cal-folds").value) || 5 };
+    lastBody = { rows, model: $("cal-model").value.trim() || "emulator", folds: Number($("cal-folds").value) || 5 };
     await run(lastBody, form, { rows: $("err-cal-rows"), model: $("err-cal-model"), folds: $("err-cal-folds") }, $("err-calibrate"));
   });
 
