@@ -43,9 +43,15 @@ function reportPoints(report) {
   return null;
 }
 
+// The model's angles at the given pressures; a measured pressure below 0 Pa (a gauge
+// reading at rest) has no model value: null, and it is not sent.
 async function modelValues(model, group, pressures) {
-  const res = await api("/v1/predict", { method: "POST", body: { design: group.design, pressures_pa: pressures, model } });
-  return res.angle_deg;
+  const keep = pressures.map((p, i) => [p, i]).filter(([p]) => Number.isFinite(p) && p >= 0);
+  const out = pressures.map(() => null);
+  if (!keep.length) return out;
+  const res = await api("/v1/predict", { method: "POST", body: { design: group.design, pressures_pa: keep.map(([p]) => p), model } });
+  keep.forEach(([, i], k) => { out[i] = res.angle_deg[k]; });
+  return out;
 }
 
 function effectLines(report) {
