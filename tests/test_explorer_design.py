@@ -76,7 +76,8 @@ def test_inverse_design_lists_candidates_and_loading_one_updates_the_panel(watch
     # at the target pressure the panel shows /v1/predict's angle for the design it sent
     at_target = httpx.post(server.url + "/v1/predict", json={
         "design": page.evaluate("window.explorer.request.design"), "pressures_pa": [1500]}).json()
-    assert f"1500 Pa: angle {at_target['angle_deg'][0]:.1f} deg" in page.locator("#p_op-out").inner_text()
+    shown = page.locator("#p_op-out").inner_text()
+    assert f"1500 Pa: angle {at_target['angle_deg'][0]:.1f} deg" in shown
     screenshot(page, "explorer-inverse-1280")
     assert watched.errors == []
 
