@@ -84,7 +84,7 @@ def test_moving_the_L_slider_redraws_the_curve_with_the_numbers_of_v1_predict(wa
     body = {"design": {"L_mm": 8.1, "t_mm": 0.5, "T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15,
                        "W_mm": 3.0, "body_material": "pdms_1_10",
                        "membrane_material": "ecoflex_00_30"},
-            "pressures_pa": grid(2000.0), "model": "fitted", "level": 0.95}
+            "pressures_pa": grid(2000.0), "model": "emulator", "level": 0.95}
     api = httpx.post(server.url + "/v1/predict", json=body).json()
     assert drawn["x"] == pytest.approx(api["pressure_pa"], abs=1e-9)
     assert drawn["y"] == pytest.approx(api["angle_deg"], abs=1e-9)

@@ -112,7 +112,7 @@ function pMax() {
 
 function predictBody(state, grid) {
   return { design: designBody(state, app.presets), pressures_pa: grid,
-           model: $("model").value.trim() || "fitted", level: LEVEL };
+           model: $("model").value.trim() || "emulator", level: LEVEL };
 }
 
 const DESIGN_SLOTS = () => {
@@ -153,7 +153,8 @@ async function update() {
     app.refused = (await offersSolve(err, body)) ? err : null;
     if (controller.signal.aborted) return;
     // a refusal of the design as a whole is shown once, in the FE solve box
-    showProblem(err, { ...DESIGN_SLOTS(), ...(app.refused ? { design: null } : {}) }, $("err-design"));
+    showProblem(err, { ...DESIGN_SLOTS(), ...(app.refused ? { design: null } : {}) },
+                app.refused ? null : $("err-design"));
     $("status").textContent = app.refused ? "No prediction: the model refuses this design (below)."
       : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
@@ -172,7 +173,7 @@ async function update() {
 }
 
 // A design the predictor refuses can still be solved by FE: a 422 whose errors all name
-// the design (its family, the model's box), for a design the API's own schema accepts
+// the design (its family, the model's box: the emulator's "out-of-box" names the field), for a design the API's own schema accepts
 // (DesignIn's limits in /openapi.json, which POST /v1/solve checks too). A value outside
 // those limits is not offered a solve that would be refused the same way.
 let designLimits = null;
@@ -191,9 +192,10 @@ async function schemaLimits() {
 async function offersSolve(err, body) {
   if (!(err instanceof ApiError) || err.status !== 422 || !body) return false;
   const errs = err.fieldErrors;
+  // the emulator's out-of-box refusal names the design field bare (["body", "L_mm"])
   const inDesign = errs.length > 0 && errs.every((e) => {
     const loc = Array.isArray(e.loc) ? e.loc.slice(1).join(".") : String(e.field || "");
-    return loc === "design" || loc.startsWith("design.");
+    return loc === "design" || loc.startsWith("design.") || Object.hasOwn(body.design, loc);
   });
   if (!inDesign) return false;
   const limits = await schemaLimits();

@@ -43,9 +43,15 @@ function reportPoints(report) {
   return null;
 }
 
+// The model's angles at the given pressures; a measured pressure below 0 Pa (a gauge
+// reading at rest) has no model value: null, and it is not sent.
 async function modelValues(model, group, pressures) {
-  const res = await api("/v1/predict", { method: "POST", body: { design: group.design, pressures_pa: pressures, model } });
-  return res.angle_deg;
+  const keep = pressures.map((p, i) => [p, i]).filter(([p]) => Number.isFinite(p) && p >= 0);
+  const out = pressures.map(() => null);
+  if (!keep.length) return out;
+  const res = await api("/v1/predict", { method: "POST", body: { design: group.design, pressures_pa: keep.map(([p]) => p), model } });
+  keep.forEach(([, i], k) => { out[i] = res.angle_deg[k]; });
+  return out;
 }
 
 function effectLines(report) {
@@ -80,7 +86,7 @@ export function setupCalibration() {
       showProblem(new Error(`${file.name}: ${err.message}`), {}, $("err-cal-rows"));
       return;
     }
-    lastBody = { rows, model: $("cal-model").value.trim() || "fitted", folds: Number($("cal-folds").value) || 5 };
+    lastBody = { rows, model: $("cal-model").value.trim() || "emulator", folds: Number($("cal-folds").value) || 5 };
     await run(lastBody, form, { rows: $("err-cal-rows"), model: $("err-cal-model"), folds: $("err-cal-folds") }, $("err-calibrate"));
   });
 

@@ -95,7 +95,12 @@ export function setupInverse({ loadDesign }) {
       const pband = c.pressure_lower_pa !== null && c.pressure_upper_pa !== null && c.pressure_lower_pa !== c.pressure_upper_pa
         ? ` [${fmt(c.pressure_lower_pa, 0)}, ${fmt(c.pressure_upper_pa, 0)}]` : "";
       const notes = (c.validity && c.validity.messages) ? c.validity.messages.join(" ") : "";
-      const cells = [c.rank, pairLabel(c.body_material, c.membrane_material), fmt(c.L_mm, 2), fmt(c.t_mm, 3),
+      const geometry = familyGeometry(c);
+      const scale = (s) => (typeof s === "number" ? `x${fmtSig(s)}` : "x1");
+      const cells = [c.rank, pairLabel(c.body_material, c.membrane_material),
+        `${scale(c.body_stiffness_scale)}, ${scale(c.membrane_stiffness_scale)}`,
+        fmt(c.L_mm, 2), fmt(c.t_mm, 3),
+        ...["T_mm", "b_mm", "h_mm"].map((k) => (typeof geometry[k] === "number" ? fmt(geometry[k], 3) : "")),
         `${fmt(c.value_at_pressure, 1)}${band}`, `${fmt(c.pressure_needed_pa, 0)}${pband}`, notes || (c.validity?.in_domain === false ? "outside the fitted domain" : "")];
       tr.innerHTML = cells.map((v) => `<td></td>`).join("") + `<td><button type="button" data-candidate="${k}">Load</button></td>`;
       cells.forEach((v, i) => { tr.children[i].textContent = String(v); });
@@ -108,8 +113,11 @@ export function setupInverse({ loadDesign }) {
     if (k === undefined) return;
     const c = candidates[Number(k)];
     const pair = PAIRS.findIndex(([b, m]) => b === c.body_material && m === c.membrane_material);
-    const values = { L_mm: Math.round(c.L_mm * 1e4) / 1e4, t_mm: Math.round(c.t_mm * 1e4) / 1e4,
-      body_scale: 1, membrane_scale: 1, ...familyGeometry(c) };
+    // the candidate's whole design: L, t, T, b, h (to 0.1 um) and each layer's stiffness scale
+    const round = (v) => Math.round(v * 1e4) / 1e4;
+    const geometry = Object.fromEntries(Object.entries(familyGeometry(c)).map(([k, v]) => [k, round(v)]));
+    const values = { L_mm: round(c.L_mm), t_mm: round(c.t_mm), ...geometry,
+      body_scale: c.body_stiffness_scale ?? 1, membrane_scale: c.membrane_stiffness_scale ?? 1 };
     if (pair >= 0) values.pair = pair;
     loadDesign(values);
     if (c.target_pressure_pa || c.pressure_needed_pa) {
