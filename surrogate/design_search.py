@@ -317,11 +317,17 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         p_max = max(target.pressure_pa, e.needed if np.isfinite(e.needed) else 0.0)
         curve = model.predict(e.design, np.linspace(0.0, p_max, CURVE_POINTS),  # type: ignore
                               level=level)
+        # report the value with its sign (the reversed pair bends towards the membrane):
+        # the search matched magnitudes
+        at = model.predict(e.design, [target.pressure_pa], level=level)  # type: ignore
+        signed = (at.force_mn if target.kind == "force_at_pressure" else at.angle_deg)
+        sign = -1.0 if signed is not None and np.isfinite(signed[0]) and signed[0] < 0 else 1.0
+        lo, hi = (e.value_lo, e.value_hi) if sign > 0 else (-e.value_hi, -e.value_lo)
         candidates.append(DesignCandidate(
             rank=rank, design=e.design, family="/".join(e.pair),
             score=float(_score(e, objective, target)), pressure_needed_pa=e.needed,
             pressure_lower_pa=e.needed_lo, pressure_upper_pa=e.needed_hi,
-            value_at_pressure=e.value, value_lower=e.value_lo, value_upper=e.value_hi,
+            value_at_pressure=sign * e.value, value_lower=lo, value_upper=hi,
             curve=curve))
     if candidates:
         explanation = (f"{len(feasible)} of {n_evaluated} evaluated designs meet the target; "
