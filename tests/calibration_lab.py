@@ -266,14 +266,16 @@ class FEStandIn:
         xs = np.array([x for x, _ in nodes])
         a_src = self._angle(src, p)
         ys = np.array([self._angle(k, p) - a_src for _, k in nodes])
-        if xs.size >= 3:  # smooth through the three nodes nearest delta (quadratic)
-            near = np.sort(np.argsort(np.abs(xs - delta))[:3])
-            w = [np.prod([(delta - xs[b]) / (xs[a] - xs[b]) for b in near if b != a])
-                 for a in near]
-            return sum(wi * ys[a] for wi, a in zip(w, near, strict=True))
         j = int(np.clip(np.searchsorted(xs, delta) - 1, 0, xs.size - 2))
         w = (delta - xs[j]) / (xs[j + 1] - xs[j])
-        return ys[j] + w * (ys[j + 1] - ys[j])
+        linear = ys[j] + w * (ys[j + 1] - ys[j])
+        if xs.size < 3:
+            return linear
+        near = np.sort(np.argsort(np.abs(xs - delta))[:3])  # smooth: quadratic through 3
+        wq = [np.prod([(delta - xs[b]) / (xs[a] - xs[b]) for b in near if b != a])
+              for a in near]
+        quad = sum(wi * ys[a] for wi, a in zip(wq, near, strict=True))
+        return np.where(np.isfinite(quad), quad, linear)  # a node's curve ended: linear
 
     def inverse(self, design, angle_deg, level: float = 0.95):
         raise NotImplementedError("the stand-in answers predict only")
