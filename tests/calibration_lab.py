@@ -192,6 +192,9 @@ def _reference(clean: Lab, c, truth: Truth, q: float):
     return tt, p, a, seg, kind, slope
 
 
+LOCAL = {"membrane": 0.5, "body": 0.6, "t": 0.1, "L": 1.0}  # axis reach of a base's solves
+
+
 class FEStandIn:
     """A Predictor interpolating the cached FE curves (stand-in for the design-space
     emulator in tests): angle(pressure) of the nominal design, plus for each physical
@@ -246,9 +249,9 @@ class FEStandIn:
                         "body": (k.L_mm, k.t_mm, k.membrane_mu_scale) == (b.L_mm, b.t_mm, 1),
                         "t": (k.L_mm, k.membrane_mu_scale, k.body_mu_scale) == (b.L_mm, 1, 1),
                         "L": (k.t_mm, k.membrane_mu_scale, k.body_mu_scale) == (b.t_mm, 1, 1)}
-                if same[axis]:
-                    x = {"membrane": k.membrane_mu_scale - 1, "body": k.body_mu_scale - 1,
-                         "t": k.t_mm - b.t_mm, "L": k.L_mm - b.L_mm}[axis]
+                x = {"membrane": k.membrane_mu_scale - 1, "body": k.body_mu_scale - 1,
+                     "t": k.t_mm - b.t_mm, "L": k.L_mm - b.L_mm}[axis]
+                if same[axis] and abs(x) <= LOCAL[axis]:  # the perturbation solves only
                     out.append((x, k))
             return sorted(out, key=lambda z: z[0])
 
