@@ -192,6 +192,9 @@ def _reference(clean: Lab, c, truth: Truth, q: float):
     return tt, p, a, seg, kind, slope
 
 
+LOCAL = {"membrane": 0.5, "body": 0.6, "t": 0.1, "L": 1.0}  # axis reach of a base's solves
+
+
 class FEStandIn:
     """A Predictor interpolating the cached FE curves (stand-in for the design-space
     emulator in tests): angle(pressure) of the nominal design, plus for each physical
@@ -246,9 +249,9 @@ class FEStandIn:
                         "body": (k.L_mm, k.t_mm, k.membrane_mu_scale) == (b.L_mm, b.t_mm, 1),
                         "t": (k.L_mm, k.membrane_mu_scale, k.body_mu_scale) == (b.L_mm, 1, 1),
                         "L": (k.t_mm, k.membrane_mu_scale, k.body_mu_scale) == (b.t_mm, 1, 1)}
-                if same[axis]:
-                    x = {"membrane": k.membrane_mu_scale - 1, "body": k.body_mu_scale - 1,
-                         "t": k.t_mm - b.t_mm, "L": k.L_mm - b.L_mm}[axis]
+                x = {"membrane": k.membrane_mu_scale - 1, "body": k.body_mu_scale - 1,
+                     "t": k.t_mm - b.t_mm, "L": k.L_mm - b.L_mm}[axis]
+                if same[axis] and abs(x) <= LOCAL[axis]:  # the perturbation solves only
                     out.append((x, k))
             return sorted(out, key=lambda z: z[0])
 
@@ -266,14 +269,16 @@ class FEStandIn:
         xs = np.array([x for x, _ in nodes])
         a_src = self._angle(src, p)
         ys = np.array([self._angle(k, p) - a_src for _, k in nodes])
-        if xs.size >= 3:  # smooth through the three nodes nearest delta (quadratic)
-            near = np.sort(np.argsort(np.abs(xs - delta))[:3])
-            w = [np.prod([(delta - xs[b]) / (xs[a] - xs[b]) for b in near if b != a])
-                 for a in near]
-            return sum(wi * ys[a] for wi, a in zip(w, near, strict=True))
         j = int(np.clip(np.searchsorted(xs, delta) - 1, 0, xs.size - 2))
         w = (delta - xs[j]) / (xs[j + 1] - xs[j])
-        return ys[j] + w * (ys[j + 1] - ys[j])
+        linear = ys[j] + w * (ys[j + 1] - ys[j])
+        if xs.size < 3:
+            return linear
+        near = np.sort(np.argsort(np.abs(xs - delta))[:3])  # smooth: quadratic through 3
+        wq = [np.prod([(delta - xs[b]) / (xs[a] - xs[b]) for b in near if b != a])
+              for a in near]
+        quad = sum(wi * ys[a] for wi, a in zip(wq, near, strict=True))
+        return np.where(np.isfinite(quad), quad, linear)  # a node's curve ended: linear
 
     def inverse(self, design, angle_deg, level: float = 0.95):
         raise NotImplementedError("the stand-in answers predict only")
