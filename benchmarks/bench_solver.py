@@ -24,9 +24,9 @@ import time
 import numpy as np
 
 from solver import Design, SolverSettings
+from solver.linear import available_backends
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions, xz_family
-from solver.linear import available_backends
 from solver.stepping import solve
 
 

@@ -25,10 +25,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import fe_calibration_curves as fe
 import numpy as np
 
 from surrogate.core import Prediction
-import fe_calibration_curves as fe
 
 FE_CURVES, FE_META = fe.load()
 NOISE_DEG = 0.7

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 import pytest
-from calibration_lab import LOADING, LOOP, Lab, Truth, FEStandIn, fe, measure, true_floor
+from calibration_lab import LOADING, LOOP, FEStandIn, Lab, Truth, fe, measure, true_floor
 
 from surrogate.calibration import observations_from_rows, run_calibration
 from surrogate.calibration._noise import noise_floor

@@ -9,13 +9,12 @@
 import numpy as np
 import pytest
 
-from solver import Design, SolverSettings
+from solver import Design, SolverSettings, stepping
 from solver.assembly import make_basis
 from solver.linear import available_backends, factorize
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.mesh import xz_family
 from solver.model import ActuatorModel, SolidModel
-from solver import stepping
 from solver.stepping import StepFailed, newton_step
 from solver.verification.cantilever import (
     bar_mesh,

@@ -2,10 +2,10 @@
 
 Labs record a curve in time (or file) order; the pressure's change from the previous
 reading says what the pump did: rising = loading (fluid in, direction +1), falling =
-unloading (withdrawn, -1), pressure and angle unchanged = hold (pump stopped, 0). The first reading takes the direction of the next
-interval; a drop into a flat stretch is the start of a hold (the gauge loses the inlet's
-R Q when the pump stops). The noise floor, the time effects' identifiability and the inlet pressure drop
-(R Q x direction) use it.
+unloading (withdrawn, -1), pressure and angle unchanged = hold (pump stopped, 0). The
+first reading takes the direction of the next interval; a drop into a flat stretch is the
+start of a hold (the gauge loses the inlet's R Q when the pump stops). The noise floor,
+the time effects' identifiability and the inlet pressure drop (R Q x direction) use it.
 """
 
 from __future__ import annotations
