@@ -160,3 +160,33 @@ def test_predict_by_volume_or_time_over_http(client):
     assert both.status_code == 422 and "exactly one" in both.text
     lone = client.post("/v1/predict", json={"times_s": [5]})
     assert lone.status_code == 422 and "flow_ul_s" in lone.text
+
+
+@pytest.mark.slow
+def test_held_out_random_designs_solved_by_the_fe(emulator):
+    """Designs the test draws itself (not the database's Sobol points), solved by the
+    default FE. Asserted: the honesty guarantees (the 95 % band covers at least 85 % of the
+    FE points, no angle past the FE's range is a number). The issue's accuracy target
+    (RMSE <= 1 deg) is reported, not asserted: benchmarks/RESULTS.md says where it stands."""
+    from solver import SolverSettings, solve
+
+    rng = np.random.default_rng()
+    inside = total = 0
+    for pair in (("pdms_1_10", "ecoflex_00_30"), ("pdms_1_15", "ecoflex_00_30")):
+        geometry = {"L_mm": rng.uniform(5, 16), "t_mm": rng.uniform(0.55, 1.1),
+                    "T_mm": rng.uniform(0.7, 1.8), "b_mm": rng.uniform(1.2, 2.2),
+                    "h_mm": rng.uniform(0.12, 0.28)}
+        design = Design(body_material=MATERIALS[pair[0]], membrane_material=MATERIALS[pair[1]],
+                        **{k: round(v, 3) for k, v in geometry.items()})
+        curve = solve(design, SolverSettings())
+        keep = (np.abs(curve.angle_deg) <= 90) & (curve.pressure_pa > 0)
+        pred = emulator.predict(design, curve.pressure_pa[keep])
+        ok = np.isfinite(pred.angle_deg)
+        fe = curve.angle_deg[keep][ok]
+        inside += int(((fe >= pred.lower_deg[ok]) & (fe <= pred.upper_deg[ok])).sum())
+        total += int(ok.sum())
+        rmse = float(np.sqrt(np.mean((pred.angle_deg[ok] - fe) ** 2)))
+        print(f"{pair} {geometry}: rmse {rmse:.2f} deg")
+        far = emulator.predict(design, [curve.pressure_pa.max() * 3])
+        assert np.isnan(far.angle_deg[0])
+    assert inside / total >= 0.85
