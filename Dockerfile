@@ -1,4 +1,4 @@
-# The design service with its default data (service/data: curves.h5, surrogate.json).
+# The design service with its default data (service/data: curves.h5, emulator.json, surrogate.json).
 #   docker build -t balloon-service .
 #   docker run --rm -p 8000:8000 -e BALLOON_API_KEY=change-me balloon-service
 # Settings are BALLOON_* environment variables (docs/service.md).
