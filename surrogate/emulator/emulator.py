@@ -85,6 +85,8 @@ class CurveBand:
     volume_ul: np.ndarray
     limit_angle_deg: float
     stop_reason: str
+    volume_log_mean: np.ndarray     # emulated log(V_k / theta_k) at the nodes
+    volume_log_sd: np.ndarray       # its sd, times the band scale
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -152,7 +154,8 @@ class Emulator:
             if np.linalg.norm(np.asarray(fu) - u) < FAILED_RADIUS and angle < limit:
                 limit = float(angle)
                 reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
-        return pe, CurveBand(p, lo, hi, v, limit, reason)
+        v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale
+        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -205,13 +208,12 @@ class Emulator:
         if (v < 0).any():
             raise InputError("volumes_ul", f"negative volume {v.min():g} ul", "volumes >= 0 ul")
         point = locate(design, reduced=True)
-        pe, cb = self.curve_band(point, z)
-        mean, var = pe.curves.predict(point.coordinates())
-        sd = np.sqrt(var[N_NODES:]) * pe.band_scale
+        pe, cb = self.curve_band(point, z)      # one GP evaluation serves both axes
+        y, sd = cb.volume_log_mean, cb.volume_log_sd
         theta = FINE_ANGLES_DEG
-        vm = _monotone(theta * np.exp(_B_ANGLE @ mean[N_NODES:]))
-        vl = _monotone(theta * np.exp(_B_ANGLE @ (mean[N_NODES:] - z * sd)))
-        vh = _monotone(theta * np.exp(_B_ANGLE @ (mean[N_NODES:] + z * sd)))
+        vm = _monotone(theta * np.exp(_B_ANGLE @ y))
+        vl = _monotone(theta * np.exp(_B_ANGLE @ (y - z * sd)))
+        vh = _monotone(theta * np.exp(_B_ANGLE @ (y + z * sd)))
         v_red = v / point.length_scale**3
         v_lim = float(np.interp(cb.limit_angle_deg, theta, vm))
         past = v_red > v_lim * (1 + 1e-12)
