@@ -1,22 +1,26 @@
 """Held-out FE curves for the emulator's accuracy: random designs inside the box.
 
     python benchmarks/heldout_designs.py --n 12 --seed 2026 --db heldout.h5 --workers 2
+    python benchmarks/heldout_designs.py --n 12 --seed 2026 --db heldout.h5 --blocked 4
 
 Draws designs uniformly (linear in every length and in each layer's stiffness scale, the
 pairs in turn) with numpy's generator -- not the database's Sobol sequence -- and solves
-them with the default FE through the precompute job (resumable). The emulator is then
+them with the default FE through the precompute job (resumable); ``--blocked K`` also
+solves the first K of them with the tip held (the database's force variant, to
+BLOCKED_MAX_PRESSURE_PA). The emulator is then
 compared with them by benchmarks/bench_emulator.py.
 """
 
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 import numpy as np
 
 from solver.design import Design
 from solver.design_space import BOX_MM, PAIRS, STIFFNESS_SCALE_RANGE, scaled_material
-from solver.precompute.grid import Grid, GridPoint
+from solver.precompute.grid import BLOCKED_MAX_PRESSURE_PA, Grid, GridPoint
 from solver.settings import SolverSettings
 from solver.store.keys import record_key
 
@@ -43,14 +47,19 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2026)
     ap.add_argument("--db", default="heldout.h5")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--blocked", type=int, default=0, metavar="K",
+                    help="also solve the first K designs with the tip held (force)")
     args = ap.parse_args()
     settings = SolverSettings()
-    points = tuple(GridPoint(record_key(d, settings), d, settings)
-                   for d in random_designs(args.n, args.seed))
+    blocked = replace(settings, tip="blocked", max_pressure_pa=BLOCKED_MAX_PRESSURE_PA)
+    designs = random_designs(args.n, args.seed)
+    points = tuple(GridPoint(record_key(d, settings), d, settings) for d in designs)
+    points += tuple(GridPoint(record_key(d, blocked), d, blocked)
+                    for d in designs[:args.blocked])
     grid = Grid("heldout", f"heldout n={args.n} seed={args.seed}", settings, points)
     summary = precompute(grid, args.db, workers=args.workers, progress=False,
                          command=f"python benchmarks/heldout_designs.py --n {args.n} "
-                                 f"--seed {args.seed}")
+                                 f"--seed {args.seed} --blocked {args.blocked}")
     print("\n".join(summary.lines()))
 
 

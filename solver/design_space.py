@@ -24,6 +24,7 @@ coordinates (relative changes matter, and the ratio's range is symmetric in log)
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -251,7 +252,11 @@ def sobol_points(n: int, seed: int = 0, skip: int = 0) -> np.ndarray:
     engine = qmc.Sobol(d=len(SAMPLED), scramble=True, seed=seed)
     if skip:
         engine.fast_forward(skip)
-    return engine.random(n)
+    with warnings.catch_warnings():
+        # scipy warns when n is not a power of 2 (the sequence's balance); a grid may
+        # continue a sequence in any step, and the union stays a prefix of it
+        warnings.simplefilter("ignore", UserWarning)
+        return engine.random(n)
 
 
 def sample_designs(n: int, pair: tuple[str, str], seed: int = 0, skip: int = 0

@@ -190,3 +190,23 @@ def test_held_out_random_designs_solved_by_the_fe(emulator):
         far = emulator.predict(design, [curve.pressure_pa.max() * 3])
         assert np.isnan(far.angle_deg[0])
     assert inside / total >= 0.85
+
+
+def test_fit_report_sets_the_emulator_beside_the_exponential_on_the_same_curves(emulator):
+    """``balloon fit`` prints, per exponential family, both models' held-out RMSE over the
+    same FE curves: the emulator's figure is the RMS of its LOO per-curve RMSEs of exactly
+    the family's records it holds."""
+    import json
+
+    from surrogate.emulator.command import loo_rmse_by_key, side_by_side
+
+    families = json.loads((DATA_DIR / "surrogate.json").read_text())["report"]["families"]
+    loo = loo_rmse_by_key(emulator)
+    assert len(loo) == sum(len(pe.keys) for pe in emulator.pairs.values())
+    lines = side_by_side(families, emulator)
+    assert len(lines) == len(families) + 2
+    for fam, line in zip(families, lines[2:]):
+        held = [loo[k] for k in fam["record_keys"] if k in loo]
+        assert held, fam["family"]          # the paper grid's curves are in the emulator
+        assert f"{np.sqrt(np.mean(np.square(held))):.2f}" in line
+        assert f"{fam['lodo']['exponential']['rmse']:.2f}" in line

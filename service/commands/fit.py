@@ -43,10 +43,11 @@ def run(args: argparse.Namespace) -> int:
     print(summary_table(s))
     print(f"\nwrote {path}")
     if args.emulator_output:
-        from surrogate.emulator.command import fit_and_save
+        from surrogate.emulator.command import fit_and_save, side_by_side
 
-        for line in fit_and_save(args.db, args.emulator_output, args.level):
-            print(line)
+        emulator, lines = fit_and_save(args.db, args.emulator_output, args.level)
+        lines += side_by_side(s.report["families"], emulator)  # type: ignore[attr-defined]
+        print("\n".join(lines))
     if args.report_dir:
         from surrogate.plots import write_report
 

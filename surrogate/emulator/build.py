@@ -26,7 +26,6 @@ import numpy as np
 
 from solver.design_space import GROUPS, locate
 from solver.errors import InputError
-from solver.precompute.grid import BLOCKED_MAX_PRESSURE_PA
 from solver.settings import SolverSettings
 from surrogate.bands import z_value
 from surrogate.emulator.emulator import (
@@ -40,6 +39,7 @@ from surrogate.emulator.emulator import (
 )
 from surrogate.emulator.features import (
     FINE_ANGLES_DEG,
+    FORCE_PRESSURE_NODES_PA,
     curve_features,
     force_features,
 )
@@ -65,13 +65,18 @@ def default_free_settings() -> SolverSettings:
     return SolverSettings()
 
 
-def default_blocked_settings() -> SolverSettings:
-    return replace(SolverSettings(), tip="blocked", max_pressure_pa=BLOCKED_MAX_PRESSURE_PA)
+def is_force_record(settings: SolverSettings) -> bool:
+    """A blocked-tip curve of the default FE, solved to at least the emulator's force range
+    (any ``max_pressure_pa`` >= the last force node: the grid's default or an older
+    database's 6000 Pa)."""
+    return (settings.tip == "blocked"
+            and settings.max_pressure_pa >= FORCE_PRESSURE_NODES_PA[-1]
+            and replace(settings, tip="free", max_pressure_pa=SolverSettings().max_pressure_pa)
+            == default_free_settings())
 
 
 def _collect(records: Iterable) -> tuple[dict, dict]:
     free_settings = default_free_settings()
-    blocked_settings = default_blocked_settings()
     free: dict[tuple[str, str], _Rows] = {}
     force: dict[tuple[str, str], tuple[list, list]] = {}
     for rec in records:
@@ -95,7 +100,7 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
             rows.keys.append(rec.key)
             rows.curves.append((c.pressure_pa / point.pressure_scale, c.angle_deg))
             rows.signs.append(f.sign)
-        elif rec.settings == blocked_settings:
+        elif is_force_record(rec.settings):
             y = force_features(c.pressure_pa / point.pressure_scale,
                                c.force_mn / (point.pressure_scale * point.length_scale**2))
             if np.isfinite(y).all():

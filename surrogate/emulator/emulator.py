@@ -54,7 +54,7 @@ class PairEmulator:
     band_scale           multiplies the GP sd so that LOO bands cover ``level``
     fe_limit_angle_deg   the FE's last angle on every database curve of the pair
     fe_stop_reason       why the FE curves end there
-    force                VectorGP of log(|F_j| / p_j) at FORCE_PRESSURE_NODES_PA, or None
+    force                VectorGP of F_j / p_j (mN/kPa, signed) at the force nodes, or None
     force_band_scale     as band_scale, for force
     coordinates          (n, 6) unit-cube coordinates of the database designs
     keys                 their record keys (nearest FE curves)
