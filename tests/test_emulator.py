@@ -210,3 +210,32 @@ def test_fit_report_sets_the_emulator_beside_the_exponential_on_the_same_curves(
         assert held, fam["family"]          # the paper grid's curves are in the emulator
         assert f"{np.sqrt(np.mean(np.square(held))):.2f}" in line
         assert f"{fam['lodo']['exponential']['rmse']:.2f}" in line
+
+
+def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(emulator):
+    """Every material group has a force model fitted from the database's blocked-tip FE
+    curves: at those designs the emulator gives the FE's force (mN) to 2 % of its largest
+    value within the force range, inside its band, and nothing past the range."""
+    from surrogate.emulator.build import is_force_record
+
+    assert all(pe.force is not None for pe in emulator.pairs.values())
+    checked = 0
+    with CurveStore(DB) as db:
+        for rec in db.records():
+            if not is_force_record(rec.settings):
+                continue
+            try:
+                pred = emulator.predict(rec.design, rec.curve.pressure_pa)
+            except InputError:
+                continue                         # near the Ecoflex/Ecoflex balance
+            c = rec.curve
+            inside = (c.pressure_pa > 0) & (c.pressure_pa <= 2500.0)
+            f, lo, hi = (x[inside] for x in (pred.force_mn, pred.force_lower_mn,
+                                             pred.force_upper_mn))
+            fe = c.force_mn[inside]
+            assert np.isfinite(f).all()
+            assert np.abs(f - fe).max() <= 0.02 * np.abs(fe).max() + 1e-3
+            assert ((lo <= fe + 1e-9) & (fe <= hi + 1e-9)).mean() >= 0.9
+            assert np.isnan(pred.force_mn[c.pressure_pa > 2500.0 * 1.001]).all()
+            checked += 1
+    assert checked >= 20
