@@ -239,3 +239,22 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(emu
             assert np.isnan(pred.force_mn[c.pressure_pa > 2500.0 * 1.001]).all()
             checked += 1
     assert checked >= 20
+
+
+def test_force_range_keeps_the_nodes_most_blocked_tip_curves_reach():
+    """A soft pair's blocked-tip FE curves stop early (the 500 ul volume stop): the group's
+    force range ends at the last node that 60 % of them, and at least 10, reach."""
+    from surrogate.emulator.build import force_range
+    from surrogate.emulator.features import FORCE_PRESSURE_NODES_PA, force_at
+
+    n_nodes = len(FORCE_PRESSURE_NODES_PA)
+    y = np.ones((20, n_nodes))
+    y[:8, 10:] = np.nan                  # 8 curves stop after node 10, 12 go on
+    y[8:11, 12:] = np.nan                # 3 more stop after node 12
+    k, u, yk = force_range(np.zeros((20, 6)), y)
+    assert (k, len(u), yk.shape) == (12, 12, (12, 12))
+    assert force_range(np.zeros((5, 6)), y[:5])[0] == 0       # too few curves
+    per_kpa = np.linspace(1.0, 2.0, 4)
+    q = FORCE_PRESSURE_NODES_PA[:4]
+    np.testing.assert_allclose(force_at(per_kpa, q), q / 1000 * per_kpa)
+    np.testing.assert_allclose(force_at(per_kpa, 10.0), 0.01 * per_kpa[0])

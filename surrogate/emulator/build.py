@@ -48,6 +48,7 @@ from surrogate.emulator.vector_gp import fit_vector_gp
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
 FAILED_RADIUS = 0.15
 MIN_DESIGNS = 10
+FORCE_SHARE = 0.6                 # of a group's blocked-tip curves its force range keeps
 
 
 @dataclass
@@ -103,7 +104,7 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
         elif is_force_record(rec.settings):
             y = force_features(c.pressure_pa / point.pressure_scale,
                                c.force_mn / (point.pressure_scale * point.length_scale**2))
-            if np.isfinite(y).all():
+            if np.isfinite(y[0]):
                 us, ys = force.setdefault(point.group, ([], []))
                 us.append(point.coordinates())
                 ys.append(y)
@@ -163,6 +164,20 @@ def _band_scale_for(curves: list, mean: np.ndarray, var: np.ndarray, level: floa
     return float(scale), report
 
 
+def force_range(u: np.ndarray, y: np.ndarray, share: float = FORCE_SHARE
+                ) -> tuple[int, np.ndarray, np.ndarray]:
+    """The force nodes a group's emulator covers, and the curves it is fitted to: the most
+    nodes (from the lowest pressure) that at least ``share`` of the group's blocked-tip
+    curves, and MIN_DESIGNS of them, reach (a soft pair's FE curves stop early at the
+    volume stop, so its force range ends lower); 0 nodes when none qualify."""
+    reach = np.isfinite(y).cumprod(axis=1).sum(axis=1)       # nodes reached, per curve
+    for k in range(y.shape[1], 0, -1):
+        ok = reach >= k
+        if ok.sum() >= max(MIN_DESIGNS, share * len(y)):
+            return k, u[ok], y[ok, :k]
+    return 0, u[:0], y[:0, :0]
+
+
 def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float, seed: int,
              force_rows: tuple[list, list] | None) -> tuple[PairEmulator, dict]:
     u = np.array(rows.u)[keep]
@@ -172,23 +187,30 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     vgp = fit_vector_gp(u, y, seed=seed)
     loo_mean, loo_var = vgp.loo()
     band_scale, loo = _band_scale_for(curves, loo_mean, loo_var, level)
-    force_gp, force_scale = None, 1.0
-    if force_rows is not None and len(force_rows[0]) >= MIN_DESIGNS:
-        force_gp = fit_vector_gp(np.array(force_rows[0]), np.array(force_rows[1]), seed=seed)
+    force_gp, force_scale, force_nodes, force_designs = None, 1.0, 0, 0
+    if force_rows is not None:
+        force_nodes, fu, fy = force_range(np.array(force_rows[0]), np.array(force_rows[1]))
+        force_designs = len(fu)
+    if force_designs >= MIN_DESIGNS:
+        force_gp = fit_vector_gp(fu, fy, seed=seed)
         fm, fv = force_gp.loo()
-        zs = np.abs(fm - np.array(force_rows[1])) / np.sqrt(fv)
+        zs = np.abs(fm - fy) / np.sqrt(fv)
         force_scale = float(max(np.quantile(zs, level) / z_value(level), 0.5))
+    force_limit_pa = float(FORCE_PRESSURE_NODES_PA[max(force_nodes, 1) - 1])
     failed = tuple((np.array(fu), fa, fr) for fu, fa, fr in rows.failed)
     pe = PairEmulator(
         pair=key, sign=sign, curves=vgp, band_scale=band_scale,
         fe_limit_angle_deg=LIMIT_ANGLE_DEG,
         fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
                        "(SolverSettings.max_angle_deg)",
-        coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale, failed=failed)
+        coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
+        force_limit_pa=force_limit_pa, failed=failed)
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gps),
-              "force_designs": 0 if force_rows is None else len(force_rows[0]),
-              "force_band_scale": force_scale, "fitted": True, **loo}
+              "force_designs": force_designs if force_gp is not None else 0,
+              "force_band_scale": force_scale,
+              "force_limit_pa": force_limit_pa if force_gp is not None else None,
+              "fitted": True, **loo}
     return pe, report
 
 

@@ -35,6 +35,7 @@ from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
+    force_at,
     spline_matrix,
 )
 from surrogate.emulator.vector_gp import VectorGP
@@ -245,11 +246,9 @@ class Emulator:
         mean, var = pe.force.predict(point.coordinates())
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
-        nodes = np.concatenate(([0.0], FORCE_PRESSURE_NODES_PA))
         out = []
         for y in (mean, mean - z * sd, mean + z * sd):
-            per_kpa = np.interp(p_red, nodes, np.concatenate(([y[0]], y)))
-            f = scale * (p_red / 1000.0) * per_kpa
+            f = scale * force_at(y, p_red)
             f[p_red > pe.force_limit_pa * (1 + 1e-12)] = np.nan
             out.append(f)
         return out[0], np.fmin(out[1], out[2]), np.fmax(out[1], out[2])
@@ -359,11 +358,8 @@ class Emulator:
                     out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
                 if fmean is not None and q <= pe.force_limit_pa:
                     scale = pt.pressure_scale * pt.length_scale**2
-                    nodes = np.concatenate(([0.0], FORCE_PRESSURE_NODES_PA))
-                    vals = []
-                    for yy in (fmean[row], fmean[row] - z * fsd[row], fmean[row] + z * fsd[row]):
-                        per_kpa = np.interp(q, nodes, np.concatenate(([yy[0]], yy)))
-                        vals.append(scale * q / 1000.0 * per_kpa)
+                    vals = [scale * float(force_at(yy, q)) for yy in (
+                        fmean[row], fmean[row] - z * fsd[row], fmean[row] + z * fsd[row])]
                     out["force"][i] = vals[0]
                     out["force_lo"][i], out["force_hi"][i] = min(vals[1:]), max(vals[1:])
         return out

@@ -114,6 +114,16 @@ def force_features(pressure_pa: np.ndarray, force_mn: np.ndarray) -> np.ndarray:
     return out
 
 
+def force_at(per_kpa: np.ndarray, pressure_pa: np.ndarray | float) -> np.ndarray:
+    """Blocked-tip force (mN) at ``pressure_pa`` (Pa) from F/p values (mN/kPa) at the first
+    ``len(per_kpa)`` of FORCE_PRESSURE_NODES_PA: F = p x (F/p), F/p linear between nodes
+    and constant below the first (the linear regime)."""
+    y = np.asarray(per_kpa, float)
+    q = np.asarray(pressure_pa, float)
+    nodes = np.concatenate(([0.0], FORCE_PRESSURE_NODES_PA[:len(y)]))
+    return q / 1000.0 * np.interp(q, nodes, np.concatenate(([y[0]], y)))
+
+
 def spline_matrix(nodes: np.ndarray, fine: np.ndarray) -> np.ndarray:
     """Matrix B with B @ f(log nodes) = the natural cubic spline through those values,
     evaluated at log ``fine`` (clamped to the node range): a linear map, so that a
