@@ -100,7 +100,9 @@ def _factor(x: np.ndarray, y: np.ndarray, lengths: np.ndarray, nugget: float):
     w = solve_triangular(chol, h, lower=True)
     z = solve_triangular(chol, y, lower=True)
     hk = w.T @ w
-    hk_chol = np.linalg.cholesky(hk)
+    # a relative jitter of 1e-12: the mean's normal matrix stays factorable when a fit
+    # with few points ends at length scales that make it nearly singular
+    hk_chol = np.linalg.cholesky(hk + 1e-12 * np.trace(hk) / len(hk) * np.eye(len(hk)))
     beta = cho_solve((hk_chol, True), w.T @ z)
     resid = z - w @ beta
     return chol, hk_chol, beta, resid

@@ -129,8 +129,9 @@ def vector_gp_from_dict(d: dict) -> VectorGP:
 
 
 def fit_vector_gp(u: np.ndarray, y: np.ndarray, tolerance: float = 1e-3,
-                  seed: int = 0) -> VectorGP:
-    """Fit to inputs ``u`` (n, d) and complete outputs ``y`` (n, c)."""
+                  seed: int = 0, max_components: int = MAX_COMPONENTS) -> VectorGP:
+    """Fit to inputs ``u`` (n, d) and complete outputs ``y`` (n, c), with at most
+    ``max_components`` principal components (the rest is kept as variance)."""
     u = np.asarray(u, float)
     y = np.asarray(y, float)
     if not np.isfinite(y).all():
@@ -141,7 +142,7 @@ def fit_vector_gp(u: np.ndarray, y: np.ndarray, tolerance: float = 1e-3,
     z = (y - center) / scale
     _, sv, vt = np.linalg.svd(z, full_matrices=False)
     m = 1
-    while m < min(MAX_COMPONENTS, len(sv)):
+    while m < min(max_components, len(sv)):
         recon = (z @ vt[:m].T) @ vt[:m]
         if np.max(np.abs(recon - z) * scale) < tolerance:
             break
