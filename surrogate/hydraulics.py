@@ -79,7 +79,10 @@ class Inlet:
                 raise InputError(f"inlet.{name}", f"got {value:g}", "> 0")
         if not (math.isfinite(self.tubing_length_mm) and self.tubing_length_mm >= 0):
             raise InputError("inlet.tubing_length_mm", f"got {self.tubing_length_mm:g}", ">= 0")
-        if self.tubing_length_mm > 0 and not (self.tubing_bore_mm and self.tubing_bore_mm > 0):
+        bore = self.tubing_bore_mm
+        if bore is not None and not (math.isfinite(bore) and bore > 0):
+            raise InputError("inlet.tubing_bore_mm", f"got {bore:g}", "> 0 mm")
+        if self.tubing_length_mm > 0 and bore is None:
             raise InputError("inlet.tubing_bore_mm", "tubing of a given length needs its bore",
                              "> 0 mm with tubing_length_mm")
 

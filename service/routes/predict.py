@@ -31,44 +31,33 @@ def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
     return prediction_body(p, model, level, design)
 
 
+def inlet_of(inlet: Any) -> Any:
+    """The schema's InletIn as a ``surrogate.hydraulics.Inlet`` (None stays None)."""
+    from surrogate.hydraulics import Inlet
+
+    return None if inlet is None else Inlet(**inlet.model_dump())
+
+
 @router.post("/predict", response_model=PredictResponse,
-             summary="Angle against pressure, with a prediction band and validity flags")
+             summary="Angle, force, pressure, volume and time, asked by pressure, by "
+                     "injected volume, or by time at a flow rate, with bands and validity")
 async def predict(request: PredictRequest, models: ModelsDep) -> Response:
-    """Angles (degrees) at the given pressures (Pa) from the chosen surrogate model.
+    """Angles (degrees) with their band from the chosen model, asked at pressures (Pa),
+    injected volumes (ul) or times (s) at a flow rate (ul/s): service/pump.py.
 
     Runs on the event loop: the model evaluation takes about 0.1 ms, less than a
     thread-pool hand-off (benchmarks/bench_service.py)."""
-    given = [n for n in ("pressures_pa", "volumes_ul", "times_s")
-             if getattr(request, n) is not None]
-    if len(given) != 1:
-        raise FieldError(("body", given[1] if given else "pressures_pa"),
-                         f"give exactly one of pressures_pa, volumes_ul, or times_s; got "
-                         f"{', '.join(given) or 'none'}",
-                         "each 0 <= pressures_pa <= 20000 (Pa); or volumes_ul (ul); or "
-                         "times_s (s) with flow_ul_s (ul/s)")
-    if (request.times_s is None) != (request.flow_ul_s is None):
-        raise FieldError(("body", "flow_ul_s"), "times_s and flow_ul_s go together",
-                         "0 < flow_ul_s <= 1000 (ul/s) with times_s")
+    from service.pump import PumpQuestion, predict_answer
+
     design = to_design(request.design)
     surrogate = models.get(request.model)
-    if request.pressures_pa is not None:
-        body = predict_dict(surrogate, design, request.pressures_pa, request.level,
-                            request.model)
-    else:
-        volumes = (np.asarray(request.volumes_ul, float) if request.volumes_ul is not None
-                   else np.asarray(request.times_s, float) * float(request.flow_ul_s or 0))
-        by_volume = getattr(surrogate, "predict_volume", None)
-        if by_volume is None:
-            raise FieldError(("body", "volumes_ul" if request.volumes_ul else "times_s"),
-                             f"model {request.model!r} answers by pressure only",
-                             'model "emulator" for volumes and times')
-        try:
-            p = by_volume(design, volumes, level=request.level)
-        except InputError as exc:
-            raise located(exc, ("body",)) from None
-        body = prediction_body(p, request.model, request.level, design)
-        if request.times_s is not None:
-            body["time_s"] = [float(t) for t in request.times_s]
+    try:
+        question = PumpQuestion(request.pressures_pa, request.volumes_ul, request.times_s,
+                                request.flow_ul_s, inlet_of(request.inlet),
+                                request.pressures_at)
+        body = predict_answer(surrogate, design, question, request.model, request.level)
+    except InputError as exc:  # e.g. OutOfFamilyError / OutOfBoxError (field "design")
+        raise located(exc, ("body",)) from None
     # plain JSON of plain data: the schema is PredictResponse (response_model, for the docs)
     return Response(to_json(body), media_type="application/json")
 
