@@ -1,4 +1,5 @@
-"""POST /v1/predict (angles with a band) and GET /v1/predict/plot (the same as a PNG)."""
+"""POST /v1/predict (angles with a band, by pressure, volume or time at a flow rate) and
+GET /v1/predict/plot (the same as a PNG: against pressure, or against time)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,10 @@ from fastapi import APIRouter, Query
 from fastapi.responses import Response
 from pydantic_core import to_json
 
-from service.convert import prediction_body, to_design
+from service.convert import to_design
 from service.deps import ModelsDep, SettingsDep
 from service.errors import FieldError, located
+from service.pump import MAX_FLOW_UL_S
 from service.schemas import PlotQuery, PredictRequest, PredictResponse
 from solver.errors import InputError
 
@@ -19,16 +21,6 @@ router = APIRouter(prefix="/v1", tags=["predict"])
 
 PNG: dict[int | str, dict[str, Any]] = {
     200: {"content": {"image/png": {}}, "description": "the plot, PNG"}}
-
-
-def predict_dict(surrogate: Any, design: Any, pressures_pa: Any, level: float,
-                 model: str, loc: tuple[str, ...] = ("body",)) -> dict[str, Any]:
-    """Run the model and convert its Prediction to the response's plain data."""
-    try:
-        p = surrogate.predict(design, np.asarray(pressures_pa, float), level=level)
-    except InputError as exc:  # e.g. OutOfFamilyError / OutOfBoxError (field "design")
-        raise located(exc, loc) from None
-    return prediction_body(p, model, level, design)
 
 
 def inlet_of(inlet: Any) -> Any:
@@ -63,23 +55,45 @@ async def predict(request: PredictRequest, models: ModelsDep) -> Response:
 
 
 @router.get("/predict/plot", response_class=Response, responses=PNG,
-            summary="PNG of the predicted curve, its band, nearby FE curves and measurements")
+            summary="PNG of the predicted curve, its band, nearby FE curves and measurements; "
+                    "against pressure, or against time at flow_ul_s with the pressure")
 def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
                  settings: SettingsDep) -> Response:
-    from service.plotting import nearby_curves, plot_prediction
+    from service.plotting import nearby_curves, plot_in_time, plot_prediction
+    from service.pump import PumpQuestion, predict_answer
+    from surrogate.hydraulics import Inlet
 
     if len(query.measured_pressure_pa) != len(query.measured_angle_deg):
         raise FieldError(("query", "measured_angle_deg"),
                          f"{len(query.measured_angle_deg)} angles for "
                          f"{len(query.measured_pressure_pa)} pressures",
                          "as many measured_angle_deg as measured_pressure_pa")
+    if query.flow_ul_s is not None and query.measured_pressure_pa:
+        raise FieldError(("query", "measured_pressure_pa"), "measured points by pressure "
+                         "are drawn on the pressure plot", "no measured points with flow_ul_s")
+    if query.inlet and query.flow_ul_s is None:
+        raise FieldError(("query", "flow_ul_s"), "the inlet's pressure drop R Q needs the "
+                         "flow rate", f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with inlet")
     design = to_design(query.model_dump(include={"L_mm", "t_mm", "T_mm", "b_mm", "h_mm",
                                                  "body_material", "membrane_material"}),
                        loc=("query",))
     surrogate = models.get(query.model)
-    pressures = np.linspace(0.0, query.p_max_pa, 101)
-    prediction = predict_dict(surrogate, design, pressures, query.level, query.model,
-                              loc=("query",))
-    fe = nearby_curves(settings.db_path, design, query.nearby, query.p_max_pa)
-    png = plot_prediction(prediction, fe, query.measured_pressure_pa, query.measured_angle_deg)
+    if query.flow_ul_s is None:
+        question = PumpQuestion(pressures_pa=np.linspace(0.0, query.p_max_pa, 101).tolist())
+    else:
+        question = PumpQuestion(times_s=np.linspace(0.0, query.t_max_s, 101).tolist(),
+                                flow_ul_s=query.flow_ul_s,
+                                inlet=Inlet() if query.inlet else None)
+    try:
+        prediction = predict_answer(surrogate, design, question, query.model, query.level)
+    except InputError as exc:
+        raise located(exc, ("query",)) from None
+    if query.flow_ul_s is None:
+        fe = nearby_curves(settings.db_path, design, query.nearby, query.p_max_pa)
+        png = plot_prediction(prediction, fe, query.measured_pressure_pa,
+                              query.measured_angle_deg)
+    else:
+        fe = nearby_curves(settings.db_path, design, query.nearby, query.t_max_s,
+                           query.flow_ul_s)
+        png = plot_in_time(prediction, fe)
     return Response(png, media_type="image/png")

@@ -1,4 +1,5 @@
-"""POST /v1/predict and GET /v1/predict/plot: angle against pressure from a surrogate."""
+"""POST /v1/predict and GET /v1/predict/plot: angle against pressure, injected volume or
+time at a flow rate, from a surrogate."""
 
 from __future__ import annotations
 
@@ -156,6 +157,13 @@ class PlotQuery(Schema):
     p_max_pa: float = Field(2000.0, gt=0.0, le=MAX_PRESSURE_PA,
                             description="largest pressure plotted, Pa")
     nearby: int = Field(3, ge=0, le=10, description="FE curves of the family to overlay")
+    flow_ul_s: float | None = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the "
+                                    "pump's flow rate, ul/s: plot angle against time, with "
+                                    "the pressure on a second axis (the paper's protocol)")
+    t_max_s: float = Field(10.0, gt=0.0, le=AXES["times_s"][1], description="largest time "
+                           "plotted, s (with flow_ul_s)")
+    inlet: bool = Field(False, description="with flow_ul_s: also the pump-gauge pressure "
+                        "through the paper's inlet channel (water), chamber + R Q")
     measured_pressure_pa: list[Pressure] = Field(
         [], max_length=200, description="measured points to overlay: pressures, Pa")
     measured_angle_deg: list[Annotated[float, Field(ge=-360.0, le=360.0)]] = Field(
