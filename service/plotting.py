@@ -79,6 +79,20 @@ def _title(ax: Any, prediction: dict[str, Any], extra: str = "") -> None:
                 color="C3", va="top", fontsize=9)
 
 
+def _draw_angles(ax: Any, prediction: dict[str, Any], x_key: str,
+                 fe_curves: list[tuple[str, np.ndarray, np.ndarray]],
+                 first_fe_color: int) -> np.ndarray:
+    """The answer's angle and band against ``x_key``, and the FE curves dashed; returns x."""
+    x = _values(prediction, x_key)
+    ax.fill_between(x, _values(prediction, "lower_deg"), _values(prediction, "upper_deg"),
+                    alpha=0.25, color="C0", label=f"{100 * prediction['level']:.0f} % band")
+    ax.plot(x, _values(prediction, "angle_deg"), color="C0", lw=2,
+            label=f"model {prediction['model']}")
+    for i, (label, fx, fa) in enumerate(fe_curves):
+        ax.plot(fx, fa, color=f"C{i + first_fe_color}", lw=1, ls="--", label=label)
+    return x
+
+
 def plot_in_time(prediction: dict[str, Any],
                  fe_curves: list[tuple[str, np.ndarray, np.ndarray]]) -> bytes:
     """The paper's protocol as PNG bytes: angle (deg) with its band against time (s) at
@@ -86,13 +100,7 @@ def plot_in_time(prediction: dict[str, Any],
     gauge's when the answer has it), Pa."""
     fig = _figure()
     ax = fig.add_subplot()
-    t = _values(prediction, "time_s")
-    ax.fill_between(t, _values(prediction, "lower_deg"), _values(prediction, "upper_deg"),
-                    alpha=0.25, color="C0", label=f"{100 * prediction['level']:.0f} % band")
-    ax.plot(t, _values(prediction, "angle_deg"), color="C0", lw=2,
-            label=f"model {prediction['model']}")
-    for i, (label, ft, fa) in enumerate(fe_curves):
-        ax.plot(ft, fa, color=f"C{i + 2}", lw=1, ls="--", label=label)
+    t = _draw_angles(ax, prediction, "time_s", fe_curves, first_fe_color=2)
     ax.set_xlabel(f"time at {prediction['flow_ul_s']:g} ul/s (s)")
     ax.set_ylabel("bending angle (deg)")
     ax.grid(alpha=0.3)
@@ -118,13 +126,7 @@ def plot_prediction(prediction: dict[str, Any],
     """Angle (degrees) against pressure (Pa) as PNG bytes (Agg; no pyplot, thread-safe)."""
     fig = _figure()
     ax = fig.add_subplot()
-    p = _values(prediction, "pressure_pa")
-    ax.fill_between(p, _values(prediction, "lower_deg"), _values(prediction, "upper_deg"),
-                    alpha=0.25, color="C0", label=f"{100 * prediction['level']:.0f} % band")
-    ax.plot(p, _values(prediction, "angle_deg"), color="C0", lw=2,
-            label=f"model {prediction['model']}")
-    for i, (label, fp, fa) in enumerate(fe_curves):
-        ax.plot(fp, fa, color=f"C{i + 1}", lw=1, ls="--", label=label)
+    _draw_angles(ax, prediction, "pressure_pa", fe_curves, first_fe_color=1)
     if measured_pressure_pa:
         ax.plot(measured_pressure_pa, measured_angle_deg, "ko", ms=4, label="measured")
     _title(ax, prediction)
