@@ -31,8 +31,8 @@ def inlet_of(inlet: Any) -> Any:
 
 
 @router.post("/predict", response_model=PredictResponse,
-             summary="Angle, force, pressure, volume and time, asked by pressure, by "
-                     "injected volume, or by time at a flow rate, with bands and validity")
+             summary="Angle against pressure, injected volume, or time at a flow rate, "
+                     "with a prediction band and validity flags")
 async def predict(request: PredictRequest, models: ModelsDep) -> Response:
     """Angles (degrees) with their band from the chosen model, asked at pressures (Pa),
     injected volumes (ul) or times (s) at a flow rate (ul/s): service/pump.py.
