@@ -137,6 +137,10 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         body["flow_ul_s"] = q
         body["time_s"] = ([float(t) for t in question.times_s or ()] if axis == "times_s"
                           else _over(body.get("volume_ul"), q))
+        v_lim = body["validity"].get("fe_limit_volume_ul")
+        if axis == "times_s" and v_lim is not None and "past_fe_range" in body["validity"]["flags"]:
+            body["validity"]["messages"].append(
+                f"at {q:g} ul/s the FE's range ends after {v_lim / q:.1f} s")
     if inlet is not None:
         body["inlet"] = inlet
         body["pump_pressure_pa"] = _plus(body["pressure_pa"], inlet["pressure_drop_pa"])

@@ -309,3 +309,12 @@ def test_cli_by_volume_and_time_and_its_one_line_errors(capsys, monkeypatch):
                  "--flow-ul-s", "2.5", "--json"]) == 0
     inv = json.loads(capsys.readouterr().out)
     assert inv["time_s"][0] == pytest.approx(inv["volume_ul"][0] / 2.5)
+
+
+def test_past_the_fe_range_by_time_no_angle_and_the_time_it_ends(client):
+    ans = client.post("/v1/predict", json={"times_s": [4, 1000], "flow_ul_s": 2.5}).json()
+    assert ans["angle_deg"][0] is not None and ans["angle_deg"][1] is None
+    assert ans["pressure_pa"][1] is None and "past_fe_range" in ans["validity"]["flags"]
+    v_lim = ans["validity"]["fe_limit_volume_ul"]
+    assert 10 < v_lim < 2500   # 1000 s at 2.5 ul/s is past it, 4 s is not
+    assert f"ends after {v_lim / 2.5:.1f} s" in " ".join(ans["validity"]["messages"])
