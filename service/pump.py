@@ -67,16 +67,7 @@ class PumpQuestion:
         bad = values[(values < lo) | (values > hi)]
         if bad.size:
             raise InputError(name, f"{bad[0]:g} {unit} is out of range", f"{lo:g}..{hi:g} {unit}")
-        if self.flow_ul_s is not None and not (
-                math.isfinite(self.flow_ul_s) and 0 < self.flow_ul_s <= MAX_FLOW_UL_S):
-            raise InputError("flow_ul_s", f"{self.flow_ul_s:g} ul/s is out of range",
-                             f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s")
-        if name == "times_s" and self.flow_ul_s is None:
-            raise InputError("flow_ul_s", "times_s needs the pump's flow rate",
-                             f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with times_s")
-        if self.inlet is not None and self.flow_ul_s is None:
-            raise InputError("flow_ul_s", "the inlet's pressure drop R Q needs the flow rate",
-                             f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with inlet")
+        check_flow(self.flow_ul_s, self.inlet, name == "times_s")
         if self.pressures_at not in PRESSURE_SITES:
             raise InputError("pressures_at", f"got {self.pressures_at!r}", "chamber, pump_gauge")
         if self.pressures_at == "pump_gauge" and (name != "pressures_pa" or self.inlet is None):
@@ -84,6 +75,20 @@ class PumpQuestion:
                              "and flow_ul_s", "chamber, or pump_gauge with pressures_pa, "
                              "inlet and flow_ul_s")
         return name
+
+
+def check_flow(flow_ul_s: float | None, inlet: Inlet | None, by_time: bool = False) -> None:
+    """The flow rate in range, and given where times or an inlet need it."""
+    if flow_ul_s is not None and not (math.isfinite(flow_ul_s)
+                                      and 0 < flow_ul_s <= MAX_FLOW_UL_S):
+        raise InputError("flow_ul_s", f"{flow_ul_s:g} ul/s is out of range",
+                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s")
+    if flow_ul_s is None and by_time:
+        raise InputError("flow_ul_s", "times_s needs the pump's flow rate",
+                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with times_s")
+    if flow_ul_s is None and inlet is not None:
+        raise InputError("flow_ul_s", "the inlet's pressure drop R Q needs the flow rate",
+                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with inlet")
 
 
 def inlet_drop(inlet: Inlet | None, flow_ul_s: float | None) -> dict[str, Any] | None:
@@ -155,13 +160,7 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
     bands (PressureResponse of /v1/inverse/pressure, ``balloon inverse --angles-deg``)."""
     from service.convert import finite_list, jsonable
 
-    if flow_ul_s is not None and not (math.isfinite(flow_ul_s)
-                                      and 0 < flow_ul_s <= MAX_FLOW_UL_S):
-        raise InputError("flow_ul_s", f"{flow_ul_s:g} ul/s is out of range",
-                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s")
-    if inlet is not None and flow_ul_s is None:
-        raise InputError("flow_ul_s", "the inlet's pressure drop R Q needs the flow rate",
-                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with inlet")
+    check_flow(flow_ul_s, inlet)
     drop = inlet_drop(inlet, flow_ul_s)
     result = surrogate.inverse(design, angles_deg, level=level)
     volume = getattr(result, "volume_ul", None)
