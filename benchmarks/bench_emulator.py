@@ -1,19 +1,22 @@
 """The emulator against held-out FE curves, and its query time.
 
-    python benchmarks/heldout_designs.py --n 16 --seed 2026 --db heldout.h5
+    python benchmarks/heldout_designs.py --n 16 --seed 2026 --db heldout.h5 --blocked 4
     python benchmarks/bench_emulator.py --heldout heldout.h5 [--emulator service/data/emulator.json]
 
 For every held-out curve (random designs inside the box, not in the database, solved by
-the default FE): the emulator at the FE's own pressures up to 90 deg -- RMSE, max error
-and the share of FE points inside the 95 % band; a refusal (near the Ecoflex/Ecoflex
-balance, or too few curves) is counted as such. Query time: 100 pressures with bands,
-median of 2000 calls, next to the exponential model's in the same run (a ratio).
+the default FE): the emulator at the FE's own pressures up to 90 deg, and at its own
+injected volumes (the syringe-pump view, ``--axis``) -- RMSE, max error and the share of
+FE points inside the 95 % band; a refusal (near the Ecoflex/Ecoflex balance, or too few
+curves) is counted as such. Blocked-tip held-out curves are compared in force (mN) within
+the emulator's force range. Query time: 100 pressures with bands, median of 2000 calls,
+next to the exponential model's in the same run (a ratio).
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,43 +26,115 @@ from surrogate import load_surrogate
 from surrogate.emulator import load_emulator
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--heldout", required=True)
-    ap.add_argument("--emulator", default="service/data/emulator.json")
-    ap.add_argument("--exponential", default="service/data/surrogate.json")
-    args = ap.parse_args()
-    e = load_emulator(args.emulator)
-    rows, all_err, inside, total = [], [], 0, 0
-    with CurveStore(args.heldout) as db:
-        records = [r for r in db.records() if r.status == "complete"]
+@dataclass
+class HeldOut:
+    """Errors of one emulator on held-out FE curves (deg for angle, mN for force)."""
+
+    axis: str
+    lines: list[str] = field(default_factory=list)
+    curve_rmse_deg: list[float] = field(default_factory=list)
+    curve_max_deg: list[float] = field(default_factory=list)
+    errors_deg: list[np.ndarray] = field(default_factory=list)
+    inside: int = 0
+    total: int = 0
+    refused: int = 0
+    force_errors_mn: list[np.ndarray] = field(default_factory=list)
+    force_inside: int = 0
+    force_total: int = 0
+
+    def summary(self) -> str:
+        flat = np.concatenate(self.errors_deg) if self.errors_deg else np.array([np.nan])
+        both = sum(r <= 1 and m <= 3 for r, m in zip(self.curve_rmse_deg, self.curve_max_deg))
+        text = (f"{len(self.errors_deg)} answered curves ({self.total} points, "
+                f"{self.refused} refused), by {self.axis}: rmse "
+                f"{np.sqrt(np.mean(flat**2)):.2f} deg, max {np.nanmax(np.abs(flat)):.2f} deg, "
+                f"95 % band coverage {self.inside / max(self.total, 1):.3f}; per-curve rmse "
+                f"median {np.median(self.curve_rmse_deg) if self.curve_rmse_deg else np.nan:.2f}"
+                f"; curves with rmse <= 1 and max <= 3 deg: {both}")
+        if self.force_errors_mn:
+            fl = np.concatenate(self.force_errors_mn)
+            text += (f"\nforce: {len(self.force_errors_mn)} blocked-tip curves, rmse "
+                     f"{np.sqrt(np.mean(fl**2)):.3f} mN, max {np.abs(fl).max():.3f} mN, "
+                     f"band coverage {self.force_inside / max(self.force_total, 1):.3f}")
+        return text
+
+
+def label(rec) -> str:
+    d = rec.design
+    return (f"{d.body_material.id}/{d.membrane_material.id} L={d.L_mm:.2f} t={d.t_mm:.2f} "
+            f"T={d.T_mm:.2f} b={d.b_mm:.2f} h={d.h_mm:.3f}")
+
+
+def _force(e, rec, out: HeldOut) -> None:
+    c = rec.curve
+    keep = c.pressure_pa > 0
+    try:
+        p = e.predict(rec.design, c.pressure_pa[keep])
+    except InputError:
+        return
+    if p.force_mn is None:
+        return
+    ok = np.isfinite(p.force_mn)
+    fe = c.force_mn[keep][ok]
+    out.force_errors_mn.append(p.force_mn[ok] - fe)
+    out.force_inside += int(((fe >= p.force_lower_mn[ok] - 1e-9)
+                             & (fe <= p.force_upper_mn[ok] + 1e-9)).sum())
+    out.force_total += int(ok.sum())
+    out.lines.append(f"{label(rec)} blocked tip: force rmse "
+                     f"{np.sqrt(np.mean((p.force_mn[ok] - fe) ** 2)):.3f} mN over "
+                     f"{int(ok.sum())} points (FE up to {np.abs(fe).max():.2f} mN)")
+
+
+def evaluate(e, records, axis: str = "pressure") -> HeldOut:
+    """The emulator ``e`` on each complete held-out record: free tip in angle at the FE's
+    own pressures (``axis`` "pressure": ``predict``) or injected volumes ("volume":
+    ``predict_volume``); blocked tip in force."""
+    out = HeldOut(axis)
     for rec in records:
+        if rec.settings.tip == "blocked":
+            if axis == "pressure":
+                _force(e, rec, out)
+            continue
         c = rec.curve
         keep = (np.abs(c.angle_deg) <= 90.0) & (c.pressure_pa > 0)
-        label = (f"{rec.design.body_material.id}/{rec.design.membrane_material.id} "
-                 f"L={rec.design.L_mm:.2f} t={rec.design.t_mm:.2f} T={rec.design.T_mm:.2f} "
-                 f"b={rec.design.b_mm:.2f} h={rec.design.h_mm:.3f}")
         try:
-            p = e.predict(rec.design, c.pressure_pa[keep])
+            p = (e.predict(rec.design, c.pressure_pa[keep]) if axis == "pressure"
+                 else e.predict_volume(rec.design, c.volume_ul[keep]))
         except InputError as exc:
-            rows.append(f"{label}: refused ({exc.field}: {exc.detail[:60]}...)")
+            out.refused += 1
+            out.lines.append(f"{label(rec)}: refused ({exc.field}: {exc.detail[:60]}...)")
             continue
         fe = c.angle_deg[keep]
         ok = np.isfinite(p.angle_deg)
         err = p.angle_deg[ok] - fe[ok]
         cover = (fe[ok] >= p.lower_deg[ok] - 1e-9) & (fe[ok] <= p.upper_deg[ok] + 1e-9)
-        inside += int(cover.sum())
-        total += int(ok.sum())
-        all_err.append(err)
-        rows.append(f"{label}: rmse {np.sqrt(np.mean(err**2)):.2f} max {np.abs(err).max():.2f}"
-                    f" deg, band covers {cover.mean():.2f}, {int((~ok).sum())} of "
-                    f"{ok.size} points past the emulated FE range")
-    flat = np.concatenate(all_err) if all_err else np.array([np.nan])
-    print("\n".join(rows))
-    print(f"\nall {len(all_err)} answered curves ({total} points): rmse "
-          f"{np.sqrt(np.mean(flat**2)):.2f} deg, max {np.abs(flat).max():.2f} deg, "
-          f"95 % band coverage {inside / max(total, 1):.3f}; "
-          f"per-curve rmse median {np.median([np.sqrt(np.mean(x**2)) for x in all_err]):.2f}")
+        out.inside += int(cover.sum())
+        out.total += int(ok.sum())
+        out.errors_deg.append(err)
+        rmse = float(np.sqrt(np.mean(err**2))) if err.size else float("nan")
+        worst = float(np.abs(err).max()) if err.size else float("nan")
+        out.curve_rmse_deg.append(rmse)
+        out.curve_max_deg.append(worst)
+        out.lines.append(f"{label(rec)}: rmse {rmse:.2f} max {worst:.2f} deg, band covers "
+                         f"{cover.mean():.2f}, {int((~ok).sum())} of {ok.size} points past "
+                         "the emulated FE range")
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--heldout", required=True)
+    ap.add_argument("--emulator", default="service/data/emulator.json")
+    ap.add_argument("--exponential", default="service/data/surrogate.json")
+    ap.add_argument("--axis", choices=("pressure", "volume", "both"), default="both",
+                    help="compare at the FE's own pressures, its own injected volumes, or both")
+    args = ap.parse_args()
+    e = load_emulator(args.emulator)
+    with CurveStore(args.heldout) as db:
+        records = [r for r in db.records() if r.status == "complete"]
+    for axis in (("pressure", "volume") if args.axis == "both" else (args.axis,)):
+        result = evaluate(e, records, axis)
+        print(f"-- by {axis}\n" + "\n".join(result.lines) + "\n\nall " + result.summary())
     from solver import Design
 
     d = Design().validated()

@@ -77,6 +77,11 @@ def jsonable(value: Any) -> Any:
     return value
 
 
+# the validity fields a Prediction may carry beyond in_domain, flags and messages
+VALIDITY_FIELDS = ("fe_limit_pa", "fe_limit_angle_deg", "fe_stop_reason", "fe_limit_volume_ul",
+                   "pressure_maximum_pa", "pressure_maximum_volume_ul")
+
+
 def prediction_body(prediction: Any, model: str, level: float | None = None,
                     design: Design | None = None) -> dict[str, Any]:
     """The one plain-data form of a ``surrogate.core.Prediction``, for HTTP and the CLI:
@@ -101,8 +106,7 @@ def prediction_body(prediction: Any, model: str, level: float | None = None,
                 "in_domain": bool(validity.get("in_domain", False)),
                 "flags": [str(f) for f in validity.get("flags", [])],
                 "messages": [str(m) for m in validity.get("messages", [])],
-                **{k: validity[k] for k in ("fe_limit_pa", "fe_limit_angle_deg",
-                                            "fe_stop_reason") if k in validity}}),
+                **{k: validity[k] for k in VALIDITY_FIELDS if k in validity}}),
             "form": getattr(prediction, "form", None),
             "provenance": public_provenance(dict(prediction.provenance or {}))}
 

@@ -92,11 +92,19 @@ class InversePrediction:
     model: str
     form: str
     provenance: dict
+    volume_ul: np.ndarray | None = None        # injected volume for each angle, ul
+    volume_lower_ul: np.ndarray | None = None  # its band's lower edge, ul
+    volume_upper_ul: np.ndarray | None = None  # its band's upper edge, ul
 
     def as_dict(self) -> dict[str, object]:
+        def opt(a: np.ndarray | None) -> list[float] | None:
+            return None if a is None else np.asarray(a, float).tolist()
+
         return {"design": self.design.as_dict(), "angle_deg": self.angle_deg.tolist(),
                 "pressure_pa": self.pressure_pa.tolist(), "lower_pa": self.lower_pa.tolist(),
-                "upper_pa": self.upper_pa.tolist(), "level": self.level,
+                "upper_pa": self.upper_pa.tolist(), "volume_ul": opt(self.volume_ul),
+                "volume_lower_ul": opt(self.volume_lower_ul),
+                "volume_upper_ul": opt(self.volume_upper_ul), "level": self.level,
                 "validity": dict(self.validity), "model": self.model, "form": self.form,
                 "provenance": dict(self.provenance)}
 

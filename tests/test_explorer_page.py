@@ -260,3 +260,65 @@ def test_force_volume_and_capped_angles_are_rendered_when_the_response_has_them(
     page.select_option("#y_axis", "angle")
     assert series(page, "prediction")["y"][-1] is None
     assert watched.errors == []
+
+
+def test_the_ask_axis_switch_asks_by_volume_and_by_time_at_the_flow_rate(watched, server):
+    """The syringe-pump view: the page asks /v1/predict by injected volume, then by time at
+    the pump's flow rate, and draws the API's own numbers against the asked axis."""
+    page = open_explorer(watched, server.url)
+    sent = []
+    page.on("request", lambda r: sent.append(r.post_data_json)
+            if "/v1/predict" in r.url and r.method == "POST" else None)
+    page.select_option("#ask_axis", "volume_ul")
+    page.wait_for_function("window.explorer.request && window.explorer.request.volumes_ul"
+                           " && window.explorer.prediction.volume_ul")
+    assert page.locator("#v_max").is_visible() and page.locator("#p_max").is_hidden()
+    assert page.input_value("#x_axis") == "volume_ul"
+    body = sent[-1]
+    assert "pressures_pa" not in body and body["flow_ul_s"] == 2.5
+    assert body["volumes_ul"] == pytest.approx(grid(50.0))
+    api = httpx.post(server.url + "/v1/predict", json=body).json()
+    drawn = series(page, "prediction")
+    assert drawn["x"] == pytest.approx(api["volume_ul"], abs=1e-9)
+    assert drawn["y"] == pytest.approx(api["angle_deg"], abs=1e-9)
+    readout = page.locator("#p_op-out").inner_text()
+    assert readout.startswith("25.00 ul: angle") and "chamber pressure" in readout
+    assert f"angle {api['angle_deg'][40]:.1f} deg" in readout
+    assert "time 10.0 s" in readout  # 25 ul at 2.5 ul/s
+
+    page.select_option("#ask_axis", "time_s")
+    page.fill("#t_max", "10")
+    page.dispatch_event("#t_max", "change")
+    page.check("#inlet")
+    page.wait_for_function("(() => { const r = window.explorer.request; return r && r.times_s"
+                           " && r.times_s.at(-1) === 10 && r.inlet"
+                           " && window.explorer.prediction.pump_pressure_pa; })()")
+    body = sent[-1]
+    assert body["times_s"] == pytest.approx(grid(10.0)) and body["inlet"] == {}
+    api = httpx.post(server.url + "/v1/predict", json=body).json()
+    assert page.input_value("#x_axis") == "time_s"
+    drawn = series(page, "prediction")
+    assert drawn["x"] == pytest.approx(api["time_s"], abs=1e-9)
+    assert drawn["y"] == pytest.approx(api["angle_deg"], abs=1e-9)
+    readout = page.locator("#p_op-out").inner_text()
+    i = round(float(page.input_value("#p_op")) / 10 * (GRID_POINTS - 1))  # the slider's point
+    assert readout.startswith(f"{api['time_s'][i]:.1f} s: angle")
+    assert f"pump gauge {api['pump_pressure_pa'][i]:.0f} Pa" in readout
+    # the nearest FE curves are drawn on the same clock: their volume over the flow rate
+    page.wait_for_selector('#plot g[data-series^="fe-"]')
+    fe = series(page, page.locator('#plot g[data-series^="fe-"]').first.get_attribute(
+        "data-series"))
+    assert max(x for x in fe["x"] if x is not None) <= 10 * 1.05
+    # a time without a flow rate: the server's problem is shown beside the flow field
+    page.fill("#flow", "")
+    page.dispatch_event("#flow", "change")
+    page.wait_for_selector("#err-flow_ul_s:not([hidden])")
+    assert "flow_ul_s" in page.locator("#err-flow_ul_s").inner_text()
+    screenshot(page, "explorer-by-time-1280")
+    page.fill("#flow", "2.5")
+    page.dispatch_event("#flow", "change")
+    page.select_option("#ask_axis", "pressure_pa")
+    page.wait_for_function("window.explorer.request && window.explorer.request.pressures_pa")
+    assert page.input_value("#x_axis") == "pressure_pa"
+    # the one console line is the browser's note of the refused (422) request
+    assert [e for e in watched.errors if "422" not in e] == []

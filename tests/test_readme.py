@@ -16,14 +16,15 @@ def _code_blocks(lang: str) -> list[str]:
     return re.findall(rf"```{lang}\n(.*?)```", README, flags=re.S)
 
 
-@pytest.mark.parametrize("name", ["client.py", "batch.py"])
+@pytest.mark.parametrize("name", ["client.py", "batch.py", "pump.py"])
 def test_python_snippets_are_included_verbatim(name):
     text = (ROOT / "docs" / "snippets" / name).read_text().rstrip("\n")
     assert any(block.rstrip("\n") == text for block in _code_blocks("python"))
 
 
-def test_curl_snippet_is_the_tested_one():
-    text = (ROOT / "docs" / "snippets" / "predict.sh").read_text()
+@pytest.mark.parametrize("name", ["predict.sh", "pump.sh"])
+def test_curl_snippet_is_the_tested_one(name):
+    text = (ROOT / "docs" / "snippets" / name).read_text()
     command = text[text.index("curl"):].rstrip("\n")
     assert any(command in block for block in _code_blocks("sh"))
 

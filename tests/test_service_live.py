@@ -97,12 +97,21 @@ def test_batch_snippet(server):
     assert at[4.1, 0.5, 1000] < at[7.1, 0.5, 1000] < at[15.1, 0.5, 1000]
 
 
+def test_pump_snippet(server):
+    lines = run_snippet(server, "pump.py", [sys.executable]).splitlines()
+    assert [ln.split()[:2] for ln in lines[:3]] == [["2.0", "s"], ["4.0", "s"], ["8.0", "s"]]
+    assert "pump gauge" in lines[0] and lines[3].startswith("45 deg needs ")
+    assert lines[3].endswith("s at 2.5 ul/s")
+
+
 @pytest.mark.skipif(shutil.which("curl") is None, reason="needs curl")
 def test_curl_snippets(server):
     import json
 
     body = json.loads(run_snippet(server, "predict.sh", ["bash"]))
     assert body["pressure_pa"] == [500, 1000, 1500, 2000] and body["model"] == "emulator"
+    pump = json.loads(run_snippet(server, "pump.sh", ["bash"]))
+    assert pump["time_s"] == [2, 4, 8] and pump["volume_ul"] == [5, 10, 20]
     job, polled = run_snippet(server, "solve.sh", ["bash"]).splitlines()
     assert json.loads(job)["status"] in ("queued", "running")
     assert json.loads(polled)["id"] == json.loads(job)["id"]

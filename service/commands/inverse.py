@@ -1,6 +1,7 @@
 """``balloon inverse``: pressures for target angles of one design, or designs for a target.
 
     balloon inverse --L-mm 7.1 --t-mm 0.5 --angles-deg 10 45       # one design: pressures
+    balloon inverse --L-mm 7.1 --t-mm 0.5 --angles-deg 45 --flow-ul-s 2.5   # + volume, time
     balloon inverse --angle-deg 45 --pressure-pa 1500               # designs within a budget
     balloon inverse --kind angle_at_pressure --angle-deg 30 --pressure-pa 1200 \\
         --L-range 4 12 --t-range 0.5 1 --pair pdms_1_10/ecoflex_00_30 --objective compact
@@ -17,7 +18,10 @@ import json
 from service.commands.predict import (
     add_design_arguments,
     add_model_arguments,
+    add_pump_arguments,
+    as_flag,
     design_from_args,
+    inlet_from_args,
     print_validity,
     surrogate_from_args,
 )
@@ -47,6 +51,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--objective", choices=("pressure", "margin", "compact", "certainty"),
                         help="ranking (default: pressure for budgets, certainty otherwise)")
     parser.add_argument("-n", "--n-results", type=int, default=5, help="designs to list (5)")
+    add_pump_arguments(parser)  # with --angles-deg: the volume, time and pump-gauge pressure
     add_model_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -66,18 +71,30 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _one_design(s: object, args: argparse.Namespace) -> int:
+    from service.pump import inverse_answer
+    from solver.errors import InputError
+
     design = design_from_args(args)
-    inv = s.inverse(design, args.angles_deg, level=args.level)  # type: ignore[attr-defined]
+    try:
+        body = inverse_answer(s, design, args.angles_deg, args.model or "emulator", args.level,
+                              args.flow_ul_s, inlet_from_args(args))  # type: ignore[arg-type]
+    except InputError as exc:
+        raise as_flag(exc) from None
     if args.json:
-        print(json.dumps(inv.as_dict(), indent=1))
+        print(json.dumps(body, indent=1))
         return 0
-    print(f"model {inv.model} ({inv.form}), L = {design.L_mm:g} mm, t = "  # type: ignore
-          f"{design.t_mm:g} mm, band {100 * inv.level:g} %")  # type: ignore[attr-defined]
-    print(f"{'angle_deg':>10s} {'pressure_pa':>12s} {'lower_pa':>10s} {'upper_pa':>10s}")
-    for a, p, lo, hi in zip(inv.angle_deg, inv.pressure_pa, inv.lower_pa, inv.upper_pa,
-                            strict=True):
-        print(f"{a:10.2f} {p:12.1f} {lo:10.1f} {hi:10.1f}")
-    print_validity(inv.validity)
+    print(f"model {body['model']}, L = {design.L_mm:g} mm, t = "  # type: ignore[attr-defined]
+          f"{design.t_mm:g} mm, band {100 * body['level']:g} %"  # type: ignore[attr-defined]
+          + (f", {body['flow_ul_s']:g} ul/s" if body.get("flow_ul_s") else ""))
+    columns = [c for c in ("angle_deg", "pressure_pa", "lower_pa", "upper_pa",
+                           "pump_pressure_pa", "volume_ul", "volume_lower_ul",
+                           "volume_upper_ul", "time_s", "time_lower_s", "time_upper_s")
+               if body.get(c) is not None]
+    print(" ".join(f"{c:>12s}" for c in columns))
+    for i in range(len(body["angle_deg"])):
+        print(" ".join("--".rjust(12) if body[c][i] is None else f"{body[c][i]:12.2f}"
+                       for c in columns))
+    print_validity(body["validity"])
     return 0
 
 

@@ -1,5 +1,8 @@
 """``balloon predict --L-mm 7.1 --t-mm 0.5 --pressures 500 1000 1500 [--model NAME|PATH]``:
-bending angle (deg) with a prediction band, force and injected volume, and validity flags.
+bending angle (deg) with a prediction band, force and injected volume, and validity flags;
+asked by pressure, by injected volume (``--volumes 2 5 10``) or by time at a syringe pump's
+flow rate (``--times 2 4 8 --flow-ul-s 2.5``); ``--inlet`` adds the pressure a gauge at
+the pump reads (chamber + R Q, the paper's inlet channel, ``--tubing-mm`` for tubing).
 
 The default model is the design-space emulator (service/data/emulator.json, or
 BALLOON_EMULATOR_PATH); ``--model exponential``, ``paper``, a saved calibrated model's
@@ -11,8 +14,6 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-
-from service.convert import prediction_body
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
@@ -51,6 +52,62 @@ def add_model_arguments(parser: argparse.ArgumentParser) -> None:
                         help="model form (default: each family's fitted default)")
     parser.add_argument("--level", type=float, default=0.95, help="band level (0.95)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def add_pump_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--flow-ul-s", type=float, default=None, metavar="UL_S",
+                        help="the syringe pump's flow rate, ul/s (adds the time axis)")
+    parser.add_argument("--inlet", action="store_true",
+                        help="add the pump-gauge pressure, chamber + R Q (Hagen-Poiseuille; "
+                             "default the paper's channel 0.5 x 3 x 0.15 mm, water)")
+    parser.add_argument("--channel-mm", type=float, nargs=3, metavar=("W", "L", "H"),
+                        help="inlet channel width, length, height, mm (with --inlet)")
+    parser.add_argument("--tubing-mm", type=float, nargs=2, metavar=("LENGTH", "BORE"),
+                        help="tubing length and bore, mm (with --inlet)")
+    parser.add_argument("--viscosity-pa-s", type=float, default=None,
+                        help="the fluid's viscosity, Pa s (with --inlet; default water, 1e-3)")
+
+
+# the request fields of service/pump.py -> the flags that set them
+PUMP_FLAGS = {"pressures_pa": "--pressures", "volumes_ul": "--volumes", "times_s": "--times",
+              "flow_ul_s": "--flow-ul-s", "pressures_at": "--pressures-at",
+              "inlet.channel_width_mm": "--channel-mm", "inlet.channel_length_mm": "--channel-mm",
+              "inlet.channel_height_mm": "--channel-mm", "inlet.tubing_length_mm": "--tubing-mm",
+              "inlet.tubing_bore_mm": "--tubing-mm", "inlet.viscosity_pa_s": "--viscosity-pa-s"}
+
+
+def as_flag(exc: Exception) -> Exception:
+    """An InputError naming a request field, renamed to the CLI flag that sets it."""
+    from solver.errors import InputError
+
+    if isinstance(exc, InputError) and exc.field in PUMP_FLAGS:
+        return InputError(PUMP_FLAGS[exc.field], exc.detail, exc.allowed)
+    return exc
+
+
+def inlet_from_args(args: argparse.Namespace) -> object:
+    """``surrogate.hydraulics.Inlet`` of --inlet (None without it)."""
+    from solver.errors import InputError
+    from surrogate.hydraulics import Inlet
+
+    given = [f for f, v in (("--channel-mm", args.channel_mm), ("--tubing-mm", args.tubing_mm),
+                            ("--viscosity-pa-s", args.viscosity_pa_s)) if v is not None]
+    if not args.inlet:
+        if given:
+            raise InputError(given[0], "describes the inlet", "with --inlet")
+        return None
+    kw: dict[str, float] = {}
+    if args.channel_mm:
+        kw.update(zip(("channel_width_mm", "channel_length_mm", "channel_height_mm"),
+                      args.channel_mm, strict=True))
+    if args.tubing_mm:
+        kw.update(tubing_length_mm=args.tubing_mm[0], tubing_bore_mm=args.tubing_mm[1])
+    if args.viscosity_pa_s is not None:
+        kw["viscosity_pa_s"] = args.viscosity_pa_s
+    try:
+        return Inlet(**kw)
+    except InputError as exc:
+        raise as_flag(exc) from None
 
 
 def design_from_args(args: argparse.Namespace) -> object:
@@ -132,6 +189,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                        help="pressures, Pa")
     group.add_argument("--pressure-range", type=float, nargs=3, metavar=("START", "STOP", "NUM"),
                        help="NUM evenly spaced pressures from START to STOP, Pa")
+    group.add_argument("--volumes", type=float, nargs="+", metavar="UL",
+                       help="injected volumes, ul (the emulator)")
+    group.add_argument("--times", type=float, nargs="+", metavar="S",
+                       help="times since the pump started, s (with --flow-ul-s)")
+    add_pump_arguments(parser)
+    parser.add_argument("--pressures-at", choices=("chamber", "pump_gauge"), default="chamber",
+                        help="where --pressures were read (pump_gauge: with --inlet and "
+                             "--flow-ul-s)")
     add_model_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -139,31 +204,42 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from service.pump import PumpQuestion, predict_answer
     from solver.errors import InputError
 
     design = design_from_args(args)
+    inlet = inlet_from_args(args)
     s = surrogate_from_args(args)
-    if args.pressures is not None:
-        pressures = np.array(args.pressures)
-    else:
+    pressures = args.pressures
+    if args.pressure_range is not None:
         start, stop, num = args.pressure_range
         if not 1 <= num <= 100_000 or num != int(num):
             raise InputError("--pressure-range", f"NUM = {num:g}", "an integer 1..100000")
-        pressures = np.linspace(start, stop, int(num))
-    pred = s.predict(design, pressures, level=args.level)  # type: ignore[attr-defined]
-    body = prediction_body(pred, args.model or "emulator", args.level, design)
+        pressures = np.linspace(start, stop, int(num)).tolist()
+    question = PumpQuestion(pressures, args.volumes, args.times, args.flow_ul_s, inlet,  # type: ignore[arg-type]
+                            args.pressures_at)
+    try:
+        body = predict_answer(s, design, question, args.model or "emulator", args.level)
+    except InputError as exc:
+        raise as_flag(exc) from None
     if args.json:
         print(json.dumps(body, indent=1))
         return 0
     print(f"model {body['model']} ({body['form'] or 'calibrated'}), L = {design.L_mm:g} mm, "  # type: ignore
-          f"t = {design.t_mm:g} mm, band {100 * args.level:g} %")  # type: ignore
-    columns = [c for c in ("pressure_pa", "angle_deg", "lower_deg", "upper_deg", "force_mn",
-                           "force_lower_mn", "force_upper_mn", "volume_ul")
+          f"t = {design.t_mm:g} mm, band {100 * args.level:g} %"  # type: ignore
+          + (f", {body['flow_ul_s']:g} ul/s" if body.get("flow_ul_s") else "")
+          + (f", inlet R = {body['inlet']['resistance_pa_per_ul_s']:.1f} Pa per ul/s"
+             if body.get("inlet") else ""))
+    columns = [c for c in ("time_s", "volume_ul", "pressure_pa", "pump_pressure_pa",
+                           "angle_deg", "lower_deg", "upper_deg", "force_mn",
+                           "force_lower_mn", "force_upper_mn")
                if body.get(c) is not None]
     print(" ".join(f"{c:>14s}" for c in columns))
-    for i in range(len(body["pressure_pa"])):
+    for i in range(len(body["angle_deg"])):
         print(" ".join(_cell(body[c][i]) for c in columns))
-    print_validity(pred.validity)
+    print("pressure_pa is the chamber's" + (", pump_pressure_pa the pump gauge's (+ R Q)"
+                                           if body.get("inlet") else ""))
+    print_validity(body["validity"])
     return 0
 
 

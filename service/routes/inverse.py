@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from service.convert import finite_list, jsonable, to_design
+from service.convert import jsonable, to_design
 from service.deps import ModelsDep
 from service.errors import located
 from service.models import require
@@ -69,17 +69,17 @@ def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
 
 
 @router.post("/inverse/pressure", response_model=PressureResponse,
-             summary="Pressure that gives each target angle for one design, with its band")
+             summary="Pressure, injected volume and time at a flow rate that give each "
+                     "target angle for one design, with bands")
 def inverse_pressure(request: PressureRequest, models: ModelsDep) -> PressureResponse:
+    from service.pump import inverse_answer
+    from service.routes.predict import inlet_of
+
     design = to_design(request.design)
     surrogate = require(models.get(request.model), request.model, "inverse")
     try:
-        result = surrogate.inverse(design, request.angles_deg, level=request.level)
+        body = inverse_answer(surrogate, design, request.angles_deg, request.model,
+                              request.level, request.flow_ul_s, inlet_of(request.inlet))
     except InputError as exc:
         raise located(exc, ("body",), PRESSURE_FIELDS) from None
-    return PressureResponse(model=request.model, level=request.level, design=design.as_dict(),
-                            angle_deg=list(request.angles_deg),
-                            pressure_pa=finite_list(result.pressure_pa),
-                            lower_pa=finite_list(result.lower_pa),
-                            upper_pa=finite_list(result.upper_pa),
-                            validity=jsonable(dict(result.validity)))
+    return PressureResponse(**body)

@@ -21,15 +21,16 @@ from service.schemas.inverse import (
 )
 from service.schemas.jobs import Job, SolveRequest
 from service.schemas.materials import Material, MaterialList
-from service.schemas.predict import PlotQuery, PredictRequest, PredictResponse
+from service.schemas.predict import InletIn, PlotQuery, PredictRequest, PredictResponse
 
 REQUEST_MODELS = (DesignIn, MaterialIn, SolveSettingsIn, CurvesQuery, InverseRequest, TargetIn,
-                  MaterialPair, PressureRequest, SolveRequest, PlotQuery, PredictRequest)
+                  MaterialPair, PressureRequest, SolveRequest, PlotQuery, PredictRequest,
+                  InletIn)
 FIELD_RANGES.update(field_ranges(REQUEST_MODELS))
 
 __all__ = [
     "REQUEST_MODELS", "CurveDetail", "CurvePage", "CurveSummary", "CurvesQuery", "DesignIn",
-    "Health", "InverseRequest", "InverseResponse", "Job", "Material", "MaterialIn",
+    "Health", "InletIn", "InverseRequest", "InverseResponse", "Job", "Material", "MaterialIn",
     "MaterialList", "MaterialPair", "PlotQuery", "PredictRequest", "PredictResponse",
     "PressureRequest", "PressureResponse", "Schema", "SolveRequest", "SolveSettingsIn",
     "TargetIn",

@@ -7,10 +7,12 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from service.pump import MAX_FLOW_UL_S
 from service.schemas.common import MATERIAL_ID, DesignIn, Schema
-from service.schemas.predict import LEVEL, MAX_PRESSURE_PA, MODEL
+from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
 
 Angle = Annotated[float, Field(ge=-360.0, le=360.0)]
+OptFloats = list[float | None] | None
 
 
 class TargetIn(Schema):
@@ -108,11 +110,16 @@ class InverseResponse(BaseModel):
 
 class PressureRequest(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
-        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [10, 45, 90]}]})
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [10, 45, 90]},
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [45], "flow_ul_s": 2.5,
+         "inlet": {}}]})
 
     design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
     angles_deg: list[Angle] = Field(min_length=1, max_length=1000,
                                     description="target angles, degrees")
+    flow_ul_s: float | None = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the pump's "
+                                    "flow rate, ul/s: adds the time needed, s")
+    inlet: InletIn | None = INLET
     model: str = MODEL
     level: float = LEVEL
 
@@ -126,4 +133,18 @@ class PressureResponse(BaseModel):
                                             "not reachable)")
     lower_pa: list[float | None] = Field(description="band's lower edge, Pa")
     upper_pa: list[float | None] = Field(description="band's upper edge, Pa")
+    volume_ul: OptFloats = Field(None, description="injected volume for each angle, ul (the "
+                                 "emulator)")
+    volume_lower_ul: OptFloats = Field(None, description="its band's lower edge, ul")
+    volume_upper_ul: OptFloats = Field(None, description="its band's upper edge, ul")
+    flow_ul_s: float | None = Field(None, description="the pump's flow rate, ul/s")
+    time_s: OptFloats = Field(None, description="time to reach each angle at flow_ul_s from "
+                              "the undeformed actuator, s")
+    time_lower_s: OptFloats = Field(None, description="its band's lower edge, s")
+    time_upper_s: OptFloats = Field(None, description="its band's upper edge, s")
+    pressure_sites: dict[str, str] = Field(
+        {"pressure_pa": "chamber"}, description="which pressure each pressure field reports")
+    pump_pressure_pa: OptFloats = Field(None, description="what a gauge at the pump reads "
+                                        "while pumping at flow_ul_s, Pa (inlet given)")
+    inlet: dict[str, Any] | None = Field(None, description="the inlet as used (R, R Q, Re)")
     validity: dict[str, Any] = Field(description="in_domain, flags, messages")

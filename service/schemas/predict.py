@@ -1,14 +1,17 @@
-"""POST /v1/predict and GET /v1/predict/plot: angle against pressure from a surrogate."""
+"""POST /v1/predict and GET /v1/predict/plot: angle against pressure, injected volume or
+time at a flow rate, from a surrogate."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from service.pump import AXES, MAX_FLOW_UL_S
 from service.schemas.common import MATERIAL_ID, DesignIn, Schema
+from surrogate import hydraulics
 
-MAX_PRESSURE_PA = 20000.0
+MAX_PRESSURE_PA = AXES["pressures_pa"][1]
 Pressure = Annotated[float, Field(ge=0.0, le=MAX_PRESSURE_PA)]
 MODEL = Field("emulator", pattern=MATERIAL_ID,
               description='"emulator" (the design-space emulator, default), "exponential" '
@@ -17,23 +20,70 @@ MODEL = Field("emulator", pattern=MATERIAL_ID,
 LEVEL = Field(0.95, ge=0.5, le=0.999, description="prediction band's coverage probability")
 
 
+def _axis(name: str) -> Any:
+    lo, hi, _ = AXES[name]
+    return Annotated[float, Field(ge=lo, le=hi)]
+
+
+class InletIn(Schema):
+    """The path from the pump's gauge to the chamber (Hagen-Poiseuille, laminar): the
+    inlet channel (default the paper's: 0.5 mm wide, 3 mm long, 0.15 mm high) and, with
+    ``tubing_length_mm`` > 0, round tubing of bore ``tubing_bore_mm``; water at 20 degC by
+    default."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"tubing_length_mm": 500, "tubing_bore_mm": 0.5}]})
+
+    channel_width_mm: float = Field(hydraulics.CHANNEL_WIDTH_MM, ge=0.005, le=20.0,
+                                    description="inlet channel width, mm")
+    channel_length_mm: float = Field(hydraulics.CHANNEL_LENGTH_MM, ge=0.01, le=1000.0,
+                                     description="inlet channel length, mm")
+    channel_height_mm: float = Field(hydraulics.CHANNEL_HEIGHT_MM, ge=0.005, le=20.0,
+                                     description="inlet channel height, mm")
+    tubing_length_mm: float = Field(0.0, ge=0.0, le=1e5, description="tubing length, mm "
+                                    "(0: none)")
+    tubing_bore_mm: float | None = Field(None, ge=0.05, le=20.0, description="tubing inner "
+                                         "diameter, mm (with tubing_length_mm)")
+    viscosity_pa_s: float = Field(hydraulics.WATER_VISCOSITY_PA_S, ge=1e-4, le=100.0,
+                                  description="the fluid's dynamic viscosity, Pa s "
+                                  "(default water at 20 degC)")
+
+
+FLOW = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the pump's flow rate, ul/s (with "
+             "times_s; with any axis it adds time_s = volume / flow, and with inlet the "
+             "pump-gauge pressure)")
+INLET = Field(None, description="the inlet's hydraulic resistance R: with flow_ul_s the "
+              "answer adds pump_pressure_pa = chamber pressure + R Q")
+
+
 class PredictRequest(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"design": {"L_mm": 7.1, "t_mm": 0.5}, "pressures_pa": [500, 1000, 1500, 2000],
-         "model": "fitted", "level": 0.95}]})
+         "model": "emulator", "level": 0.95},
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "volumes_ul": [2, 5, 10, 20]},
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "times_s": [1, 2, 4, 6, 8, 10],
+         "flow_ul_s": 2.5},
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "times_s": [2, 4, 8], "flow_ul_s": 2.5,
+         "inlet": {"tubing_length_mm": 500, "tubing_bore_mm": 0.5}},
+        {"design": {"L_mm": 7.1, "t_mm": 0.5}, "pressures_pa": [800, 1200],
+         "pressures_at": "pump_gauge", "flow_ul_s": 2.5, "inlet": {}}]})
 
     design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
-    pressures_pa: list[Pressure] | None = Field(
-        None, min_length=1, max_length=1000, description="chamber pressures, Pa (give "
-        "exactly one of pressures_pa, volumes_ul, or times_s with flow_ul_s)")
-    volumes_ul: list[Annotated[float, Field(ge=0.0, le=10000.0)]] | None = Field(
-        None, min_length=1, max_length=1000, description="injected volumes, ul (the "
-        "syringe pump's view; the emulator)")
-    times_s: list[Annotated[float, Field(ge=0.0, le=1e5)]] | None = Field(
-        None, min_length=1, max_length=1000, description="times since the pump started, "
-        "s (with flow_ul_s)")
-    flow_ul_s: float | None = Field(None, gt=0.0, le=1000.0, description="the pump's flow "
-                                    "rate, ul/s (with times_s)")
+    pressures_pa: list[_axis("pressures_pa")] | None = Field(  # type: ignore[valid-type]
+        None, min_length=1, max_length=1000, description="pressures, Pa, at the chamber "
+        "(or the pump gauge: pressures_at) (give exactly one of pressures_pa, volumes_ul, "
+        "or times_s with flow_ul_s)")
+    volumes_ul: list[_axis("volumes_ul")] | None = Field(  # type: ignore[valid-type]
+        None, min_length=1, max_length=1000, description="injected volumes, ul, whole "
+        "actuator (the syringe pump's view; the emulator)")
+    times_s: list[_axis("times_s")] | None = Field(  # type: ignore[valid-type]
+        None, min_length=1, max_length=1000, description="times since the pump started "
+        "from the undeformed actuator, s (with flow_ul_s; volume = flow x time)")
+    flow_ul_s: float | None = FLOW
+    inlet: InletIn | None = INLET
+    pressures_at: Literal["chamber", "pump_gauge"] = Field(
+        "chamber", description="where pressures_pa were read: the chamber, or a gauge at "
+        "the pump (then chamber = given - R Q; needs inlet and flow_ul_s)")
     model: str = MODEL
     level: float = LEVEL
 
@@ -46,6 +96,12 @@ class Validity(BaseModel):
                                       "range for this design, Pa (emulator)")
     fe_limit_angle_deg: float | None = Field(None, description="angle there, degrees")
     fe_stop_reason: str | None = Field(None, description="why the FE curves end there")
+    fe_limit_volume_ul: float | None = Field(None, description="injected volume there, ul "
+                                             "(asked by volume or time)")
+    pressure_maximum_pa: float | None = Field(None, description="the pressure maximum of a "
+                                              "limit point (flag past_pressure_maximum), Pa")
+    pressure_maximum_volume_ul: float | None = Field(None, description="the injected volume "
+                                                     "at that maximum, ul")
 
 
 OptFloats = list[float | None] | None
@@ -65,7 +121,18 @@ class PredictResponse(BaseModel):
     force_lower_mn: OptFloats = Field(None, description="force band's lower end, mN")
     force_upper_mn: OptFloats = Field(None, description="force band's upper end, mN")
     volume_ul: OptFloats = Field(None, description="injected volume at each point, ul")
-    time_s: OptFloats = Field(None, description="time at the flow rate, s (times_s asked)")
+    time_s: OptFloats = Field(None, description="time at the flow rate, s (flow_ul_s given)")
+    asked: str | None = Field(None, description="the axis asked: pressures_pa, volumes_ul or "
+                              "times_s")
+    flow_ul_s: float | None = Field(None, description="the pump's flow rate, ul/s")
+    pressure_sites: dict[str, str] = Field(
+        {"pressure_pa": "chamber"}, description="which pressure each pressure field reports: "
+        "pressure_pa the chamber's, pump_pressure_pa the pump gauge's")
+    pump_pressure_pa: OptFloats = Field(None, description="what a gauge at the pump reads, "
+                                        "Pa: chamber pressure + R Q (inlet given)")
+    inlet: dict[str, Any] | None = Field(None, description="the inlet as used: dimensions, "
+                                         "resistance_pa_per_ul_s, pressure_drop_pa (R Q), "
+                                         "reynolds_number")
     validity: Validity = Field(description="whether the answer is inside the model's domain")
     form: str | None = Field(None, description='model form: "exponential" (the paper\'s) '
                              'or "extended"')
@@ -90,6 +157,13 @@ class PlotQuery(Schema):
     p_max_pa: float = Field(2000.0, gt=0.0, le=MAX_PRESSURE_PA,
                             description="largest pressure plotted, Pa")
     nearby: int = Field(3, ge=0, le=10, description="FE curves of the family to overlay")
+    flow_ul_s: float | None = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the "
+                                    "pump's flow rate, ul/s: plot angle against time, with "
+                                    "the pressure on a second axis (the paper's protocol)")
+    t_max_s: float = Field(10.0, gt=0.0, le=AXES["times_s"][1], description="largest time "
+                           "plotted, s (with flow_ul_s)")
+    inlet: bool = Field(False, description="with flow_ul_s: also the pump-gauge pressure "
+                        "through the paper's inlet channel (water), chamber + R Q")
     measured_pressure_pa: list[Pressure] = Field(
         [], max_length=200, description="measured points to overlay: pressures, Pa")
     measured_angle_deg: list[Annotated[float, Field(ge=-360.0, le=360.0)]] = Field(

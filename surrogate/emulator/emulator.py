@@ -39,10 +39,15 @@ from surrogate.emulator.features import (
     spline_matrix,
 )
 from surrogate.emulator.vector_gp import VectorGP
+from surrogate.volume_control import by_volume
 
 N_NODES = len(ANGLE_NODES_DEG)
 FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE curve limits
 SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness balance
+# A fall of the emulated p(theta) below its running maximum counts as a pressure maximum
+# from this relative size on: smaller wiggles (the shipped fit's largest is 2.5e-4) are far
+# inside the band (a few per cent) and say nothing about the physics.
+EMULATED_PRESSURE_DROP = 1e-3
 _B_ANGLE = spline_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
 
 
@@ -88,6 +93,7 @@ class CurveBand:
     stop_reason: str
     volume_log_mean: np.ndarray     # emulated log(V_k / theta_k) at the nodes
     volume_log_sd: np.ndarray       # its sd, times the band scale
+    pressure_raw_pa: np.ndarray     # the mean p(theta) before it is made monotone
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -145,7 +151,8 @@ class Emulator:
         mean, var = pe.curves.predict(point.coordinates())
         sd = np.sqrt(var[:N_NODES]) * pe.band_scale
         theta = FINE_ANGLES_DEG
-        p = _monotone(theta * np.exp(_B_ANGLE @ mean[:N_NODES]))
+        p_raw = theta * np.exp(_B_ANGLE @ mean[:N_NODES])
+        p = _monotone(p_raw)
         lo = _monotone(theta * np.exp(_B_ANGLE @ (mean[:N_NODES] - z * sd)))
         hi = _monotone(theta * np.exp(_B_ANGLE @ (mean[:N_NODES] + z * sd)))
         v = theta * np.exp(_B_ANGLE @ mean[N_NODES:])
@@ -156,7 +163,7 @@ class Emulator:
                 limit = float(angle)
                 reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
         v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale
-        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd)
+        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -199,43 +206,68 @@ class Emulator:
 
     def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95
                        ) -> Prediction:
-        """The syringe-pump view: angle (deg) with its band and chamber pressure (Pa) at
-        each injected volume (ul, whole actuator), read off the emulated V(theta) and
-        p(theta) of the same design; NaN past the FE's range (flagged). Under volume
-        control the answer stays defined where the pressure would fall (none of the
-        database curves has a pressure maximum before 90 deg)."""
+        """The syringe-pump view: angle (deg) with its band, chamber pressure (Pa) and the
+        blocked-tip force at that pressure (mN) at each injected volume (ul, whole
+        actuator), read off the emulated V(theta) and p(theta) of the same design; NaN
+        past the FE's range (flagged). Under volume control the answer stays defined
+        where p(theta) has a maximum: the pressure is the emulated one, falling past it
+        (flag ``past_pressure_maximum``; ``surrogate.volume_control``)."""
         z = z_value(level)
         v = _array(volumes_ul, "volumes_ul", "ul")
         if (v < 0).any():
             raise InputError("volumes_ul", f"negative volume {v.min():g} ul", "volumes >= 0 ul")
         point = locate(design, reduced=True)
         pe, cb = self.curve_band(point, z)      # one GP evaluation serves both axes
-        y, sd = cb.volume_log_mean, cb.volume_log_sd
-        theta = FINE_ANGLES_DEG
-        vm = _monotone(theta * np.exp(_B_ANGLE @ y))
-        vl = _monotone(theta * np.exp(_B_ANGLE @ (y - z * sd)))
-        vh = _monotone(theta * np.exp(_B_ANGLE @ (y + z * sd)))
-        v_red = v / point.length_scale**3
-        v_lim = float(np.interp(cb.limit_angle_deg, theta, vm))
+        vm, vl, vh = self._volume_curves(cb, z)
+        ls3 = point.length_scale**3
+        v_red = v / ls3
+        v_lim = float(np.interp(cb.limit_angle_deg, ANGLES0, vm))
         past = v_red > v_lim * (1 + 1e-12)
-        angle = np.interp(v_red, _with_origin(vm), ANGLES0)
-        upper = np.interp(v_red, _with_origin(vl), ANGLES0)
-        lower = np.interp(v_red, _with_origin(vh), ANGLES0)
-        pressure = np.interp(angle, ANGLES0, _with_origin(cb.pressure_pa)) * point.pressure_scale
-        for a in (angle, upper, lower, pressure):
+        answer = by_volume(v_red, vm, _with_origin(cb.pressure_raw_pa), ANGLES0,
+                           rel_drop=EMULATED_PRESSURE_DROP)
+        angle = answer.angle_deg
+        upper = np.interp(v_red, vl, ANGLES0)
+        lower = np.interp(v_red, vh, ANGLES0)
+        p_red = answer.pressure_pa
+        pressure = p_red * point.pressure_scale
+        for a in (angle, upper, lower, pressure, p_red):
             a[past] = np.nan
         if pe.sign < 0:
             angle, lower, upper = -angle, -upper, -lower
-        validity = self._validity(pe, cb, point, np.nan_to_num(pressure), past, None)
+        force = self._force(pe, point, p_red, z)
+        validity = self._validity(pe, cb, point, np.nan_to_num(pressure), past, force)
         if past.any():
             validity["messages"][0] = (
-                f"{int(past.sum())} volume(s) above {v_lim * point.length_scale**3:.1f} ul are "
-                f"past the FE's range for this design ({cb.stop_reason}): no angle is given")
-        validity["fe_limit_volume_ul"] = v_lim * point.length_scale**3
+                f"{int(past.sum())} volume(s) above {v_lim * ls3:.1f} ul are past the FE's "
+                f"range for this design ({cb.stop_reason}): no angle is given")
+        validity["fe_limit_volume_ul"] = v_lim * ls3
+        beyond = answer.past_maximum & ~past
+        if beyond.any():
+            p_max = answer.maximum_pressure_pa * point.pressure_scale
+            validity["flags"].append("past_pressure_maximum")
+            validity["messages"].append(
+                f"{int(beyond.sum())} volume(s) above {answer.maximum_volume_ul * ls3:.2f} ul "
+                f"are past the pressure maximum ({p_max:.0f} Pa at "
+                f"{answer.maximum_angle_deg:.1f} deg): under volume control the angle keeps "
+                "rising while the pressure falls; a pressure source would snap through here")
+            validity["pressure_maximum_pa"] = p_max
+            validity["pressure_maximum_volume_ul"] = answer.maximum_volume_ul * ls3
         return Prediction(design=design, pressure_pa=pressure, angle_deg=angle,
                           lower_deg=lower, upper_deg=upper, level=level, validity=validity,
                           model=self.name, form="emulator", provenance=dict(self.provenance),
-                          parameters={"pair": "/".join(point.pair)}, volume_ul=v)
+                          parameters={"pair": "/".join(point.pair)},
+                          force_mn=None if force is None else force[0],
+                          force_lower_mn=None if force is None else force[1],
+                          force_upper_mn=None if force is None else force[2],
+                          volume_ul=v)
+
+    @staticmethod
+    def _volume_curves(cb: CurveBand, z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """V(theta) on ANGLES0 (reduced, ul): mean and the band's low and high curves."""
+        y, sd = cb.volume_log_mean, cb.volume_log_sd
+        theta = FINE_ANGLES_DEG
+        return tuple(_with_origin(_monotone(theta * np.exp(_B_ANGLE @ yy)))  # type: ignore
+                     for yy in (y, y - z * sd, y + z * sd))
 
     def _force(self, pe: PairEmulator, point: BoxPoint, p_red: np.ndarray, z: float
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -277,7 +309,8 @@ class Emulator:
 
     def inverse(self, design: Design, angle_deg: object, level: float = 0.95
                 ) -> InversePrediction:
-        """Chamber pressure (Pa) that gives each angle (deg), with a band at ``level``."""
+        """Chamber pressure (Pa) and injected volume (ul) that give each angle (deg), each
+        with a band at ``level``."""
         z = z_value(level)
         ang = _array(angle_deg, "angle_deg", "deg")
         point = locate(design, reduced=True)
@@ -297,6 +330,8 @@ class Emulator:
         p = np.interp(signed, ANGLES0, _with_origin(cb.pressure_pa)) * s
         lo = np.interp(signed, ANGLES0, _with_origin(cb.pressure_lower_pa)) * s
         hi = np.interp(signed, ANGLES0, _with_origin(cb.pressure_upper_pa)) * s
+        vm, vl, vh = self._volume_curves(cb, z)
+        ls3 = point.length_scale**3
         validity = {"in_domain": True, "flags": [], "messages": [],
                     "fe_limit_pa": cb.limit_pressure_pa * s,
                     "fe_limit_angle_deg": cb.limit_angle_deg,
@@ -304,7 +339,10 @@ class Emulator:
         return InversePrediction(design=design, angle_deg=ang, pressure_pa=p, lower_pa=lo,
                                  upper_pa=hi, level=level, validity=validity,
                                  model=self.name, form="emulator",
-                                 provenance=dict(self.provenance))
+                                 provenance=dict(self.provenance),
+                                 volume_ul=np.interp(signed, ANGLES0, vm) * ls3,
+                                 volume_lower_ul=np.interp(signed, ANGLES0, vl) * ls3,
+                                 volume_upper_ul=np.interp(signed, ANGLES0, vh) * ls3)
 
     def evaluate_designs(self, designs: list[Design], pressure_pa: float,
                          angle_deg: float | None, level: float = 0.95) -> dict[str, np.ndarray]:

@@ -1,41 +1,21 @@
 """Hydraulic resistance of the inlet channel and tubing: the gauge reads R Q above the
 chamber while fluid flows in, R Q below while it is withdrawn, and the chamber during a
-hold (Hagen-Poiseuille, laminar)."""
+hold (Hagen-Poiseuille, laminar: surrogate/hydraulics.py)."""
 
 from __future__ import annotations
 
-import math
-
 from surrogate.calibration.effects._base import Effect, EffectParameter
+from surrogate.hydraulics import (
+    CHANNEL_HEIGHT_MM,
+    CHANNEL_LENGTH_MM,
+    CHANNEL_WIDTH_MM,
+    rectangular_channel_resistance_pa_per_ul_s,
+    round_tube_resistance_pa_per_ul_s,
+)
 
-WATER_VISCOSITY_PA_S = 1.0e-3  # 20 degC
-
-# The paper's inlet: a straight channel 0.5 mm x 3 mm (width x length), 150 um high
-# (soft lithography, SU-8 150 um); tubing is not described, 0.5 mm bore assumed.
-CHANNEL_WIDTH_MM = 0.5
-CHANNEL_LENGTH_MM = 3.0
-CHANNEL_HEIGHT_MM = 0.15
+# Tubing is not described in the paper: 0.5 mm bore, 1 m assumed for the plausible range.
 TUBING_BORE_MM = 0.5
 TUBING_LENGTH_MM = 1000.0
-
-
-def rectangular_channel_resistance_pa_per_ul_s(length_mm: float, width_mm: float,
-                                               height_mm: float,
-                                               viscosity_pa_s: float = WATER_VISCOSITY_PA_S
-                                               ) -> float:
-    """Hagen-Poiseuille resistance of a shallow rectangular channel (h < w),
-    R = 12 mu L / (w h^3 (1 - 0.63 h/w)), in Pa per ul/s (1 ul/s = 1e-9 m^3/s)."""
-    L, w, h = length_mm * 1e-3, width_mm * 1e-3, height_mm * 1e-3
-    h, w = min(h, w), max(h, w)
-    r_si = 12.0 * viscosity_pa_s * L / (w * h**3 * (1.0 - 0.63 * h / w))
-    return r_si * 1e-9
-
-
-def round_tube_resistance_pa_per_ul_s(length_mm: float, bore_mm: float,
-                                      viscosity_pa_s: float = WATER_VISCOSITY_PA_S) -> float:
-    """Hagen-Poiseuille resistance of a round tube, R = 8 mu L / (pi r^4), Pa per ul/s."""
-    r = 0.5 * bore_mm * 1e-3
-    return 8.0 * viscosity_pa_s * length_mm * 1e-3 / (math.pi * r**4) * 1e-9
 
 
 R_CHANNEL = rectangular_channel_resistance_pa_per_ul_s(CHANNEL_LENGTH_MM, CHANNEL_WIDTH_MM,

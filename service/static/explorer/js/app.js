@@ -1,12 +1,14 @@
 // The design explorer: design panel -> POST /v1/predict -> curve, band, validity,
-// nearest FE curves (GET /v1/curves), pressure readout and sketch; pinned designs;
+// nearest FE curves (GET /v1/curves), readout at one point and sketch; pinned designs;
+// the curve asked by chamber pressure, by injected volume, or by time at the pump's flow
+// rate (the request's pressures_pa, volumes_ul or times_s with flow_ul_s);
 // the FE solve of a refused design (POST /v1/solve, GET /v1/jobs/{id}); exports.
 // The inverse form and the measured-data report live in inverse.js and calibration.js.
 
 import { api, ApiError, clearProblems, isAbort, showProblem } from "./api.js";
 import { setupCalibration } from "./calibration.js";
 import {
-  FIELDS, PAIRS, defaultState, designBody, designLabel, materialId, pairLabel, pressureGrid,
+  FIELDS, PAIRS, defaultState, designBody, designLabel, materialId, pairLabel, axisGrid,
 } from "./design.js";
 import { setupInverse } from "./inverse.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
@@ -17,7 +19,15 @@ const N_POINTS = 81;
 const LEVEL = 0.95;
 const DEBOUNCE_MS = 16;  // one frame: a drag's inputs coalesce, a stale request is aborted
 const MAX_PINNED = 4;
+// What the curve is asked by: the request field, the input of its largest value, the unit.
+const ASK = {
+  pressure_pa: { field: "pressures_pa", input: "p_max", unit: "Pa", digits: 0, label: "pressure", fallback: 2000 },
+  volume_ul: { field: "volumes_ul", input: "v_max", unit: "ul", digits: 2, label: "injected volume", fallback: 50 },
+  time_s: { field: "times_s", input: "t_max", unit: "s", digits: 1, label: "time", fallback: 20 },
+};
 const FLAG_WORDS = {
+  past_fe_range: "past the FE range",
+  past_pressure_maximum: "past the pressure maximum (volume control)",
   angle_beyond_fe: "past the largest FE angle",
   pressure_beyond_fe: "past the FE pressure range",
   two_balloon_regime: "two-balloon regime",
@@ -78,7 +88,8 @@ function buildFields() {
   const pair = $("pair");
   PAIRS.forEach(([b, m], k) => pair.add(new Option(pairLabel(b, m), String(k))));
   pair.addEventListener("change", () => onInput("pair", Number(pair.value)));
-  for (const id of ["p_max", "model", "nearby"]) $(id).addEventListener("change", () => schedule(0));
+  for (const id of ["p_max", "v_max", "t_max", "flow", "inlet", "model", "nearby"]) $(id).addEventListener("change", () => schedule(0));
+  $("ask_axis").addEventListener("change", onAskAxis);
   for (const id of ["x_axis", "y_axis"]) $(id).addEventListener("change", redraw);
   $("p_op").addEventListener("input", () => { showOperatingPoint(); redraw(); });
 }
@@ -105,14 +116,47 @@ function schedule(delay) {
   app.timer = setTimeout(update, delay);
 }
 
-function pMax() {
-  const v = Number($("p_max").value);
-  return Number.isFinite(v) && v > 0 ? v : 2000;
+function askAxis() {
+  return $("ask_axis").value;
+}
+
+// The largest value of the asked axis (the grid runs from 0 to it).
+function gridMax() {
+  const a = ASK[askAxis()];
+  const v = Number($(a.input).value);
+  return Number.isFinite(v) && v > 0 ? v : a.fallback;
+}
+
+function flowRate() {
+  const text = $("flow").value.trim();
+  return text === "" ? null : Number(text);
+}
+
+// The request without its design: the asked axis, the flow rate, the inlet, the model.
+function askPart(grid) {
+  const body = { [ASK[askAxis()].field]: grid, model: $("model").value.trim() || "emulator", level: LEVEL };
+  const q = flowRate();
+  if (q !== null) body.flow_ul_s = q;
+  if ($("inlet").checked) body.inlet = {};
+  return body;
 }
 
 function predictBody(state, grid) {
-  return { design: designBody(state, app.presets), pressures_pa: grid,
-           model: $("model").value.trim() || "emulator", level: LEVEL };
+  return { design: designBody(state, app.presets), ...askPart(grid) };
+}
+
+function onAskAxis() {
+  const axis = askAxis();
+  for (const el of document.querySelectorAll("[data-ask]")) el.hidden = el.dataset.ask !== axis;
+  const option = $("x_axis").querySelector(`option[value="${axis}"]`);
+  option.disabled = false;
+  $("x_axis").value = axis;
+  const a = ASK[axis];
+  $("p_op-h").textContent = `At one ${a.label}`;
+  $("p_op-label").textContent = `${a.label[0].toUpperCase()}${a.label.slice(1)} (${a.unit})`;
+  $("curve-h").textContent = `${a.label[0].toUpperCase()}${a.label.slice(1)} - angle curve`;
+  $("p_op").value = String(gridMax() / 2);
+  schedule(0);
 }
 
 const DESIGN_SLOTS = () => {
@@ -122,6 +166,10 @@ const DESIGN_SLOTS = () => {
   slots["design.membrane_material"] = $("err-membrane_material");
   slots.design = $("err-design");
   slots.pressures_pa = $("err-pressures_pa");
+  slots.volumes_ul = $("err-volumes_ul");
+  slots.times_s = $("err-times_s");
+  slots.flow_ul_s = $("err-flow_ul_s");
+  slots.inlet = $("err-inlet");
   slots.model = $("err-model");
   return slots;
 };
@@ -130,10 +178,10 @@ async function update() {
   if (app.controller) app.controller.abort();  // a stale request is cancelled
   const controller = new AbortController();
   app.controller = controller;
-  const grid = pressureGrid(pMax(), N_POINTS);
+  const grid = axisGrid(gridMax(), N_POINTS);  // 0 .. the largest value, on any axis
   const p = $("p_op");
-  p.max = String(pMax());
-  p.step = String(pMax() / (N_POINTS - 1));
+  p.max = String(gridMax());
+  p.step = String(gridMax() / (N_POINTS - 1));
   const mark = app.inputMark;
   let body = null;
   try {
@@ -274,11 +322,14 @@ function curveSeries() {
   };
   app.nearest.forEach((rec, k) => {
     const d = rec.design;
-    const pm = pMax() * 1.05;
     const c = rec.curve;
-    const keep = c.pressure_pa.map((p) => p <= pm);
+    // an FE record's clock at the page's flow rate: its own injected volume over the flow
+    const q = flowRate();
+    const time = q > 0 && c.volume_ul ? c.volume_ul.map((v) => v / q) : c.time_s;
+    const along = { pressure_pa: c.pressure_pa, volume_ul: c.volume_ul, time_s: time }[askAxis()] || c.pressure_pa;
+    const keep = along.map((x) => x <= gridMax() * 1.05);
     const cut = (a) => (a ? a.filter((_, i) => keep[i]) : a);
-    const data = { pressure_pa: cut(c.pressure_pa), volume_ul: cut(c.volume_ul), time_s: cut(c.time_s),
+    const data = { pressure_pa: cut(c.pressure_pa), volume_ul: cut(c.volume_ul), time_s: cut(time),
       angle_deg: cut(c.angle_deg), force_mn: cut(c.force_mn) };
     add(`fe-${rec.id}`, `FE L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm`, data, ["#6b7280", "#9ca3af", "#4b5563", "#a3a3a3", "#737373", "#525252"][k], { dash: "5 4", width: 1.4 });
   });
@@ -306,7 +357,7 @@ export function redraw() {
   if (app.prediction && i !== null) cursor = (xOf(app.prediction) || [])[i];
   renderPlot($("plot"), series, {
     xLabel, yLabel, cursorX: cursor,
-    xRange: x === "pressure_pa" ? [0, pMax()] : undefined, legend: "below",
+    xRange: x === askAxis() ? [0, gridMax()] : undefined, legend: "below",
     note: app.prediction ? "" : (app.refused ? "the model refuses this design" : ""),
   });
   drawSketch();
@@ -314,26 +365,32 @@ export function redraw() {
 
 function opIndex() {
   const p = Number($("p_op").value);
-  return Math.round((p / pMax()) * (N_POINTS - 1));
+  return Math.round((p / gridMax()) * (N_POINTS - 1));
 }
 
 function showOperatingPoint() {
   const out = $("p_op-out");
   const i = opIndex();
   const pred = app.prediction;
-  const p = (pMax() * i) / (N_POINTS - 1);
-  if (!pred) { out.textContent = `${fmt(p, 0)} Pa: no prediction`; return; }
+  const axis = askAxis();
+  const ask = ASK[axis];
+  const p = (gridMax() * i) / (N_POINTS - 1);
+  if (!pred) { out.textContent = `${fmt(p, ask.digits)} ${ask.unit}: no prediction`; return; }
   const a = pred.angle_deg[i];
-  let text = `${fmt(pred.pressure_pa[i], 0)} Pa: angle ${a === null ? "not predicted (past the FE range)" : fmt(a, 1) + " deg"}`;
+  const at = axis === "pressure_pa" ? pred.pressure_pa[i] : (pred[axis] || [])[i];
+  let text = `${fmt(at, ask.digits)} ${ask.unit}: angle ${a === null ? "not predicted (past the FE range)" : fmt(a, 1) + " deg"}`;
   if (a !== null) text += ` [${fmt(pred.lower_deg[i], 1)}, ${fmt(pred.upper_deg[i], 1)}] (${Math.round(pred.level * 100)} %)`;
   if (pred.force_mn && pred.force_mn[i] !== null && pred.force_mn[i] !== undefined) {
     text += `; force ${fmt(pred.force_mn[i], 2)} mN`;
     if (pred.force_lower_mn && pred.force_upper_mn) text += ` [${fmt(pred.force_lower_mn[i], 2)}, ${fmt(pred.force_upper_mn[i], 2)}]`;
   }
-  if (pred.volume_ul && pred.volume_ul[i] !== null && pred.volume_ul[i] !== undefined) text += `; volume ${fmt(pred.volume_ul[i], 2)} ul`;
-  if (pred.time_s && pred.time_s[i] !== null && pred.time_s[i] !== undefined) text += `; time ${fmt(pred.time_s[i], 1)} s`;
+  const has = (k) => Array.isArray(pred[k]) && pred[k][i] !== null && pred[k][i] !== undefined;
+  if (axis !== "pressure_pa" && has("pressure_pa")) text += `; chamber pressure ${fmt(pred.pressure_pa[i], 0)} Pa`;
+  if (has("pump_pressure_pa")) text += `; pump gauge ${fmt(pred.pump_pressure_pa[i], 0)} Pa`;
+  if (axis !== "volume_ul" && has("volume_ul")) text += `; volume ${fmt(pred.volume_ul[i], 2)} ul`;
+  if (axis !== "time_s" && has("time_s")) text += `; time ${fmt(pred.time_s[i], 1)} s`;
   out.textContent = text;
-  $("compare-p-h").textContent = `angle at ${fmt(p, 0)} Pa`;
+  $("compare-p-h").textContent = `angle at ${fmt(p, ask.digits)} ${ask.unit}`;
   renderCompare();
 }
 
@@ -367,7 +424,8 @@ function showValidity() {
   const ul = document.createElement("ul");
   const messages = [...(v.messages || [])];
   const firstNull = pred.angle_deg.findIndex((a) => a === null);
-  if (firstNull > 0) messages.push(`No angle is given from ${fmt(pred.pressure_pa[firstNull], 0)} Pa on: past the FE's range the answer is capped there.`);
+  const asked = app.request ? app.request[ASK[askAxis()].field] : null;
+  if (firstNull > 0 && asked) messages.push(`No angle is given from ${fmt(asked[firstNull], ASK[askAxis()].digits)} ${ASK[askAxis()].unit} on: past the FE's range the answer is capped there.`);
   for (const m of messages) {
     const li = document.createElement("li");
     li.textContent = m;
@@ -389,20 +447,18 @@ function pin() {
   const used = new Set(app.pinned.map((p) => p.n));
   let n = 1;
   while (used.has(n)) n++;
-  app.pinned.push({ n, state: { ...app.state }, prediction: app.prediction, color: COLORS[n], model: $("model").value });
+  app.pinned.push({ n, state: { ...app.state }, prediction: app.prediction, color: COLORS[n], ask: JSON.stringify(askPart(axisGrid(gridMax(), N_POINTS))) });
   renderCompare();
   redraw();
 }
 
 async function refreshPinned(grid) {
+  const ask = JSON.stringify(askPart(grid));  // the same question of every pinned design
   for (const pin of app.pinned) {
-    const same = pin.prediction && pin.prediction.pressure_pa.length === grid.length &&
-      pin.prediction.pressure_pa[grid.length - 1] === grid[grid.length - 1] &&
-      pin.model === $("model").value;
-    if (same) continue;
+    if (pin.prediction && pin.ask === ask) continue;
     try {
       pin.prediction = await api("/v1/predict", { method: "POST", body: predictBody(pin.state, grid) });
-      pin.model = $("model").value;
+      pin.ask = ask;
     } catch { pin.prediction = null; }
     renderCompare();
     redraw();

@@ -73,8 +73,9 @@ export function designLabel(state) {
     `${MATERIAL_NAMES[body] || body}${sc(state.body_scale)} / ${MATERIAL_NAMES[membrane] || membrane}${sc(state.membrane_scale)}`;
 }
 
-// Pressures of a curve request: n points from 0 to pMax (the pressure slider steps on them,
-// so the value it shows is one the server computed, never an interpolation).
-export function pressureGrid(pMaxPa, n = 81) {
-  return Array.from({ length: n }, (_, i) => (pMaxPa * i) / (n - 1));
+// The points of a curve request on the asked axis (pressures, Pa; volumes, ul; or times,
+// s): n points from 0 to max (the readout slider steps on them, so the value it shows is
+// one the server computed, never an interpolation).
+export function axisGrid(max, n = 81) {
+  return Array.from({ length: n }, (_, i) => (max * i) / (n - 1));
 }

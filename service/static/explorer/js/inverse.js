@@ -119,6 +119,10 @@ export function setupInverse({ loadDesign }) {
     const values = { L_mm: round(c.L_mm), t_mm: round(c.t_mm), ...geometry,
       body_scale: c.body_stiffness_scale ?? 1, membrane_scale: c.membrane_stiffness_scale ?? 1 };
     if (pair >= 0) values.pair = pair;
+    if ($("ask_axis").value !== "pressure_pa") {  // the candidate's numbers are pressures
+      $("ask_axis").value = "pressure_pa";
+      $("ask_axis").dispatchEvent(new Event("change"));
+    }
     loadDesign(values);
     if (c.target_pressure_pa || c.pressure_needed_pa) {
       const p = $("p_op");

@@ -1,0 +1,184 @@
+"""The syringe-pump view of a prediction, for HTTP and the CLI alike.
+
+A forward question is asked on exactly one axis: chamber (or pump-gauge) pressures (Pa),
+injected volumes (ul), or times (s) at a flow rate (ul/s: volume = flow x time, the pump
+starting from the undeformed state); the answer carries every axis it can (pressure,
+volume, time when a flow rate is given) with the angle and force. An inverse question
+(target angles of one design) is answered as the chamber pressure, the injected volume
+and, at a flow rate, the time, each with its band.
+
+With an ``Inlet`` (surrogate/hydraulics.py) and a flow rate the answer also gives the
+pressure a gauge at the pump reads, p_pump = p_chamber + R Q (steady flow); every answer
+says which site each of its pressure fields reports (``pressure_sites``).
+
+Errors are ``InputError`` naming the request field (``volumes_ul``, ``flow_ul_s``, ...);
+the route locates them in the body, the CLI names its flag.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from solver.errors import InputError
+from surrogate.hydraulics import Inlet
+
+# request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
+# schema's Field limits and the CLI's checks)
+AXES: dict[str, tuple[float, float, str]] = {
+    "pressures_pa": (0.0, 20000.0, "Pa"),
+    "volumes_ul": (0.0, 10000.0, "ul"),
+    "times_s": (0.0, 1e5, "s"),
+}
+MAX_FLOW_UL_S = 1000.0     # 0 < flow_ul_s <= this
+PRESSURE_SITES = ("chamber", "pump_gauge")
+
+
+@dataclass(frozen=True)
+class PumpQuestion:
+    """What a forward request asks: one of the three axes, the flow rate, the inlet."""
+
+    pressures_pa: Sequence[float] | None = None
+    volumes_ul: Sequence[float] | None = None
+    times_s: Sequence[float] | None = None
+    flow_ul_s: float | None = None
+    inlet: Inlet | None = None
+    pressures_at: str = "chamber"      # the site the given pressures_pa were read at
+
+    def axis(self) -> str:
+        """The one axis asked; InputError naming the field otherwise."""
+        given = [n for n in AXES if getattr(self, n) is not None]
+        if len(given) != 1:
+            raise InputError(given[1] if given else "pressures_pa",
+                             "give exactly one of pressures_pa, volumes_ul, or times_s; got "
+                             f"{', '.join(given) or 'none'}",
+                             "; or ".join(f"each {lo:g} <= {n} <= {hi:g} ({u})"
+                                          for n, (lo, hi, u) in AXES.items())
+                             + " with flow_ul_s (ul/s)")
+        name = given[0]
+        lo, hi, unit = AXES[name]
+        values = np.asarray(getattr(self, name), float)
+        if values.size == 0 or not np.all(np.isfinite(values)):
+            raise InputError(name, "needs one or more finite numbers", f"{lo:g}..{hi:g} {unit}")
+        bad = values[(values < lo) | (values > hi)]
+        if bad.size:
+            raise InputError(name, f"{bad[0]:g} {unit} is out of range", f"{lo:g}..{hi:g} {unit}")
+        check_flow(self.flow_ul_s, self.inlet, name == "times_s")
+        if self.pressures_at not in PRESSURE_SITES:
+            raise InputError("pressures_at", f"got {self.pressures_at!r}", "chamber, pump_gauge")
+        if self.pressures_at == "pump_gauge" and (name != "pressures_pa" or self.inlet is None):
+            raise InputError("pressures_at", "pump_gauge pressures need pressures_pa, an inlet "
+                             "and flow_ul_s", "chamber, or pump_gauge with pressures_pa, "
+                             "inlet and flow_ul_s")
+        return name
+
+
+def check_flow(flow_ul_s: float | None, inlet: Inlet | None, by_time: bool = False) -> None:
+    """The flow rate in range, and given where times or an inlet need it."""
+    if flow_ul_s is not None and not (math.isfinite(flow_ul_s)
+                                      and 0 < flow_ul_s <= MAX_FLOW_UL_S):
+        raise InputError("flow_ul_s", f"{flow_ul_s:g} ul/s is out of range",
+                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s")
+    if flow_ul_s is None and by_time:
+        raise InputError("flow_ul_s", "times_s needs the pump's flow rate",
+                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with times_s")
+    if flow_ul_s is None and inlet is not None:
+        raise InputError("flow_ul_s", "the inlet's pressure drop R Q needs the flow rate",
+                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with inlet")
+
+
+def inlet_drop(inlet: Inlet | None, flow_ul_s: float | None) -> dict[str, Any] | None:
+    """The inlet as the answer reports it, with R (Pa per ul/s), R Q (Pa) and Re."""
+    if inlet is None or flow_ul_s is None:
+        return None
+    drop = inlet.pressure_drop_pa(flow_ul_s)   # refuses a flow that is not laminar
+    return {**inlet.as_dict(), "resistance_pa_per_ul_s": inlet.resistance_pa_per_ul_s,
+            "flow_ul_s": flow_ul_s, "pressure_drop_pa": drop,
+            "reynolds_number": inlet.reynolds_number(flow_ul_s)}
+
+
+def _plus(values: list[float | None], offset: float) -> list[float | None]:
+    return [None if v is None else v + offset for v in values]
+
+
+def _over(values: list[float | None] | None, flow: float) -> list[float | None] | None:
+    return None if values is None else [None if v is None else v / flow for v in values]
+
+
+def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: str,
+                   level: float) -> dict[str, Any]:
+    """The plain-data answer of /v1/predict and ``balloon predict`` (PredictResponse)."""
+    from service.convert import prediction_body  # service.schemas imports AXES from here
+
+    axis = question.axis()
+    q = question.flow_ul_s
+    inlet = inlet_drop(question.inlet, q)
+    if axis == "pressures_pa":
+        p = np.asarray(question.pressures_pa, float)
+        if question.pressures_at == "pump_gauge" and inlet is not None:
+            drop = inlet["pressure_drop_pa"]
+            if (p < drop).any():
+                raise InputError("pressures_pa", f"{p.min():g} Pa at the pump gauge is below "
+                                 f"the inlet's drop R Q = {drop:.1f} Pa at {q:g} ul/s",
+                                 f">= {drop:.1f} Pa at the pump gauge")
+            p = p - drop
+        prediction = surrogate.predict(design, p, level=level)
+    else:
+        by_volume = getattr(surrogate, "predict_volume", None)
+        if by_volume is None:
+            raise InputError(axis, f"model {model!r} answers by pressure only",
+                             'model "emulator" for volumes and times')
+        v = (np.asarray(question.volumes_ul, float) if axis == "volumes_ul"
+             else np.asarray(question.times_s, float) * float(q or 0))
+        prediction = by_volume(design, v, level=level)
+    body = prediction_body(prediction, model, level, design)
+    body["asked"] = axis
+    body["pressure_sites"] = {"pressure_pa": "chamber"}
+    if q is not None:
+        body["flow_ul_s"] = q
+        body["time_s"] = ([float(t) for t in question.times_s or ()] if axis == "times_s"
+                          else _over(body.get("volume_ul"), q))
+        v_lim = body["validity"].get("fe_limit_volume_ul")
+        if axis == "times_s" and v_lim is not None and "past_fe_range" in body["validity"]["flags"]:
+            body["validity"]["messages"].append(
+                f"at {q:g} ul/s the FE's range ends after {v_lim / q:.1f} s")
+    if inlet is not None:
+        body["inlet"] = inlet
+        body["pump_pressure_pa"] = _plus(body["pressure_pa"], inlet["pressure_drop_pa"])
+        body["pressure_sites"]["pump_pressure_pa"] = "pump_gauge"
+    return body
+
+
+def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], model: str,
+                   level: float, flow_ul_s: float | None = None, inlet: Inlet | None = None
+                   ) -> dict[str, Any]:
+    """Pressure, injected volume and (at ``flow_ul_s``) time for each target angle, with
+    bands (PressureResponse of /v1/inverse/pressure, ``balloon inverse --angles-deg``)."""
+    from service.convert import finite_list, jsonable
+
+    check_flow(flow_ul_s, inlet)
+    drop = inlet_drop(inlet, flow_ul_s)
+    result = surrogate.inverse(design, angles_deg, level=level)
+    volume = getattr(result, "volume_ul", None)
+    body: dict[str, Any] = {
+        "model": model, "level": level, "design": design.as_dict(),
+        "angle_deg": [float(a) for a in angles_deg],
+        "pressure_pa": finite_list(result.pressure_pa), "lower_pa": finite_list(result.lower_pa),
+        "upper_pa": finite_list(result.upper_pa),
+        "volume_ul": None if volume is None else finite_list(volume),
+        "volume_lower_ul": None if volume is None else finite_list(result.volume_lower_ul),
+        "volume_upper_ul": None if volume is None else finite_list(result.volume_upper_ul),
+        "validity": jsonable(dict(result.validity)), "pressure_sites": {"pressure_pa": "chamber"}}
+    if flow_ul_s is not None:
+        body["flow_ul_s"] = flow_ul_s
+        for name in ("", "_lower", "_upper"):
+            body[f"time{name}_s"] = _over(body[f"volume{name}_ul"], flow_ul_s)
+    if drop is not None:
+        body["inlet"] = drop
+        body["pump_pressure_pa"] = _plus(body["pressure_pa"], drop["pressure_drop_pa"])
+        body["pressure_sites"]["pump_pressure_pa"] = "pump_gauge"
+    return body

@@ -1,0 +1,74 @@
+"""Answers by injected volume on a tabulated curve (pure; ul, Pa, deg).
+
+Under volume control (a syringe pump) the injected volume is what is set and grows
+monotonically, so angle and pressure are functions of it even where the pressure has a
+maximum (a limit point: past it the pressure falls while the volume still rises; under
+pressure control the actuator would snap through there). ``by_volume`` interpolates the
+curve's own angle and pressure columns linearly in volume, and says where the asked
+volumes lie past the curve's pressure maximum or past its end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver.errors import InputError
+
+
+@dataclass(frozen=True)
+class VolumeAnswer:
+    """At each asked volume: angle (deg) and pressure (Pa), NaN past the curve's end.
+
+    past_end           the volume is above the curve's last volume
+    past_maximum       the volume is above the volume at the pressure maximum (the
+                       pressure falls from there on); all False without a maximum
+    maximum_pressure_pa, maximum_volume_ul, maximum_angle_deg
+                       the pressure maximum (None without one)
+    """
+
+    angle_deg: np.ndarray
+    pressure_pa: np.ndarray
+    past_end: np.ndarray
+    past_maximum: np.ndarray
+    maximum_pressure_pa: float | None
+    maximum_volume_ul: float | None
+    maximum_angle_deg: float | None
+
+
+def pressure_maximum_index(pressure_pa: np.ndarray, rel_drop: float = 0.0) -> int:
+    """The index of the curve's first pressure maximum: the largest pressure before the
+    first point that falls more than ``rel_drop`` (relative) below the running maximum;
+    -1 when the pressure never falls that far."""
+    p = np.asarray(pressure_pa, float)
+    run = np.maximum.accumulate(p)
+    falls = np.flatnonzero(p < run * (1.0 - rel_drop) - 1e-12 * np.abs(run))
+    if falls.size == 0:
+        return -1
+    return int(np.argmax(p[:falls[0]]))
+
+
+def by_volume(volumes_ul: np.ndarray, curve_volume_ul: np.ndarray,
+              curve_pressure_pa: np.ndarray, curve_angle_deg: np.ndarray,
+              rel_drop: float = 0.0) -> VolumeAnswer:
+    """Angle and pressure at ``volumes_ul`` on the curve (its volume non-decreasing),
+    linear in volume; the pressure maximum found as in ``pressure_maximum_index``."""
+    v = np.asarray(volumes_ul, float)
+    cv = np.asarray(curve_volume_ul, float)
+    cp = np.asarray(curve_pressure_pa, float)
+    ca = np.asarray(curve_angle_deg, float)
+    if cv.size < 2 or np.any(np.diff(cv) < 0):
+        raise InputError("volume_ul", "the curve's volume is not non-decreasing: it was not "
+                         "solved under volume control", "a volume-controlled curve")
+    past_end = v > cv[-1] * (1 + 1e-12)
+    angle = np.interp(v, cv, ca)
+    pressure = np.interp(v, cv, cp)
+    angle[past_end] = np.nan
+    pressure[past_end] = np.nan
+    k = pressure_maximum_index(cp, rel_drop)
+    if k < 0:
+        return VolumeAnswer(angle, pressure, past_end, np.zeros(v.shape, bool), None, None,
+                            None)
+    return VolumeAnswer(angle, pressure, past_end, (v > cv[k]) & ~past_end, float(cp[k]),
+                        float(cv[k]), float(ca[k]))

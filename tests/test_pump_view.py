@@ -1,0 +1,320 @@
+"""The syringe-pump view (issue 17): answers by injected volume and by time at a flow rate
+against the FE records' own volume and time columns, the inverse round trip by volume,
+the pump-gauge pressure through the inlet, a limit-point curve answered by volume past
+its pressure maximum, the plot against time, the CLI, and the errors.
+
+Reference numbers: the FE records of the shipped database (read with CurveStore) and
+hand computations written here; the tolerances are the emulator's stated ones at database
+designs (0.5 deg, 1 % in pressure: tests/test_emulator.py), never a number of its fit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from service_fakes import settings_for
+
+from service.app import create_app
+from service.cli import main
+from service.settings import DATA_DIR
+from solver.design import Design
+from solver.store import CurveStore
+from surrogate.emulator import load_emulator
+from surrogate.emulator.emulator import FINE_ANGLES_DEG, Emulator
+from surrogate.volume_control import by_volume, pressure_maximum_index
+
+EMULATOR = DATA_DIR / "emulator.json"
+DB = DATA_DIR / "curves.h5"
+R_PAPER_CHANNEL = 26.307   # Pa per ul/s, by hand in tests/test_hydraulics.py
+
+
+@pytest.fixture(scope="module")
+def emulator():
+    return load_emulator(EMULATOR)
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("pump")
+    app = create_app(settings_for(tmp, emulator_path=EMULATOR, db_path=DB))
+    with TestClient(app) as c:
+        yield c
+
+
+def database_records(emulator, every: int = 25):
+    keys = sorted({k for pe in emulator.pairs.values() for k in pe.keys})[::every]
+    with CurveStore(DB) as db:
+        return [db.get(k) for k in keys]
+
+
+def design_json(design: Design) -> dict:
+    """The design as /v1/predict takes it; a stiffness-scaled material inline, its id
+    "<preset>_x<s>" (the store's "<preset>*<s>" is not a request id)."""
+    d = design.as_dict()
+    out = {k: d[k] for k in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm")}
+    for role in ("body_material", "membrane_material"):
+        m = dict(d[role])
+        out[role] = {**m, "id": m["id"].replace("*", "_x")} if "*" in m["id"] else m["id"]
+    return out
+
+
+def test_by_time_and_by_volume_the_fe_records_own_columns_are_reproduced(client, emulator):
+    checked = 0
+    for record in database_records(emulator):
+        c = record.curve
+        flow = record.settings.flow_ul_s
+        # the FE record's own clock: time = injected volume / the flow rate of the solve
+        np.testing.assert_allclose(c.time_s, c.volume_ul / flow, rtol=1e-9, atol=1e-12)
+        inside = (np.abs(c.angle_deg) <= 89.0) & (c.volume_ul > 0)
+        times = c.time_s[inside].tolist()
+        by_t = client.post("/v1/predict", json={"design": design_json(record.design),
+                                                "times_s": times, "flow_ul_s": flow})
+        assert by_t.status_code == 200, by_t.text
+        by_t = by_t.json()
+        assert by_t["asked"] == "times_s" and by_t["time_s"] == times
+        assert by_t["pressure_sites"] == {"pressure_pa": "chamber"}
+        np.testing.assert_allclose(by_t["volume_ul"], c.volume_ul[inside], rtol=1e-9)
+        angle = np.array(by_t["angle_deg"], float)
+        assert np.max(np.abs(angle - c.angle_deg[inside])) < 0.5
+        rel = np.abs(np.array(by_t["pressure_pa"], float) / c.pressure_pa[inside] - 1)
+        assert np.max(rel[np.abs(c.angle_deg[inside]) > 1]) < 0.01
+        by_v = client.post("/v1/predict", json={"design": design_json(record.design),
+                                                "volumes_ul": c.volume_ul[inside].tolist(),
+                                                "flow_ul_s": flow}).json()
+        assert by_v["angle_deg"] == pytest.approx(by_t["angle_deg"], abs=1e-9)
+        np.testing.assert_allclose(by_v["time_s"], c.time_s[inside], rtol=1e-9)
+        # asked by pressure the answer carries the same volume and time axes
+        by_p = client.post("/v1/predict", json={"design": design_json(record.design),
+                                                "pressures_pa": by_t["pressure_pa"],
+                                                "flow_ul_s": flow}).json()
+        ok = np.abs(c.angle_deg[inside]) > 1
+        np.testing.assert_allclose(np.array(by_p["volume_ul"], float)[ok],
+                                   c.volume_ul[inside][ok], rtol=0.02)
+        np.testing.assert_allclose(np.array(by_p["time_s"]), np.array(by_p["volume_ul"]) / flow)
+        checked += 1
+    assert checked >= 5
+
+
+def test_inverse_round_trip_by_volume_and_time(client):
+    design = {"L_mm": 11.0, "t_mm": 0.8, "T_mm": 1.4, "b_mm": 2.0, "h_mm": 0.2}
+    inv = client.post("/v1/inverse/pressure", json={"design": design,
+                                                    "angles_deg": [10, 45, 80],
+                                                    "flow_ul_s": 2.5})
+    assert inv.status_code == 200, inv.text
+    inv = inv.json()
+    v = np.array(inv["volume_ul"])
+    assert np.all(np.diff(v) > 0)
+    assert np.all(np.array(inv["volume_lower_ul"]) <= v)
+    assert np.all(v <= np.array(inv["volume_upper_ul"]))
+    np.testing.assert_allclose(inv["time_s"], v / 2.5)
+    np.testing.assert_allclose(inv["time_upper_s"], np.array(inv["volume_upper_ul"]) / 2.5)
+    fwd = client.post("/v1/predict", json={"design": design, "volumes_ul": v.tolist()}).json()
+    np.testing.assert_allclose(fwd["angle_deg"], [10, 45, 80], atol=0.05)
+    by_t = client.post("/v1/predict", json={"design": design, "times_s": inv["time_s"],
+                                            "flow_ul_s": 2.5}).json()
+    np.testing.assert_allclose(by_t["angle_deg"], [10, 45, 80], atol=0.05)
+    # the chamber pressure at that volume is the inverse's pressure for the angle
+    np.testing.assert_allclose(fwd["pressure_pa"], inv["pressure_pa"], rtol=0.01)
+
+
+def test_inverse_volume_agrees_with_the_fe_record_at_a_database_design(client, emulator):
+    record = next(r for r in database_records(emulator, every=7)
+                  if r.curve.status == "complete" and r.curve.angle_deg[-1] >= 60)
+    c = record.curve
+    inv = client.post("/v1/inverse/pressure", json={"design": design_json(record.design),
+                                                    "angles_deg": [30, 60]}).json()
+    sign = np.sign(c.angle_deg[-1])
+    fe_volume = np.interp([30, 60], sign * c.angle_deg, c.volume_ul)
+    np.testing.assert_allclose(inv["volume_ul"], fe_volume, rtol=0.02)
+
+
+def test_the_pump_gauge_reads_r_q_above_the_chamber(client):
+    # the paper's channel (R = 26.307 Pa per ul/s by hand) and 0.5 m of 0.5 mm bore tubing
+    # (8 mu L / (pi r^4) = 4e-3 / 1.22718e-14 Pa s/m^3 = 325.95 Pa per ul/s), at 2.5 ul/s:
+    # R Q = (26.307 + 325.95) * 2.5 = 880.64 Pa
+    body = {"times_s": [2, 4, 8], "flow_ul_s": 2.5,
+            "inlet": {"tubing_length_mm": 500, "tubing_bore_mm": 0.5}}
+    ans = client.post("/v1/predict", json=body).json()
+    assert ans["pressure_sites"] == {"pressure_pa": "chamber", "pump_pressure_pa": "pump_gauge"}
+    assert ans["inlet"]["pressure_drop_pa"] == pytest.approx(880.64, rel=1e-4)
+    np.testing.assert_allclose(np.subtract(ans["pump_pressure_pa"], ans["pressure_pa"]),
+                               880.64, rtol=1e-4)
+    # the chamber answer does not depend on the inlet
+    bare = client.post("/v1/predict", json={"times_s": [2, 4, 8], "flow_ul_s": 2.5}).json()
+    assert bare["angle_deg"] == ans["angle_deg"] and "pump_pressure_pa" not in bare
+    # gauge readings in: the chamber is R Q lower (channel only: 26.307 * 2.5 = 65.77 Pa)
+    gauge = client.post("/v1/predict", json={"pressures_pa": [1000, 1500],
+                                             "pressures_at": "pump_gauge", "flow_ul_s": 2.5,
+                                             "inlet": {}}).json()
+    np.testing.assert_allclose(gauge["pressure_pa"], [1000 - 65.77, 1500 - 65.77], atol=0.01)
+    assert gauge["pump_pressure_pa"] == pytest.approx([1000, 1500])
+    chamber = client.post("/v1/predict", json={"pressures_pa": gauge["pressure_pa"]}).json()
+    assert chamber["angle_deg"] == pytest.approx(gauge["angle_deg"])
+    inv = client.post("/v1/inverse/pressure", json={"angles_deg": [45], "flow_ul_s": 2.5,
+                                                    "inlet": {}}).json()
+    assert inv["pump_pressure_pa"][0] - inv["pressure_pa"][0] == pytest.approx(
+        R_PAPER_CHANNEL * 2.5, rel=1e-4)
+
+
+@pytest.mark.parametrize(("body", "field", "allowed"), [
+    ({"volumes_ul": [20000]}, "volumes_ul", "10000"),
+    ({"volumes_ul": [5], "pressures_pa": [100]}, "volumes_ul", "each 0 <= volumes_ul"),
+    ({"times_s": [5]}, "flow_ul_s", "0 < flow_ul_s <= 1000"),
+    ({"times_s": [5], "flow_ul_s": 0}, "flow_ul_s", "0"),
+    ({"times_s": [5], "flow_ul_s": 2000}, "flow_ul_s", "1000"),
+    ({"volumes_ul": [5], "inlet": {}}, "flow_ul_s", "with inlet"),
+    ({"volumes_ul": [5], "flow_ul_s": 1, "inlet": {"tubing_length_mm": 10}},
+     "inlet.tubing_bore_mm", "> 0 mm"),
+    ({"pressures_pa": [10], "pressures_at": "pump_gauge", "flow_ul_s": 2.5, "inlet": {}},
+     "pressures_pa", ">= 65.8 Pa"),
+    ({"volumes_ul": [5], "pressures_at": "pump_gauge"}, "pressures_at", "pump_gauge with"),
+    ({"volumes_ul": [5], "model": "paper"}, "volumes_ul", "emulator"),
+])
+def test_errors_name_the_field_and_its_range(client, body, field, allowed):
+    r = client.post("/v1/predict", json=body)
+    assert r.status_code == 422, r.text
+    errors = r.json()["errors"]
+    assert any(".".join(map(str, e["loc"][1:])).startswith(field) and allowed in e["allowed"]
+               for e in errors), errors
+
+
+def test_openapi_has_an_example_of_each_request_kind(client):
+    spec = client.get("/openapi.json").json()
+    schemas = spec["components"]["schemas"]
+    examples = schemas["PredictRequest"]["examples"]
+    kinds = {next(k for k in ("pressures_pa", "volumes_ul", "times_s") if k in e)
+             for e in examples}
+    assert kinds == {"pressures_pa", "volumes_ul", "times_s"}
+    assert any("inlet" in e for e in examples)
+    assert all("flow_ul_s" in e for e in examples if "times_s" in e)
+    for example in examples:  # each example is answered as written
+        assert client.post("/v1/predict", json=example).status_code == 200, example
+    assert any("flow_ul_s" in e for e in schemas["PressureRequest"]["examples"])
+
+
+# -- volume control past a pressure maximum -------------------------------------------
+
+def limit_point_record():
+    """The shipped record whose pressure falls furthest past its maximum (the FE's limit
+    point, ``pressure_maximum_index``)."""
+    best, drop = None, 0.0
+    with CurveStore(DB) as db:
+        for row in db.summaries():
+            record = db.get(row["key"])
+            k = record.curve.pressure_maximum_index
+            if k >= 0:
+                p = record.curve.pressure_pa
+                if (p[k] - p[-1]) / p[k] > drop:
+                    best, drop = record, (p[k] - p[-1]) / p[k]
+    return best
+
+
+def test_a_limit_point_curve_is_answered_by_volume_past_its_maximum():
+    record = limit_point_record()
+    if record is None:
+        pytest.skip("no shipped FE record has a pressure maximum")
+    c = record.curve
+    k = c.pressure_maximum_index
+    assert k == pressure_maximum_index(c.pressure_pa)   # the data show the FE's maximum
+    assert np.all(np.diff(c.volume_ul) > 0)             # volume control: V rises throughout
+    answer = by_volume(c.volume_ul, c.volume_ul, c.pressure_pa, c.angle_deg)
+    np.testing.assert_array_equal(answer.angle_deg, c.angle_deg)   # its own columns
+    np.testing.assert_array_equal(answer.pressure_pa, c.pressure_pa)
+    assert answer.maximum_pressure_pa == c.pressure_pa[k]
+    assert answer.maximum_volume_ul == c.volume_ul[k]
+    np.testing.assert_array_equal(answer.past_maximum, np.arange(len(c.volume_ul)) > k)
+    # between the FE's points past the maximum: defined, flagged, the pressure below it
+    between = 0.5 * (c.volume_ul[k:-1] + c.volume_ul[k + 1:])
+    past = by_volume(between, c.volume_ul, c.pressure_pa, c.angle_deg)
+    assert np.all(np.isfinite(past.angle_deg)) and past.past_maximum.all()
+    assert np.all(past.pressure_pa < c.pressure_pa[k])
+    beyond = by_volume([c.volume_ul[-1] * 1.1], c.volume_ul, c.pressure_pa, c.angle_deg)
+    assert beyond.past_end.all() and np.isnan(beyond.angle_deg).all()
+
+
+def test_the_emulator_by_volume_keeps_a_falling_pressure_and_flags_it(emulator, monkeypatch):
+    """An emulated curve with a limit point, built from an FE record: the standard design's
+    p(theta) times a factor falling by 20 % from 40 to 90 deg (the pressure then falls
+    while the angle and the volume rise)."""
+    design = Design()
+    with CurveStore(DB) as db:
+        key = emulator.nearest_records(design, 1)[0]
+        c = db.get(key).curve
+    keep = c.angle_deg > 0
+    theta = FINE_ANGLES_DEG
+    p_fe = np.interp(theta, c.angle_deg[keep], c.pressure_pa[keep])
+    falling = p_fe * (1 - 0.2 * np.clip((theta - 40) / 50, 0, 1))
+    real = Emulator.curve_band
+
+    def with_limit_point(self, point, z):
+        pe, cb = real(self, point, z)
+        return pe, dataclasses.replace(cb, pressure_raw_pa=falling / point.pressure_scale,
+                                       pressure_pa=np.maximum.accumulate(falling)
+                                       / point.pressure_scale)
+
+    monkeypatch.setattr(Emulator, "curve_band", with_limit_point)
+    v_fe = np.interp([20, 60, 85], c.angle_deg[keep], c.volume_ul[keep])
+    pred = emulator.predict_volume(design, v_fe)
+    assert np.all(np.isfinite(pred.angle_deg)) and np.all(np.diff(pred.angle_deg) > 0)
+    assert pred.pressure_pa[2] < pred.pressure_pa[1]              # falls past the maximum
+    v = pred.validity
+    assert "past_pressure_maximum" in v["flags"]
+    assert v["pressure_maximum_pa"] == pytest.approx(falling.max(), rel=1e-9)
+    assert v_fe[0] < v["pressure_maximum_volume_ul"] < v_fe[2]
+    assert any("snap" in m for m in v["messages"])
+    # under pressure control the same curve is monotone: no angle past the maximum's
+    by_p = emulator.predict(design, [falling.max() * 0.999])
+    assert np.isfinite(by_p.angle_deg).all()
+
+
+# -- plot and CLI ---------------------------------------------------------------------
+
+def test_plot_against_time_is_a_png_and_its_errors_name_the_field(client):
+    r = client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "t_max_s": 10,
+                                               "inlet": "true", "nearby": 1})
+    assert r.status_code == 200 and r.content[:8] == b"\x89PNG\r\n\x1a\n"
+    by_p = client.get("/v1/predict/plot", params={"nearby": 1})
+    assert by_p.content != r.content
+    bad = client.get("/v1/predict/plot", params={"inlet": "true"})
+    assert bad.status_code == 422 and bad.json()["errors"][0]["field"] == "flow_ul_s"
+    bad = client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "t_max_s": -1})
+    assert bad.status_code == 422 and bad.json()["errors"][0]["field"] == "t_max_s"
+
+
+def test_cli_by_volume_and_time_and_its_one_line_errors(capsys, monkeypatch):
+    monkeypatch.setenv("BALLOON_EMULATOR_PATH", str(EMULATOR))
+    assert main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--times", "2", "4",
+                 "--flow-ul-s", "2.5", "--inlet", "--json"]) == 0
+    import json
+    body = json.loads(capsys.readouterr().out)
+    assert body["time_s"] == [2.0, 4.0] and body["volume_ul"] == pytest.approx([5.0, 10.0])
+    assert body["pressure_sites"]["pump_pressure_pa"] == "pump_gauge"
+    assert main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--volumes", "5", "10"]) == 0
+    table = capsys.readouterr().out
+    assert "volume_ul" in table and "chamber" in table
+    for argv, flag, allowed in (
+            (["--volumes", "20000"], "--volumes", "0..10000 ul"),
+            (["--times", "3"], "--flow-ul-s", "1000 ul/s"),
+            (["--times", "3", "--flow-ul-s", "5000"], "--flow-ul-s", "1000 ul/s"),
+            (["--volumes", "3", "--inlet", "--flow-ul-s", "1", "--tubing-mm", "10", "-1"],
+             "--tubing-mm", "> 0 mm")):
+        assert main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", *argv]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and err.startswith(f"balloon: error: {flag}:"), err
+        assert allowed in err
+    assert main(["inverse", "--L-mm", "7.1", "--t-mm", "0.5", "--angles-deg", "45",
+                 "--flow-ul-s", "2.5", "--json"]) == 0
+    inv = json.loads(capsys.readouterr().out)
+    assert inv["time_s"][0] == pytest.approx(inv["volume_ul"][0] / 2.5)
+
+
+def test_past_the_fe_range_by_time_no_angle_and_the_time_it_ends(client):
+    ans = client.post("/v1/predict", json={"times_s": [4, 1000], "flow_ul_s": 2.5}).json()
+    assert ans["angle_deg"][0] is not None and ans["angle_deg"][1] is None
+    assert ans["pressure_pa"][1] is None and "past_fe_range" in ans["validity"]["flags"]
+    v_lim = ans["validity"]["fe_limit_volume_ul"]
+    assert 10 < v_lim < 2500   # 1000 s at 2.5 ul/s is past it, 4 s is not
+    assert f"ends after {v_lim / 2.5:.1f} s" in " ".join(ans["validity"]["messages"])
