@@ -197,8 +197,7 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         force_nodes, fu, fy = force_range(np.array(force_rows[0]), np.array(force_rows[1]))
         force_designs = len(fu)
     if force_designs >= MIN_DESIGNS:
-        # few blocked-tip designs: a score per three designs, so each GP is determined
-        force_gp = fit_vector_gp(fu, fy, seed=seed, max_components=max(1, len(fu) // 3))
+        force_gp = fit_vector_gp(fu, fy, seed=seed)
         fm, fv = force_gp.loo()
         zs = np.abs(fm - fy) / np.sqrt(fv)
         force_scale = float(max(np.quantile(zs, level) / z_value(level), 0.5))

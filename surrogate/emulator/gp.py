@@ -25,6 +25,7 @@ from scipy.optimize import minimize
 SQRT5 = np.sqrt(5.0)
 NUGGET_BOUNDS = (1e-10, 1e-2)        # relative to the signal variance
 LENGTH_BOUNDS = (0.05, 20.0)         # in unit-cube coordinates
+INTERPOLATION_SD = 1e-4              # the nugget's largest sd, relative to std(y)
 
 
 def matern52(xa: np.ndarray, xb: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -178,10 +179,23 @@ def fit_gp(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
     for i in range(starts):
         lengths0 = np.full(d, 0.6) if i == 0 else np.exp(rng.uniform(np.log(0.2),
                                                                       np.log(3.0), d))
-        x0 = np.concatenate((np.log(lengths0), [np.log(max(1e-6, min_nugget))]))
+        # nugget starts at 1e-6 and, every other start, at the bound: the likelihood is
+        # flat in a small nugget, so L-BFGS-B stays near where it starts
+        nugget0 = 1e-6 if i % 2 == 0 else NUGGET_BOUNDS[0]
+        x0 = np.concatenate((np.log(lengths0), [np.log(max(nugget0, min_nugget))]))
         res = minimize(_neg_reml, x0, args=(x, y), jac=True, method="L-BFGS-B",
                        bounds=bounds, options={"maxiter": 300})
         if best is None or res.fun < best.fun:
             best = res
     assert best is not None
-    return from_hyperparameters(x, y, np.exp(best.x[:d]), float(np.exp(best.x[d])))
+    gp = from_hyperparameters(x, y, np.exp(best.x[:d]), float(np.exp(best.x[d])))
+    # The data are FE curves, not noisy measurements: keep the nugget's absolute sd below
+    # INTERPOLATION_SD of the outputs' spread, so that the GP reproduces its database
+    # designs (a smooth, long-length-scale score has a large signal variance, and a
+    # relative nugget of 1e-6 would then smooth it by 2 % of its spread).
+    cap = (INTERPOLATION_SD * float(np.std(y))) ** 2 / gp.signal_var
+    if gp.nugget > cap and cap > NUGGET_BOUNDS[0]:
+        gp = from_hyperparameters(x, y, gp.lengths, cap)
+    elif gp.nugget > cap:
+        gp = from_hyperparameters(x, y, gp.lengths, NUGGET_BOUNDS[0])
+    return gp
