@@ -109,6 +109,10 @@ def test_hdf5_loops_on_the_fixture_but_the_store_answers(tmp_path, monkeypatch):
     with pytest.raises(DamagedStoreError, match="stalled for 5 s reading its attributes"):
         CurveStore(path)
     assert time.monotonic() - t0 < 60.0
+    t0 = time.monotonic()  # the verdict is kept: the next reader is told at once
+    with pytest.raises(DamagedStoreError, match="stalled for 5 s reading its attributes"):
+        CurveStore(path)
+    assert time.monotonic() - t0 < 1.0
 
 
 def test_the_writer_seals_a_file_of_older_code(original, tmp_path, capsys):

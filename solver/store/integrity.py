@@ -19,9 +19,9 @@ never handed to HDF5 unchecked:
   the child found damaged is refused when read, naming the record). The next write
   seals the file (``balloon db seal`` does it at once).
 
-A version found intact is remembered by its stamp (device, inode, mtime, size) for the
-life of the process, so the many short-lived readers of the service check each
-published version once.
+A version found intact, or found to stall or crash HDF5, is remembered by its stamp
+(device, inode, mtime, size) for the life of the process, so the many short-lived readers
+of the service check each published version once.
 """
 
 from __future__ import annotations
@@ -78,7 +78,9 @@ def is_sealed_image(data: bytes | memoryview) -> bool:
     return stored is not None and stored == _digest([memoryview(data)[USERBLOCK_BYTES:]])
 
 
-_checked: dict[tuple[str, Stamp], bool] = {}  # versions found intact: (path, stamp) -> sealed
+# versions checked: (path, stamp) -> sealed (intact), or the DamagedStoreError of a guarded
+# read that stalled or died (not repeated for every request of the service)
+_checked: dict[tuple[str, Stamp], bool | DamagedStoreError] = {}
 _walking = threading.Lock()  # one guarded read at a time (concurrent requests wait for it)
 
 
@@ -90,6 +92,8 @@ def check(path: Path) -> tuple[Stamp, bool]:
     with open(path, "rb") as fh:
         stamp = stamp_of(os.fstat(fh.fileno()))
         known = _checked.get((str(path), stamp))
+        if isinstance(known, DamagedStoreError):
+            raise DamagedStoreError(known.path, known.cause) from None
         if known is not None:
             return stamp, known
         stored = _seal_of(fh.read(USERBLOCK_BYTES))
@@ -100,12 +104,19 @@ def check(path: Path) -> tuple[Stamp, bool]:
                                         "seal's checksum does not match")
             return _remember(path, stamp, True), True
     with _walking:
-        if (str(path), stamp) not in _checked:
-            walk_guarded(path)
+        known = _checked.get((str(path), stamp))
+        if isinstance(known, DamagedStoreError):
+            raise DamagedStoreError(known.path, known.cause) from None
+        if known is None:
+            try:
+                walk_guarded(path)
+            except DamagedStoreError as exc:
+                _remember(path, stamp, exc)
+                raise
     return _remember(path, stamp, False), False
 
 
-def _remember(path: Path, stamp: Stamp, sealed: bool) -> Stamp:
+def _remember(path: Path, stamp: Stamp, sealed: bool | DamagedStoreError) -> Stamp:
     if len(_checked) > 64:
         _checked.clear()
     _checked[(str(path), stamp)] = sealed
