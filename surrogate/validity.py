@@ -70,6 +70,7 @@ def check(domain: Domain, design: Design, pressure_pa: np.ndarray,
                         "of the family: no number is given there (null)")
     if past_fe(domain, p, angle_deg).any():
         flags.append("past_fe_range")  # the two above, under the name every model uses
+        messages.append("no number is given past the FE's range (null there)")
     return {"in_domain": not flags, "flags": flags, "messages": messages,
             "L_range_mm": list(domain.L_mm), "t_range_mm": list(domain.t_mm),
             "pressure_max_pa": domain.pressure_max_pa, "angle_max_deg": domain.angle_max_deg,
