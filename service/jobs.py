@@ -9,9 +9,12 @@ the job's progress, enforces ``time_limit_s`` and honours cancellation by
 terminating the process. A finished curve is handed to ``write_fn(design, settings,
 curve) -> curve id``, which the server serialises: one writer of the database.
 
-Job states: queued -> running -> finished | failed | cancelled | timed_out
+Job states: queued -> running -> finished | parked | failed | cancelled | timed_out
 (a queued job may also be cancelled). ``finished`` means the curve is stored; the
-curve's own status (complete / stopped / failed) is reported beside it.
+curve's own status (complete / stopped / failed) is reported beside it. ``parked``: the
+solve finished but the database could not take it (disk full, read-only): the result
+is kept beside the database and written with the next write that succeeds
+(``service.store_access.ResultWriter``).
 
 Jobs live in memory: a restart forgets them (the stored curves remain).
 """
@@ -30,6 +33,7 @@ from typing import Any
 
 from service._worker import child_main
 from service.errors import ConflictError, QueueFullError
+from service.store_access import ResultParkedError
 from solver.errors import NotFoundError
 
 SolveFn = Callable[..., Any]
@@ -218,6 +222,10 @@ class JobManager:
             try:
                 curve_id = self._write_fn(job.design, job.settings, curve)
                 outcome = {"status": "finished", "curve_id": curve_id,
+                           "curve_status": getattr(curve, "status", None),
+                           "curve_reason": getattr(curve, "reason", None) or None}
+            except ResultParkedError as exc:
+                outcome = {"status": "parked", "error": str(exc),
                            "curve_status": getattr(curve, "status", None),
                            "curve_reason": getattr(curve, "reason", None) or None}
             except Exception as exc:  # noqa: BLE001 - reported as the job's error

@@ -76,15 +76,16 @@ class ModelRegistry:
                 self._load_emulator()      # an app built without start-up loading
             if self.emulator is None:
                 raise UnavailableError(
-                    f"the emulator is not loaded ({self.emulator_error or 'no file'}); use "
+                    f'model "emulator": the emulator is not loaded '
+                    f"({self.emulator_error or 'no file'}); use "
                     'model "exponential" or "paper", or set BALLOON_EMULATOR_PATH and '
                     "restart")
             return self.emulator
         if name in ("fitted", "exponential"):
             if self.fitted is None:
                 raise UnavailableError(
-                    f"no fitted surrogate is loaded ({self.fitted_error}); use "
-                    f'model "paper", or set BALLOON_SURROGATE_PATH and restart')
+                    f'model "{name}": no fitted surrogate is loaded ({self.fitted_error}); '
+                    'use model "paper", or set BALLOON_SURROGATE_PATH and restart')
             return self.fitted
         if name == "paper":
             if self._paper is None:

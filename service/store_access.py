@@ -83,8 +83,23 @@ def stored_key(path: Path, key: str) -> bool:
         return key in db
 
 
+class ResultParkedError(BalloonError):
+    """The solve finished but the database could not take it (disk full, read-only file
+    system): the record is parked beside it (``solver.precompute.parking``, as the
+    precompute job does) and written with the next write that succeeds. The message
+    names the database by its name only (clients read it)."""
+
+    def __init__(self, key: str, name: str, cause: str) -> None:
+        super().__init__(f"the solve finished but the curve database {name} cannot be "
+                         f"written ({cause}); the result is kept (parked) and written with "
+                         "the next write that succeeds")
+        self.key = key
+
+
 class ResultWriter:
-    """``writer(design, settings, curve) -> key``: store one finished solve."""
+    """``writer(design, settings, curve) -> key``: store one finished solve, after the
+    results parked by earlier failed writes; when the database cannot be written, park
+    it and raise ResultParkedError (nothing finished is lost)."""
 
     def __init__(self, path: Path, busy_wait_s: float = 600.0) -> None:
         self.path = Path(path)
@@ -92,8 +107,9 @@ class ResultWriter:
         self._lock = threading.Lock()
 
     def __call__(self, design: Any, settings: Any, curve: Any) -> str:
+        from solver.precompute.parking import park, unpark
         from solver.store import CurveStore
-        from solver.store.errors import StoreBusyError
+        from solver.store.errors import StoreBusyError, StoreWriteError
         from solver.store.record import make_record
 
         record = make_record(design, settings, curve)
@@ -102,9 +118,16 @@ class ResultWriter:
             while True:
                 try:
                     with CurveStore(self.path, mode="a") as db:
+                        unpark(db)
                         db.put(record)
                     return record.key
                 except StoreBusyError:
                     if time.monotonic() > deadline:
                         raise
                     time.sleep(1.0)
+                except StoreWriteError as exc:
+                    try:
+                        park(record, self.path)
+                    except OSError as lost:
+                        raise StoreWriteError(self.path, lost) from exc
+                    raise ResultParkedError(record.key, self.path.name, exc.cause) from None

@@ -21,7 +21,7 @@ from surrogate import bands, model
 from surrogate.errors import OutOfFamilyError
 from surrogate.family import Family
 from surrogate.jointfit import ModelParameters, band
-from surrogate.validity import check
+from surrogate.validity import check, past_fe
 
 MAX_POINTS = 10_000_000
 _PROVENANCE_SUMMARY = ("format_version", "created_utc", "package_version", "git_commit",
@@ -208,9 +208,12 @@ class Surrogate:
         force: tuple[np.ndarray | None, ...] = (None, None, None)
         if fam.force is not None:
             force = band(fam.force, design.L_mm, design.t_mm, p, level)
+        validity = check(fam.domain, design, p, m)
+        past = past_fe(fam.domain, p, m)   # no number past the FE's range
+        m, lo, hi = (np.where(past, np.nan, x) for x in (m, lo, hi))
+        force = tuple(None if f is None else np.where(past, np.nan, f) for f in force)
         return Prediction(design=design, pressure_pa=p, angle_deg=m, lower_deg=lo,
-                          upper_deg=hi, level=level,
-                          validity=check(fam.domain, design, p, m), model=self.name,
+                          upper_deg=hi, level=level, validity=validity, model=self.name,
                           form=par.form, provenance=self._summary(),
                           parameters={n: v for n, v in zip(par.names, par.values, strict=True)},
                           force_mn=force[0], force_lower_mn=force[1], force_upper_mn=force[2])
@@ -239,9 +242,13 @@ class Surrogate:
         var = (par.parameter_variance(g)
                + dp_da**2 * bands.scatter_variance(par.residual_sd, par.residual_rel, ang, x))
         half = par.band_scale * z * np.sqrt(np.where(ang == 0.0, 0.0, var))
+        validity = check(fam.domain, design, p, ang)
+        past = past_fe(fam.domain, p, ang)   # no number past the FE's range
+        p, lower, upper = (np.where(past, np.nan, x)
+                           for x in (p, np.maximum(p - half, 0.0), p + half))
         return InversePrediction(design=design, angle_deg=ang, pressure_pa=p,
-                                 lower_pa=np.maximum(p - half, 0.0), upper_pa=p + half,
-                                 level=level, validity=check(fam.domain, design, p, ang),
+                                 lower_pa=lower, upper_pa=upper,
+                                 level=level, validity=validity,
                                  model=self.name, form=par.form, provenance=self._summary())
 
 

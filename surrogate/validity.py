@@ -8,6 +8,8 @@ Flags (each with a message):
     width_not_fitted         actuator width W not among the widths of the family's data
     pressure_beyond_fe       a pressure above the family's last converged FE point
     angle_beyond_fe          a predicted angle beyond the largest FE angle of the family
+    past_fe_range            either of the two: the model gives no number there (NaN,
+                             null over HTTP; ``past_fe``), as every Predictor does
 
 ``in_domain`` is True only when no flag is raised.
 """
@@ -21,6 +23,16 @@ from surrogate.family import Domain
 from surrogate.paper_data import TWO_BALLOON_BELOW_t_MM
 
 _TOL = 1e-9
+
+
+def past_fe(domain: Domain, pressure_pa: np.ndarray, angle_deg: np.ndarray) -> np.ndarray:
+    """Where an answer is past the family's FE range: a pressure above its last converged
+    FE point, or an angle magnitude beyond its largest FE angle (the exponential form
+    grows without bound there: 164 deg at 2500 Pa, 2e17 deg at 20 kPa)."""
+    p = np.asarray(pressure_pa, dtype=float)
+    a = np.abs(np.asarray(angle_deg, dtype=float))
+    return ((p > domain.pressure_max_pa * (1 + _TOL))
+            | (a > domain.angle_max_deg * (1 + _TOL)))
 
 
 def check(domain: Domain, design: Design, pressure_pa: np.ndarray,
@@ -50,12 +62,16 @@ def check(domain: Domain, design: Design, pressure_pa: np.ndarray,
         n = int(np.sum(p > domain.pressure_max_pa))
         flags.append("pressure_beyond_fe")
         messages.append(f"{n} pressure(s) above {domain.pressure_max_pa:.0f} Pa, the family's "
-                        "last converged FE point: extrapolated")
+                        "last converged FE point: no number is given there (null)")
     a = np.abs(np.asarray(angle_deg, dtype=float))
     if a.size and float(np.nanmax(a)) > domain.angle_max_deg * (1 + _TOL):
         flags.append("angle_beyond_fe")
         messages.append(f"angles beyond {domain.angle_max_deg:.1f} deg, the largest FE angle "
-                        "of the family: extrapolated")
+                        "of the family: no number is given there (null)")
+    if past_fe(domain, p, angle_deg).any():
+        flags.append("past_fe_range")  # the two above, under the name every model uses
+        messages.append("no number is given past the FE's range (null there)")
     return {"in_domain": not flags, "flags": flags, "messages": messages,
             "L_range_mm": list(domain.L_mm), "t_range_mm": list(domain.t_mm),
-            "pressure_max_pa": domain.pressure_max_pa, "angle_max_deg": domain.angle_max_deg}
+            "pressure_max_pa": domain.pressure_max_pa, "angle_max_deg": domain.angle_max_deg,
+            "fe_limit_pa": domain.pressure_max_pa, "fe_limit_angle_deg": domain.angle_max_deg}

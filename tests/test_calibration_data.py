@@ -169,3 +169,23 @@ def test_history_order_is_kept_and_unloading_recognised():
 def _write(path, data: bytes):
     path.write_bytes(data)
     return path
+
+
+def test_mixed_kpa_and_pa_warn_naming_the_curve_and_the_factor():
+    data = rows()
+    ids = sorted({r["curve_id"] for r in data})
+    one_in_kpa = [{**r, "pressure_pa": str(float(r["pressure_pa"]) / 1000.0)}
+                  if r["curve_id"] == ids[0] else r for r in data]
+    obs = observations_from_rows(one_in_kpa)
+    assert any("pressure_pa" in w and "mixed units" in w and repr(ids[0]) in w
+               and "x1000" in w for w in obs.warnings), obs.warnings
+    with pytest.raises(DataError, match="strict") as err:
+        observations_from_rows(one_in_kpa, strict=True)
+    assert err.value.column == "pressure_pa"
+    first = [i for i, r in enumerate(data) if r["curve_id"] == ids[1]]
+    half = [{**r, "pressure_pa": str(float(r["pressure_pa"]) / 1000.0)}
+            if i in first[:len(first) // 2 + 1] else r for i, r in enumerate(data)]
+    obs = observations_from_rows(half)
+    assert any("jumps" in w and "x1000" in w and repr(ids[1]) in w for w in obs.warnings), \
+        obs.warnings
+    assert observations_from_rows(data).warnings == ()

@@ -107,17 +107,27 @@ def test_no_surrogate_file_is_degraded_health_without_its_path(tmp_path):
     assert "none.json" in body["surrogate"]["error"] and str(tmp_path) not in r.text
 
 
-def damaged_database(path):
-    """A database whose records index is damaged (flipped bytes in its object header)."""
-    from test_store_damage import flip_object_header
+def damaged_database(path, damage="header"):
+    """A database whose records index is damaged (flipped bytes in its object header),
+    the same unsealed (as older code wrote it), or a file of older code on which HDF5
+    loops for ever (test_store_damage.LOOP)."""
+    from test_store_damage import LOOP, flip_object_header, unseal
 
+    if damage == "loop":
+        path.write_bytes(LOOP.read_bytes())
+        return
     with CurveStore(path, mode="a") as db:
         db.put_many([record_for(L_mm=L) for L in (4.1, 5.1, 7.1, 9.1)])
-    path.write_bytes(flip_object_header(path.read_bytes(), 1))
+    data = path.read_bytes()
+    path.write_bytes(flip_object_header(unseal(data) if damage == "unsealed" else data, 1))
 
 
-def test_a_damaged_database_is_503_and_degraded_health(tmp_path):
-    damaged_database(tmp_path / "curves.h5")
+@pytest.mark.parametrize("damage", ["header", "unsealed", "loop"])
+def test_a_damaged_database_is_503_and_degraded_health(tmp_path, monkeypatch, damage):
+    from solver.store import integrity
+
+    monkeypatch.setattr(integrity, "STALL_S", 3.0)
+    damaged_database(tmp_path / "curves.h5", damage)
     with make_client(tmp_path) as c:
         for r in (c.get("/v1/curves"), c.get("/v1/curves/" + "0" * 32)):
             body = assert_problem(r, 503)

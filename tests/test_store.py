@@ -18,6 +18,7 @@ from solver.store import (
     SchemaVersionError,
     StoreBusyError,
     StoreWriteError,
+    integrity,
     make_record,
     record_key,
 )
@@ -117,6 +118,9 @@ def test_newer_schema_is_refused_with_a_clear_message(db_path):
         db.put(record_for())
     with h5py.File(db_path, "r+") as f:
         f.attrs["schema_version"] = SCHEMA_VERSION + 1
+    image = bytearray(db_path.read_bytes())
+    integrity.seal(memoryview(image))  # as a newer writer would
+    db_path.write_bytes(image)
     with pytest.raises(SchemaVersionError, match=f"schema version {SCHEMA_VERSION + 1}.*"
                                                  f"up to {SCHEMA_VERSION}.*upgrade"):
         CurveStore(db_path)

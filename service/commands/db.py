@@ -1,8 +1,9 @@
-"""``balloon db ls|show|export``: look into a curve database.
+"""``balloon db ls|show|export|seal``: look into a curve database.
 
     balloon db ls curves.h5 [--status failed] [--where L_mm=7.1 ...] [--json]
     balloon db show curves.h5 [KEY] [--json]      # no KEY: the file's metadata
     balloon db export curves.h5 [KEY ...] --format csv|json [-o OUT] [--where ...]
+    balloon db seal curves.h5                     # write a file of older code sealed
 
 Keys may be abbreviated to any unique prefix. CSV is long format: one row per
 curve point, with the record's key, status and design (lengths in mm, material ids) on
@@ -53,6 +54,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     export.add_argument("--status", choices=("complete", "stopped", "failed"))
     export.add_argument("-o", "--output", default="-", help="output file (default stdout)")
     export.set_defaults(func=run_export)
+    seal = sub.add_parser("seal", help="check the file and write it sealed (its checksum "
+                          "in the header, checked by every reader)",
+                          description="Check the file (a guarded full read when it has no "
+                                      "seal) and publish it again with the seal that "
+                                      "readers check before HDF5 parses it (files written "
+                                      "by this version are sealed already).")
+    seal.add_argument("db", help="curve database (HDF5)")
+    seal.set_defaults(func=run_seal)
 
 
 def parse_where(items: list[str]) -> dict[str, object]:
@@ -129,6 +138,16 @@ def run_ls(args: argparse.Namespace) -> int:
               f"{str(s['mesh_level']) + ' ' + s['element']:6}  {row['n_steps']:5d}  "
               f"{float(row['provenance'].get('wall_time_s', 0.0)):7.1f}")
     print(f"{len(rows)} records", file=sys.stderr)
+    return 0
+
+
+def run_seal(args: argparse.Namespace) -> int:
+    from solver.store import CurveStore
+
+    with CurveStore(args.db, mode="a") as db:
+        db.seal()
+        n = len(db)
+    print(f"{args.db}: sealed ({n} records)", file=sys.stderr)
     return 0
 
 

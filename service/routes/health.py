@@ -10,6 +10,7 @@ from service.deps import JobsDep, ModelsDep, SettingsDep
 from service.schemas import Health
 from service.schemas.health import DatabaseStatus, JobsStatus, SurrogateStatus
 from service.store_access import database_state
+from solver.precompute.parking import parked_files
 
 router = APIRouter(prefix="/v1", tags=["health"])
 
@@ -37,6 +38,11 @@ async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Hea
         problems.append(f"no curve database {settings.db_path.name}: /v1/curves answers 503")
     elif db_error:
         problems.append(f"{db_error}: /v1/curves answers 503")
+    parked = len(parked_files(settings.db_path))
+    if parked:
+        problems.append(f"{parked} finished solve result(s) parked: the curve database "
+                        f"{settings.db_path.name} could not be written; they are written "
+                        "with the next write that succeeds")
     if fitted is None:
         problems.append(f"no fitted surrogate ({models.fitted_error}): model \"exponential\" "
                         "answers 503; \"paper\" answers")

@@ -8,7 +8,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from service.schemas.common import DesignIn, Schema, SolveSettingsIn
 
-JobStatus = Literal["queued", "running", "finished", "failed", "cancelled", "timed_out"]
+JobStatus = Literal["queued", "running", "finished", "parked", "failed", "cancelled",
+                    "timed_out"]
 
 
 class SolveRequest(Schema):
@@ -30,7 +31,10 @@ class Progress(BaseModel):
 
 class Job(BaseModel):
     id: str
-    status: JobStatus = Field(description="finished: the curve is stored (see curve_status)")
+    status: JobStatus = Field(description="finished: the curve is stored (see "
+                              "curve_status); parked: the solve finished but the database "
+                              "could not be written (error says why): the result is kept "
+                              "and written with the next write that succeeds")
     key: str = Field(description="the database key the result is stored under")
     created_utc: str = Field(description="when it was queued, ISO 8601 UTC")
     started_utc: str | None = Field(None, description="when a worker took it, ISO 8601 UTC")

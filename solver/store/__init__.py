@@ -13,6 +13,7 @@ Errors: SchemaVersionError, StoreBusyError (a second writer), NotACurveStoreErro
 (disk full, read-only), and NotFoundError for a missing record or file.
 """
 
+from solver.store import integrity
 from solver.store.errors import (
     DamagedStoreError,
     NotACurveStoreError,
@@ -28,5 +29,5 @@ from solver.store.schema import SCHEMA_VERSION
 __all__ = [
     "SCHEMA_VERSION", "CurveStore", "DamagedStoreError", "NotACurveStoreError", "Record",
     "SchemaVersionError", "StoreBusyError", "StoreWriteError", "canonical_json", "failed_curve",
-    "make_provenance", "make_record", "record_key",
+    "integrity", "make_provenance", "make_record", "record_key",
 ]

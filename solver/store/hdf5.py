@@ -14,8 +14,12 @@ the published name (an atomic rename on POSIX), then fsyncs the directory. Hence
   time a writer opens the database;
 - a failed write (disk full, read-only file system) raises StoreWriteError naming the
   path and the cause; the published file is untouched;
-- damage inside the file (flipped bytes: HDF5 structures that no longer parse, a
-  record whose design or settings no longer give its key, a dataset whose fletcher32
+- every published file is sealed: its checksum in the HDF5 user block, checked before
+  HDF5 parses a byte of a new version (``integrity.py``; HDF5 can loop for ever or crash
+  on flipped bytes), so a damaged file is one DamagedStoreError at once; a file without
+  a seal (older code) is read in a guarded child process first;
+- damage inside an unsealed file (flipped bytes: HDF5 structures that no longer parse,
+  a record whose design or settings no longer give its key, a dataset whose fletcher32
   checksum fails) raises DamagedStoreError naming the record, never a wrong number;
 - one writer at a time, enforced by an exclusive flock on ``<db>.lock``: held for the
   writer's lifetime by default, or, with ``hold_lock=False``, only during each put (a
@@ -43,7 +47,7 @@ from solver.curve import STATUSES
 from solver.design import LIMITS_MM
 from solver.errors import BalloonError, InputError, NotFoundError
 from solver.settings import SolverSettings
-from solver.store import schema
+from solver.store import integrity, schema
 from solver.store.errors import DamagedStoreError, StoreWriteError, cause_of
 from solver.store.locking import WriterLock, lock_path
 from solver.store.record import Record, utc_now
@@ -55,6 +59,7 @@ _counter = itertools.count()
 # HDF5 1.8 object format: compact link storage in small groups (about half the size of the
 # 1.6 format here) and readable by every HDF5 release since 2008.
 LIBVER = ("v108", "v108")
+USERBLOCK = integrity.USERBLOCK_BYTES  # where the seal lives (solver/store/integrity.py)
 
 
 def _write_file(path: Path, data: memoryview) -> None:
@@ -168,32 +173,42 @@ class CurveStore:
 
     # -- reading ---------------------------------------------------------------------------
     def _file(self) -> h5py.File:
-        """The latest published version, re-opened when the path points to a new file."""
-        try:
-            st = os.stat(self.path)
-        except FileNotFoundError:
-            raise NotFoundError(f"curve database {self.path} has disappeared") from None
-        stamp = (st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size)
-        if self._h5 is None or stamp != self._stamp:
+        """The latest published version, re-opened when the path points to a new file.
+        A new version is checked before HDF5 reads it (``integrity.check``: its seal, or
+        a guarded read in a child process), and opened only if it is still the file that
+        was checked."""
+        for _ in range(100):  # a new version published between the check and the open
+            try:
+                stamp = integrity.stamp_of(os.stat(self.path))
+            except FileNotFoundError:
+                raise NotFoundError(f"curve database {self.path} has disappeared") from None
+            if self._h5 is not None and stamp == self._stamp:
+                return self._h5
             if self._h5 is not None:
                 self._h5.close()
                 self._h5 = None
             try:
+                checked, _ = integrity.check(self.path)
                 f = h5py.File(self.path, "r")
+            except FileNotFoundError:
+                continue
             except OSError as exc:
                 raise schema.NotACurveStoreError(
                     "db", f"{self.path} is not a readable HDF5 file "
                     f"({cause_of(exc, self.path)})", "a file written by balloon precompute"
                 ) from None
             try:
+                if integrity.stamp_of(os.stat(self.path)) != checked:
+                    continue
                 with self._reading():
                     schema.check_schema(f, self.path)
                     f[schema.RECORDS]  # noqa: B018 - the index must open
             except BaseException:
                 f.close()
                 raise
-            self._h5, self._stamp = f, stamp
-        return self._h5
+            self._h5, self._stamp = f, checked
+            return f
+        raise StoreWriteError(self.path, OSError("the file changes faster than it can be read"))
 
     def _records_group(self) -> h5py.Group:
         return self._file()[schema.RECORDS]
@@ -301,6 +316,14 @@ class CurveStore:
             with self._locked():
                 self._publish(lambda f: schema.write_attrs(f, items))
 
+    def seal(self) -> None:
+        """Publish the file again with its seal (solver/store/integrity.py): what a file
+        of older code needs once; the records are unchanged."""
+        with self._mutex:
+            self._require_writer()
+            with self._locked():
+                self._publish(lambda f: None)
+
     def _require_writer(self) -> None:
         if self.mode != "a" or self._closed:
             raise InputError("mode", f"{self!r} is read-only (or closed)", "open with mode='a'")
@@ -328,19 +351,22 @@ class CurveStore:
         self._remove_orphans()
         image = io.BytesIO()
         if create:
-            with h5py.File(image, "w", libver=LIBVER) as f:
+            with h5py.File(image, "w", libver=LIBVER, userblock_size=USERBLOCK) as f:
                 schema.init_file(f, utc_now())
-        elif drop:
-            self._repack(image, drop)
         else:
             with self._reading():
-                image.write(self.path.read_bytes())
+                published = self.path.read_bytes()
+            if drop or not integrity.is_sealed_image(published):
+                self._repack(image, drop)  # an unsealed file: read through the check
+            else:
+                image.write(published)
         tmp = self._tmp_path()
         try:
             with h5py.File(image, "r+", libver=LIBVER) as f:
                 change(f)
                 f.attrs["updated_utc"] = utc_now()
                 f.attrs["n_records"] = len(f[schema.RECORDS])
+            integrity.seal(image.getbuffer())
             _write_file(tmp, image.getbuffer())
             os.replace(tmp, self.path)
             _fsync_path(self.path.parent, directory=True)
@@ -356,7 +382,7 @@ class CurveStore:
         deleted groups, so replaced records are dropped by rewriting the file)."""
         with self._reading():
             src = self._file()
-        with h5py.File(tmp, "w", libver=LIBVER) as dst:
+        with h5py.File(tmp, "w", libver=LIBVER, userblock_size=USERBLOCK) as dst:
             for name, value in src.attrs.items():
                 dst.attrs[name] = value
             group = dst.create_group(schema.RECORDS)

@@ -280,11 +280,43 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
         warnings.append(("pressure_pa", f"pressures reach only {p_max:g} Pa while angles "
                          f"reach {a_max:.1f} deg: they look like kPa (x1000 gives "
                          f"{1000 * p_max:g} Pa); convert pressure_pa to Pa", None))
+    else:
+        warnings += _mixed_units(kept)
     if strict and warnings:
         column, message, row = warnings[0]
         raise DataError(column, message + " (refused: strict)", row,
                         "data without warnings (drop --strict to accept with a warning)")
     return kept, [f"{c}: {m}" for c, m, _ in warnings]
+
+
+def _mixed_units(kept: list[dict[str, object]]) -> list[tuple[str, str, int | None]]:
+    """Pressures in kPa beside pressures in Pa: a curve whose pressures stay below
+    ``KPA_MAX_PA`` while it bends (when others do not), or, within a curve, a step of
+    about x1000 between neighbouring rows (one below ``KPA_MAX_PA``)."""
+    out: list[tuple[str, str, int | None]] = []
+    rows: dict[str, list[tuple[int, float, float]]] = {}
+    for i, rec in enumerate(kept):
+        rows.setdefault(str(rec["curve_id"]), []).append(
+            (i, abs(float(rec["pressure_pa"])), abs(float(rec["angle_deg"]))))  # type: ignore
+    small = [cid for cid, r in rows.items()
+             if 0.0 < max(p for _, p, _ in r) < KPA_MAX_PA
+             and max(a for _, _, a in r) > KPA_MIN_ANGLE_DEG]
+    if small:
+        top = max(p for _, p, _ in rows[small[0]])
+        out.append(("pressure_pa", f"curve_id {small[0]!r}"
+                    f"{f' (and {len(small) - 1} more)' if len(small) > 1 else ''} reaches "
+                    f"only {top:g} Pa while it bends and other curves reach more: mixed "
+                    f"units? (x1000 gives {1000 * top:g} Pa); convert pressure_pa to Pa",
+                    rows[small[0]][0][0] + 1))
+    for cid, r in rows.items():
+        for (_, p0, _), (i, p1, _) in zip(r, r[1:]):
+            lo, hi = min(p0, p1), max(p0, p1)
+            if 0.0 < lo < KPA_MAX_PA and 300.0 <= hi / lo <= 3000.0:
+                out.append(("pressure_pa", f"row {i + 1}: curve_id {cid!r} jumps from "
+                            f"{p0:g} to {p1:g} Pa (about x1000): mixed kPa and Pa? convert "
+                            "pressure_pa to Pa", i + 1))
+                break
+    return out
 
 
 def _build(parsed: list[dict[str, object]], present: list[str],

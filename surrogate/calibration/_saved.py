@@ -5,6 +5,12 @@ parameters, the selected effects' values and the provenance (data sha256, starti
 report summary). ``CalibratedModel.predict(design, pressures_pa, level)`` answers like the
 surrogate's ``predict``: a quasi-static angle at gauge pressure, with a band of
 +/- z(level) x the cross-validated error after calibration.
+
+No number past the FE's range (as every Predictor): the file's ``fe_range`` is where
+the baseline of the calibration still answered for the measured designs (its largest
+pressure and angle magnitude, found at saving); past it, or past the measured pressures
+when a file of older code has no ``fe_range``, the angle is NaN (null over HTTP) with the
+flag ``past_fe_range``.
 """
 
 from __future__ import annotations
@@ -108,15 +114,63 @@ class CalibratedModel:
             messages.append("viscoelastic lag not applied: the prediction is quasi-static")
         if "R_pa_per_ul_s" in values:
             messages.append(f"inlet pressure drop at the calibration flow {q:g} ul/s")
-        validity = {"in_domain": not flags, "flags": flags, "messages": messages}
+        lim_p, lim_a, whose = self._fe_limits()
+        past = (p > lim_p * (1 + 1e-9)) | (np.abs(angle) > lim_a * (1 + 1e-9))
+        if past.any():
+            flags.append("past_fe_range")
+            messages.append(f"{int(past.sum())} answer(s) past {whose} (up to {lim_p:.0f} Pa"
+                            + (f" and {lim_a:.1f} deg" if math.isfinite(lim_a) else "")
+                            + "): no number is given there (null)")
+        angle = np.where(past, np.nan, angle)
+        validity = {"in_domain": not flags, "flags": flags, "messages": messages,
+                    "fe_limit_pa": lim_p,
+                    "fe_limit_angle_deg": lim_a if math.isfinite(lim_a) else None}
         return CalibratedPrediction(p, angle, angle - half, angle + half, validity,
                                     self.name, dict(self.provenance))
+
+    def _fe_limits(self) -> tuple[float, float, str]:
+        """(pressure Pa, angle magnitude deg, what they are) beyond which no number."""
+        fe = self.domain.get("fe_range")
+        if fe:
+            top = fe.get("angle_deg")
+            return (float(fe["pressure_pa"]), math.inf if top is None else float(top),
+                    "the FE's range")
+        return float(self.domain["pressure_pa"][1]), math.inf, "the measured pressures"
 
     def family_parameters(self, design) -> dict:
         f = self._family(design)
         return {k: f[k] for k in ("a_deg_per_mm", "a_t_pa", "b_t_per_mm", "c")} | {
             "tau_form": "tau_pa = a_t_pa * log10(b_t_per_mm * t_mm)",
             "effects": dict(self.effects), "residual_sd_deg": self.rmse_deg}
+
+
+FE_PROBE_PA = np.linspace(0.0, 50_000.0, 501)  # far past any FE curve (MAX_PRESSURE_PA)
+
+
+def fe_range(cal) -> dict[str, float]:
+    """Where the calibration's baseline still gives numbers for the measured designs: its
+    largest pressure (Pa) and angle magnitude (deg) over them (every Predictor gives NaN
+    past the FE's range). Designs it refuses are skipped; none answering: the measured
+    pressures."""
+    obs, top_p, top_a = cal.obs, 0.0, 0.0
+    seen = set()
+    for c in range(obs.n_curves):
+        design = obs.design(c)
+        if repr(design) in seen:
+            continue
+        seen.add(repr(design))
+        try:
+            pred = cal.baseline.predictor.predict(design, FE_PROBE_PA)
+        except BalloonError:
+            continue
+        angle = np.asarray(pred.angle_deg, dtype=float)
+        ok = np.isfinite(angle)
+        if ok.any():
+            top_p = max(top_p, float(FE_PROBE_PA[ok].max()))
+            top_a = max(top_a, float(np.abs(angle[ok]).max()))
+    if top_p == 0.0:
+        return {"pressure_pa": float(np.max(obs.pressure_pa)), "angle_deg": None}
+    return {"pressure_pa": top_p, "angle_deg": top_a}
 
 
 def _check_name(name: str) -> str:
@@ -150,7 +204,8 @@ def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) 
         "domain": {"L_mm": [float(obs.L_mm.min()), float(obs.L_mm.max())],
                    "t_mm": [float(obs.t_mm.min()), float(obs.t_mm.max())],
                    "pressure_pa": [float(obs.pressure_pa.min()),
-                                   float(obs.pressure_pa.max())]},
+                                   float(obs.pressure_pa.max())],
+                   "fe_range": fe_range(cal)},
         "provenance": {"data_sha256": obs.sha256, "base_model": r["model"].get("name"),
                        "selected_effects": r["selected_effects"],
                        "fitted_values": {k: v["value"] for k, v in r["fitted"]["effects"].items()},
@@ -231,6 +286,10 @@ def _checked(doc: object, name: str) -> CalibratedModel:
         pair = doc["domain"].get(key)
         if not (isinstance(pair, list) and len(pair) == 2 and all(map(_finite, pair))):
             raise bad(f"domain.{key} is missing or not [low, high]")
+    fe = doc["domain"].get("fe_range")  # absent in files of older code
+    if fe is not None and not (isinstance(fe, dict) and _finite(fe.get("pressure_pa"))
+                               and (_finite(fe.get("angle_deg")) or fe.get("angle_deg") is None)):
+        raise bad("domain.fe_range is not {pressure_pa, angle_deg} (finite numbers)")
     for key in ("rmse_deg", "flow_ul_s"):
         if key not in doc or not (doc[key] is None or _finite(doc[key])):
             raise bad(f"{key!r} is missing or not a finite number (or null)")

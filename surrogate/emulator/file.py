@@ -23,6 +23,7 @@ from surrogate.emulator.emulator import Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
 from surrogate.emulator.vector_gp import vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
+from surrogate.file_seal import check_seal, seal
 
 FORMAT_NAME = "balloon-emulator"
 FORMAT_VERSION = 2
@@ -53,11 +54,12 @@ def emulator_to_dict(e: Emulator) -> dict:
             "curves": pe.curves.as_dict(),
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa})
-    return _plain({"format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
-                   "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
-                   "force_pressure_nodes_pa": FORCE_PRESSURE_NODES_PA.tolist(),
-                   "provenance": e.provenance, "report": e.report, "pairs": pairs,
-                   "sign_models": {g: m.as_dict() for g, m in e.sign_models.items()}})
+    return seal(_plain({
+        "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
+        "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
+        "force_pressure_nodes_pa": FORCE_PRESSURE_NODES_PA.tolist(),
+        "provenance": e.provenance, "report": e.report, "pairs": pairs,
+        "sign_models": {g: m.as_dict() for g, m in e.sign_models.items()}}))
 
 
 def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
@@ -72,6 +74,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
             or d.get("force_pressure_nodes_pa") != FORCE_PRESSURE_NODES_PA.tolist()):
         raise SurrogateFileError(origin, "made with other curve nodes than this code uses; "
                                  "refit it with `balloon fit`")
+    check_seal(d, origin)
     try:
         pairs = {}
         for p in d["pairs"]:
@@ -89,11 +92,45 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                 failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
+        if not pairs:
+            raise ValueError("no pairs")
+        for pe in pairs.values():
+            _check_pair(pe)
+        for group, m in sign_models.items():
+            _check_gp(m, f"sign model {group}")
         return Emulator(name=str(d["name"]), pairs=pairs, provenance=dict(d["provenance"]),
                         report=dict(d.get("report") or {}), sign_models=sign_models)
-    except (KeyError, TypeError, ValueError, IndexError, np.linalg.LinAlgError) as exc:
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError, ArithmeticError,
+            np.linalg.LinAlgError) as exc:
         raise SurrogateFileError(origin, f"damaged emulator file ({type(exc).__name__}: "
                                  f"{exc})") from None
+
+
+def _check_gp(gp, what: str) -> None:
+    """A GP that gives finite means and non-negative variances at its own first training
+    input (the shapes of every stored array must agree for that)."""
+    mean, var = gp.predict(gp.gps[0].x[0])
+    if not (np.isfinite(mean).all() and np.isfinite(var).all() and (var >= 0).all()):
+        raise ValueError(f"{what}: no finite answer at its own training design")
+
+
+def _check_pair(pe: PairEmulator) -> None:
+    """The numbers of one pair that a prediction uses, in range (ValueError otherwise)."""
+    scalars = {"sign": pe.sign, "band_scale": pe.band_scale,
+               "fe_limit_angle_deg": pe.fe_limit_angle_deg,
+               "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa}
+    if not all(math.isfinite(v) for v in scalars.values()):
+        raise ValueError(f"pair {pe.pair}: a number is not finite")
+    if (abs(pe.sign) != 1.0 or pe.band_scale <= 0 or pe.fe_limit_angle_deg <= 0
+            or pe.force_band_scale <= 0 or pe.force_limit_pa <= 0):
+        raise ValueError(f"pair {pe.pair}: sign, band scale or FE limit out of range")
+    if pe.coordinates.ndim != 2 or len(pe.coordinates) != len(pe.keys):
+        raise ValueError(f"pair {pe.pair}: coordinates and keys do not agree")
+    if not np.isfinite(pe.coordinates).all():
+        raise ValueError(f"pair {pe.pair}: coordinates are not finite")
+    _check_gp(pe.curves, f"pair {pe.pair}")
+    if pe.force is not None:
+        _check_gp(pe.force, f"pair {pe.pair} force")
 
 
 def save_emulator(e: Emulator, path: str | os.PathLike) -> Path:

@@ -1,0 +1,148 @@
+"""Model files validated on load, never a 500 or a wrong number inside a request: the
+exponential surrogate (surrogate/files.py) and the emulator (surrogate/emulator/file.py).
+A file this code writes carries a content checksum, so any later change is refused; a
+file of older code (the shipped ones until refitted) is checked by its structure and a
+trial prediction at its own data. Over HTTP: 503 naming the model, /v1/health degraded
+naming the file; the CLI: one line."""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+from service_fakes import assert_problem, settings_for
+
+from service.app import create_app
+from service.cli import main
+from surrogate import load_surrogate, save_surrogate
+from surrogate.emulator.file import emulator_from_dict
+from surrogate.errors import SurrogateFileError
+from surrogate.file_seal import KEY
+
+DATA = Path(__file__).resolve().parents[1] / "service" / "data"
+
+
+@pytest.fixture(scope="module")
+def surrogate_doc():
+    doc = json.loads((DATA / "surrogate.json").read_text())
+    doc.pop(KEY, None)  # as older code wrote it: only the structure and a trial check it
+    return doc
+
+
+@pytest.fixture(scope="module")
+def emulator_doc():
+    doc = json.loads((DATA / "emulator.json").read_text())
+    doc.pop(KEY, None)
+    return doc
+
+
+def put(doc, path, value):
+    out = copy.deepcopy(doc)
+    target = out
+    for k in path[:-1]:
+        target = target[k]
+    if value is DELETE:
+        del target[path[-1]]
+    else:
+        target[path[-1]] = value
+    return out
+
+
+DELETE = object()
+EXP = ("families", 0, "parameters", "exponential")
+SURROGATE_DAMAGE = {
+    "default_form a list": (("families", 0, "default_form"), [1.0]),
+    "domain end null": (("families", 0, "domain", "t_mm", 1), None),
+    "value a string": ((*EXP, "values", 0), "x"),
+    "value 1e308": ((*EXP, "values", 0), 1e308),
+    "negative scatter": ((*EXP, "residual_sd"), -1.0),
+    "covariance cut": ((*EXP, "covariance"), [[1.0]]),
+    "name a boolean": ((*EXP, "names", 0), True),
+    "no families": (("families",), []),
+    "band scale 0": ((*EXP, "band_scale"), 0.0),
+    "values missing": ((*EXP, "values"), DELETE),
+}
+
+
+@pytest.mark.parametrize("damage", SURROGATE_DAMAGE)
+def test_a_damaged_surrogate_file_is_refused_on_load(surrogate_doc, tmp_path, damage):
+    path = tmp_path / "surrogate.json"
+    path.write_text(json.dumps(put(surrogate_doc, *SURROGATE_DAMAGE[damage])))
+    with pytest.raises(SurrogateFileError, match="surrogate.json"):
+        load_surrogate(path)
+
+
+def test_any_change_to_a_sealed_surrogate_file_is_refused(tmp_path):
+    s = load_surrogate(DATA / "surrogate.json")
+    path = save_surrogate(s, tmp_path / "surrogate.json")
+    doc = json.loads(path.read_text())
+    assert KEY in doc
+    assert load_surrogate(path).family_fits == s.family_fits  # unchanged: loads the same
+    values = doc["families"][0]["parameters"]["exponential"]["values"]
+    values[0] *= 1.01  # plausible, and wrong: only the checksum can tell
+    path.write_text(json.dumps(doc))
+    with pytest.raises(SurrogateFileError, match="content changed since it was written"):
+        load_surrogate(path)
+
+
+EMULATOR_DAMAGE = {
+    "band scale a string": (("pairs", 0, "band_scale"), "x"),
+    "sign 0.5": (("pairs", 0, "sign"), 0.5),
+    "lengths cut": (("pairs", 0, "curves", "gps", 0, "lengths"), [1.0]),
+    "coordinates missing a row": (("pairs", 1, "coordinates", 0), DELETE),
+    "centre null": (("pairs", 0, "curves", "center"), None),
+}
+
+
+@pytest.mark.parametrize("damage", EMULATOR_DAMAGE)
+def test_a_damaged_emulator_file_is_refused_on_load(emulator_doc, damage):
+    with pytest.raises(SurrogateFileError, match="emulator.json"):
+        emulator_from_dict(put(emulator_doc, *EMULATOR_DAMAGE[damage]), "emulator.json")
+
+
+def test_any_change_to_a_sealed_emulator_file_is_refused(emulator_doc):
+    from surrogate.file_seal import seal
+
+    doc = seal(emulator_doc)
+    doc["pairs"][0]["band_scale"] *= 1.01
+    with pytest.raises(SurrogateFileError, match="content changed since it was written"):
+        emulator_from_dict(doc, "emulator.json")
+
+
+def test_damaged_model_files_are_503_naming_the_model_and_degraded_health(
+        tmp_path, surrogate_doc, emulator_doc):
+    sur, emu = tmp_path / "surrogate.json", tmp_path / "emulator.json"
+    sur.write_text(json.dumps(put(surrogate_doc, *SURROGATE_DAMAGE["negative scatter"])))
+    emu.write_text(json.dumps(put(emulator_doc, *EMULATOR_DAMAGE["sign 0.5"])))
+    app = create_app(settings_for(tmp_path, surrogate_path=sur, emulator_path=emu))
+    with TestClient(app, raise_server_exceptions=False) as c:
+        for model in ("emulator", "exponential"):
+            for r in (c.post("/v1/predict", json={"design": {"L_mm": 7.1, "t_mm": 0.5},
+                                                  "pressures_pa": [1000], "model": model}),
+                      c.post("/v1/inverse/pressure", json={"design": {"L_mm": 7.1, "t_mm": 0.5},
+                                                  "angles_deg": [20], "model": model})):
+                body = assert_problem(r, 503)
+                assert f'model "{model}"' in body["detail"], body
+                assert str(tmp_path) not in r.text
+        health = c.get("/v1/health").json()
+        assert health["status"] == "degraded"
+        assert "surrogate.json" in health["surrogate"]["error"]
+        assert "emulator.json" in health["emulator"]["error"]
+        assert str(tmp_path) not in json.dumps(health)
+        r = c.post("/v1/predict", json={"design": {"L_mm": 7.1, "t_mm": 0.5},
+                                        "pressures_pa": [1000], "model": "paper"})
+        assert r.status_code == 200  # the other models still answer
+
+
+def test_balloon_predict_with_a_damaged_surrogate_file_is_one_line(tmp_path, surrogate_doc,
+                                                                   capsys):
+    path = tmp_path / "surrogate.json"
+    path.write_text(json.dumps(put(surrogate_doc, *SURROGATE_DAMAGE["value 1e308"])))
+    code = main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1000",
+                 "--model", str(path)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "surrogate.json" in err, err
+    assert "Traceback" not in err
