@@ -14,10 +14,13 @@ candidate set E (one effect, or a pair) is selectable when
 6. (pairs) each member earns its place: BIC(pair) < BIC(each member alone) - 6 and the
    pair's cross-validated error is below each member's alone;
 7. it explains the data: what replicates still share after it (_residual.py) is within
-   the baseline's own uncertainty and replicate scatter; and for a physical effect the
-   baseline's own uncertainty at the fitted design (its band) is below the noise floor
-   (an emulator far from its training designs cannot back a size). A set that lowers the error
+   the baseline's own uncertainty and replicate scatter. A set that lowers the error
    but leaves structure is reported, not selected: an effect outside the catalogue acts.
+A physical effect's standard error counts the baseline's own uncertainty at the fitted
+design (its band, _backing.py): an emulator far from its training designs cannot back a
+size, and then rule 3 fails. A physical effect is fitted only where the baseline answers
+every design of the data (its reach, _response.py: the emulator's box); a fit that ends at
+the edge of the reach is not selected, and the report says where the baseline stops.
 Pairs are tried when at least one member alone passes rule 4. Among selectable sets the
 lowest BIC wins; none -> nothing selected, and then
 ``rmse_after_deg`` = ``rmse_before_deg``: a selection never makes the error worse.
@@ -32,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from solver.errors import InputError
+from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._fit import FitResult, cross_validate, fit
@@ -116,7 +120,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
     def get_fit(effects: tuple[str, ...]) -> FitResult:
         if effects not in fits:
-            fits[effects] = fit(make(effects)(obs))
+            fits[effects] = with_baseline_uncertainty(fit(make(effects)(obs)), responses)
             tick()
         return fits[effects]
 
@@ -154,29 +158,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         return residual_summary(obs, resid, cv, noise, {"structured": False, "z_lag1": 0.0,
                                                          "z_runs": 0.0}, baseline_var)
 
-    def baseline_sd_at(effects: tuple[str, ...]) -> float | None:
-        """RMS of the baseline's own sd at the fitted physical change (None: none)."""
-        phys = tuple(EFFECTS[e] for e in effects if EFFECTS[e].stage == "design")
-        if not phys:
-            return None
-        values = get_fit(effects).values
-        sd = responses.lookup(responses.sd_at(phys, [values[e.parameters[0].name]
-                                                     for e in phys]),
-                              as_is.design_index, np.clip(obs.pressure_pa, 0.0, None))
-        return float(np.sqrt(np.nanmean(sd**2))) if np.any(np.isfinite(sd)) else None
-
     candidates, selectable = [], []
     for effects in evaluated:
-        cand = _judge(effects, get_fit, get_cv, base, rmse_before)
-        sd_here = baseline_sd_at(effects) if cand["selectable"] else None
-        if sd_here is not None:
-            cand["baseline_sd_at_fit_deg"] = sd_here
-            limit = noise.rms_deg if math.isfinite(noise.rms_deg) else math.inf
-            if sd_here > limit:
-                cand["selectable"] = False
-                cand["why_not"].append(
-                    f"the baseline's own uncertainty at the fitted design ({sd_here:.2f} "
-                    f"deg) exceeds the noise floor: it cannot back this size")
+        cand = _judge(effects, get_fit, get_cv, base, rmse_before, responses)
         if cand["selectable"] or not cand["why_not"]:
             rest = leaves(effects)
             cand["unexplained_rms_deg"] = rest["unexplained_rms_deg"]
@@ -247,6 +231,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                            "cv_below": "rmse_before_deg", "pairs": "each member earns its "
                            "place (BIC - 6 and lower CV than each alone)"},
         "baseline_calls": responses.calls,
+        "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
+                           if e.stage == "design" and responses.reach(e).limits},
     }
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
@@ -304,6 +290,11 @@ def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
     why = e.not_identifiable(traits)
     if why is not None:
         return {"applicable": True, "reason": why[0], "measure": why[1]}
+    if e.stage == "design" and responses.reach(e).empty:
+        return {"applicable": True, "reason": "the baseline answers no change of it at "
+                "these designs: " + "; ".join(responses.reach(e).limits),
+                "measure": "solve the changed designs with the FE (balloon solve), or "
+                "calibrate on designs inside the baseline's range"}
     if e.stage == "design" and not responses.responsive(e):
         return {"applicable": True, "reason": "the baseline does not respond to it (a "
                 "per-family model ignores material constants; a model without data along "
@@ -313,31 +304,54 @@ def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
 
 
 def _params(f: FitResult) -> dict[str, dict]:
+    """Each effect parameter: value, sd (data and baseline together), sd_data,
+    sd_baseline (the baseline's own uncertainty at the fitted design, _backing.py)."""
     out = {}
-    values, sd = f.values, f.sd()
+    values, sd, sd_b = f.values, f.sd(), f.sd_baseline()
     for e in f.model.effects:
         for p in e.parameters:
             v = values[p.name]
             lo, hi = p.plausible
-            out[p.name] = {"value": _num(v), "sd": _num(sd[p.name]), "unit": p.unit,
+            data = math.sqrt(max(sd[p.name] ** 2 - sd_b[p.name] ** 2, 0.0))
+            out[p.name] = {"value": _num(v), "sd": _num(sd[p.name]), "sd_data": _num(data),
+                           "sd_baseline": _num(sd_b[p.name]), "unit": p.unit,
                            "plausible_range": [lo, hi], "effect": e.id,
                            "plausible": bool(lo <= v <= hi)}
     return out
 
 
-def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float) -> dict:
+def _at_reach(f: FitResult, responses: Responses) -> list[str]:
+    """Why a fitted physical change sits at the edge of what the baseline answers."""
+    out = []
+    for e in f.model.physical:
+        r = responses.reach(e)
+        v = f.values[e.parameters[0].name]
+        tol = 1e-3 * (e.parameters[0].fit_bounds[1] - e.parameters[0].fit_bounds[0])
+        for side, edge in (("lower", r.lower), ("upper", r.upper)):
+            if abs(v - edge) <= tol and edge != e.parameters[0].fit_bounds[side == "upper"]:
+                op = ">=" if side == "lower" else "<="
+                out += [w for w in r.limits if f"{op} " in w] or [
+                    f"{e.parameters[0].name} at the edge of the baseline's range"]
+    return out
+
+
+def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
+           responses: Responses) -> dict:
     f = get_fit(effects)
     cv, _ = get_cv(effects)
     params = _params(f)
     plausible = all(p["plausible"] for p in params.values())
-    values, sd = f.values, f.sd()
-    z = {}
+    values, sd, sd_b = f.values, f.sd(), f.sd_baseline()
+    z, z_data = {}, {}
     for eid in effects:
         shape = tuple(p.name for p in EFFECTS[eid].parameters if not p.tested)
         for p in EFFECTS[eid].parameters:
             if p.tested:
                 s = f.conditional_sd(p.name, shape) if shape else sd[p.name]
                 z[p.name] = abs(values[p.name] - p.null) / s if s > 0 else math.inf
+                s_data = math.sqrt(max(s**2 - sd_b[p.name] ** 2, 0.0))
+                z_data[p.name] = (abs(values[p.name] - p.null) / s_data if s_data > 0
+                                  else math.inf)
     significant = all(v > Z_SIGNIFICANT for v in z.values())
     delta_bic = f.bic - base.bic
     reasons = []
@@ -346,7 +360,17 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float) -> dic
                if not p["plausible"]]
         reasons.append("outside the plausible range: " + ", ".join(bad))
     if not significant:
-        reasons.append("not significant (z <= 3): within what replicate scatter explains")
+        if all(v > Z_SIGNIFICANT for v in z_data.values()):
+            reasons.append(f"not significant (z <= 3) once the baseline's own uncertainty "
+                           f"at the fitted design ({f.baseline_sd_deg:.2f} deg) is counted: "
+                           "the baseline cannot back this size there")
+        else:
+            reasons.append("not significant (z <= 3): within what replicate scatter "
+                           "explains")
+    edge = _at_reach(f, responses)
+    if edge:
+        reasons.append("fitted at the edge of what the baseline answers: " + "; ".join(edge)
+                       + " (solve the changed design with the FE to look further)")
     if delta_bic >= DELTA_BIC:
         reasons.append(f"delta BIC {delta_bic:.1f} is not below {DELTA_BIC:g}")
     if not math.isfinite(cv):
@@ -367,6 +391,8 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float) -> dic
             "delta_bic": float(delta_bic), "bic": float(f.bic), "params": params,
             "plausible": plausible, "significant": significant,
             "z": {n: _num(v) for n, v in z.items()}, "selectable": not reasons,
+            "baseline_sd_at_fit_deg": _num(f.baseline_sd_deg)
+            if f.baseline_sd_deg is not None else None,
             "why_not": reasons}
 
 
