@@ -153,19 +153,27 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                np.clip(obs.pressure_pa, 0.0, None))
     baseline_var = float(np.nanmean(sd_rows**2)) if np.any(np.isfinite(sd_rows)) else 0.0
 
-    def leaves(effects: tuple[str, ...]) -> dict:
+    def own_var(effects: tuple[str, ...], backed: bool = True) -> float:
+        """The baseline's own variance where the set puts the designs: at the fitted
+        physical change (its band there) when the size is backed against it, else at
+        the nominal designs (a band too wide to back a size must not excuse a misfit)."""
+        sd = get_fit(effects).baseline_sd_deg
+        return baseline_var if sd is None or not backed else max(sd**2, baseline_var)
+
+    def leaves(effects: tuple[str, ...], backed: bool = True) -> dict:
         cv, resid = get_cv(effects)
         return residual_summary(obs, resid, cv, noise, {"structured": False, "z_lag1": 0.0,
-                                                         "z_runs": 0.0}, baseline_var)
+                                                         "z_runs": 0.0},
+                                own_var(effects, backed))
 
     candidates, selectable = [], []
     for effects in evaluated:
         cand = _judge(effects, get_fit, get_cv, base, rmse_before, responses)
-        if cand["selectable"] or not cand["why_not"]:
-            rest = leaves(effects)
+        if cand["selectable"] or not cand["why_not"] or cand["unbacked"]:
+            rest = leaves(effects, backed=not cand["unbacked"])
             cand["unexplained_rms_deg"] = rest["unexplained_rms_deg"]
             if rest["structured"]:
-                cand["selectable"] = False
+                cand["selectable"] = cand["unbacked"] = False
                 cand["why_not"].append(
                     f"leaves a shared residual of {rest['unexplained_rms_deg']:.2f} deg: it "
                     "does not explain the data (something outside the catalogue acts)")
@@ -182,11 +190,15 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                "why_not": [st["reason"]], "measure": st["measure"]})
 
     chosen: tuple[str, ...] = min(selectable)[1] if selectable else ()
+    # a set the data prefer that fails only for want of the baseline's backing: reported
+    # beside the selection (its CV advantage may be the baseline's own error there)
+    unbacked = _better_unbacked(candidates, chosen, rmse_before)
     after = get_fit(chosen)
     rmse_after, resid_after = get_cv(chosen)
     nuisance = _nuisance(after)
     structure = structure_test(obs.curve, after.residual, nuisance)
-    left = residual_summary(obs, resid_after, rmse_after, noise, structure, baseline_var)
+    left = residual_summary(obs, resid_after, rmse_after, noise, structure,
+                            own_var(chosen))
     not_identifiable = [{"effect": e.id, "reason": status[e.id]["reason"],
                          "measure": status[e.id]["measure"]}
                         for e in CATALOGUE if status[e.id]["reason"] is not None]
@@ -224,12 +236,14 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "unexplained_where": left["where"],
         "systematic_residual": left["systematic"],
         "baseline_sd_deg": math.sqrt(baseline_var),
+        "baseline_sd_after_deg": math.sqrt(own_var(chosen)),
         "noise_floor_rel_se": _num(noise.rel_se),
         "excess_allowance": excess_limit(noise) if noise.source == "replicates" else None,
         "structure_after": structure,
         "selection_rule": {"z_significant": Z_SIGNIFICANT, "delta_bic_below": DELTA_BIC,
                            "cv_below": "rmse_before_deg", "pairs": "each member earns its "
                            "place (BIC - 6 and lower CV than each alone)"},
+        "unbacked_better": unbacked,
         "baseline_calls": responses.calls,
         "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
                            if e.stage == "design" and responses.reach(e).limits},
@@ -256,6 +270,13 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                              f"{exc}", "a model covering every design of the data "
                              "(--model)") from None
         pred[rows] = np.asarray(out.angle_deg, dtype=float)
+    # the fit reads the baseline off its table (linear between 241 pressures): a reading
+    # in the last interval before the FE's end has no tabulated neighbour above it
+    index = np.array([responses.index[design_key(obs.design(c))]
+                      for c in range(obs.n_curves)])[obs.curve]
+    tabulated = responses.lookup(responses.table(())[1], index,
+                                 np.clip(obs.pressure_pa, 0.0, None))
+    pred = np.where(np.isinf(pred) | np.isfinite(tabulated), pred, np.nan)
     inf = np.isinf(pred)
     if np.any(inf):
         i = int(np.flatnonzero(inf)[np.argmin(obs.pressure_pa[inf])])
@@ -359,8 +380,9 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
         bad = [f"{n} = {p['value']:.3g} {p['unit']}" for n, p in params.items()
                if not p["plausible"]]
         reasons.append("outside the plausible range: " + ", ".join(bad))
+    unbacked = not significant and all(v > Z_SIGNIFICANT for v in z_data.values())
     if not significant:
-        if all(v > Z_SIGNIFICANT for v in z_data.values()):
+        if unbacked:
             reasons.append(f"not significant (z <= 3) once the baseline's own uncertainty "
                            f"at the fitted design ({f.baseline_sd_deg:.2f} deg) is counted: "
                            "the baseline cannot back this size there")
@@ -391,9 +413,30 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
             "delta_bic": float(delta_bic), "bic": float(f.bic), "params": params,
             "plausible": plausible, "significant": significant,
             "z": {n: _num(v) for n, v in z.items()}, "selectable": not reasons,
+            "unbacked": unbacked and len(reasons) == 1,
             "baseline_sd_at_fit_deg": _num(f.baseline_sd_deg)
             if f.baseline_sd_deg is not None else None,
             "why_not": reasons}
+
+
+def _better_unbacked(candidates: list[dict], chosen: tuple[str, ...],
+                     rmse_before: float) -> dict | None:
+    """The best candidate that fails only because the baseline cannot back its size
+    (its own uncertainty at the fitted design), when it beats ``chosen`` (or, with
+    nothing chosen, the baseline) in BIC by more than 6 and in cross-validated error."""
+    ref = next((c for c in candidates if tuple(c["effects"]) == chosen), None)
+    bic_ref = ref["bic"] + DELTA_BIC if ref is not None else DELTA_BIC + 0.0
+    cv_ref = ref["rmse_cv_deg"] if ref is not None else rmse_before
+    better = [c for c in candidates if c.get("unbacked") and c["rmse_cv_deg"] < cv_ref
+              and (c["bic"] < bic_ref if ref is not None else c["delta_bic"] < DELTA_BIC)]
+    if not better:
+        return None
+    c = min(better, key=lambda c: c["bic"])
+    return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"],
+            "params": {n: {"value": p["value"], "sd": p["sd"], "sd_baseline":
+                           p["sd_baseline"], "unit": p["unit"]} for n, p in c["params"].items()},
+            "baseline_sd_at_fit_deg": c["baseline_sd_at_fit_deg"],
+            "instead_of": list(chosen)}
 
 
 def _nuisance(f: FitResult) -> np.ndarray:
@@ -469,15 +512,37 @@ def interpret(report: dict, left: dict) -> str:
     else:
         s.append("No catalogued effect is warranted: none lowers the cross-validated error "
                  "and the BIC with physically plausible, significant values.")
+    u = report.get("unbacked_better")
+    if u is not None:
+        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
+                          for n, p in u["params"].items())
+        s.append(f"{' and '.join(u['effects'])} fits the data best ({sizes}; cross-validated "
+                 f"error {u['rmse_cv_deg']:.2f} deg"
+                 + (f", better than {' and '.join(u['instead_of'])}" if u["instead_of"]
+                    else "") + "), but the baseline cannot back that size: its own "
+                 f"uncertainty at the fitted design is {u['baseline_sd_at_fit_deg']:.2f} deg "
+                 "RMS, so its better fit may be the baseline's own error there. An FE solve "
+                 "of the fitted design (`balloon solve`) or a baseline with more FE data "
+                 "there would decide.")
     for c in report["not_identifiable"]:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
                      f"{c['measure']}.")
-    if left["structured"]:
+    if left["structured"] and u is not None:
+        size = left["unexplained_rms_deg"]
+        s.append("What is left" + (f" ({size:.2f} deg RMS beyond the floor)" if size else "")
+                 + " is what that effect would explain.")
+    elif left["structured"]:
         s.append(left["sentence"])
     elif noise is not None:
-        s.append("What remains is consistent with replicate scatter (no structure along the "
-                 "curves).")
+        at_fit = report["baseline_sd_after_deg"]
+        if at_fit > 1.5 * report["baseline_sd_deg"] and at_fit > 0.25 * noise:
+            s.append("What remains is consistent with replicate scatter and the baseline's "
+                     f"own uncertainty at the fitted design ({at_fit:.2f} deg RMS): an FE "
+                     "solve of that design (`balloon solve`) would sharpen the size.")
+        else:
+            s.append("What remains is consistent with replicate scatter (no structure along "
+                     "the curves).")
     for w in report["warnings"]:
         s.append(f"Warning: {w}.")
     return " ".join(s)

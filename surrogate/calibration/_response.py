@@ -20,10 +20,9 @@ range), and the fit stays inside it.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
-
-from dataclasses import dataclass
 
 from solver.errors import InputError
 from surrogate.calibration.effects import Effect
