@@ -139,11 +139,11 @@ XFAIL_LONGER_CHAMBER = (
     'the longer chambers is 6.6 deg RMS (its error at the FE solve L 7.6 mm: 0.3 deg), so '
     'it cannot back the size')
 XFAIL_STIFFER_BODY = (
-    'measured (emulator of 193 records, seed 1, L 7.1 / t 0.75 and L 11.1 / t 0.5): '
-    'body_stiffness fits 1.54 +/- 0.69 with the lowest CV error (1.63 deg, floor 1.58) and '
-    "BIC, but the emulator's band at the stiffer body is 10.6 deg RMS (its error at the FE "
-    'solves b1.5: 1.0-1.1 deg), so it cannot back the size; nothing is selected '
-    '(unbacked_better names it) rather than a stand-in 200 Pa pressure offset')
+    "measured (emulator of 193 records, seed 1): body_stiffness fits 1.48 +/- 0.75 (truth "
+    "1.5) with CV 2.11 deg (floor 1.58) and the lowest BIC of the plausible sets, but the "
+    "emulator's band at the stiffer body is 12.9 deg RMS (its error at the FE solves b1.5: "
+    "1.0-1.1 deg), so it cannot back the size; nothing is selected (pressure_offset, "
+    "182 Pa, leaves a 1.6 deg shared residual)")
 
 PHYSICAL_CASES = [
     ("membrane_stiffness", Truth(membrane_mu_scale=1.3), {"membrane_mu_scale": 1.3}, BASES,
