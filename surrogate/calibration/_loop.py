@@ -312,8 +312,9 @@ def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
     if why is not None:
         return {"applicable": True, "reason": why[0], "measure": why[1]}
     if e.stage == "design" and responses.reach(e).empty:
-        return {"applicable": True, "reason": "the baseline answers no change of it at "
-                "these designs: " + "; ".join(responses.reach(e).limits),
+        return {"applicable": True, "reason": "the baseline does not respond to it: it "
+                "answers no change of it at these designs (" + "; ".join(
+                    responses.reach(e).limits) + ")",
                 "measure": "solve the changed designs with the FE (balloon solve), or "
                 "calibrate on designs inside the baseline's range"}
     if e.stage == "design" and not responses.responsive(e):
