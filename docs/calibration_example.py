@@ -12,9 +12,10 @@ root:
     .venv/bin/python docs/calibration_example.py
 
 writes surrogate/calibration/data/example_lab.csv, docs/calibration-example-report.json
-and docs/calibration-example.png. The baseline is the FE stand-in of the tests (the cached
-curves interpolated); ``balloon calibrate surrogate/calibration/data/example_lab.csv
---model paper`` runs the same data against the paper's exponential model.
+and docs/calibration-example.png. The baseline is the shipped design-space emulator
+(service/data/emulator.json; ``balloon calibrate`` uses it by default);
+``balloon calibrate surrogate/calibration/data/example_lab.csv --model paper`` runs the
+same data against the paper's exponential model.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ def main() -> int:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    cal = run_calibration(rows, lab.FEStandIn())
+    cal = run_calibration(rows, lab.emulator())
     report = jsonable(cal.report)
     (ROOT / "docs" / "calibration-example-report.json").write_text(
         json.dumps(report, indent=1) + "\n")

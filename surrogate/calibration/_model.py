@@ -65,11 +65,13 @@ class AugmentedModel:
         n_open = len(names)
         for e in effects:
             for p in e.parameters:
+                # a physical effect stays where the baseline answers (its reach)
+                b = responses.reach(e).bounds if e.stage == "design" else p.fit_bounds
                 names.append(p.name)
                 units.append(p.unit)
-                lo.append(p.fit_bounds[0])
-                hi.append(p.fit_bounds[1])
-                x0.append(p.start)
+                lo.append(b[0])
+                hi.append(b[1])
+                x0.append(min(max(p.start, b[0]), b[1]))
         self.layout = Layout(tuple(names), tuple(units), np.array(lo, float),
                              np.array(hi, float), np.array(x0, float), n_open)
         per_curve = np.array([responses.index[design_key(obs.design(c))]

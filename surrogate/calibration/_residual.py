@@ -78,7 +78,10 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
     if replicates and math.isfinite(rmse_after):
         model_part2 = max(rmse_after**2 - baseline_var, 0.0)
         unexplained = math.sqrt(max(model_part2 - floor**2, 0.0))
-        ratio = math.sqrt(model_part2) / floor
+        if floor > 0:
+            ratio = math.sqrt(model_part2) / floor
+        else:  # replicates that agree exactly (copies of one curve): any misfit counts
+            ratio = math.inf if model_part2 > 0 else 0.0
         limit = excess_limit(noise)
         excess = ratio > limit
         if excess:

@@ -7,13 +7,20 @@ nominal ones. Calling it inside the optimiser would be slow for an FE-trained em
 instead it is asked once per design at ``NODES`` values of each physical parameter (a
 tensor grid for two) on a pressure grid, and the fit interpolates: 4-point Lagrange
 (cubic) along each parameter, linear along pressure. A pressure past the end of the FE's
-range (the predictor's NaN) stays NaN; a design the predictor refuses (outside its box)
-is NaN at that node.
+range (the predictor's NaN) stays NaN.
+
+A physical effect is tabulated only over the values at which the predictor answers every
+nominal design (``reach``): the emulator refuses designs outside its box
+(``solver.design_space.OutOfBoxError``), so at t = 0.5 mm, the box's edge, a thinner
+membrane has no answer. The reach is found by bisection of the predictor's refusals; where
+it ends short of the effect's fit bounds it says why (the refused field and its allowed
+range), and the fit stays inside it.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,6 +32,29 @@ NODES = 9
 PRESSURE_POINTS = 241
 BAND_LEVEL = 0.95
 BAND_Z = 1.959964  # two-sided 95 %
+PROBE_STEPS = 16   # bisection steps of the reach: 1/65536 of the fit range
+
+
+@dataclass(frozen=True)
+class Reach:
+    """The values of a physical effect's parameter at which the predictor answers every
+    nominal design: [lower, upper] inside the fit bounds, and why each side ends short
+    of them (empty when it does not)."""
+
+    lower: float
+    upper: float
+    limits: tuple[str, ...] = ()
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        return (self.lower, self.upper)
+
+    @property
+    def empty(self) -> bool:
+        return not self.upper > self.lower
+
+    def as_dict(self) -> dict[str, object]:
+        return {"lower": self.lower, "upper": self.upper, "limits": list(self.limits)}
 
 
 def design_key(design) -> str:
@@ -44,7 +74,48 @@ class Responses:
         self.dp = self.p_grid[1] - self.p_grid[0]
         self._tables: dict[tuple[str, ...], tuple[list[np.ndarray], np.ndarray]] = {}
         self._sd: np.ndarray | None = None
+        self._reach: dict[str, Reach] = {}
         self.calls = 0
+
+    def _refusal(self, design) -> InputError | None:
+        """The predictor's refusal of ``design`` (None: it answers)."""
+        self.calls += 1
+        try:
+            self.predictor.predict(design, np.zeros(1), level=BAND_LEVEL)
+        except InputError as exc:
+            return exc
+        return None
+
+    def reach(self, effect: Effect) -> Reach:
+        """Where the predictor answers ``effect`` at every nominal design (see Reach)."""
+        if effect.id not in self._reach:
+            par = effect.parameters[0]
+            bounds = {"lower": par.fit_bounds[0], "upper": par.fit_bounds[1]}
+            why: dict[str, str] = {}
+            for k in self.keys:
+                d0 = self.designs[k]
+                for side, sign in (("lower", -1.0), ("upper", 1.0)):
+                    err = self._refusal(effect.design(d0, bounds[side]))
+                    if err is None:
+                        continue
+                    good, bad = par.null, bounds[side]
+                    for _ in range(PROBE_STEPS):
+                        mid = 0.5 * (good + bad)
+                        e2 = self._refusal(effect.design(d0, mid))
+                        if e2 is None:
+                            good = mid
+                        else:
+                            bad, err = mid, e2
+                    bounds[side] = good
+                    op = ">=" if sign < 0 else "<="
+                    why[side] = (f"{par.name} {op} {good:.4g} {par.unit}: the baseline refuses "
+                                 f"{d0.body_material.id}/{d0.membrane_material.id} L_mm = "
+                                 f"{d0.L_mm:g}, t_mm = {d0.t_mm:g} changed further "
+                                 f"({err.field}: {err.allowed or err.detail})")
+            self._reach[effect.id] = Reach(bounds["lower"], bounds["upper"],
+                                           tuple(why[s] for s in ("lower", "upper")
+                                                 if s in why))
+        return self._reach[effect.id]
 
     def _predict(self, design, with_sd: bool = False):
         self.calls += 1
@@ -81,7 +152,8 @@ class Responses:
         """(nodes per effect, values (n_designs, n_1, ..., n_k, pressures))."""
         key = tuple(e.id for e in effects)
         if key not in self._tables:
-            nodes = [physical_nodes(e.parameters[0], NODES) for e in effects]
+            nodes = [physical_nodes(e.parameters[0], NODES, self.reach(e).bounds)
+                     for e in effects]
             shape = (len(self.keys),) + tuple(n.size for n in nodes) + (self.p_grid.size,)
             values = np.empty(shape)
             for di, k in enumerate(self.keys):
@@ -112,7 +184,12 @@ class Responses:
         out = values
         for axis_nodes, theta in zip(nodes, thetas, strict=True):
             idx, w = lagrange_weights(axis_nodes, theta)
-            out = np.tensordot(w, np.take(out, idx, axis=1), axes=([0], [1]))
+            cubic = np.tensordot(w, np.take(out, idx, axis=1), axes=([0], [1]))
+            idx, w = linear_weights(axis_nodes, theta)
+            linear = np.tensordot(w, np.take(out, idx, axis=1), axes=([0], [1]))
+            # a node's curve that ends sooner (past the FE's range: NaN) must not void
+            # the answer between two nodes that have one: linear there
+            out = np.where(np.isfinite(cubic), cubic, linear)
         return out
 
     def lookup(self, curves: np.ndarray, design_index: np.ndarray, p_pa: np.ndarray
@@ -128,6 +205,19 @@ class Responses:
         b = curves[design_index, i0 + 1]
         out = a + frac * (b - a)
         return np.where(inside | (f <= self.p_grid.size - 1), out, np.nan)
+
+
+def linear_weights(nodes: np.ndarray, x: float) -> tuple[np.ndarray, np.ndarray]:
+    """Indices and weights of linear interpolation at ``x`` (clamped to the nodes); at a
+    node, that node alone."""
+    x = min(max(float(x), float(nodes[0])), float(nodes[-1]))
+    j = int(np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, nodes.size - 2))
+    f = (x - nodes[j]) / (nodes[j + 1] - nodes[j])
+    if f == 0.0:
+        return np.array([j]), np.ones(1)
+    if f == 1.0:
+        return np.array([j + 1]), np.ones(1)
+    return np.array([j, j + 1]), np.array([1.0 - f, f])
 
 
 def lagrange_weights(nodes: np.ndarray, x: float) -> tuple[np.ndarray, np.ndarray]:

@@ -113,9 +113,11 @@ class Effect:
     needs: tuple[str, ...] = ()  # optional data columns it needs
 
 
-def physical_nodes(p: EffectParameter, n: int) -> np.ndarray:
-    """Grid of a design-stage parameter's values at which the baseline is tabulated."""
-    lo, hi = p.fit_bounds
+def physical_nodes(p: EffectParameter, n: int,
+                   bounds: tuple[float, float] | None = None) -> np.ndarray:
+    """Grid of a design-stage parameter's values at which the baseline is tabulated, over
+    ``bounds`` (default its fit bounds)."""
+    lo, hi = p.fit_bounds if bounds is None else bounds
     if lo > 0 and hi / lo > 2.5:
         return np.geomspace(lo, hi, n)
     return np.linspace(lo, hi, n)
