@@ -48,7 +48,7 @@ from solver.branching import switch_branch
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
-from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions
+from solver.mesh import MeshDivisions
 from solver.model import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
 from solver.stability import volume_control_index
@@ -229,7 +229,7 @@ def predictor(history: list[tuple[float, np.ndarray, list[np.ndarray], float]], 
 
 def solve(design: Design, settings: SolverSettings | None = None,
           on_step: Callable[[dict], None] | None = None, backend: str = "auto",
-          divisions: MeshDivisions = DEFAULT_DIVISIONS,
+          divisions: MeshDivisions | None = None,
           follow_stable_branch: bool = False) -> Curve:
     """Inflate ``design`` until a stop criterion; return the curve.
 
@@ -248,11 +248,12 @@ def solve(design: Design, settings: SolverSettings | None = None,
 
 def inflate(design: Design, settings: SolverSettings | None = None,
             on_step: Callable[[dict], None] | None = None, backend: str = "auto",
-            debug: bool = False, divisions: MeshDivisions = DEFAULT_DIVISIONS,
+            debug: bool = False, divisions: MeshDivisions | None = None,
             follow_stable_branch: bool = False) -> tuple[Curve, ActuatorModel, np.ndarray]:
     """Like ``solve``, also returning the discrete model and the last converged
-    displacement (free dofs), for field output (VTK). ``divisions``: the level-0 mesh
-    resolution (convergence studies only; records assume the default).
+    displacement (free dofs), for field output (VTK). ``divisions``: an explicit level-0
+    mesh resolution for convergence studies (records know only the named ones); None takes
+    ``settings.mesh_divisions``.
 
     numpy's OpenBLAS is held to one thread meanwhile: its idle threads spin and take
     the cores from MKL PARDISO's, which does the parallel work (benchmarks/RESULTS.md).
@@ -265,7 +266,7 @@ def inflate(design: Design, settings: SolverSettings | None = None,
 
 
 def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict], None] | None,
-             backend: str, debug: bool, divisions: MeshDivisions,
+             backend: str, debug: bool, divisions: MeshDivisions | None,
              follow_stable_branch: bool) -> tuple[Curve, ActuatorModel, np.ndarray]:
     t_start = time.perf_counter()
     model = ActuatorModel(design, settings, divisions)
