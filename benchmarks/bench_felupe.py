@@ -21,7 +21,7 @@ Elements (``--element``):
   felupe's own choice for this element, trilinear per element (8 functions), which is
   a different discretisation (it shows how much the pressure space matters).
 
-    .venv/bin/python benchmarks/bench_felupe.py [--element hex1] [--level 1] [--pmax 1500] [--dp 100]
+    .venv/bin/python benchmarks/bench_felupe.py [--level 1] [--pmax 1500] [--dp 100]
     .venv/bin/python benchmarks/bench_felupe.py --element hex2 --level 0 [--pressure-space p1]
 
 felupe is an optional benchmark extra (pyproject ``benchmark``); results are

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from solver.branching import switch_branch
+from solver.branching import switch_at_failure, switch_branch
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
@@ -62,6 +62,8 @@ DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, no
 PREDICTOR_POINTS = 3        # converged states the predictor's parabola passes through
 CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated without tangent
 CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
+FAILURES_BEFORE_SWITCH = 4   # follow_stable_branch: failed attempts from one converged state
+                             # (extrapolated, then cut back) before the mode is injected
 
 
 class StepFailed(Exception):
@@ -296,6 +298,19 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                      "volume_ul": rows["v"][-1], "angle_deg": angle, "newton_iterations": it})
         return angle
 
+    def try_switch(switch_fn, u_, q_, p_, volume):
+        """One branch-switch attempt at the converged state (u_, q_, p_), Newton at the
+        cavity volume ``volume`` (solver/branching.py)."""
+        switch = switch_fn(model, u_, q_, p_, volume,
+                           lambda us, qs, ps: mixed_newton_step(model, us, qs, ps, settings,
+                                                                volume, None, backend),
+                           backend)
+        model.timings["branch_switch_attempts"] = (
+            model.timings.get("branch_switch_attempts", 0) + 1)
+        if debug:
+            print(f"branch switch after step {len(rows['p']) - 1}: {switch.reason}")
+        return switch
+
     last = model.evaluate(u, p, pressures=q)
     record(u, p, 0, 0.0, 0, last)
     # Initial increments: a small fraction of the chamber volume, or of the membrane modulus.
@@ -306,6 +321,8 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
         (model.volume0_mm3 if volume_control else 0.0, u, q, p)]
     extrapolate = True
     switch_index = -1
+    failures_here = 0            # failed attempts from the current converged state
+    failed_load = None           # the first of them's target
     for _ in range(settings.max_steps):
         # Under pressure control the last step lands on max_pressure_pa, not beyond it.
         load = (model.volume0_mm3 + 0.5 * rows["v"][-1] + step) if volume_control else (
@@ -323,10 +340,26 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
             model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
             if debug:
                 print(f"cut-back at p = {p:.1f}, step {step:.4g}: {exc}")
+            failures_here += 1
+            if failed_load is None:
+                failed_load = load
             if guess is not None:
                 extrapolate = False            # retry the same step from the converged state
                 continue
             extrapolate = True
+            if (follow_stable_branch and volume_control and switch_index < 0
+                    and failures_here == FAILURES_BEFORE_SWITCH):
+                switch = try_switch(switch_at_failure, u, q, p, failed_load)
+                if switch.converged is not None:
+                    out = switch.converged
+                    u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
+                    history = [(failed_load, u, q, p)]
+                    angle = record(u, p, out.iterations, out.residual, out.negative_pivots,
+                                   last, out.g_kinv_g)
+                    switch_index = len(rows["p"]) - 1
+                    failures_here, failed_load = 0, None
+                    step = 0.5 * step
+                    continue
             step *= 0.5
             if step < MIN_CUTBACK * initial_step:
                 status, reason = "failed", (f"step at p = {p:.1f} Pa, angle = "
@@ -336,21 +369,14 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
             continue
         u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
         extrapolate = True
+        failures_here, failed_load = 0, None
         history = (history + [(load, u, q, p)])[-PREDICTOR_POINTS:]
         its = step_out.iterations
         angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last,
                        step_out.g_kinv_g)
         if (follow_stable_branch and volume_control and switch_index < 0
                 and rows["negv"][-1] > 0):
-            switch = switch_branch(
-                model, u, q, p, load,
-                lambda u_, q_, p_, load=load: mixed_newton_step(model, u_, q_, p_, settings, load,
-                                                                  None,
-                                                     backend), backend)
-            model.timings["branch_switch_attempts"] = (
-                model.timings.get("branch_switch_attempts", 0) + 1)
-            if debug:
-                print(f"branch switch at step {len(rows['p']) - 1}: {switch.reason}")
+            switch = try_switch(switch_branch, u, q, p, load)
             if switch.converged is not None:
                 out = switch.converged
                 for column in rows.values():
