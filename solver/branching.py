@@ -34,6 +34,7 @@ from solver.model import ActuatorModel
 from solver.stability import constrained_modes, volume_control_index
 
 AMPLITUDES_MM = (0.005, 0.01, 0.02, 0.04, 0.08, 0.16)   # trial sizes of the injected mode
+FAILURE_AMPLITUDES_MM = (0.01, 0.04, 0.16)   # the same at a failed step (each a Newton solve)
 
 
 @dataclass
@@ -81,7 +82,7 @@ def switch_branch(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: f
                       "the potential does not fall along the unstable mode")
     start = u + best[1] * phi
     try:
-        out = converge(start, model.consistent_pressures(start), p)
+        out = converge(start, perturbed_pressures(model, ev, q, best[1] * phi), p)
     except Exception as exc:         # StepFailed, an inverted element, a failed factorisation
         return Switch(None, float(vals[0]), abs(best[1]), best[0],
                       f"Newton from the perturbed state failed: {exc}")
@@ -95,6 +96,14 @@ def switch_branch(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: f
     return Switch(out, float(vals[0]), abs(best[1]), drop, "switched")
 
 
+def perturbed_pressures(model: ActuatorModel, ev, q: list[np.ndarray], du: np.ndarray
+                        ) -> list[np.ndarray]:
+    """Element pressures for the start u + du: q plus their linearised change (the mixed
+    iterate's update, solver/assembly.py), not the penalty pressures of the perturbed
+    state, whose second-order dilatation times K would swamp the start."""
+    return [qb + d for qb, d in zip(q, model.pressure_update(ev, du))]
+
+
 def mode_component_mm(phi: np.ndarray, du: np.ndarray) -> float:
     """Amplitude of the mode phi (scaled to a largest component of 1) in a displacement
     change du: the least-squares c of du ~ c phi, mm."""
@@ -105,7 +114,7 @@ def switch_at_failure(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
                       target_volume: float, converge: Callable, backend: str) -> Switch:
     """A volume step from the converged state (u, q, p) to ``target_volume`` (half
     model, mm^3) failed. Start Newton at ``target_volume`` from u + s phi (phi: the
-    lowest volume-neutral mode at (u, q, p), any sign; s from ``AMPLITUDES_MM``, + then
+    lowest volume-neutral mode at (u, q, p), any sign; s from ``FAILURE_AMPLITUDES_MM``, + then
     -) and take the first converged state with no unstable mode at constant volume.
     ``converge(u, q, p)`` runs the volume step to ``target_volume`` from a start.
     ``amplitude_mm`` of the result is the mode's amplitude in the change of state."""
@@ -114,19 +123,20 @@ def switch_at_failure(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
     vals, vecs = constrained_modes(ev.K, ev.g, fac, k=1)
     phi = vecs[:, 0] / np.abs(vecs[:, 0]).max()
     tried = []
-    for amp in AMPLITUDES_MM:
+    for amp in FAILURE_AMPLITUDES_MM:
         for sign in (1.0, -1.0):
             start = u + sign * amp * phi
             try:
-                out = converge(start, model.consistent_pressures(start), p)
+                out = converge(start, perturbed_pressures(model, ev, q, sign * amp * phi), p)
             except Exception as exc:   # StepFailed, an inverted element, a failed factorisation
                 tried.append(f"{sign * amp:+g} mm: {type(exc).__name__}")
                 continue
             index = volume_control_index(out.negative_pivots, out.g_kinv_g)
             if index == 0:
                 return Switch(out, float(vals[0]), abs(mode_component_mm(phi, out.u - u)),
-                              float("nan"), f"switched at a failed step (injected "
-                              f"{sign * amp:+g} mm)")
+                              float("nan"), f"switched at a failed step (lowest volume-"
+                              f"neutral eigenvalue {vals[0]:.3g}; injected {sign * amp:+g} mm)")
             tried.append(f"{sign * amp:+g} mm: converged with {index} unstable modes")
     return Switch(None, float(vals[0]), 0.0, float("nan"),
-                  "no stable state from the injected mode: " + "; ".join(tried))
+                  f"no stable state from the injected mode (lowest volume-neutral eigenvalue "
+                  f"{vals[0]:.3g}): " + "; ".join(tried))

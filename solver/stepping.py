@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
@@ -62,8 +62,10 @@ DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, no
 PREDICTOR_POINTS = 3        # converged states the predictor's parabola passes through
 CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated without tangent
 CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
-FAILURES_BEFORE_SWITCH = 4   # follow_stable_branch: failed attempts from one converged state
-                             # (extrapolated, then cut back) before the mode is injected
+FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one converged state
+                             # (extrapolated and plain, each size; the step cut to 1/4) before
+                             # the unstable mode is injected (towards the last failed volume)
+SWITCH_NEWTON_ITER = 12      # Newton iterations allowed from an injected mode
 
 
 class StepFailed(Exception):
@@ -98,7 +100,7 @@ class Converged:
 def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
                       settings: SolverSettings, target_volume: float | None,
                       target_pressure: float | None, backend: str,
-                      start: Evaluation | None = None) -> Converged:
+                      start: Evaluation | None = None, patient: bool = False) -> Converged:
     """Converge one load step of the mixed u-q form (q: element pressures per block).
 
     ``start``: the evaluation at (u, q, p) when known (a volume step starting from the
@@ -112,6 +114,9 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
     contracts the error by ``CHORD_RATE`` per update (near the solution the chord
     update is nearly as good as Newton's: the tangent changes by O(|du|)); otherwise
     the tangent is assembled again. ``iterations`` counts linear solves.
+
+    ``patient``: no cut-off when the residual rises above the first iterate's (a start
+    perturbed off an equilibrium branch may climb before it converges).
     """
     tol = settings.newton_tol
     force_floor = model.mu0_min_pa * 1e-6
@@ -162,7 +167,7 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             raise StepFailed("Newton diverged")
         if it == 2:
             predictor_res = res
-        elif it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR:
+        elif it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR and not patient:
             # Worse than right after the predictor: this step is leaving the basin of
             # convergence; cutting back now is cheaper than iterating on.
             raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
@@ -237,8 +242,9 @@ def solve(design: Design, settings: SolverSettings | None = None,
 
     ``follow_stable_branch`` (volume control): where the state first becomes unstable
     at constant volume (a bifurcation, solver/stability.py), inject the unstable mode
-    and continue on the stable branch (solver/branching.py); the curve records the
-    step in ``branch_switch_index``. Off by default: the database's curves follow the
+    and continue on the stable branch (solver/branching.py); likewise when a step keeps
+    failing near one (``FAILURES_BEFORE_SWITCH``); the curve records the step in
+    ``branch_switch_index``. Off by default: the database's curves follow the
     primary branch and flag the instability (``volume_control_negative_eigenvalues``).
 
     Raises InputError for invalid input only; a solve that fails returns a Curve
@@ -298,12 +304,15 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                      "volume_ul": rows["v"][-1], "angle_deg": angle, "newton_iterations": it})
         return angle
 
+    switch_settings = replace(settings, max_newton_iter=SWITCH_NEWTON_ITER)
+
     def try_switch(switch_fn, u_, q_, p_, volume):
         """One branch-switch attempt at the converged state (u_, q_, p_), Newton at the
         cavity volume ``volume`` (solver/branching.py)."""
         switch = switch_fn(model, u_, q_, p_, volume,
-                           lambda us, qs, ps: mixed_newton_step(model, us, qs, ps, settings,
-                                                                volume, None, backend),
+                           lambda us, qs, ps: mixed_newton_step(
+                               model, us, qs, ps, switch_settings, volume, None, backend,
+                               patient=True),
                            backend)
         model.timings["branch_switch_attempts"] = (
             model.timings.get("branch_switch_attempts", 0) + 1)
@@ -322,7 +331,6 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
     extrapolate = True
     switch_index = -1
     failures_here = 0            # failed attempts from the current converged state
-    failed_load = None           # the first of them's target
     for _ in range(settings.max_steps):
         # Under pressure control the last step lands on max_pressure_pa, not beyond it.
         load = (model.volume0_mm3 + 0.5 * rows["v"][-1] + step) if volume_control else (
@@ -341,23 +349,21 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
             if debug:
                 print(f"cut-back at p = {p:.1f}, step {step:.4g}: {exc}")
             failures_here += 1
-            if failed_load is None:
-                failed_load = load
             if guess is not None:
                 extrapolate = False            # retry the same step from the converged state
                 continue
             extrapolate = True
             if (follow_stable_branch and volume_control and switch_index < 0
                     and failures_here == FAILURES_BEFORE_SWITCH):
-                switch = try_switch(switch_at_failure, u, q, p, failed_load)
+                switch = try_switch(switch_at_failure, u, q, p, load)
                 if switch.converged is not None:
                     out = switch.converged
                     u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
-                    history = [(failed_load, u, q, p)]
+                    history = [(load, u, q, p)]
                     angle = record(u, p, out.iterations, out.residual, out.negative_pivots,
                                    last, out.g_kinv_g)
                     switch_index = len(rows["p"]) - 1
-                    failures_here, failed_load = 0, None
+                    failures_here = 0
                     step = 0.5 * step
                     continue
             step *= 0.5
@@ -369,7 +375,7 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
             continue
         u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
         extrapolate = True
-        failures_here, failed_load = 0, None
+        failures_here = 0
         history = (history + [(load, u, q, p)])[-PREDICTOR_POINTS:]
         its = step_out.iterations
         angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last,
