@@ -23,9 +23,10 @@ last three converged states (u, q, p) extrapolated to the new load; the first tw
 start from the converged state with its tangent (an Euler predictor). Near the
 solution the iterate is evaluated without its tangent first and corrected with the
 last factorisation (chord updates) while that converges fast (``mixed_newton_step``).
-Neither changes the converged states beyond the Newton tolerance; together they cut
-the tangent assemblies and factorisations per step by about a third
-(benchmarks/RESULTS.md). A step whose extrapolated start fails is retried from the
+Neither changes the converged states beyond the Newton tolerance; on the standard curve
+the chord updates cut the tangent assemblies by a third and the factorisations by 15 %
+against full Newton (CHORD_SWITCH and CHORD_RATE tuned by these counts,
+benchmarks/RESULTS.md). A step whose extrapolated start fails is retried from the
 converged state before it is cut back; a failed step is cut back by half; the step grows
 when Newton converges quickly and shrinks when the
 angle increment is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
