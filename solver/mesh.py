@@ -43,9 +43,12 @@ class MeshDivisions:
 # 1000-2000 Pa is -2.3 to -2.9 % and the pressure at 10-60 deg +0.4 to +0.9 %;
 # FINE_X_DIVISIONS (twice the x divisions, ~2x the dofs) is within -0.6 to -1.7 % and
 # +0.3 to +0.4 %. Switching the default to it means regenerating the database (record key
-# version 3) and refitting the emulator.
+# version 3) and refitting the emulator. Until then it is selectable by name:
+# SolverSettings(mesh_divisions="fine_x") (own record keys, solver/store/keys.py).
 DEFAULT_DIVISIONS = MeshDivisions()
 FINE_X_DIVISIONS = MeshDivisions(x_refine=2)
+# The level-0 resolutions a user selects by name (SolverSettings.mesh_divisions).
+NAMED_DIVISIONS = {"default": DEFAULT_DIVISIONS, "fine_x": FINE_X_DIVISIONS}
 COARSE_DIVISIONS = MeshDivisions(y_chamber=2, y_side=1, membrane=1)
 GRADING_RATIO = 1.6     # largest / smallest element in a graded segment
 REFERENCE_WIDTH_MM = 3.0   # the x element sizes are given at this width (the paper's W)

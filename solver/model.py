@@ -28,7 +28,7 @@ from solver.assembly import (
     scatter_vector,
 )
 from solver.design import Design
-from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions, build_mesh
+from solver.mesh import NAMED_DIVISIONS, MeshDivisions, build_mesh
 from solver.settings import SolverSettings
 
 
@@ -184,9 +184,13 @@ class ActuatorModel(SolidModel):
     """
 
     def __init__(self, design: Design, settings: SolverSettings,
-                 divisions: MeshDivisions = DEFAULT_DIVISIONS) -> None:
+                 divisions: MeshDivisions | None = None) -> None:
+        """``divisions``: the level-0 resolution; None takes settings.mesh_divisions
+        (explicit divisions are for convergence studies)."""
         self.design = design.validated()
         self.settings = settings
+        if divisions is None:
+            divisions = NAMED_DIVISIONS[settings.mesh_divisions]
         am = build_mesh(self.design, settings.mesh_level, divisions)
         groups = [(np.nonzero(~am.membrane)[0], self.design.body_material, False),
                   (np.nonzero(am.membrane)[0], self.design.membrane_material, True)]

@@ -10,6 +10,7 @@ from solver.errors import InputError
 CONTROLS = ("volume", "pressure")
 ELEMENTS = ("hex2", "hex1")
 TIPS = ("free", "spring", "blocked")
+MESH_DIVISIONS = ("default", "fine_x")   # keys of solver.mesh.NAMED_DIVISIONS
 
 DEFAULT_MESH_LEVEL = 0  # within 2 % of the mesh-converged curve (docs/verification.md)
 MAX_MESH_LEVEL = 2   # level 2: every division x 3, ~500k dofs at the standard design (a
@@ -22,6 +23,9 @@ class SolverSettings:
 
     mesh_level        0 (coarsest) .. MAX_MESH_LEVEL; level n has n + 1 times the divisions
                       of level 0 in every direction (solver/mesh.py)
+    mesh_divisions    the level-0 resolution: "default" (the shipped database's), or
+                      "fine_x" (twice the divisions along x, ~2x the dofs; within the
+                      issue-12 mesh targets, docs/verification.md)
     element           "hex2" (27-node triquadratic, default) or "hex1" (8-node trilinear)
     control           "volume" (injected volume, pressure is an unknown) or "pressure"
     max_angle_deg     stop once the bending angle's magnitude exceeds this
@@ -38,6 +42,7 @@ class SolverSettings:
     """
 
     mesh_level: int = DEFAULT_MESH_LEVEL
+    mesh_divisions: str = "default"
     element: str = "hex2"
     control: str = "volume"
     max_angle_deg: float = 90.0
@@ -63,7 +68,8 @@ class SolverSettings:
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or value != value or not lo <= value <= hi:
                 raise InputError(name, f"got {value!r}", f"{lo} <= {name} <= {hi}")
-        for name, allowed in (("element", ELEMENTS), ("control", CONTROLS), ("tip", TIPS)):
+        for name, allowed in (("element", ELEMENTS), ("control", CONTROLS), ("tip", TIPS),
+                              ("mesh_divisions", MESH_DIVISIONS)):
             if getattr(self, name) not in allowed:
                 raise InputError(name, f"got {getattr(self, name)!r}", " | ".join(allowed))
         if self.tip == "spring" and self.spring_k_n_per_m <= 0:

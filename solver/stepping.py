@@ -23,9 +23,10 @@ last three converged states (u, q, p) extrapolated to the new load; the first tw
 start from the converged state with its tangent (an Euler predictor). Near the
 solution the iterate is evaluated without its tangent first and corrected with the
 last factorisation (chord updates) while that converges fast (``mixed_newton_step``).
-Neither changes the converged states beyond the Newton tolerance; together they cut
-the tangent assemblies and factorisations per step by about a third
-(benchmarks/RESULTS.md). A step whose extrapolated start fails is retried from the
+Neither changes the converged states beyond the Newton tolerance; on the standard curve
+the chord updates cut the tangent assemblies by a third and the factorisations by 15 %
+against full Newton (CHORD_SWITCH and CHORD_RATE tuned by these counts,
+benchmarks/RESULTS.md). A step whose extrapolated start fails is retried from the
 converged state before it is cut back; a failed step is cut back by half; the step grows
 when Newton converges quickly and shrinks when the
 angle increment is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
@@ -39,16 +40,16 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from solver.branching import switch_branch
+from solver.branching import switch_at_failure, switch_branch
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
-from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions
+from solver.mesh import MeshDivisions
 from solver.model import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
 from solver.stability import volume_control_index
@@ -62,6 +63,10 @@ DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, no
 PREDICTOR_POINTS = 3        # converged states the predictor's parabola passes through
 CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated without tangent
 CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
+FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one converged state
+                             # (extrapolated and plain, each size; the step cut to 1/4) before
+                             # the unstable mode is injected (towards the last failed volume)
+SWITCH_NEWTON_ITER = 12      # Newton iterations allowed from an injected mode
 
 
 class StepFailed(Exception):
@@ -96,7 +101,7 @@ class Converged:
 def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
                       settings: SolverSettings, target_volume: float | None,
                       target_pressure: float | None, backend: str,
-                      start: Evaluation | None = None) -> Converged:
+                      start: Evaluation | None = None, patient: bool = False) -> Converged:
     """Converge one load step of the mixed u-q form (q: element pressures per block).
 
     ``start``: the evaluation at (u, q, p) when known (a volume step starting from the
@@ -110,6 +115,9 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
     contracts the error by ``CHORD_RATE`` per update (near the solution the chord
     update is nearly as good as Newton's: the tangent changes by O(|du|)); otherwise
     the tangent is assembled again. ``iterations`` counts linear solves.
+
+    ``patient``: no cut-off when the residual rises above the first iterate's (a start
+    perturbed off an equilibrium branch may climb before it converges).
     """
     tol = settings.newton_tol
     force_floor = model.mu0_min_pa * 1e-6
@@ -160,7 +168,7 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             raise StepFailed("Newton diverged")
         if it == 2:
             predictor_res = res
-        elif it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR:
+        elif it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR and not patient:
             # Worse than right after the predictor: this step is leaving the basin of
             # convergence; cutting back now is cheaper than iterating on.
             raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
@@ -229,14 +237,15 @@ def predictor(history: list[tuple[float, np.ndarray, list[np.ndarray], float]], 
 
 def solve(design: Design, settings: SolverSettings | None = None,
           on_step: Callable[[dict], None] | None = None, backend: str = "auto",
-          divisions: MeshDivisions = DEFAULT_DIVISIONS,
+          divisions: MeshDivisions | None = None,
           follow_stable_branch: bool = False) -> Curve:
     """Inflate ``design`` until a stop criterion; return the curve.
 
     ``follow_stable_branch`` (volume control): where the state first becomes unstable
     at constant volume (a bifurcation, solver/stability.py), inject the unstable mode
-    and continue on the stable branch (solver/branching.py); the curve records the
-    step in ``branch_switch_index``. Off by default: the database's curves follow the
+    and continue on the stable branch (solver/branching.py); likewise when a step keeps
+    failing near one (``FAILURES_BEFORE_SWITCH``); the curve records the step in
+    ``branch_switch_index``. Off by default: the database's curves follow the
     primary branch and flag the instability (``volume_control_negative_eigenvalues``).
 
     Raises InputError for invalid input only; a solve that fails returns a Curve
@@ -248,11 +257,12 @@ def solve(design: Design, settings: SolverSettings | None = None,
 
 def inflate(design: Design, settings: SolverSettings | None = None,
             on_step: Callable[[dict], None] | None = None, backend: str = "auto",
-            debug: bool = False, divisions: MeshDivisions = DEFAULT_DIVISIONS,
+            debug: bool = False, divisions: MeshDivisions | None = None,
             follow_stable_branch: bool = False) -> tuple[Curve, ActuatorModel, np.ndarray]:
     """Like ``solve``, also returning the discrete model and the last converged
-    displacement (free dofs), for field output (VTK). ``divisions``: the level-0 mesh
-    resolution (convergence studies only; records assume the default).
+    displacement (free dofs), for field output (VTK). ``divisions``: an explicit level-0
+    mesh resolution for convergence studies (records know only the named ones); None takes
+    ``settings.mesh_divisions``.
 
     numpy's OpenBLAS is held to one thread meanwhile: its idle threads spin and take
     the cores from MKL PARDISO's, which does the parallel work (benchmarks/RESULTS.md).
@@ -265,7 +275,7 @@ def inflate(design: Design, settings: SolverSettings | None = None,
 
 
 def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict], None] | None,
-             backend: str, debug: bool, divisions: MeshDivisions,
+             backend: str, debug: bool, divisions: MeshDivisions | None,
              follow_stable_branch: bool) -> tuple[Curve, ActuatorModel, np.ndarray]:
     t_start = time.perf_counter()
     model = ActuatorModel(design, settings, divisions)
@@ -295,6 +305,22 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                      "volume_ul": rows["v"][-1], "angle_deg": angle, "newton_iterations": it})
         return angle
 
+    switch_settings = replace(settings, max_newton_iter=SWITCH_NEWTON_ITER)
+
+    def try_switch(switch_fn, u_, q_, p_, volume):
+        """One branch-switch attempt at the converged state (u_, q_, p_), Newton at the
+        cavity volume ``volume`` (solver/branching.py)."""
+        switch = switch_fn(model, u_, q_, p_, volume,
+                           lambda us, qs, ps: mixed_newton_step(
+                               model, us, qs, ps, switch_settings, volume, None, backend,
+                               patient=True),
+                           backend)
+        model.timings["branch_switch_attempts"] = (
+            model.timings.get("branch_switch_attempts", 0) + 1)
+        if debug:
+            print(f"branch switch after step {len(rows['p']) - 1}: {switch.reason}")
+        return switch
+
     last = model.evaluate(u, p, pressures=q)
     record(u, p, 0, 0.0, 0, last)
     # Initial increments: a small fraction of the chamber volume, or of the membrane modulus.
@@ -305,6 +331,7 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
         (model.volume0_mm3 if volume_control else 0.0, u, q, p)]
     extrapolate = True
     switch_index = -1
+    failures_here = 0            # failed attempts from the current converged state
     for _ in range(settings.max_steps):
         # Under pressure control the last step lands on max_pressure_pa, not beyond it.
         load = (model.volume0_mm3 + 0.5 * rows["v"][-1] + step) if volume_control else (
@@ -322,10 +349,24 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
             model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
             if debug:
                 print(f"cut-back at p = {p:.1f}, step {step:.4g}: {exc}")
+            failures_here += 1
             if guess is not None:
                 extrapolate = False            # retry the same step from the converged state
                 continue
             extrapolate = True
+            if (follow_stable_branch and volume_control and switch_index < 0
+                    and failures_here == FAILURES_BEFORE_SWITCH):
+                switch = try_switch(switch_at_failure, u, q, p, load)
+                if switch.converged is not None:
+                    out = switch.converged
+                    u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
+                    history = [(load, u, q, p)]
+                    angle = record(u, p, out.iterations, out.residual, out.negative_pivots,
+                                   last, out.g_kinv_g)
+                    switch_index = len(rows["p"]) - 1
+                    failures_here = 0
+                    step = 0.5 * step
+                    continue
             step *= 0.5
             if step < MIN_CUTBACK * initial_step:
                 status, reason = "failed", (f"step at p = {p:.1f} Pa, angle = "
@@ -335,21 +376,14 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
             continue
         u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
         extrapolate = True
+        failures_here = 0
         history = (history + [(load, u, q, p)])[-PREDICTOR_POINTS:]
         its = step_out.iterations
         angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last,
                        step_out.g_kinv_g)
         if (follow_stable_branch and volume_control and switch_index < 0
                 and rows["negv"][-1] > 0):
-            switch = switch_branch(
-                model, u, q, p, load,
-                lambda u_, q_, p_, load=load: mixed_newton_step(model, u_, q_, p_, settings, load,
-                                                                  None,
-                                                     backend), backend)
-            model.timings["branch_switch_attempts"] = (
-                model.timings.get("branch_switch_attempts", 0) + 1)
-            if debug:
-                print(f"branch switch at step {len(rows['p']) - 1}: {switch.reason}")
+            switch = try_switch(switch_branch, u, q, p, load)
             if switch.converged is not None:
                 out = switch.converged
                 for column in rows.values():

@@ -31,7 +31,7 @@ class CurveData:
     key: str = ""
     tip: str = "free"
     spring_k_n_per_m: float = 0.0
-    mesh_rank: tuple = field(default=(0, 0))  # finer solves win when a design repeats
+    mesh_rank: tuple = field(default=(0, 0, 0))  # finer solves win when a design repeats
 
     def usable_points(self, quantity: str = "angle_deg") -> tuple[np.ndarray, np.ndarray]:
         """(pressure_pa, values) on the rising pressure branch, p > 0, finite values."""
@@ -143,5 +143,6 @@ def curves_from_store(path: str | os.PathLike) -> tuple[list[CurveData], dict]:
                 angle_deg=np.asarray(c.angle_deg, dtype=float),
                 force_mn=np.asarray(c.force_mn, dtype=float), key=rec.key, tip=s.tip,
                 spring_k_n_per_m=float(s.spring_k_n_per_m),
-                mesh_rank=(int(s.mesh_level), 1 if s.element == "hex2" else 0)))
+                mesh_rank=(int(s.mesh_level), 1 if s.mesh_divisions == "fine_x" else 0,
+                           1 if s.element == "hex2" else 0)))
     return curves, metadata

@@ -15,6 +15,7 @@ from solver.settings import MAX_MESH_LEVEL, settings_from_dict
     ({"mesh_level": MAX_MESH_LEVEL + 1}, "mesh_level", f"0 <= mesh_level <= {MAX_MESH_LEVEL}"),
     ({"newton_tol": 0.5}, "newton_tol", "newton_tol <= 0.01"),
     ({"element": "tet4"}, "element", "hex2 | hex1"),
+    ({"mesh_divisions": "fine"}, "mesh_divisions", "default | fine_x"),
     ({"mesh_lvl": 1}, "mesh_lvl", "mesh_level"),
     ({"max_steps": "many"}, "max_steps", None),
 ])
@@ -31,3 +32,17 @@ def test_whole_floats_and_defaults_are_read():
     assert s.mesh_level == 1 and isinstance(s.mesh_level, int)
     assert s.max_angle_deg == 45.0
     assert settings_from_dict({}) == SolverSettings()
+
+
+def test_mesh_divisions_select_the_fine_x_mesh():
+    # "fine_x" doubles every division along x (solver/mesh.py FINE_X_DIVISIONS) and
+    # nothing else; "default" is the shipped database's mesh.
+    from solver import Design
+    from solver.mesh import FINE_X_DIVISIONS, build_mesh
+    from solver.model import ActuatorModel
+
+    default = ActuatorModel(Design(), SolverSettings(element="hex1"))
+    fine = ActuatorModel(Design(), settings_from_dict({"element": "hex1",
+                                                       "mesh_divisions": "fine_x"}))
+    expected = build_mesh(Design(), 0, FINE_X_DIVISIONS).mesh
+    assert fine.mesh.nelements == expected.nelements == 2 * default.mesh.nelements

@@ -2,7 +2,11 @@
 
 A key is the first 32 hex digits (128 bits) of the SHA-256 of a canonical JSON text::
 
-    {"design": Design.as_dict(), "key_version": 1, "settings": SolverSettings.as_dict()}
+    {"design": Design.as_dict(), "key_version": 2, "settings": SolverSettings.as_dict()}
+
+except that settings added after version 2 (``ADDED_SETTINGS``) are left out while they
+hold their default value, so every key of version 2 stays valid (the shipped database)
+and a record with a non-default value still gets a key of its own.
 
 Canonical means: the design is validated first (so a default body length and an
 explicit 12 mm give the same key), every number is a float rounded to
@@ -26,6 +30,8 @@ from solver.settings import SolverSettings
 
 KEY_VERSION = 2   # 2: mesh levels redefined (solver/mesh.py), so a level names a new mesh
                   # (3 is reserved for the day the default divisions become FINE_X_DIVISIONS)
+# Settings added after version 2, with the value that keeps a version-2 key.
+ADDED_SETTINGS = {"mesh_divisions": "default"}
 SIGNIFICANT_DIGITS = 10
 KEY_HEX_DIGITS = 32
 
@@ -56,8 +62,11 @@ def canonical(value: object) -> object:
 
 def canonical_json(design: Design, settings: SolverSettings) -> str:
     """The text whose hash is the key (useful to see why two keys differ)."""
-    data = {"design": design.as_dict(), "key_version": KEY_VERSION,
-            "settings": settings.validated().as_dict()}
+    plain = settings.validated().as_dict()
+    for name, default in ADDED_SETTINGS.items():
+        if plain[name] == default:
+            del plain[name]
+    data = {"design": design.as_dict(), "key_version": KEY_VERSION, "settings": plain}
     return json.dumps(canonical(data), sort_keys=True, separators=(",", ":"))
 
 
