@@ -266,3 +266,18 @@ def test_force_range_keeps_the_nodes_most_blocked_tip_curves_reach():
     q = FORCE_PRESSURE_NODES_PA[:4]
     np.testing.assert_allclose(force_at(per_kpa, q), q / 1000 * per_kpa)
     np.testing.assert_allclose(force_at(per_kpa, 10.0), 0.01 * per_kpa[0])
+
+
+def test_no_force_number_where_its_band_is_wider_than_twice_the_force(emulator):
+    """The force models rest on 10-12 blocked-tip designs per group: wherever the band is
+    wider than FORCE_BAND_LIMIT x the force, no force is given and validity says why."""
+    from surrogate.emulator.emulator import FORCE_BAND_LIMIT
+
+    p = np.linspace(100.0, 2000.0, 20)
+    for d in (Design(), Design(L_mm=10, t_mm=0.9, T_mm=1.3, b_mm=1.6, h_mm=0.2)):
+        pred = emulator.predict(d, p)
+        f, lo, hi = pred.force_mn, pred.force_lower_mn, pred.force_upper_mn
+        shown = np.isfinite(f)
+        assert (hi[shown] - lo[shown] <= FORCE_BAND_LIMIT * np.abs(f[shown]) + 1e-9).all()
+        if (~shown).any():
+            assert "force_band_too_wide" in pred.validity["flags"]

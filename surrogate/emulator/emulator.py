@@ -51,6 +51,9 @@ EMULATED_PRESSURE_DROP = 1e-3
 _B_ANGLE = spline_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
 
 
+FORCE_BAND_LIMIT = 2.0     # widest force band answered, relative to the force
+
+
 @dataclass(frozen=True)
 class PairEmulator:
     """The emulator of one material pair (body, membrane).
@@ -283,7 +286,12 @@ class Emulator:
             f = scale * force_at(y, p_red)
             f[p_red > pe.force_limit_pa * (1 + 1e-12)] = np.nan
             out.append(f)
-        return out[0], np.fmin(out[1], out[2]), np.fmax(out[1], out[2])
+        lo, hi = np.fmin(out[1], out[2]), np.fmax(out[1], out[2])
+        # no force where its band is wider than FORCE_BAND_LIMIT x the force itself:
+        # the group's few blocked-tip designs do not back a number there
+        unbacked = (hi - lo) > FORCE_BAND_LIMIT * np.abs(out[0]) + 1e-9
+        return (np.where(unbacked, np.nan, out[0]), np.where(unbacked, np.nan, lo),
+                np.where(unbacked, np.nan, hi))
 
     def _validity(self, pe: PairEmulator, cb: CurveBand, point: BoxPoint, p: np.ndarray,
                   past: np.ndarray, force: object) -> dict[str, object]:
@@ -298,6 +306,13 @@ class Emulator:
                 f"{cb.limit_angle_deg:g} deg): no angle is given there; an FE solve "
                 "(POST /v1/solve) with a larger max_angle_deg can go further")
         if force is not None:
+            unbacked = np.isnan(force[0]) & (p <= pe.force_limit_pa * point.pressure_scale)
+            if unbacked.any():
+                flags.append("force_band_too_wide")
+                messages.append(f"no force at {int(unbacked.sum())} pressure(s): its band "
+                                f"is wider than {FORCE_BAND_LIMIT:g} x the force there (too "
+                                "few blocked-tip FE curves near this design; an FE solve "
+                                "with tip = blocked gives it)")
             f_lim = pe.force_limit_pa * point.pressure_scale
             if (p > f_lim * (1 + 1e-12)).any():
                 flags.append("force_past_fe_range")
@@ -398,8 +413,10 @@ class Emulator:
                     scale = pt.pressure_scale * pt.length_scale**2
                     vals = [scale * float(force_at(yy, q)) for yy in (
                         fmean[row], fmean[row] - z * fsd[row], fmean[row] + z * fsd[row])]
-                    out["force"][i] = vals[0]
-                    out["force_lo"][i], out["force_hi"][i] = min(vals[1:]), max(vals[1:])
+                    lo_f, hi_f = min(vals[1:]), max(vals[1:])
+                    if hi_f - lo_f <= FORCE_BAND_LIMIT * abs(vals[0]) + 1e-9:
+                        out["force"][i] = vals[0]
+                        out["force_lo"][i], out["force_hi"][i] = lo_f, hi_f
         return out
 
     def nearest_records(self, design: Design, count: int = 3) -> list[str]:
