@@ -23,6 +23,7 @@ import numpy as np
 from solver.errors import InputError
 from solver.store import CurveStore
 from surrogate import load_surrogate
+from surrogate.emulator import emulator as emulator_module
 from surrogate.emulator import load_emulator
 
 
@@ -41,6 +42,7 @@ class HeldOut:
     force_errors_mn: list[np.ndarray] = field(default_factory=list)
     force_inside: int = 0
     force_total: int = 0
+    force_withheld: int = 0
 
     def summary(self) -> str:
         flat = np.concatenate(self.errors_deg) if self.errors_deg else np.array([np.nan])
@@ -51,6 +53,10 @@ class HeldOut:
                 f"95 % band coverage {self.inside / max(self.total, 1):.3f}; per-curve rmse "
                 f"median {np.median(self.curve_rmse_deg) if self.curve_rmse_deg else np.nan:.2f}"
                 f"; curves with rmse <= 1 and max <= 3 deg: {both}")
+        if self.force_withheld:
+            text += (f"\nforce: {self.force_withheld} of {self.force_total} points "
+                     "withheld in the answer (flag force_band_too_wide); the force model "
+                     "at all of them:")
         if self.force_errors_mn:
             fl = np.concatenate(self.force_errors_mn)
             text += (f"\nforce: {len(self.force_errors_mn)} blocked-tip curves, rmse "
@@ -74,7 +80,15 @@ def _force(e, rec, out: HeldOut) -> None:
         return
     if p.force_mn is None:
         return
+    answered = np.isfinite(p.force_mn)
+    # the force model's own accuracy, also where the answer withholds it (band > 2x force)
+    limit, emulator_module.FORCE_BAND_LIMIT = emulator_module.FORCE_BAND_LIMIT, np.inf
+    try:
+        p = e.predict(rec.design, c.pressure_pa[keep])
+    finally:
+        emulator_module.FORCE_BAND_LIMIT = limit
     ok = np.isfinite(p.force_mn)
+    out.force_withheld += int((ok & ~answered).sum())
     fe = c.force_mn[keep][ok]
     out.force_errors_mn.append(p.force_mn[ok] - fe)
     out.force_inside += int(((fe >= p.force_lower_mn[ok] - 1e-9)
