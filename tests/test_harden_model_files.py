@@ -90,6 +90,8 @@ def test_any_change_to_a_sealed_surrogate_file_is_refused(tmp_path):
 
 EMULATOR_DAMAGE = {
     "band scale a string": (("pairs", 0, "band_scale"), "x"),
+    "band scales cut": (("pairs", 0, "band_scale"), [1.0, 2.0]),
+    "a band scale negative": (("pairs", 0, "band_scale"), [1.0] * 40 + [-1.0] + [1.0] * 27),
     "sign 0.5": (("pairs", 0, "sign"), 0.5),
     "lengths cut": (("pairs", 0, "curves", "gps", 0, "lengths"), [1.0]),
     "coordinates missing a row": (("pairs", 1, "coordinates", 0), DELETE),
@@ -107,7 +109,7 @@ def test_any_change_to_a_sealed_emulator_file_is_refused(emulator_doc):
     from surrogate.file_seal import seal
 
     doc = seal(emulator_doc)
-    doc["pairs"][0]["band_scale"] *= 1.01
+    doc["pairs"][0]["curves"]["gps"][0]["lengths"][0] *= 1.01
     with pytest.raises(SurrogateFileError, match="content changed since it was written"):
         emulator_from_dict(doc, "emulator.json")
 

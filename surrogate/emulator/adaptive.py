@@ -4,9 +4,9 @@
 
 Candidates are scrambled Sobol points of every group's reduced box (``CANDIDATES``
 per group, a seed different from the grid's); each is scored by the emulator's
-predictive standard deviation of log p, averaged over the angle nodes from 5 to 90 deg,
-times the group's band scale (so that a group whose LOO errors exceed its GP variance
-is refined first). The n best are taken greedily, each at least ``MIN_SPACING``
+predictive standard deviation of log p times the node's band multiplier (so that a
+group whose LOO errors exceed its GP variance is refined first), averaged over the
+angle nodes from 10 to 90 deg (below 10 deg the angle hardly depends on p's error). The n best are taken greedily, each at least ``MIN_SPACING``
 (unit-cube distance) from the others and from the database designs, so that one
 uncertain corner does not take every slot.
 """
@@ -60,7 +60,7 @@ def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = N
     if not 1 <= n <= 10_000:
         raise InputError("--adaptive", f"got {n}", "1 <= N <= 10000")
     settings = settings or SolverSettings()
-    nodes = ANGLE_NODES_DEG >= 5.0
+    nodes = ANGLE_NODES_DEG >= 10.0
     scored: list[tuple[float, str, np.ndarray, Design]] = []
     for group in sorted(set(GROUPS.values())):
         models = [pe for key, pe in emulator.pairs.items() if key[:-1] == group]
@@ -75,9 +75,9 @@ def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = N
             try:
                 pe = emulator._pair(point, uu)
             except InputError:
-                pe = max(models, key=lambda m: m.band_scale)   # near a balance: uncertain
+                pe = max(models, key=lambda m: float(np.median(m.band_scale)))  # near a balance
             _, var = pe.curves.predict(uu)
-            score = float(np.sqrt(var[:N_NODES][nodes]).mean()) * pe.band_scale
+            score = float((np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES])[nodes].mean())
             scored.append((score, group, uu, design))
     scored.sort(key=lambda s: -s[0])
     taken: dict[str, list[np.ndarray]] = {

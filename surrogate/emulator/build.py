@@ -12,9 +12,11 @@ scale^2)), so records of scaled copies of a design pool their information.
 Curves that end before 90 deg (the FE failed or stopped) are not interpolated; they
 limit the range of every query within ``FAILED_RADIUS`` of them (unit-cube distance).
 
-Bands: the GP's standard deviation times ``band_scale``, chosen so that leave-one-out
-(LOO) bands cover ``level`` of the LOO FE points in angle (each database curve
-predicted by the emulator fitted without it, read at the curve's own pressures).
+Bands: the GP's standard deviation times ``band_scale``, one multiplier per output node
+(``node_band_scales``: per angle bin for pressure), chosen so that leave-one-out (LOO)
+bands cover ``level`` of the LOO FE points in every angle bin; the report gives the resulting LOO coverage in
+angle, overall and by angle bin (each database curve predicted by the emulator fitted
+without it, read at the curve's own pressures).
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from surrogate.emulator.emulator import (
     _with_origin,
 )
 from surrogate.emulator.features import (
+    ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
     curve_features,
@@ -116,57 +119,99 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
     return free, force
 
 
-def _band_scale_for(curves: list, mean: np.ndarray, var: np.ndarray, level: float
-                    ) -> tuple[float, dict]:
-    """The sd multiplier whose LOO bands cover ``level`` of the LOO FE points, and the LOO
-    angle errors (deg) at scale 1."""
-    z = z_value(level)
-    theta = FINE_ANGLES_DEG
+ANGLE_BINS_DEG = (0.0, 10.0, 20.0, 40.0, 60.0, 75.0, 90.0)   # band calibration bins
 
-    def angles(i: int, shift: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        p_red, a = curves[i]
+
+def _loo_curves(curves: list, mean: np.ndarray, var: np.ndarray, scales: np.ndarray,
+                z: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Per database curve: its FE angles (deg, up to the FE's stop, signed positive) and
+    the LOO emulator's angle, band lower and upper at the curve's own pressures."""
+    theta = FINE_ANGLES_DEG
+    out = []
+    for i, (p_red, a) in enumerate(curves):
         sign = 1.0 if a[np.argmax(np.abs(a))] >= 0 else -1.0
         keep = np.abs(a) <= LIMIT_ANGLE_DEG
-        y, sd = mean[i, :N_NODES], np.sqrt(var[i, :N_NODES])
+        y, sd = mean[i, :N_NODES], np.sqrt(var[i, :N_NODES]) * scales[:N_NODES]
         pm = _with_origin(_monotone(theta * np.exp(_B_ANGLE @ y)))
-        pl = _with_origin(_monotone(theta * np.exp(_B_ANGLE @ (y - shift * sd))))
-        pu = _with_origin(_monotone(theta * np.exp(_B_ANGLE @ (y + shift * sd))))
+        pl = _with_origin(_monotone(theta * np.exp(_B_ANGLE @ (y - z * sd))))
+        pu = _with_origin(_monotone(theta * np.exp(_B_ANGLE @ (y + z * sd))))
         q = p_red[keep]
-        return (sign * a[keep], np.interp(q, pm, ANGLES0), np.interp(q, pu, ANGLES0),
-                np.interp(q, pl, ANGLES0))
+        out.append((sign * a[keep], np.interp(q, pm, ANGLES0), np.interp(q, pu, ANGLES0),
+                    np.interp(q, pl, ANGLES0)))
+    return out
 
-    errors = []
-    for i in range(len(curves)):
-        fe, m, _, _ = angles(i, 0.0)
-        errors.append(m - fe)
-    flat = np.concatenate(errors)
 
-    def coverage(scale: float) -> float:
+def _angle_bin(angle_deg: np.ndarray) -> np.ndarray:
+    """Index of the ANGLE_BINS_DEG bin of each angle (the last bin closed)."""
+    edges = np.asarray(ANGLE_BINS_DEG)
+    return np.clip(np.searchsorted(edges, angle_deg, side="right") - 1, 0, len(edges) - 2)
+
+
+def node_band_scales(y: np.ndarray, curves: list, mean: np.ndarray, var: np.ndarray,
+                     level: float) -> np.ndarray:
+    """The sd multiplier of every output node (log p, then log V, at each angle node).
+
+    Pressure nodes: one multiplier per angle bin (ANGLE_BINS_DEG), the smallest whose
+    leave-one-out bands cover ``level`` of the LOO FE points with angles in that bin
+    (bisection, bins from low angles up, two sweeps). One multiplier for the whole curve was set by
+    the low-angle points, where the FE steps crowd (half the points lie below 10 deg) and
+    the GP's sd is smallest relative to its error: above 10 deg those bands covered every
+    LOO point and were +-30 deg wide. Volume nodes: the ``level`` quantile of |LOO error|
+    / LOO sd at each node over z(level) (a volume band is read at that node's angle).
+    All kept within [0.2, 50]."""
+    z = z_value(level)
+    node_bin = _angle_bin(ANGLE_NODES_DEG)
+    scales = np.ones(2 * N_NODES)
+    fe_bins = [_angle_bin(fe) for fe, *_ in _loo_curves(curves, mean, var, scales, z)]
+
+    def coverage(b: int) -> float:
         inside = total = 0
-        for i in range(len(curves)):
-            fe, _, lo, hi = angles(i, scale * z)
-            inside += int(((fe >= lo - 1e-9) & (fe <= hi + 1e-9)).sum())
-            total += len(fe)
-        return inside / max(total, 1)
+        for (fe, _, lo, hi), bins in zip(_loo_curves(curves, mean, var, scales, z), fe_bins):
+            sel = bins == b
+            inside += int(((fe[sel] >= lo[sel] - 1e-9) & (fe[sel] <= hi[sel] + 1e-9)).sum())
+            total += int(sel.sum())
+        return inside / total if total else 1.0
 
-    lo_s, hi_s = 0.2, 20.0
-    if coverage(hi_s) < level:
-        scale = hi_s
-    else:
-        for _ in range(30):
+    # two sweeps: a bin's nodes also shape the band just outside it
+    for b in list(range(len(ANGLE_BINS_DEG) - 1)) * 2:
+        nodes = np.flatnonzero(node_bin == b)
+        lo_s, hi_s = 0.2, 50.0
+        for _ in range(20):
             mid = np.sqrt(lo_s * hi_s)
-            if coverage(mid) >= level:
+            scales[nodes] = mid
+            if coverage(b) >= level:
                 hi_s = mid
             else:
                 lo_s = mid
-        scale = hi_s
-    per_curve = [float(np.sqrt(np.mean(e**2))) for e in errors]
-    report = {"loo_rmse_deg": float(np.sqrt(np.mean(flat**2))),
-              "loo_max_deg": float(np.max(np.abs(flat))),
-              "loo_curve_rmse_deg": per_curve,
-              "loo_coverage_at_scale_1": coverage(1.0), "band_scale": float(scale),
-              "loo_coverage": coverage(scale)}
-    return float(scale), report
+        scales[nodes] = hi_s
+    zs = np.abs(mean[:, N_NODES:] - y[:, N_NODES:]) / np.sqrt(np.maximum(var[:, N_NODES:],
+                                                                         1e-300))
+    scales[N_NODES:] = np.quantile(zs, level, axis=0) / z
+    return np.clip(scales, 0.2, 50.0)
+
+
+def _loo_angle_report(curves: list, mean: np.ndarray, var: np.ndarray,
+                      scales: np.ndarray, level: float) -> dict:
+    """LOO angle errors (deg) and band coverage, overall and by angle bin: each database
+    curve predicted by the emulator fitted without it, at the curve's own pressures."""
+    loo = _loo_curves(curves, mean, var, scales, z_value(level))
+    errors = [m - fe for fe, m, _, _ in loo]
+    flat = np.concatenate(errors)
+    ins = np.concatenate([(fe >= lo - 1e-9) & (fe <= hi + 1e-9) for fe, _, lo, hi in loo])
+    bins = _angle_bin(np.concatenate([fe for fe, *_ in loo]))
+    by_bin = []
+    for b, (a0, a1) in enumerate(zip(ANGLE_BINS_DEG[:-1], ANGLE_BINS_DEG[1:])):
+        sel = bins == b
+        if sel.any():
+            by_bin.append({"from_deg": a0, "to_deg": a1, "points": int(sel.sum()),
+                           "coverage": float(ins[sel].mean()),
+                           "rmse_deg": float(np.sqrt(np.mean(flat[sel] ** 2)))})
+    return {"loo_rmse_deg": float(np.sqrt(np.mean(flat**2))),
+            "loo_max_deg": float(np.max(np.abs(flat))),
+            "loo_curve_rmse_deg": [float(np.sqrt(np.mean(e**2))) for e in errors],
+            "loo_coverage": float(ins.mean()), "loo_coverage_by_angle": by_bin,
+            "band_scale_median": float(np.median(scales[:N_NODES])),
+            "band_scale_range": [float(scales.min()), float(scales.max())]}
 
 
 def force_range(u: np.ndarray, y: np.ndarray, share: float = FORCE_SHARE
@@ -191,7 +236,8 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     keys = tuple(k for k, kk in zip(rows.keys, keep) if kk)
     vgp = fit_vector_gp(u, y, seed=seed)
     loo_mean, loo_var = vgp.loo()
-    band_scale, loo = _band_scale_for(curves, loo_mean, loo_var, level)
+    band_scale = node_band_scales(y, curves, loo_mean, loo_var, level)
+    loo = _loo_angle_report(curves, loo_mean, loo_var, band_scale, level)
     force_gp, force_scale, force_nodes, force_designs = None, 1.0, 0, 0
     if force_rows is not None:
         force_nodes, fu, fy = force_range(np.array(force_rows[0]), np.array(force_rows[1]))

@@ -40,7 +40,7 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95
             continue
         lines.append(f"{pair:32s} {rep['designs']:7d} {rep['failed_designs']:6d} "
                      f"{rep['components']:4d} {rep['loo_rmse_deg']:12.2f} "
-                     f"{rep['loo_max_deg']:11.2f} {rep['band_scale']:7.2f} "
+                     f"{rep['loo_max_deg']:11.2f} {rep['band_scale_median']:7.2f} "
                      f"{rep['loo_coverage']:9.3f} {rep['force_designs']:13d}")
     lines.append(f"emulator fitted in {fit_s:.1f} s; wrote {path}")
     return emulator, lines

@@ -10,7 +10,7 @@ vector over the box's unit-cube coordinates (``solver.design_space``). A query
 2. predicts the node values and their variance, draws p(theta) through them (a linear
    spline map), and reads angle(p) off the monotone curve,
 3. gives the band as the horizontal band of the p(theta) curves at +-z sd (scaled by
-   ``band_scale``, calibrated on leave-one-out FE curves), so it is monotone too,
+   ``band_scale``, one per node, calibrated on leave-one-out FE curves), so it is monotone too,
 4. refuses every pressure past the FE's range: the database curves end at the FE's
    stop (``fe_limit_angle_deg``, 90 deg unless a curve failed earlier) and past it the
    answer is NaN with the flag ``past_fe_range``.
@@ -60,7 +60,8 @@ class PairEmulator:
 
     sign                 +1 bends away from the membrane, -1 towards it (reversed pair)
     curves               VectorGP of (log p_k/theta_k, log V_k/theta_k), k over nodes
-    band_scale           multiplies the GP sd so that LOO bands cover ``level``
+    band_scale           (2 N_NODES,) multipliers of the GP sd, one per output node, so
+                         that LOO bands cover ``level`` at every angle node
     fe_limit_angle_deg   the FE's last angle on every database curve of the pair
     fe_stop_reason       why the FE curves end there
     force                VectorGP of F_j / p_j (mN/kPa, signed) at the force nodes, or None
@@ -72,7 +73,7 @@ class PairEmulator:
     pair: str                    # group and sign, e.g. "pdms/ecoflex_00_30+"
     sign: float
     curves: VectorGP
-    band_scale: float
+    band_scale: np.ndarray
     fe_limit_angle_deg: float
     fe_stop_reason: str
     coordinates: np.ndarray
@@ -152,7 +153,7 @@ class Emulator:
     def curve_band(self, point: BoxPoint, z: float) -> tuple[PairEmulator, CurveBand]:
         pe = self._pair(point)
         mean, var = pe.curves.predict(point.coordinates())
-        sd = np.sqrt(var[:N_NODES]) * pe.band_scale
+        sd = np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES]
         theta = FINE_ANGLES_DEG
         p_raw = theta * np.exp(_B_ANGLE @ mean[:N_NODES])
         p = _monotone(p_raw)
@@ -165,7 +166,7 @@ class Emulator:
             if np.linalg.norm(np.asarray(fu) - u) < FAILED_RADIUS and angle < limit:
                 limit = float(angle)
                 reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
-        v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale
+        v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale[N_NODES:]
         return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw)
 
     # -- Predictor -----------------------------------------------------------------------
@@ -383,7 +384,7 @@ class Emulator:
             pe = self.pairs[key]
             u = np.array([points[i].coordinates() for i in idx])
             mean, var = pe.curves.predict_many(u)
-            y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * pe.band_scale
+            y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * pe.band_scale[:N_NODES]
             curves = [np.maximum.accumulate(theta * np.exp(m @ _B_ANGLE.T), axis=1)
                       for m in (y, y - z * sd, y + z * sd)]
             fmean = fsd = None

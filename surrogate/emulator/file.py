@@ -19,14 +19,14 @@ from pathlib import Path
 import numpy as np
 
 from solver.atomic_file import write_text_atomic
-from surrogate.emulator.emulator import Emulator, PairEmulator
+from surrogate.emulator.emulator import N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
 from surrogate.emulator.vector_gp import vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
 from surrogate.file_seal import check_seal, seal
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3   # 3: band_scale per output node (2 read, one multiplier)
 
 
 def _plain(value: object) -> object:
@@ -47,7 +47,7 @@ def emulator_to_dict(e: Emulator) -> dict:
     pairs = []
     for pe in e.pairs.values():
         pairs.append({
-            "pair": pe.pair, "sign": pe.sign, "band_scale": pe.band_scale,
+            "pair": pe.pair, "sign": pe.sign, "band_scale": pe.band_scale.tolist(),
             "fe_limit_angle_deg": pe.fe_limit_angle_deg, "fe_stop_reason": pe.fe_stop_reason,
             "coordinates": pe.coordinates.tolist(), "keys": list(pe.keys),
             "failed": [[np.asarray(u).tolist(), a, r] for u, a, r in pe.failed],
@@ -81,7 +81,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
             pair = str(p["pair"])
             pairs[pair] = PairEmulator(
                 pair=pair, sign=float(p["sign"]), curves=vector_gp_from_dict(p["curves"]),
-                band_scale=float(p["band_scale"]),
+                band_scale=_band_scales(p["band_scale"]),
                 fe_limit_angle_deg=float(p["fe_limit_angle_deg"]),
                 fe_stop_reason=str(p["fe_stop_reason"]),
                 coordinates=np.array(p["coordinates"], float),
@@ -114,14 +114,24 @@ def _check_gp(gp, what: str) -> None:
         raise ValueError(f"{what}: no finite answer at its own training design")
 
 
+def _band_scales(value: object) -> np.ndarray:
+    """Per-node band multipliers; a format-2 file's single multiplier applies to all."""
+    if isinstance(value, (int, float)):
+        return np.full(2 * N_NODES, float(value))
+    return np.asarray(value, float)
+
+
 def _check_pair(pe: PairEmulator) -> None:
     """The numbers of one pair that a prediction uses, in range (ValueError otherwise)."""
-    scalars = {"sign": pe.sign, "band_scale": pe.band_scale,
+    if pe.band_scale.shape != (2 * N_NODES,) or not np.isfinite(pe.band_scale).all() \
+            or (pe.band_scale <= 0).any():
+        raise ValueError(f"pair {pe.pair}: band scales must be {2 * N_NODES} positive numbers")
+    scalars = {"sign": pe.sign,
                "fe_limit_angle_deg": pe.fe_limit_angle_deg,
                "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa}
     if not all(math.isfinite(v) for v in scalars.values()):
         raise ValueError(f"pair {pe.pair}: a number is not finite")
-    if (abs(pe.sign) != 1.0 or pe.band_scale <= 0 or pe.fe_limit_angle_deg <= 0
+    if (abs(pe.sign) != 1.0 or pe.fe_limit_angle_deg <= 0
             or pe.force_band_scale <= 0 or pe.force_limit_pa <= 0):
         raise ValueError(f"pair {pe.pair}: sign, band scale or FE limit out of range")
     if pe.coordinates.ndim != 2 or len(pe.coordinates) != len(pe.keys):
