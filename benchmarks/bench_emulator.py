@@ -25,6 +25,7 @@ from solver.store import CurveStore
 from surrogate import load_surrogate
 from surrogate.emulator import emulator as emulator_module
 from surrogate.emulator import load_emulator
+from surrogate.emulator.build import ANGLE_BINS_DEG, angle_bin
 
 
 @dataclass
@@ -43,6 +44,8 @@ class HeldOut:
     force_inside: int = 0
     force_total: int = 0
     force_withheld: int = 0
+    fe_deg: list[np.ndarray] = field(default_factory=list)
+    inside_points: list[np.ndarray] = field(default_factory=list)
 
     def summary(self) -> str:
         flat = np.concatenate(self.errors_deg) if self.errors_deg else np.array([np.nan])
@@ -53,6 +56,13 @@ class HeldOut:
                 f"95 % band coverage {self.inside / max(self.total, 1):.3f}; per-curve rmse "
                 f"median {np.median(self.curve_rmse_deg) if self.curve_rmse_deg else np.nan:.2f}"
                 f"; curves with rmse <= 1 and max <= 3 deg: {both}")
+        if self.fe_deg:
+            fe, ins = np.abs(np.concatenate(self.fe_deg)), np.concatenate(self.inside_points)
+            bins = angle_bin(fe)
+            text += "\nband coverage by FE angle: " + ", ".join(
+                f"{ANGLE_BINS_DEG[b]:g}-{ANGLE_BINS_DEG[b + 1]:g} deg {ins[bins == b].mean():.2f}"
+                f" ({int((bins == b).sum())})" for b in range(len(ANGLE_BINS_DEG) - 1)
+                if (bins == b).any())
         if self.force_withheld:
             text += (f"\nforce: {self.force_withheld} of {self.force_total} points "
                      "withheld in the answer (flag force_band_too_wide); the force model "
@@ -122,6 +132,8 @@ def evaluate(e, records, axis: str = "pressure") -> HeldOut:
         ok = np.isfinite(p.angle_deg)
         err = p.angle_deg[ok] - fe[ok]
         cover = (fe[ok] >= p.lower_deg[ok] - 1e-9) & (fe[ok] <= p.upper_deg[ok] + 1e-9)
+        out.fe_deg.append(fe[ok])
+        out.inside_points.append(cover)
         out.inside += int(cover.sum())
         out.total += int(ok.sum())
         out.errors_deg.append(err)

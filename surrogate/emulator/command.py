@@ -31,41 +31,42 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95
     fit_s = time.perf_counter() - t0
     path = save_emulator(emulator, output)
     lines = ["", f"{'emulator group':32s} {'designs':>7s} {'failed':>6s} {'comp':>4s} "
-                 f"{'LOO rmse deg':>12s} {'LOO max deg':>11s} {'band x':>7s} "
-                 f"{'LOO cover':>9s} {'force designs':>13s}"]
+                 f"{'CV rmse deg':>12s} {'CV max deg':>11s} {'band x':>7s} "
+                 f"{'CV cover':>9s} {'force designs':>13s}"]
     for pair, rep in emulator.report["pairs"].items():
         if not rep.get("fitted"):
             lines.append(f"{pair:32s} {rep.get('designs', 0):7d}  "
                          "(too few complete curves: not fitted)")
             continue
         lines.append(f"{pair:32s} {rep['designs']:7d} {rep['failed_designs']:6d} "
-                     f"{rep['components']:4d} {rep['loo_rmse_deg']:12.2f} "
-                     f"{rep['loo_max_deg']:11.2f} {rep['band_scale_median']:7.2f} "
-                     f"{rep['loo_coverage']:9.3f} {rep['force_designs']:13d}")
+                     f"{rep['components']:4d} {rep['cv_rmse_deg']:12.2f} "
+                     f"{rep['cv_max_deg']:11.2f} {rep['band_scale_median']:7.2f} "
+                     f"{rep['cv_coverage']:9.3f} {rep['force_designs']:13d}")
     lines.append(f"emulator fitted in {fit_s:.1f} s; wrote {path}")
     return emulator, lines
 
 
-def loo_rmse_by_key(emulator: Emulator) -> dict[str, float]:
-    """Each database curve's leave-one-out angle RMSE (deg), by record key."""
+def cv_rmse_by_key(emulator: Emulator) -> dict[str, float]:
+    """Each database curve's cross-validated angle RMSE (deg; 5 folds, the emulator
+    refitted without the curve's fold), by record key."""
     out: dict[str, float] = {}
     for pair, pe in emulator.pairs.items():
-        per_curve = emulator.report["pairs"][pair].get("loo_curve_rmse_deg", [])
+        per_curve = emulator.report["pairs"][pair].get("cv_curve_rmse_deg", [])
         out.update(zip(pe.keys, per_curve))
     return out
 
 
 def side_by_side(families: list[dict], emulator: Emulator) -> list[str]:
     """Held-out angle RMSE (deg) per exponential family: the exponential model's
-    leave-one-design-out figure and the emulator's leave-one-out figure on the same FE
+    leave-one-design-out figure and the emulator's 5-fold cross-validated figure on the same FE
     curves (the RMS of the per-curve RMSEs; curves the emulator does not hold, e.g. ones
     ending before 90 deg, are left out of its figure and counted)."""
-    loo = loo_rmse_by_key(emulator)
+    cv = cv_rmse_by_key(emulator)
     lines = ["", f"{'held-out angle rmse (deg)':44s} {'curves':>6s} {'exponential':>11s} "
                  f"{'emulator':>8s} {'emulator has':>12s}"]
     for fam in families:
         keys = fam.get("record_keys", [])
-        mine = [loo[k] for k in keys if k in loo]
+        mine = [cv[k] for k in keys if k in cv]
         exp_rmse = fam["lodo"]["exponential"].get("rmse")
         emu = f"{np.sqrt(np.mean(np.square(mine))):.2f}" if mine else "-"
         exp_text = "-" if exp_rmse is None else f"{exp_rmse:.2f}"

@@ -36,6 +36,7 @@ from surrogate.emulator.features import (
     FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
     force_at,
+    linear_matrix,
     spline_matrix,
 )
 from surrogate.emulator.vector_gp import VectorGP
@@ -49,6 +50,21 @@ SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness bala
 # inside the band (a few per cent) and say nothing about the physics.
 EMULATED_PRESSURE_DROP = 1e-3
 _B_ANGLE = spline_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
+_L_ANGLE = linear_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
+
+
+def node_curves(y: np.ndarray, sd: np.ndarray, z: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """p(theta) (or V(theta)) on FINE_ANGLES_DEG from node values ``y`` = log(x / theta)
+    and their sd (rows of a 2-D ``y`` are designs): the mean through the natural spline,
+    the band's low and high curves at -+ z sd with the half-width linear between nodes
+    (a spline of the half-width overshoots where the band multiplier changes between
+    angle bins, and the band would cross the mean). Not yet made monotone."""
+    theta = FINE_ANGLES_DEG
+    centre = y @ _B_ANGLE.T
+    half = z * (sd @ _L_ANGLE.T)
+    return (theta * np.exp(centre), theta * np.exp(centre - half),
+            theta * np.exp(centre + half))
 
 
 FORCE_BAND_LIMIT = 2.0     # widest force band answered, relative to the force
@@ -154,12 +170,9 @@ class Emulator:
         pe = self._pair(point)
         mean, var = pe.curves.predict(point.coordinates())
         sd = np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES]
-        theta = FINE_ANGLES_DEG
-        p_raw = theta * np.exp(_B_ANGLE @ mean[:N_NODES])
-        p = _monotone(p_raw)
-        lo = _monotone(theta * np.exp(_B_ANGLE @ (mean[:N_NODES] - z * sd)))
-        hi = _monotone(theta * np.exp(_B_ANGLE @ (mean[:N_NODES] + z * sd)))
-        v = theta * np.exp(_B_ANGLE @ mean[N_NODES:])
+        p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
+        p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
+        v = FINE_ANGLES_DEG * np.exp(_B_ANGLE @ mean[N_NODES:])
         limit, reason = pe.fe_limit_angle_deg, pe.fe_stop_reason
         u = point.coordinates()
         for fu, angle, why in pe.failed:
@@ -268,10 +281,8 @@ class Emulator:
     @staticmethod
     def _volume_curves(cb: CurveBand, z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """V(theta) on ANGLES0 (reduced, ul): mean and the band's low and high curves."""
-        y, sd = cb.volume_log_mean, cb.volume_log_sd
-        theta = FINE_ANGLES_DEG
-        return tuple(_with_origin(_monotone(theta * np.exp(_B_ANGLE @ yy)))  # type: ignore
-                     for yy in (y, y - z * sd, y + z * sd))
+        return tuple(_with_origin(_monotone(c))  # type: ignore[return-value]
+                     for c in node_curves(cb.volume_log_mean, cb.volume_log_sd, z))
 
     def _force(self, pe: PairEmulator, point: BoxPoint, p_red: np.ndarray, z: float
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -379,14 +390,12 @@ class Emulator:
                 continue
             if key in self.pairs:
                 by_pair.setdefault(key, []).append(i)
-        theta = FINE_ANGLES_DEG
         for key, idx in by_pair.items():
             pe = self.pairs[key]
             u = np.array([points[i].coordinates() for i in idx])
             mean, var = pe.curves.predict_many(u)
             y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * pe.band_scale[:N_NODES]
-            curves = [np.maximum.accumulate(theta * np.exp(m @ _B_ANGLE.T), axis=1)
-                      for m in (y, y - z * sd, y + z * sd)]
+            curves = [np.maximum.accumulate(c, axis=1) for c in node_curves(y, sd, z)]
             fmean = fsd = None
             if pe.force is not None:
                 fmean, fvar = pe.force.predict_many(u)

@@ -124,6 +124,16 @@ def force_at(per_kpa: np.ndarray, pressure_pa: np.ndarray | float) -> np.ndarray
     return q / 1000.0 * np.interp(q, nodes, np.concatenate(([y[0]], y)))
 
 
+def linear_matrix(nodes: np.ndarray, fine: np.ndarray) -> np.ndarray:
+    """Matrix L with L @ f(log nodes) = f linear in log angle between the nodes at log
+    ``fine`` (clamped to the node range); every weight is >= 0, so L maps a
+    non-negative vector (a band's half-width) to a non-negative one."""
+    ln = np.log(nodes)
+    lf = np.clip(np.log(fine), ln[0], ln[-1])
+    eye = np.eye(len(nodes))
+    return np.column_stack([np.interp(lf, ln, eye[i]) for i in range(len(nodes))])
+
+
 def spline_matrix(nodes: np.ndarray, fine: np.ndarray) -> np.ndarray:
     """Matrix B with B @ f(log nodes) = the natural cubic spline through those values,
     evaluated at log ``fine`` (clamped to the node range): a linear map, so that a
