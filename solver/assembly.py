@@ -314,52 +314,58 @@ class Pattern:
         self.reduced = reduced
         n = len(free)
         self.n = n
-        keys_all = []      # per list: one key array, or (upper, mirror) for pair layout
+        # Keys row * n + col (-1 where a fixed dof is involved), int32 when they fit:
+        # the pattern's set-up is the solve's peak memory.
+        kind = np.int32 if n * n < 2**31 else np.int64
+        rdofs = reduced.astype(kind)
+        keys = []          # per list: one key array, or (upper, mirror) for pair layout
+        sizes = []         # values per list
         for index, dofs in enumerate(dof_lists):
-            rd = reduced[dofs]                                              # (ne, m)
+            rd = rdofs[dofs]                                                # (ne, m)
             if index < n_pair_lists:
                 nb = rd.shape[1] // 3
                 pa, pb = node_pairs(nb)
                 r3 = rd.reshape(-1, nb, 3)
-                rows = np.broadcast_to(r3[:, pa, :, None], (rd.shape[0], len(pa), 3, 3))
-                cols = np.broadcast_to(r3[:, pb, None, :], (rd.shape[0], len(pa), 3, 3))
-                rows = np.moveaxis(rows, 1, 0)                              # (P, ne, 3, 3)
-                cols = np.moveaxis(cols, 1, 0)
-                ok = (rows >= 0) & (cols >= 0)
-                upper = np.where(ok, rows * n + cols, -1).ravel()
-                diagonal = np.broadcast_to((pa == pb)[:, None, None, None], rows.shape)
-                mirror = np.where(ok & ~diagonal, cols * n + rows, -1).ravel()
-                keys_all.append((upper, mirror))
+                rows = r3[:, pa, :, None].transpose(1, 0, 2, 3)            # (P, ne, 3, 1)
+                cols = r3[:, pb, None, :].transpose(1, 0, 2, 3)            # (P, ne, 1, 3)
+                ok = (rows >= 0) & (cols >= 0)                              # (P, ne, 3, 3)
+                keys.append(np.where(ok, rows * n + cols, -1).ravel())
+                ok &= (pa != pb)[:, None, None, None]                       # no mirror
+                keys.append(np.where(ok, cols * n + rows, -1).ravel())      # on a diagonal
+                sizes.append(ok.size)
             else:
-                rows = np.repeat(rd[:, :, None], rd.shape[1], axis=2)
-                cols = np.repeat(rd[:, None, :], rd.shape[1], axis=1)
-                keys_all.append((np.where((rows >= 0) & (cols >= 0), rows * n + cols,
-                                          -1).ravel(),))
-        # One sort of all keys gives both the pattern and every entry's slot.
-        flat = [k for ks in keys_all for k in ks]
-        keys = np.concatenate(flat)
+                rows, cols = rd[:, :, None], rd[:, None, :]
+                keys.append(np.where((rows >= 0) & (cols >= 0), rows * n + cols,
+                                     -1).ravel())
+                sizes.append(keys[-1].size)
+            del rows, cols
+        # Value index of every key (a pair-layout value feeds its upper and its
+        # mirrored slot), in the order of the concatenated keys.
+        value_offsets = np.cumsum([0] + sizes)
+        sources = np.concatenate([np.arange(value_offsets[i], value_offsets[i + 1],
+                                            dtype=np.int32)
+                                  for i in range(len(sizes))
+                                  for _ in range(2 if i < n_pair_lists else 1)])
+        keys = np.concatenate(keys)
+        # One sort of all keys gives the pattern and the scatter of values into it: the
+        # scatter is one sparse (nnz x values) 0/1 matrix, data = S @ values (~2x faster
+        # than a bincount per slot list: benchmarks/RESULTS.md, issue 12, third session).
         order = np.argsort(keys, kind="stable")
-        sorted_keys = keys[order]
-        new_key = np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1]))
-        unique = sorted_keys[new_key]
-        slot = np.cumsum(new_key) - 1
-        if len(unique) and unique[0] < 0:                                   # fixed dofs
-            unique = unique[1:]
-            slot -= 1
-            slot[slot < 0] = len(unique)                                    # a dump slot
-        positions = np.empty(len(keys), dtype=np.int64)
-        positions[order] = slot
-        # The scatter as one sparse (nnz x values) 0/1 matrix: data = S @ values, with the
-        # values of every list concatenated once (a pair-layout value feeds its upper
-        # and its mirrored slot). One sparse product is ~2x faster than a bincount per
-        # slot list (benchmarks/RESULTS.md, issue 12, third session).
-        value_offsets = np.cumsum([0] + [len(ks[0]) for ks in keys_all])
-        sources = np.concatenate([np.arange(value_offsets[i], value_offsets[i + 1])
-                                  for i, ks in enumerate(keys_all) for _ in ks])
-        used = positions < len(unique)
+        keys = keys[order]
+        first = int(np.searchsorted(keys, 0))                               # skip fixed dofs
+        keys = keys[first:]
+        sources = sources[order[first:]]
+        del order
+        new_key = np.empty(len(keys), dtype=bool)
+        new_key[:1] = True
+        np.not_equal(keys[1:], keys[:-1], out=new_key[1:])
+        starts = np.flatnonzero(new_key)
+        unique = keys[starts].astype(np.int64)
+        del keys, new_key
         self.n_values = int(value_offsets[-1])
         self.scatter = sp.csr_matrix(
-            (np.ones(int(used.sum())), (positions[used], sources[used])),
+            (np.ones(len(sources)), sources,
+             np.append(starts, len(sources)).astype(np.int32)),
             shape=(len(unique), self.n_values))
         rows = unique // n
         self.indices = (unique % n).astype(np.int32)
