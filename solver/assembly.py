@@ -65,6 +65,7 @@ class MaterialBlock:
     elements: np.ndarray | None = None      # element indices in the mesh
     box_scale: np.ndarray | None = None     # (ne, 3) element sizes when all are boxes
     box_products: np.ndarray | None = None  # (nb nb, nq 9): dNref_aJ dNref_bL per q
+    box_gradients: np.ndarray | None = None  # (nb, nq 3): dNref_aJ, columns (q J)
     M: np.ndarray | None = None             # (ne, npr, npr) pressure mass matrices
 
 
@@ -116,6 +117,28 @@ def _detect_boxes(block: MaterialBlock) -> None:
     prod = np.einsum("qaJ,qbL->abqJL", ref, ref).reshape(nb * nb, nq * 9)
     block.box_scale = ratio
     block.box_products = prod
+    block.box_gradients = np.ascontiguousarray(ref.transpose(1, 0, 2).reshape(nb, nq * 3))
+
+
+def _gradient_contraction(block: MaterialBlock, X: np.ndarray) -> np.ndarray:
+    """sum_(q, J) dN[e, q, a, J] X[e, q, ..., J] -> (ne, nb, ...): the transpose of the
+    gradient, for residuals (X = P dV) and the pressure coupling D (X = N_p cof dV).
+    On box elements one matrix product with the common reference gradients."""
+    ne, nq = X.shape[:2]
+    if block.box_gradients is not None:
+        Xs = X / block.box_scale.reshape((ne,) + (1,) * (X.ndim - 2) + (3,))
+        Xs = np.moveaxis(Xs, -1, 2).reshape(ne, nq * 3, -1)                # (e, q J, ...)
+        Y = block.box_gradients @ np.swapaxes(Xs, 0, 1).reshape(nq * 3, -1)  # (a, e ...)
+        Y = Y.reshape((Y.shape[0], ne) + X.shape[2:-1])
+        return np.moveaxis(Y, 0, 1)
+    return np.einsum("eqaJ,eq...J->ea...", block.dN, X, optimize=True)
+
+
+def cofactor_and_det(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cof F = det(F) F^-T (rows: cross products of F's rows) and det F, for (..., 3, 3)."""
+    r0, r1, r2 = F[..., 0, :], F[..., 1, :], F[..., 2, :]
+    cof = np.stack((np.cross(r1, r2), np.cross(r2, r0), np.cross(r0, r1)), axis=-2)
+    return cof, np.einsum("...j,...j->...", r0, cof[..., 0, :])
 
 
 def node_pairs(nb: int) -> tuple[np.ndarray, np.ndarray]:
@@ -165,7 +188,16 @@ def full_element_matrices(pairs: np.ndarray) -> np.ndarray:
 
 def deformation_gradient(block: MaterialBlock, u: np.ndarray) -> np.ndarray:
     """F = I + grad u at every quadrature point, (ne, nq, 3, 3)."""
-    ue = u[block.dofs].reshape(block.dofs.shape[0], -1, 3)                  # (ne, nb, 3)
+    ne = block.dofs.shape[0]
+    ue = u[block.dofs].reshape(ne, -1, 3)                                   # (ne, nb, 3)
+    if block.box_gradients is not None:
+        nq = block.dN.shape[1]
+        G = (ue.transpose(0, 2, 1).reshape(ne * 3, -1) @ block.box_gradients)  # (e i, q J)
+        G = G.reshape(ne, 3, nq, 3).transpose(0, 2, 1, 3) / block.box_scale[:, None, None, :]
+        G[..., 0, 0] += 1.0
+        G[..., 1, 1] += 1.0
+        G[..., 2, 2] += 1.0
+        return G
     return np.eye(3) + np.einsum("eai,eqaJ->eqiJ", ue, block.dN)
 
 
@@ -205,12 +237,10 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     """
     F = deformation_gradient(block, u)
     ne, nq = F.shape[:2]
-    J = np.linalg.det(F)
+    cof, J = cofactor_and_det(F)
     if not np.all(J > 0):
         raise FloatingPointError("element inverted (det F <= 0)")
-    Finv_T = np.transpose(np.linalg.inv(F), (0, 1, 3, 2))
-    cof = J[..., None, None] * Finv_T
-    W, P, A, lam = stress_and_tangent(F, block.mu_pa, block.alpha)
+    W, P, A, lam = stress_and_tangent(F, block.mu_pa, block.alpha, tangent=with_tangent)
 
     g = np.einsum("eqm,eq,eq->em", block.Np, J - 1.0, block.wdV)
     constraint: np.ndarray | None = None
@@ -229,12 +259,16 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     p_hat = np.einsum("eqm,em->eq", block.Np, coef)
 
     Ptot = P + p_hat[..., None, None] * cof
+    Ptot *= block.wdV[..., None, None]
     nb = block.dN.shape[2]
-    r = np.einsum("eqiJ,eqaJ,eq->eai", Ptot, block.dN, block.wdV).reshape(ne, 3 * nb)
+    r = _gradient_contraction(block, Ptot).reshape(ne, 3 * nb)              # (e, a i)
     D = None
+    if pressure_coef is not None or with_tangent:
+        # D_e[m, a i] = int N_p,m cof_iJ dN_aJ dV
+        NpW = block.Np * block.wdV[..., None]                                 # (e, q, m)
+        D = _gradient_contraction(block, NpW[..., :, None, None] * cof[:, :, None])
+        D = np.ascontiguousarray(D.transpose(0, 2, 1, 3)).reshape(ne, -1, 3 * nb)
     if pressure_coef is not None:
-        D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV,
-                      optimize=True).reshape(ne, -1, 3 * nb)
         strain = np.einsum("emn,en->em", block.Minv, Rp)                      # M^-1 R_p
         r = r + np.einsum("ema,em->ea", D, block.bulk_pa * strain)
         dilatation_error = float(np.abs(strain).max()) if strain.size else 0.0
@@ -244,15 +278,14 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
         return BlockState(energy, r, None, lam, float(J.min()), constraint, D,
                           dilatation_error)
 
-    f = Finv_T.reshape(ne, nq, 9)
-    # T_(iJ)(kL) = f_iL f_kJ
-    T = np.einsum("eqiL,eqkJ->eqiJkL", Finv_T, Finv_T).reshape(ne, nq, 9, 9)
-    A = A + (p_hat * J)[..., None, None] * (f[..., :, None] * f[..., None, :] - T)
-    A = A * block.wdV[..., None, None]
+    # + p_hat J (f_iJ f_kL - f_iL f_kJ), f = F^-T = cof / J, all times dV.
+    f = cof / J[..., None, None]
+    ff = f[..., :, :, None, None] * f[..., None, None, :, :]                 # (e, q, i, J, k, L)
+    ff -= np.swapaxes(ff, -3, -1).copy()
+    ff *= (p_hat * J)[..., None, None, None, None]
+    A += ff.reshape(ne, nq, 9, 9)
+    A *= block.wdV[..., None, None]
     K = element_stiffness(block, A)
-    if D is None:
-        D = np.einsum("eqm,eqiJ,eqaJ,eq->emai", block.Np, cof, block.dN, block.wdV,
-                      optimize=True).reshape(ne, -1, 3 * nb)
     # + K D^T M^-1 D, on the same node pairs.
     # Per node pair a <= b: the (3 x npr) @ (npr x 3) product D_a^T (K M^-1 D)_b.
     pa, pb = node_pairs(nb)
@@ -281,44 +314,59 @@ class Pattern:
         self.reduced = reduced
         n = len(free)
         self.n = n
-        keys_all = []      # per list: one key array, or (upper, mirror) for pair layout
+        # Keys row * n + col (-1 where a fixed dof is involved), int32 when they fit:
+        # the pattern's set-up is the solve's peak memory.
+        kind = np.int32 if n * n < 2**31 else np.int64
+        rdofs = reduced.astype(kind)
+        keys = []          # per list: one key array, or (upper, mirror) for pair layout
+        sizes = []         # values per list
         for index, dofs in enumerate(dof_lists):
-            rd = reduced[dofs]                                              # (ne, m)
+            rd = rdofs[dofs]                                                # (ne, m)
             if index < n_pair_lists:
                 nb = rd.shape[1] // 3
                 pa, pb = node_pairs(nb)
                 r3 = rd.reshape(-1, nb, 3)
-                rows = np.broadcast_to(r3[:, pa, :, None], (rd.shape[0], len(pa), 3, 3))
-                cols = np.broadcast_to(r3[:, pb, None, :], (rd.shape[0], len(pa), 3, 3))
-                rows = np.moveaxis(rows, 1, 0)                              # (P, ne, 3, 3)
-                cols = np.moveaxis(cols, 1, 0)
-                ok = (rows >= 0) & (cols >= 0)
-                upper = np.where(ok, rows * n + cols, -1).ravel()
-                diagonal = np.broadcast_to((pa == pb)[:, None, None, None], rows.shape)
-                mirror = np.where(ok & ~diagonal, cols * n + rows, -1).ravel()
-                keys_all.append((upper, mirror))
+                rows = r3[:, pa, :, None].transpose(1, 0, 2, 3)            # (P, ne, 3, 1)
+                cols = r3[:, pb, None, :].transpose(1, 0, 2, 3)            # (P, ne, 1, 3)
+                ok = (rows >= 0) & (cols >= 0)                              # (P, ne, 3, 3)
+                keys.append(np.where(ok, rows * n + cols, -1).ravel())
+                ok &= (pa != pb)[:, None, None, None]                       # no mirror
+                keys.append(np.where(ok, cols * n + rows, -1).ravel())      # on a diagonal
+                sizes.append(ok.size)
             else:
-                rows = np.repeat(rd[:, :, None], rd.shape[1], axis=2)
-                cols = np.repeat(rd[:, None, :], rd.shape[1], axis=1)
-                keys_all.append((np.where((rows >= 0) & (cols >= 0), rows * n + cols,
-                                          -1).ravel(),))
-        # One sort of all keys gives both the pattern and every entry's slot.
-        flat = [k for ks in keys_all for k in ks]
-        keys = np.concatenate(flat)
+                rows, cols = rd[:, :, None], rd[:, None, :]
+                keys.append(np.where((rows >= 0) & (cols >= 0), rows * n + cols,
+                                     -1).ravel())
+                sizes.append(keys[-1].size)
+            del rows, cols
+        # Value index of every key (a pair-layout value feeds its upper and its
+        # mirrored slot), in the order of the concatenated keys.
+        value_offsets = np.cumsum([0] + sizes)
+        sources = np.concatenate([np.arange(value_offsets[i], value_offsets[i + 1],
+                                            dtype=np.int32)
+                                  for i in range(len(sizes))
+                                  for _ in range(2 if i < n_pair_lists else 1)])
+        keys = np.concatenate(keys)
+        # One sort of all keys gives the pattern and the scatter of values into it: the
+        # scatter is one sparse (nnz x values) 0/1 matrix, data = S @ values (~2x faster
+        # than a bincount per slot list: benchmarks/RESULTS.md, issue 12, third session).
         order = np.argsort(keys, kind="stable")
-        sorted_keys = keys[order]
-        new_key = np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1]))
-        unique = sorted_keys[new_key]
-        slot = np.cumsum(new_key) - 1
-        if len(unique) and unique[0] < 0:                                   # fixed dofs
-            unique = unique[1:]
-            slot -= 1
-            slot[slot < 0] = len(unique)                                    # a dump slot
-        positions = np.empty(len(keys), dtype=np.int64)
-        positions[order] = slot
-        bounds = np.cumsum([0] + [len(k) for k in flat])
-        chunks = iter(positions[a:b] for a, b in zip(bounds[:-1], bounds[1:]))
-        self.positions = [[next(chunks) for _ in ks] for ks in keys_all]
+        keys = keys[order]
+        first = int(np.searchsorted(keys, 0))                               # skip fixed dofs
+        keys = keys[first:]
+        sources = sources[order[first:]]
+        del order
+        new_key = np.empty(len(keys), dtype=bool)
+        new_key[:1] = True
+        np.not_equal(keys[1:], keys[:-1], out=new_key[1:])
+        starts = np.flatnonzero(new_key)
+        unique = keys[starts].astype(np.int64)
+        del keys, new_key
+        self.n_values = int(value_offsets[-1])
+        self.scatter = sp.csr_matrix(
+            (np.ones(len(sources)), sources,
+             np.append(starts, len(sources)).astype(np.int32)),
+            shape=(len(unique), self.n_values))
         rows = unique // n
         self.indices = (unique % n).astype(np.int32)
         self.indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n)))
@@ -326,12 +374,12 @@ class Pattern:
         self.nnz = len(unique)
 
     def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
-        data = np.zeros(self.nnz + 1)
-        for pos_list, Ke in zip(self.positions, element_matrices):
-            values = Ke.ravel()
-            for pos in pos_list:
-                data += np.bincount(pos, weights=values, minlength=self.nnz + 1)
-        return sp.csr_matrix((data[:-1], self.indices, self.indptr), shape=(self.n, self.n))
+        values = np.concatenate([Ke.ravel() for Ke in element_matrices])
+        if len(values) != self.n_values:
+            raise ValueError(f"{len(values)} element-matrix entries for a pattern of "
+                             f"{self.n_values}")
+        data = self.scatter @ values
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
 
 def scatter_vector(ndofs: int, dofs: np.ndarray, values: np.ndarray) -> np.ndarray:

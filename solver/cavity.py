@@ -54,6 +54,16 @@ def make_cavity(mesh, element: str, facets: np.ndarray, doflocs: np.ndarray) -> 
     N1 = np.einsum("jfqa,fqj->fqa", grads, t1)
     N2 = np.einsum("jfqa,fqj->fqa", grads, t2)
     sdofs = fb.element_dofs.T                                                 # (nf, nb)
+    # Keep the shape functions of the face's own nodes (9 of hex2's 27, 4 of hex1's 8):
+    # the others vanish on the face with their tangential derivatives (skfem evaluates
+    # them to ~1e-13), so the cavity's vectors and matrices are 9x smaller for hex2.
+    on_face = np.abs(vals).max(axis=1) > 1e-8                                 # (nf, nb)
+    n_face = int(on_face.sum(axis=1).min())
+    if n_face == on_face.sum(axis=1).max():
+        keep = np.argsort(~on_face, axis=1, kind="stable")[:, :n_face]       # (nf, n_face)
+        vals, N1, N2 = (np.take_along_axis(x, keep[:, None, :], axis=2) for x in (vals, N1, N2))
+        sdofs = np.take_along_axis(sdofs, keep, axis=1)
+        nb = n_face
     dofs = (3 * sdofs[:, :, None] + np.arange(3)).reshape(sdofs.shape[0], 3 * nb)
     return Cavity(vals, N1, N2, fb.dx, dofs, doflocs[:, sdofs].transpose(1, 2, 0))
 

@@ -15,6 +15,11 @@ benchmarks/RESULTS.md compares them.
 
 from __future__ import annotations
 
+import functools
+import glob
+import os
+import sys
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -33,13 +38,31 @@ class SuperLUFactor:
         return self._lu.solve(b)
 
 
+def _import_pypardiso():
+    """Import pypardiso, pointing it at the MKL runtime installed beside this Python.
+
+    pypardiso looks for ``mkl_rt`` with ``ctypes.util.find_library`` and, failing that
+    (a pip-installed MKL is not on the loader's path), with a recursive glob over
+    ``sys.prefix``: ~1 s of CPU time at its import and again for every solver handle,
+    i.e. for every curve (benchmarks/RESULTS.md, issue 12, third session). Its own
+    variable ``PYPARDISO_MKL_RT`` skips the search; it is set here, when unset, to the
+    library in ``sys.prefix/lib`` where pip puts it.
+    """
+    if "PYPARDISO_MKL_RT" not in os.environ:
+        found = sorted(glob.glob(os.path.join(sys.prefix, "lib", "libmkl_rt.so*")), key=len)
+        if found:
+            os.environ["PYPARDISO_MKL_RT"] = found[0]
+    import pypardiso
+
+    return pypardiso
+
+
 class _PardisoPattern:
     """An MKL PARDISO handle analysed (ordering, symbolic factorisation) for one
     sparsity pattern, in symmetric-indefinite mode on the upper triangle."""
 
     def __init__(self, K: sp.csr_matrix) -> None:
-        import pypardiso
-
+        pypardiso = _import_pypardiso()
         self.ps = pypardiso.PyPardisoSolver(mtype=-2)       # real symmetric indefinite
         self.indptr, self.indices = K.indptr, K.indices
         rows = np.repeat(np.arange(K.shape[0]), np.diff(K.indptr))
@@ -98,14 +121,17 @@ class PardisoFactor:
         return np.ascontiguousarray(x)
 
 
-def available_backends() -> list[str]:
-    names = ["superlu"]
+@functools.cache
+def _pardiso_installed() -> bool:
     try:
-        import pypardiso  # noqa: F401
-        names.append("pardiso")
+        _import_pypardiso()
     except ImportError:
-        pass
-    return names
+        return False
+    return True
+
+
+def available_backends() -> list[str]:
+    return ["superlu", "pardiso"] if _pardiso_installed() else ["superlu"]
 
 
 def default_backend() -> str:

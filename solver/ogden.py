@@ -58,53 +58,61 @@ def energy_derivatives(c: np.ndarray, mu: np.ndarray, alpha: np.ndarray
     return w, dw, d2w
 
 
-def stress_and_tangent(F: np.ndarray, mu: np.ndarray, alpha: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def stress_and_tangent(F: np.ndarray, mu: np.ndarray, alpha: np.ndarray,
+                       tangent: bool = True
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
     """Isochoric Ogden response at deformation gradients F (..., 3, 3).
 
     Returns (W, P, A, lam_max): strain energy density, first Piola-Kirchhoff stress
     P = F S (..., 3, 3), the material tangent A_iJkL = dP_iJ/dF_kL as (..., 9, 9)
-    with row index 3 i + J, and the largest principal stretch (...,).
+    with row index 3 i + J (None when ``tangent`` is False: a residual needs only P),
+    and the largest principal stretch (...,).
     """
-    C = np.einsum("...ki,...kj->...ij", F, F)
+    C = np.swapaxes(F, -1, -2) @ F
     c, Q = np.linalg.eigh(C)
     w, dw, d2w = energy_derivatives(c, mu, alpha)
     S_eig = 2.0 * dw                                            # principal PK2 stresses
-    S = np.einsum("...ia,...a,...ja->...ij", Q, S_eig, Q)
+    S = (Q * S_eig[..., None, :]) @ np.swapaxes(Q, -1, -2)
     P = F @ S
+    lam_max = np.sqrt(c[..., -1])
+    if not tangent:
+        return w, P, None, lam_max
 
-    # Divided differences theta_ab = (w_a - w_b)/(c_a - c_b), limit w_aa - w_ab.
-    ca, cb = c[..., :, None], c[..., None, :]
+    # Divided differences theta_ab = (w_a - w_b)/(c_a - c_b), limit w_aa - w_ab, for
+    # the pairs (a, b) = (0, 1), (0, 2), (1, 2).
+    ia, ib = np.array([0, 0, 1]), np.array([1, 2, 2])
+    ca, cb = c[..., ia], c[..., ib]
     diff = ca - cb
-    scale = np.maximum(np.abs(ca), np.abs(cb))
-    repeated = np.abs(diff) <= REPEATED_TOL * scale
-    safe = np.where(repeated, 1.0, diff)
-    theta = (dw[..., :, None] - dw[..., None, :]) / safe
+    repeated = np.abs(diff) <= REPEATED_TOL * np.maximum(np.abs(ca), np.abs(cb))
+    theta = (dw[..., ia] - dw[..., ib]) / np.where(repeated, 1.0, diff)
     if np.any(repeated):
-        mid = 0.5 * (ca + cb)
-        idx = np.nonzero(repeated)
         # Evaluate the limit at the mid-point of each near-coincident pair.
-        *lead, a_idx, b_idx = idx
+        *lead, pair = np.nonzero(repeated)
+        a_idx, b_idx = ia[pair], ib[pair]
         c_mid = c[tuple(lead)].copy()
-        c_mid[np.arange(c_mid.shape[0]), a_idx] = mid[idx]
-        c_mid[np.arange(c_mid.shape[0]), b_idx] = mid[idx]
+        n = np.arange(c_mid.shape[0])
+        mid = 0.5 * (c_mid[n, a_idx] + c_mid[n, b_idx])
+        c_mid[n, a_idx] = mid
+        c_mid[n, b_idx] = mid
         _, _, h = energy_derivatives(c_mid, mu, alpha)
-        n = np.arange(h.shape[0])
-        theta[idx] = h[n, a_idx, a_idx] - h[n, a_idx, b_idx]
+        theta[(*lead, pair)] = h[n, a_idx, a_idx] - h[n, a_idx, b_idx]
 
-    # E_ab = u_a (x) q_b with u_a = F n_a, q_b = n_b, flattened to 9 (row 3 i + J);
-    # E is (..., 9 (a b), 9 (i J)), so every sum over (a, b) is one batched matmul.
+    # With u_a = F n_a and E_ab = u_a (x) n_b flattened to 9 (row 3 i + J), the spectral
+    # tangent is sum_ab 4 w_ab E_aa (x) E_bb + sum_(a<b) 2 theta_ab G_ab (x) G_ab,
+    # G_ab = E_ab + E_ba: A = H^T X H with the six rows H = (E_00, E_11, E_22, G_01,
+    # G_02, G_12) and X = diag(4 w_ab, 2 theta_ab), one batched (9 x 6)(6 x 9) product.
     batch = c.shape[:-1]
     U = F @ Q                                                   # columns u_a
-    E = np.einsum("...ia,...jb->...abij", U, Q).reshape(batch + (9, 9))
-    Ediag = E[..., [0, 4, 8], :]                                # E_aa, (..., 3, 9)
-    A = 4.0 * np.swapaxes(Ediag, -1, -2) @ (d2w @ Ediag)
-    off = (2.0 * theta * (1.0 - np.eye(3))).reshape(batch + (9, 1))
-    E_ba = E.reshape(batch + (3, 3, 9)).swapaxes(-3, -2).reshape(batch + (9, 9))
-    A += np.swapaxes(off * E, -1, -2) @ (E + E_ba)
+    rows_a = np.array([0, 1, 2, 0, 0, 1])
+    rows_b = np.array([0, 1, 2, 1, 2, 2])
+    H = U[..., :, None, rows_a] * Q[..., None, :, rows_b]              # (..., i, J, 6)
+    H[..., 3:] += U[..., :, None, rows_b[3:]] * Q[..., None, :, rows_a[3:]]
+    H = np.swapaxes(H.reshape(batch + (9, 6)), -1, -2)                  # (..., 6, 9)
+    XH = np.concatenate((4.0 * d2w @ H[..., :3, :],
+                         2.0 * theta[..., :, None] * H[..., 3:, :]), axis=-2)
+    A = np.swapaxes(H, -1, -2) @ XH
     # Geometric part delta_ik S_JL.
     A4 = A.reshape(batch + (3, 3, 3, 3))
     for i in range(3):
         A4[..., i, :, i, :] += S
-    lam_max = np.sqrt(c[..., -1])
     return w, P, A, lam_max
