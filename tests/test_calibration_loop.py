@@ -246,6 +246,9 @@ def test_effects_outside_the_catalogue_are_flagged_not_explained(truth):
     assert r["residual_structured_after"]
     assert r["unexplained_rms_deg"] > 0.5
     assert r["unexplained_where"] and "outside the catalogue" in r["interpretation"]
+    near = r["closest_rejected"]  # the nearest catalogued set is named with why it fails
+    assert near is None or (near["why_not"] and "+".join(near["effects"]).split("+")[0]
+                            in r["interpretation"])
 
 
 def test_creep_from_loading_at_one_flow_rate_is_not_identifiable_and_says_what_to_measure():

@@ -271,6 +271,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                            "place (BIC - 6 and lower CV than each alone)"},
         "unbacked_better": unbacked,
         "indistinguishable": alike,
+        "closest_rejected": (_closest_rejected(candidates, rmse_before)
+                             if not chosen and left["structured"] else None),
         "baseline_calls": responses.calls,
         "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
                            if e.stage == "design" and responses.reach(e).limits},
@@ -457,6 +459,19 @@ def _explains_better(cand: dict, candidates: list[dict]) -> dict | None:
     return min(better, key=lambda c: c["bic"]) if better else None
 
 
+def _closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:
+    """With nothing selected and structure left: the plausible set that predicts unseen
+    curves best (below the baseline's error), with why it was not selected."""
+    ok = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
+          and c["rmse_cv_deg"] < rmse_before]
+    if not ok:
+        return None
+    c = min(ok, key=lambda c: c["rmse_cv_deg"])
+    return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"], "why_not": c["why_not"],
+            "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
+                       for n, p in c["params"].items()}}
+
+
 def _indistinguishable(candidates: list[dict], chosen: tuple[str, ...]) -> list[dict]:
     """Other explanations the data cannot tell from the selection: selectable, or failing
     only for want of the baseline's backing, and predicting unseen curves as well (paired
@@ -577,7 +592,8 @@ def interpret(report: dict, left: dict) -> str:
                  f"is {report['rmse_after_deg']:.2f} deg.")
     else:
         s.append("No catalogued effect is warranted: none lowers the cross-validated error "
-                 "and the BIC with physically plausible, significant values.")
+                 "and the BIC with physically plausible, significant values and leaves "
+                 "only replicate scatter.")
     alike = report.get("indistinguishable") or []
     if alike:
         sets = "; ".join(
@@ -594,12 +610,19 @@ def interpret(report: dict, left: dict) -> str:
                  "as well (paired by curve, |z| < 2), so the choice of "
                  f"{chosen} is the lowest BIC, not evidence. To tell them apart: "
                  + "; ".join(measures) + ".")
+    u = report.get("unbacked_better")
+    near = report.get("closest_rejected")
+    if near is not None and u is None:
+        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
+                          for n, p in near["params"].items())
+        s.append(f"The closest plausible explanation is {' and '.join(near['effects'])} "
+                 f"({sizes}; cross-validated {near['rmse_cv_deg']:.2f} deg), not selected: "
+                 + "; ".join(near["why_not"]) + ".")
     for c in report["candidates"]:
         if c.get("outdone_by"):
             s.append(f"{' and '.join(c['effects'])} would leave a residual only the "
                      "baseline's own uncertainty at its fitted design excuses, while "
                      f"{' and '.join(c['outdone_by'])} fits better: not selected.")
-    u = report.get("unbacked_better")
     if u is not None:
         sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
                           for n, p in u["params"].items())
