@@ -189,3 +189,26 @@ def test_mixed_kpa_and_pa_warn_naming_the_curve_and_the_factor():
     assert any("jumps" in w and "x1000" in w and repr(ids[1]) in w for w in obs.warnings), \
         obs.warnings
     assert observations_from_rows(data).warnings == ()
+
+
+def test_lab_protocols_load_without_false_warnings():
+    # FE-derived lab data (tests/calibration_lab.py): loading, a hold and unloading back to
+    # zero pressure in one curve, at two flow rates, and the reversed pair bending
+    # negative. Unloading to ~0 Pa is a x100-x1000 step of the pressure but not kPa: the
+    # angle straightens with it. Nothing here may warn.
+    from calibration_lab import LOOP, Lab, fe, measure
+
+    for lab in (Lab(protocol=LOOP, flows_ul_s=(1.25, 2.5)),
+                Lab(protocol=LOOP, designs=((7.1, 0.5),), materials=fe.REVERSED)):
+        data = measure(lab)
+        obs = observations_from_rows(data)
+        assert obs.warnings == (), obs.warnings
+        assert set(obs.direction.tolist()) == {-1, 0, 1}  # loading, hold, unloading
+        assert len({(float(L), float(q)) for L, q in zip(obs.L_mm, obs.flow_ul_s)}) \
+            == len(lab.designs) * len(lab.flows_ul_s)
+        again = observations_from_rows(list(reversed(data)))  # time_s orders each curve
+        for cid in obs.curve_ids:
+            a = obs.direction[obs.curve == obs.curve_ids.index(cid)]
+            b = again.direction[again.curve == again.curve_ids.index(cid)]
+            assert a.tolist() == b.tolist(), cid
+    assert obs.angle_deg.min() < -20.0  # the reversed pair: negative angles accepted

@@ -28,6 +28,7 @@ TRAITS = DataTraits(has_time=True, has_flow=True, n_flow_rates=1, has_unloading=
 def test_every_effect_keeps_the_contract(effect):
     assert effect.stage in STAGES and effect.kind in ("physical", "measurement", "time")
     assert effect.parameters and effect.title and effect.description
+    assert len(effect.measure_directly) > 20  # told when the data cannot tell it apart
     for p in effect.parameters:
         lo, hi = p.fit_bounds
         assert lo <= p.plausible[0] <= p.plausible[1] <= hi, p.name

@@ -3,16 +3,20 @@ parameters' standard errors.
 
 A physical effect is read off the baseline at a changed design (a stiffer membrane, a
 longer chamber). Where the baseline is uncertain there (an emulator's band at the changed
-design), the size it gives is uncertain too, whatever the data say. The band is a
-systematic error shared by every reading of the design, so it moves the fitted
-parameters coherently: with s the baseline's standard deviation at each reading (its 95 %
-band / 1.96, at the fitted design) and J the model's Jacobian at the fit,
+design), the size it gives is uncertain too, whatever the data say. The baseline's error
+at one design is systematic: every specimen, flow rate and reading of that design shares
+it (the emulator's band moves the whole curve: every node at +-z sd), so within a design it
+shifts the fitted parameters coherently. Distinct nominal designs of the data are separate
+points of the box, each with its own interpolation error, taken as independent of one
+another (the ``Predictor`` protocol gives no covariance between designs). With s_d the
+baseline's standard deviation at the readings of design d (its 95 % band / 1.96, at the
+fitted design) and J the model's Jacobian at the fit,
 
-    delta = (J'J)^-1 J' s,        cov_total = cov_data + delta delta'
+    delta_d = (J'J)^-1 J_d' s_d,        cov_total = cov_data + sum_d delta_d delta_d'
 
-(the shift least squares makes when the baseline is off by one standard deviation along
-its whole band). Significance and the reported sd use cov_total; ``sd_data`` and
-``sd_baseline`` are reported apart.
+(delta_d: the shift least squares makes when the baseline is off by one standard
+deviation along its whole band at design d). Significance and the reported sd use
+cov_total; ``sd_data`` and ``sd_baseline`` are reported apart.
 """
 
 from __future__ import annotations
@@ -42,6 +46,16 @@ def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
     s = baseline_sd_rows(f, responses)
     if s is None or f.jac is None or not f.k:
         return f
-    delta = np.linalg.pinv(f.jac.T @ f.jac) @ (f.jac.T @ s)
-    return replace(f, cov=f.cov + np.outer(delta, delta), baseline_shift=delta,
+    cov = baseline_covariance(f.jac, s, f.model.design_index)
+    return replace(f, cov=f.cov + cov, baseline_shift=np.sqrt(np.diag(cov)),
                    baseline_sd_deg=float(np.sqrt(np.mean(s**2))))
+
+
+def baseline_covariance(jac: np.ndarray, s: np.ndarray, design: np.ndarray) -> np.ndarray:
+    """sum_d delta_d delta_d', delta_d = (J'J)^-1 J_d' s_d: the baseline's error coherent
+    within each design (index ``design`` per row), independent between designs."""
+    bread = np.linalg.pinv(jac.T @ jac)
+    g = np.zeros((int(design.max()) + 1, jac.shape[1]))
+    np.add.at(g, design, jac * s[:, None])
+    delta = g @ bread  # row d: delta_d' (bread is symmetric)
+    return delta.T @ delta

@@ -292,7 +292,8 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
 def _mixed_units(kept: list[dict[str, object]]) -> list[tuple[str, str, int | None]]:
     """Pressures in kPa beside pressures in Pa: a curve whose pressures stay below
     ``KPA_MAX_PA`` while it bends (when others do not), or, within a curve, a step of
-    about x1000 between neighbouring rows (one below ``KPA_MAX_PA``)."""
+    about x1000 between neighbouring rows (one below ``KPA_MAX_PA``) while the angle
+    stays about the same (unloading to zero pressure straightens the actuator too)."""
     out: list[tuple[str, str, int | None]] = []
     rows: dict[str, list[tuple[int, float, float]]] = {}
     for i, rec in enumerate(kept):
@@ -309,9 +310,12 @@ def _mixed_units(kept: list[dict[str, object]]) -> list[tuple[str, str, int | No
                     f"units? (x1000 gives {1000 * top:g} Pa); convert pressure_pa to Pa",
                     rows[small[0]][0][0] + 1))
     for cid, r in rows.items():
-        for (_, p0, _), (i, p1, _) in zip(r, r[1:]):
+        for (_, p0, a0), (i, p1, a1) in zip(r, r[1:]):
             lo, hi = min(p0, p1), max(p0, p1)
-            if 0.0 < lo < KPA_MAX_PA and 300.0 <= hi / lo <= 3000.0:
+            a_lo, a_hi = (a0, a1) if p0 < p1 else (a1, a0)
+            # a kPa reading bends like its Pa neighbour; a curve unloaded to zero does not
+            bends = a_lo > max(KPA_MIN_ANGLE_DEG, 0.5 * a_hi)
+            if 0.0 < lo < KPA_MAX_PA and 300.0 <= hi / lo <= 3000.0 and bends:
                 out.append(("pressure_pa", f"row {i + 1}: curve_id {cid!r} jumps from "
                             f"{p0:g} to {p1:g} Pa (about x1000): mixed kPa and Pa? convert "
                             "pressure_pa to Pa", i + 1))

@@ -33,8 +33,9 @@ class FitResult:
     success: bool
     residual: np.ndarray = field(repr=False)
     jac: np.ndarray | None = field(default=None, repr=False)
-    #: shift of each parameter a one-sd error of the baseline at the fitted design makes
-    #: (_backing.py; zero without a physical effect), and that sd's RMS over the readings
+    #: each parameter's sd from the baseline's own error at the fitted design, coherent
+    #: within a design (_backing.py; zero without a physical effect), and that error's
+    #: sd, RMS over the readings
     baseline_shift: np.ndarray | None = field(default=None, repr=False)
     baseline_sd_deg: float | None = None
 
@@ -159,3 +160,21 @@ def _transfer(f: FitResult, target: AugmentedModel) -> np.ndarray:
     lay = target.layout
     x = np.array([by_name.get(n, s) for n, s in zip(lay.names, lay.start, strict=True)])
     return x if lay.k else np.zeros(0)
+
+
+def paired_cv(resid_a: np.ndarray, resid_b: np.ndarray, curve: np.ndarray) -> float:
+    """How decisively held-out curves tell set A from set B: z of the mean difference of
+    squared out-of-fold errors, A - B, with curves as the independent units (a specimen's
+    scatter is shared along its curve). Negative: A predicts unseen curves better."""
+    ok = np.isfinite(resid_a) & np.isfinite(resid_b)
+    if not np.any(ok):
+        return float("nan")
+    d = np.zeros(int(curve.max()) + 1)
+    np.add.at(d, curve[ok], resid_a[ok] ** 2 - resid_b[ok] ** 2)
+    used = np.unique(curve[ok])
+    d = d[used] / ok.sum() * used.size  # each curve's share of the mean difference
+    if used.size < 3:
+        return float("nan")
+    se = float(d.std(ddof=1) / np.sqrt(used.size))
+    mean = float(d.mean())
+    return mean / se if se > 0 else (0.0 if mean == 0 else float(np.sign(mean) * np.inf))

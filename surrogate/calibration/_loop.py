@@ -38,7 +38,7 @@ from solver.errors import InputError
 from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._fit import FitResult, cross_validate, fit
+from surrogate.calibration._fit import FitResult, cross_validate, fit, paired_cv
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._model import AugmentedModel
 from surrogate.calibration._noise import noise_floor
@@ -51,6 +51,7 @@ from surrogate.calibration.effects import CATALOGUE, EFFECTS, DataTraits, Effect
 Z_SIGNIFICANT = 3.0
 DELTA_BIC = -6.0
 PAIRS_CROSS_VALIDATED = 4
+Z_ALIKE = 2.0  # |paired z| below this: held-out curves do not tell two sets apart
 MIN_CURVES = 2
 REPORT_SCHEMA = "balloon.calibration.report/2"
 
@@ -169,6 +170,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     candidates, selectable = [], []
     for effects in evaluated:
         cand = _judge(effects, get_fit, get_cv, base, rmse_before, responses)
+        cand["excused"] = False
         if cand["selectable"] or not cand["why_not"] or cand["unbacked"]:
             rest = leaves(effects, backed=not cand["unbacked"])
             cand["unexplained_rms_deg"] = rest["unexplained_rms_deg"]
@@ -177,6 +179,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                 cand["why_not"].append(
                     f"leaves a shared residual of {rest['unexplained_rms_deg']:.2f} deg: it "
                     "does not explain the data (something outside the catalogue acts)")
+            elif not cand["unbacked"] and get_fit(effects).baseline_sd_deg is not None:
+                # what it leaves is within the baseline's band at the fitted design, but
+                # would not be within its band at the nominal designs
+                cand["excused"] = bool(leaves(effects, backed=False)["structured"])
         candidates.append(cand)
         if cand["selectable"]:
             selectable.append((cand["bic"], effects))
@@ -189,7 +195,27 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                "plausible": None, "significant": None, "selectable": False,
                                "why_not": [st["reason"]], "measure": st["measure"]})
 
-    chosen: tuple[str, ...] = min(selectable)[1] if selectable else ()
+    chosen: tuple[str, ...] = ()
+    for _, effects in sorted(selectable):
+        cand = next(c for c in candidates if tuple(c["effects"]) == effects)
+        better = _explains_better(cand, candidates) if cand["excused"] else None
+        if better is None:
+            chosen = effects
+            break
+        cand["selectable"] = False
+        cand["why_not"].append(
+            f"what it leaves is within the baseline's own uncertainty at the fitted design "
+            f"only, while {better['effect']} (plausible) explains the data better (BIC "
+            f"{better['bic'] - cand['bic']:.0f} lower, cross-validated "
+            f"{better['rmse_cv_deg']:.2f} vs {cand['rmse_cv_deg']:.2f} deg): the baseline's "
+            "uncertainty does not excuse the worse fit")
+        cand["outdone_by"] = better["effects"]
+    resid_chosen = get_cv(chosen)[1]
+    for cand in candidates:
+        if cand["rmse_cv_deg"] is not None:
+            cand["paired_z"] = _num(paired_cv(get_cv(tuple(cand["effects"]))[1],
+                                              resid_chosen, obs.curve))
+    alike = _indistinguishable(candidates, chosen)
     # a set the data prefer that fails only for want of the baseline's backing: reported
     # beside the selection (its CV advantage may be the baseline's own error there)
     unbacked = _better_unbacked(candidates, chosen, rmse_before)
@@ -244,6 +270,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                            "cv_below": "rmse_before_deg", "pairs": "each member earns its "
                            "place (BIC - 6 and lower CV than each alone)"},
         "unbacked_better": unbacked,
+        "indistinguishable": alike,
+        "closest_rejected": (_closest_rejected(candidates, rmse_before)
+                             if not chosen and left["structured"] else None),
         "baseline_calls": responses.calls,
         "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
                            if e.stage == "design" and responses.reach(e).limits},
@@ -420,6 +449,57 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
             "why_not": reasons}
 
 
+def _explains_better(cand: dict, candidates: list[dict]) -> dict | None:
+    """The best plausible candidate that beats ``cand`` in BIC by more than 6 and in
+    cross-validated error (whatever else it fails), or None: a set whose residual only the
+    baseline's band at its fitted design excuses is not chosen over a better fit."""
+    better = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
+              and c["effects"] != cand["effects"] and c["bic"] < cand["bic"] + DELTA_BIC
+              and c["rmse_cv_deg"] < cand["rmse_cv_deg"]]
+    return min(better, key=lambda c: c["bic"]) if better else None
+
+
+def _closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:
+    """With nothing selected and structure left: the plausible set that predicts unseen
+    curves best (below the baseline's error), with why it was not selected."""
+    ok = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
+          and c["rmse_cv_deg"] < rmse_before]
+    if not ok:
+        return None
+    c = min(ok, key=lambda c: c["rmse_cv_deg"])
+    return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"], "why_not": c["why_not"],
+            "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
+                       for n, p in c["params"].items()}}
+
+
+def _indistinguishable(candidates: list[dict], chosen: tuple[str, ...]) -> list[dict]:
+    """Other explanations the data cannot tell from the selection: selectable, or failing
+    only for want of the baseline's backing, and predicting unseen curves as well (paired
+    by curve, |z| < Z_ALIKE); sets that only add to or drop from the selection are rule 6's
+    business. Each with its size, and what a lab measures to tell the members apart."""
+    if not chosen:
+        return []
+    out = []
+    for c in candidates:
+        eff = set(c["effects"])
+        if (not (c["selectable"] or c.get("unbacked")) or eff <= set(chosen)
+                or eff >= set(chosen) or c.get("paired_z") is None
+                or abs(c["paired_z"]) >= Z_ALIKE):
+            continue
+        out.append({"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"],
+                    "paired_z": c["paired_z"], "delta_bic_vs_selected": None,
+                    "backed": bool(c["selectable"]),
+                    "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
+                               for n, p in c["params"].items()}})
+    ref = next(c for c in candidates if tuple(c["effects"]) == chosen)
+    for a in out:
+        cand = next(c for c in candidates if c["effects"] == a["effects"])
+        a["delta_bic_vs_selected"] = cand["bic"] - ref["bic"]
+        a["measure"] = [EFFECTS[e].measure_directly for e in a["effects"]
+                        if e not in chosen]
+    return sorted(out, key=lambda a: a["rmse_cv_deg"])
+
+
 def _better_unbacked(candidates: list[dict], chosen: tuple[str, ...],
                      rmse_before: float) -> dict | None:
     """The best candidate that fails only because the baseline cannot back its size
@@ -512,8 +592,37 @@ def interpret(report: dict, left: dict) -> str:
                  f"is {report['rmse_after_deg']:.2f} deg.")
     else:
         s.append("No catalogued effect is warranted: none lowers the cross-validated error "
-                 "and the BIC with physically plausible, significant values.")
+                 "and the BIC with physically plausible, significant values and leaves "
+                 "only replicate scatter.")
+    alike = report.get("indistinguishable") or []
+    if alike:
+        sets = "; ".join(
+            " and ".join(a["effects"]) + " (" + ", ".join(
+                f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
+                for n, p in a["params"].items()) + f", cross-validated "
+            f"{a['rmse_cv_deg']:.2f} deg" + ("" if a["backed"] else ", not backed by the "
+                                             "baseline") + ")" for a in alike)
+        chosen = " and ".join(report["selected_effects"])
+        measures = [m for e in report["selected_effects"]
+                    for m in [EFFECTS[e].measure_directly]]
+        measures += [m for a in alike for m in a["measure"] if m not in measures]
+        s.append(f"These data do not tell {chosen} from {sets}: each predicts unseen curves "
+                 "as well (paired by curve, |z| < 2), so the choice of "
+                 f"{chosen} is the lowest BIC, not evidence. To tell them apart: "
+                 + "; ".join(measures) + ".")
     u = report.get("unbacked_better")
+    near = report.get("closest_rejected")
+    if near is not None and u is None:
+        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
+                          for n, p in near["params"].items())
+        s.append(f"The closest plausible explanation is {' and '.join(near['effects'])} "
+                 f"({sizes}; cross-validated {near['rmse_cv_deg']:.2f} deg), not selected: "
+                 + "; ".join(near["why_not"]) + ".")
+    for c in report["candidates"]:
+        if c.get("outdone_by"):
+            s.append(f"{' and '.join(c['effects'])} would leave a residual only the "
+                     "baseline's own uncertainty at its fitted design excuses, while "
+                     f"{' and '.join(c['outdone_by'])} fits better: not selected.")
     if u is not None:
         sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
                           for n, p in u["params"].items())

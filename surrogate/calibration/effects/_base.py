@@ -9,8 +9,9 @@ The augmented model, in the order it is evaluated (docs/calibration.md):
     angle     = time stage (static along each curve's time)   time effects
     observed  = angle stage (angle)                           measurement effects
 
-Adding an effect is one file in this package (a subclass with its transform) plus its
-test; ``effects/__init__.py`` lists the instances.
+Adding an effect is one file in this package (a subclass with its transform, its
+interpretation and how a lab measures it on its own) plus its test;
+``effects/__init__.py`` lists the instances.
 """
 
 from __future__ import annotations
@@ -71,6 +72,9 @@ class Effect:
     kind: str = ""  # "physical" | "measurement" | "time"
     parameters: tuple[EffectParameter, ...] = ()
     description: str = ""
+    #: how a lab measures this effect on its own (told when the data cannot tell it from
+    #: another effect)
+    measure_directly: str = ""
     #: open baseline parameters this effect is exactly (then it is not fitted)
     same_as_open: tuple[str, ...] = ()
 
@@ -108,6 +112,7 @@ class Effect:
     def as_dict(self) -> dict[str, object]:
         return {"id": self.id, "title": self.title, "kind": self.kind, "stage": self.stage,
                 "needs": list(self.needs), "description": self.description,
+                "measure_directly": self.measure_directly,
                 "parameters": [p.as_dict() for p in self.parameters]}
 
     needs: tuple[str, ...] = ()  # optional data columns it needs

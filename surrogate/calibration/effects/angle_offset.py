@@ -8,6 +8,7 @@ from surrogate.calibration.effects._base import Effect, EffectParameter
 class AngleOffset(Effect):
     id = "angle_offset"
     title = "Angle offset"
+    measure_directly = "read the angle of the unpressurised actuator before each run"
     stage = "angle"
     kind = "measurement"
     parameters = (EffectParameter(

@@ -11,6 +11,7 @@ from surrogate.calibration.effects._materials import scale_layer
 class BodyStiffness(Effect):
     id = "body_stiffness"
     title = "Body stiffness scale"
+    measure_directly = "tensile-test the body material (its Ogden mu)"
     stage = "design"
     kind = "physical"
     parameters = (EffectParameter(

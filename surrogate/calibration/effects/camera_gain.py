@@ -9,6 +9,7 @@ from surrogate.calibration.effects._base import Effect, EffectParameter
 class CameraGain(Effect):
     id = "camera_gain"
     title = "Camera (angle reading) gain"
+    measure_directly = "read a target of known angle (a protractor card) in the camera's view"
     stage = "angle"
     kind = "measurement"
     parameters = (EffectParameter(

@@ -10,6 +10,7 @@ from surrogate.calibration.effects._base import Effect, EffectParameter
 class ChamberLength(Effect):
     id = "chamber_length"
     title = "Chamber length change"
+    measure_directly = "measure the chamber length on the mould or a cut specimen"
     stage = "design"
     kind = "physical"
     parameters = (EffectParameter(

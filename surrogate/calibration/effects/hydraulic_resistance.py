@@ -26,6 +26,8 @@ R_TUBING_1M = round_tube_resistance_pa_per_ul_s(TUBING_LENGTH_MM, TUBING_BORE_MM
 class HydraulicResistance(Effect):
     id = "hydraulic_resistance"
     title = "Inlet channel and tubing resistance"
+    measure_directly = ("read the pressure at the chip as well as at the pump, or repeat at "
+                        "a second flow rate")
     stage = "pressure"
     kind = "measurement"
     needs = ("flow_ul_s",)

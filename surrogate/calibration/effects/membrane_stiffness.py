@@ -11,6 +11,7 @@ from surrogate.calibration.effects._materials import scale_layer
 class MembraneStiffness(Effect):
     id = "membrane_stiffness"
     title = "Membrane stiffness scale"
+    measure_directly = "tensile-test the membrane material (its Ogden mu)"
     stage = "design"
     kind = "physical"
     parameters = (EffectParameter(

@@ -10,6 +10,7 @@ from surrogate.calibration.effects._base import Effect, EffectParameter
 class MembraneThickness(Effect):
     id = "membrane_thickness"
     title = "Membrane thickness change"
+    measure_directly = "measure the membrane thickness on a cut specimen"
     stage = "design"
     kind = "physical"
     parameters = (EffectParameter(

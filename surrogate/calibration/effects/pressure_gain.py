@@ -8,6 +8,7 @@ from surrogate.calibration.effects._base import Effect, EffectParameter
 class PressureGain(Effect):
     id = "pressure_gain"
     title = "Pressure sensor gain"
+    measure_directly = "check the gauge against a reference gauge at two pressures"
     stage = "pressure"
     kind = "measurement"
     parameters = (EffectParameter(

@@ -8,6 +8,7 @@ from surrogate.calibration.effects._base import Effect, EffectParameter
 class PressureOffset(Effect):
     id = "pressure_offset"
     title = "Pressure offset"
+    measure_directly = "read the gauge open to the atmosphere (its zero) before each run"
     stage = "pressure"
     kind = "measurement"
     parameters = (EffectParameter(

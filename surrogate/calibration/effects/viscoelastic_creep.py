@@ -32,6 +32,7 @@ def prony_lag(static_deg: np.ndarray, time_s: np.ndarray, valid: np.ndarray,
 class ViscoelasticCreep(Effect):
     id = "viscoelastic_creep"
     title = "Viscoelastic creep (one-term Prony)"
+    measure_directly = "hold the volume for 5-10 s and watch the angle creep"
     stage = "time"
     kind = "time"
     needs = ("time_s",)

@@ -1,0 +1,136 @@
+"""The calibration loop's test cases as a table, and the emulator's own error at the FE
+solves they are made from (docs/calibration.md, "Tests").
+
+    .venv/bin/python benchmarks/calibration_cases.py                 # every case
+    .venv/bin/python benchmarks/calibration_cases.py camera_gain     # some cases
+    .venv/bin/python benchmarks/calibration_cases.py --emulator-error
+    .venv/bin/python benchmarks/calibration_cases.py --emulator PATH --reports DIR
+
+The cases are those of tests/test_calibration_loop.py (same labs, truths and seed), run
+against the shipped emulator (or ``--emulator PATH``); one markdown row per case:
+selected set, recovered size +- sd (truth), CV error before -> after, noise floor, their
+ratio, and what else the report says (explanations the data cannot tell apart, ``*``: not
+backed by the emulator; a better fit it cannot back; structure left). ``--emulator-error``
+compares the emulator with every cached FE curve (to 60 deg): RMS error against the RMS of
+its band's sd (band / 1.96) -- what the band claims against what it is.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+import calibration_lab as lab_mod  # noqa: E402
+import test_calibration_loop as cases_mod  # noqa: E402
+from calibration_lab import FULL_LOOP, Lab, Truth, fe, measure  # noqa: E402
+
+from solver.errors import InputError  # noqa: E402
+from surrogate.calibration import run_calibration  # noqa: E402
+
+ANGLE_MAX_DEG = 60.0
+
+
+def cases() -> list[tuple[str, Lab, Truth, dict[str, float]]]:
+    """(id, lab, truth, true sizes) of every loop test case."""
+    bases, paper = cases_mod.BASES, cases_mod.PAPER_DESIGNS
+    out = [("clean-3", Lab(designs=bases, protocol=FULL_LOOP), Truth(), {}),
+           ("clean-6", Lab(designs=paper, protocol=FULL_LOOP), Truth(), {}),
+           ("reversed", Lab(designs=((7.1, 0.5), (11.1, 0.5)), materials=fe.REVERSED,
+                            protocol=FULL_LOOP), Truth(), {})]
+    for case_id, c in zip(cases_mod.MEASUREMENT_IDS, cases_mod.MEASUREMENT_CASES,
+                          strict=True):
+        _, truth, values, protocol, flows = getattr(c, "values", c)
+        out.append((case_id, Lab(designs=bases, protocol=protocol, flows_ul_s=flows), truth,
+                    values))
+    for case_id, (_, truth, values, designs, _) in zip(cases_mod.PHYSICAL_IDS,
+                                                       cases_mod.PHYSICAL_CASES, strict=True):
+        out.append((case_id, Lab(designs=designs, protocol=FULL_LOOP), truth, values))
+    out += [("hysteresis", Lab(designs=bases, protocol=FULL_LOOP), Truth(hysteresis_deg=5.0),
+             {}),
+            ("contact", Lab(designs=bases, protocol=FULL_LOOP), Truth(contact_deg=25.0), {})]
+    return out
+
+
+def row(case_id: str, report: dict, truth: dict[str, float], seconds: float) -> str:
+    fitted = report["fitted"]["effects"]
+    sizes = "; ".join(f"{n} {p['value']:.4g} +/- {p['sd']:.2g}" for n, p in fitted.items())
+    if sizes and truth:
+        sizes += " (" + ", ".join(f"{v:g}" for v in truth.values()) + ")"
+    notes = []
+    alike = report.get("indistinguishable") or []
+    if alike:
+        notes.append("alike: " + ", ".join("+".join(a["effects"]) + ("" if a["backed"]
+                                                                       else "*")
+                                           for a in alike))
+    u = report.get("unbacked_better")
+    if u:
+        notes.append("unbacked better: " + "+".join(u["effects"]) + " " + "; ".join(
+            f"{p['value']:.3g} +/- {p['sd']:.2g}" for p in u["params"].values()))
+    if report["residual_structured_after"]:
+        notes.append(f"flagged, {report['unexplained_rms_deg']:.2f} deg unexplained")
+    floor = report["noise_floor_deg"]
+    return (f"| {case_id} | {', '.join(report['selected_effects']) or 'nothing'} | "
+            f"{sizes or '-'} | {report['rmse_before_deg']:.2f} -> "
+            f"{report['rmse_after_deg']:.2f} | {floor:.2f} | "
+            f"{report['rmse_after_deg'] / floor:.2f} | {'; '.join(notes)} | {seconds:.0f} |")
+
+
+def emulator_error(emulator) -> None:
+    """The emulator against every cached FE curve: RMS error and RMS band sd (deg)."""
+    print("| FE solve | readings | RMS error | mean error | RMS band sd |")
+    print("|---|---|---|---|---|")
+    for key, c in lab_mod.FE_CURVES.items():
+        m = np.abs(c.angle_deg) <= ANGLE_MAX_DEG
+        try:
+            out = emulator.predict(fe.design_of(c.case), np.clip(c.pressure_pa[m], 0, None))
+        except InputError as exc:  # outside the box: a row of the table
+            print(f"| {key} | refused: {str(exc)[:60]} | | | |")
+            continue
+        a = np.asarray(out.angle_deg, float)
+        ok = np.isfinite(a)
+        err = a[ok] - c.angle_deg[m][ok]
+        sd = 0.5 * (np.asarray(out.upper_deg) - np.asarray(out.lower_deg))[ok] / 1.959964
+        print(f"| {key} | {int(ok.sum())} | {np.sqrt(np.mean(err**2)):.2f} | "
+              f"{err.mean():+.2f} | {np.sqrt(np.mean(sd**2)):.2f} |")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("cases", nargs="*", help="case ids (default: every case)")
+    parser.add_argument("--emulator", type=Path, default=lab_mod.EMULATOR_PATH)
+    parser.add_argument("--emulator-error", action="store_true")
+    parser.add_argument("--reports", type=Path, help="write each case's report here")
+    args = parser.parse_args(argv)
+    from surrogate.emulator.file import load_emulator
+
+    emulator = load_emulator(args.emulator)
+    if args.emulator_error:
+        emulator_error(emulator)
+        return 0
+    print(f"emulator: {args.emulator} ({emulator.provenance.get('database_records')} records)")
+    print("| case | selected | size (truth) | CV before -> after | floor | after / floor "
+          "| also | s |")
+    print("|---|---|---|---|---|---|---|---|")
+    for case_id, lab, truth, values in cases():
+        if args.cases and case_id not in args.cases:
+            continue
+        t0 = time.perf_counter()
+        report = run_calibration(measure(lab, truth), emulator).report
+        print(row(case_id, report, values, time.perf_counter() - t0), flush=True)
+        if args.reports:
+            args.reports.mkdir(parents=True, exist_ok=True)
+            (args.reports / f"{case_id}.json").write_text(json.dumps(
+                report, default=lambda o: o.item() if hasattr(o, "item") else str(o)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,43 @@
+"""The loop's statistics on their own: the baseline's band coherent within a design and
+independent between designs (_backing.py), and the paired comparison of two sets on
+held-out curves (_fit.paired_cv)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from surrogate.calibration._backing import baseline_covariance
+from surrogate.calibration._fit import paired_cv
+
+
+def test_the_band_shifts_a_size_coherently_within_a_design_and_independently_between():
+    rng = np.random.default_rng(3)
+    jac = rng.uniform(0.5, 1.5, (40, 1))          # one parameter, every reading moves alike
+    s = np.full(40, 2.0)                          # the band's sd at every reading (deg)
+    one = baseline_covariance(jac, s, np.zeros(40, int))
+    bread = 1.0 / float(jac[:, 0] @ jac[:, 0])
+    coherent = bread * float(jac[:, 0] @ s)       # the whole band at +1 sd, one design
+    assert np.isclose(one[0, 0], coherent**2)
+    two = baseline_covariance(jac, s, np.repeat([0, 1], 20))
+    halves = [bread * float(jac[i:i + 20, 0] @ s[i:i + 20]) for i in (0, 20)]
+    assert np.isclose(two[0, 0], halves[0] ** 2 + halves[1] ** 2)
+    assert two[0, 0] < one[0, 0]                  # two independent errors partly cancel
+    # by Monte Carlo: a coherent error per design, independent between designs
+    shifts = [bread * float(jac[:, 0] @ (s * np.repeat(rng.standard_normal(2), 20)))
+              for _ in range(20000)]
+    assert abs(np.var(shifts) / two[0, 0] - 1.0) < 0.05
+
+
+def test_paired_cv_tells_a_better_set_from_an_equal_one_by_curve():
+    rng = np.random.default_rng(5)
+    curve = np.repeat(np.arange(9), 12)
+    scatter = np.repeat(rng.normal(0, 1.0, 9), 12) + rng.normal(0, 0.7, curve.size)
+    assert paired_cv(scatter, scatter, curve) == 0.0
+    better = paired_cv(0.5 * scatter, scatter, curve)
+    assert better < -3.0                          # A halves every curve's error
+    other = np.repeat(rng.normal(0, 1.0, 9), 12) + rng.normal(0, 0.7, curve.size)
+    z = [paired_cv(scatter + 0.1 * rng.standard_normal(curve.size),
+                   scatter + 0.1 * rng.standard_normal(curve.size), curve)
+         for _ in range(200)]
+    assert np.mean(np.abs(z) < 2.0) > 0.85        # equal sets: |z| < 2 mostly
+    assert np.isfinite(paired_cv(scatter, other, curve))
