@@ -1,6 +1,6 @@
 """Prediction, one-design inverse, validity flags, refusals, and surrogate files.
 
-Reference numbers: the paper preset's constants (surrogate/paper_data.py) and the
+Reference numbers: the paper preset's constants (surrogate/exponential/paper_tables.py) and the
 closed-form model angle = a L (exp(p / tau) - 1), tau = a_t log10(b_t t).
 """
 
@@ -25,8 +25,8 @@ from surrogate import (
     paper_surrogate,
     save_surrogate,
 )
-from surrogate.synthetic import synthetic_curves
-from surrogate.validity import past_fe
+from surrogate.exponential.synthetic_curves import synthetic_curves
+from surrogate.exponential.validity import past_fe
 
 
 @pytest.fixture(scope="module")
@@ -39,10 +39,9 @@ def fitted():
 
 def test_public_names_are_complete() -> None:
     public = {n for n in dir(surrogate) if not n.startswith("_")} - {
-        "annotations", "bands", "core", "curvefit", "dataset", "errors", "family", "files",
-        "fit", "inverse_design", "jointfit", "model", "paper", "paper_data", "plots",
-        "procedure", "synthetic", "validity", "calibration", "emulator", "predictor",
-        "design_search", "hydraulics", "volume_control", "file_seal"}
+        "annotations", "band_level", "dataset", "errors", "exponential", "json_plain",
+        "calibration", "emulator", "predictor", "design_search", "hydraulics",
+        "volume_control", "file_seal"}
     assert public <= set(surrogate.__all__) | {"inverse_design"}
     for name in ("Surrogate", "Prediction", "InversePrediction", "load_surrogate",
                  "save_surrogate", "paper_surrogate", "fit_surrogate", "inverse_design",

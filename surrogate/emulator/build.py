@@ -27,7 +27,7 @@ import numpy as np
 from solver.design_space import GROUPS, locate
 from solver.errors import InputError
 from solver.settings import SolverSettings
-from surrogate.bands import z_value
+from surrogate.band_level import z_value
 from surrogate.emulator.emulator import (
     _B_ANGLE,
     ANGLES0,

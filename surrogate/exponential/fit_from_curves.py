@@ -1,9 +1,10 @@
 """Fit a surrogate from FE curves: ``fit_surrogate(curves_or_db_path) -> Surrogate``.
 
 For every family (material pair, T, b, h) with free-tip curves: the paper's procedure
-(``surrogate.procedure``), joint fits of each model form, leave-one-design-out errors and
-band coverage per form, a residual profile (how the FE curves leave the exponential form
-as the angle grows), the fitted domain, and a force model when curves with force exist.
+(``surrogate.exponential.paper_procedure``), joint fits of each model form,
+leave-one-design-out errors and band coverage per form, a residual profile (how the FE
+curves leave the exponential form as the angle grows), the fitted domain, and a force
+model when curves with force exist.
 The family's default form is "extended" only when it lowers the leave-one-design-out
 RMSE by at least 10 % (else the paper's "exponential"). Everything lands in
 ``Surrogate.report`` (plain JSON).
@@ -22,14 +23,16 @@ from typing import Any, cast
 import numpy as np
 
 from solver.errors import InputError
-from surrogate import model
-from surrogate.core import Surrogate
 from surrogate.dataset import CurveData, curves_from_store, select_angle_curves, select_force_curves
-from surrogate.family import Domain, Family
-from surrogate.jointfit import ModelParameters, Points, joint_fit, leave_one_design_out, make_points
-from surrogate.procedure import paper_procedure
+from surrogate.exponential import equations
+from surrogate.exponential.family import Domain, Family
+from surrogate.exponential.family_fit import Points, joint_fit, leave_one_design_out, make_points
+from surrogate.exponential.file import FORMAT_VERSION
+from surrogate.exponential.paper_procedure import paper_procedure
+from surrogate.exponential.parameters import ModelParameters
+from surrogate.exponential.surrogate import Surrogate
+from surrogate.json_plain import plain_json
 
-FORMAT_VERSION = 2  # 2: covariances in log10 b_t (surrogate.files reads 1 as well)
 EXTENDED_GAIN = 0.9  # extended becomes the default when its LODO RMSE < 0.9 x the paper's
 
 
@@ -53,7 +56,7 @@ def git_commit() -> str:
 
 
 def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "fe-fit",
-                  level: float = 0.95, forms: tuple[str, ...] = model.FORMS,
+                  level: float = 0.95, forms: tuple[str, ...] = equations.FORMS,
                   progress: bool = False) -> Surrogate:
     """Fit every family found in ``source`` (a CurveStore path or a list of CurveData)."""
     if isinstance(source, (str, os.PathLike)):
@@ -62,8 +65,8 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
     else:
         curves, metadata, db_path = list(source), {}, ""
     for f in forms:
-        if f not in model.FORMS:
-            raise InputError("forms", f"unknown form {f!r}", " | ".join(model.FORMS))
+        if f not in equations.FORMS:
+            raise InputError("forms", f"unknown form {f!r}", " | ".join(equations.FORMS))
     angle_curves = select_angle_curves(curves)
     if not angle_curves:
         raise InputError("db", "no free-tip curve with at least 3 converged points to fit",
@@ -89,7 +92,7 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
     provenance = {
         "format_version": FORMAT_VERSION, "created_utc": datetime.now(UTC).isoformat(),
         "package_version": package_version(), "git_commit": git_commit(),
-        "database_path": db_path, "database_metadata": _plain(metadata),
+        "database_path": db_path, "database_metadata": plain_json(metadata),
         "record_keys": used, "n_records": len(used), "level": level, "forms": list(forms),
         "source": "fit of FE curves",
     }
@@ -97,7 +100,7 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
               "force": "no record holds a force curve" if not force_groups else
               f"force models for {len(force_groups)} famil(ies)"}
     return Surrogate(name=name, family_fits=tuple(families), provenance=provenance,
-                     report=_plain(report))
+                     report=plain_json(report))
 
 
 def _group_key(c: CurveData) -> tuple:
@@ -163,7 +166,7 @@ def residual_profile(pts: Points, params: dict) -> dict[str, object]:
     out: dict[str, object] = {"angle_bands_deg": edges[:-1] + ["inf"],
                               "note": "residual = sign * (FE - model), sign of the family"}
     for form, par in params.items():
-        r = sign * (pts.value - model.angle_deg(par.theta, pts.L_mm, pts.t_mm, pts.pressure_pa))
+        r = sign * (pts.value - equations.angle_deg(par.theta, pts.L_mm, pts.t_mm, pts.pressure_pa))
         mag = np.abs(pts.value)
         rows = []
         for lo, hi in zip(edges[:-1], edges[1:], strict=True):
@@ -174,25 +177,6 @@ def residual_profile(pts: Points, params: dict) -> dict[str, object]:
                          "rms": float(np.sqrt(np.mean(r[sel] ** 2))) if sel.any() else None})
         out[form] = rows
     return out
-
-
-def _plain(obj: Any) -> Any:
-    """JSON-safe copy: numpy to Python, NaN/inf to None, tuples to lists."""
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if obj is None or isinstance(obj, (str, int, bool)):
-        return obj
-    return str(obj)
 
 
 class _NoBar:

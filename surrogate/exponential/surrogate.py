@@ -4,7 +4,7 @@
     s.inverse(design, angles_deg)    -> InversePrediction pressure (Pa) with a band
     s.family_parameters(design)      -> dict              the family's model parameters
 
-Bands: see ``surrogate.bands``. The inverse is closed form, p = tau x with
+Bands: see ``surrogate.exponential.bands``. The inverse is closed form, p = tau x with
 x + c x^2 = ln(1 + angle / A); its band is the delta method on p (parameter covariance)
 plus the residual scatter carried through dp/dangle.
 """
@@ -17,96 +17,15 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate import bands, model
 from surrogate.errors import OutOfFamilyError
-from surrogate.family import Family
-from surrogate.jointfit import ModelParameters, band
-from surrogate.validity import check, past_fe
+from surrogate.exponential import bands, equations
+from surrogate.exponential.family import Family
+from surrogate.exponential.parameters import ModelParameters
+from surrogate.exponential.validity import check, past_fe
+from surrogate.predictor import InversePrediction, Prediction, number_array
 
-MAX_POINTS = 10_000_000
 _PROVENANCE_SUMMARY = ("format_version", "created_utc", "package_version", "git_commit",
                        "database_path", "source")
-
-
-def _array(values: object, field_name: str, unit: str) -> np.ndarray:
-    try:
-        a = np.atleast_1d(np.asarray(values, dtype=float))
-    except (TypeError, ValueError):
-        raise InputError(field_name, f"not a list of numbers: {values!r}") from None
-    if a.ndim != 1 or a.size == 0 or a.size > MAX_POINTS:
-        raise InputError(field_name, f"{a.size} values with shape {a.shape}",
-                         f"1 to {MAX_POINTS} numbers ({unit})")
-    if not np.isfinite(a).all():
-        raise InputError(field_name, "values must be finite", f"finite numbers ({unit})")
-    return a
-
-
-@dataclass(frozen=True)
-class Prediction:
-    """Angles (deg) at ``pressure_pa`` (Pa) with a band at ``level`` (lower_deg, upper_deg);
-    force_mn (mN) and its band when the model has force, else None; volume_ul (injected
-    volume, ul) when the model has it. NaN where the answer is past the FE's range."""
-
-    design: Design
-    pressure_pa: np.ndarray
-    angle_deg: np.ndarray
-    lower_deg: np.ndarray
-    upper_deg: np.ndarray
-    level: float
-    validity: dict
-    model: str
-    form: str
-    provenance: dict
-    parameters: dict
-    force_mn: np.ndarray | None = None
-    force_lower_mn: np.ndarray | None = None
-    force_upper_mn: np.ndarray | None = None
-    volume_ul: np.ndarray | None = None
-
-    def as_dict(self) -> dict[str, object]:
-        def lst(a: np.ndarray | None) -> list | None:
-            return None if a is None else np.asarray(a).tolist()
-
-        return {"design": self.design.as_dict(), "pressure_pa": lst(self.pressure_pa),
-                "angle_deg": lst(self.angle_deg), "lower_deg": lst(self.lower_deg),
-                "upper_deg": lst(self.upper_deg), "level": self.level,
-                "force_mn": lst(self.force_mn), "force_lower_mn": lst(self.force_lower_mn),
-                "force_upper_mn": lst(self.force_upper_mn), "volume_ul": lst(self.volume_ul),
-                "validity": dict(self.validity),
-                "model": self.model, "form": self.form, "parameters": dict(self.parameters),
-                "provenance": dict(self.provenance)}
-
-
-@dataclass(frozen=True)
-class InversePrediction:
-    """Pressures (Pa) that give ``angle_deg`` (deg), with a band at ``level``; arrays have
-    the length of the requested angles."""
-
-    design: Design
-    angle_deg: np.ndarray
-    pressure_pa: np.ndarray
-    lower_pa: np.ndarray
-    upper_pa: np.ndarray
-    level: float
-    validity: dict
-    model: str
-    form: str
-    provenance: dict
-    volume_ul: np.ndarray | None = None        # injected volume for each angle, ul
-    volume_lower_ul: np.ndarray | None = None  # its band's lower edge, ul
-    volume_upper_ul: np.ndarray | None = None  # its band's upper edge, ul
-
-    def as_dict(self) -> dict[str, object]:
-        def opt(a: np.ndarray | None) -> list[float] | None:
-            return None if a is None else np.asarray(a, float).tolist()
-
-        return {"design": self.design.as_dict(), "angle_deg": self.angle_deg.tolist(),
-                "pressure_pa": self.pressure_pa.tolist(), "lower_pa": self.lower_pa.tolist(),
-                "upper_pa": self.upper_pa.tolist(), "volume_ul": opt(self.volume_ul),
-                "volume_lower_ul": opt(self.volume_lower_ul),
-                "volume_upper_ul": opt(self.volume_upper_ul), "level": self.level,
-                "validity": dict(self.validity), "model": self.model, "form": self.form,
-                "provenance": dict(self.provenance)}
 
 
 @dataclass(frozen=True)
@@ -135,8 +54,8 @@ class Surrogate:
         return out
 
     def with_form(self, form: str | None) -> Surrogate:
-        if form is not None and form not in model.FORMS:
-            raise InputError("form", f"unknown model form {form!r}", " | ".join(model.FORMS))
+        if form is not None and form not in equations.FORMS:
+            raise InputError("form", f"unknown model form {form!r}", " | ".join(equations.FORMS))
         return replace(self, form=form)
 
     def covered_slices(self, pair: tuple[str, str]) -> list[dict[str, float]]:
@@ -177,18 +96,18 @@ class Surrogate:
         fam = self.family_for(design)
         par = self._params(fam, form)
         out: dict[str, object] = {n: v for n, v in zip(par.names, par.values, strict=True)}
-        out.update(form=par.form, names=list(par.names), tau_form=model.TAU_FORM,
+        out.update(form=par.form, names=list(par.names), tau_form=equations.TAU_FORM,
                    covariance_names=list(par.covariance_names),
                    covariance=[list(r) for r in par.covariance],
                    standard_errors=par.standard_errors,
                    residual_sd_deg=par.residual_sd, residual_rel=par.residual_rel,
                    fixed=list(par.fixed), source=par.source,
-                   A_deg=float(model.amplitude_deg(par.theta, design.L_mm)),
-                   tau_pa=float(model.tau_pa(par.theta, design.t_mm)), family=fam.label)
+                   A_deg=float(equations.amplitude_deg(par.theta, design.L_mm)),
+                   tau_pa=float(equations.tau_pa(par.theta, design.t_mm)), family=fam.label)
         return out
 
     def _check_tau(self, par: ModelParameters, design: Design) -> None:
-        if not float(model.tau_pa(par.theta, design.t_mm)) > 0.0:
+        if not float(equations.tau_pa(par.theta, design.t_mm)) > 0.0:
             t_min = 1.0 / par.theta[2]
             raise InputError("t_mm", f"t_mm = {design.t_mm:g} gives a non-positive pressure "
                              "constant tau", f"t_mm > {t_min:.3g} mm")
@@ -196,18 +115,18 @@ class Surrogate:
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95,
                 form: str | None = None) -> Prediction:
         """Angle (deg) at each pressure (Pa, >= 0) with a band at ``level``; force (mN)
-        as well when the family has a force model."""
+        as well when the family has a force equations."""
         fam = self.family_for(design)
         par = self._params(fam, form)
         self._check_tau(par, design)
-        p = _array(pressures_pa, "pressures_pa", "Pa")
+        p = number_array(pressures_pa, "pressures_pa", "Pa")
         if (p < 0).any():
             raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
                              "pressures >= 0 Pa (the model ignores suction)")
-        m, lo, hi = band(par, design.L_mm, design.t_mm, p, level)
+        m, lo, hi = bands.angle_band(par, design.L_mm, design.t_mm, p, level)
         force: tuple[np.ndarray | None, ...] = (None, None, None)
         if fam.force is not None:
-            force = band(fam.force, design.L_mm, design.t_mm, p, level)
+            force = bands.angle_band(fam.force, design.L_mm, design.t_mm, p, level)
         validity = check(fam.domain, design, p, m)
         past = past_fe(fam.domain, p, m)   # no number past the FE's range
         m, lo, hi = (np.where(past, np.nan, x) for x in (m, lo, hi))
@@ -224,24 +143,18 @@ class Surrogate:
         fam = self.family_for(design)
         par = self._params(fam, form)
         self._check_tau(par, design)
-        ang = _array(angle_deg, "angle_deg", "deg")
-        p = model.pressure_pa(par.theta, design.L_mm, design.t_mm, ang)
+        ang = number_array(angle_deg, "angle_deg", "deg")
+        p, half = bands.pressure_band(par, design.L_mm, design.t_mm, ang, level)
         bad = ~np.isfinite(p)
         if bad.any():
-            A = float(model.amplitude_deg(par.theta, design.L_mm))
-            top = float(model.max_angle_deg(par.theta, design.L_mm, design.t_mm))
+            A = float(equations.amplitude_deg(par.theta, design.L_mm))
+            top = float(equations.max_angle_deg(par.theta, design.L_mm, design.t_mm))
             sign = "positive" if A > 0 else "negative"
             allowed = f"{sign} angles (A = {A:.4g} deg)"
             if np.isfinite(top):
                 allowed += f" of magnitude below {top:.4g} deg"
             raise InputError("angle_deg", f"{ang[bad][0]:g} deg is not reachable by this "
                              "design", allowed)
-        z = bands.z_value(level)
-        g, dp_da = model.pressure_gradient(par.theta, design.L_mm, design.t_mm, ang)
-        x = p / model.tau_pa(par.theta, design.t_mm)
-        var = (par.parameter_variance(g)
-               + dp_da**2 * bands.scatter_variance(par.residual_sd, par.residual_rel, ang, x))
-        half = par.band_scale * z * np.sqrt(np.where(ang == 0.0, 0.0, var))
         validity = check(fam.domain, design, p, ang)
         past = past_fe(fam.domain, p, ang)   # no number past the FE's range
         p, lower, upper = (np.where(past, np.nan, x)

@@ -8,7 +8,11 @@ from dataclasses import dataclass
 
 from solver.design import Design
 from solver.materials import OgdenMaterial
-from surrogate.jointfit import COVARIANCE_IN_LOG10_B_T_SINCE, ModelParameters, parameters_from_dict
+from surrogate.exponential.parameters import (
+    COVARIANCE_IN_LOG10_B_T_SINCE,
+    ModelParameters,
+    parameters_from_dict,
+)
 
 
 @dataclass(frozen=True)
