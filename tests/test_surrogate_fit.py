@@ -187,7 +187,7 @@ def test_band_scale_is_calibrated_on_held_out_designs_when_errors_are_correlated
     # curve (correlated, heavy-tailed: Student t with 3 dof), on top of small white
     # noise. The in-sample scatter model underestimates what a held-out design misses;
     # the band scale must fix that on designs it did not see (jackknife) and be stored
-    # with the equations. (Seeded; the seed gives a case with a clear shortfall.)
+    # with the model. (Seeded; the seed gives a case with a clear shortfall.)
     from dataclasses import replace as dc_replace
 
     from solver.design import Design

@@ -180,7 +180,7 @@ def test_failed_save_keeps_the_old_file(fitted, tmp_path) -> None:
 
 def test_provenance_records_the_source(fitted) -> None:
     prov = fitted.provenance
-    assert prov["format_version"] == surrogate.FORMAT_VERSION == 2
+    assert prov["format_version"] == surrogate.FORMAT_VERSION == 3
     assert prov["record_keys"] and prov["created_utc"]
     assert "package_version" in prov and "git_commit" in prov
     fam = fitted.families[0]
@@ -201,7 +201,8 @@ def test_format_version_1_file_loads_with_the_same_answers(tmp_path) -> None:
     5d1f4a8 (format version 1: covariances in b_t, 1/mm; report stripped), and
     surrogate_v1_expected.json holds that code's predictions and inverses from it. Read
     now, the covariance is converted to log10 b_t (delta method, exact to first order),
-    so every band comes out the same; saved again it is a version-2 file."""
+    so every band comes out the same; saved again it is a file of the current version, still
+    without a pressure-volume relation (by volume: a 422 naming volumes_ul)."""
     old = load_surrogate(DATA / "surrogate_v1.json")
     cases = json.loads((DATA / "surrogate_v1_expected.json").read_text())["cases"]
     assert len(cases) == 18
@@ -228,6 +229,9 @@ def test_format_version_1_file_loads_with_the_same_answers(tmp_path) -> None:
     # b_t = 7.7 /mm with sd 0.14 /mm in the v1 file -> log10 b_t sd 0.008
     assert std.parameters["exponential"].standard_errors["log10_b_t_per_mm"] == \
         pytest.approx(0.00803, rel=1e-3)
-    again = load_surrogate(save_surrogate(old, tmp_path / "v2.json"))
-    assert json.loads((tmp_path / "v2.json").read_text())["format_version"] == 2
+    again = load_surrogate(save_surrogate(old, tmp_path / "v3.json"))
+    assert json.loads((tmp_path / "v3.json").read_text())["format_version"] == 3
     assert again == old
+    assert all(f.volume is None for f in again.family_fits)
+    with pytest.raises(InputError, match="volumes_ul: .*no pressure-volume relation.*refit"):
+        again.predict_volume(d, [5.0])

@@ -1,14 +1,16 @@
 """Surrogate files: versioned JSON.
 
-    {"format": "balloon-surrogate", "format_version": 2, "name", "form", "provenance"
+    {"format": "balloon-surrogate", "format_version": 3, "name", "form", "provenance"
      (database path and metadata, record keys, package version, git commit, date),
      "families": [Family.as_dict()...], "report": {...the fit report...}}
 
-Format versions: 2 stores each parameter covariance in the fit coordinates
-(``covariance_names``: log10 b_t in place of b_t); 1 stored it in b_t (1/mm) and is
-still read (converted on load, same bands). Writes are atomic (temporary file +
-rename): a failed save leaves the old file intact. A file of a newer format version
-than this code reads is refused with SurrogateFileError, and so is one whose content
+Format versions: 3 adds to a fitted family its pressure-volume relation (``"volume"``,
+surrogate/exponential/volume_relation.py; null when the data held no volumes); a file of
+version 2 or 1 has none and answers by pressure only. 2 stores each parameter covariance
+in the fit coordinates (``covariance_names``: log10 b_t in place of b_t); 1 stored it in
+b_t (1/mm) and is still read (converted on load, same bands). Writes are atomic
+(temporary file + rename): a failed save leaves the old file intact. A file of a newer
+format version than this code reads is refused with SurrogateFileError, and so is one whose content
 changed since it was written (``content_sha256``, surrogate/file_seal.py) or whose
 values do not give a finite answer at the centre of each family (checked on load).
 """
@@ -33,7 +35,7 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-surrogate"
-FORMAT_VERSION = 2  # 2: covariances in log10 b_t (1 is read as well)
+FORMAT_VERSION = 3  # 3: families may carry "volume"; 2: covariances in log10 b_t
 
 
 def surrogate_to_dict(s: Surrogate) -> dict:
@@ -93,6 +95,12 @@ def _check_family(s: Surrogate, fam, origin: str) -> None:
                 values += [pred.force_mn, pred.force_lower_mn, pred.force_upper_mn]
             if not all(np.isfinite(np.asarray(v, float)).all() for v in values):
                 raise ValueError(f"{form}: no finite answer at its family's centre")
+            if fam.volume is not None:
+                by_v = s.predict_volume(design, [0.0, 0.5 * fam.volume.volume_curve_ul(
+                    design.L_mm, design.t_mm)[-1]], form=form)
+                if not np.isfinite(np.asarray([by_v.angle_deg, by_v.lower_deg,
+                                               by_v.upper_deg], float)).all():
+                    raise ValueError(f"{form}: no finite answer by volume at its centre")
     except SurrogateFileError:
         raise
     except (BalloonError, ArithmeticError, KeyError, TypeError, ValueError, AttributeError,

@@ -31,6 +31,7 @@ from surrogate.exponential.file import FORMAT_VERSION
 from surrogate.exponential.paper_procedure import paper_procedure
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.surrogate import Surrogate
+from surrogate.exponential.volume_relation import VolumeCurve, fit_volume_relation
 from surrogate.json_plain import plain_json
 
 EXTENDED_GAIN = 0.9  # extended becomes the default when its LODO RMSE < 0.9 x the paper's
@@ -145,17 +146,36 @@ def _fit_family(members: list[CurveData], force_members: list[CurveData],
         pressure_max_pa=max(last_p), angle_max_deg=float(np.abs(pts.value).max()),
         W_mm=tuple(sorted({round(c.design.W_mm, 6) for c in members})),
         designs=tuple((c.design.L_mm, c.design.t_mm) for c in members))
+    volume = fit_volume_relation(_volume_curves(members), level)
     fam = Family(body_material=d0.body_material, membrane_material=d0.membrane_material,
                  T_mm=d0.T_mm, b_mm=d0.b_mm, h_mm=d0.h_mm, parameters=params,
-                 default_form=default, domain=domain, force=force)
+                 default_form=default, domain=domain, force=force, volume=volume)
     report = {"family": fam.label, "key": list(fam.key), "n_curves": len(members),
               "n_points": int(len(pts.value)), "record_keys": [c.key for c in members],
               "default_form": default, "domain": domain.as_dict(),
               "paper_procedure": paper_procedure(pts),
               "joint_fit": {f: p.as_dict() for f, p in params.items()},
               "lodo": lodo, "residual_profile": residual_profile(pts, params),
-              "force": force_report}
+              "force": force_report,
+              "volume": None if volume is None else {"lodo": volume.lodo,
+                                                     "angle_max_deg": volume.angle_max_deg}}
     return fam, report
+
+
+def _volume_curves(members: list[CurveData]) -> list[VolumeCurve]:
+    """The curves with an injected-volume column, one per (L, t), at the family's most
+    common actuator width W (the relation is over L and t only)."""
+    with_v = [c for c in members if c.volume_ul is not None]
+    if not with_v:
+        return []
+    widths = [round(c.design.W_mm, 6) for c in with_v]
+    w = max(set(widths), key=widths.count)
+    out: dict[tuple[float, float], VolumeCurve] = {}
+    for c, cw in zip(with_v, widths, strict=True):
+        key = (round(c.design.L_mm, 6), round(c.design.t_mm, 6))
+        if cw == w and key not in out and c.volume_ul is not None:
+            out[key] = VolumeCurve(c.design.L_mm, c.design.t_mm, c.angle_deg, c.volume_ul)
+    return list(out.values())
 
 
 def residual_profile(pts: Points, params: dict) -> dict[str, object]:
@@ -193,3 +213,27 @@ def _progress(total: int, show: bool) -> Any:
     from tqdm import tqdm
 
     return tqdm(total=total, desc="fitting families", unit="family")
+
+
+def attach_volume_relations(s: Surrogate, curves: list[CurveData], level: float = 0.95,
+                            note: str = "") -> Surrogate:
+    """``s`` with each family's pressure-volume relation fitted from those of ``curves``
+    (free tip) whose record keys ``s`` was fitted from; its parameters unchanged. For a
+    file fitted before format version 3 (``python -m surrogate.exponential.add_volumes``)."""
+    keys = set(s.provenance.get("record_keys", ()))
+    groups: dict[tuple, list[CurveData]] = {}
+    for c in select_angle_curves([c for c in curves if c.key in keys]):
+        groups.setdefault(c.design.family, []).append(c)
+    families, reports = [], []
+    for fam, rep in zip(s.family_fits, s.report.get("families", [{}] * len(s.family_fits)),
+                        strict=True):
+        members = [c for c in groups.get(fam.key, []) if fam.matches(c.design)]
+        volume = fit_volume_relation(_volume_curves(members), level)
+        families.append(replace(fam, volume=volume))
+        reports.append({**rep, "volume": None if volume is None else {
+            "lodo": volume.lodo, "angle_max_deg": volume.angle_max_deg}})
+    provenance = {**s.provenance, "format_version": FORMAT_VERSION,
+                  "volume_relation": {"added_utc": datetime.now(UTC).isoformat(),
+                                      "git_commit": git_commit(), "note": note}}
+    return replace(s, family_fits=tuple(families), provenance=provenance,
+                   report=plain_json({**s.report, "families": reports}))

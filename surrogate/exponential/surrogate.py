@@ -17,12 +17,16 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
+from surrogate.band_level import z_value
 from surrogate.errors import OutOfFamilyError
 from surrogate.exponential import bands, equations
 from surrogate.exponential.family import Family
+from surrogate.exponential.paper_tables import SOURCE as PAPER_SOURCE
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.validity import check, past_fe
+from surrogate.exponential.volume_relation import VolumeRelation, check_volumes
 from surrogate.predictor import InversePrediction, Prediction, number_array
+from surrogate.volume_control import by_volume
 
 _PROVENANCE_SUMMARY = ("format_version", "created_utc", "package_version", "git_commit",
                        "database_path", "source")
@@ -115,7 +119,7 @@ class Surrogate:
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95,
                 form: str | None = None) -> Prediction:
         """Angle (deg) at each pressure (Pa, >= 0) with a band at ``level``; force (mN)
-        as well when the family has a force equations."""
+        as well when the family has a force model."""
         fam = self.family_for(design)
         par = self._params(fam, form)
         self._check_tau(par, design)
@@ -131,11 +135,79 @@ class Surrogate:
         past = past_fe(fam.domain, p, m)   # no number past the FE's range
         m, lo, hi = (np.where(past, np.nan, x) for x in (m, lo, hi))
         force = tuple(None if f is None else np.where(past, np.nan, f) for f in force)
-        return Prediction(design=design, pressure_pa=p, angle_deg=m, lower_deg=lo,
-                          upper_deg=hi, level=level, validity=validity, model=self.name,
-                          form=par.form, provenance=self._summary(),
+        volume = None
+        if fam.volume is not None:   # the injected volume at the predicted angle
+            nodes, vm, _, _ = _volume_table(fam.volume, design, level)
+            a = np.abs(m)
+            volume = np.where(a <= nodes[-1] * (1 + 1e-12), np.interp(a, nodes, vm), np.nan)
+        return self._prediction(design, par, p, (m, lo, hi), force, volume, level, validity)
+
+    def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95,
+                       form: str | None = None) -> Prediction:
+        """The syringe-pump view: angle (deg) with its band at each injected volume (ul,
+        whole actuator), read off the family's FE-interpolated V(theta) (its band from
+        that relation's held-out error, ``volume_relation``); the chamber pressure (Pa)
+        is the exponential model's at that angle, the force (mN) the force model's at
+        that pressure. NaN past the relation's largest angle or the family's FE range
+        (flag ``past_fe_range``); ``past_pressure_maximum`` as for every model, though the
+        exponential form's pressure never falls. InputError naming ``volumes_ul`` when the
+        family has no relation (the paper preset; files of format version < 3)."""
+        fam = self.family_for(design)
+        if fam.volume is None:
+            raise InputError("volumes_ul", _no_volume_message(self, fam),
+                             'pressures_pa; by volume: model "emulator", or an exponential '
+                             "model fitted from FE curves with volumes (`balloon fit`)")
+        par = self._params(fam, form)
+        self._check_tau(par, design)
+        v = number_array(volumes_ul, "volumes_ul", "ul")
+        check_volumes(v)
+        nodes, vm, vlo, vhi = _volume_table(fam.volume, design, level)
+        sign = 1.0 if float(equations.amplitude_deg(par.theta, design.L_mm)) > 0 else -1.0
+        p_nodes = equations.pressure_pa(par.theta, design.L_mm, design.t_mm, sign * nodes)
+        answer = by_volume(v, vm, p_nodes, nodes)
+        ang = sign * answer.angle_deg
+        p = equations.pressure_pa(par.theta, design.L_mm, design.t_mm, ang)
+        hi_a, lo_a = (sign * np.interp(v, vv, nodes) for vv in (vlo, vhi))
+        lower, upper = np.fmin(lo_a, hi_a), np.fmax(lo_a, hi_a)
+        validity = check(fam.domain, design, np.nan_to_num(p), np.nan_to_num(ang))
+        flags, messages = _lists(validity)
+        past = answer.past_end | past_fe(fam.domain, p, ang)
+        ang, lower, upper, p = (np.where(past, np.nan, x) for x in (ang, lower, upper, p))
+        force: tuple[np.ndarray | None, ...] = (None, None, None)
+        if fam.force is not None:
+            force = tuple(np.where(past, np.nan, f) for f in bands.angle_band(
+                fam.force, design.L_mm, design.t_mm, np.nan_to_num(p), level))
+        v_lim = float(vm[-1])
+        validity["fe_limit_volume_ul"] = v_lim
+        if answer.past_end.any():
+            if "past_fe_range" not in flags:
+                flags.append("past_fe_range")
+            validity["in_domain"] = False
+            messages.append(
+                f"{int(answer.past_end.sum())} volume(s) above {v_lim:.1f} ul are past the "
+                f"family's FE volumes for this design ({nodes[-1]:.1f} deg, the smallest "
+                "largest angle of its FE curves): no angle is given")
+        beyond = answer.past_maximum & ~past
+        if beyond.any() and answer.maximum_pressure_pa is not None:
+            flags.append("past_pressure_maximum")
+            messages.append(
+                f"{int(beyond.sum())} volume(s) are past the pressure maximum "
+                f"({answer.maximum_pressure_pa:.0f} Pa): under volume control the angle keeps "
+                "rising while the pressure falls")
+        return self._prediction(design, par, p, (ang, lower, upper), force, v, level,
+                                validity)
+
+    def _prediction(self, design: Design, par: ModelParameters, p: np.ndarray,
+                    angle: tuple[np.ndarray, np.ndarray, np.ndarray],
+                    force: tuple[np.ndarray | None, ...], volume: np.ndarray | None,
+                    level: float, validity: dict) -> Prediction:
+        return Prediction(design=design, pressure_pa=p, angle_deg=angle[0],
+                          lower_deg=angle[1], upper_deg=angle[2], level=level,
+                          validity=validity, model=self.name, form=par.form,
+                          provenance=self._summary(),
                           parameters={n: v for n, v in zip(par.names, par.values, strict=True)},
-                          force_mn=force[0], force_lower_mn=force[1], force_upper_mn=force[2])
+                          force_mn=force[0], force_lower_mn=force[1], force_upper_mn=force[2],
+                          volume_ul=volume)
 
     def inverse(self, design: Design, angle_deg: object, level: float = 0.95,
                 form: str | None = None) -> InversePrediction:
@@ -156,13 +228,48 @@ class Surrogate:
             raise InputError("angle_deg", f"{ang[bad][0]:g} deg is not reachable by this "
                              "design", allowed)
         validity = check(fam.domain, design, p, ang)
+        flags, messages = _lists(validity)
         past = past_fe(fam.domain, p, ang)   # no number past the FE's range
         p, lower, upper = (np.where(past, np.nan, x)
                            for x in (p, np.maximum(p - half, 0.0), p + half))
+        volumes: tuple[np.ndarray | None, ...] = (None, None, None)
+        if fam.volume is not None:   # the injected volume that reaches each angle, band
+            nodes, vm, vlo, vhi = _volume_table(fam.volume, design, level)
+            a = np.abs(ang)
+            out = a > nodes[-1] * (1 + 1e-12)
+            volumes = tuple(np.where(past | out, np.nan, np.interp(a, nodes, vv))
+                            for vv in (vm, vlo, vhi))
+            if out.any():
+                flags.append("past_fe_range")
+                messages.append(
+                    f"no volume above {nodes[-1]:.1f} deg, the smallest largest angle of the "
+                    "family's FE curves")
         return InversePrediction(design=design, angle_deg=ang, pressure_pa=p,
                                  lower_pa=lower, upper_pa=upper,
                                  level=level, validity=validity,
-                                 model=self.name, form=par.form, provenance=self._summary())
+                                 model=self.name, form=par.form, provenance=self._summary(),
+                                 volume_ul=volumes[0], volume_lower_ul=volumes[1],
+                                 volume_upper_ul=volumes[2])
+
+
+def _lists(validity: dict) -> tuple[list[str], list[str]]:
+    """The validity's flag and message lists (appended to in place)."""
+    return validity["flags"], validity["messages"]
+
+
+def _volume_table(rel: VolumeRelation, design: Design, level: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(|angle| nodes with 0, V, V low, V high) of the design (deg, ul) at ``level``."""
+    vm, vlo, vhi = rel.band_curves_ul(design.L_mm, design.t_mm, z_value(level))
+    return np.concatenate([[0.0], rel.angle_nodes_deg]), vm, vlo, vhi
+
+
+def _no_volume_message(s: Surrogate, fam: Family) -> str:
+    why = ("the paper publishes no volumes" if s.provenance.get("source") == PAPER_SOURCE
+           else "its file predates format version 3, or its FE curves held no volumes; "
+           "refit it with `balloon fit --db DB -o FILE`")
+    return (f"model {s.name!r} answers by pressure only: no pressure-volume relation for "
+            f"{fam.label} ({why})")
 
 
 def _out_of_family_message(s: Surrogate, design: Design) -> str:
