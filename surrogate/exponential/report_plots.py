@@ -79,7 +79,7 @@ def write_report(s: Surrogate, curves: list[CurveData], out_dir: str | Path) -> 
             else np.array([])
         if "thickness_constants" in t5 and len(t):
             tc = t5["thickness_constants"]
-            axes[1].plot(tg, tc["a_t_pa"] * np.log10(tc["b_t_per_mm"] * tg), "-",
+            axes[1].plot(tg, equations.tau_from_constants(tc["a_t_pa"], tc["b_t_per_mm"], tg), "-",
                          label="tau = a_t log10(b_t t)")
         if len(tg):
             axes[1].plot(tg, equations.tau_pa(theta, tg), ":", label="joint fit")
