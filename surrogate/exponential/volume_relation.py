@@ -189,7 +189,10 @@ def _held_out_errors(usable: list[VolumeCurve], designs: np.ndarray, y: np.ndarr
         a = np.abs(np.asarray(c.angle_deg, float))
         v = np.asarray(c.volume_ul, float)
         keep = np.isfinite(a) & np.isfinite(v) & (a >= 0.5) & (a <= nodes[-1]) & (v > 0)
+        keep &= np.interp(a, grid, v_pred) > 0
         a, v = a[keep], v[keep]
+        if not a.size:   # nothing of this curve to compare in the relation's range
+            continue
         e_v = np.interp(a, grid, v_pred) - v
         e_a = np.interp(v, v_pred, grid) - a
         big = a >= MIN_PERCENT_ANGLE_DEG
@@ -202,6 +205,9 @@ def _held_out_errors(usable: list[VolumeCurve], designs: np.ndarray, y: np.ndarr
                      "max_error_ul": float(np.max(np.abs(e_v))),
                      "max_error_percent": float(np.max(np.abs(rel[-1]), initial=0.0)),
                      "max_angle_error_deg": float(np.max(np.abs(e_a)))})
+    if not rows:
+        return {"n_designs": len(usable), "available": False,
+                "note": "no held-out FE point inside the relation's angle range"}, 0.0, 1.0
     ev, ea, el, er = (np.concatenate(x) for x in (dv, da, dlog, rel))
     log_sd = float(np.sqrt(np.mean(el**2)))
     z = z_value(level)
@@ -209,8 +215,8 @@ def _held_out_errors(usable: list[VolumeCurve], designs: np.ndarray, y: np.ndarr
     report = {
         "n_designs": len(usable), "n_points": int(ev.size),
         "rmse_ul": float(np.sqrt(np.mean(ev**2))), "max_error_ul": float(np.max(np.abs(ev))),
-        "rmse_percent": float(np.sqrt(np.mean(er**2))),
-        "max_error_percent": float(np.max(np.abs(er))),
+        "rmse_percent": float(np.sqrt(np.mean(er**2))) if er.size else None,
+        "max_error_percent": float(np.max(np.abs(er), initial=0.0)),
         "percent_from_angle_deg": MIN_PERCENT_ANGLE_DEG,
         "rmse_angle_deg": float(np.sqrt(np.mean(ea**2))),
         "max_angle_error_deg": float(np.max(np.abs(ea))),
