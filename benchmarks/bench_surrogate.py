@@ -21,8 +21,8 @@ import numpy as np
 
 from solver.design import Design
 from surrogate import DesignTarget, fit_surrogate, inverse_design, open_surrogate
-from surrogate.paper_data import SIMULATED_L_MM
-from surrogate.synthetic import synthetic_curves
+from surrogate.exponential.paper_tables import SIMULATED_L_MM
+from surrogate.exponential.synthetic_curves import synthetic_curves
 
 DEFAULT = Path(__file__).resolve().parents[1] / "service" / "data" / "surrogate.json"
 

@@ -84,7 +84,7 @@ VALIDITY_FIELDS = ("fe_limit_pa", "fe_limit_angle_deg", "fe_stop_reason", "fe_li
 
 def prediction_body(prediction: Any, model: str, level: float | None = None,
                     design: Design | None = None) -> dict[str, Any]:
-    """The one plain-data form of a ``surrogate.core.Prediction``, for HTTP and the CLI:
+    """The one plain-data form of a ``surrogate.predictor.Prediction``, for HTTP and the CLI:
     angles (deg) with the band, force (mN, blocked tip) and injected volume (ul) when the
     model has them, validity and provenance. NaN (past the FE's range) becomes null."""
     validity = dict(prediction.validity or {})

@@ -134,7 +134,12 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
                              'model "emulator" for volumes and times')
         v = (np.asarray(question.volumes_ul, float) if axis == "volumes_ul"
              else np.asarray(question.times_s, float) * float(q or 0))
-        prediction = by_volume(design, v, level=level)
+        try:
+            prediction = by_volume(design, v, level=level)
+        except InputError as exc:   # volumes derived from times: name the field asked
+            if exc.field != "volumes_ul" or axis == "volumes_ul":
+                raise
+            raise InputError(axis, exc.detail, exc.allowed) from None
     body = prediction_body(prediction, model, level, design)
     body["asked"] = axis
     body["pressure_sites"] = {"pressure_pa": "chamber"}

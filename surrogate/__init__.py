@@ -12,23 +12,30 @@ tau = a_t log10(b_t t); the "extended" form adds c: exp(x + c x^2), x = p / tau.
 Errors: OutOfFamilyError and SurrogateFileError (both InputError, see surrogate.errors).
 """
 
-from surrogate.core import InversePrediction, Prediction, Surrogate
 from surrogate.dataset import CurveData, curves_from_store
 from surrogate.errors import OutOfFamilyError, SurrogateFileError
-from surrogate.files import load_surrogate, open_surrogate, save_surrogate
-from surrogate.fit import FORMAT_VERSION, fit_surrogate
-from surrogate.inverse_design import (
+from surrogate.exponential.file import (
+    FORMAT_VERSION,
+    load_surrogate,
+    open_surrogate,
+    save_surrogate,
+)
+from surrogate.exponential.fit_from_curves import fit_surrogate
+from surrogate.exponential.inverse_design import (
     DesignBounds,
     DesignCandidate,
     DesignTarget,
     InverseDesignResult,
     inverse_design,
 )
-from surrogate.paper import paper_surrogate
+from surrogate.exponential.paper_preset import paper_surrogate
+from surrogate.exponential.surrogate import Surrogate
+from surrogate.predictor import InversePrediction, Prediction, Predictor
 
 __all__ = [
     "FORMAT_VERSION", "CurveData", "DesignBounds", "DesignCandidate", "DesignTarget",
-    "InverseDesignResult", "InversePrediction", "OutOfFamilyError", "Prediction", "Surrogate",
+    "InverseDesignResult", "InversePrediction", "OutOfFamilyError", "Prediction", "Predictor",
+    "Surrogate",
     "SurrogateFileError", "curves_from_store", "fit_surrogate", "inverse_design",
     "load_surrogate", "open_surrogate", "paper_surrogate", "save_surrogate",
 ]

@@ -20,9 +20,9 @@ from solver.design import Design
 @dataclass(frozen=True)
 class CurveData:
     """One FE curve: converged points, pressure_pa (Pa), angle_deg (deg), force_mn (mN,
-    NaN for a free tip). ``tip`` is the solver's tip condition ("free", "spring",
-    "blocked"); only free-tip curves inform the angle model, only curves with finite
-    force inform the force model."""
+    NaN for a free tip), volume_ul (injected volume, ul; None when not known). ``tip``
+    is the solver's tip condition ("free", "spring", "blocked"); only free-tip curves
+    inform the angle model, only curves with finite force inform the force model."""
 
     design: Design
     pressure_pa: np.ndarray
@@ -32,6 +32,7 @@ class CurveData:
     tip: str = "free"
     spring_k_n_per_m: float = 0.0
     mesh_rank: tuple = field(default=(0, 0, 0))  # finer solves win when a design repeats
+    volume_ul: np.ndarray | None = None
 
     def usable_points(self, quantity: str = "angle_deg") -> tuple[np.ndarray, np.ndarray]:
         """(pressure_pa, values) on the rising pressure branch, p > 0, finite values."""
@@ -144,5 +145,6 @@ def curves_from_store(path: str | os.PathLike) -> tuple[list[CurveData], dict]:
                 force_mn=np.asarray(c.force_mn, dtype=float), key=rec.key, tip=s.tip,
                 spring_k_n_per_m=float(s.spring_k_n_per_m),
                 mesh_rank=(int(s.mesh_level), 1 if s.mesh_divisions == "fine_x" else 0,
-                           1 if s.element == "hex2" else 0)))
+                           1 if s.element == "hex2" else 0),
+                volume_ul=np.asarray(c.volume_ul, dtype=float)))
     return curves, metadata

@@ -39,7 +39,7 @@ from solver.design_space import (
     scaled_material,
 )
 from solver.errors import InputError
-from surrogate.inverse_design import (
+from surrogate.exponential.inverse_design import (
     DEFAULT_OBJECTIVE,
     OBJECTIVES,
     DesignCandidate,

@@ -6,6 +6,7 @@ parses -- is refused on load, never turned into a different number.
 canonical JSON (sorted keys; Python's float repr round-trips exactly, so reading and
 re-serialising gives the same bytes). ``check_seal(doc, origin)`` verifies it; a file
 of older code has none and is checked only by its structure and a trial prediction.
+``check_header`` checks the format name and version every model file starts with.
 """
 
 from __future__ import annotations
@@ -42,3 +43,18 @@ def check_seal(doc: dict, origin: str) -> None:
         raise SurrogateFileError(origin, "its content changed since it was written (the "
                                  "content_sha256 checksum does not match): refit it with "
                                  "`balloon fit`, or restore it")
+
+
+def check_header(doc: object, format_name: str, reads_up_to: int, kind: str,
+                 origin: str) -> int:
+    """The file's format version, after checking that ``doc`` is a ``format_name`` file
+    (``kind``: "a surrogate", "an emulator", for the message) of a version this code
+    reads (at most ``reads_up_to``); SurrogateFileError otherwise."""
+    if not isinstance(doc, dict) or doc.get("format") != format_name:
+        raise SurrogateFileError(origin, f"not {kind} file (no \"format\": "
+                                 f"\"{format_name}\")")
+    version = doc.get("format_version")
+    if not isinstance(version, int) or version > reads_up_to:
+        raise SurrogateFileError(origin, f"format version {version!r} is newer than this "
+                                 f"code reads ({reads_up_to}); upgrade balloon-actuator")
+    return version

@@ -1,4 +1,6 @@
-"""The one interface every model implements: emulator, exponential, paper, calibrated.
+"""The one interface every model implements (emulator, exponential, paper, calibrated),
+its result types (``Prediction``, ``InversePrediction``) and the check of a request's
+list of numbers (``number_array``).
 
 Routes, CLI commands and the calibration loop call only these methods, so they never
 branch on a model's kind:
@@ -21,10 +23,97 @@ Contract (what every implementation guarantees):
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
+import numpy as np
+
 from solver.design import Design
-from surrogate.core import InversePrediction, Prediction
+from solver.errors import InputError
+
+MAX_POINTS = 10_000_000  # the most numbers one request may ask for
+
+
+def number_array(values: object, field_name: str, unit: str) -> np.ndarray:
+    """A request's list of numbers as a 1-D float array; InputError naming the field."""
+    try:
+        a = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise InputError(field_name, f"not a list of numbers: {values!r}") from None
+    if a.ndim != 1 or a.size == 0 or a.size > MAX_POINTS:
+        raise InputError(field_name, f"{a.size} values with shape {a.shape}",
+                         f"1 to {MAX_POINTS} numbers ({unit})")
+    if not np.isfinite(a).all():
+        raise InputError(field_name, "values must be finite", f"finite numbers ({unit})")
+    return a
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Angles (deg) at ``pressure_pa`` (Pa) with a band at ``level`` (lower_deg, upper_deg);
+    force_mn (mN) and its band when the model has force, else None; volume_ul (injected
+    volume, ul) when the model has it. NaN where the answer is past the FE's range."""
+
+    design: Design
+    pressure_pa: np.ndarray
+    angle_deg: np.ndarray
+    lower_deg: np.ndarray
+    upper_deg: np.ndarray
+    level: float
+    validity: dict
+    model: str
+    form: str
+    provenance: dict
+    parameters: dict
+    force_mn: np.ndarray | None = None
+    force_lower_mn: np.ndarray | None = None
+    force_upper_mn: np.ndarray | None = None
+    volume_ul: np.ndarray | None = None
+
+    def as_dict(self) -> dict[str, object]:
+        def lst(a: np.ndarray | None) -> list | None:
+            return None if a is None else np.asarray(a).tolist()
+
+        return {"design": self.design.as_dict(), "pressure_pa": lst(self.pressure_pa),
+                "angle_deg": lst(self.angle_deg), "lower_deg": lst(self.lower_deg),
+                "upper_deg": lst(self.upper_deg), "level": self.level,
+                "force_mn": lst(self.force_mn), "force_lower_mn": lst(self.force_lower_mn),
+                "force_upper_mn": lst(self.force_upper_mn), "volume_ul": lst(self.volume_ul),
+                "validity": dict(self.validity),
+                "model": self.model, "form": self.form, "parameters": dict(self.parameters),
+                "provenance": dict(self.provenance)}
+
+
+@dataclass(frozen=True)
+class InversePrediction:
+    """Pressures (Pa) that give ``angle_deg`` (deg), with a band at ``level``; arrays have
+    the length of the requested angles."""
+
+    design: Design
+    angle_deg: np.ndarray
+    pressure_pa: np.ndarray
+    lower_pa: np.ndarray
+    upper_pa: np.ndarray
+    level: float
+    validity: dict
+    model: str
+    form: str
+    provenance: dict
+    volume_ul: np.ndarray | None = None        # injected volume for each angle, ul
+    volume_lower_ul: np.ndarray | None = None  # its band's lower edge, ul
+    volume_upper_ul: np.ndarray | None = None  # its band's upper edge, ul
+
+    def as_dict(self) -> dict[str, object]:
+        def opt(a: np.ndarray | None) -> list[float] | None:
+            return None if a is None else np.asarray(a, float).tolist()
+
+        return {"design": self.design.as_dict(), "angle_deg": self.angle_deg.tolist(),
+                "pressure_pa": self.pressure_pa.tolist(), "lower_pa": self.lower_pa.tolist(),
+                "upper_pa": self.upper_pa.tolist(), "volume_ul": opt(self.volume_ul),
+                "volume_lower_ul": opt(self.volume_lower_ul),
+                "volume_upper_ul": opt(self.volume_upper_ul), "level": self.level,
+                "validity": dict(self.validity), "model": self.model, "form": self.form,
+                "provenance": dict(self.provenance)}
 
 
 @runtime_checkable

@@ -1,4 +1,10 @@
-"""Shared pytest configuration: heavy finite-element cases are opt-in (--runslow)."""
+"""Shared pytest configuration: heavy finite-element cases are opt-in (--runslow); the
+``shipped_client`` fixture (the app over the shipped data, one per test module).
+
+Named ``shipped_client``, not ``client``: several modules define their own ``client``
+over fakes or a temporary database, and a conftest fixture of that name would be
+shadowed there silently.
+"""
 
 import pytest
 
@@ -15,3 +21,21 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+@pytest.fixture(scope="module")
+def shipped_client(tmp_path_factory):
+    """A TestClient of the app over the shipped database, emulator and exponential file
+    (service/data/), with its own temporary models directory."""
+    from fastapi.testclient import TestClient
+    from service_fakes import settings_for
+
+    from service.app import create_app
+    from service.settings import DATA_DIR
+
+    tmp = tmp_path_factory.mktemp("shipped")
+    app = create_app(settings_for(tmp, emulator_path=DATA_DIR / "emulator.json",
+                                  db_path=DATA_DIR / "curves.h5",
+                                  surrogate_path=DATA_DIR / "surrogate.json"))
+    with TestClient(app) as c:
+        yield c

@@ -9,10 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
-from service_fakes import settings_for
 
-from service.app import create_app
 from service.settings import DATA_DIR
 from solver.design import Design
 from solver.design_space import OutOfBoxError, locate, scaled_material
@@ -29,14 +26,6 @@ DB = DATA_DIR / "curves.h5"
 @pytest.fixture(scope="module")
 def emulator():
     return load_emulator(EMULATOR)
-
-
-@pytest.fixture(scope="module")
-def client(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("emu")
-    app = create_app(settings_for(tmp, emulator_path=EMULATOR, db_path=DB))
-    with TestClient(app) as c:
-        yield c
 
 
 def test_the_emulator_is_a_predictor(emulator):
@@ -94,8 +83,8 @@ def test_a_scaled_inline_material_is_recognised_and_other_inline_ones_are_refuse
     assert info.value.field == "membrane_material"
 
 
-def test_past_the_fe_range_no_number_is_given(client):
-    r = client.post("/v1/predict", json={"pressures_pa": [1000, 2500, 5000, 20000]})
+def test_past_the_fe_range_no_number_is_given(shipped_client):
+    r = shipped_client.post("/v1/predict", json={"pressures_pa": [1000, 2500, 5000, 20000]})
     assert r.status_code == 200, r.text
     body = r.json()
     assert body["model"] == "emulator"
@@ -108,8 +97,8 @@ def test_past_the_fe_range_no_number_is_given(client):
     assert "FE" in " ".join(v["messages"])
 
 
-def test_outside_the_box_is_refused_with_the_nearest_design(client):
-    r = client.post("/v1/predict", json={"design": {"L_mm": 3.0}, "pressures_pa": [500]})
+def test_outside_the_box_is_refused_with_the_nearest_design(shipped_client):
+    r = shipped_client.post("/v1/predict", json={"design": {"L_mm": 3.0}, "pressures_pa": [500]})
     assert r.status_code == 422, r.text
     body = r.json()
     assert r.headers["content-type"] == "application/problem+json"
@@ -148,17 +137,17 @@ def test_by_volume_the_fe_records_own_volume_column_is_reproduced(emulator):
             assert np.nanmax(rel[np.abs(c.angle_deg[inside]) > 1]) < 0.01
 
 
-def test_predict_by_volume_or_time_over_http(client):
-    by_v = client.post("/v1/predict", json={"volumes_ul": [5, 10, 20, 400]}).json()
-    by_t = client.post("/v1/predict", json={"times_s": [2, 4, 8, 160],
+def test_predict_by_volume_or_time_over_http(shipped_client):
+    by_v = shipped_client.post("/v1/predict", json={"volumes_ul": [5, 10, 20, 400]}).json()
+    by_t = shipped_client.post("/v1/predict", json={"times_s": [2, 4, 8, 160],
                                             "flow_ul_s": 2.5}).json()
     assert by_v["angle_deg"][:3] == pytest.approx(by_t["angle_deg"][:3])
     assert by_t["time_s"] == [2, 4, 8, 160] and by_v["volume_ul"] == [5, 10, 20, 400]
     assert by_v["angle_deg"][3] is None and "past_fe_range" in by_v["validity"]["flags"]
     assert 0 < by_v["pressure_pa"][0] < by_v["pressure_pa"][2]
-    both = client.post("/v1/predict", json={"volumes_ul": [5], "pressures_pa": [100]})
+    both = shipped_client.post("/v1/predict", json={"volumes_ul": [5], "pressures_pa": [100]})
     assert both.status_code == 422 and "exactly one" in both.text
-    lone = client.post("/v1/predict", json={"times_s": [5]})
+    lone = shipped_client.post("/v1/predict", json={"times_s": [5]})
     assert lone.status_code == 422 and "flow_ul_s" in lone.text
 
 
@@ -290,7 +279,7 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
     folds, each predicted by the emulator refitted without it) cover 95 % in
     every bin (at least 0.93: a bin's nodes also shape the band just outside it), by
     pressure and by injected volume, and not every point (not needlessly wide)."""
-    from surrogate.bands import z_value
+    from surrogate.band_level import z_value
     from surrogate.emulator.build import (
         ANGLE_BINS_DEG,
         _collect,

@@ -69,6 +69,26 @@ def test_page_loads_offline_with_no_console_error_at_both_widths(browser, server
             w.close()
 
 
+def test_the_nearest_fe_curves_are_labelled_with_their_materials(watched, server):
+    page = open_explorer(watched, server.url)
+    page.wait_for_selector('#plot g[data-series^="fe-"]')
+    labels = [x for x in page.locator("#plot text").all_text_contents() if x.startswith("FE ")]
+    assert labels and all(x.startswith("FE PDMS 1:10 / Ecoflex 00-30, L=") for x in labels), labels
+    # a stored stiffness-scaled layer ("<preset>*<s>") and the page's inline one
+    # ("<preset>_x<s>", scale read off the moduli) carry their scale; a scale of 1 none
+    got = page.evaluate("""async () => {
+        const d = await import("/static/explorer/js/design.js");
+        const presets = window.explorer.presets;
+        const inline = d.material("pdms_1_15", 0.5, presets);
+        return [d.materialLabel("pdms_1_15*0.967705"), d.materialLabel(inline, presets),
+                d.materialLabel("ecoflex_00_30", presets),
+                d.materialLabel({id: "pdms_1_10", mu_kpa: presets.pdms_1_10.mu_kpa,
+                                 alpha: presets.pdms_1_10.alpha}, presets)];
+    }""")
+    assert got == ["PDMS 1:15 x0.968", "PDMS 1:15 x0.5", "Ecoflex 00-30", "PDMS 1:10"]
+    assert watched.errors == []
+
+
 def test_moving_the_L_slider_redraws_the_curve_with_the_numbers_of_v1_predict(watched, server):
     page = open_explorer(watched, server.url)
     before = page.locator('#plot g[data-series="prediction"] path.line').get_attribute("d")

@@ -82,8 +82,8 @@ def test_inverse_past_the_fe_range_is_null_over_http(client, model):
 def test_a_calibrated_model_records_its_baselines_fe_range(calibration, tmp_path):
     save_model(calibration, "lab1", tmp_path)
     fe = json.loads((tmp_path / "lab1.json").read_text())["domain"]["fe_range"]
-    # the baseline is the paper's preset: 3000 Pa and 90 deg (surrogate/paper.py), reached
-    # first by the angle for the measured designs
+    # the baseline is the paper's preset: 3000 Pa and 90 deg
+    # (surrogate/exponential/paper_preset.py), reached first by the angle for the measured designs
     assert 0 < fe["pressure_pa"] <= 3000.0 and 0 < fe["angle_deg"] <= 90.0
 
 

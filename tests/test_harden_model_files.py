@@ -1,5 +1,5 @@
 """Model files validated on load, never a 500 or a wrong number inside a request: the
-exponential surrogate (surrogate/files.py) and the emulator (surrogate/emulator/file.py).
+exponential surrogate (surrogate/exponential/file.py) and the emulator (surrogate/emulator/file.py).
 A file this code writes carries a content checksum, so any later change is refused; a
 file of older code (the shipped ones until refitted) is checked by its structure and a
 trial prediction at its own data. Over HTTP: 503 naming the model, /v1/health degraded

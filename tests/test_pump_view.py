@@ -14,10 +14,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
-from service_fakes import settings_for
 
-from service.app import create_app
 from service.cli import main
 from service.settings import DATA_DIR
 from solver.design import Design
@@ -34,14 +31,6 @@ R_PAPER_CHANNEL = 26.307   # Pa per ul/s, by hand in tests/test_hydraulics.py
 @pytest.fixture(scope="module")
 def emulator():
     return load_emulator(EMULATOR)
-
-
-@pytest.fixture(scope="module")
-def client(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("pump")
-    app = create_app(settings_for(tmp, emulator_path=EMULATOR, db_path=DB))
-    with TestClient(app) as c:
-        yield c
 
 
 def database_records(emulator, every: int = 25):
@@ -61,7 +50,7 @@ def design_json(design: Design) -> dict:
     return out
 
 
-def test_by_time_and_by_volume_the_fe_records_own_columns_are_reproduced(client, emulator):
+def test_by_time_and_by_volume_the_fe_records_own_columns_are_reproduced(shipped_client, emulator):
     checked = 0
     for record in database_records(emulator):
         c = record.curve
@@ -70,7 +59,7 @@ def test_by_time_and_by_volume_the_fe_records_own_columns_are_reproduced(client,
         np.testing.assert_allclose(c.time_s, c.volume_ul / flow, rtol=1e-9, atol=1e-12)
         inside = (np.abs(c.angle_deg) <= 89.0) & (c.volume_ul > 0)
         times = c.time_s[inside].tolist()
-        by_t = client.post("/v1/predict", json={"design": design_json(record.design),
+        by_t = shipped_client.post("/v1/predict", json={"design": design_json(record.design),
                                                 "times_s": times, "flow_ul_s": flow})
         assert by_t.status_code == 200, by_t.text
         by_t = by_t.json()
@@ -81,13 +70,13 @@ def test_by_time_and_by_volume_the_fe_records_own_columns_are_reproduced(client,
         assert np.max(np.abs(angle - c.angle_deg[inside])) < 0.5
         rel = np.abs(np.array(by_t["pressure_pa"], float) / c.pressure_pa[inside] - 1)
         assert np.max(rel[np.abs(c.angle_deg[inside]) > 1]) < 0.01
-        by_v = client.post("/v1/predict", json={"design": design_json(record.design),
+        by_v = shipped_client.post("/v1/predict", json={"design": design_json(record.design),
                                                 "volumes_ul": c.volume_ul[inside].tolist(),
                                                 "flow_ul_s": flow}).json()
         assert by_v["angle_deg"] == pytest.approx(by_t["angle_deg"], abs=1e-9)
         np.testing.assert_allclose(by_v["time_s"], c.time_s[inside], rtol=1e-9)
         # asked by pressure the answer carries the same volume and time axes
-        by_p = client.post("/v1/predict", json={"design": design_json(record.design),
+        by_p = shipped_client.post("/v1/predict", json={"design": design_json(record.design),
                                                 "pressures_pa": by_t["pressure_pa"],
                                                 "flow_ul_s": flow}).json()
         ok = np.abs(c.angle_deg[inside]) > 1
@@ -98,9 +87,9 @@ def test_by_time_and_by_volume_the_fe_records_own_columns_are_reproduced(client,
     assert checked >= 5
 
 
-def test_inverse_round_trip_by_volume_and_time(client):
+def test_inverse_round_trip_by_volume_and_time(shipped_client):
     design = {"L_mm": 11.0, "t_mm": 0.8, "T_mm": 1.4, "b_mm": 2.0, "h_mm": 0.2}
-    inv = client.post("/v1/inverse/pressure", json={"design": design,
+    inv = shipped_client.post("/v1/inverse/pressure", json={"design": design,
                                                     "angles_deg": [10, 45, 80],
                                                     "flow_ul_s": 2.5})
     assert inv.status_code == 200, inv.text
@@ -111,49 +100,50 @@ def test_inverse_round_trip_by_volume_and_time(client):
     assert np.all(v <= np.array(inv["volume_upper_ul"]))
     np.testing.assert_allclose(inv["time_s"], v / 2.5)
     np.testing.assert_allclose(inv["time_upper_s"], np.array(inv["volume_upper_ul"]) / 2.5)
-    fwd = client.post("/v1/predict", json={"design": design, "volumes_ul": v.tolist()}).json()
+    fwd = shipped_client.post("/v1/predict",
+                              json={"design": design, "volumes_ul": v.tolist()}).json()
     np.testing.assert_allclose(fwd["angle_deg"], [10, 45, 80], atol=0.05)
-    by_t = client.post("/v1/predict", json={"design": design, "times_s": inv["time_s"],
+    by_t = shipped_client.post("/v1/predict", json={"design": design, "times_s": inv["time_s"],
                                             "flow_ul_s": 2.5}).json()
     np.testing.assert_allclose(by_t["angle_deg"], [10, 45, 80], atol=0.05)
     # the chamber pressure at that volume is the inverse's pressure for the angle
     np.testing.assert_allclose(fwd["pressure_pa"], inv["pressure_pa"], rtol=0.01)
 
 
-def test_inverse_volume_agrees_with_the_fe_record_at_a_database_design(client, emulator):
+def test_inverse_volume_agrees_with_the_fe_record_at_a_database_design(shipped_client, emulator):
     record = next(r for r in database_records(emulator, every=7)
                   if r.curve.status == "complete" and r.curve.angle_deg[-1] >= 60)
     c = record.curve
-    inv = client.post("/v1/inverse/pressure", json={"design": design_json(record.design),
+    inv = shipped_client.post("/v1/inverse/pressure", json={"design": design_json(record.design),
                                                     "angles_deg": [30, 60]}).json()
     sign = np.sign(c.angle_deg[-1])
     fe_volume = np.interp([30, 60], sign * c.angle_deg, c.volume_ul)
     np.testing.assert_allclose(inv["volume_ul"], fe_volume, rtol=0.02)
 
 
-def test_the_pump_gauge_reads_r_q_above_the_chamber(client):
+def test_the_pump_gauge_reads_r_q_above_the_chamber(shipped_client):
     # the paper's channel (R = 26.307 Pa per ul/s by hand) and 0.5 m of 0.5 mm bore tubing
     # (8 mu L / (pi r^4) = 4e-3 / 1.22718e-14 Pa s/m^3 = 325.95 Pa per ul/s), at 2.5 ul/s:
     # R Q = (26.307 + 325.95) * 2.5 = 880.64 Pa
     body = {"times_s": [2, 4, 8], "flow_ul_s": 2.5,
             "inlet": {"tubing_length_mm": 500, "tubing_bore_mm": 0.5}}
-    ans = client.post("/v1/predict", json=body).json()
+    ans = shipped_client.post("/v1/predict", json=body).json()
     assert ans["pressure_sites"] == {"pressure_pa": "chamber", "pump_pressure_pa": "pump_gauge"}
     assert ans["inlet"]["pressure_drop_pa"] == pytest.approx(880.64, rel=1e-4)
     np.testing.assert_allclose(np.subtract(ans["pump_pressure_pa"], ans["pressure_pa"]),
                                880.64, rtol=1e-4)
     # the chamber answer does not depend on the inlet
-    bare = client.post("/v1/predict", json={"times_s": [2, 4, 8], "flow_ul_s": 2.5}).json()
+    bare = shipped_client.post("/v1/predict", json={"times_s": [2, 4, 8], "flow_ul_s": 2.5}).json()
     assert bare["angle_deg"] == ans["angle_deg"] and "pump_pressure_pa" not in bare
     # gauge readings in: the chamber is R Q lower (channel only: 26.307 * 2.5 = 65.77 Pa)
-    gauge = client.post("/v1/predict", json={"pressures_pa": [1000, 1500],
+    gauge = shipped_client.post("/v1/predict", json={"pressures_pa": [1000, 1500],
                                              "pressures_at": "pump_gauge", "flow_ul_s": 2.5,
                                              "inlet": {}}).json()
     np.testing.assert_allclose(gauge["pressure_pa"], [1000 - 65.77, 1500 - 65.77], atol=0.01)
     assert gauge["pump_pressure_pa"] == pytest.approx([1000, 1500])
-    chamber = client.post("/v1/predict", json={"pressures_pa": gauge["pressure_pa"]}).json()
+    chamber = shipped_client.post("/v1/predict", json={"pressures_pa": gauge["pressure_pa"]}).json()
     assert chamber["angle_deg"] == pytest.approx(gauge["angle_deg"])
-    inv = client.post("/v1/inverse/pressure", json={"angles_deg": [45], "flow_ul_s": 2.5,
+    inv = shipped_client.post("/v1/inverse/pressure", json={"angles_deg": [45], "flow_ul_s": 2.5,
                                                     "inlet": {}}).json()
     assert inv["pump_pressure_pa"][0] - inv["pressure_pa"][0] == pytest.approx(
         R_PAPER_CHANNEL * 2.5, rel=1e-4)
@@ -173,16 +163,16 @@ def test_the_pump_gauge_reads_r_q_above_the_chamber(client):
     ({"volumes_ul": [5], "pressures_at": "pump_gauge"}, "pressures_at", "pump_gauge with"),
     ({"volumes_ul": [5], "model": "paper"}, "volumes_ul", "emulator"),
 ])
-def test_errors_name_the_field_and_its_range(client, body, field, allowed):
-    r = client.post("/v1/predict", json=body)
+def test_errors_name_the_field_and_its_range(shipped_client, body, field, allowed):
+    r = shipped_client.post("/v1/predict", json=body)
     assert r.status_code == 422, r.text
     errors = r.json()["errors"]
     assert any(".".join(map(str, e["loc"][1:])).startswith(field) and allowed in e["allowed"]
                for e in errors), errors
 
 
-def test_openapi_has_an_example_of_each_request_kind(client):
-    spec = client.get("/openapi.json").json()
+def test_openapi_has_an_example_of_each_request_kind(shipped_client):
+    spec = shipped_client.get("/openapi.json").json()
     schemas = spec["components"]["schemas"]
     examples = schemas["PredictRequest"]["examples"]
     kinds = {next(k for k in ("pressures_pa", "volumes_ul", "times_s") if k in e)
@@ -191,7 +181,7 @@ def test_openapi_has_an_example_of_each_request_kind(client):
     assert any("inlet" in e for e in examples)
     assert all("flow_ul_s" in e for e in examples if "times_s" in e)
     for example in examples:  # each example is answered as written
-        assert client.post("/v1/predict", json=example).status_code == 200, example
+        assert shipped_client.post("/v1/predict", json=example).status_code == 200, example
     assert any("flow_ul_s" in e for e in schemas["PressureRequest"]["examples"])
 
 
@@ -272,15 +262,15 @@ def test_the_emulator_by_volume_keeps_a_falling_pressure_and_flags_it(emulator, 
 
 # -- plot and CLI ---------------------------------------------------------------------
 
-def test_plot_against_time_is_a_png_and_its_errors_name_the_field(client):
-    r = client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "t_max_s": 10,
+def test_plot_against_time_is_a_png_and_its_errors_name_the_field(shipped_client):
+    r = shipped_client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "t_max_s": 10,
                                                "inlet": "true", "nearby": 1})
     assert r.status_code == 200 and r.content[:8] == b"\x89PNG\r\n\x1a\n"
-    by_p = client.get("/v1/predict/plot", params={"nearby": 1})
+    by_p = shipped_client.get("/v1/predict/plot", params={"nearby": 1})
     assert by_p.content != r.content
-    bad = client.get("/v1/predict/plot", params={"inlet": "true"})
+    bad = shipped_client.get("/v1/predict/plot", params={"inlet": "true"})
     assert bad.status_code == 422 and bad.json()["errors"][0]["field"] == "flow_ul_s"
-    bad = client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "t_max_s": -1})
+    bad = shipped_client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "t_max_s": -1})
     assert bad.status_code == 422 and bad.json()["errors"][0]["field"] == "t_max_s"
 
 
@@ -311,8 +301,8 @@ def test_cli_by_volume_and_time_and_its_one_line_errors(capsys, monkeypatch):
     assert inv["time_s"][0] == pytest.approx(inv["volume_ul"][0] / 2.5)
 
 
-def test_past_the_fe_range_by_time_no_angle_and_the_time_it_ends(client):
-    ans = client.post("/v1/predict", json={"times_s": [4, 1000], "flow_ul_s": 2.5}).json()
+def test_past_the_fe_range_by_time_no_angle_and_the_time_it_ends(shipped_client):
+    ans = shipped_client.post("/v1/predict", json={"times_s": [4, 1000], "flow_ul_s": 2.5}).json()
     assert ans["angle_deg"][0] is not None and ans["angle_deg"][1] is None
     assert ans["pressure_pa"][1] is None and "past_fe_range" in ans["validity"]["flags"]
     v_lim = ans["validity"]["fe_limit_volume_ul"]

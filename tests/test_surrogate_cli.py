@@ -1,6 +1,6 @@
 """``balloon fit``, ``balloon predict`` and ``balloon inverse`` end to end on a small curve
 database written through the store API (synthetic curves with the paper's constants,
-surrogate/synthetic.py), so the fitted a must come back as 0.101 deg/mm."""
+surrogate/exponential/synthetic_curves.py), so the fitted a must come back as 0.101 deg/mm."""
 
 import json
 
@@ -12,7 +12,7 @@ from solver.curve import Curve
 from solver.settings import SolverSettings
 from solver.store import CurveStore, make_record
 from surrogate import load_surrogate
-from surrogate.synthetic import synthetic_curves
+from surrogate.exponential.synthetic_curves import synthetic_curves
 
 
 @pytest.fixture(autouse=True)

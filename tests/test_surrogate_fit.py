@@ -1,10 +1,10 @@
 """Fitting: known parameters recovered from synthetic curves, the paper's procedure,
 the joint-fit covariance against a parametric bootstrap, band coverage held out.
 
-Synthetic curves (surrogate/synthetic.py) follow the model exactly with the paper's
-constants (a = 0.101, a_t = 731.2, b_t = 7.179) plus seeded normal noise, so the expected
-numbers are the generating parameters themselves. The covariance is that of the fit
-coordinates (log10 b_t in place of b_t, ``surrogate.model.to_fit``).
+Synthetic curves (surrogate/exponential/synthetic_curves.py) follow the model exactly with
+the paper's constants (a = 0.101, a_t = 731.2, b_t = 7.179) plus seeded normal noise, so
+the expected numbers are the generating parameters themselves. The covariance is that of the fit
+coordinates (log10 b_t in place of b_t, ``surrogate.exponential.equations.to_fit``).
 """
 
 from dataclasses import replace
@@ -12,11 +12,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from surrogate import fit_surrogate, model
+from surrogate import fit_surrogate
 from surrogate.dataset import CurveData
-from surrogate.jointfit import band, joint_fit, leave_one_design_out, make_points
-from surrogate.procedure import paper_procedure
-from surrogate.synthetic import PAPER_THETA, synthetic_curves
+from surrogate.exponential import equations
+from surrogate.exponential.bands import angle_band
+from surrogate.exponential.family_fit import joint_fit, leave_one_design_out, make_points
+from surrogate.exponential.paper_procedure import paper_procedure
+from surrogate.exponential.synthetic_curves import PAPER_THETA, synthetic_curves
 
 L_GRID = (4.1, 7.1, 11.1, 15.1)
 T_GRID = (0.5, 0.75, 1.0)
@@ -35,7 +37,7 @@ def test_noise_free_curves_give_the_generating_parameters() -> None:
 def test_noisy_curves_recover_parameters_within_their_standard_errors() -> None:
     fit = joint_fit(points(synthetic_curves(noise_deg=0.5, seed=1)), "exponential")
     se = np.sqrt(np.diag(fit.cov))
-    assert (np.abs(model.to_fit(fit.theta) - model.to_fit(PAPER_THETA)) < 4 * se).all()
+    assert (np.abs(equations.to_fit(fit.theta) - equations.to_fit(PAPER_THETA)) < 4 * se).all()
     assert fit.residual_sd == pytest.approx(0.5, rel=0.2)
 
 
@@ -93,7 +95,7 @@ def test_joint_fit_covariance_matches_a_parametric_bootstrap() -> None:
     boot = []
     for _ in range(60):
         y = m + rng.normal(size=m.shape) * sd
-        boot.append(model.to_fit(joint_fit(
+        boot.append(equations.to_fit(joint_fit(
             type(pts)(pts.L_mm, pts.t_mm, pts.pressure_pa, y, pts.curve),
             "exponential", start=fit.theta).theta))
     ratio = np.std(boot, axis=0, ddof=1) / np.sqrt(np.diag(fit.cov))
@@ -121,7 +123,7 @@ def test_b_t_of_a_family_whose_tau_ignores_t_has_an_honest_error(form, theta,
     se = fit.standard_errors["log10_b_t_per_mm"]
     assert np.isfinite(se) and se > 0.1
     m = _predict(fit, pts)
-    x = pts.pressure_pa / model.tau_pa(fit.theta, pts.t_mm)
+    x = pts.pressure_pa / equations.tau_pa(fit.theta, pts.t_mm)
     sd = np.sqrt(fit.residual_sd**2 * np.expm1(-x) ** 2 + (fit.residual_rel * m) ** 2)
     L, t, p = np.full(5, 15.1), np.array([0.3, 0.5, 1.0, 2.0, 4.0]), np.full(5, 1500.0)
     rng = np.random.default_rng(22)
@@ -131,19 +133,19 @@ def test_b_t_of_a_family_whose_tau_ignores_t_has_an_honest_error(form, theta,
         f = joint_fit(type(pts)(pts.L_mm, pts.t_mm, pts.pressure_pa, y, pts.curve), form,
                       start=fit.theta)
         log_b_t.append(np.log10(f.theta[2]))
-        curve.append(model.angle_deg(f.theta, L, t, p))
+        curve.append(equations.angle_deg(f.theta, L, t, p))
     ratio = np.std(log_b_t, ddof=1) / se
     assert 1 / 1.5 < ratio < 1.5, (se, ratio)
     bare = replace(fit, residual_sd=0.0, residual_rel=0.0, band_scale=1.0)
-    mid, lo, hi = band(bare, L, t, p, level=0.95)
+    mid, lo, hi = angle_band(bare, L, t, p, level=0.95)
     boot_half = 1.96 * np.std(curve, axis=0, ddof=1)
     assert ((hi - mid) >= 0.9 * boot_half).all(), (hi - mid) / boot_half
 
 
 def _predict(fit, pts):
-    from surrogate import model
+    from surrogate.exponential import equations
 
-    return model.angle_deg(fit.theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
+    return equations.angle_deg(fit.theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
 
 
 def test_band_coverage_on_held_out_designs_is_near_nominal() -> None:
@@ -190,7 +192,6 @@ def test_band_scale_is_calibrated_on_held_out_designs_when_errors_are_correlated
 
     from solver.design import Design
     from surrogate import load_surrogate, save_surrogate
-    from surrogate.jointfit import band
 
     rng = np.random.default_rng(3)
     curves = [dc_replace(c, angle_deg=c.angle_deg * (1 + 0.12 * rng.standard_t(3)))
@@ -208,7 +209,7 @@ def test_band_scale_is_calibrated_on_held_out_designs_when_errors_are_correlated
     design = Design(L_mm=8.1, t_mm=0.6)
     wide = s.predict(design, [1500.0])
     narrow = dc_replace(par, band_scale=1.0)
-    m, lo, hi = band(narrow, 8.1, 0.6, np.array([1500.0]))
+    m, lo, hi = angle_band(narrow, 8.1, 0.6, np.array([1500.0]))
     np.testing.assert_allclose(wide.upper_deg - wide.angle_deg, (hi - m) * par.band_scale)
     path = save_surrogate(s, tmp_path / "s.json")
     assert load_surrogate(path).family_fits[0].parameters["exponential"].band_scale == \

@@ -1,6 +1,7 @@
 """Inverse design: feasible designs meet the target, bounds and pairs are respected,
-infeasible targets are explained. Reference: the paper preset (surrogate/paper_data.py)
-and its closed form; a fitted two-family synthetic surrogate for material pairs."""
+infeasible targets are explained. Reference: the paper preset
+(surrogate/exponential/paper_tables.py) and its closed form; a fitted two-family synthetic
+surrogate for material pairs."""
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from surrogate import (
     inverse_design,
     paper_surrogate,
 )
-from surrogate.synthetic import synthetic_curves
+from surrogate.exponential.synthetic_curves import synthetic_curves
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """The ``paper`` preset against the paper's own Tables 4 and 5.
 
-Expected numbers: surrogate/paper_data.py, transcribed from the reference paper
+Expected numbers: surrogate/exponential/paper_tables.py, transcribed from the reference paper
 (Table 4: A per chamber length at tau = 420; Table 5: tau per membrane thickness at
 A = 0.65; Eq. 6 constants a_t = 731.2, b_t = 7.179; a = 0.101). Tolerances are the
 issue's: A within 10 %, tau within 3 %.
@@ -11,7 +11,7 @@ import pytest
 
 from solver.design import Design
 from surrogate import paper_surrogate
-from surrogate.paper_data import TABLE_4, TABLE_5, tau_from_paper_constants
+from surrogate.exponential.paper_tables import TABLE_4, TABLE_5, tau_from_paper_constants
 
 
 @pytest.mark.parametrize(("L_mm", "A_printed"), [(row[0], row[1]) for row in TABLE_4])

@@ -1,6 +1,6 @@
 """Prediction, one-design inverse, validity flags, refusals, and surrogate files.
 
-Reference numbers: the paper preset's constants (surrogate/paper_data.py) and the
+Reference numbers: the paper preset's constants (surrogate/exponential/paper_tables.py) and the
 closed-form model angle = a L (exp(p / tau) - 1), tau = a_t log10(b_t t).
 """
 
@@ -25,8 +25,8 @@ from surrogate import (
     paper_surrogate,
     save_surrogate,
 )
-from surrogate.synthetic import synthetic_curves
-from surrogate.validity import past_fe
+from surrogate.exponential.synthetic_curves import synthetic_curves
+from surrogate.exponential.validity import past_fe
 
 
 @pytest.fixture(scope="module")
@@ -39,10 +39,9 @@ def fitted():
 
 def test_public_names_are_complete() -> None:
     public = {n for n in dir(surrogate) if not n.startswith("_")} - {
-        "annotations", "bands", "core", "curvefit", "dataset", "errors", "family", "files",
-        "fit", "inverse_design", "jointfit", "model", "paper", "paper_data", "plots",
-        "procedure", "synthetic", "validity", "calibration", "emulator", "predictor",
-        "design_search", "hydraulics", "volume_control", "file_seal"}
+        "annotations", "band_level", "dataset", "errors", "exponential", "json_plain",
+        "calibration", "emulator", "predictor", "design_search", "hydraulics",
+        "volume_control", "file_seal"}
     assert public <= set(surrogate.__all__) | {"inverse_design"}
     for name in ("Surrogate", "Prediction", "InversePrediction", "load_surrogate",
                  "save_surrogate", "paper_surrogate", "fit_surrogate", "inverse_design",
@@ -181,7 +180,7 @@ def test_failed_save_keeps_the_old_file(fitted, tmp_path) -> None:
 
 def test_provenance_records_the_source(fitted) -> None:
     prov = fitted.provenance
-    assert prov["format_version"] == surrogate.FORMAT_VERSION == 2
+    assert prov["format_version"] == surrogate.FORMAT_VERSION == 3
     assert prov["record_keys"] and prov["created_utc"]
     assert "package_version" in prov and "git_commit" in prov
     fam = fitted.families[0]
@@ -202,7 +201,8 @@ def test_format_version_1_file_loads_with_the_same_answers(tmp_path) -> None:
     5d1f4a8 (format version 1: covariances in b_t, 1/mm; report stripped), and
     surrogate_v1_expected.json holds that code's predictions and inverses from it. Read
     now, the covariance is converted to log10 b_t (delta method, exact to first order),
-    so every band comes out the same; saved again it is a version-2 file."""
+    so every band comes out the same; saved again it is a file of the current version, still
+    without a pressure-volume relation (by volume: a 422 naming volumes_ul)."""
     old = load_surrogate(DATA / "surrogate_v1.json")
     cases = json.loads((DATA / "surrogate_v1_expected.json").read_text())["cases"]
     assert len(cases) == 18
@@ -229,6 +229,9 @@ def test_format_version_1_file_loads_with_the_same_answers(tmp_path) -> None:
     # b_t = 7.7 /mm with sd 0.14 /mm in the v1 file -> log10 b_t sd 0.008
     assert std.parameters["exponential"].standard_errors["log10_b_t_per_mm"] == \
         pytest.approx(0.00803, rel=1e-3)
-    again = load_surrogate(save_surrogate(old, tmp_path / "v2.json"))
-    assert json.loads((tmp_path / "v2.json").read_text())["format_version"] == 2
+    again = load_surrogate(save_surrogate(old, tmp_path / "v3.json"))
+    assert json.loads((tmp_path / "v3.json").read_text())["format_version"] == 3
     assert again == old
+    assert all(f.volume is None for f in again.family_fits)
+    with pytest.raises(InputError, match="volumes_ul: .*no pressure-volume relation.*refit"):
+        again.predict_volume(d, [5.0])

@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
         lines += side_by_side(s.report["families"], emulator)  # type: ignore[attr-defined]
         print("\n".join(lines))
     if args.report_dir:
-        from surrogate.plots import write_report
+        from surrogate.exponential.report_plots import write_report
 
         for p in write_report(s, curves, args.report_dir):
             print(f"wrote {p}")

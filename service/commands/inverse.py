@@ -7,7 +7,7 @@
         --L-range 4 12 --t-range 0.5 1 --pair pdms_1_10/ecoflex_00_30 --objective compact
     balloon inverse --kind force_at_pressure --force-mn 2 --pressure-pa 1500
 
-Targets, objectives and defaults: docs/surrogate.md (``surrogate.inverse_design``).
+Targets, objectives and defaults: docs/surrogate.md (``surrogate.exponential.inverse_design``).
 """
 
 from __future__ import annotations

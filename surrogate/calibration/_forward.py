@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate.calibration._baseline import exponential_angle_deg, tau_pa
 from surrogate.calibration._data import Observations
+from surrogate.exponential.equations import angle_from_constants, tau_from_constants
 
 LAG_SUBSTEPS = 4
 
@@ -27,9 +27,10 @@ def static_angle_deg(p_chamber, L_mm, t_mm, fam: np.ndarray, values: dict[str, f
     """Quasi-static angle (deg): baseline with the tau, saturation and reverse terms;
     ``fam`` is (..., 4) family parameters broadcast to the points."""
     t_eff = np.asarray(t_mm, dtype=float) + values.get("dt_mm", 0.0)
-    tau = values.get("s", 1.0) * tau_pa(fam[..., 1], fam[..., 2], np.maximum(t_eff, 1e-6))
+    tau = values.get("s", 1.0) * tau_from_constants(fam[..., 1], fam[..., 2],
+                                                    np.maximum(t_eff, 1e-6))
     tau = np.where(tau > 1.0, tau, 1.0)  # b_t t <= 1 has no meaning; keep the fit finite
-    forward = exponential_angle_deg(fam[..., 0] * L_mm, tau, p_chamber, fam[..., 3])
+    forward = angle_from_constants(fam[..., 0] * L_mm, tau, p_chamber, fam[..., 3])
     inv_max = values.get("inv_theta_max_per_deg", 0.0)
     if inv_max > 0.0:
         forward = np.tanh(forward * inv_max) / inv_max

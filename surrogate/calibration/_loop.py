@@ -47,6 +47,7 @@ from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._start import Baseline
 from surrogate.calibration._structure import structure_test
 from surrogate.calibration.effects import CATALOGUE, EFFECTS, DataTraits, Effect
+from surrogate.exponential.equations import TAU_FORM
 
 Z_SIGNIFICANT = 3.0
 DELTA_BIC = -6.0
@@ -565,7 +566,7 @@ def _family_constants(obs: Observations, baseline: Baseline, base: FitResult,
                          "a_t_pa": float(par["a_t_pa"]) * float(k_p[here[0]]),
                          "b_t_per_mm": float(par["b_t_per_mm"]),
                          "c": float(par.get("c", 0.0) or 0.0),
-                         "tau_form": "tau_pa = a_t_pa * log10(b_t_per_mm * t_mm)"})
+                         "tau_form": TAU_FORM})
         out[key] = rows
     return out
 

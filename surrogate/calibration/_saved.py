@@ -30,6 +30,7 @@ from solver.atomic_file import write_text_atomic, write_text_exclusive
 from solver.errors import BalloonError, ExistsError, InputError
 from surrogate.calibration._errors import ModelNotFoundError
 from surrogate.calibration._forward import chamber_pressure_pa, static_angle_deg
+from surrogate.exponential.equations import TAU_FORM
 
 FORMAT = "balloon.calibrated-model/1"
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
@@ -140,7 +141,7 @@ class CalibratedModel:
     def family_parameters(self, design) -> dict:
         f = self._family(design)
         return {k: f[k] for k in ("a_deg_per_mm", "a_t_pa", "b_t_per_mm", "c")} | {
-            "tau_form": "tau_pa = a_t_pa * log10(b_t_per_mm * t_mm)",
+            "tau_form": TAU_FORM,
             "effects": dict(self.effects), "residual_sd_deg": self.rmse_deg}
 
 

@@ -7,8 +7,9 @@ per group, a seed different from the grid's); each is scored by the emulator's
 predictive standard deviation of log p times the node's band multiplier (so that a
 group whose cross-validated errors exceed its GP variance is refined first), averaged
 over the angle nodes from 10 to 90 deg (below 10 deg the angle hardly depends on p's
-error). The n best are taken greedily, each at least ``MIN_SPACING`` (unit-cube distance) from the others and from the database designs, so that one
-uncertain corner does not take every slot.
+error). The n best are taken greedily, each at least ``MIN_SPACING`` (unit-cube
+distance) from the others and from the database designs, so that one uncertain corner
+does not take every slot.
 """
 
 from __future__ import annotations

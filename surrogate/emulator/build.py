@@ -30,7 +30,7 @@ import numpy as np
 from solver.design_space import GROUPS, locate
 from solver.errors import InputError
 from solver.settings import SolverSettings
-from surrogate.bands import z_value
+from surrogate.band_level import z_value
 from surrogate.emulator.emulator import (
     ANGLES0,
     N_NODES,
@@ -42,7 +42,6 @@ from surrogate.emulator.emulator import (
 )
 from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
-    FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
     curve_features,
     force_features,

@@ -29,8 +29,7 @@ import numpy as np
 from solver.design import Design
 from solver.design_space import PAIRS, BoxPoint, locate
 from solver.errors import InputError
-from surrogate.bands import z_value
-from surrogate.core import InversePrediction, Prediction, _array
+from surrogate.band_level import z_value
 from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
@@ -40,6 +39,7 @@ from surrogate.emulator.features import (
     spline_matrix,
 )
 from surrogate.emulator.vector_gp import VectorGP
+from surrogate.predictor import InversePrediction, Prediction, number_array
 from surrogate.volume_control import by_volume
 
 N_NODES = len(ANGLE_NODES_DEG)
@@ -188,7 +188,7 @@ class Emulator:
         """Angle (deg) at each chamber pressure (Pa), band at ``level``, force (mN) of the
         blocked tip, injected volume (ul); NaN past the FE's range (flagged)."""
         z = z_value(level)
-        p = _array(pressures_pa, "pressures_pa", "Pa")
+        p = number_array(pressures_pa, "pressures_pa", "Pa")
         if (p < 0).any():
             raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
                              "pressures >= 0 Pa")
@@ -230,7 +230,7 @@ class Emulator:
         where p(theta) has a maximum: the pressure is the emulated one, falling past it
         (flag ``past_pressure_maximum``; ``surrogate.volume_control``)."""
         z = z_value(level)
-        v = _array(volumes_ul, "volumes_ul", "ul")
+        v = number_array(volumes_ul, "volumes_ul", "ul")
         if (v < 0).any():
             raise InputError("volumes_ul", f"negative volume {v.min():g} ul", "volumes >= 0 ul")
         point = locate(design, reduced=True)
@@ -339,7 +339,7 @@ class Emulator:
         """Chamber pressure (Pa) and injected volume (ul) that give each angle (deg), each
         with a band at ``level``."""
         z = z_value(level)
-        ang = _array(angle_deg, "angle_deg", "deg")
+        ang = number_array(angle_deg, "angle_deg", "deg")
         point = locate(design, reduced=True)
         pe, cb = self.curve_band(point, z)
         signed = ang * pe.sign

@@ -23,24 +23,11 @@ from surrogate.emulator.emulator import N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
 from surrogate.emulator.vector_gp import vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
-from surrogate.file_seal import check_seal, seal
+from surrogate.file_seal import check_header, check_seal, seal
+from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
 FORMAT_VERSION = 3   # 3: band_scale per output node (2 read, one multiplier)
-
-
-def _plain(value: object) -> object:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, (np.floating, np.integer)):
-        return _plain(value.item())
-    return value
 
 
 def emulator_to_dict(e: Emulator) -> dict:
@@ -54,7 +41,7 @@ def emulator_to_dict(e: Emulator) -> dict:
             "curves": pe.curves.as_dict(),
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa})
-    return seal(_plain({
+    return seal(plain_json({
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
         "force_pressure_nodes_pa": FORCE_PRESSURE_NODES_PA.tolist(),
@@ -63,13 +50,8 @@ def emulator_to_dict(e: Emulator) -> dict:
 
 
 def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
-    if not isinstance(d, dict) or d.get("format") != FORMAT_NAME:
-        raise SurrogateFileError(origin, f"not an emulator file (format is not "
-                                 f"\"{FORMAT_NAME}\")")
-    version = d.get("format_version")
-    if not isinstance(version, int) or version > FORMAT_VERSION:
-        raise SurrogateFileError(origin, f"format version {version!r} is newer than this "
-                                 f"code reads ({FORMAT_VERSION}); upgrade balloon-actuator")
+    check_header(d, FORMAT_NAME, FORMAT_VERSION, "an emulator", origin)
+    assert isinstance(d, dict)  # check_header refused anything else
     if (d.get("angle_nodes_deg") != ANGLE_NODES_DEG.tolist()
             or d.get("force_pressure_nodes_pa") != FORCE_PRESSURE_NODES_PA.tolist()):
         raise SurrogateFileError(origin, "made with other curve nodes than this code uses; "

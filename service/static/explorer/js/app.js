@@ -8,7 +8,7 @@
 import { api, ApiError, clearProblems, isAbort, showProblem } from "./api.js";
 import { setupCalibration } from "./calibration.js";
 import {
-  FIELDS, PAIRS, defaultState, designBody, designLabel, materialId, pairLabel, axisGrid,
+  FIELDS, PAIRS, defaultState, designBody, designLabel, materialId, materialLabel, pairLabel, axisGrid,
 } from "./design.js";
 import { setupInverse } from "./inverse.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
@@ -331,7 +331,9 @@ function curveSeries() {
     const cut = (a) => (a ? a.filter((_, i) => keep[i]) : a);
     const data = { pressure_pa: cut(c.pressure_pa), volume_ul: cut(c.volume_ul), time_s: cut(time),
       angle_deg: cut(c.angle_deg), force_mn: cut(c.force_mn) };
-    add(`fe-${rec.id}`, `FE L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm`, data, ["#6b7280", "#9ca3af", "#4b5563", "#a3a3a3", "#737373", "#525252"][k], { dash: "5 4", width: 1.4 });
+    // labelled with its materials: the pooled PDMS group holds PDMS 1:10 and 1:15 records
+    const pair = `${materialLabel(d.body_material, app.presets)} / ${materialLabel(d.membrane_material, app.presets)}`;
+    add(`fe-${rec.id}`, `FE ${pair}, L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm`, data, ["#6b7280", "#9ca3af", "#4b5563", "#a3a3a3", "#737373", "#525252"][k], { dash: "5 4", width: 1.4 });
   });
   // pinned curves without their bands (the table gives the band at the chosen pressure)
   app.pinned.forEach((pin) => { if (pin.prediction) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pin.prediction, pin.color, { width: 1.6, lower: null, upper: null }); });

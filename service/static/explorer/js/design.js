@@ -66,6 +66,21 @@ export function materialId(m) {
   return typeof m === "string" ? m : m.id;
 }
 
+// A stored record's layer as people read it: the preset's name, and its stiffness scale
+// when not 1 ("PDMS 1:15 x0.968"). The store names a scaled layer "<preset>*<s>", an
+// inline one sent by this page "<preset>_x<s>"; with the presets (GET /v1/materials) the
+// scale is read off the moduli instead.
+export function materialLabel(m, presets) {
+  const id = materialId(m);
+  const match = id.match(/^(.*?)(?:\*([0-9.eE+-]+)|_x([0-9.]+))$/);
+  const base = match ? match[1] : id;
+  let scale = match ? Number(match[2] || match[3]) : 1;
+  const preset = presets && presets[base];
+  if (preset && typeof m === "object" && m.mu_kpa && preset.mu_kpa[0]) scale = m.mu_kpa[0] / preset.mu_kpa[0];
+  const name = MATERIAL_NAMES[base] || base;
+  return Math.abs(scale - 1) < 1e-3 ? name : `${name} x${scaleText(scale)}`;
+}
+
 export function designLabel(state) {
   const [body, membrane] = PAIRS[state.pair];
   const sc = (s) => (Math.abs(s - 1) < 1e-9 ? "" : ` x${scaleText(s)}`);

@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from solver.design import Design
-from surrogate.family import Domain
-from surrogate.paper_data import TWO_BALLOON_BELOW_t_MM
+from surrogate.exponential.family import Domain
+from surrogate.exponential.paper_tables import TWO_BALLOON_BELOW_t_MM
 
 _TOL = 1e-9
 

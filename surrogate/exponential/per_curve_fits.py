@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from surrogate.exponential.equations import angle_from_constants
+
 
 @dataclass(frozen=True)
 class CurveFit:
@@ -54,7 +56,7 @@ def _se(jac: np.ndarray, resid: np.ndarray) -> list[float | None]:
 
 def fit_tau_fixed(p: np.ndarray, y: np.ndarray, tau_pa: float) -> CurveFit:
     """A by linear least squares with tau fixed."""
-    g = np.expm1(p / tau_pa)
+    g = angle_from_constants(1.0, tau_pa, p)
     A = float(g @ y / (g @ g))
     resid = y - A * g
     return CurveFit(A, tau_pa, _se(g[:, None], resid)[0], None, _r2(y, resid), len(p), "tau")
@@ -65,7 +67,7 @@ def fit_A_fixed(p: np.ndarray, y: np.ndarray, A_deg: float) -> CurveFit:
     tau0 = _tau_grid_start(p, y, A_deg)
 
     def res(q: np.ndarray) -> np.ndarray:
-        return A_deg * np.expm1(p / q[0]) - y
+        return angle_from_constants(A_deg, q[0], p) - y
 
     sol = least_squares(res, [tau0], bounds=([1e-9 * p.max()], [np.inf]), x_scale=[tau0])
     tau = float(sol.x[0])
@@ -83,7 +85,7 @@ def fit_free(p: np.ndarray, y: np.ndarray) -> CurveFit:
     assert best is not None
 
     def res(q: np.ndarray) -> np.ndarray:
-        return q[0] * np.expm1(p / q[1]) - y
+        return angle_from_constants(q[0], q[1], p) - y
 
     x0 = [best.A_deg, best.tau_pa]
     sol = least_squares(res, x0, bounds=([-np.inf, 1e-6 * p.max()], [np.inf, np.inf]),
@@ -95,7 +97,7 @@ def fit_free(p: np.ndarray, y: np.ndarray) -> CurveFit:
 
 def _tau_grid_start(p: np.ndarray, y: np.ndarray, A: float) -> float:
     taus = p.max() * np.geomspace(0.03, 30.0, 60)
-    sse = [float(np.sum((A * np.expm1(p / tau) - y) ** 2)) for tau in taus]
+    sse = [float(np.sum((angle_from_constants(A, tau, p) - y) ** 2)) for tau in taus]
     return float(taus[int(np.argmin(sse))])
 
 

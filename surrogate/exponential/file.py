@@ -1,14 +1,16 @@
 """Surrogate files: versioned JSON.
 
-    {"format": "balloon-surrogate", "format_version": 2, "name", "form", "provenance"
+    {"format": "balloon-surrogate", "format_version": 3, "name", "form", "provenance"
      (database path and metadata, record keys, package version, git commit, date),
      "families": [Family.as_dict()...], "report": {...the fit report...}}
 
-Format versions: 2 stores each parameter covariance in the fit coordinates
-(``covariance_names``: log10 b_t in place of b_t); 1 stored it in b_t (1/mm) and is
-still read (converted on load, same bands). Writes are atomic (temporary file +
-rename): a failed save leaves the old file intact. A file of a newer format version
-than this code reads is refused with SurrogateFileError, and so is one whose content
+Format versions: 3 adds to a fitted family its pressure-volume relation (``"volume"``,
+surrogate/exponential/volume_relation.py; null when the data held no volumes); a file of
+version 2 or 1 has none and answers by pressure only. 2 stores each parameter covariance
+in the fit coordinates (``covariance_names``: log10 b_t in place of b_t); 1 stored it in
+b_t (1/mm) and is still read (converted on load, same bands). Writes are atomic
+(temporary file + rename): a failed save leaves the old file intact. A file of a newer
+format version than this code reads is refused with SurrogateFileError, and so is one whose content
 changed since it was written (``content_sha256``, surrogate/file_seal.py) or whose
 values do not give a finite answer at the centre of each family (checked on load).
 """
@@ -25,31 +27,26 @@ import numpy as np
 from solver.atomic_file import write_text_atomic
 from solver.design import Design
 from solver.errors import BalloonError, NotFoundError
-from surrogate import model
-from surrogate.core import Surrogate
 from surrogate.errors import SurrogateFileError
-from surrogate.family import family_from_dict
-from surrogate.file_seal import check_seal, seal
-from surrogate.fit import FORMAT_VERSION, _plain
+from surrogate.exponential import equations
+from surrogate.exponential.family import family_from_dict
+from surrogate.exponential.surrogate import Surrogate
+from surrogate.file_seal import check_header, check_seal, seal
+from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-surrogate"
+FORMAT_VERSION = 3  # 3: families may carry "volume"; 2: covariances in log10 b_t
 
 
 def surrogate_to_dict(s: Surrogate) -> dict:
     return seal({"format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": s.name,
-                 "form": s.form, "provenance": _plain(s.provenance),
-                 "families": [_plain(f.as_dict()) for f in s.family_fits],
-                 "report": _plain(s.report)})
+                 "form": s.form, "provenance": plain_json(s.provenance),
+                 "families": [plain_json(f.as_dict()) for f in s.family_fits],
+                 "report": plain_json(s.report)})
 
 
 def surrogate_from_dict(d: dict, origin: str = "<dict>") -> Surrogate:
-    if not isinstance(d, dict) or d.get("format") != FORMAT_NAME:
-        raise SurrogateFileError(origin, f"not a surrogate file (no \"format\": "
-                                 f"\"{FORMAT_NAME}\")")
-    version = d.get("format_version")
-    if not isinstance(version, int) or version > FORMAT_VERSION:
-        raise SurrogateFileError(origin, f"format version {version!r} is newer than this "
-                                 f"code reads ({FORMAT_VERSION}); upgrade balloon-actuator")
+    version = check_header(d, FORMAT_NAME, FORMAT_VERSION, "a surrogate", origin)
     check_seal(d, origin)
     try:
         families = tuple(family_from_dict(f, version) for f in d["families"])
@@ -86,7 +83,7 @@ def _check_family(s: Surrogate, fam, origin: str) -> None:
                         membrane_material=fam.membrane_material,
                         T_mm=fam.T_mm, b_mm=fam.b_mm, h_mm=fam.h_mm)
         for form, par in fam.parameters.items():
-            if form != par.form or par.names != model.PARAMETER_NAMES.get(form):
+            if form != par.form or par.names != equations.PARAMETER_NAMES.get(form):
                 raise ValueError(f"{form}: parameter names {list(par.names)} are not "
                                  f"those of the form")
             if not (par.residual_sd >= 0 and par.residual_rel >= 0 and par.band_scale > 0
@@ -98,6 +95,12 @@ def _check_family(s: Surrogate, fam, origin: str) -> None:
                 values += [pred.force_mn, pred.force_lower_mn, pred.force_upper_mn]
             if not all(np.isfinite(np.asarray(v, float)).all() for v in values):
                 raise ValueError(f"{form}: no finite answer at its family's centre")
+            if fam.volume is not None:
+                by_v = s.predict_volume(design, [0.0, 0.5 * fam.volume.volume_curve_ul(
+                    design.L_mm, design.t_mm)[-1]], form=form)
+                if not np.isfinite(np.asarray([by_v.angle_deg, by_v.lower_deg,
+                                               by_v.upper_deg], float)).all():
+                    raise ValueError(f"{form}: no finite answer by volume at its centre")
     except SurrogateFileError:
         raise
     except (BalloonError, ArithmeticError, KeyError, TypeError, ValueError, AttributeError,
@@ -128,7 +131,7 @@ def load_surrogate(path: str | os.PathLike) -> Surrogate:
 def open_surrogate(spec: str | os.PathLike) -> Surrogate:
     """``"paper"`` for the paper preset, else a surrogate file path."""
     if str(spec) == "paper":
-        from surrogate.paper import paper_surrogate
+        from surrogate.exponential.paper_preset import paper_surrogate
 
         return paper_surrogate()
     return load_surrogate(spec)

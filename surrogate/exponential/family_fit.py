@@ -1,10 +1,10 @@
 """Joint fit of one family's curves: (a, a_t, b_t) [and c for the extended form] at once.
 
 Least squares on every usable point of every curve (scipy.optimize.least_squares),
-weighted by the residual-scatter model of ``surrogate.bands`` (two passes: unweighted,
+weighted by the residual-scatter model of ``surrogate.exponential.bands`` (two passes: unweighted,
 then weighted with the scatter estimated from the first pass). The fit runs in the fit
-coordinates of ``surrogate.model`` (log10 b_t in place of b_t), and the covariance is
-taken there: (J_w^T J_w)^-1 times the weighted residual variance RSS_w / (n - k), J_w
+coordinates of ``surrogate.exponential.equations`` (log10 b_t in place of b_t), and the
+covariance is taken there: (J_w^T J_w)^-1 times the weighted residual variance RSS_w / (n - k), J_w
 the weighted Jacobian at the solution (columns scaled to unit norm before the
 pseudo-inverse). With fewer than two membrane thicknesses b_t is not identifiable and
 is held at the paper's value (its variance is then zero).
@@ -13,15 +13,15 @@ is held at the paper's value (its variance is then zero).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from functools import cached_property
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from surrogate import bands, model
-from surrogate.curvefit import fit_free, thickness_constants
-from surrogate.paper_data import B_T_PER_MM
+from surrogate.exponential import bands, equations
+from surrogate.exponential.paper_tables import B_T_PER_MM
+from surrogate.exponential.parameters import ModelParameters
+from surrogate.exponential.per_curve_fits import fit_free, thickness_constants
 
 LOG10_B_T_MAX = 100.0  # upper bound of log10 b_t (1/mm) in the fit: tau flat in t
 
@@ -56,95 +56,6 @@ def make_points(curves: list[tuple[float, float, np.ndarray, np.ndarray]]) -> Po
     return Points(L, t, p, y, cols[4].astype(int))
 
 
-@dataclass(frozen=True)
-class ModelParameters:
-    """A fitted (or published) parameter set of one form for one family.
-
-    ``values`` follow ``names`` (b_t in 1/mm); ``covariance`` is that of the fit
-    coordinates ``covariance_names`` (log10 b_t in place of b_t, see ``surrogate.model``;
-    use ``parameter_variance`` for g C g^T with g = d / d values); ``fixed`` names
-    parameters held constant (zero variance); residual scatter sd(angle) =
-    sqrt(residual_sd^2 + (residual_rel angle)^2) in the model's unit (deg for angle, mN
-    for force). ``rmse``/``max_error`` are the in-sample errors of the fit,
-    ``n_points``/``n_curves`` its data. ``band_scale`` (>= 1) multiplies every band's
-    half-width: it is calibrated on held-out designs (``band_scale_from_lodo``) because
-    model-form error is correlated along a curve and the in-sample scatter model alone
-    gives bands that are too narrow."""
-
-    form: str
-    names: tuple[str, ...]
-    values: tuple[float, ...]
-    covariance: tuple[tuple[float, ...], ...]
-    residual_sd: float
-    residual_rel: float
-    fixed: tuple[str, ...] = ()
-    rmse: float | None = None
-    max_error: float | None = None
-    n_points: int = 0
-    n_curves: int = 0
-    source: str = "fit"
-    extra: dict = field(default_factory=dict)
-    band_scale: float = 1.0
-
-    @cached_property
-    def theta(self) -> np.ndarray:
-        return np.asarray(self.values, dtype=float)
-
-    @cached_property
-    def cov(self) -> np.ndarray:
-        """Covariance of the fit coordinates (``covariance_names``)."""
-        return np.asarray(self.covariance, dtype=float).reshape(len(self.values),
-                                                                len(self.values))
-
-    @property
-    def covariance_names(self) -> tuple[str, ...]:
-        return model.FIT_NAMES[self.form]
-
-    @property
-    def standard_errors(self) -> dict[str, float]:
-        """sqrt of the covariance's diagonal, by ``covariance_names``."""
-        se = np.sqrt(np.clip(np.diag(self.cov), 0.0, None))
-        return {n: float(v) for n, v in zip(self.covariance_names, se, strict=True)}
-
-    def parameter_variance(self, gradient: np.ndarray) -> np.ndarray:
-        """g C g^T for a gradient (..., k) in ``values`` (d / d b_t in the b_t column)."""
-        return bands.parameter_variance(model.gradient_to_fit(gradient, self.theta), self.cov)
-
-    def as_dict(self) -> dict[str, object]:
-        return {"form": self.form, "names": list(self.names), "values": list(self.values),
-                "covariance_names": list(self.covariance_names),
-                "covariance": [list(r) for r in self.covariance],
-                "standard_errors": self.standard_errors,
-                "residual_sd": self.residual_sd, "residual_rel": self.residual_rel,
-                "fixed": list(self.fixed), "rmse": self.rmse, "max_error": self.max_error,
-                "n_points": self.n_points, "n_curves": self.n_curves, "source": self.source,
-                "extra": dict(self.extra), "band_scale": self.band_scale}
-
-
-COVARIANCE_IN_LOG10_B_T_SINCE = 2  # surrogate file format versions before: b_t in 1/mm
-
-
-def parameters_from_dict(d: dict, format_version: int = COVARIANCE_IN_LOG10_B_T_SINCE
-                         ) -> ModelParameters:
-    """From ``as_dict``; a covariance written by format version 1 (in b_t, 1/mm) is
-    converted to the fit coordinates (``model.covariance_from_b_t``: same bands)."""
-    values = tuple(float(v) for v in d["values"])
-    cov = np.array(d["covariance"], dtype=float).reshape(len(values), len(values))
-    fit_names = model.FIT_NAMES[d["form"]]
-    if format_version < COVARIANCE_IN_LOG10_B_T_SINCE:
-        cov = model.covariance_from_b_t(cov, np.array(values))
-    elif tuple(d.get("covariance_names", fit_names)) != fit_names:
-        raise ValueError(f"covariance_names {d['covariance_names']!r} are not {fit_names}")
-    return ModelParameters(
-        form=d["form"], names=tuple(d["names"]), values=values,
-        covariance=tuple(tuple(float(v) for v in r) for r in cov),
-        residual_sd=float(d["residual_sd"]), residual_rel=float(d["residual_rel"]),
-        fixed=tuple(d.get("fixed", ())), rmse=d.get("rmse"), max_error=d.get("max_error"),
-        n_points=int(d.get("n_points", 0)), n_curves=int(d.get("n_curves", 0)),
-        source=d.get("source", "fit"), extra=dict(d.get("extra", {})),
-        band_scale=float(d.get("band_scale", 1.0)))
-
-
 def start_values(pts: Points) -> np.ndarray:
     """(a, a_t, b_t) from per-curve free fits, as the paper's two-stage procedure."""
     A, tau, L, t = [], [], [], []
@@ -176,35 +87,35 @@ def _default_b_t(t_mm: np.ndarray) -> float:
 def joint_fit(pts: Points, form: str = "exponential", start: np.ndarray | None = None,
               weighted: bool = True) -> ModelParameters:
     """Fit ``form`` to all points of a family; see the module docstring."""
-    names = model.PARAMETER_NAMES[form]
+    names = equations.PARAMETER_NAMES[form]
     theta0 = np.array(start if start is not None else start_values(pts), dtype=float)
     if form == "extended" and len(theta0) == 3:
         theta0 = np.append(theta0, 0.0)
     free = np.ones(len(names), dtype=bool)
     if len(np.unique(pts.t_mm)) < 2:
-        free[model.B_T] = False
+        free[equations.B_T] = False
     # fit coordinates (log10 b_t); b_t t > 1 for every t, b_t <= 1e100 /mm (tau flat in t)
     lo = np.array([-np.inf, 1e-9, -math.log10(pts.t_mm.min()) + 1e-6, -5.0])[: len(names)]
     hi = np.array([np.inf, np.inf, LOG10_B_T_MAX, 5.0])[: len(names)]
-    q0 = np.clip(model.to_fit(theta0), lo + 1e-9, hi - 1e-9)
+    q0 = np.clip(equations.to_fit(theta0), lo + 1e-9, hi - 1e-9)
 
     def solve(q_start: np.ndarray, w: np.ndarray) -> np.ndarray:
         def full(x: np.ndarray) -> np.ndarray:
             q = q_start.copy()
             q[free] = x
-            return model.from_fit(q)
+            return equations.from_fit(q)
 
         def fun(x: np.ndarray) -> np.ndarray:
             with np.errstate(over="ignore", invalid="ignore"):
-                r = (model.angle_deg(full(x), pts.L_mm, pts.t_mm, pts.pressure_pa)
+                r = (equations.angle_deg(full(x), pts.L_mm, pts.t_mm, pts.pressure_pa)
                      - pts.value) * w
             return np.clip(np.nan_to_num(r, nan=1e12), -1e12, 1e12)
 
         def jac(x: np.ndarray) -> np.ndarray:
             th = full(x)
             with np.errstate(over="ignore", invalid="ignore"):
-                g = model.gradient_to_fit(
-                    model.angle_gradient(th, pts.L_mm, pts.t_mm, pts.pressure_pa), th)
+                g = equations.gradient_to_fit(
+                    equations.angle_gradient(th, pts.L_mm, pts.t_mm, pts.pressure_pa), th)
             return np.clip(np.nan_to_num(g[:, free] * w[:, None], nan=0.0), -1e12, 1e12)
 
         sol = least_squares(fun, q_start[free], jac=jac, bounds=(lo[free], hi[free]),
@@ -215,13 +126,13 @@ def joint_fit(pts: Points, form: str = "exponential", start: np.ndarray | None =
 
     w = np.ones_like(pts.value)
     q = solve(q0, w)
-    sd, rel = _scatter(model.from_fit(q), pts)
+    sd, rel = _scatter(equations.from_fit(q), pts)
     if weighted:
-        w = _weights(model.from_fit(q), pts, sd, rel)
+        w = _weights(equations.from_fit(q), pts, sd, rel)
         q = solve(q, w)
-        sd, rel = _scatter(model.from_fit(q), pts)
-        w = _weights(model.from_fit(q), pts, sd, rel)
-    theta = model.from_fit(q)
+        sd, rel = _scatter(equations.from_fit(q), pts)
+        w = _weights(equations.from_fit(q), pts, sd, rel)
+    theta = equations.from_fit(q)
     cov = _covariance(theta, pts, w, free)
     err = _predict(theta, pts) - pts.value
     return ModelParameters(
@@ -234,11 +145,11 @@ def joint_fit(pts: Points, form: str = "exponential", start: np.ndarray | None =
 
 
 def _predict(theta: np.ndarray, pts: Points) -> np.ndarray:
-    return model.angle_deg(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
+    return equations.angle_deg(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
 
 
 def _x(theta: np.ndarray, pts: Points) -> np.ndarray:
-    return pts.pressure_pa / model.tau_pa(theta, pts.t_mm)
+    return pts.pressure_pa / equations.tau_pa(theta, pts.t_mm)
 
 
 def _scatter(theta: np.ndarray, pts: Points) -> tuple[float, float]:
@@ -255,8 +166,8 @@ def _covariance(theta: np.ndarray, pts: Points, w: np.ndarray, free: np.ndarray)
     """Covariance of the fit coordinates; J's columns are scaled to unit norm before the
     pseudo-inverse so that its cut-off only drops directions the data do not fix."""
     k = len(theta)
-    g = model.angle_gradient(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
-    J = model.gradient_to_fit(g, theta)[:, free] * w[:, None]
+    g = equations.angle_gradient(theta, pts.L_mm, pts.t_mm, pts.pressure_pa)
+    J = equations.gradient_to_fit(g, theta)[:, free] * w[:, None]
     r = (_predict(theta, pts) - pts.value) * w
     n, kf = J.shape
     cov = np.zeros((k, k))
@@ -270,19 +181,6 @@ def _covariance(theta: np.ndarray, pts: Points, w: np.ndarray, free: np.ndarray)
     idx = np.flatnonzero(free)
     cov[np.ix_(idx, idx)] = sub
     return cov
-
-
-def band(params: ModelParameters, L_mm, t_mm, pressure_pa, level: float = 0.95,
-         scale: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(prediction, lower, upper) at ``level``; ``scale`` multiplies the half-width."""
-    z = bands.z_value(level)
-    m = model.angle_deg(params.theta, L_mm, t_mm, pressure_pa)
-    g = model.angle_gradient(params.theta, L_mm, t_mm, pressure_pa)
-    x = np.asarray(pressure_pa, dtype=float) / model.tau_pa(params.theta, t_mm)
-    var = params.parameter_variance(g) + bands.scatter_variance(
-        params.residual_sd, params.residual_rel, m, x)
-    half = scale * params.band_scale * z * np.sqrt(var)
-    return m, m - half, m + half
 
 
 def leave_one_design_out(pts: Points, form: str, level: float = 0.95,
@@ -310,7 +208,7 @@ def leave_one_design_out(pts: Points, form: str, level: float = 0.95,
         if len(np.unique(train.L_mm)) < 1:
             continue
         params = joint_fit(train, form, start=start)
-        m, lo, hi = band(params, test.L_mm, test.t_mm, test.pressure_pa, level)
+        m, lo, hi = bands.angle_band(params, test.L_mm, test.t_mm, test.pressure_pa, level)
         err = m - test.value
         ins = (test.value >= lo) & (test.value <= hi)
         half = 0.5 * (hi - lo) / (params.band_scale * bands.z_value(level))

@@ -72,9 +72,24 @@ def covariance_from_b_t(cov: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return np.asarray(cov, dtype=float) * np.outer(d, d)
 
 
+def tau_from_constants(a_t_pa, b_t_per_mm, t_mm) -> np.ndarray:
+    """Eq. 6 as this package reads it: tau (Pa) = a_t log10(b_t t); <= 0 when b_t t <= 1."""
+    return a_t_pa * np.log10(b_t_per_mm * np.asarray(t_mm, dtype=float))
+
+
+def angle_from_constants(A_deg, tau_pa_, pressure_pa, c=0.0) -> np.ndarray:
+    """Eq. 5 (c = 0) and its extension: angle (deg) = A (exp(x + c x^2) - 1), x = p / tau,
+    for a curve's own constants A (deg) and tau (Pa) at pressure p (Pa)."""
+    return A_deg * np.expm1(_exponent(np.asarray(pressure_pa, dtype=float) / tau_pa_, c))
+
+
+def _exponent(x, c) -> np.ndarray:
+    return x + c * x * x if np.any(c) else x
+
+
 def tau_pa(theta: np.ndarray, t_mm: np.ndarray | float) -> np.ndarray:
     """Pressure constant tau (Pa) for membrane thickness t (mm); <= 0 when b_t t <= 1."""
-    return theta[1] * np.log10(theta[2] * np.asarray(t_mm, dtype=float))
+    return tau_from_constants(theta[1], theta[2], t_mm)
 
 
 def amplitude_deg(theta: np.ndarray, L_mm: np.ndarray | float) -> np.ndarray:
@@ -88,10 +103,16 @@ def _c(theta: np.ndarray) -> float:
 
 def angle_deg(theta: np.ndarray, L_mm, t_mm, pressure_pa) -> np.ndarray:
     """Bending angle (deg) at cavity pressure p (Pa) for chamber length L and thickness t."""
-    x = np.asarray(pressure_pa, dtype=float) / tau_pa(theta, t_mm)
-    c = _c(theta)
-    u = x + c * x * x if c else x
-    return amplitude_deg(theta, L_mm) * np.expm1(u)
+    return angle_from_constants(amplitude_deg(theta, L_mm), tau_pa(theta, t_mm), pressure_pa,
+                                _c(theta))
+
+
+def length_mm(theta: np.ndarray, t_mm, pressure_pa, angle_magnitude_deg) -> np.ndarray:
+    """Chamber length L (mm) whose |angle| at pressure p (Pa) is ``angle_magnitude_deg``
+    (closed form, L = |angle| / (|a| (exp(x + c x^2) - 1))); NaN/inf where none does."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs(angle_magnitude_deg) / np.abs(
+            angle_from_constants(float(theta[0]), tau_pa(theta, t_mm), pressure_pa, _c(theta)))
 
 
 def angle_gradient(theta: np.ndarray, L_mm, t_mm, pressure_pa) -> np.ndarray:

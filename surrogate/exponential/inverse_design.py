@@ -32,11 +32,13 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate import bands, model
-from surrogate.core import Prediction, Surrogate
-from surrogate.family import Family
-from surrogate.jointfit import ModelParameters
-from surrogate.paper_data import TWO_BALLOON_BELOW_t_MM
+from surrogate.band_level import z_value
+from surrogate.exponential import bands, equations
+from surrogate.exponential.family import Family
+from surrogate.exponential.paper_tables import TWO_BALLOON_BELOW_t_MM
+from surrogate.exponential.parameters import ModelParameters
+from surrogate.exponential.surrogate import Surrogate
+from surrogate.predictor import Prediction
 
 KINDS = ("angle_at_pressure", "pressure_budget", "force_at_pressure")
 OBJECTIVES = ("pressure", "margin", "compact", "certainty")
@@ -207,32 +209,20 @@ def _evaluate(par: ModelParameters, target: DesignTarget, objective: str, L: np.
     """Metrics for candidate (L, t) arrays; infeasible candidates score +inf."""
     th = par.theta
     P = float(target.pressure_pa)
-    z = bands.z_value(level) * par.band_scale
     sign = 1.0 if th[0] > 0 else -1.0
-    tau = model.tau_pa(th, t)
-    ok = tau > 0
+    ok = equations.tau_pa(th, t) > 0
     with np.errstate(all="ignore"):
         if target.kind == "pressure_budget":
-            ang = np.full_like(L, sign * target.value)
-            p = model.pressure_pa(th, L, t, ang)
-            g, dp_da = model.pressure_gradient(th, L, t, ang)
-            var = par.parameter_variance(g) + dp_da**2 * bands.scatter_variance(
-                par.residual_sd, par.residual_rel, ang, p / tau)
-            half = z * np.sqrt(var)
+            p, half = bands.pressure_band(par, L, t, np.full_like(L, sign * target.value), level)
             p_lo, p_hi = p - half, p + half
             ok &= np.isfinite(p) & (p <= P)
         else:
-            x = P / tau
-            u = x + (th[3] * x * x if len(th) > 3 else 0.0)
-            L = np.where(ok, target.value / (abs(th[0]) * np.expm1(u)), np.nan)
+            L = np.where(ok, equations.length_mm(th, t, P, target.value), np.nan)
             p = np.full_like(L, P)
             p_lo = p_hi = p
             ok &= np.isfinite(L)
-        v = model.angle_deg(th, L, t, P)
-        gv = model.angle_gradient(th, L, t, P)
-        vvar = par.parameter_variance(gv) + bands.scatter_variance(
-            par.residual_sd, par.residual_rel, v, P / tau)
-        vh = z * np.sqrt(vvar)
+        v, v_lo, v_hi = bands.angle_band(par, L, t, P, level)
+        vh = 0.5 * (v_hi - v_lo)
         score = {"pressure": p, "margin": p_hi, "compact": L + 1e-9 * p,
                  "certainty": 2 * vh / np.abs(v)}[objective]
     score = np.where(ok & np.isfinite(score), score, np.inf)
@@ -289,7 +279,7 @@ def inverse_design(surrogate: Surrogate, target: DesignTarget,
         raise InputError("n_results", f"got {n_results!r}", "1 <= n_results <= 50")
     if not 4 <= grid <= 400:
         raise InputError("grid", f"got {grid!r}", "4 <= grid <= 400")
-    bands.z_value(level)
+    z_value(level)
     per_family: list[tuple[Family, ModelParameters, _Eval, tuple, tuple]] = []
     n_eval = 0
     for fam in _families(surrogate, bounds):
@@ -373,16 +363,16 @@ def _best_reachable(per_family: list, target: DesignTarget) -> dict[str, object]
     for fam, par, _, Lr, tr in per_family:
         for L in Lr:
             for t in tr:
-                if not model.tau_pa(par.theta, t) > 0:
+                if not equations.tau_pa(par.theta, t) > 0:
                     continue
-                v = float(model.angle_deg(par.theta, L, t, P))
+                v = float(equations.angle_deg(par.theta, L, t, P))
                 if best is None or abs(v) > abs(best["value"]):
                     best = {"value": v, "L_mm": L, "t_mm": t, "family": fam.label}
     smallest = None
     for fam, par, _, Lr, tr in per_family:
         for L in Lr:
             for t in tr:
-                v = float(model.angle_deg(par.theta, L, t, P))
+                v = float(equations.angle_deg(par.theta, L, t, P))
                 if smallest is None or abs(v) < abs(smallest["value"]):
                     smallest = {"value": v, "L_mm": L, "t_mm": t, "family": fam.label}
     out: dict[str, object] = {"largest_at_pressure": best, "smallest_at_pressure": smallest,

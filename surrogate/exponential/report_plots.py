@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from surrogate import model
-from surrogate.core import Surrogate
 from surrogate.dataset import CurveData, select_angle_curves
+from surrogate.exponential import equations
+from surrogate.exponential.surrogate import Surrogate
 
 
 def _slug(label: str) -> str:
@@ -45,7 +45,7 @@ def write_report(s: Surrogate, curves: list[CurveData], out_dir: str | Path) -> 
             pp = np.linspace(0, p.max(), 100)
             for form, style in (("exponential", "--"), ("extended", ":")):
                 if form in fam.parameters:
-                    ax.plot(pp, model.angle_deg(fam.parameters[form].theta, c.design.L_mm,
+                    ax.plot(pp, equations.angle_deg(fam.parameters[form].theta, c.design.L_mm,
                                                 c.design.t_mm, pp), style, color=col, lw=1)
         ax.set(xlabel="pressure (Pa)", ylabel="bending angle (deg)",
                title=f"{fam.label}\nFE (dots), paper form (--), extended (:)")
@@ -79,10 +79,10 @@ def write_report(s: Surrogate, curves: list[CurveData], out_dir: str | Path) -> 
             else np.array([])
         if "thickness_constants" in t5 and len(t):
             tc = t5["thickness_constants"]
-            axes[1].plot(tg, tc["a_t_pa"] * np.log10(tc["b_t_per_mm"] * tg), "-",
+            axes[1].plot(tg, equations.tau_from_constants(tc["a_t_pa"], tc["b_t_per_mm"], tg), "-",
                          label="tau = a_t log10(b_t t)")
         if len(tg):
-            axes[1].plot(tg, model.tau_pa(theta, tg), ":", label="joint fit")
+            axes[1].plot(tg, equations.tau_pa(theta, tg), ":", label="joint fit")
         axes[1].set(xlabel="membrane thickness t (mm)", ylabel="tau (Pa)",
                     title=f"tau vs t at L = {t5['L_mm']:g} mm")
         axes[1].legend(fontsize=7)

@@ -8,7 +8,12 @@ from dataclasses import dataclass
 
 from solver.design import Design
 from solver.materials import OgdenMaterial
-from surrogate.jointfit import COVARIANCE_IN_LOG10_B_T_SINCE, ModelParameters, parameters_from_dict
+from surrogate.exponential.parameters import (
+    COVARIANCE_IN_LOG10_B_T_SINCE,
+    ModelParameters,
+    parameters_from_dict,
+)
+from surrogate.exponential.volume_relation import VolumeRelation, volume_relation_from_dict
 
 
 @dataclass(frozen=True)
@@ -44,7 +49,9 @@ def domain_from_dict(d: dict) -> Domain:
 class Family:
     """``parameters`` maps a form name ("exponential", "extended") to its parameters;
     ``default_form`` is the one used unless a form is asked for; ``force`` is the force
-    model (exponential form, mN) or None when the data held no force curves."""
+    model (exponential form, mN) or None when the data held no force curves; ``volume``
+    the pressure-volume relation (``volume_relation``) or None (the paper preset, files
+    of format version < 3, curves without volumes)."""
 
     body_material: OgdenMaterial
     membrane_material: OgdenMaterial
@@ -55,6 +62,7 @@ class Family:
     default_form: str
     domain: Domain
     force: ModelParameters | None = None
+    volume: VolumeRelation | None = None
 
     @property
     def key(self) -> tuple[str, str, float, float, float]:
@@ -77,7 +85,8 @@ class Family:
                 "default_form": self.default_form,
                 "parameters": {k: v.as_dict() for k, v in self.parameters.items()},
                 "force": self.force.as_dict() if self.force else None,
-                "domain": self.domain.as_dict()}
+                "domain": self.domain.as_dict(),
+                "volume": self.volume.as_dict() if self.volume else None}
 
 
 def _material(d: dict) -> OgdenMaterial:
@@ -93,4 +102,5 @@ def family_from_dict(d: dict, format_version: int = COVARIANCE_IN_LOG10_B_T_SINC
                   T_mm=float(d["T_mm"]), b_mm=float(d["b_mm"]), h_mm=float(d["h_mm"]),
                   parameters={k: parameters_from_dict(p, v) for k, p in d["parameters"].items()},
                   default_form=d["default_form"], domain=domain_from_dict(d["domain"]),
-                  force=parameters_from_dict(d["force"], v) if d.get("force") else None)
+                  force=parameters_from_dict(d["force"], v) if d.get("force") else None,
+                  volume=volume_relation_from_dict(d["volume"]) if d.get("volume") else None)

@@ -1,9 +1,10 @@
 """Fit a surrogate from FE curves: ``fit_surrogate(curves_or_db_path) -> Surrogate``.
 
 For every family (material pair, T, b, h) with free-tip curves: the paper's procedure
-(``surrogate.procedure``), joint fits of each model form, leave-one-design-out errors and
-band coverage per form, a residual profile (how the FE curves leave the exponential form
-as the angle grows), the fitted domain, and a force model when curves with force exist.
+(``surrogate.exponential.paper_procedure``), joint fits of each model form,
+leave-one-design-out errors and band coverage per form, a residual profile (how the FE
+curves leave the exponential form as the angle grows), the fitted domain, and a force
+model when curves with force exist.
 The family's default form is "extended" only when it lowers the leave-one-design-out
 RMSE by at least 10 % (else the paper's "exponential"). Everything lands in
 ``Surrogate.report`` (plain JSON).
@@ -22,14 +23,17 @@ from typing import Any, cast
 import numpy as np
 
 from solver.errors import InputError
-from surrogate import model
-from surrogate.core import Surrogate
 from surrogate.dataset import CurveData, curves_from_store, select_angle_curves, select_force_curves
-from surrogate.family import Domain, Family
-from surrogate.jointfit import ModelParameters, Points, joint_fit, leave_one_design_out, make_points
-from surrogate.procedure import paper_procedure
+from surrogate.exponential import equations
+from surrogate.exponential.family import Domain, Family
+from surrogate.exponential.family_fit import Points, joint_fit, leave_one_design_out, make_points
+from surrogate.exponential.file import FORMAT_VERSION
+from surrogate.exponential.paper_procedure import paper_procedure
+from surrogate.exponential.parameters import ModelParameters
+from surrogate.exponential.surrogate import Surrogate
+from surrogate.exponential.volume_relation import VolumeCurve, fit_volume_relation
+from surrogate.json_plain import plain_json
 
-FORMAT_VERSION = 2  # 2: covariances in log10 b_t (surrogate.files reads 1 as well)
 EXTENDED_GAIN = 0.9  # extended becomes the default when its LODO RMSE < 0.9 x the paper's
 
 
@@ -53,7 +57,7 @@ def git_commit() -> str:
 
 
 def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "fe-fit",
-                  level: float = 0.95, forms: tuple[str, ...] = model.FORMS,
+                  level: float = 0.95, forms: tuple[str, ...] = equations.FORMS,
                   progress: bool = False) -> Surrogate:
     """Fit every family found in ``source`` (a CurveStore path or a list of CurveData)."""
     if isinstance(source, (str, os.PathLike)):
@@ -62,8 +66,8 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
     else:
         curves, metadata, db_path = list(source), {}, ""
     for f in forms:
-        if f not in model.FORMS:
-            raise InputError("forms", f"unknown form {f!r}", " | ".join(model.FORMS))
+        if f not in equations.FORMS:
+            raise InputError("forms", f"unknown form {f!r}", " | ".join(equations.FORMS))
     angle_curves = select_angle_curves(curves)
     if not angle_curves:
         raise InputError("db", "no free-tip curve with at least 3 converged points to fit",
@@ -89,7 +93,7 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
     provenance = {
         "format_version": FORMAT_VERSION, "created_utc": datetime.now(UTC).isoformat(),
         "package_version": package_version(), "git_commit": git_commit(),
-        "database_path": db_path, "database_metadata": _plain(metadata),
+        "database_path": db_path, "database_metadata": plain_json(metadata),
         "record_keys": used, "n_records": len(used), "level": level, "forms": list(forms),
         "source": "fit of FE curves",
     }
@@ -97,7 +101,7 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
               "force": "no record holds a force curve" if not force_groups else
               f"force models for {len(force_groups)} famil(ies)"}
     return Surrogate(name=name, family_fits=tuple(families), provenance=provenance,
-                     report=_plain(report))
+                     report=plain_json(report))
 
 
 def _group_key(c: CurveData) -> tuple:
@@ -142,17 +146,36 @@ def _fit_family(members: list[CurveData], force_members: list[CurveData],
         pressure_max_pa=max(last_p), angle_max_deg=float(np.abs(pts.value).max()),
         W_mm=tuple(sorted({round(c.design.W_mm, 6) for c in members})),
         designs=tuple((c.design.L_mm, c.design.t_mm) for c in members))
+    volume = fit_volume_relation(_volume_curves(members), level)
     fam = Family(body_material=d0.body_material, membrane_material=d0.membrane_material,
                  T_mm=d0.T_mm, b_mm=d0.b_mm, h_mm=d0.h_mm, parameters=params,
-                 default_form=default, domain=domain, force=force)
+                 default_form=default, domain=domain, force=force, volume=volume)
     report = {"family": fam.label, "key": list(fam.key), "n_curves": len(members),
               "n_points": int(len(pts.value)), "record_keys": [c.key for c in members],
               "default_form": default, "domain": domain.as_dict(),
               "paper_procedure": paper_procedure(pts),
               "joint_fit": {f: p.as_dict() for f, p in params.items()},
               "lodo": lodo, "residual_profile": residual_profile(pts, params),
-              "force": force_report}
+              "force": force_report,
+              "volume": None if volume is None else {"lodo": volume.lodo,
+                                                     "angle_max_deg": volume.angle_max_deg}}
     return fam, report
+
+
+def _volume_curves(members: list[CurveData]) -> list[VolumeCurve]:
+    """The curves with an injected-volume column, one per (L, t), at the family's most
+    common actuator width W (the relation is over L and t only)."""
+    with_v = [c for c in members if c.volume_ul is not None]
+    if not with_v:
+        return []
+    widths = [round(c.design.W_mm, 6) for c in with_v]
+    w = max(set(widths), key=widths.count)
+    out: dict[tuple[float, float], VolumeCurve] = {}
+    for c, cw in zip(with_v, widths, strict=True):
+        key = (round(c.design.L_mm, 6), round(c.design.t_mm, 6))
+        if cw == w and key not in out and c.volume_ul is not None:
+            out[key] = VolumeCurve(c.design.L_mm, c.design.t_mm, c.angle_deg, c.volume_ul)
+    return list(out.values())
 
 
 def residual_profile(pts: Points, params: dict) -> dict[str, object]:
@@ -163,7 +186,7 @@ def residual_profile(pts: Points, params: dict) -> dict[str, object]:
     out: dict[str, object] = {"angle_bands_deg": edges[:-1] + ["inf"],
                               "note": "residual = sign * (FE - model), sign of the family"}
     for form, par in params.items():
-        r = sign * (pts.value - model.angle_deg(par.theta, pts.L_mm, pts.t_mm, pts.pressure_pa))
+        r = sign * (pts.value - equations.angle_deg(par.theta, pts.L_mm, pts.t_mm, pts.pressure_pa))
         mag = np.abs(pts.value)
         rows = []
         for lo, hi in zip(edges[:-1], edges[1:], strict=True):
@@ -174,25 +197,6 @@ def residual_profile(pts: Points, params: dict) -> dict[str, object]:
                          "rms": float(np.sqrt(np.mean(r[sel] ** 2))) if sel.any() else None})
         out[form] = rows
     return out
-
-
-def _plain(obj: Any) -> Any:
-    """JSON-safe copy: numpy to Python, NaN/inf to None, tuples to lists."""
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if obj is None or isinstance(obj, (str, int, bool)):
-        return obj
-    return str(obj)
 
 
 class _NoBar:
@@ -209,3 +213,27 @@ def _progress(total: int, show: bool) -> Any:
     from tqdm import tqdm
 
     return tqdm(total=total, desc="fitting families", unit="family")
+
+
+def attach_volume_relations(s: Surrogate, curves: list[CurveData], level: float = 0.95,
+                            note: str = "") -> Surrogate:
+    """``s`` with each family's pressure-volume relation fitted from those of ``curves``
+    (free tip) whose record keys ``s`` was fitted from; its parameters unchanged. For a
+    file fitted before format version 3 (``python -m surrogate.exponential.add_volumes``)."""
+    keys = set(s.provenance.get("record_keys", ()))
+    groups: dict[tuple, list[CurveData]] = {}
+    for c in select_angle_curves([c for c in curves if c.key in keys]):
+        groups.setdefault(c.design.family, []).append(c)
+    families, reports = [], []
+    for fam, rep in zip(s.family_fits, s.report.get("families", [{}] * len(s.family_fits)),
+                        strict=True):
+        members = [c for c in groups.get(fam.key, []) if fam.matches(c.design)]
+        volume = fit_volume_relation(_volume_curves(members), level)
+        families.append(replace(fam, volume=volume))
+        reports.append({**rep, "volume": None if volume is None else {
+            "lodo": volume.lodo, "angle_max_deg": volume.angle_max_deg}})
+    provenance = {**s.provenance, "format_version": FORMAT_VERSION,
+                  "volume_relation": {"added_utc": datetime.now(UTC).isoformat(),
+                                      "git_commit": git_commit(), "note": note}}
+    return replace(s, family_fits=tuple(families), provenance=provenance,
+                   report=plain_json({**s.report, "families": reports}))

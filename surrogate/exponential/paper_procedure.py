@@ -13,15 +13,15 @@ from typing import Any
 
 import numpy as np
 
-from surrogate.curvefit import (
+from surrogate.exponential.family_fit import Points
+from surrogate.exponential.paper_tables import STANDARD_L_MM, STANDARD_t_MM
+from surrogate.exponential.per_curve_fits import (
     fit_A_fixed,
     fit_free,
     fit_tau_fixed,
     length_constant,
     thickness_constants,
 )
-from surrogate.jointfit import Points
-from surrogate.paper_data import STANDARD_L_MM, STANDARD_t_MM
 
 
 def paper_procedure(pts: Points) -> dict[str, object]:

@@ -1,9 +1,9 @@
 """Synthetic curve records for tests, benchmarks and demonstrations (no FE needed).
 
-Curves follow the model exactly (``theta`` in ``surrogate.model``'s order) plus normal
-noise with the variance form of ``surrogate.bands``: noise_deg^2 (1 - exp(-p/tau))^2 +
-(noise_rel angle)^2; each stops at ``max_angle_deg`` like an
-FE run with that stop criterion.
+Curves follow the model exactly (``theta`` in ``surrogate.exponential.equations``'s
+order) plus normal noise with the variance form of ``surrogate.exponential.bands``:
+noise_deg^2 (1 - exp(-p/tau))^2 + (noise_rel angle)^2; each stops at ``max_angle_deg``
+like an FE run with that stop criterion.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import numpy as np
 
 from solver.design import Design
 from solver.materials import get_material
-from surrogate import bands, model
 from surrogate.dataset import CurveData
-from surrogate.paper_data import A_DEG_PER_MM, A_T_PA, B_T_PER_MM
+from surrogate.exponential import bands, equations
+from surrogate.exponential.paper_tables import A_DEG_PER_MM, A_T_PA, B_T_PER_MM
 
 PAPER_THETA = np.array([A_DEG_PER_MM, A_T_PA, B_T_PER_MM])
 
@@ -38,16 +38,16 @@ def synthetic_curves(theta: np.ndarray = PAPER_THETA,
         for t in t_mm:
             d = replace(base, L_mm=L, t_mm=t, body_material=get_material(body),
                         membrane_material=get_material(membrane))
-            p_end = float(model.pressure_pa(np.asarray(theta), L, t,
+            p_end = float(equations.pressure_pa(np.asarray(theta), L, t,
                                             np.sign(theta[0]) * max_angle_deg))
             p = np.linspace(0.0, p_end, n_points)
-            y = model.angle_deg(np.asarray(theta), L, t, p)
-            x = p / model.tau_pa(np.asarray(theta), t)
+            y = equations.angle_deg(np.asarray(theta), L, t, p)
+            x = p / equations.tau_pa(np.asarray(theta), t)
             y = y + rng.normal(size=p.shape) * np.sqrt(
                 bands.scatter_variance(noise_deg, noise_rel, y, x))
             out.append(CurveData(d, p, y, np.full(p.shape, np.nan), key=f"syn-{L}-{t}"))
             if force_theta is not None:
-                f = model.angle_deg(np.asarray(force_theta), L, t, p)
+                f = equations.angle_deg(np.asarray(force_theta), L, t, p)
                 out.append(CurveData(d, p, np.zeros_like(p), f, key=f"synf-{L}-{t}",
                                      tip="blocked"))
     return out

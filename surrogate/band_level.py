@@ -1,0 +1,21 @@
+"""The two-sided normal quantile of a band's level, shared by every model's bands."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from scipy.stats import norm
+
+from solver.errors import InputError
+
+
+def z_value(level: float) -> float:
+    """Two-sided normal quantile for a band at ``level`` (e.g. 1.96 at 0.95)."""
+    if not isinstance(level, (int, float)) or not 0.5 <= level < 1.0:
+        raise InputError("level", f"got {level!r}", "0.5 <= level < 1")
+    return _z(float(level))
+
+
+@lru_cache(maxsize=64)
+def _z(level: float) -> float:
+    return float(norm.ppf(0.5 + 0.5 * level))
