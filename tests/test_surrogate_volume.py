@@ -13,6 +13,7 @@ family below 5 % RMS (measured 3.6 %, benchmarks/RESULTS.md).
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -166,3 +167,19 @@ def test_exponential_by_volume_and_time_over_http(shipped_client):
         "model": "exponential", "angles_deg": [30.0], "flow_ul_s": 2.5}).json()
     assert inv["volume_ul"][0] > 0 and inv["time_s"][0] == pytest.approx(
         inv["volume_ul"][0] / 2.5)
+
+
+def test_add_volumes_refuses_a_missing_database_in_one_line(tmp_path):
+    """The maintenance command names the missing file, prints no traceback, writes
+    nothing."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "s.json"
+    r = subprocess.run([sys.executable, "-m", "surrogate.exponential.add_volumes", "--db",
+                        str(tmp_path / "none.h5"), "-i", "service/data/surrogate.json",
+                        "-o", str(out)], capture_output=True, text=True,
+                       cwd=Path(__file__).resolve().parents[1])
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert "none.h5" in r.stderr and not out.exists()

@@ -40,4 +40,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from solver.errors import BalloonError
+
+    try:
+        sys.exit(main())
+    except (BalloonError, OSError) as exc:   # a bad --db or -i file: one line, file intact
+        print(f"add_volumes: error: {exc}", file=sys.stderr)
+        sys.exit(2)
