@@ -40,11 +40,10 @@ from solver.design_space import (
 )
 from solver.errors import InputError
 from surrogate.exponential.inverse_design import (
-    DEFAULT_OBJECTIVE,
-    OBJECTIVES,
     DesignCandidate,
     DesignTarget,
     InverseDesignResult,
+    resolve_objective,
 )
 
 CANDIDATES_PER_PAIR = 512
@@ -253,12 +252,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                    seed: int = 0) -> InverseDesignResult:
     """Ranked designs meeting ``target`` (see the module docstring)."""
     target = target.validated()
-    objective = objective or DEFAULT_OBJECTIVE[target.kind]
-    if objective not in OBJECTIVES:
-        raise InputError("objective", f"unknown objective {objective!r}", " | ".join(OBJECTIVES))
-    if objective in ("pressure", "margin") and target.kind != "pressure_budget":
-        raise InputError("objective", f"{objective!r} ranks by the pressure needed",
-                         "compact | certainty for this target")
+    objective = resolve_objective(target, objective)
     ranges = bounds.ranges()
     slices_fn = getattr(model, "covered_slices", None)
     n_evaluated = 0

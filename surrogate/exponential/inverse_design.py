@@ -49,6 +49,18 @@ GRID = 48
 CURVE_POINTS = 41
 
 
+def resolve_objective(target: DesignTarget, objective: str | None) -> str:
+    """The ranking objective for ``target``: the given one, checked, or the target's
+    default (InputError naming ``objective`` and the allowed values otherwise)."""
+    objective = objective or DEFAULT_OBJECTIVE[target.kind]
+    if objective not in OBJECTIVES:
+        raise InputError("objective", f"unknown objective {objective!r}", " | ".join(OBJECTIVES))
+    if objective in ("pressure", "margin") and target.kind != "pressure_budget":
+        raise InputError("objective", f"{objective!r} ranks pressure_budget targets only",
+                         "certainty | compact")
+    return objective
+
+
 @dataclass(frozen=True)
 class DesignTarget:
     """What the design must do; units in the names. See the module docstring."""
@@ -269,12 +281,7 @@ def inverse_design(surrogate: Surrogate, target: DesignTarget,
     explanation of why none is feasible. See the module docstring."""
     target = target.validated()
     bounds = (bounds or DesignBounds()).validated()
-    objective = objective or DEFAULT_OBJECTIVE[target.kind]
-    if objective not in OBJECTIVES:
-        raise InputError("objective", f"unknown objective {objective!r}", " | ".join(OBJECTIVES))
-    if objective in ("pressure", "margin") and target.kind != "pressure_budget":
-        raise InputError("objective", f"{objective!r} ranks pressure_budget targets only",
-                         "certainty | compact")
+    objective = resolve_objective(target, objective)
     if not 1 <= n_results <= 50:
         raise InputError("n_results", f"got {n_results!r}", "1 <= n_results <= 50")
     if not 4 <= grid <= 400:
