@@ -208,6 +208,20 @@ def test_metadata_round_trip_and_reserved_names(db_path):
     assert meta["created_utc"] <= meta["updated_utc"]
 
 
+def test_an_overwritten_metadata_value_leaves_no_trace_in_the_file(db_path):
+    # HDF5 keeps an overwritten attribute's old bytes in the file's free space: a local
+    # path written by a build job must not ship inside the published database
+    with CurveStore(db_path, mode="a") as db:
+        db.put(record_for())
+        db.set_metadata(generator_command="balloon precompute g.toml --db /home/me/scratch.h5")
+        db.set_metadata(generator_command="balloon precompute g.toml --db curves.h5")
+    data = db_path.read_bytes()
+    assert b"/home/me/scratch.h5" not in data
+    assert b"--db curves.h5" in data
+    with CurveStore(db_path) as db:
+        assert len(db) == 1 and db.metadata["generator_command"].endswith("curves.h5")
+
+
 def test_orphaned_temporary_files_are_removed_by_the_next_writer(db_path):
     with CurveStore(db_path, mode="a") as db:
         db.put(record_for())

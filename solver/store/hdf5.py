@@ -314,15 +314,19 @@ class CurveStore:
         with self._mutex:
             self._require_writer()
             with self._locked():
-                self._publish(lambda f: schema.write_attrs(f, items))
+                # rewritten, not patched: HDF5 leaves an overwritten attribute's old value
+                # in the file's free space, and a stale value (a local path, say) must not
+                # ship inside a published file
+                self._publish(lambda f: schema.write_attrs(f, items), repack=True)
 
     def seal(self) -> None:
-        """Publish the file again with its seal (solver/store/integrity.py): what a file
-        of older code needs once; the records are unchanged."""
+        """Publish the file again, rewritten and with its seal (solver/store/integrity.py):
+        what a file of older code needs once; the records are unchanged, the free space
+        left by earlier edits is gone."""
         with self._mutex:
             self._require_writer()
             with self._locked():
-                self._publish(lambda f: None)
+                self._publish(lambda f: None, repack=True)
 
     def _require_writer(self) -> None:
         if self.mode != "a" or self._closed:
@@ -340,9 +344,11 @@ class CurveStore:
                 raise StoreWriteError(self.path, exc) from None
 
     def _publish(self, change: Any, create: bool = False,
-                 drop: frozenset[str] | set[str] = frozenset()) -> None:
-        """Copy the file, apply ``change(h5file)`` to the copy, fsync, rename over.
-        Called with the writer lock held.
+                 drop: frozenset[str] | set[str] = frozenset(), repack: bool = False) -> None:
+        """Copy the file (rewritten record by record when records are dropped or when it
+        is not sealed), apply ``change(h5file)`` to the copy (and rewrite the result when
+        ``repack``: no freed bytes survive), fsync, rename over. Called with the writer
+        lock held.
 
         The copy is built in memory and written to disk with plain file I/O: a failed
         write (disk full, read-only) is then one clean OSError, where HDF5 writing to a
@@ -366,6 +372,10 @@ class CurveStore:
                 change(f)
                 f.attrs["updated_utc"] = utc_now()
                 f.attrs["n_records"] = len(f[schema.RECORDS])
+            if repack:
+                with h5py.File(image, "r", libver=LIBVER) as f:
+                    image = io.BytesIO()
+                    _copy_file(f, image, frozenset())
             integrity.seal(image.getbuffer())
             _write_file(tmp, image.getbuffer())
             os.replace(tmp, self.path)
@@ -382,10 +392,16 @@ class CurveStore:
         deleted groups, so replaced records are dropped by rewriting the file)."""
         with self._reading():
             src = self._file()
-        with h5py.File(tmp, "w", libver=LIBVER, userblock_size=USERBLOCK) as dst:
-            for name, value in src.attrs.items():
-                dst.attrs[name] = value
-            group = dst.create_group(schema.RECORDS)
-            for key in src[schema.RECORDS]:
-                if key not in drop:
-                    src.copy(src[schema.RECORDS][key], group, name=key)
+        _copy_file(src, tmp, drop)
+
+
+def _copy_file(src: h5py.File, dst_image: Any, drop: frozenset[str] | set[str]) -> None:
+    """Write the attributes and the records of ``src`` (less those in ``drop``) into a
+    fresh file at ``dst_image``: a copy holds no free space and no stale bytes."""
+    with h5py.File(dst_image, "w", libver=LIBVER, userblock_size=USERBLOCK) as dst:
+        for name, value in src.attrs.items():
+            dst.attrs[name] = value
+        group = dst.create_group(schema.RECORDS)
+        for key in src[schema.RECORDS]:
+            if key not in drop:
+                src.copy(src[schema.RECORDS][key], group, name=key)
