@@ -146,6 +146,29 @@ def test_uploading_the_example_csv_shows_the_report_and_saving_asks_for_the_key(
     screenshot(page, "explorer-calibration-saved-1280")
 
 
+def test_the_report_names_the_explanations_the_data_cannot_tell_apart(watched, server):
+    # a report in the shape surrogate/calibration/_loop.py writes (docs/calibration.md)
+    report = {"selected_effects": ["body_stiffness"],
+              "indistinguishable": [{"effects": ["pressure_offset"], "rmse_cv_deg": 1.234,
+                                     "paired_z": -0.8, "backed": True,
+                                     "params": {"p0_pa": {"value": 118.0, "sd": 9.0,
+                                                          "unit": "Pa"}},
+                                     "measure": ["read the gauge at rest"]}],
+              "closest_rejected": {"effects": ["angle_offset"], "rmse_cv_deg": 2.5,
+                                   "why_not": ["rule 3: not backed"],
+                                   "params": {"offset_deg": {"value": 1.5, "sd": 0.4,
+                                                             "unit": "deg"}}}}
+    page = open_explorer(watched, server.url)
+    lines = page.evaluate("async (r) => (await import('/static/explorer/js/calibration.js'))"
+                          ".alternativeLines(r)", report)
+    text = " | ".join(line["text"] for line in lines)
+    assert "pressure offset" in text and "p0_pa = 118 +/- 9.0 Pa" in text
+    assert "read the gauge at rest" in text and "1.23" in text
+    assert "angle offset" in text and "rule 3: not backed" in text
+    assert page.evaluate("async () => (await import('/static/explorer/js/calibration.js'))"
+                         ".alternativeLines({}).length") == 0
+
+
 def test_a_refused_design_offers_the_fe_solve_and_plots_the_stored_curve(watched, server):
     page = open_explorer(watched, server.url)
     assert page.locator("#refused").is_hidden()

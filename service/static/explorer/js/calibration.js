@@ -71,6 +71,39 @@ function effectLines(report) {
   return lines;
 }
 
+function paramText(params) {
+  return Object.entries(params || {}).map(([k, p]) => (p && typeof p === "object"
+    ? `${k} = ${fmtSig(p.value)}${typeof p.sd === "number" ? " +/- " + fmtSig(p.sd, 2) : ""} ${p.unit || ""}`.trim()
+    : `${k} = ${fmtSig(p)}`)).join("; ");
+}
+
+function effectNames(effects) {
+  return (effects || []).map((e) => String(e).replaceAll("_", " ")).join(" + ") || "nothing";
+}
+
+// What else the data allow: explanations they cannot tell from the selection
+// (`indistinguishable`), a better fit the baseline cannot back (`unbacked_better`), and with
+// nothing selected the closest rejected set (`closest_rejected`). Read defensively.
+export function alternativeLines(report) {
+  const out = [];
+  for (const a of report.indistinguishable || []) {
+    const measure = (Array.isArray(a.measure) ? a.measure : [a.measure]).filter(Boolean).join("; ");
+    out.push({ warn: true, text: `Equally consistent with the data: ${effectNames(a.effects)} (${paramText(a.params)}; `
+      + `CV error ${fmt(a.rmse_cv_deg, 2)} deg, paired z ${fmt(a.paired_z, 2)}${a.backed === false ? ", not backed by the baseline" : ""}). `
+      + `The selection is the lowest BIC, not evidence against it${measure ? "; to tell them apart: " + measure : ""}.` });
+  }
+  const u = report.unbacked_better;
+  if (u && typeof u === "object") {
+    out.push({ warn: true, text: `Fits better but cannot be backed by the baseline: ${effectNames(u.effects)} (${paramText(u.params)}); an FE solve of the fitted design would decide.` });
+  }
+  const c = report.closest_rejected;
+  if (c && typeof c === "object") {
+    const why = Array.isArray(c.why_not) ? c.why_not.join("; ") : (c.why_not || "");
+    out.push({ warn: false, text: `Closest catalogued explanation, rejected: ${effectNames(c.effects)} (${paramText(c.params)}; CV error ${fmt(c.rmse_cv_deg, 2)} deg)${why ? ": " + why : ""}.` });
+  }
+  return out;
+}
+
 export function setupCalibration() {
   const form = $("cal-form");
   let rows = null, report = null, lastBody = null;
@@ -147,6 +180,12 @@ export function setupCalibration() {
     const lines = effectLines(rep);
     if (!lines.length) lines.push("none: no catalogued effect explains the data better than the recalibrated model");
     for (const line of lines) { const li = document.createElement("li"); li.textContent = line; eff.appendChild(li); }
+    for (const line of alternativeLines(rep)) {
+      const li = document.createElement("li");
+      li.className = line.warn ? "warn" : "";
+      li.textContent = line.text;
+      eff.appendChild(li);
+    }
     if (rep.residual_structured_after) {
       const li = document.createElement("li");
       li.className = "warn";
