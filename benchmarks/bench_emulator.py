@@ -59,6 +59,10 @@ class HeldOut:
         if self.fe_deg:
             fe, ins = np.abs(np.concatenate(self.fe_deg)), np.concatenate(self.inside_points)
             bins = angle_bin(fe)
+            text += "\nrmse by FE angle: " + ", ".join(
+                f"{ANGLE_BINS_DEG[b]:g}-{ANGLE_BINS_DEG[b + 1]:g} deg "
+                f"{np.sqrt(np.nanmean(flat[bins == b] ** 2)):.2f}"
+                for b in range(len(ANGLE_BINS_DEG) - 1) if (bins == b).any())
             text += "\nband coverage by FE angle: " + ", ".join(
                 f"{ANGLE_BINS_DEG[b]:g}-{ANGLE_BINS_DEG[b + 1]:g} deg {ins[bins == b].mean():.2f}"
                 f" ({int((bins == b).sum())})" for b in range(len(ANGLE_BINS_DEG) - 1)
