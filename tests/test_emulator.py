@@ -201,14 +201,12 @@ def test_fit_report_sets_the_emulator_beside_the_exponential_on_the_same_curves(
         assert f"{fam['lodo']['exponential']['rmse']:.2f}" in line
 
 
-@pytest.mark.xfail(reason="measured 2026-12-02: at some blocked-tip database designs the force "
-                   "model is off by up to 40 % of the curve's largest force (10-12 designs per "
-                   "group, F/p linear between nodes); held-out force RMSE 0.065 mN on 3 "
-                   "curves, band coverage 0.89 (benchmarks/RESULTS.md)", strict=False)
 def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(emulator):
     """Every material group has a force model fitted from the database's blocked-tip FE
-    curves: at those designs the emulator gives the FE's force (mN) to 5 % of its largest
-    value within the force range, with a band about it, and nothing past the range."""
+    curves: at the designs it is fitted to (those whose curve reaches the group's force
+    range; a curve that failed before it is not among them) the emulator gives the FE's
+    force (mN) to 5 % of its largest value within the force range (the rest is F/p linear
+    between nodes), with a band about it, and nothing past the range."""
     from surrogate.emulator.build import is_force_record
 
     assert all(pe.force is not None for pe in emulator.pairs.values())
@@ -218,12 +216,14 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(emu
     with CurveStore(DB) as db:
         for rec in db.records():
             if not is_force_record(rec.settings) or "pdms" not in rec.design.body_material.id:
-                continue             # the soft groups' force models: 10-12 designs, open
+                continue             # the soft groups' force models: 16-17 designs, open
             try:
                 pred = emulator.predict(rec.design, rec.curve.pressure_pa)
             except InputError:
                 continue                         # near the Ecoflex/Ecoflex balance
             c = rec.curve
+            if c.pressure_pa.max() < 2500.0:
+                continue             # ended before the PDMS group's force range: not fitted
             # within the group's force range (soft pairs: the nodes most of their
             # blocked-tip curves reach before the FE's volume stop)
             inside = (c.pressure_pa > 0) & (c.pressure_pa <= limit_pa)
@@ -255,6 +255,31 @@ def test_force_range_keeps_the_nodes_most_blocked_tip_curves_reach():
     q = FORCE_PRESSURE_NODES_PA[:4]
     np.testing.assert_allclose(force_at(per_kpa, q), q / 1000 * per_kpa)
     np.testing.assert_allclose(force_at(per_kpa, 10.0), 0.01 * per_kpa[0])
+
+
+def test_the_force_variable_is_f_over_p_normalised_by_the_free_secant_and_back():
+    """features.force_feature: asinh of (F/p) over the free tip's secant theta/p at the
+    first angle node; linear through zero (a sign change of the initial reaction), log
+    where large, and exactly invertible for either bending sign."""
+    from surrogate.emulator.features import (
+        FORCE_RATIO_UNIT,
+        force_feature,
+        free_secant_deg_per_pa,
+        per_kpa_from_feature,
+    )
+
+    node_mean = np.array([[np.log(200.0), 1.0], [np.log(50.0), 2.0]])  # log(p/theta) first
+    for sign in (1.0, -1.0):
+        s0 = free_secant_deg_per_pa(node_mean, sign)
+        np.testing.assert_allclose(s0, sign * np.array([1 / 200.0, 1 / 50.0]))
+        per_kpa = np.array([[-1e-4, 0.0, 2e-3, 0.4], [1e-5, 3e-3, 0.05, 1.0]]) * sign
+        y = force_feature(per_kpa, s0)
+        np.testing.assert_allclose(per_kpa_from_feature(y, s0), per_kpa, rtol=1e-12,
+                                   atol=1e-15)
+        assert np.all(np.diff(y, axis=1) > 0)        # monotone in F/p (s0 of its sign)
+    # large ratios: a log, so a relative change of F is an additive one of the variable
+    big = force_feature(np.array([100.0, 200.0]), 1.0 / FORCE_RATIO_UNIT)
+    assert abs((big[1] - big[0]) - np.log(2.0)) < 1e-4
 
 
 def test_no_force_number_where_its_band_is_wider_than_twice_the_force(emulator):
@@ -308,3 +333,31 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
                 assert inside[bins == b].mean() >= 0.93, (axis, ANGLE_BINS_DEG[b])
         assert inside.mean() <= 0.99, axis
     assert scales[:34].max() > 3 * np.median(scales[:34])   # the low angles need more
+
+
+def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tmp_path):
+    """The fit end to end on a slice of the shipped database (the PDMS group's first 16
+    complete free-tip curves and its blocked-tip curves): the force model is the secant-normalised
+    form, reproduces its blocked-tip designs, and a saved file answers identically."""
+    from surrogate.emulator.build import fit_emulator, is_force_record
+    from surrogate.emulator.file import load_emulator as load, save_emulator
+
+    with CurveStore(DB) as db:
+        recs = [r for r in db.records() if "pdms" in r.design.body_material.id]
+    free = [r for r in recs if not is_force_record(r.settings)
+            and r.curve.angle_deg[-1] >= 89.0][:16]
+    blocked = [r for r in recs if is_force_record(r.settings)]
+    e = fit_emulator(free + blocked)
+    pe = e.pairs["pdms/ecoflex_00_30+"]
+    assert pe.force is not None and pe.force_form == "secant_ratio"
+    path = save_emulator(e, tmp_path / "e.json")
+    again = load(path)
+    rec = blocked[0]
+    c = rec.curve
+    inside = (c.pressure_pa > 0) & (c.pressure_pa <= pe.force_limit_pa)
+    a, b = (m.predict(rec.design, c.pressure_pa[inside]) for m in (e, again))
+    np.testing.assert_array_equal(a.force_mn, b.force_mn)
+    np.testing.assert_array_equal(a.angle_deg, b.angle_deg)
+    # a database design: the GP interpolates its own force curve
+    fe = c.force_mn[inside]
+    np.testing.assert_allclose(a.force_mn, fe, atol=0.02 * np.abs(fe).max())

@@ -33,6 +33,7 @@ from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.emulator import (
     ANGLES0,
+    FORCE_FORMS,
     N_NODES,
     Emulator,
     PairEmulator,
@@ -44,12 +45,13 @@ from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FORCE_PRESSURE_NODES_PA,
     curve_features,
+    force_feature,
     force_features,
+    free_secant_deg_per_pa,
 )
 from surrogate.emulator.vector_gp import fit_vector_gp
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
-FAILED_RADIUS = 0.15
 MIN_DESIGNS = 10
 FORCE_SHARE = 0.6                 # of a group's blocked-tip curves its force range keeps
 
@@ -290,6 +292,10 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         force_nodes, fu, fy = force_range(np.array(force_rows[0]), np.array(force_rows[1]))
         force_designs = len(fu)
     if force_designs >= MIN_DESIGNS:
+        # F/p normalised by this pair's emulated free-tip secant (features.py): the force
+        # designs are few, the free curves many
+        secant = free_secant_deg_per_pa(vgp.predict_many(fu)[0], sign)
+        fy = force_feature(fy, secant)
         force_gp = fit_vector_gp(fu, fy, seed=seed)
         fm, fv = force_gp.loo()
         zs = np.abs(fm - fy) / np.sqrt(fv)
@@ -302,7 +308,7 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
                        "(SolverSettings.max_angle_deg)",
         coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
-        force_limit_pa=force_limit_pa, failed=failed)
+        force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[1])
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gps),
               "force_designs": force_designs if force_gp is not None else 0,

@@ -35,7 +35,9 @@ from surrogate.emulator.features import (
     FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
     force_at,
+    free_secant_deg_per_pa,
     linear_matrix,
+    per_kpa_from_feature,
     spline_matrix,
 )
 from surrogate.emulator.vector_gp import VectorGP
@@ -68,6 +70,7 @@ def node_curves(y: np.ndarray, sd: np.ndarray, z: float
 
 
 FORCE_BAND_LIMIT = 2.0     # widest force band answered, relative to the force
+FORCE_FORMS = ("per_kpa", "secant_ratio")    # PairEmulator.force_form
 
 
 @dataclass(frozen=True)
@@ -80,7 +83,10 @@ class PairEmulator:
                          that LOO bands cover ``level`` at every angle node
     fe_limit_angle_deg   the FE's last angle on every database curve of the pair
     fe_stop_reason       why the FE curves end there
-    force                VectorGP of F_j / p_j (mN/kPa, signed) at the force nodes, or None
+    force                VectorGP of the force variable at the force nodes, or None
+    force_form           what that variable is: "secant_ratio" (``features.force_feature``,
+                         F/p over the free tip's emulated secant; fits since 2026-12-02)
+                         or "per_kpa" (F_j / p_j in mN/kPa, signed; older files)
     force_band_scale     as band_scale, for force
     coordinates          (n, 6) unit-cube coordinates of the database designs
     keys                 their record keys (nearest FE curves)
@@ -98,6 +104,14 @@ class PairEmulator:
     force_band_scale: float = 1.0
     force_limit_pa: float = float(FORCE_PRESSURE_NODES_PA[-1])
     failed: tuple = ()      # (unit coordinates, end angle deg, reason) of curves ended early
+    force_form: str = "per_kpa"
+
+    def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
+        """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
+        vector(s) ``node_mean`` at the same design(s)."""
+        if self.force_form == "per_kpa":
+            return np.asarray(feature, float)
+        return per_kpa_from_feature(feature, free_secant_deg_per_pa(node_mean, self.sign))
 
 
 @dataclass(frozen=True)
@@ -114,6 +128,7 @@ class CurveBand:
     volume_log_mean: np.ndarray     # emulated log(V_k / theta_k) at the nodes
     volume_log_sd: np.ndarray       # its sd, times the band scale
     pressure_raw_pa: np.ndarray     # the mean p(theta) before it is made monotone
+    node_mean: np.ndarray           # the emulated node vector (force normalisation)
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -180,7 +195,7 @@ class Emulator:
                 limit = float(angle)
                 reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
         v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale[N_NODES:]
-        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw)
+        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -207,7 +222,7 @@ class Emulator:
             a[past] = np.nan
         if pe.sign < 0:
             angle, lower, upper = -angle, -upper, -lower
-        force = self._force(pe, point, p_red, z)
+        force = self._force(pe, cb, point, p_red, z)
         validity = self._validity(pe, cb, point, p, past, force)
         return Prediction(design=design, pressure_pa=p, angle_deg=angle, lower_deg=lower,
                           upper_deg=upper, level=level, validity=validity, model=self.name,
@@ -251,7 +266,7 @@ class Emulator:
             a[past] = np.nan
         if pe.sign < 0:
             angle, lower, upper = -angle, -upper, -lower
-        force = self._force(pe, point, p_red, z)
+        force = self._force(pe, cb, point, p_red, z)
         validity = self._validity(pe, cb, point, np.nan_to_num(pressure), past, force)
         if past.any():
             validity["messages"][0] = (
@@ -284,8 +299,8 @@ class Emulator:
         return tuple(_with_origin(_monotone(c))  # type: ignore[return-value]
                      for c in node_curves(cb.volume_log_mean, cb.volume_log_sd, z))
 
-    def _force(self, pe: PairEmulator, point: BoxPoint, p_red: np.ndarray, z: float
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    def _force(self, pe: PairEmulator, cb: CurveBand, point: BoxPoint, p_red: np.ndarray,
+               z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Blocked-tip force (mN) with its band: F = p x (F/p emulated at the pressure
         nodes, linear between them), F scaling with s_membrane x length_scale^2."""
         if pe.force is None:
@@ -295,7 +310,7 @@ class Emulator:
         scale = point.pressure_scale * point.length_scale**2
         out = []
         for y in (mean, mean - z * sd, mean + z * sd):
-            f = scale * force_at(y, p_red)
+            f = scale * force_at(pe.force_per_kpa(y, cb.node_mean), p_red)
             f[p_red > pe.force_limit_pa * (1 + 1e-12)] = np.nan
             out.append(f)
         lo, hi = np.fmin(out[1], out[2]), np.fmax(out[1], out[2])
@@ -421,8 +436,9 @@ class Emulator:
                     out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
                 if fmean is not None and q <= pe.force_limit_pa:
                     scale = pt.pressure_scale * pt.length_scale**2
-                    vals = [scale * float(force_at(yy, q)) for yy in (
-                        fmean[row], fmean[row] - z * fsd[row], fmean[row] + z * fsd[row])]
+                    vals = [scale * float(force_at(pe.force_per_kpa(yy, mean[row]), q))
+                            for yy in (fmean[row], fmean[row] - z * fsd[row],
+                                       fmean[row] + z * fsd[row])]
                     lo_f, hi_f = min(vals[1:]), max(vals[1:])
                     if hi_f - lo_f <= FORCE_BAND_LIMIT * abs(vals[0]) + 1e-9:
                         out["force"][i] = vals[0]

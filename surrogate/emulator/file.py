@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from solver.atomic_file import write_text_atomic
-from surrogate.emulator.emulator import N_NODES, Emulator, PairEmulator
+from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
 from surrogate.emulator.vector_gp import vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
@@ -27,7 +27,8 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 3   # 3: band_scale per output node (2 read, one multiplier)
+FORMAT_VERSION = 4   # 4: force_form (3 read: F/p); 3: band_scale per output node (2 read,
+                     # one multiplier)
 
 
 def emulator_to_dict(e: Emulator) -> dict:
@@ -40,7 +41,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "failed": [[np.asarray(u).tolist(), a, r] for u, a, r in pe.failed],
             "curves": pe.curves.as_dict(),
             "force": None if pe.force is None else pe.force.as_dict(),
-            "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa})
+            "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
+            "force_form": pe.force_form})
     return seal(plain_json({
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
@@ -71,7 +73,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                 force=None if p["force"] is None else vector_gp_from_dict(p["force"]),
                 force_band_scale=float(p["force_band_scale"]),
                 force_limit_pa=float(p["force_limit_pa"]),
-                failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]))
+                failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]),
+                force_form=str(p.get("force_form", FORCE_FORMS[0])))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
         if not pairs:
@@ -113,6 +116,9 @@ def _check_pair(pe: PairEmulator) -> None:
                "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa}
     if not all(math.isfinite(v) for v in scalars.values()):
         raise ValueError(f"pair {pe.pair}: a number is not finite")
+    if pe.force_form not in FORCE_FORMS:
+        raise ValueError(f"pair {pe.pair}: force_form {pe.force_form!r} is not one of "
+                         f"{', '.join(FORCE_FORMS)}")
     if (abs(pe.sign) != 1.0 or pe.fe_limit_angle_deg <= 0
             or pe.force_band_scale <= 0 or pe.force_limit_pa <= 0):
         raise ValueError(f"pair {pe.pair}: sign, band scale or FE limit out of range")

@@ -83,7 +83,10 @@ class GaussianProcess:
         kinv = cho_solve((self.chol, True), np.eye(n))
         kh = kinv @ h
         hk = h.T @ kh
-        p = kinv - kh @ np.linalg.solve(hk, kh.T)
+        # the same relative jitter as the fit's (_factor): with few points and long length
+        # scales K is near singular and H^T K^-1 H loses its last digits
+        hk = hk + 1e-12 * np.trace(hk) / len(hk) * np.eye(len(hk))
+        p = kinv - kh @ np.linalg.lstsq(hk, kh.T, rcond=None)[0]
         d = np.diag(p)
         resid = (p @ self.y) / d
         return resid, self.signal_var / d

@@ -1,0 +1,43 @@
+"""Adaptive refinement (surrogate/emulator/adaptive.py) on the shipped emulator: the next
+designs are in the box, spaced apart, away from the database designs and from curves that
+ended early, and the count is checked."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from service.settings import DATA_DIR
+from solver.design_space import locate
+from solver.errors import InputError
+from surrogate.emulator import load_emulator
+from surrogate.emulator.adaptive import MIN_SPACING, next_designs
+from surrogate.emulator.emulator import FAILED_RADIUS
+
+
+@pytest.fixture(scope="module")
+def emulator():
+    return load_emulator(DATA_DIR / "emulator.json")
+
+
+def test_next_designs_keep_away_from_known_and_from_early_ended_curves(emulator):
+    points = next_designs(emulator, 12)
+    assert len(points) == 12
+    assert len({p.key for p in points}) == 12
+    by_group: dict[str, list[np.ndarray]] = {}
+    for p in points:
+        bp = locate(p.design, reduced=True)
+        u = bp.coordinates()
+        pes = [pe for key, pe in emulator.pairs.items() if key[:-1] == bp.group]
+        for pe in pes:
+            assert np.min(np.linalg.norm(pe.coordinates - u, axis=1)) >= MIN_SPACING
+            for fu, _, _ in pe.failed:
+                assert np.linalg.norm(np.asarray(fu) - u) >= FAILED_RADIUS
+        for other in by_group.get(bp.group, []):
+            assert np.linalg.norm(other - u) >= MIN_SPACING
+        by_group.setdefault(bp.group, []).append(u)
+
+
+def test_a_count_outside_its_range_is_refused_with_the_option_named(emulator):
+    with pytest.raises(InputError, match="--adaptive"):
+        next_designs(emulator, 0)
