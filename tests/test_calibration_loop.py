@@ -291,3 +291,29 @@ def test_noise_floor_follows_the_loading_history_with_creep_holds_and_unloading(
     clean = noise_floor(observations_from_rows(measure(lab, Truth(g_retarded=0.3))))
     assert clean.rms_deg < 1.3 * 0.7  # reading noise only: the loop and the creep are not noise
     assert math.isfinite(clean.rms_deg)
+
+
+def test_the_injected_volume_and_the_pressure_floor_follow_the_pump():
+    # The pump's volume from time, flow and direction (the lab's own V(t)), and the gauge
+    # pressure's replicate scatter at the same volume against the generator's: specimen
+    # scatter 2 % of the chamber pressure, 3 Pa reading noise; the inlet's R Q, shared by
+    # replicates, is not scatter.
+    from surrogate.calibration._noise import pressure_floor
+
+    lab = Lab(designs=BASES, protocol=LOOP, flows_ul_s=(1.25, 2.5))
+    obs = observations_from_rows(measure(lab, Truth(R_pa_per_ul_s=60.0)))
+    t, q = obs.time_s, obs.flow_ul_s
+    expected = np.where(t <= 6, q * t, np.where(t <= 10, 6 * q, q * (16 - t)))
+    np.testing.assert_allclose(obs.volume_ul, expected, atol=1e-9)
+    ratios = []
+    for seed in (1, 2, 3):
+        lab_s = Lab(designs=BASES, protocol=LOOP, seed=seed)
+        rows = measure(lab_s, Truth(R_pa_per_ul_s=60.0))
+        clean_r = measure(Lab(**{**lab_s.__dict__, "specimen_sd": 0.0, "noise_deg": 0.0,
+                                 "specimens": 1, "extra": {"exact": True}}),
+                          Truth(R_pa_per_ul_s=60.0))
+        mean = {(r["L_mm"], r["t_mm"], r["time_s"]): r["pressure_pa"] for r in clean_r}
+        true = np.sqrt(np.mean([(r["pressure_pa"] - mean[(r["L_mm"], r["t_mm"],
+                                                          r["time_s"])]) ** 2 for r in rows]))
+        ratios.append(pressure_floor(observations_from_rows(rows)).rms_pa / true)
+    assert 0.85 < float(np.mean(ratios)) < 1.15, ratios

@@ -38,10 +38,16 @@ from solver.errors import InputError
 from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._fit import FitResult, cross_validate, fit, paired_cv
+from surrogate.calibration._fit import (
+    CrossValidation,
+    FitResult,
+    cross_validate,
+    fit,
+    paired_cv,
+)
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._model import AugmentedModel
-from surrogate.calibration._noise import noise_floor
+from surrogate.calibration._noise import noise_floor, pressure_floor
 from surrogate.calibration._residual import excess_limit, residual_summary
 from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._start import Baseline
@@ -114,11 +120,14 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
     traits = data_traits(obs, baseline.open_parameters)
     fits: dict[tuple[str, ...], FitResult] = {}
-    cvs: dict[tuple[str, ...], tuple[float, np.ndarray]] = {}
+    cvs: dict[tuple[str, ...], CrossValidation] = {}
+    noise = noise_floor(obs)
+    channel = pressure_channel(obs, responses, baseline, noise)
 
     def make(effects: tuple[str, ...]):
         chosen = tuple(EFFECTS[e] for e in effects)
-        return lambda o: AugmentedModel(o, responses, chosen, baseline.open_parameters)
+        return lambda o: AugmentedModel(o, responses, chosen, baseline.open_parameters,
+                                        channel["weight_deg_per_pa"])
 
     def get_fit(effects: tuple[str, ...]) -> FitResult:
         if effects not in fits:
@@ -126,16 +135,20 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             tick()
         return fits[effects]
 
-    def get_cv(effects: tuple[str, ...]) -> tuple[float, np.ndarray]:
+    def get_xv(effects: tuple[str, ...]) -> CrossValidation:
         if effects not in cvs:
             cvs[effects] = cross_validate(obs, make(effects), get_fit(effects), k)
             tick()
         return cvs[effects]
 
+    def get_cv(effects: tuple[str, ...]) -> tuple[float, np.ndarray]:
+        """Cross-validated angle error (deg) and the out-of-fold angle residuals."""
+        xv = get_xv(effects)
+        return xv.rmse_deg, xv.angle
+
     y = obs.angle_deg
     as_is = AugmentedModel(obs, responses, (), baseline.open_parameters)
     rmse_model = float(np.sqrt(np.mean((as_is.angles(as_is.layout.start) - y) ** 2)))
-    noise = noise_floor(obs)
     base = get_fit(())
     rmse_before, resid_before = get_cv(())
 
@@ -169,8 +182,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                 own_var(effects, backed))
 
     candidates, selectable = [], []
+    base_joint = get_xv(()).rmse_joint
     for effects in evaluated:
-        cand = _judge(effects, get_fit, get_cv, base, rmse_before, responses)
+        cand = _judge(effects, get_fit, get_xv, base, rmse_before, base_joint, responses,
+                      channel["weight_deg_per_pa"])
         cand["excused"] = False
         if cand["selectable"] or not cand["why_not"] or cand["unbacked"]:
             rest = leaves(effects, backed=not cand["unbacked"])
@@ -211,15 +226,15 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             f"{better['rmse_cv_deg']:.2f} vs {cand['rmse_cv_deg']:.2f} deg): the baseline's "
             "uncertainty does not excuse the worse fit")
         cand["outdone_by"] = better["effects"]
-    resid_chosen = get_cv(chosen)[1]
+    xv_chosen = get_xv(chosen)
     for cand in candidates:
-        if cand["rmse_cv_deg"] is not None:
-            cand["paired_z"] = _num(paired_cv(get_cv(tuple(cand["effects"]))[1],
-                                              resid_chosen, obs.curve))
+        if cand["rmse_cv_deg"] is not None:  # both channels, paired by curve
+            cand["paired_z"] = _num(paired_cv(get_xv(tuple(cand["effects"])).joint,
+                                              xv_chosen.joint, xv_chosen.curves(obs.curve)))
     alike = _indistinguishable(candidates, chosen)
     # a set the data prefer that fails only for want of the baseline's backing: reported
     # beside the selection (its CV advantage may be the baseline's own error there)
-    unbacked = _better_unbacked(candidates, chosen, rmse_before)
+    unbacked = _better_unbacked(candidates, chosen, base_joint)
     after = get_fit(chosen)
     rmse_after, resid_after = get_cv(chosen)
     nuisance = _nuisance(after)
@@ -249,6 +264,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "rmse_after_deg": rmse_after,
         "noise_floor_deg": _num(noise.rms_deg),
         "noise_floor_source": noise.source,
+        "pressure_channel": channel,
+        "rmse_pressure_before_pa": _pressure_rms(get_xv(()), channel),
+        "rmse_pressure_after_pa": _pressure_rms(get_xv(chosen), channel),
         "cross_validation": {"method": "grouped K-fold by curve", "folds": k,
                              "folds_requested": folds_requested},
         "selected_effects": list(chosen),
@@ -332,6 +350,35 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
     return obs
 
 
+def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline,
+                     noise) -> dict:
+    """Whether the gauge pressure at each reading's injected volume is a second observable
+    (docs/calibration.md, "Two observables"), and its weight: the angle's noise floor over
+    the pressure's (deg per Pa), so each channel counts by its own replicate scatter."""
+    why = None
+    floor = pressure_floor(obs) if obs.has_volume else None
+    if not obs.has_volume:
+        why = "needs time_s and flow_ul_s on every reading (the injected volume)"
+    elif baseline.open_parameters:
+        why = ("the baseline leaves its pressure scale open per family, so its pressure at "
+               "a volume is open too")
+    elif not responses.has_volumes():
+        why = "the baseline gives no injected volume with its answer"
+    elif floor is None or not math.isfinite(noise.rms_deg or math.nan):
+        why = "needs replicate curves for the pressure's and the angle's noise floors"
+    used = why is None
+    return {"used": used, "why_not": why,
+            "pressure_floor_pa": _num(floor.rms_pa) if floor is not None else None,
+            "weight_deg_per_pa": noise.rms_deg / floor.rms_pa if used else 0.0}
+
+
+def _pressure_rms(xv: CrossValidation, channel: dict) -> float | None:
+    """Cross-validated RMS error of the gauge pressure at the injected volume (Pa)."""
+    if xv.pressure is None or not channel["used"]:
+        return None
+    return _num(float(np.sqrt(np.nanmean(xv.pressure**2))) / channel["weight_deg_per_pa"])
+
+
 def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
     missing = [c for c in e.needs if (c == "time_s" and not traits.has_time)
                or (c == "flow_ul_s" and not traits.has_flow)]
@@ -387,10 +434,11 @@ def _at_reach(f: FitResult, responses: Responses) -> list[str]:
     return out
 
 
-def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
-           responses: Responses) -> dict:
+def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_joint: float,
+           responses: Responses, weight: float) -> dict:
     f = get_fit(effects)
-    cv, _ = get_cv(effects)
+    xv = get_xv(effects)
+    cv, cv_joint = xv.rmse_deg, xv.rmse_joint
     params = _params(f)
     plausible = all(p["plausible"] for p in params.values())
     values, sd, sd_b = f.values, f.sd(), f.sd_baseline()
@@ -430,8 +478,12 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
         reasons.append("held-out curves fall past the end of the baseline's range")
     elif not cv < rmse_before:
         reasons.append("cross-validated error not below the recalibrated baseline's")
+    elif not cv_joint < base_joint:
+        reasons.append("cross-validated error of angle and pressure by volume together not "
+                       "below the recalibrated baseline's: it moves the gauge pressure at the "
+                       "injected volume the wrong way")
     if len(effects) > 1:
-        alone = [(get_fit((m,)).bic, get_cv((m,))[0]) for m in effects]
+        alone = [(get_fit((m,)).bic, get_xv((m,)).rmse_joint) for m in effects]
         if f.bic >= min(b for b, _ in alone) + DELTA_BIC:
             reasons.append("a member does not earn its place: delta BIC against the better "
                            f"member alone {f.bic - min(b for b, _ in alone):.1f}")
@@ -441,6 +493,9 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
     return {"effect": "+".join(effects), "effects": list(effects),
             "kind": "+".join(sorted({EFFECTS[e].kind for e in effects})),
             "applicable": True, "identifiable": True, "rmse_cv_deg": cv,
+            "rmse_cv_joint": cv_joint,
+            "rmse_cv_pressure_pa": (_num(float(np.sqrt(np.nanmean(xv.pressure**2))) / weight)
+                                    if xv.pressure is not None else None),
             "delta_bic": float(delta_bic), "bic": float(f.bic), "params": params,
             "plausible": plausible, "significant": significant,
             "z": {n: _num(v) for n, v in z.items()}, "selectable": not reasons,
@@ -456,7 +511,7 @@ def _explains_better(cand: dict, candidates: list[dict]) -> dict | None:
     baseline's band at its fitted design excuses is not chosen over a better fit."""
     better = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
               and c["effects"] != cand["effects"] and c["bic"] < cand["bic"] + DELTA_BIC
-              and c["rmse_cv_deg"] < cand["rmse_cv_deg"]]
+              and c["rmse_cv_joint"] < cand["rmse_cv_joint"]]
     return min(better, key=lambda c: c["bic"]) if better else None
 
 
@@ -488,6 +543,7 @@ def _indistinguishable(candidates: list[dict], chosen: tuple[str, ...]) -> list[
                 or abs(c["paired_z"]) >= Z_ALIKE):
             continue
         out.append({"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"],
+                    "rmse_cv_pressure_pa": c["rmse_cv_pressure_pa"],
                     "paired_z": c["paired_z"], "delta_bic_vs_selected": None,
                     "backed": bool(c["selectable"]),
                     "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
@@ -502,14 +558,15 @@ def _indistinguishable(candidates: list[dict], chosen: tuple[str, ...]) -> list[
 
 
 def _better_unbacked(candidates: list[dict], chosen: tuple[str, ...],
-                     rmse_before: float) -> dict | None:
+                     base_joint: float) -> dict | None:
     """The best candidate that fails only because the baseline cannot back its size
     (its own uncertainty at the fitted design), when it beats ``chosen`` (or, with
-    nothing chosen, the baseline) in BIC by more than 6 and in cross-validated error."""
+    nothing chosen, the baseline) in BIC by more than 6 and in cross-validated error (both
+    channels)."""
     ref = next((c for c in candidates if tuple(c["effects"]) == chosen), None)
     bic_ref = ref["bic"] + DELTA_BIC if ref is not None else DELTA_BIC + 0.0
-    cv_ref = ref["rmse_cv_deg"] if ref is not None else rmse_before
-    better = [c for c in candidates if c.get("unbacked") and c["rmse_cv_deg"] < cv_ref
+    cv_ref = ref["rmse_cv_joint"] if ref is not None else base_joint
+    better = [c for c in candidates if c.get("unbacked") and c["rmse_cv_joint"] < cv_ref
               and (c["bic"] < bic_ref if ref is not None else c["delta_bic"] < DELTA_BIC)]
     if not better:
         return None

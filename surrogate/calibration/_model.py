@@ -5,6 +5,14 @@
     angle     = time effects (static along each curve's time; 4 substeps per interval)
     observed  = angle effects (angle)
 
+and, where the injected volume of every reading is known (time_s and flow_ul_s) and the
+baseline gives V(p) (the pressure-by-volume channel, ``gauge_pressures``):
+
+    gauge     = pressure effects' inverse (baseline p_chamber(design + physical effects, V))
+
+A gauge effect moves the second channel and leaves angle against volume alone; a camera
+effect the reverse; a physical change both, the FE's coupled way (docs/calibration.md).
+
 k_A,f and k_p,f (amplitude and pressure scale per family) exist only when the baseline
 leaves them open (the exponential and paper models: their per-family constants); the
 emulator leaves nothing open (its material constants are the stiffness effects).
@@ -17,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate.calibration._data import Observations
-from surrogate.calibration._response import Responses, design_key
+from surrogate.calibration._response import Responses, design_key, pressure_at_volume
 from surrogate.calibration.effects import Effect
 
 SUBSTEPS = 4
@@ -44,8 +52,12 @@ class AugmentedModel:
     """Evaluates angles at the rows of ``obs`` for parameter vectors of ``layout``."""
 
     def __init__(self, obs: Observations, responses: Responses, effects: tuple[Effect, ...],
-                 open_parameters: tuple[str, ...]) -> None:
+                 open_parameters: tuple[str, ...], pressure_weight: float = 0.0) -> None:
+        """``pressure_weight`` (deg per Pa): the pressure-by-volume channel's residuals
+        count as ``pressure_weight`` x (predicted - read gauge pressure) beside the angle's
+        (the ratio of the two noise floors); 0 leaves the channel out."""
         self.obs = obs
+        self.pressure_weight = float(pressure_weight)
         self.responses = responses
         self.effects = effects
         self.physical = tuple(e for e in effects if e.stage == "design")
@@ -81,6 +93,21 @@ class AugmentedModel:
         self.family_pos = np.array([fam_pos[f] for f in obs.family])
         if self.time:
             self._prepare_substeps()
+
+    def gauge_pressures(self, x: np.ndarray) -> np.ndarray:
+        """Predicted gauge reading (Pa) at every row's injected volume: the baseline's
+        chamber pressure at that volume for the changed design, through the pressure
+        effects' inverses (last applied first)."""
+        values = self.values(x)
+        o = self.obs
+        vol = self.responses.curves(self.physical,
+                                    [values[e.parameters[0].name] for e in self.physical],
+                                    volume=True)
+        p = pressure_at_volume(self.responses.p_grid, vol, self.design_index, o.volume_ul)
+        q = np.nan_to_num(o.flow_ul_s)
+        for e in reversed(self.pressure):
+            p = e.gauge_pressure(p, q, o.direction, values)
+        return p
 
     def values(self, x: np.ndarray) -> dict[str, float]:
         n = self.layout.n_open

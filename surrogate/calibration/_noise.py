@@ -155,3 +155,58 @@ def _within_curve(obs: Observations) -> NoiseFloor:
     if n == 0:
         return NoiseFloor(float("nan"), 0, "none", 0)
     return NoiseFloor(float(np.sqrt(sq / n)), n, "within-curve", 0)
+
+
+@dataclass(frozen=True)
+class PressureFloor:
+    """Replicate scatter of the gauge pressure at the same injected volume (Pa)."""
+
+    rms_pa: float
+    dof: int
+
+
+def pressure_floor(obs: Observations) -> PressureFloor | None:
+    """How far a new specimen's gauge reading scatters around its design's mean at the
+    same injected volume: replicates (one design at one flow rate) compared in the same
+    segment of their history at the same time since it began -- at one flow rate, the same
+    volume -- so the inlet's R Q (shared) is not scatter, while the specimen's own
+    stiffness is. floor^2 = sum (p - mean_others)^2 / (1 + 1/k) / N as for the angle.
+    None without injected volumes or replicates."""
+    if not obs.has_volume:
+        return None
+    sq, n_used = 0.0, 0
+    for g in np.unique(obs.group):
+        curves = np.unique(obs.curve[obs.group == g])
+        if curves.size < 2:
+            continue
+        cut = {}
+        for c in curves:
+            rows = np.flatnonzero(obs.curve == c)
+            seg = segments(obs.direction[rows])
+            cut[int(c)] = [(rows[seg == k], obs.direction[rows[seg == k]][0])
+                           for k in range(int(seg.max()) + 1)]
+        for c, parts in cut.items():
+            for k, (r, d) in enumerate(parts):
+                t = obs.time_s[r] - obs.time_s[r][0]
+                others = []
+                for c2, parts2 in cut.items():
+                    if c2 == c or k >= len(parts2) or parts2[k][1] != d:
+                        continue
+                    r2 = parts2[k][0]
+                    t2 = obs.time_s[r2] - obs.time_s[r2][0]
+                    others.append(np.interp(t, t2, obs.pressure_pa[r2], left=np.nan,
+                                            right=np.nan) if t2.size > 1 else
+                                  np.where(t == 0, obs.pressure_pa[r2][0], np.nan))
+                if not others:
+                    continue
+                o = np.array(others)
+                n_others = np.sum(np.isfinite(o), axis=0)
+                ok = n_others >= 1
+                if not np.any(ok):
+                    continue
+                diff = obs.pressure_pa[r][ok] - np.nanmean(o[:, ok], axis=0)
+                sq += float(np.sum(diff**2 / (1.0 + 1.0 / n_others[ok])))
+                n_used += int(ok.sum())
+    if n_used < MIN_READINGS or sq <= 0:
+        return None
+    return PressureFloor(float(np.sqrt(sq / n_used)), n_used)

@@ -73,6 +73,8 @@ class Responses:
         self.p_grid = np.linspace(0.0, p_max_pa, PRESSURE_POINTS)
         self.dp = self.p_grid[1] - self.p_grid[0]
         self._tables: dict[tuple[str, ...], tuple[list[np.ndarray], np.ndarray]] = {}
+        # the injected volume (ul) at the same pressures, where the predictor gives it
+        self._volumes: dict[tuple[str, ...], np.ndarray | None] = {}
         self._sd: np.ndarray | None = None
         self._reach: dict[str, Reach] = {}
         self.calls = 0
@@ -117,14 +119,17 @@ class Responses:
                                                  if s in why))
         return self._reach[effect.id]
 
-    def _predict(self, design, with_sd: bool = False):
+    def _predict(self, design, with_sd: bool = False, with_volume: bool = False):
         self.calls += 1
         nan = np.full(self.p_grid.size, np.nan)
         try:
             out = self.predictor.predict(design, self.p_grid, level=BAND_LEVEL)
         except InputError:
-            return (nan, nan) if with_sd else nan
+            return (nan, nan) if with_sd or with_volume else nan
         angle = np.asarray(out.angle_deg, dtype=float)
+        if with_volume:
+            v = getattr(out, "volume_ul", None)
+            return angle, (None if v is None else np.asarray(v, dtype=float))
         if not with_sd:
             return angle
         half = 0.5 * (np.asarray(out.upper_deg, float) - np.asarray(out.lower_deg, float))
@@ -156,14 +161,25 @@ class Responses:
                      for e in effects]
             shape = (len(self.keys),) + tuple(n.size for n in nodes) + (self.p_grid.size,)
             values = np.empty(shape)
+            volumes: np.ndarray | None = np.empty(shape)
             for di, k in enumerate(self.keys):
                 for idx in np.ndindex(*shape[1:-1]):
                     d = self.designs[k]
                     for e, n, j in zip(effects, nodes, idx, strict=True):
                         d = e.design(d, float(n[j]))
-                    values[(di,) + idx] = self._predict(d)
+                    values[(di,) + idx], v = self._predict(d, with_volume=True)
+                    if v is None:
+                        volumes = None
+                    elif volumes is not None:
+                        volumes[(di,) + idx] = v
             self._tables[key] = (nodes, values)
+            self._volumes[key] = volumes
         return self._tables[key]
+
+    def has_volumes(self) -> bool:
+        """Does the predictor give the injected volume with its answer (the emulator)?"""
+        self.table(())
+        return self._volumes[()] is not None
 
     def responsive(self, effect: Effect) -> bool:
         """Does the predictor's answer change with this physical effect at all?"""
@@ -176,11 +192,17 @@ class Responses:
                 return True
         return False
 
-    def curves(self, effects: tuple[Effect, ...], thetas: list[float]) -> np.ndarray:
-        """(n_designs, pressures) at the effects' values ``thetas`` (interpolated)."""
-        if not effects:
-            return self.table(())[1]
+    def curves(self, effects: tuple[Effect, ...], thetas: list[float],
+               volume: bool = False) -> np.ndarray:
+        """(n_designs, pressures) at the effects' values ``thetas`` (interpolated): the
+        angle, or with ``volume`` the injected volume (ul) at each pressure."""
         nodes, values = self.table(effects)
+        if volume:
+            values = self._volumes[tuple(e.id for e in effects)]
+            if values is None:
+                raise ValueError("the predictor gives no injected volumes")
+        if not effects:
+            return values
         out = values
         for axis_nodes, theta in zip(nodes, thetas, strict=True):
             idx, w = lagrange_weights(axis_nodes, theta)
@@ -205,6 +227,25 @@ class Responses:
         b = curves[design_index, i0 + 1]
         out = a + frac * (b - a)
         return np.where(inside | (f <= self.p_grid.size - 1), out, np.nan)
+
+
+def pressure_at_volume(p_grid: np.ndarray, volume_curves: np.ndarray,
+                       design_index: np.ndarray, v_ul: np.ndarray) -> np.ndarray:
+    """Chamber pressure (Pa) at injected volume ``v_ul`` of each row's design: V(p)
+    tabulated on ``p_grid`` inverted along its rising part (loading under pressure
+    control; linear between grid points); past its last finite volume NaN."""
+    out = np.full(v_ul.size, np.nan)
+    for d in np.unique(design_index):
+        rows = design_index == d
+        v = volume_curves[d]
+        ok = np.isfinite(v)
+        if ok.sum() < 2:
+            continue
+        n = int(np.argmin(ok)) if not ok.all() else v.size  # the finite prefix
+        vv = np.maximum.accumulate(v[:n])
+        rising = np.concatenate([[True], np.diff(vv) > 0])
+        out[rows] = np.interp(v_ul[rows], vv[rising], p_grid[:n][rising], right=np.nan)
+    return out
 
 
 def linear_weights(nodes: np.ndarray, x: float) -> tuple[np.ndarray, np.ndarray]:
