@@ -37,7 +37,7 @@ def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray | None:
         return None
     values = f.values
     table = responses.sd_at(m.physical, [values[e.parameters[0].name] for e in m.physical])
-    sd = responses.lookup(table, m.design_index, np.clip(m.obs.pressure_pa, 0.0, None))
+    sd = responses.lookup(table, m.design_index, m.reading_pressure(f.x))
     return np.nan_to_num(sd, nan=0.0)
 
 

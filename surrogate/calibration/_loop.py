@@ -47,9 +47,9 @@ from surrogate.calibration._fit import (
 )
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._model import AugmentedModel
-from surrogate.calibration._noise import noise_floor, pressure_floor
+from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
 from surrogate.calibration._residual import excess_limit, residual_summary
-from surrogate.calibration._response import Responses, design_key
+from surrogate.calibration._response import Responses, design_key, pressure_at_volume
 from surrogate.calibration._start import Baseline
 from surrogate.calibration._structure import structure_test
 from surrogate.calibration.effects import CATALOGUE, EFFECTS, DataTraits, Effect
@@ -121,8 +121,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     traits = data_traits(obs, baseline.open_parameters)
     fits: dict[tuple[str, ...], FitResult] = {}
     cvs: dict[tuple[str, ...], CrossValidation] = {}
-    noise = noise_floor(obs)
-    channel = pressure_channel(obs, responses, baseline, noise)
+    channel, noise = pressure_channel(obs, responses, baseline)
+    if channel["used"]:
+        obs = _within_volume_range(obs, responses, warnings)
 
     def make(effects: tuple[str, ...]):
         chosen = tuple(EFFECTS[e] for e in effects)
@@ -164,8 +165,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     pairs.sort(key=lambda p: get_fit(p).bic)
     evaluated = [(e,) for e in singles] + pairs[:PAIRS_CROSS_VALIDATED]
 
+    by_volume = AugmentedModel(obs, responses, (), baseline.open_parameters,
+                               channel["weight_deg_per_pa"])
     sd_rows = responses.lookup(responses.nominal_sd(), as_is.design_index,
-                               np.clip(obs.pressure_pa, 0.0, None))
+                               by_volume.reading_pressure(np.zeros(0)))
     baseline_var = float(np.nanmean(sd_rows**2)) if np.any(np.isfinite(sd_rows)) else 0.0
 
     def own_var(effects: tuple[str, ...], backed: bool = True) -> float:
@@ -264,6 +267,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "rmse_after_deg": rmse_after,
         "noise_floor_deg": _num(noise.rms_deg),
         "noise_floor_source": noise.source,
+        "noise_floor_basis": channel["angle_floor_basis"],
         "pressure_channel": channel,
         "rmse_pressure_before_pa": _pressure_rms(get_xv(()), channel),
         "rmse_pressure_after_pa": _pressure_rms(get_xv(chosen), channel),
@@ -350,13 +354,17 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
     return obs
 
 
-def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline,
-                     noise) -> dict:
-    """Whether the gauge pressure at each reading's injected volume is a second observable
-    (docs/calibration.md, "Two observables"), and its weight: the angle's noise floor over
-    the pressure's (deg per Pa), so each channel counts by its own replicate scatter."""
+def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline
+                     ) -> tuple[dict, NoiseFloor]:
+    """Whether the data are read as a syringe pump's two observables (docs/calibration.md,
+    "Two observables"): angle and gauge pressure at each reading's injected volume; with
+    the angle's noise floor in the same terms. The weight of the gauge residual is the
+    angle's floor over the pressure's (deg per Pa), so each counts by its own replicate
+    scatter. Otherwise (``used`` false, ``why_not``): the angle at the gauge pressure, its
+    floor at the same pressure."""
     why = None
-    floor = pressure_floor(obs) if obs.has_volume else None
+    floor_a = volume_floor(obs, obs.angle_deg) if obs.has_volume else None
+    floor_p = volume_floor(obs, obs.pressure_pa) if obs.has_volume else None
     if not obs.has_volume:
         why = "needs time_s and flow_ul_s on every reading (the injected volume)"
     elif baseline.open_parameters:
@@ -364,12 +372,40 @@ def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline
                "a volume is open too")
     elif not responses.has_volumes():
         why = "the baseline gives no injected volume with its answer"
-    elif floor is None or not math.isfinite(noise.rms_deg or math.nan):
+    elif floor_a is None or floor_p is None:
         why = "needs replicate curves for the pressure's and the angle's noise floors"
-    used = why is None
-    return {"used": used, "why_not": why,
-            "pressure_floor_pa": _num(floor.rms_pa) if floor is not None else None,
-            "weight_deg_per_pa": noise.rms_deg / floor.rms_pa if used else 0.0}
+    if why is not None:
+        return ({"used": False, "why_not": why, "pressure_floor_pa": None,
+                 "weight_deg_per_pa": 0.0, "angle_floor_basis": "gauge pressure"},
+                noise_floor(obs))
+    return ({"used": True, "why_not": None, "pressure_floor_pa": floor_p.rms_deg,
+             "weight_deg_per_pa": floor_a.rms_deg / floor_p.rms_deg,
+             "angle_floor_basis": "injected volume"}, floor_a)
+
+
+def _within_volume_range(obs: Observations, responses: Responses, warnings: list[str]
+                         ) -> Observations:
+    """Drop (with a warning) readings whose injected volume lies past the end of the
+    baseline's range for their nominal design."""
+    index = np.array([responses.index[design_key(obs.design(c))]
+                      for c in range(obs.n_curves)])[obs.curve]
+    p = pressure_at_volume(responses.p_grid, responses.curves((), [], volume=True), index,
+                           obs.volume_ul)
+    ok = np.isfinite(responses.lookup(responses.table(())[1], index, np.nan_to_num(p, nan=-1))
+                     ) & np.isfinite(p)
+    if np.all(ok):
+        return obs
+    warnings.append(f"time_s: {int((~ok).sum())} readings' injected volumes lie past the end "
+                    "of the baseline's range for their design (the FE stopped there) and "
+                    "are not used")
+    keep_curves = [c for c in range(obs.n_curves) if np.sum(ok[obs.curve == c]) >= 4]
+    out = obs.rows(ok & np.isin(obs.curve, keep_curves))
+    if out.n_curves < MIN_CURVES:
+        raise DataError("time_s", f"only {out.n_curves} curve keeps 4 readings within the "
+                        "baseline's range of injected volume", None,
+                        "at least 2 curves with 4 readings each below the end of the FE's "
+                        "range")
+    return out
 
 
 def _pressure_rms(xv: CrossValidation, channel: dict) -> float | None:
@@ -476,7 +512,8 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
         reasons.append(f"delta BIC {delta_bic:.1f} is not below {DELTA_BIC:g}")
     if not math.isfinite(cv):
         reasons.append("held-out curves fall past the end of the baseline's range")
-    elif not cv < rmse_before:
+    elif not (cv < rmse_before or (weight > 0.0 and cv <= rmse_before * (1 + 1e-9))):
+        # by volume a gauge effect leaves the angle channel as it is: not worse suffices
         reasons.append("cross-validated error not below the recalibrated baseline's")
     elif not cv_joint < base_joint:
         reasons.append("cross-validated error of angle and pressure by volume together not "
@@ -631,7 +668,10 @@ def _family_constants(obs: Observations, baseline: Baseline, base: FitResult,
 def interpret(report: dict, left: dict) -> str:
     """A few sentences a lab can act on."""
     noise = report["noise_floor_deg"]
+    basis = (" at the same injected volume (angle and gauge pressure read against the "
+             "pump's volume)" if report["pressure_channel"]["used"] else "")
     floor = (f"against a noise floor of {noise:.2f} deg from {report['noise_floor_source']}"
+             f"{basis}"
              if noise is not None else "with no noise floor to compare against (it needs "
              "replicate curves of one design)")
     b = report["baseline"]

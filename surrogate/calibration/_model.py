@@ -5,13 +5,16 @@
     angle     = time effects (static along each curve's time; 4 substeps per interval)
     observed  = angle effects (angle)
 
-and, where the injected volume of every reading is known (time_s and flow_ul_s) and the
-baseline gives V(p) (the pressure-by-volume channel, ``gauge_pressures``):
+or, where the injected volume V of every reading is known (time_s and flow_ul_s) and the
+baseline gives V(p) (``pressure_weight`` > 0: the two observables of a syringe pump):
 
-    gauge     = pressure effects' inverse (baseline p_chamber(design + physical effects, V))
+    p_chamber = baseline p_chamber(design + physical effects, V)
+    static    = baseline(design + physical effects, p_chamber)     angle by volume
+    angle     = time effects;  observed = angle effects            as above
+    gauge     = pressure effects' inverses (p_chamber)             ``gauge_pressures``
 
-A gauge effect moves the second channel and leaves angle against volume alone; a camera
-effect the reverse; a physical change both, the FE's coupled way (docs/calibration.md).
+A gauge effect moves only the gauge against volume; a camera effect only the angle
+against volume; a physical change both, the FE's coupled way (docs/calibration.md).
 
 k_A,f and k_p,f (amplitude and pressure scale per family) exist only when the baseline
 leaves them open (the exponential and paper models: their per-family constants); the
@@ -58,6 +61,7 @@ class AugmentedModel:
         (the ratio of the two noise floors); 0 leaves the channel out."""
         self.obs = obs
         self.pressure_weight = float(pressure_weight)
+        self.by_volume = self.pressure_weight > 0.0
         self.responses = responses
         self.effects = effects
         self.physical = tuple(e for e in effects if e.stage == "design")
@@ -100,14 +104,25 @@ class AugmentedModel:
         effects' inverses (last applied first)."""
         values = self.values(x)
         o = self.obs
-        vol = self.responses.curves(self.physical,
-                                    [values[e.parameters[0].name] for e in self.physical],
-                                    volume=True)
-        p = pressure_at_volume(self.responses.p_grid, vol, self.design_index, o.volume_ul)
+        p = self._chamber_at_volume(values, self.design_index, o.volume_ul)
         q = np.nan_to_num(o.flow_ul_s)
         for e in reversed(self.pressure):
             p = e.gauge_pressure(p, q, o.direction, values)
         return p
+
+    def _chamber_at_volume(self, values, design_index, v_ul):
+        vol = self.responses.curves(self.physical,
+                                    [values[e.parameters[0].name] for e in self.physical],
+                                    volume=True)
+        return pressure_at_volume(self.responses.p_grid, vol, design_index, v_ul)
+
+    def reading_pressure(self, x: np.ndarray) -> np.ndarray:
+        """The chamber pressure (Pa) at which each row's angle is read off the baseline:
+        the gauge's, or by volume the baseline's at the injected volume."""
+        if self.by_volume:
+            return self._chamber_at_volume(self.values(x), self.design_index,
+                                           self.obs.volume_ul)
+        return np.clip(self.obs.pressure_pa, 0.0, None)
 
     def values(self, x: np.ndarray) -> dict[str, float]:
         n = self.layout.n_open
@@ -126,10 +141,13 @@ class AugmentedModel:
                 i += 1
         return k_a[self.family_pos], k_p[self.family_pos]
 
-    def _static(self, values, design_index, p_gauge, flow, direction, k_a, k_p):
-        p = p_gauge
-        for e in self.pressure:
-            p = e.chamber_pressure(p, flow, direction, values)
+    def _static(self, values, design_index, p_gauge, flow, direction, k_a, k_p, v_ul):
+        if self.by_volume:  # the gauge's effects do not move the actuator
+            p = self._chamber_at_volume(values, design_index, v_ul)
+        else:
+            p = p_gauge
+            for e in self.pressure:
+                p = e.chamber_pressure(p, flow, direction, values)
         curves = self.responses.curves(self.physical,
                                        [values[e.parameters[0].name] for e in self.physical])
         return k_a * self.responses.lookup(curves, design_index, p / k_p)
@@ -143,11 +161,11 @@ class AugmentedModel:
         o = self.obs
         if not self.time:
             out = self._static(values, self.design_index, o.pressure_pa, o.flow_ul_s,
-                               o.direction, k_a, k_p)
+                               o.direction, k_a, k_p, o.volume_ul)
         else:
             s = self._sub
             static = self._static(values, self.design_index[s["rows"]], s["p"], s["q"],
-                                  s["d"], k_a[s["rows"]], k_p[s["rows"]])
+                                  s["d"], k_a[s["rows"]], k_p[s["rows"]], s["v"])
             grid = np.full(s["shape"], np.nan)
             grid[s["valid"]] = static
             tgrid = np.zeros(s["shape"])
@@ -161,14 +179,15 @@ class AugmentedModel:
         return out
 
     def _prepare_substeps(self) -> None:
-        """Pressure linear in time between readings, SUBSTEPS per interval; the lag is
-        integrated exactly for a static angle linear between substeps."""
+        """Pressure (and injected volume) linear in time between readings, SUBSTEPS per
+        interval; the lag is integrated exactly for a static angle linear between
+        substeps."""
         o = self.obs
         order = o.padded_order()
         n_curves, m = order.shape
         width = (m - 1) * SUBSTEPS + 1
         valid = np.zeros((n_curves, width), bool)
-        rows, p, q, d, t = [], [], [], [], []
+        rows, p, q, d, t, v = [], [], [], [], [], []
         sample_rows, sample_pos = [], []
         for c in range(n_curves):
             idx = order[c][order[c] >= 0]
@@ -184,12 +203,13 @@ class AugmentedModel:
                     rows.append(r)
                     p.append(o.pressure_pa[prev] + w * (o.pressure_pa[r] - o.pressure_pa[prev]))
                     t.append(o.time_s[prev] + w * (o.time_s[r] - o.time_s[prev]))
+                    v.append(o.volume_ul[prev] + w * (o.volume_ul[r] - o.volume_ul[prev]))
                     q.append(o.flow_ul_s[r])
                     d.append(o.direction[r])
                 sample_rows.append(r)
                 sample_pos.append((c, 0 if j == 0 else j * SUBSTEPS))
         # rows of a curve fill its first positions contiguously
         self._sub = {"rows": np.array(rows), "p": np.array(p), "q": np.nan_to_num(np.array(q)),
-                     "d": np.array(d), "t": np.array(t), "valid": valid,
+                     "d": np.array(d), "t": np.array(t), "v": np.array(v), "valid": valid,
                      "shape": (n_curves, width), "sample_rows": np.array(sample_rows),
                      "sample_pos": tuple(np.array(sample_pos).T)}

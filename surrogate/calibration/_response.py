@@ -217,8 +217,9 @@ class Responses:
     def lookup(self, curves: np.ndarray, design_index: np.ndarray, p_pa: np.ndarray
                ) -> np.ndarray:
         """Angle at chamber pressure ``p_pa`` of each row's design (linear in p; below 0
-        the angle at 0; past the grid NaN)."""
-        f = np.clip(p_pa, 0.0, None) / self.dp
+        the angle at 0; past the grid, or at a NaN pressure, NaN)."""
+        known = np.isfinite(p_pa)
+        f = np.where(known, np.clip(p_pa, 0.0, None), 0.0) / self.dp
         i0 = np.floor(f).astype(int)
         inside = i0 < self.p_grid.size - 1
         i0 = np.where(inside, i0, self.p_grid.size - 2)
@@ -226,7 +227,7 @@ class Responses:
         a = curves[design_index, i0]
         b = curves[design_index, i0 + 1]
         out = a + frac * (b - a)
-        return np.where(inside | (f <= self.p_grid.size - 1), out, np.nan)
+        return np.where((inside | (f <= self.p_grid.size - 1)) & known, out, np.nan)
 
 
 def pressure_at_volume(p_grid: np.ndarray, volume_curves: np.ndarray,
