@@ -49,7 +49,7 @@ from surrogate.calibration._history import history_traits
 from surrogate.calibration._model import AugmentedModel
 from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
 from surrogate.calibration._residual import excess_limit, residual_summary
-from surrogate.calibration._response import Responses, design_key, pressure_at_volume
+from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._start import Baseline
 from surrogate.calibration._structure import structure_test
 from surrogate.calibration.effects import CATALOGUE, EFFECTS, DataTraits, Effect
@@ -115,15 +115,18 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         d = obs.design(c)
         designs.setdefault(design_key(d), d)
     p_max = 1.6 * float(np.max(np.abs(obs.pressure_pa))) + 200.0
-    responses = Responses(baseline.predictor, designs, p_max)
-    obs = _usable_rows(obs, responses, baseline, warnings)
+    v_max = 1.25 * float(np.max(obs.volume_ul)) + 1.0 if obs.has_volume else None
+    responses = Responses(baseline.predictor, designs, p_max, v_max)
+    channel, noise = pressure_channel(obs, responses, baseline)
+    # by volume a reading is past the baseline's range by its volume, not by its gauge
+    # pressure (which a specimen's scatter or a gauge effect moves: no selection by it)
+    obs = _usable_rows(obs, responses, baseline, warnings, by_gauge=not channel["used"])
+    if channel["used"]:
+        obs = _within_volume_range(obs, responses, warnings)
 
     traits = data_traits(obs, baseline.open_parameters)
     fits: dict[tuple[str, ...], FitResult] = {}
     cvs: dict[tuple[str, ...], CrossValidation] = {}
-    channel, noise = pressure_channel(obs, responses, baseline)
-    if channel["used"]:
-        obs = _within_volume_range(obs, responses, warnings)
 
     def make(effects: tuple[str, ...]):
         chosen = tuple(EFFECTS[e] for e in effects)
@@ -305,10 +308,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
 
 def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
-                 warnings: list[str]) -> Observations:
+                 warnings: list[str], by_gauge: bool = True) -> Observations:
     """Refuse a design the baseline cannot answer and pressures where it overflows; drop
-    (with a warning) readings past the end of its range (the FE stopped there: no number
-    to compare with)."""
+    (with a warning) readings past the end of its range at their gauge pressure (the FE
+    stopped there: no number to compare with) when ``by_gauge``."""
     pred = np.empty(obs.n)
     for c in range(obs.n_curves):
         rows = np.flatnonzero(obs.curve == c)
@@ -339,7 +342,7 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                         "(its exponential overflows)", None,
                         "pressures where the baseline is finite"
                         + (f" (up to {p_ok.max():.0f} Pa in this curve)" if p_ok.size else ""))
-    ok = np.isfinite(pred)
+    ok = np.isfinite(pred) | (not by_gauge)
     if not np.all(ok):
         warnings.append(f"pressure_pa: {int((~ok).sum())} readings lie past the end of the "
                         f"baseline's range for their design (the FE stopped there) and are "
@@ -389,10 +392,10 @@ def _within_volume_range(obs: Observations, responses: Responses, warnings: list
     baseline's range for their nominal design."""
     index = np.array([responses.index[design_key(obs.design(c))]
                       for c in range(obs.n_curves)])[obs.curve]
-    p = pressure_at_volume(responses.p_grid, responses.curves((), [], volume=True), index,
-                           obs.volume_ul)
-    ok = np.isfinite(responses.lookup(responses.table(())[1], index, np.nan_to_num(p, nan=-1))
-                     ) & np.isfinite(p)
+    ok = np.ones(obs.n, bool)
+    for what in ("angle_v", "pressure_v"):
+        ok &= np.isfinite(responses.lookup_volume(responses.curves((), [], what), index,
+                                                  obs.volume_ul))
     if np.all(ok):
         return obs
     warnings.append(f"time_s: {int((~ok).sum())} readings' injected volumes lie past the end "

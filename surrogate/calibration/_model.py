@@ -8,8 +8,8 @@
 or, where the injected volume V of every reading is known (time_s and flow_ul_s) and the
 baseline gives V(p) (``pressure_weight`` > 0: the two observables of a syringe pump):
 
+    static    = baseline angle(design + physical effects, V)        its answer by volume
     p_chamber = baseline p_chamber(design + physical effects, V)
-    static    = baseline(design + physical effects, p_chamber)     angle by volume
     angle     = time effects;  observed = angle effects            as above
     gauge     = pressure effects' inverses (p_chamber)             ``gauge_pressures``
 
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate.calibration._data import Observations
-from surrogate.calibration._response import Responses, design_key, pressure_at_volume
+from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration.effects import Effect
 
 SUBSTEPS = 4
@@ -110,11 +110,16 @@ class AugmentedModel:
             p = e.gauge_pressure(p, q, o.direction, values)
         return p
 
+    def _by_volume(self, what, values, design_index, v_ul):
+        """The baseline's angle ("angle_v") or chamber pressure ("pressure_v") at injected
+        volume ``v_ul`` of the changed design (its table by volume, interpolated)."""
+        table = self.responses.curves(self.physical,
+                                      [values[e.parameters[0].name] for e in self.physical],
+                                      what=what)
+        return self.responses.lookup_volume(table, design_index, v_ul)
+
     def _chamber_at_volume(self, values, design_index, v_ul):
-        vol = self.responses.curves(self.physical,
-                                    [values[e.parameters[0].name] for e in self.physical],
-                                    volume=True)
-        return pressure_at_volume(self.responses.p_grid, vol, design_index, v_ul)
+        return self._by_volume("pressure_v", values, design_index, v_ul)
 
     def reading_pressure(self, x: np.ndarray) -> np.ndarray:
         """The chamber pressure (Pa) at which each row's angle is read off the baseline:
@@ -143,11 +148,10 @@ class AugmentedModel:
 
     def _static(self, values, design_index, p_gauge, flow, direction, k_a, k_p, v_ul):
         if self.by_volume:  # the gauge's effects do not move the actuator
-            p = self._chamber_at_volume(values, design_index, v_ul)
-        else:
-            p = p_gauge
-            for e in self.pressure:
-                p = e.chamber_pressure(p, flow, direction, values)
+            return k_a * self._by_volume("angle_v", values, design_index, v_ul)
+        p = p_gauge
+        for e in self.pressure:
+            p = e.chamber_pressure(p, flow, direction, values)
         curves = self.responses.curves(self.physical,
                                        [values[e.parameters[0].name] for e in self.physical])
         return k_a * self.responses.lookup(curves, design_index, p / k_p)
