@@ -210,8 +210,11 @@ def cross_validate(obs: Observations, make: Callable[[Observations], AugmentedMo
         resid[rows] = m_test.angles(x) - test.angle_deg
         if resid_p is not None:
             resid_p[rows] = pressure_residual(m_test, x)
-    clean = (lambda r: None if r is None else np.where(np.isfinite(r), r, np.nan))
-    return CrossValidation(clean(resid), clean(resid_p))
+    return CrossValidation(_finite_or_nan(resid), _finite_or_nan(resid_p))
+
+
+def _finite_or_nan(r: np.ndarray | None) -> np.ndarray | None:
+    return None if r is None else np.where(np.isfinite(r), r, np.nan)
 
 
 def _transfer(f: FitResult, target: AugmentedModel) -> np.ndarray:

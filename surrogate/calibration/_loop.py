@@ -557,12 +557,13 @@ def _explains_better(cand: dict, candidates: list[dict]) -> dict | None:
 
 def _closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:
     """With nothing selected and structure left: the plausible set that predicts unseen
-    curves best (below the baseline's error), with why it was not selected."""
+    curves best (angle below the baseline's error; the best of both channels), with why
+    it was not selected."""
     ok = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
           and c["rmse_cv_deg"] < rmse_before]
     if not ok:
         return None
-    c = min(ok, key=lambda c: c["rmse_cv_deg"])
+    c = min(ok, key=lambda c: c["rmse_cv_joint"])  # both channels (by volume)
     return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"], "why_not": c["why_not"],
             "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
                        for n, p in c["params"].items()}}
