@@ -10,7 +10,9 @@ candidate set E (one effect, or a pair) is selectable when
 3. every member is significant: its tested parameter is more than 3 standard errors from
    the value that switches it off (clustered by curve);
 4. BIC(E) < BIC(recalibrated baseline) - 6;
-5. its error cross-validated by curve is below the recalibrated baseline's;
+5. its error cross-validated by curve is below the recalibrated baseline's (read by
+   injected volume, ``pressure_channel``: angle and gauge pressure together, the angle's
+   not above it);
 6. (pairs) each member earns its place: BIC(pair) < BIC(each member alone) - 6 and the
    pair's cross-validated error is below each member's alone;
 7. it explains the data: what replicates still share after it (_residual.py) is within
