@@ -60,6 +60,19 @@ def test_the_null_value_switches_a_transform_off(effect):
         np.testing.assert_allclose(effect.lag(a, t, np.ones_like(a, bool), values), a)
 
 
+@pytest.mark.parametrize("effect", [e for e in CATALOGUE if e.stage == "pressure"],
+                         ids=lambda e: e.id)
+def test_a_pressure_effects_gauge_reading_inverts_its_chamber_pressure(effect):
+    # the pressure-by-volume channel predicts the gauge from the chamber pressure: the
+    # forward transform must undo the fit's own, at every flow direction, and move off null
+    values = {p.name: p.plausible[1] for p in effect.parameters}
+    p = np.array([0.0, 400.0, 1500.0])
+    q, d = np.full(3, 2.5), np.array([1.0, 0.0, -1.0])
+    gauge = effect.gauge_pressure(p, q, d, values)
+    np.testing.assert_allclose(effect.chamber_pressure(gauge, q, d, values), p, atol=1e-9)
+    assert not np.allclose(gauge[[0, 2]], p[[0, 2]])
+
+
 def test_physical_effects_change_the_design_the_baseline_is_asked_for():
     d = Design(L_mm=7.1, t_mm=0.75)
     m = EFFECTS["membrane_stiffness"].design(d, 1.3)

@@ -37,7 +37,7 @@ def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray | None:
         return None
     values = f.values
     table = responses.sd_at(m.physical, [values[e.parameters[0].name] for e in m.physical])
-    sd = responses.lookup(table, m.design_index, np.clip(m.obs.pressure_pa, 0.0, None))
+    sd = responses.lookup(table, m.design_index, m.reading_pressure(f.x))
     return np.nan_to_num(sd, nan=0.0)
 
 
@@ -46,7 +46,11 @@ def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
     s = baseline_sd_rows(f, responses)
     if s is None or f.jac is None or not f.k:
         return f
-    cov = baseline_covariance(f.jac, s, f.model.design_index)
+    design = f.model.design_index
+    if f.jac.shape[0] > s.size:  # the pressure channel: no band for V(p) (0 there)
+        s = np.concatenate([s, np.zeros(f.jac.shape[0] - s.size)])
+        design = np.concatenate([design, design])
+    cov = baseline_covariance(f.jac, s, design)
     return replace(f, cov=f.cov + cov, baseline_shift=np.sqrt(np.diag(cov)),
                    baseline_sd_deg=float(np.sqrt(np.mean(s**2))))
 

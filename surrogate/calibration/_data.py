@@ -20,7 +20,7 @@ import numpy as np
 
 from solver.materials import MATERIALS
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._history import directions
+from surrogate.calibration._history import directions, injected_volume_ul
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
             "pressure_pa", "angle_deg")
@@ -64,11 +64,22 @@ class Observations:
     sha256: str
     direction: np.ndarray = None  # type: ignore[assignment]
     warnings: tuple[str, ...] = ()
+    #: the pump's injected volume at each reading (ul; NaN without time_s and flow_ul_s),
+    #: from the whole history of each curve (_history.injected_volume_ul)
+    volume_ul: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if self.direction is None:
             object.__setattr__(self, "direction",
                                directions(self.curve, self.pressure_pa, self.angle_deg))
+        if self.volume_ul is None:
+            object.__setattr__(self, "volume_ul", injected_volume_ul(
+                self.curve, self.time_s, self.flow_ul_s, self.direction))
+
+    @property
+    def has_volume(self) -> bool:
+        """Every reading's injected volume is known (time_s and flow_ul_s)."""
+        return bool(self.n and np.all(np.isfinite(self.volume_ul)))
 
     @property
     def n(self) -> int:
@@ -123,7 +134,7 @@ class Observations:
             self.family[keep], group, self.L_mm[keep], self.t_mm[keep],
             self.pressure_pa[keep], self.angle_deg[keep], self.time_s[keep],
             self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
-            self.direction[keep], self.warnings)
+            self.direction[keep], self.warnings, self.volume_ul[keep])
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""

@@ -3,6 +3,10 @@ cross-validation by curve.
 
 Standard errors are the sandwich estimator clustered by curve (specimen-to-specimen
 scatter is shared along a curve, so it counts in full); BIC = n ln(SSE/n) + k ln n.
+With the pressure-by-volume channel (``AugmentedModel.pressure_weight`` > 0) the
+residuals are the angles' and, beside them, the gauge pressures' at the injected volume
+times the weight (deg per Pa: the ratio of the two noise floors); SSE, n, BIC and the
+clustering count both, and ``residual`` stays the angles' (the structure tests').
 """
 
 from __future__ import annotations
@@ -38,6 +42,8 @@ class FitResult:
     #: sd, RMS over the readings
     baseline_shift: np.ndarray | None = field(default=None, repr=False)
     baseline_sd_deg: float | None = None
+    #: the pressure channel's weighted residual (deg-equivalent), None without it
+    residual_pressure: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def k(self) -> int:
@@ -88,29 +94,51 @@ class FitResult:
         return float(1.0 / np.sqrt(precision[0, 0])) if precision[0, 0] > 0 else np.inf
 
 
+def _capped(r: np.ndarray) -> np.ndarray:
+    return np.clip(np.nan_to_num(r, nan=R_CAP_DEG), -R_CAP_DEG, R_CAP_DEG)
+
+
+def pressure_residual(model: AugmentedModel, x: np.ndarray) -> np.ndarray | None:
+    """The pressure channel's residual at every row, weighted (deg-equivalent); None
+    without the channel."""
+    if model.pressure_weight <= 0.0:
+        return None
+    return model.pressure_weight * (model.gauge_pressures(x) - model.obs.pressure_pa)
+
+
 def _residual_fn(model: AugmentedModel) -> Callable[[np.ndarray], np.ndarray]:
     y = model.obs.angle_deg
 
     def residual(x: np.ndarray) -> np.ndarray:
         r = model.angles(x) - y
-        return np.clip(np.nan_to_num(r, nan=R_CAP_DEG), -R_CAP_DEG, R_CAP_DEG)
+        rp = pressure_residual(model, x)
+        return _capped(r if rp is None else np.concatenate([r, rp]))
 
     return residual
+
+
+def channel_curves(model: AugmentedModel) -> np.ndarray:
+    """The curve of every residual (the pressure channel's rows repeat the angles')."""
+    c = model.obs.curve
+    return c if model.pressure_weight <= 0.0 else np.concatenate([c, c])
 
 
 def fit(model: AugmentedModel, x0: np.ndarray | None = None) -> FitResult:
     lay = model.layout
     residual = _residual_fn(model)
+    n = model.obs.n
     if lay.k == 0:
         r = residual(np.zeros(0))
-        return FitResult(model, np.zeros(0), float(r @ r), r.size, np.zeros((0, 0)), True, r)
+        return FitResult(model, np.zeros(0), float(r @ r), r.size, np.zeros((0, 0)), True,
+                         r[:n], residual_pressure=r[n:] if r.size > n else None)
     start = lay.start if x0 is None else x0
     start = np.clip(start, lay.lower, lay.upper)
     res = least_squares(residual, start, bounds=(lay.lower, lay.upper), x_scale="jac",
                         method="trf", diff_step=1e-4, max_nfev=60 * max(lay.k, 1))
     r = res.fun
-    cov = cluster_covariance(res.jac, r, model.obs.curve)
-    return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r, res.jac)
+    cov = cluster_covariance(res.jac, r, channel_curves(model))
+    return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r[:n],
+                     res.jac, residual_pressure=r[n:] if r.size > n else None)
 
 
 def cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np.ndarray:
@@ -134,12 +162,43 @@ def curve_folds(n_curves: int, k: int = 5) -> list[np.ndarray]:
     return [np.arange(i, n_curves, k) for i in range(k)]
 
 
+@dataclass(frozen=True)
+class CrossValidation:
+    """Out-of-fold residuals per row: the angle's (deg) and, with the pressure channel,
+    the gauge pressure's weighted (deg-equivalent; None without it)."""
+
+    angle: np.ndarray
+    pressure: np.ndarray | None
+
+    @property
+    def rmse_deg(self) -> float:
+        """RMS angle error (deg); inf when a held-out curve falls past the baseline."""
+        r = self.angle
+        return float(np.sqrt(np.mean(r**2))) if np.all(np.isfinite(r)) else float("inf")
+
+    @property
+    def joint(self) -> np.ndarray:
+        """Both channels' residuals (angle rows, then pressure rows)."""
+        return self.angle if self.pressure is None else np.concatenate([self.angle,
+                                                                        self.pressure])
+
+    @property
+    def rmse_joint(self) -> float:
+        """RMS of both channels (deg-equivalent): what the selection compares."""
+        r = self.joint
+        return float(np.sqrt(np.mean(r**2))) if np.all(np.isfinite(r)) else float("inf")
+
+    def curves(self, curve: np.ndarray) -> np.ndarray:
+        return curve if self.pressure is None else np.concatenate([curve, curve])
+
+
 def cross_validate(obs: Observations, make: Callable[[Observations], AugmentedModel],
-                   full: FitResult, k: int = 5) -> tuple[float, np.ndarray]:
-    """RMS error (deg) of predicting each held-out curve from a fit that did not see it,
-    and the per-row out-of-fold residual. A family absent from a training set keeps its
-    open scales at 1 (the baseline as is)."""
+                   full: FitResult, k: int = 5) -> CrossValidation:
+    """Predicting each held-out curve from a fit that did not see it: the per-row
+    out-of-fold residuals (NaN where a held-out curve falls past the baseline's range).
+    A family absent from a training set keeps its open scales at 1 (the baseline as is)."""
     resid = np.empty(obs.n)
+    resid_p = np.empty(obs.n) if full.model.pressure_weight > 0.0 else None
     for held in curve_folds(obs.n_curves, k):
         train = obs.subset(np.setdiff1d(np.arange(obs.n_curves), held))
         test = obs.subset(held)
@@ -149,9 +208,13 @@ def cross_validate(obs: Observations, make: Callable[[Observations], AugmentedMo
         x = _transfer(f, m_test)
         rows = np.isin(obs.curve, held)
         resid[rows] = m_test.angles(x) - test.angle_deg
-    if not np.all(np.isfinite(resid)):  # a held-out curve past the baseline's range
-        return float("inf"), np.where(np.isfinite(resid), resid, np.nan)
-    return float(np.sqrt(np.mean(resid**2))), resid
+        if resid_p is not None:
+            resid_p[rows] = pressure_residual(m_test, x)
+    return CrossValidation(_finite_or_nan(resid), _finite_or_nan(resid_p))
+
+
+def _finite_or_nan(r: np.ndarray | None) -> np.ndarray | None:
+    return None if r is None else np.where(np.isfinite(r), r, np.nan)
 
 
 def _transfer(f: FitResult, target: AugmentedModel) -> np.ndarray:

@@ -5,7 +5,9 @@ reading says what the pump did: rising = loading (fluid in, direction +1), falli
 unloading (withdrawn, -1), pressure and angle unchanged = hold (pump stopped, 0). The
 first reading takes the direction of the next interval; a drop into a flat stretch is the
 start of a hold (the gauge loses the inlet's R Q when the pump stops). The noise floor,
-the time effects' identifiability and the inlet pressure drop (R Q x direction) use it.
+the time effects' identifiability and the inlet pressure drop (R Q x direction) use it,
+and so does the injected volume (``injected_volume_ul``: the syringe pump's volume, from
+time, flow rate and direction).
 """
 
 from __future__ import annotations
@@ -49,3 +51,22 @@ def history_traits(curve: np.ndarray, pressure_pa: np.ndarray, direction: np.nda
     hold = (direction == 0) & (pressure_pa > REST_FRACTION * top[curve])
     return {"loading": int(np.sum(direction > 0)), "unloading": int(np.sum(direction < 0)),
             "hold": int(np.sum(hold))}
+
+
+def injected_volume_ul(curve: np.ndarray, time_s: np.ndarray, flow_ul_s: np.ndarray,
+                       direction: np.ndarray) -> np.ndarray:
+    """The volume the pump has put into the chamber at each reading (ul): V_0 = Q d t_0,
+    V_k = V_(k-1) + Q d_k (t_k - t_(k-1)) along each curve (rows sorted by curve, then
+    time; d the pump's state since the previous reading). ``time_s`` counts from the start
+    of the pump with the chamber at rest (empty of injected fluid); NaN without time or
+    flow. An incompressible fluid and stiff tubing are assumed: the pump's volume is the
+    chamber's."""
+    out = np.full(time_s.size, np.nan)
+    if not (np.all(np.isfinite(time_s)) and np.all(np.isfinite(flow_ul_s))):
+        return out
+    for c in np.unique(curve):
+        rows = np.flatnonzero(curve == c)
+        t = time_s[rows]
+        dt = np.diff(np.concatenate([[0.0], t]))
+        out[rows] = np.maximum(np.cumsum(flow_ul_s[rows] * direction[rows] * dt), 0.0)
+    return out

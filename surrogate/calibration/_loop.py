@@ -10,7 +10,9 @@ candidate set E (one effect, or a pair) is selectable when
 3. every member is significant: its tested parameter is more than 3 standard errors from
    the value that switches it off (clustered by curve);
 4. BIC(E) < BIC(recalibrated baseline) - 6;
-5. its error cross-validated by curve is below the recalibrated baseline's;
+5. its error cross-validated by curve is below the recalibrated baseline's (read by
+   injected volume, ``pressure_channel``: angle and gauge pressure together, the angle's
+   not above it);
 6. (pairs) each member earns its place: BIC(pair) < BIC(each member alone) - 6 and the
    pair's cross-validated error is below each member's alone;
 7. it explains the data: what replicates still share after it (_residual.py) is within
@@ -38,10 +40,16 @@ from solver.errors import InputError
 from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._fit import FitResult, cross_validate, fit, paired_cv
+from surrogate.calibration._fit import (
+    CrossValidation,
+    FitResult,
+    cross_validate,
+    fit,
+    paired_cv,
+)
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._model import AugmentedModel
-from surrogate.calibration._noise import noise_floor
+from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
 from surrogate.calibration._residual import excess_limit, residual_summary
 from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._start import Baseline
@@ -109,16 +117,23 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         d = obs.design(c)
         designs.setdefault(design_key(d), d)
     p_max = 1.6 * float(np.max(np.abs(obs.pressure_pa))) + 200.0
-    responses = Responses(baseline.predictor, designs, p_max)
-    obs = _usable_rows(obs, responses, baseline, warnings)
+    v_max = 1.25 * float(np.max(obs.volume_ul)) + 1.0 if obs.has_volume else None
+    responses = Responses(baseline.predictor, designs, p_max, v_max)
+    channel, noise = pressure_channel(obs, responses, baseline)
+    # by volume a reading is past the baseline's range by its volume, not by its gauge
+    # pressure (which a specimen's scatter or a gauge effect moves: no selection by it)
+    obs = _usable_rows(obs, responses, baseline, warnings, by_gauge=not channel["used"])
+    if channel["used"]:
+        obs = _within_volume_range(obs, responses, warnings)
 
     traits = data_traits(obs, baseline.open_parameters)
     fits: dict[tuple[str, ...], FitResult] = {}
-    cvs: dict[tuple[str, ...], tuple[float, np.ndarray]] = {}
+    cvs: dict[tuple[str, ...], CrossValidation] = {}
 
     def make(effects: tuple[str, ...]):
         chosen = tuple(EFFECTS[e] for e in effects)
-        return lambda o: AugmentedModel(o, responses, chosen, baseline.open_parameters)
+        return lambda o: AugmentedModel(o, responses, chosen, baseline.open_parameters,
+                                        channel["weight_deg_per_pa"])
 
     def get_fit(effects: tuple[str, ...]) -> FitResult:
         if effects not in fits:
@@ -126,16 +141,20 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             tick()
         return fits[effects]
 
-    def get_cv(effects: tuple[str, ...]) -> tuple[float, np.ndarray]:
+    def get_xv(effects: tuple[str, ...]) -> CrossValidation:
         if effects not in cvs:
             cvs[effects] = cross_validate(obs, make(effects), get_fit(effects), k)
             tick()
         return cvs[effects]
 
+    def get_cv(effects: tuple[str, ...]) -> tuple[float, np.ndarray]:
+        """Cross-validated angle error (deg) and the out-of-fold angle residuals."""
+        xv = get_xv(effects)
+        return xv.rmse_deg, xv.angle
+
     y = obs.angle_deg
     as_is = AugmentedModel(obs, responses, (), baseline.open_parameters)
     rmse_model = float(np.sqrt(np.mean((as_is.angles(as_is.layout.start) - y) ** 2)))
-    noise = noise_floor(obs)
     base = get_fit(())
     rmse_before, resid_before = get_cv(())
 
@@ -151,8 +170,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     pairs.sort(key=lambda p: get_fit(p).bic)
     evaluated = [(e,) for e in singles] + pairs[:PAIRS_CROSS_VALIDATED]
 
+    by_volume = AugmentedModel(obs, responses, (), baseline.open_parameters,
+                               channel["weight_deg_per_pa"])
     sd_rows = responses.lookup(responses.nominal_sd(), as_is.design_index,
-                               np.clip(obs.pressure_pa, 0.0, None))
+                               by_volume.reading_pressure(np.zeros(0)))
     baseline_var = float(np.nanmean(sd_rows**2)) if np.any(np.isfinite(sd_rows)) else 0.0
 
     def own_var(effects: tuple[str, ...], backed: bool = True) -> float:
@@ -169,8 +190,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                 own_var(effects, backed))
 
     candidates, selectable = [], []
+    base_joint = get_xv(()).rmse_joint
     for effects in evaluated:
-        cand = _judge(effects, get_fit, get_cv, base, rmse_before, responses)
+        cand = _judge(effects, get_fit, get_xv, base, rmse_before, base_joint, responses,
+                      channel["weight_deg_per_pa"])
         cand["excused"] = False
         if cand["selectable"] or not cand["why_not"] or cand["unbacked"]:
             rest = leaves(effects, backed=not cand["unbacked"])
@@ -211,15 +234,15 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             f"{better['rmse_cv_deg']:.2f} vs {cand['rmse_cv_deg']:.2f} deg): the baseline's "
             "uncertainty does not excuse the worse fit")
         cand["outdone_by"] = better["effects"]
-    resid_chosen = get_cv(chosen)[1]
+    xv_chosen = get_xv(chosen)
     for cand in candidates:
-        if cand["rmse_cv_deg"] is not None:
-            cand["paired_z"] = _num(paired_cv(get_cv(tuple(cand["effects"]))[1],
-                                              resid_chosen, obs.curve))
+        if cand["rmse_cv_deg"] is not None:  # both channels, paired by curve
+            cand["paired_z"] = _num(paired_cv(get_xv(tuple(cand["effects"])).joint,
+                                              xv_chosen.joint, xv_chosen.curves(obs.curve)))
     alike = _indistinguishable(candidates, chosen)
     # a set the data prefer that fails only for want of the baseline's backing: reported
     # beside the selection (its CV advantage may be the baseline's own error there)
-    unbacked = _better_unbacked(candidates, chosen, rmse_before)
+    unbacked = _better_unbacked(candidates, chosen, base_joint)
     after = get_fit(chosen)
     rmse_after, resid_after = get_cv(chosen)
     nuisance = _nuisance(after)
@@ -249,6 +272,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "rmse_after_deg": rmse_after,
         "noise_floor_deg": _num(noise.rms_deg),
         "noise_floor_source": noise.source,
+        "noise_floor_basis": channel["angle_floor_basis"],
+        "pressure_channel": channel,
+        "rmse_pressure_before_pa": _pressure_rms(get_xv(()), channel),
+        "rmse_pressure_after_pa": _pressure_rms(get_xv(chosen), channel),
         "cross_validation": {"method": "grouped K-fold by curve", "folds": k,
                              "folds_requested": folds_requested},
         "selected_effects": list(chosen),
@@ -283,10 +310,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
 
 def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
-                 warnings: list[str]) -> Observations:
+                 warnings: list[str], by_gauge: bool = True) -> Observations:
     """Refuse a design the baseline cannot answer and pressures where it overflows; drop
-    (with a warning) readings past the end of its range (the FE stopped there: no number
-    to compare with)."""
+    (with a warning) readings past the end of its range at their gauge pressure (the FE
+    stopped there: no number to compare with) when ``by_gauge``."""
     pred = np.empty(obs.n)
     for c in range(obs.n_curves):
         rows = np.flatnonzero(obs.curve == c)
@@ -317,7 +344,7 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                         "(its exponential overflows)", None,
                         "pressures where the baseline is finite"
                         + (f" (up to {p_ok.max():.0f} Pa in this curve)" if p_ok.size else ""))
-    ok = np.isfinite(pred)
+    ok = np.isfinite(pred) | (not by_gauge)
     if not np.all(ok):
         warnings.append(f"pressure_pa: {int((~ok).sum())} readings lie past the end of the "
                         f"baseline's range for their design (the FE stopped there) and are "
@@ -330,6 +357,67 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                             "at least 2 curves with 4 readings each below the end of the "
                             "FE's range")
     return obs
+
+
+def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline
+                     ) -> tuple[dict, NoiseFloor]:
+    """Whether the data are read as a syringe pump's two observables (docs/calibration.md,
+    "Two observables"): angle and gauge pressure at each reading's injected volume; with
+    the angle's noise floor in the same terms. The weight of the gauge residual is the
+    angle's floor over the pressure's (deg per Pa), so each counts by its own replicate
+    scatter. Otherwise (``used`` false, ``why_not``): the angle at the gauge pressure, its
+    floor at the same pressure."""
+    why = None
+    floor_a = volume_floor(obs, obs.angle_deg) if obs.has_volume else None
+    floor_p = volume_floor(obs, obs.pressure_pa) if obs.has_volume else None
+    if not obs.has_volume:
+        why = "needs time_s and flow_ul_s on every reading (the injected volume)"
+    elif baseline.open_parameters:
+        why = ("the baseline leaves its pressure scale open per family, so its pressure at "
+               "a volume is open too")
+    elif not responses.has_volumes():
+        why = "the baseline gives no injected volume with its answer"
+    elif floor_a is None or floor_p is None:
+        why = "needs replicate curves for the pressure's and the angle's noise floors"
+    if why is not None:
+        return ({"used": False, "why_not": why, "pressure_floor_pa": None,
+                 "weight_deg_per_pa": 0.0, "angle_floor_basis": "gauge pressure"},
+                noise_floor(obs))
+    return ({"used": True, "why_not": None, "pressure_floor_pa": floor_p.rms_deg,
+             "weight_deg_per_pa": floor_a.rms_deg / floor_p.rms_deg,
+             "angle_floor_basis": "injected volume"}, floor_a)
+
+
+def _within_volume_range(obs: Observations, responses: Responses, warnings: list[str]
+                         ) -> Observations:
+    """Drop (with a warning) readings whose injected volume lies past the end of the
+    baseline's range for their nominal design."""
+    index = np.array([responses.index[design_key(obs.design(c))]
+                      for c in range(obs.n_curves)])[obs.curve]
+    ok = np.ones(obs.n, bool)
+    for what in ("angle_v", "pressure_v"):
+        ok &= np.isfinite(responses.lookup_volume(responses.curves((), [], what), index,
+                                                  obs.volume_ul))
+    if np.all(ok):
+        return obs
+    warnings.append(f"time_s: {int((~ok).sum())} readings' injected volumes lie past the end "
+                    "of the baseline's range for their design (the FE stopped there) and "
+                    "are not used")
+    keep_curves = [c for c in range(obs.n_curves) if np.sum(ok[obs.curve == c]) >= 4]
+    out = obs.rows(ok & np.isin(obs.curve, keep_curves))
+    if out.n_curves < MIN_CURVES:
+        raise DataError("time_s", f"only {out.n_curves} curve keeps 4 readings within the "
+                        "baseline's range of injected volume", None,
+                        "at least 2 curves with 4 readings each below the end of the FE's "
+                        "range")
+    return out
+
+
+def _pressure_rms(xv: CrossValidation, channel: dict) -> float | None:
+    """Cross-validated RMS error of the gauge pressure at the injected volume (Pa)."""
+    if xv.pressure is None or not channel["used"]:
+        return None
+    return _num(float(np.sqrt(np.nanmean(xv.pressure**2))) / channel["weight_deg_per_pa"])
 
 
 def _status(e: Effect, traits: DataTraits, responses: Responses) -> dict:
@@ -387,10 +475,11 @@ def _at_reach(f: FitResult, responses: Responses) -> list[str]:
     return out
 
 
-def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
-           responses: Responses) -> dict:
+def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_joint: float,
+           responses: Responses, weight: float) -> dict:
     f = get_fit(effects)
-    cv, _ = get_cv(effects)
+    xv = get_xv(effects)
+    cv, cv_joint = xv.rmse_deg, xv.rmse_joint
     params = _params(f)
     plausible = all(p["plausible"] for p in params.values())
     values, sd, sd_b = f.values, f.sd(), f.sd_baseline()
@@ -428,10 +517,15 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
         reasons.append(f"delta BIC {delta_bic:.1f} is not below {DELTA_BIC:g}")
     if not math.isfinite(cv):
         reasons.append("held-out curves fall past the end of the baseline's range")
-    elif not cv < rmse_before:
+    elif not (cv < rmse_before or (weight > 0.0 and cv <= rmse_before * (1 + 1e-9))):
+        # by volume a gauge effect leaves the angle channel as it is: not worse suffices
         reasons.append("cross-validated error not below the recalibrated baseline's")
+    elif not cv_joint < base_joint:
+        reasons.append("cross-validated error of angle and pressure by volume together not "
+                       "below the recalibrated baseline's: it moves the gauge pressure at the "
+                       "injected volume the wrong way")
     if len(effects) > 1:
-        alone = [(get_fit((m,)).bic, get_cv((m,))[0]) for m in effects]
+        alone = [(get_fit((m,)).bic, get_xv((m,)).rmse_joint) for m in effects]
         if f.bic >= min(b for b, _ in alone) + DELTA_BIC:
             reasons.append("a member does not earn its place: delta BIC against the better "
                            f"member alone {f.bic - min(b for b, _ in alone):.1f}")
@@ -441,6 +535,9 @@ def _judge(effects, get_fit, get_cv, base: FitResult, rmse_before: float,
     return {"effect": "+".join(effects), "effects": list(effects),
             "kind": "+".join(sorted({EFFECTS[e].kind for e in effects})),
             "applicable": True, "identifiable": True, "rmse_cv_deg": cv,
+            "rmse_cv_joint": cv_joint,
+            "rmse_cv_pressure_pa": (_num(float(np.sqrt(np.nanmean(xv.pressure**2))) / weight)
+                                    if xv.pressure is not None else None),
             "delta_bic": float(delta_bic), "bic": float(f.bic), "params": params,
             "plausible": plausible, "significant": significant,
             "z": {n: _num(v) for n, v in z.items()}, "selectable": not reasons,
@@ -456,18 +553,19 @@ def _explains_better(cand: dict, candidates: list[dict]) -> dict | None:
     baseline's band at its fitted design excuses is not chosen over a better fit."""
     better = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
               and c["effects"] != cand["effects"] and c["bic"] < cand["bic"] + DELTA_BIC
-              and c["rmse_cv_deg"] < cand["rmse_cv_deg"]]
+              and c["rmse_cv_joint"] < cand["rmse_cv_joint"]]
     return min(better, key=lambda c: c["bic"]) if better else None
 
 
 def _closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:
     """With nothing selected and structure left: the plausible set that predicts unseen
-    curves best (below the baseline's error), with why it was not selected."""
+    curves best (angle below the baseline's error; the best of both channels), with why
+    it was not selected."""
     ok = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
           and c["rmse_cv_deg"] < rmse_before]
     if not ok:
         return None
-    c = min(ok, key=lambda c: c["rmse_cv_deg"])
+    c = min(ok, key=lambda c: c["rmse_cv_joint"])  # both channels (by volume)
     return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"], "why_not": c["why_not"],
             "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
                        for n, p in c["params"].items()}}
@@ -488,6 +586,7 @@ def _indistinguishable(candidates: list[dict], chosen: tuple[str, ...]) -> list[
                 or abs(c["paired_z"]) >= Z_ALIKE):
             continue
         out.append({"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"],
+                    "rmse_cv_pressure_pa": c["rmse_cv_pressure_pa"],
                     "paired_z": c["paired_z"], "delta_bic_vs_selected": None,
                     "backed": bool(c["selectable"]),
                     "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
@@ -502,14 +601,15 @@ def _indistinguishable(candidates: list[dict], chosen: tuple[str, ...]) -> list[
 
 
 def _better_unbacked(candidates: list[dict], chosen: tuple[str, ...],
-                     rmse_before: float) -> dict | None:
+                     base_joint: float) -> dict | None:
     """The best candidate that fails only because the baseline cannot back its size
     (its own uncertainty at the fitted design), when it beats ``chosen`` (or, with
-    nothing chosen, the baseline) in BIC by more than 6 and in cross-validated error."""
+    nothing chosen, the baseline) in BIC by more than 6 and in cross-validated error (both
+    channels)."""
     ref = next((c for c in candidates if tuple(c["effects"]) == chosen), None)
     bic_ref = ref["bic"] + DELTA_BIC if ref is not None else DELTA_BIC + 0.0
-    cv_ref = ref["rmse_cv_deg"] if ref is not None else rmse_before
-    better = [c for c in candidates if c.get("unbacked") and c["rmse_cv_deg"] < cv_ref
+    cv_ref = ref["rmse_cv_joint"] if ref is not None else base_joint
+    better = [c for c in candidates if c.get("unbacked") and c["rmse_cv_joint"] < cv_ref
               and (c["bic"] < bic_ref if ref is not None else c["delta_bic"] < DELTA_BIC)]
     if not better:
         return None
@@ -574,7 +674,10 @@ def _family_constants(obs: Observations, baseline: Baseline, base: FitResult,
 def interpret(report: dict, left: dict) -> str:
     """A few sentences a lab can act on."""
     noise = report["noise_floor_deg"]
+    basis = (" at the same injected volume (angle and gauge pressure read against the "
+             "pump's volume)" if report["pressure_channel"]["used"] else "")
     floor = (f"against a noise floor of {noise:.2f} deg from {report['noise_floor_source']}"
+             f"{basis}"
              if noise is not None else "with no noise floor to compare against (it needs "
              "replicate curves of one design)")
     b = report["baseline"]

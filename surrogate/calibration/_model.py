@@ -5,6 +5,17 @@
     angle     = time effects (static along each curve's time; 4 substeps per interval)
     observed  = angle effects (angle)
 
+or, where the injected volume V of every reading is known (time_s and flow_ul_s) and the
+baseline gives V(p) (``pressure_weight`` > 0: the two observables of a syringe pump):
+
+    static    = baseline angle(design + physical effects, V)        its answer by volume
+    p_chamber = baseline p_chamber(design + physical effects, V)
+    angle     = time effects;  observed = angle effects            as above
+    gauge     = pressure effects' inverses (p_chamber)             ``gauge_pressures``
+
+A gauge effect moves only the gauge against volume; a camera effect only the angle
+against volume; a physical change both, the FE's coupled way (docs/calibration.md).
+
 k_A,f and k_p,f (amplitude and pressure scale per family) exist only when the baseline
 leaves them open (the exponential and paper models: their per-family constants); the
 emulator leaves nothing open (its material constants are the stiffness effects).
@@ -44,8 +55,13 @@ class AugmentedModel:
     """Evaluates angles at the rows of ``obs`` for parameter vectors of ``layout``."""
 
     def __init__(self, obs: Observations, responses: Responses, effects: tuple[Effect, ...],
-                 open_parameters: tuple[str, ...]) -> None:
+                 open_parameters: tuple[str, ...], pressure_weight: float = 0.0) -> None:
+        """``pressure_weight`` (deg per Pa): the pressure-by-volume channel's residuals
+        count as ``pressure_weight`` x (predicted - read gauge pressure) beside the angle's
+        (the ratio of the two noise floors); 0 leaves the channel out."""
         self.obs = obs
+        self.pressure_weight = float(pressure_weight)
+        self.by_volume = self.pressure_weight > 0.0
         self.responses = responses
         self.effects = effects
         self.physical = tuple(e for e in effects if e.stage == "design")
@@ -82,6 +98,37 @@ class AugmentedModel:
         if self.time:
             self._prepare_substeps()
 
+    def gauge_pressures(self, x: np.ndarray) -> np.ndarray:
+        """Predicted gauge reading (Pa) at every row's injected volume: the baseline's
+        chamber pressure at that volume for the changed design, through the pressure
+        effects' inverses (last applied first)."""
+        values = self.values(x)
+        o = self.obs
+        p = self._chamber_at_volume(values, self.design_index, o.volume_ul)
+        q = np.nan_to_num(o.flow_ul_s)
+        for e in reversed(self.pressure):
+            p = e.gauge_pressure(p, q, o.direction, values)
+        return p
+
+    def _by_volume(self, what, values, design_index, v_ul):
+        """The baseline's angle ("angle_v") or chamber pressure ("pressure_v") at injected
+        volume ``v_ul`` of the changed design (its table by volume, interpolated)."""
+        table = self.responses.curves(self.physical,
+                                      [values[e.parameters[0].name] for e in self.physical],
+                                      what=what)
+        return self.responses.lookup_volume(table, design_index, v_ul)
+
+    def _chamber_at_volume(self, values, design_index, v_ul):
+        return self._by_volume("pressure_v", values, design_index, v_ul)
+
+    def reading_pressure(self, x: np.ndarray) -> np.ndarray:
+        """The chamber pressure (Pa) at which each row's angle is read off the baseline:
+        the gauge's, or by volume the baseline's at the injected volume."""
+        if self.by_volume:
+            return self._chamber_at_volume(self.values(x), self.design_index,
+                                           self.obs.volume_ul)
+        return np.clip(self.obs.pressure_pa, 0.0, None)
+
     def values(self, x: np.ndarray) -> dict[str, float]:
         n = self.layout.n_open
         return {name: float(v) for name, v in zip(self.layout.names[n:], x[n:], strict=True)}
@@ -99,7 +146,9 @@ class AugmentedModel:
                 i += 1
         return k_a[self.family_pos], k_p[self.family_pos]
 
-    def _static(self, values, design_index, p_gauge, flow, direction, k_a, k_p):
+    def _static(self, values, design_index, p_gauge, flow, direction, k_a, k_p, v_ul):
+        if self.by_volume:  # the gauge's effects do not move the actuator
+            return k_a * self._by_volume("angle_v", values, design_index, v_ul)
         p = p_gauge
         for e in self.pressure:
             p = e.chamber_pressure(p, flow, direction, values)
@@ -116,11 +165,11 @@ class AugmentedModel:
         o = self.obs
         if not self.time:
             out = self._static(values, self.design_index, o.pressure_pa, o.flow_ul_s,
-                               o.direction, k_a, k_p)
+                               o.direction, k_a, k_p, o.volume_ul)
         else:
             s = self._sub
             static = self._static(values, self.design_index[s["rows"]], s["p"], s["q"],
-                                  s["d"], k_a[s["rows"]], k_p[s["rows"]])
+                                  s["d"], k_a[s["rows"]], k_p[s["rows"]], s["v"])
             grid = np.full(s["shape"], np.nan)
             grid[s["valid"]] = static
             tgrid = np.zeros(s["shape"])
@@ -134,14 +183,15 @@ class AugmentedModel:
         return out
 
     def _prepare_substeps(self) -> None:
-        """Pressure linear in time between readings, SUBSTEPS per interval; the lag is
-        integrated exactly for a static angle linear between substeps."""
+        """Pressure (and injected volume) linear in time between readings, SUBSTEPS per
+        interval; the lag is integrated exactly for a static angle linear between
+        substeps."""
         o = self.obs
         order = o.padded_order()
         n_curves, m = order.shape
         width = (m - 1) * SUBSTEPS + 1
         valid = np.zeros((n_curves, width), bool)
-        rows, p, q, d, t = [], [], [], [], []
+        rows, p, q, d, t, v = [], [], [], [], [], []
         sample_rows, sample_pos = [], []
         for c in range(n_curves):
             idx = order[c][order[c] >= 0]
@@ -157,12 +207,13 @@ class AugmentedModel:
                     rows.append(r)
                     p.append(o.pressure_pa[prev] + w * (o.pressure_pa[r] - o.pressure_pa[prev]))
                     t.append(o.time_s[prev] + w * (o.time_s[r] - o.time_s[prev]))
+                    v.append(o.volume_ul[prev] + w * (o.volume_ul[r] - o.volume_ul[prev]))
                     q.append(o.flow_ul_s[r])
                     d.append(o.direction[r])
                 sample_rows.append(r)
                 sample_pos.append((c, 0 if j == 0 else j * SUBSTEPS))
         # rows of a curve fill its first positions contiguously
         self._sub = {"rows": np.array(rows), "p": np.array(p), "q": np.nan_to_num(np.array(q)),
-                     "d": np.array(d), "t": np.array(t), "valid": valid,
+                     "d": np.array(d), "t": np.array(t), "v": np.array(v), "valid": valid,
                      "shape": (n_curves, width), "sample_rows": np.array(sample_rows),
                      "sample_pos": tuple(np.array(sample_pos).T)}

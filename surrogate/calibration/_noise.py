@@ -155,3 +155,62 @@ def _within_curve(obs: Observations) -> NoiseFloor:
     if n == 0:
         return NoiseFloor(float("nan"), 0, "none", 0)
     return NoiseFloor(float(np.sqrt(sq / n)), n, "within-curve", 0)
+
+
+
+def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
+    """How far a new specimen's reading ``y`` (its angle, deg, or its gauge pressure, Pa)
+    scatters around its design's mean at the same injected volume: replicates (one design
+    at one flow rate) compared in the same segment of their history at the same time since
+    it began -- at one flow rate, the same volume -- so what replicates share (the
+    inlet's R Q, creep, a loop) is not scatter, while a specimen's own stiffness and
+    geometry are. floor^2 = sum (y - mean_others)^2 / (1 + 1/k) / N as ``noise_floor``;
+    ``rms_deg`` carries the floor in y's unit. None without injected volumes or
+    replicates."""
+    if not obs.has_volume:
+        return None
+    sq, n_used = 0.0, 0
+    per_curve: dict[int, list[float]] = {}
+    for g in np.unique(obs.group):
+        curves = np.unique(obs.curve[obs.group == g])
+        if curves.size < 2:
+            continue
+        cut = {}
+        for c in curves:
+            rows = np.flatnonzero(obs.curve == c)
+            seg = segments(obs.direction[rows])
+            cut[int(c)] = [(rows[seg == k], obs.direction[rows[seg == k]][0])
+                           for k in range(int(seg.max()) + 1)]
+        for c, parts in cut.items():
+            for k, (r, d) in enumerate(parts):
+                t = obs.time_s[r] - obs.time_s[r][0]
+                others = []
+                for c2, parts2 in cut.items():
+                    if c2 == c or k >= len(parts2) or parts2[k][1] != d:
+                        continue
+                    r2 = parts2[k][0]
+                    t2 = obs.time_s[r2] - obs.time_s[r2][0]
+                    others.append(np.interp(t, t2, y[r2], left=np.nan, right=np.nan)
+                                  if t2.size > 1 else np.where(t == 0, y[r2][0], np.nan))
+                if not others:
+                    continue
+                o = np.array(others)
+                n_others = np.sum(np.isfinite(o), axis=0)
+                ok = n_others >= 1
+                if not np.any(ok):
+                    continue
+                diff = y[r][ok] - np.nanmean(o[:, ok], axis=0)
+                term = float(np.sum(diff**2 / (1.0 + 1.0 / n_others[ok])))
+                sq += term
+                n_used += int(ok.sum())
+                acc = per_curve.setdefault(c, [0.0, 0])
+                acc[0] += term
+                acc[1] += int(ok.sum())
+    if n_used < MIN_READINGS or sq <= 0:
+        return None
+    floor2 = sq / n_used
+    means = np.array([a / n for a, n in per_curve.values() if n])
+    rel = (0.5 * float(np.std(means, ddof=1)) / np.sqrt(means.size) / floor2
+           if means.size >= 2 else float("nan"))
+    return NoiseFloor(float(np.sqrt(floor2)), n_used, "replicates", len(np.unique(obs.group)),
+                      rel)

@@ -65,7 +65,11 @@ class Responses:
     """Tables of ``predictor`` at the nominal ``designs`` (one per key), pressures
     0 .. ``p_max_pa``."""
 
-    def __init__(self, predictor, designs: dict[str, object], p_max_pa: float) -> None:
+    def __init__(self, predictor, designs: dict[str, object], p_max_pa: float,
+                 v_max_ul: float | None = None) -> None:
+        """``v_max_ul``: also tabulate angle and chamber pressure by injected volume,
+        0 .. v_max_ul (the predictor's ``predict_volume``), for the two observables of a
+        syringe pump (docs/calibration.md)."""
         self.predictor = predictor
         self.keys = tuple(designs)
         self.designs = designs
@@ -73,6 +77,12 @@ class Responses:
         self.p_grid = np.linspace(0.0, p_max_pa, PRESSURE_POINTS)
         self.dp = self.p_grid[1] - self.p_grid[0]
         self._tables: dict[tuple[str, ...], tuple[list[np.ndarray], np.ndarray]] = {}
+        # angle and chamber pressure by injected volume, where the predictor answers so
+        self.v_grid = (np.linspace(0.0, v_max_ul, PRESSURE_POINTS)
+                       if v_max_ul and callable(getattr(predictor, "predict_volume", None))
+                       else None)
+        self.dv = self.v_grid[1] - self.v_grid[0] if self.v_grid is not None else None
+        self._volumes: dict[tuple[str, ...], dict[str, np.ndarray]] = {}
         self._sd: np.ndarray | None = None
         self._reach: dict[str, Reach] = {}
         self.calls = 0
@@ -117,6 +127,18 @@ class Responses:
                                                  if s in why))
         return self._reach[effect.id]
 
+    def _by_volume(self, design) -> tuple[np.ndarray, np.ndarray]:
+        """Angle (deg) and chamber pressure (Pa) on ``v_grid`` (NaN where refused)."""
+        self.calls += 1
+        nan = np.full(self.v_grid.size, np.nan)
+        try:
+            out = self.predictor.predict_volume(design, self.v_grid, level=BAND_LEVEL)
+        except InputError:
+            return nan, nan
+        p = getattr(out, "pressure_pa", None)
+        return (np.asarray(out.angle_deg, dtype=float),
+                nan if p is None else np.asarray(p, dtype=float))
+
     def _predict(self, design, with_sd: bool = False):
         self.calls += 1
         nan = np.full(self.p_grid.size, np.nan)
@@ -156,14 +178,29 @@ class Responses:
                      for e in effects]
             shape = (len(self.keys),) + tuple(n.size for n in nodes) + (self.p_grid.size,)
             values = np.empty(shape)
+            vshape = shape[:-1] + (0 if self.v_grid is None else self.v_grid.size,)
+            by_v = {"angle_v": np.empty(vshape), "pressure_v": np.empty(vshape)}
             for di, k in enumerate(self.keys):
                 for idx in np.ndindex(*shape[1:-1]):
                     d = self.designs[k]
                     for e, n, j in zip(effects, nodes, idx, strict=True):
                         d = e.design(d, float(n[j]))
                     values[(di,) + idx] = self._predict(d)
+                    if self.v_grid is not None:
+                        by_v["angle_v"][(di,) + idx], by_v["pressure_v"][(di,) + idx] = \
+                            self._by_volume(d)
             self._tables[key] = (nodes, values)
+            self._volumes[key] = by_v
         return self._tables[key]
+
+    def has_volumes(self) -> bool:
+        """Does the predictor answer by injected volume, with the chamber pressure there
+        (the emulator), at every nominal design?"""
+        if self.v_grid is None:
+            return False
+        self.table(())
+        p = self._volumes[()]["pressure_v"]
+        return bool(np.all(np.isfinite(p[:, :2])))
 
     def responsive(self, effect: Effect) -> bool:
         """Does the predictor's answer change with this physical effect at all?"""
@@ -176,11 +213,15 @@ class Responses:
                 return True
         return False
 
-    def curves(self, effects: tuple[Effect, ...], thetas: list[float]) -> np.ndarray:
-        """(n_designs, pressures) at the effects' values ``thetas`` (interpolated)."""
-        if not effects:
-            return self.table(())[1]
+    def curves(self, effects: tuple[Effect, ...], thetas: list[float],
+               what: str = "angle") -> np.ndarray:
+        """At the effects' values ``thetas`` (interpolated): "angle" (n_designs, pressures),
+        or by injected volume "angle_v" / "pressure_v" (n_designs, volumes)."""
         nodes, values = self.table(effects)
+        if what != "angle":
+            values = self._volumes[tuple(e.id for e in effects)][what]
+        if not effects:
+            return values
         out = values
         for axis_nodes, theta in zip(nodes, thetas, strict=True):
             idx, w = lagrange_weights(axis_nodes, theta)
@@ -195,16 +236,30 @@ class Responses:
     def lookup(self, curves: np.ndarray, design_index: np.ndarray, p_pa: np.ndarray
                ) -> np.ndarray:
         """Angle at chamber pressure ``p_pa`` of each row's design (linear in p; below 0
-        the angle at 0; past the grid NaN)."""
-        f = np.clip(p_pa, 0.0, None) / self.dp
-        i0 = np.floor(f).astype(int)
-        inside = i0 < self.p_grid.size - 1
-        i0 = np.where(inside, i0, self.p_grid.size - 2)
-        frac = f - i0
-        a = curves[design_index, i0]
-        b = curves[design_index, i0 + 1]
-        out = a + frac * (b - a)
-        return np.where(inside | (f <= self.p_grid.size - 1), out, np.nan)
+        the angle at 0; past the grid, or at a NaN pressure, NaN)."""
+        return _on_grid(curves, design_index, p_pa, self.dp)
+
+    def lookup_volume(self, curves: np.ndarray, design_index: np.ndarray, v_ul: np.ndarray
+                      ) -> np.ndarray:
+        """A by-volume table's value at injected volume ``v_ul`` of each row's design."""
+        return _on_grid(curves, design_index, v_ul, self.dv)
+
+
+def _on_grid(curves: np.ndarray, design_index: np.ndarray, x: np.ndarray, dx: float
+             ) -> np.ndarray:
+    """Linear interpolation on a uniform grid from 0 in steps ``dx`` (below 0 the value at
+    0; past the grid, or at NaN, NaN)."""
+    n = curves.shape[1]
+    known = np.isfinite(x)
+    f = np.where(known, np.clip(x, 0.0, None), 0.0) / dx
+    i0 = np.floor(f).astype(int)
+    inside = i0 < n - 1
+    i0 = np.where(inside, i0, n - 2)
+    frac = f - i0
+    a = curves[design_index, i0]
+    b = curves[design_index, i0 + 1]
+    out = a + frac * (b - a)
+    return np.where((inside | (f <= n - 1)) & known, out, np.nan)
 
 
 def linear_weights(nodes: np.ndarray, x: float) -> tuple[np.ndarray, np.ndarray]:

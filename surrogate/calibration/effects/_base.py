@@ -64,7 +64,8 @@ class DataTraits:
 
 class Effect:
     """Base class. Subclasses set the class attributes and implement their stage's
-    transform (one of ``chamber_pressure``, ``design``, ``lag``, ``observed``)."""
+    transform (one of ``chamber_pressure`` with its inverse ``gauge_pressure``, ``design``,
+    ``lag``, ``observed``)."""
 
     id: str = ""
     title: str = ""
@@ -91,6 +92,13 @@ class Effect:
     # ---- transforms (one per stage; the default is the identity) ---------------------
     def chamber_pressure(self, p_pa: np.ndarray, flow_ul_s: np.ndarray,
                          direction: np.ndarray, values: dict[str, float]) -> np.ndarray:
+        return p_pa
+
+    def gauge_pressure(self, p_pa: np.ndarray, flow_ul_s: np.ndarray,
+                       direction: np.ndarray, values: dict[str, float]) -> np.ndarray:
+        """The inverse of ``chamber_pressure``: what the gauge reads for a chamber pressure
+        (the pressure-by-volume channel predicts the gauge's reading at the injected
+        volume, _volume.py). A pressure effect implements both."""
         return p_pa
 
     def design(self, design, value: float):

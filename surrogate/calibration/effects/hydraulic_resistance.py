@@ -52,6 +52,9 @@ class HydraulicResistance(Effect):
     def chamber_pressure(self, p_pa, flow_ul_s, direction, values):
         return p_pa - values["R_pa_per_ul_s"] * flow_ul_s * direction
 
+    def gauge_pressure(self, p_pa, flow_ul_s, direction, values):
+        return p_pa + values["R_pa_per_ul_s"] * flow_ul_s * direction
+
     def interpret(self, params, data):
         v = params["R_pa_per_ul_s"]
         q = max(data.get("flow_rates_ul_s") or [2.5])

@@ -21,6 +21,9 @@ class PressureGain(Effect):
     def chamber_pressure(self, p_pa, flow_ul_s, direction, values):
         return p_pa / values["k_pressure"]
 
+    def gauge_pressure(self, p_pa, flow_ul_s, direction, values):
+        return p_pa * values["k_pressure"]
+
     def interpret(self, params, data):
         v = params["k_pressure"]
         return (f"The pressure sensor reads {100 * (v['value'] - 1):+.1f} +/- "

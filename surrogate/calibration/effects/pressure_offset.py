@@ -21,6 +21,9 @@ class PressureOffset(Effect):
     def chamber_pressure(self, p_pa, flow_ul_s, direction, values):
         return p_pa - values["p0_pa"]
 
+    def gauge_pressure(self, p_pa, flow_ul_s, direction, values):
+        return p_pa + values["p0_pa"]
+
     def interpret(self, params, data):
         v = params["p0_pa"]
         return (f"The gauge reads {v['value']:.0f} +/- {v['sd']:.0f} Pa above the chamber at "
