@@ -313,13 +313,16 @@ def predictor(history: list[State], load: float
         return None
     w, wr = extrapolation_weights(np.array([h.load for h in history]), has_rate, load)
 
-    def combine(value, rate):
-        out = sum(wi * value(h) for wi, h in zip(w, history))
-        return out + sum(wi * rate(h) for wi, h in zip(wr, history) if h.rate is not None)
+    rates = [h.rate for h in history]
 
-    u = combine(lambda h: h.u, lambda h: h.rate.du)
-    q = [combine(lambda h: h.q[b], lambda h: h.rate.dq[b]) for b in range(len(history[0].q))]
-    p = float(combine(lambda h: h.pressure_pa, lambda h: h.rate.dp))
+    def combine(values: list, rate_values: list):
+        out = sum(wi * v for wi, v in zip(w, values))
+        return out + sum(wi * r for wi, r in zip(wr, rate_values) if r is not None)
+
+    u = combine([h.u for h in history], [r and r.du for r in rates])
+    q = [combine([h.q[b] for h in history], [r and r.dq[b] for r in rates])
+         for b in range(len(history[0].q))]
+    p = float(combine([h.pressure_pa for h in history], [r and r.dp for r in rates]))
     return u, q, p
 
 
