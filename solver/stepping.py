@@ -60,6 +60,10 @@ TARGET_ANGLE_STEP_DEG = 8.0
 MAX_PRESSURE_STEP_PA = 150.0   # output resolution where the curve is steep in pressure,
 MAX_RELATIVE_PRESSURE_STEP = 0.08   # or 8 % of the pressure when that is more (a blocked
                                     # tip climbing to kPa: ~45 steps to 20 kPa, not 130)
+GROW_SOLVES = 4     # a step converged in at most this many Newton solves grows the next 1.6x,
+HOLD_SOLVES = 7     # in at most this many keeps it, otherwise shrinks it to 0.6x (the
+                    # Hermite predictor takes ~2 solves where the parabola took 3-4: these
+                    # were 6 and 9 with the parabola)
 MIN_CUTBACK = 1.0 / 1024.0
 DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
 PREDICTOR_POINTS = 3        # converged states (with their tangents) the predictor passes through
@@ -219,9 +223,11 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             raise StepFailed("Newton diverged")
         if it == 2:
             predictor_res = res
-        elif it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR and not patient:
+        elif (it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR and not patient
+              and not chord):
             # Worse than right after the predictor: this step is leaving the basin of
-            # convergence; cutting back now is cheaper than iterating on.
+            # convergence; cutting back now is cheaper than iterating on. (A chord update
+            # that made it worse is followed by a fresh tangent instead, below.)
             raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
         # Converged below the tolerance, or stalled at the rounding floor (which grows
         # with the bulk modulus) within 100 x the tolerance.
@@ -488,7 +494,7 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                                last, out.g_kinv_g)
                 switch_index = len(rows["p"]) - 1
         d_angle = abs(angle - rows["a"][-2])
-        factor = 1.6 if its <= 6 else (1.0 if its <= 9 else 0.6)
+        factor = 1.6 if its <= GROW_SOLVES else (1.0 if its <= HOLD_SOLVES else 0.6)
         if d_angle > 1e-9:
             factor = min(factor, max(0.5, TARGET_ANGLE_STEP_DEG / d_angle))
         d_pressure = abs(p - rows["p"][-2])
