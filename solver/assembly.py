@@ -220,11 +220,16 @@ def consistent_pressures(block: MaterialBlock, u: np.ndarray) -> np.ndarray:
     return block.bulk_pa * np.einsum("emn,en->em", block.Minv, g)
 
 
-def pressure_update(block: MaterialBlock, state: BlockState, du: np.ndarray) -> np.ndarray:
-    """dq_e = K M_e^-1 (R_p + D_e du_e) for a full displacement update du (mm)."""
+def pressure_update(block: MaterialBlock, state: BlockState, du: np.ndarray,
+                    constraint: bool = True) -> np.ndarray:
+    """dq_e = K M_e^-1 (R_p + D_e du_e) for a full displacement update du (mm);
+    ``constraint=False`` drops R_p: the pressures' rate K M_e^-1 D_e du_e along a
+    displacement rate du (the tangent of the equilibrium path)."""
     assert state.constraint is not None and state.D is not None
     due = du[block.dofs]                                                    # (ne, 3 nb)
-    rhs = state.constraint + np.einsum("ema,ea->em", state.D, due)
+    rhs = np.einsum("ema,ea->em", state.D, due)
+    if constraint:
+        rhs += state.constraint
     return block.bulk_pa * np.einsum("emn,en->em", block.Minv, rhs)
 
 

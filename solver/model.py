@@ -105,11 +105,14 @@ class SolidModel:
         u = self.full(u_free)
         return [consistent_pressures(block, u) for block in self.blocks]
 
-    def pressure_update(self, ev: Evaluation, du_free: np.ndarray) -> list[np.ndarray]:
-        """The mixed element pressures' Newton update (Pa) for a displacement update."""
+    def pressure_update(self, ev: Evaluation, du_free: np.ndarray,
+                        constraint: bool = True) -> list[np.ndarray]:
+        """The mixed element pressures' Newton update (Pa) for a displacement update;
+        ``constraint=False``: their rate along a displacement rate (no constraint residual)."""
         assert ev.block_states is not None
         du = self.full(du_free)
-        return [pressure_update(b, st, du) for b, st in zip(self.blocks, ev.block_states)]
+        return [pressure_update(b, st, du, constraint)
+                for b, st in zip(self.blocks, ev.block_states)]
 
     def evaluate(self, u_free: np.ndarray, pressure_pa: float, tangent: bool = True,
                  pressures: list[np.ndarray] | None = None) -> Evaluation:

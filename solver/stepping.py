@@ -18,18 +18,20 @@ dilatation of a large rotating predictor step, times the bulk modulus, made the
 tangent indefinite and forced ~2.5 degree steps; the mixed iterate takes the full
 target step (benchmarks/RESULTS.md).
 
-Predictor: from the third step on, each step starts from the parabola through the
-last three converged states (u, q, p) extrapolated to the new load; the first two
-start from the converged state with its tangent (an Euler predictor). Near the
-solution the iterate is evaluated without its tangent first and corrected with the
+Predictor: each step starts from the Hermite polynomial through the last three converged
+states (u, q, p) and the path's tangent at each (``Rate``: du/dV = K^-1 g / g^T K^-1 g from
+the second right-hand side of the state's last linear solve, so it costs no extra
+factorisation), extrapolated to the new load: a quintic once three states are known, the
+Euler predictor along the undeformed state's tangent for the first step. On the standard
+curve it starts ~10x closer to the converged state than the parabola through the states
+alone, and most steps converge after two Newton solves (benchmarks/RESULTS.md, issue 12).
+Near the solution the iterate is evaluated without its tangent first and corrected with the
 last factorisation (chord updates) while that converges fast (``mixed_newton_step``).
-Neither changes the converged states beyond the Newton tolerance; on the standard curve
-the chord updates cut the tangent assemblies by a third and the factorisations by 15 %
-against full Newton (CHORD_SWITCH and CHORD_RATE tuned by these counts,
-benchmarks/RESULTS.md). A step whose extrapolated start fails is retried from the
-converged state before it is cut back; a failed step is cut back by half; the step grows
-when Newton converges quickly and shrinks when the
-angle increment is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
+Neither changes the converged states beyond the Newton tolerance (CHORD_SWITCH and
+CHORD_RATE tuned by counts, benchmarks/RESULTS.md). A step whose extrapolated start fails
+is retried from the converged state before it is cut back; a failed step is cut back by
+half; the step grows when Newton converges quickly and shrinks when the angle increment
+is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
 pressure, if more) per step (so that the curve is resolved where the angle is small
 and the pressure rises fast).
 A step that cannot converge after the cut-backs ends the curve with status
@@ -58,9 +60,13 @@ TARGET_ANGLE_STEP_DEG = 8.0
 MAX_PRESSURE_STEP_PA = 150.0   # output resolution where the curve is steep in pressure,
 MAX_RELATIVE_PRESSURE_STEP = 0.08   # or 8 % of the pressure when that is more (a blocked
                                     # tip climbing to kPa: ~45 steps to 20 kPa, not 130)
+GROW_SOLVES = 4     # a step converged in at most this many Newton solves grows the next 1.6x,
+HOLD_SOLVES = 7     # in at most this many keeps it, otherwise shrinks it to 0.6x (the
+                    # Hermite predictor takes ~2 solves where the parabola took 3-4: these
+                    # were 6 and 9 with the parabola)
 MIN_CUTBACK = 1.0 / 1024.0
 DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
-PREDICTOR_POINTS = 3        # converged states the predictor's parabola passes through
+PREDICTOR_POINTS = 3        # converged states (with their tangents) the predictor passes through
 CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated without tangent
 CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
 FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one converged state
@@ -84,6 +90,29 @@ def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverS
 
 
 @dataclass
+class Rate:
+    """The tangent of the equilibrium path at a state, per unit of the load parameter
+    (cavity volume in mm^3 under volume control, pressure in Pa under pressure control):
+    displacement (mm), element pressures (Pa) and cavity pressure (Pa)."""
+
+    du: np.ndarray
+    dq: list[np.ndarray]
+    dp: float
+
+
+@dataclass
+class State:
+    """A converged state on the path at load parameter ``load`` (see ``Rate``), with its
+    rate when known: what the predictor extrapolates from."""
+
+    load: float
+    u: np.ndarray
+    q: list[np.ndarray]
+    pressure_pa: float
+    rate: Rate | None = None
+
+
+@dataclass
 class Converged:
     """A converged load step: the state, how it was reached, and its evaluation
     (residual and tangent at the state, reused by the next volume step)."""
@@ -96,6 +125,31 @@ class Converged:
     negative_pivots: int
     evaluation: Evaluation
     g_kinv_g: float = float("nan")   # g^T K^-1 g at the last factorisation (= dV/dp)
+    rate: Rate | None = None         # the path's tangent, from the last linear solve
+
+
+def counted_factorisation(model: ActuatorModel, K, backend: str):
+    """``factorize`` timed and counted in ``model.timings``; StepFailed if singular."""
+    t0 = time.perf_counter()
+    try:
+        fac = factorize(K, backend)
+    except (np.linalg.LinAlgError, RuntimeError) as exc:
+        raise StepFailed(f"linear solve failed: {exc}") from None
+    finally:
+        model.timings["linear_solve_s"] += time.perf_counter() - t0
+    model.timings["factorisations"] = model.timings.get("factorisations", 0) + 1
+    return fac
+
+
+def counted_solve(model: ActuatorModel, fac, rhs: np.ndarray) -> np.ndarray:
+    """``fac.solve(rhs)`` timed in ``model.timings``; StepFailed if it fails."""
+    t0 = time.perf_counter()
+    try:
+        return fac.solve(rhs)
+    except (np.linalg.LinAlgError, RuntimeError) as exc:
+        raise StepFailed(f"linear solve failed: {exc}") from None
+    finally:
+        model.timings["linear_solve_s"] += time.perf_counter() - t0
 
 
 def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
@@ -135,6 +189,7 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
     solves = 0
     res = np.inf
     gb = float("nan")
+    b = ev_solved = None
     for it in range(1, settings.max_newton_iter + 1):
         if target_pressure is not None:
             p = target_pressure
@@ -168,38 +223,35 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             raise StepFailed("Newton diverged")
         if it == 2:
             predictor_res = res
-        elif it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR and not patient:
+        elif (it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR and not patient
+              and not chord):
             # Worse than right after the predictor: this step is leaving the basin of
-            # convergence; cutting back now is cheaper than iterating on.
+            # convergence; cutting back now is cheaper than iterating on. (A chord update
+            # that made it worse is followed by a fresh tangent instead, below.)
             raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
         # Converged below the tolerance, or stalled at the rounding floor (which grows
         # with the bulk modulus) within 100 x the tolerance.
         # (Not after a chord update: its slower, linear convergence is no stall.)
         floor = it > 2 and res < 100 * tol and res > 0.3 * previous_res and not chord
         if it > 1 and vres < tol and ev.constraint_error < tol and (res < tol or floor):
-            return Converged(u, q, p, solves, res, neg, ev, gb)
+            return Converged(u, q, p, solves, res, neg, ev, gb,
+                             path_rate(model, ev_solved, b, gb, target_volume is not None))
         if ev.K is None and (fac is None or err > CHORD_RATE * previous_err):
             # The chord update would contract too slowly: assemble the tangent here.
             ev = model.evaluate(u, p, pressures=q)
             fac = None
         previous_res = res
         previous_err = err
-        t0 = time.perf_counter()
-        try:
-            chord = ev.K is None
-            if not chord:
-                fac = factorize(ev.K, backend)
-                model.timings["factorisations"] = model.timings.get("factorisations", 0) + 1
-                neg = fac.negative_pivots
-            # Both right-hand sides in one pass (b also gives the volume-control
-            # stability under pressure control, solver/stability.py).
-            a, b = fac.solve(np.column_stack((-ev.R, ev.g))).T
-        except (np.linalg.LinAlgError, RuntimeError) as exc:
-            raise StepFailed(f"linear solve failed: {exc}") from None
-        finally:
-            model.timings["linear_solve_s"] += time.perf_counter() - t0
+        chord = ev.K is None
+        if not chord:
+            fac = counted_factorisation(model, ev.K, backend)
+            neg = fac.negative_pivots
+        # Both right-hand sides in one pass (b also gives the volume-control stability
+        # under pressure control, solver/stability.py, and the path's tangent).
+        a, b = counted_solve(model, fac, np.column_stack((-ev.R, ev.g))).T
         solves += 1
         gb = float(ev.g @ b)
+        ev_solved = ev
         if target_volume is None:
             du, dp = a, 0.0
         else:
@@ -208,30 +260,75 @@ def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], 
             dp = -(ev.volume_mm3 - target_volume + float(ev.g @ a)) / gb
             du = a + b * dp
         dq = model.pressure_update(ev, du)
-        want_tangent = err >= CHORD_SWITCH
+        # (An update from a converged start is a whole load step: never a chord.)
+        want_tangent = err >= CHORD_SWITCH or (it == 1 and start is not None)
     raise StepFailed(f"no convergence in {settings.max_newton_iter} Newton iterations "
                       f"(residual {res:.2e})")
 
 
-def predictor(history: list[tuple[float, np.ndarray, list[np.ndarray], float]], load: float
+def path_rate(model: ActuatorModel, ev: Evaluation, b: np.ndarray, g_kinv_g: float,
+              volume_control: bool) -> Rate | None:
+    """The equilibrium path's tangent from b = K^-1 g (the second right-hand side of the
+    last linear solve, at an iterate next to the converged state): under pressure
+    control du/dp = b; under volume control, where K du = g dp and g . du = dV,
+    du/dV = b / (g . b) and dp/dV = 1 / (g . b). None if g . b is not usable."""
+    if not np.isfinite(g_kinv_g) or g_kinv_g == 0.0:
+        return None
+    scale = 1.0 / g_kinv_g if volume_control else 1.0
+    du = b * scale
+    return Rate(du, model.pressure_update(ev, du, constraint=False), scale)
+
+
+def extrapolation_weights(loads: np.ndarray, has_rate: np.ndarray, load: float
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """Weights (w, w') of the Hermite polynomial through values at ``loads`` and, where
+    ``has_rate``, their first derivatives, evaluated at ``load``: value = sum w f +
+    sum w' f'. Its degree is the number of conditions less one (a confluent
+    Vandermonde system in the load scaled to the points' spread)."""
+    origin = float(loads[-1])
+    scale = max(float(np.abs(loads - origin).max()), abs(load - origin), 1e-300)
+    x = (loads - origin) / scale
+    rows, kinds = [], []
+    degree = len(loads) + int(has_rate.sum())
+    k = np.arange(degree)
+    for i, xi in enumerate(x):
+        rows.append(xi ** k)
+        kinds.append((i, False))
+        if has_rate[i]:
+            rows.append(k * xi ** np.maximum(k - 1, 0) / scale)   # d/d(load) of x^k
+            kinds.append((i, True))
+    target = ((load - origin) / scale) ** k
+    w = np.linalg.solve(np.array(rows).T, target)
+    values, rates = np.zeros(len(loads)), np.zeros(len(loads))
+    for weight, (i, is_rate) in zip(w, kinds):
+        (rates if is_rate else values)[i] = weight
+    return values, rates
+
+
+def predictor(history: list[State], load: float
               ) -> tuple[np.ndarray, list[np.ndarray], float] | None:
     """Extrapolated start (u, q, p) for the next step at load parameter ``load`` (the
     cavity volume under volume control, the pressure under pressure control): the
-    Lagrange polynomial through the last three converged states (a parabola in the
-    load), or None before there are three (the step then starts from the converged
-    state with its tangent: an Euler predictor)."""
-    n = len(history)
-    if n < 3:
+    Hermite polynomial through the last converged states and their path tangents
+    (``Rate``; quintic through three states with tangents: ~10x closer to the
+    converged state than the parabola through the states alone, benchmarks/RESULTS.md),
+    or None with a single state that has no tangent (the step then starts from the
+    converged state with its tangent: an Euler predictor)."""
+    has_rate = np.array([h.rate is not None for h in history])
+    if len(history) + int(has_rate.sum()) < 2:
         return None
-    s = np.array([h[0] for h in history])
-    w = np.ones(n)
-    for i in range(n):
-        for j in range(n):
-            if i != j:
-                w[i] *= (load - s[j]) / (s[i] - s[j])
-    u = sum(wi * h[1] for wi, h in zip(w, history))
-    q = [sum(wi * h[2][b] for wi, h in zip(w, history)) for b in range(len(history[0][2]))]
-    p = float(sum(wi * h[3] for wi, h in zip(w, history)))
+    w, wr = extrapolation_weights(np.array([h.load for h in history]), has_rate, load)
+
+    rates = [h.rate for h in history]
+
+    def combine(values: list, rate_values: list):
+        out = sum(wi * v for wi, v in zip(w, values))
+        return out + sum(wi * r for wi, r in zip(wr, rate_values) if r is not None)
+
+    u = combine([h.u for h in history], [r and r.du for r in rates])
+    q = [combine([h.q[b] for h in history], [r and r.dq[b] for r in rates])
+         for b in range(len(history[0].q))]
+    p = float(combine([h.pressure_pa for h in history], [r and r.dp for r in rates]))
     return u, q, p
 
 
@@ -327,8 +424,11 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
     step = 0.05 * model.volume0_mm3 if volume_control else 0.05 * model.mu0_min_pa
     initial_step = step
     status, reason = "stopped", f"reached max_steps = {settings.max_steps}"
-    history: list[tuple[float, np.ndarray, list[np.ndarray], float]] = [
-        (model.volume0_mm3 if volume_control else 0.0, u, q, p)]
+    # The path's tangent at the undeformed state: the first step starts from the Euler
+    # predictor along it.
+    b0 = counted_solve(model, counted_factorisation(model, last.K, backend), last.g)
+    history = [State(model.volume0_mm3 if volume_control else 0.0, u, q, p,
+                     path_rate(model, last, b0, float(last.g @ b0), volume_control))]
     extrapolate = True
     switch_index = -1
     failures_here = 0            # failed attempts from the current converged state
@@ -360,7 +460,7 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                 if switch.converged is not None:
                     out = switch.converged
                     u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
-                    history = [(load, u, q, p)]
+                    history = [State(load, u, q, p, out.rate)]
                     angle = record(u, p, out.iterations, out.residual, out.negative_pivots,
                                    last, out.g_kinv_g)
                     switch_index = len(rows["p"]) - 1
@@ -377,7 +477,7 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
         u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
         extrapolate = True
         failures_here = 0
-        history = (history + [(load, u, q, p)])[-PREDICTOR_POINTS:]
+        history = (history + [State(load, u, q, p, step_out.rate)])[-PREDICTOR_POINTS:]
         its = step_out.iterations
         angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last,
                        step_out.g_kinv_g)
@@ -389,12 +489,12 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                 for column in rows.values():
                     column.pop()
                 u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
-                history = [(load, u, q, p)]
+                history = [State(load, u, q, p, out.rate)]
                 angle = record(u, p, its + out.iterations, out.residual, out.negative_pivots,
                                last, out.g_kinv_g)
                 switch_index = len(rows["p"]) - 1
         d_angle = abs(angle - rows["a"][-2])
-        factor = 1.6 if its <= 6 else (1.0 if its <= 9 else 0.6)
+        factor = 1.6 if its <= GROW_SOLVES else (1.0 if its <= HOLD_SOLVES else 0.6)
         if d_angle > 1e-9:
             factor = min(factor, max(0.5, TARGET_ANGLE_STEP_DEG / d_angle))
         d_pressure = abs(p - rows["p"][-2])

@@ -6,26 +6,39 @@ import numpy as np
 import pytest
 
 from solver import Design, SolverSettings, stepping
-from solver.stepping import predictor, solve
+from solver.stepping import Rate, State, predictor, solve
 
 SMALL = SolverSettings(element="hex1", max_angle_deg=25)
 
 
-def test_predictor_is_exact_on_a_parabola():
+def test_predictor_is_exact_on_a_quintic_through_three_states_and_their_tangents():
     def state(s):
-        return (np.array([s, s * s]), [np.array([2 * s * s - 1])], 3 * s * s)
+        return (np.array([s, s**5 - 2 * s**3]), [np.array([2 * s * s - 1])], 3 * s**4 + s)
 
-    history = [(s, *state(s)) for s in (0.0, 1.0, 1.5)]
+    def rate(s):
+        return Rate(np.array([1.0, 5 * s**4 - 6 * s**2]), [np.array([4 * s])], 12 * s**3 + 1)
+
+    history = [State(s, *state(s), rate(s)) for s in (0.0, 1.0, 1.5)]
     u, q, p = predictor(history, 2.2)
     eu, eq, ep = state(2.2)
     assert np.allclose(u, eu) and np.allclose(q[0], eq[0]) and p == pytest.approx(ep)
-    assert predictor(history[:2], 2.2) is None       # two states: Euler from the last
+    # Without the middle state's tangent: a quartic, still exact on the quartic parts.
+    history[1].rate = None
+    u, q, p = predictor(history, 2.2)
+    assert np.allclose(q[0], eq[0]) and p == pytest.approx(ep)
+    assert not np.isclose(u[1], eu[1])
+    # One state without its tangent: no extrapolation (Euler from the converged state).
+    assert predictor([State(0.0, *state(0.0))], 2.2) is None
+    # One state with it: the Euler predictor.
+    u, q, p = predictor([State(1.0, *state(1.0), rate(1.0))], 1.5)
+    assert p == pytest.approx(4.0 + 13.0 * 0.5)
 
 
 def test_speed_ups_leave_the_converged_curve_unchanged(monkeypatch):
     fast = solve(Design(L_mm=4.1), SMALL)
     monkeypatch.setattr(stepping, "CHORD_SWITCH", 0.0)      # full Newton every iteration
-    monkeypatch.setattr(stepping, "PREDICTOR_POINTS", 1)    # restart from the last state
+    monkeypatch.setattr(stepping, "predictor", lambda history, load: None)   # restart from
+                                                                             # the last state
     plain = solve(Design(L_mm=4.1), SMALL)
     assert fast.status == plain.status == "complete"
     # The same steps (the step control sees the same converged states): compare the

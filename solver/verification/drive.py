@@ -3,6 +3,9 @@
 Uses the solver's own ``newton_step`` (the production Newton loop, bordered system
 under volume control) so that the verification exercises the code the product
 runs; only the stepping is simpler: fixed increments, halved on failure.
+``drive_pressure`` also starts each increment from the production predictor
+(``solver.stepping.predictor``; from the last converged state if that start fails), as
+the felupe benchmark compares the two codes' solves at the same increments.
 """
 
 from __future__ import annotations
@@ -13,7 +16,14 @@ import numpy as np
 
 from solver.errors import ConvergenceError
 from solver.settings import SolverSettings
-from solver.stepping import StepFailed, newton_step
+from solver.stepping import (
+    PREDICTOR_POINTS,
+    State,
+    StepFailed,
+    mixed_newton_step,
+    newton_step,
+    predictor,
+)
 
 
 def drive_volume(model, volumes_mm3: Sequence[float], settings: SolverSettings | None = None,
@@ -64,24 +74,34 @@ def drive_pressure(model, pressures_pa: Sequence[float], settings: SolverSetting
     settings = settings or SolverSettings()
     u = np.zeros(model.n_free)
     p = 0.0
+    history = [State(0.0, u, model.consistent_pressures(u), 0.0)]
     out = []
     for target in pressures_pa:
         its_total = 0
         inc = target - p
         cut = 0
+        extrapolate = True
         while p != target:
             pt = target if abs(target - p) <= abs(inc) * (1 + 1e-12) else p + inc
+            guess = predictor(history, pt) if extrapolate else None
+            u0, q0, p0 = guess if guess is not None else (u, model.consistent_pressures(u), p)
             try:
-                u, _, its, _, _ = newton_step(model, u, p, settings, None, pt, backend)
+                step = mixed_newton_step(model, u0, q0, p0, settings, None, pt, backend)
             except (StepFailed, FloatingPointError) as exc:
+                if guess is not None:
+                    extrapolate = False          # retry from the converged state
+                    continue
+                extrapolate = True
                 cut += 1
                 if cut > max_cutbacks:
                     raise ConvergenceError(f"pressure step to {pt:.6g} Pa failed: {exc}"
                                            ) from None
                 inc *= 0.5
                 continue
-            p = pt
+            u, p = step.u, pt
+            history = (history + [State(pt, u, step.q, pt, step.rate)])[-PREDICTOR_POINTS:]
+            extrapolate = True
             cut = 0
-            its_total += its
+            its_total += step.iterations
         out.append((u.copy(), its_total))
     return out
