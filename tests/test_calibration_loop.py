@@ -130,7 +130,8 @@ MEASUREMENT_CASES = [
     pytest.param("camera_gain", Truth(k_angle=1.08), {"k_angle": 1.08}, LOOP, (2.5,),
                  marks=pytest.mark.xfail(reason=(
                      "measured 2026-12-02 (emulator of 533 records, seed 1, angle and gauge "
-                     "pressure by injected volume): camera_gain fits 1.087 +/- 0.010 with "
+                     "pressure by injected volume; still xfail on the 663-record one): "
+                     "camera_gain fits 1.087 +/- 0.010 with "
                      "the lowest angle CV (0.80 deg, floor 0.82) and no pressure offset or "
                      "gain ties with it any more; but body_stiffness 0.84 +/- 0.03 raises "
                      "the angle at a volume nearly alike (CV 0.85 deg) and also lowers the "

@@ -331,3 +331,21 @@ def test_calibrate_save_name_errors_name_the_save_field(client):
     assert calibrate("lab1").json()["saved_model"] == "lab1"
     body = assert_problem(calibrate("lab1"), 409)  # never overwrites a model
     assert body["model"] == "lab1" and "'lab1' already exists" in body["detail"]
+
+
+def test_a_force_target_is_met_across_the_box_by_the_shipped_emulator(shipped_client):
+    # issue 14: "force targets work": 0.2 mN at 1500 Pa with the blocked tip, searched over
+    # the whole box; every candidate's own prediction gives that force, with its band
+    target = {"kind": "force_at_pressure", "pressure_pa": 1500, "force_mn": 0.2}
+    r = shipped_client.post("/v1/inverse", json={"target": target, "n_results": 3})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["model"] == "emulator" and body["feasible"], body["explanation"]
+    for c in body["candidates"]:
+        keys = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "body_material", "membrane_material")
+        design = {k: c[k] for k in keys if k in c}
+        back = shipped_client.post("/v1/predict", json={"design": design,
+                                                        "pressures_pa": [1500]}).json()
+        f, lo, hi = back["force_mn"][0], back["force_lower_mn"][0], back["force_upper_mn"][0]
+        assert f is not None and lo <= f <= hi
+        assert f == pytest.approx(0.2, rel=0.05)
