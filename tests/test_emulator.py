@@ -300,7 +300,7 @@ def test_no_force_number_where_its_band_is_wider_than_twice_the_force(emulator):
 def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
     """One band multiplier for the whole curve was set by the low-angle FE points (half of
     them lie below 10 deg) and covered every held-out point above 10 deg with +-30 deg bands.
-    Per angle bin, the cross-validated bands of the reversed pair's database curves (5
+    Per angle bin, the cross-validated bands of 90 of the reversed pair's database curves (5
     folds, each predicted by the emulator refitted without it) cover 95 % in
     every bin (at least 0.93: a bin's nodes also shape the band just outside it), by
     pressure and by injected volume, and not every point (not needlessly wide)."""
@@ -318,8 +318,10 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
         free, _ = _collect(store.records())
     rows = free["ecoflex_00_30/pdms_1_15"]
     keep = np.array(rows.signs) < 0
-    u, y = np.array(rows.u)[keep], np.array(rows.y)[keep]
-    curves = [c for c, k in zip(rows.curves, keep) if k]
+    # the first 90 of the pair's curves (151 in the shipped database): the calibration is
+    # the same procedure on any set, and 5 refits of 90 take a third of the time
+    u, y = np.array(rows.u)[keep][:90], np.array(rows.y)[keep][:90]
+    curves = [c for c, k in zip(rows.curves, keep) if k][:90]
     mean, var = cross_validated(u, y)
     scales = node_band_scales(curves, mean, var, 0.95)
     for axis in ("pressure", "volume"):
