@@ -345,18 +345,7 @@ def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
                         "pressures where the baseline is finite"
                         + (f" (up to {p_ok.max():.0f} Pa in this curve)" if p_ok.size else ""))
     ok = np.isfinite(pred) | (not by_gauge)
-    if not np.all(ok):
-        warnings.append(f"pressure_pa: {int((~ok).sum())} readings lie past the end of the "
-                        f"baseline's range for their design (the FE stopped there) and are "
-                        "not used")
-        keep_curves = [c for c in range(obs.n_curves) if np.sum(ok[obs.curve == c]) >= 4]
-        obs = obs.rows(ok & np.isin(obs.curve, keep_curves))
-        if obs.n_curves < MIN_CURVES:
-            raise DataError("pressure_pa", f"only {obs.n_curves} curve keeps 4 readings "
-                            "within the baseline's range (the FE's converged range)", None,
-                            "at least 2 curves with 4 readings each below the end of the "
-                            "FE's range")
-    return obs
+    return _keep_within_range(obs, ok, "pressure_pa", "readings", "", warnings)
 
 
 def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline
@@ -398,16 +387,25 @@ def _within_volume_range(obs: Observations, responses: Responses, warnings: list
     for what in ("angle_v", "pressure_v"):
         ok &= np.isfinite(responses.lookup_volume(responses.curves((), [], what), index,
                                                   obs.volume_ul))
+    return _keep_within_range(obs, ok, "time_s", "readings' injected volumes",
+                              " of injected volume", warnings)
+
+
+def _keep_within_range(obs: Observations, ok: np.ndarray, field: str, what: str,
+                       axis: str, warnings: list[str]) -> Observations:
+    """The readings ``ok`` (inside the baseline's range for their design), with a warning
+    naming ``field`` when some are dropped; curves left with fewer than 4 readings go too,
+    and fewer than MIN_CURVES curves is a DataError on ``field``."""
     if np.all(ok):
         return obs
-    warnings.append(f"time_s: {int((~ok).sum())} readings' injected volumes lie past the end "
-                    "of the baseline's range for their design (the FE stopped there) and "
-                    "are not used")
+    warnings.append(f"{field}: {int((~ok).sum())} {what} lie past the end of the "
+                    "baseline's range for their design (the FE stopped there) and are not "
+                    "used")
     keep_curves = [c for c in range(obs.n_curves) if np.sum(ok[obs.curve == c]) >= 4]
     out = obs.rows(ok & np.isin(obs.curve, keep_curves))
     if out.n_curves < MIN_CURVES:
-        raise DataError("time_s", f"only {out.n_curves} curve keeps 4 readings within the "
-                        "baseline's range of injected volume", None,
+        raise DataError(field, f"only {out.n_curves} curve keeps 4 readings within the "
+                        f"baseline's range{axis} (the FE's converged range)", None,
                         "at least 2 curves with 4 readings each below the end of the FE's "
                         "range")
     return out

@@ -115,18 +115,15 @@ def noise_floor(obs: Observations) -> NoiseFloor:
                 t_rel = t[m] - t[m][0]
                 o = np.array([_other_at(obs, rows2, seg_of[c2], d, k, p, t_rel)
                               for c2, rows2 in rows_of.items() if c2 != c])
-                n_others = np.sum(np.isfinite(o), axis=0)
-                ok = n_others >= 1
-                if not np.any(ok):
+                share = _replicate_share(obs.angle_deg[rows[m]], o)
+                if share is None:
                     continue
-                mean = np.nanmean(o[:, ok], axis=0)
-                diff = obs.angle_deg[rows[m]][ok] - mean
-                term = float(np.sum(diff**2 / (1.0 + 1.0 / n_others[ok])))
+                term, n = share
                 sq += term
-                n_used += int(ok.sum())
+                n_used += n
                 acc = per_curve.setdefault(c, [0.0, 0])
                 acc[0] += term
-                acc[1] += int(ok.sum())
+                acc[1] += n
                 used_here += 1
         groups += used_here > 0
     if n_used >= MIN_READINGS:
@@ -195,17 +192,15 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
                 if not others:
                     continue
                 o = np.array(others)
-                n_others = np.sum(np.isfinite(o), axis=0)
-                ok = n_others >= 1
-                if not np.any(ok):
+                share = _replicate_share(y[r], o)
+                if share is None:
                     continue
-                diff = y[r][ok] - np.nanmean(o[:, ok], axis=0)
-                term = float(np.sum(diff**2 / (1.0 + 1.0 / n_others[ok])))
+                term, n = share
                 sq += term
-                n_used += int(ok.sum())
+                n_used += n
                 acc = per_curve.setdefault(c, [0.0, 0])
                 acc[0] += term
-                acc[1] += int(ok.sum())
+                acc[1] += n
     if n_used < MIN_READINGS or sq <= 0:
         return None
     floor2 = sq / n_used
@@ -214,3 +209,16 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
            if means.size >= 2 else float("nan"))
     return NoiseFloor(float(np.sqrt(floor2)), n_used, "replicates", len(np.unique(obs.group)),
                       rel)
+
+
+def _replicate_share(y: np.ndarray, others: np.ndarray) -> tuple[float, int] | None:
+    """One curve segment's share of the replicate scatter: sum over its readings of
+    (y - mean of the other replicates there)^2 / (1 + 1/n), n the others that have a value
+    there (so that the expectation is the scatter's variance per reading), and how many
+    readings counted; None when no other replicate covers any of them."""
+    n_others = np.sum(np.isfinite(others), axis=0)
+    ok = n_others >= 1
+    if not np.any(ok):
+        return None
+    diff = y[ok] - np.nanmean(others[:, ok], axis=0)
+    return float(np.sum(diff**2 / (1.0 + 1.0 / n_others[ok]))), int(ok.sum())
