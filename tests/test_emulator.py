@@ -363,3 +363,24 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
     # a database design: the GP interpolates its own force curve
     fe = c.force_mn[inside]
     np.testing.assert_allclose(a.force_mn, fe, atol=0.02 * np.abs(fe).max())
+
+
+def test_an_emulator_file_with_an_unknown_force_form_is_refused_and_a_format_3_file_reads(
+        emulator):
+    """file.py: force_form is one of FORCE_FORMS (a file that says otherwise is refused,
+    naming the field); a format-3 file, which has no force_form, holds plain F/p."""
+    from surrogate.emulator.file import emulator_from_dict, emulator_to_dict
+    from surrogate.errors import SurrogateFileError
+    from surrogate.file_seal import KEY, seal
+
+    doc = emulator_to_dict(emulator)
+    body = {k: v for k, v in doc.items() if k != KEY}
+    body["pairs"][0]["force_form"] = "newtons"
+    with pytest.raises(SurrogateFileError, match="force_form"):
+        emulator_from_dict(seal(body))
+    old = {k: v for k, v in doc.items() if k != KEY}
+    old["format_version"] = 3
+    for p in old["pairs"]:             # (shared with body's: the bad value goes too)
+        del p["force_form"]
+    e3 = emulator_from_dict(seal(old))
+    assert all(pe.force_form == "per_kpa" for pe in e3.pairs.values())
