@@ -342,7 +342,8 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
     complete free-tip curves and its blocked-tip curves): the force model is the secant-normalised
     form, reproduces its blocked-tip designs, and a saved file answers identically."""
     from surrogate.emulator.build import fit_emulator, is_force_record
-    from surrogate.emulator.file import load_emulator as load, save_emulator
+    from surrogate.emulator.file import load_emulator as load
+    from surrogate.emulator.file import save_emulator
 
     with CurveStore(DB) as db:
         recs = [r for r in db.records() if "pdms" in r.design.body_material.id]
