@@ -11,6 +11,8 @@ scale^2)), so records of scaled copies of a design pool their information.
 
 Curves that end before 90 deg (the FE failed or stopped) are not interpolated; they
 limit the range of every query within ``FAILED_RADIUS`` of them (unit-cube distance).
+Every query's range also ends where its emulated injected volume reaches the FE's volume
+stop (``SolverSettings.max_volume_ul``), as the FE's own curve would.
 
 Bands: the GP's standard deviation times ``band_scale``, one multiplier per output node
 (``node_band_scales``: per angle bin for pressure), chosen so that cross-validated bands
@@ -49,7 +51,7 @@ from surrogate.emulator.features import (
     force_features,
     free_secant_deg_per_pa,
 )
-from surrogate.emulator.vector_gp import fit_vector_gp
+from surrogate.emulator.vector_gp import fit_output_gps, fit_vector_gp
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
 MIN_DESIGNS = 10
@@ -133,7 +135,7 @@ GEOMETRY_COORDINATES = 5          # the first five unit-cube coordinates: L, t, 
 def cross_validated(u: np.ndarray, y: np.ndarray, seed: int = 0, folds: int = CV_FOLDS
                     ) -> tuple[np.ndarray, np.ndarray]:
     """K-fold cross-validated mean and variance of every output at every design: each
-    fold predicted by a VectorGP refitted (PCA and GP hyperparameters) without it.
+    fold predicted by the per-output GPs refitted (hyperparameters too) without it.
     Designs that share a geometry (the two PDMS bodies of a pooled group at one Sobol
     point) fall in one fold.
 
@@ -150,7 +152,7 @@ def cross_validated(u: np.ndarray, y: np.ndarray, seed: int = 0, folds: int = CV
         test = fold == k
         if not test.any():
             continue
-        gp = fit_vector_gp(u[~test], y[~test], seed=seed)
+        gp = fit_output_gps(u[~test], y[~test], seed=seed)
         mean[test], var[test] = gp.predict_many(u[test])
     return mean, var
 
@@ -283,7 +285,7 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     y = np.array(rows.y)[keep]
     curves = [c for c, k in zip(rows.curves, keep) if k]
     keys = tuple(k for k, kk in zip(rows.keys, keep) if kk)
-    vgp = fit_vector_gp(u, y, seed=seed)
+    vgp = fit_output_gps(u, y, seed=seed)
     cv_mean, cv_var = cross_validated(u, y, seed)
     band_scale = node_band_scales(curves, cv_mean, cv_var, level)
     cv = _cv_angle_report(curves, cv_mean, cv_var, band_scale, level)
@@ -310,6 +312,7 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         fe_limit_angle_deg=LIMIT_ANGLE_DEG,
         fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
                        "(SolverSettings.max_angle_deg)",
+        fe_max_volume_ul=default_free_settings().max_volume_ul,
         coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
         force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[1])
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),

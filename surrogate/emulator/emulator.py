@@ -105,6 +105,29 @@ class PairEmulator:
     force_limit_pa: float = float(FORCE_PRESSURE_NODES_PA[-1])
     failed: tuple = ()      # (unit coordinates, end angle deg, reason) of curves ended early
     force_form: str = "per_kpa"
+    fe_max_volume_ul: float | None = None   # the FE's volume stop (whole actuator, ul)
+
+    def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float
+                 ) -> tuple[float, str]:
+        """The FE's range for the design at unit coordinates ``u`` (deg) and why it ends
+        there: the FE's angle stop; the angle at which the emulated injected volume
+        ``volume_red_ul`` (reduced, on FINE_ANGLES_DEG) reaches the FE's volume stop; the
+        end of an early-ended database curve within FAILED_RADIUS."""
+        limit, reason = self.fe_limit_angle_deg, self.fe_stop_reason
+        if self.fe_max_volume_ul is not None:
+            v_stop = self.fe_max_volume_ul / length_scale**3
+            over = np.flatnonzero(np.asarray(volume_red_ul) >= v_stop)
+            if len(over) and FINE_ANGLES_DEG[over[0]] < limit:
+                limit = float(FINE_ANGLES_DEG[over[0]])
+                reason = (f"the default FE stops at {self.fe_max_volume_ul:g} ul injected "
+                          "(SolverSettings.max_volume_ul), which this design's emulated "
+                          f"volume reaches at {limit:.1f} deg: the balloon grows more than "
+                          "the actuator bends")
+        for fu, angle, why in self.failed:
+            if np.linalg.norm(np.asarray(fu) - u) < FAILED_RADIUS and angle < limit:
+                limit = float(angle)
+                reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
+        return limit, reason
 
     def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
         """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
@@ -188,12 +211,7 @@ class Emulator:
         p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
         p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
         v = FINE_ANGLES_DEG * np.exp(_B_ANGLE @ mean[N_NODES:])
-        limit, reason = pe.fe_limit_angle_deg, pe.fe_stop_reason
-        u = point.coordinates()
-        for fu, angle, why in pe.failed:
-            if np.linalg.norm(np.asarray(fu) - u) < FAILED_RADIUS and angle < limit:
-                limit = float(angle)
-                reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
+        limit, reason = pe.fe_range(point.coordinates(), v, point.length_scale)
         v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale[N_NODES:]
         return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean)
 
@@ -331,7 +349,8 @@ class Emulator:
                 f"{int(past.sum())} pressure(s) above {fe_limit_pa:.0f} Pa are past the FE's "
                 f"range for this design ({cb.stop_reason}; "
                 f"{cb.limit_angle_deg:g} deg): no angle is given there; an FE solve "
-                "(POST /v1/solve) with a larger max_angle_deg can go further")
+                "(POST /v1/solve) with a larger max_angle_deg or max_volume_ul can go "
+                "further")
         if force is not None:
             unbacked = np.isnan(force[0]) & (p <= pe.force_limit_pa * point.pressure_scale)
             if unbacked.any():
@@ -415,12 +434,10 @@ class Emulator:
             if pe.force is not None:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
+            volumes = FINE_ANGLES_DEG * np.exp(mean[:, N_NODES:] @ _B_ANGLE.T)
             for row, i in enumerate(idx):
                 pt = points[i]
-                limit = pe.fe_limit_angle_deg
-                for fu, ang, _ in pe.failed:
-                    if np.linalg.norm(np.asarray(fu) - u[row]) < FAILED_RADIUS:
-                        limit = min(limit, ang)
+                limit = pe.fe_range(u[row], volumes[row], pt.length_scale)[0]
                 pm, pl, pu = (_with_origin(c[row]) for c in curves)
                 p_lim = float(np.interp(limit, ANGLES0, pm))
                 q = pressure_pa / pt.pressure_scale

@@ -27,8 +27,9 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 4   # 4: force_form (3 read: F/p); 3: band_scale per output node (2 read,
-                     # one multiplier)
+FORMAT_VERSION = 5   # 5: fe_max_volume_ul, GPs with per-point noise (early-ended curves;
+                     # 4 read: no volume stop); 4: force_form (3 read: F/p); 3: band_scale
+                     # per output node (2 read, one multiplier)
 
 
 def emulator_to_dict(e: Emulator) -> dict:
@@ -42,7 +43,7 @@ def emulator_to_dict(e: Emulator) -> dict:
             "curves": pe.curves.as_dict(),
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
-            "force_form": pe.force_form})
+            "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul})
     return seal(plain_json({
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
@@ -74,7 +75,9 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                 force_band_scale=float(p["force_band_scale"]),
                 force_limit_pa=float(p["force_limit_pa"]),
                 failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]),
-                force_form=str(p.get("force_form", FORCE_FORMS[0])))
+                force_form=str(p.get("force_form", FORCE_FORMS[0])),
+                fe_max_volume_ul=None if p.get("fe_max_volume_ul") is None
+                else float(p["fe_max_volume_ul"]))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
         if not pairs:
@@ -122,6 +125,9 @@ def _check_pair(pe: PairEmulator) -> None:
     if (abs(pe.sign) != 1.0 or pe.fe_limit_angle_deg <= 0
             or pe.force_band_scale <= 0 or pe.force_limit_pa <= 0):
         raise ValueError(f"pair {pe.pair}: sign, band scale or FE limit out of range")
+    if pe.fe_max_volume_ul is not None and not (math.isfinite(pe.fe_max_volume_ul)
+                                                and pe.fe_max_volume_ul > 0):
+        raise ValueError(f"pair {pe.pair}: fe_max_volume_ul must be a positive number")
     if pe.coordinates.ndim != 2 or len(pe.coordinates) != len(pe.keys):
         raise ValueError(f"pair {pe.pair}: coordinates and keys do not agree")
     if not np.isfinite(pe.coordinates).all():

@@ -168,8 +168,11 @@ def from_hyperparameters(x: np.ndarray, y: np.ndarray, lengths: np.ndarray,
 
 
 def fit_gp(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
-           min_nugget: float = NUGGET_BOUNDS[0]) -> GaussianProcess:
-    """Maximise the restricted likelihood over (log lengths, log nugget)."""
+           min_nugget: float = NUGGET_BOUNDS[0],
+           warm: GaussianProcess | None = None) -> GaussianProcess:
+    """Maximise the restricted likelihood over (log lengths, log nugget), from ``starts``
+    starting points: the first at ``warm``'s hyperparameters when given (a neighbouring
+    output's fit), else at length 0.6 everywhere."""
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     n, d = x.shape
@@ -185,6 +188,10 @@ def fit_gp(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
         # nugget starts at 1e-6 and, every other start, at the bound: the likelihood is
         # flat in a small nugget, so L-BFGS-B stays near where it starts
         nugget0 = 1e-6 if i % 2 == 0 else NUGGET_BOUNDS[0]
+        if warm is not None and i == 0:
+            lengths0, nugget0 = np.clip(warm.lengths, *LENGTH_BOUNDS), warm.nugget
+        elif warm is not None and i == 1:
+            lengths0 = np.full(d, 0.6)
         x0 = np.concatenate((np.log(lengths0), [np.log(max(nugget0, min_nugget))]))
         res = minimize(_neg_reml, x0, args=(x, y), jac=True, method="L-BFGS-B",
                        bounds=bounds, options={"maxiter": 300})
