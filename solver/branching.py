@@ -52,6 +52,9 @@ EASY_ITERATIONS = 4
 MAX_AMPLITUDE = 2.0     # give up beyond this amplitude, x the state's largest displacement
 MIN_STEP = 1e-4         # give up when an increment is cut below this (same unit)
 MODE_NEWTON_ITER = 15
+ARC_FIRST_STEP = 0.002  # first arc-length step, x the state's largest displacement
+ARC_MAX_STEP = 0.1      # largest arc-length step (same unit)
+ARC_STEPS = 120         # arc-length steps before giving up
 
 
 @dataclass
@@ -213,3 +216,106 @@ def switch_branch(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: f
     return Switch(None, eigenvalue, 0.0, float("nan"),
                   f"no stable state along the lowest volume-neutral mode (eigenvalue "
                   f"{eigenvalue:.3g} uN/mm): " + "; ".join(tried))
+
+
+@dataclass
+class PathPoint:
+    """A converged state of the arc-length continuation with its stability and the
+    path's unit tangent (du, dp) per unit arc length in u."""
+
+    u: np.ndarray
+    q: list[np.ndarray]
+    pressure_pa: float
+    volume_mm3: float
+    unstable_modes: int
+    tangent_u: np.ndarray
+    tangent_p: float
+    iterations: int
+
+
+def arc_length_point(model: ActuatorModel, start: PathPoint, step: float, tol: float,
+                     backend: str) -> PathPoint:
+    """One arc-length step along the equilibrium path R(u, p) = 0 from ``start``: the
+    predictor start + step x tangent, then Newton with the constraint
+    t_u . (u - u_start) = step (cylindrical arc length in u: the bordered matrix
+    [[K, -g], [t_u^T, 0]] stays regular at folds in pressure and in volume)."""
+    t_u = start.tangent_u
+    u, p = start.u + step * t_u, start.pressure_pa + step * start.tangent_p
+    q = start.q
+    force_floor = model.mu0_min_pa * 1e-6
+    res = np.inf
+    for it in range(1, MODE_NEWTON_ITER + 1):
+        ev = model.evaluate(u, p, pressures=q)
+        res = float(np.linalg.norm(ev.R)) / max(ev.load_norm, force_floor)
+        c = float(t_u @ (u - start.u)) - step
+        if not np.isfinite(res):
+            raise ArithmeticError("non-finite residual")
+        fac = factorize(ev.K, backend)
+        a, b = fac.solve(np.column_stack((-ev.R, ev.g))).T
+        if it > 1 and res < tol and ev.constraint_error < tol and abs(c) < tol * abs(step):
+            gkg = float(ev.g @ b)
+            # The tangent: K du = g dp, continuing the old direction.
+            du = b / float(np.linalg.norm(b))
+            sign = 1.0 if du @ t_u >= 0 else -1.0
+            return PathPoint(u, q, p, ev.volume_mm3,
+                             volume_control_index(fac.negative_pivots, gkg), sign * du,
+                             sign / float(np.linalg.norm(b)), it - 1)
+        dp = (-c - float(t_u @ a)) / float(t_u @ b)
+        du = a + dp * b
+        q = [qb + d for qb, d in zip(q, model.pressure_update(ev, du))]
+        u, p = u + du, p + dp
+    raise ArithmeticError(f"no convergence in {MODE_NEWTON_ITER} iterations (residual "
+                          f"{res:.2e})")
+
+
+def pass_fold(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
+              target_volume: float, converge: Callable, backend: str, tol: float,
+              log: list | None = None) -> Switch:
+    """A volume step from the converged state (u, q, p) to ``target_volume`` failed at
+    a fold of the path in volume (the bordered system singular, no equilibrium nearby
+    beyond it: under a syringe pump, a snap). Follow the equilibrium path by arc length
+    from the state, over the fold and along the branch beyond it (unstable at constant
+    volume), until it is stable at constant volume again at a volume at or beyond
+    ``target_volume``; then converge the volume step there."""
+    ev = model.evaluate(u, p, pressures=q)
+    fac = factorize(ev.K, backend)
+    b = fac.solve(ev.g)
+    gkg = float(ev.g @ b)
+    # Start towards growing volume: dV = g . du = gkg dp.
+    sign = 1.0 if gkg > 0 else -1.0
+    point = PathPoint(u, q, p, ev.volume_mm3, volume_control_index(fac.negative_pivots, gkg),
+                      sign * b / float(np.linalg.norm(b)), sign / float(np.linalg.norm(b)), 0)
+    scale = max(float(np.abs(u).max()), 1e-3)
+    step = ARC_FIRST_STEP * scale
+    left = False
+    volumes = [point.volume_mm3]
+    for _ in range(ARC_STEPS):
+        try:
+            new = arc_length_point(model, point, step, tol, backend)
+        except (ArithmeticError, FloatingPointError, np.linalg.LinAlgError, RuntimeError):
+            step *= 0.5
+            if step < MIN_STEP * scale:
+                break
+            continue
+        if log is not None:
+            log.append((new.volume_mm3, new.pressure_pa, new.unstable_modes, new.iterations))
+        volumes.append(new.volume_mm3)
+        left = left or new.unstable_modes > 0
+        point = new
+        if left and new.unstable_modes == 0 and new.volume_mm3 >= target_volume:
+            try:
+                out = converge(new.u, new.q, new.pressure_pa)
+            except Exception as exc:   # StepFailed, an inverted element, a failed factorisation
+                return Switch(None, float("nan"), 0.0, float("nan"),
+                              f"past the fold, the volume step back to the target failed: {exc}")
+            index = volume_control_index(out.negative_pivots, out.g_kinv_g)
+            if index == 0:
+                return Switch(out, float("nan"), float(np.abs(out.u - u).max()), float("nan"),
+                              f"passed a fold in volume by arc length ({len(volumes) - 1} "
+                              f"points, volume {min(volumes):.4g}-{max(volumes):.4g} mm^3)")
+        if new.iterations <= EASY_ITERATIONS:
+            step = min(step * GROWTH, ARC_MAX_STEP * scale)
+    return Switch(None, float("nan"), 0.0, float("nan"),
+                  f"arc length from the fold found no stable state at the target volume "
+                  f"({len(volumes) - 1} points, volume {min(volumes):.4g}-{max(volumes):.4g} "
+                  f"mm^3, left the stable branch: {left})")
