@@ -1,13 +1,15 @@
-"""Leaving an unstable equilibrium branch under volume control: mode-amplitude continuation.
+"""Leaving an unstable equilibrium branch under volume control (issue 12).
 
-Past a bifurcation under volume control the primary solution (the branch continued
-from the undeformed state) is a saddle of the potential Pi = E - p (V - V_t) at constant
-volume: along its unstable volume-neutral mode phi (solver/stability.py) Pi decreases,
-and the stable secondary branch lies that way, at a distance that grows like the square
-root of the volume past the bifurcation (a pitchfork). Newton alone cannot leave the
-primary branch: started from a small perturbation it converges back to the nearest
-equilibrium, the unstable one. The secondary branch is reached by continuation in the
-mode's amplitude instead:
+Two situations, two methods.
+
+**A bifurcation passed** (a converged state unstable at constant volume,
+``switch_branch``). The primary solution (the branch continued from the undeformed
+state) is then a saddle of the potential Pi = E - p (V - V_t) at constant volume: along
+its unstable volume-neutral mode phi (solver/stability.py) Pi decreases, and the stable
+secondary branch lies that way, at a distance that grows like the square root of the
+volume past a pitchfork. Newton alone cannot leave the primary branch: started from a
+small perturbation it converges back to the nearest equilibrium, the unstable one. The
+secondary branch is reached by continuation in the mode's amplitude:
 
 1. phi: the lowest eigenvector of K on the volume-neutral subspace at the state;
 2. at the target volume, equilibrium with the amplitude s = phi . (u - u_0) prescribed
@@ -20,19 +22,25 @@ mode's amplitude instead:
    at constant volume and, at the same volume, has a lower potential than the state
    it left.
 
-The same works where a volume step fails at a fold of the path in volume (an imperfect
-pitchfork: the primary path turns back in volume, there is no equilibrium nearby
-beyond it, and the bordered system is singular at the fold): step 2 at the failed
-step's volume starts with a non-zero force f_0 at s = 0 (no equilibrium there), and s
-moves in the direction -sign(f_0) until f vanishes.
+**A fold in volume** (a volume step fails however far it is cut back, ``pass_fold``).
+An imperfect pitchfork (the actuator is not symmetric along x: one end clamped) turns
+the bifurcation into a path that reaches a maximum of the volume and turns back: the
+bordered system is singular there and there is no equilibrium nearby beyond it (under
+a syringe pump, a snap). Arc-length continuation in u (the bordered matrix
+[[K, -g], [t^T, 0]] stays regular at folds in pressure and in volume) follows the path
+over the fold, back along the branch that is unstable at constant volume, until it is
+stable again at or beyond the failed step's volume; a volume step to that volume from
+there is the new state.
 
-What did not work (kept out, issue 12): a line search of Pi along +-s phi at fixed
-pressure followed by Newton at the same volume. On two balloons sharing one pressure
+What did not work (kept out): a line search of Pi along +-s phi at fixed pressure
+followed by Newton at the same volume. On two balloons sharing one pressure
 (solver/verification/two_balloons.py) the line minimum lies at 0.005-0.03 mm, because
 the frozen mode's second-order dilatation times the bulk modulus dominates Pi, and
 Newton from there returned to the symmetric state every time (potential drop 1e-12 nJ);
 on the actuator (t = 0.25 mm) the mode injected at 0.01-0.16 mm at a failed step did
-not converge from any of six starts.
+not converge from any of six starts, and the amplitude-held Newton at the failed
+step's volume (step 2 above) did not converge either (residual 2.2 after 15
+iterations): past a fold there is no nearby state to hold.
 """
 
 from __future__ import annotations
@@ -52,9 +60,13 @@ EASY_ITERATIONS = 4
 MAX_AMPLITUDE = 2.0     # give up beyond this amplitude, x the state's largest displacement
 MIN_STEP = 1e-4         # give up when an increment is cut below this (same unit)
 MODE_NEWTON_ITER = 15
-ARC_FIRST_STEP = 0.002  # first arc-length step, x the state's largest displacement
-ARC_MAX_STEP = 0.1      # largest arc-length step (same unit)
-ARC_STEPS = 120         # arc-length steps before giving up
+ARC_FIRST_STEP = 1e-4   # first arc-length step, x the norm of the state's displacement
+ARC_MAX_STEP = 0.02     # largest arc-length step (same unit)
+ARC_MIN_STEP = 1e-7     # give up when a step is cut below this (same unit)
+ARC_STEPS = 100         # arc-length steps before giving up
+ARC_EASY_ITERATIONS = 3  # an arc-length step converged in this many grows the next,
+                         # in more than EASY_ITERATIONS halves it
+ARC_MAX_ITERATIONS = 6   # an arc-length step converged in more is retried at half the size
 
 
 @dataclass
@@ -62,8 +74,9 @@ class Switch:
     """Outcome of a switch attempt; ``converged`` is the new state (a stepping
     ``Converged``) when accepted, else None; ``reason`` says why not.
     ``amplitude_mm``: the largest nodal displacement of the mode's amplitude at the
-    release; ``potential_drop``: Pi of the state left minus Pi of the new one at the same
-    volume (nJ; NaN when the state left is at another volume)."""
+    release; ``potential_drop``: Pi of the state left minus Pi of the new one at the
+    target volume (nJ; when the state left is at another volume, its Pi there to first
+    order in the difference)."""
 
     converged: object | None
     eigenvalue: float
@@ -185,7 +198,8 @@ def switch_branch(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: f
     except (ArithmeticError, FloatingPointError, np.linalg.LinAlgError, RuntimeError) as exc:
         return Switch(None, eigenvalue, 0.0, float("nan"),
                       f"no equilibrium with the mode held at the target volume: {exc}")
-    base = potential(model, u, p, target_volume) if at_target else float("nan")
+    # Pi at the target volume of the state left (at another volume: to first order).
+    base = potential(model, u, p, target_volume)
     # At a bifurcation passed the force is ~0 and either side falls; past a fold only the
     # side against the force does.
     held = abs(start.force) > tol * max(model.evaluate(u, p, tangent=False).load_norm,
@@ -254,9 +268,10 @@ def arc_length_point(model: ActuatorModel, start: PathPoint, step: float, tol: f
         a, b = fac.solve(np.column_stack((-ev.R, ev.g))).T
         if it > 1 and res < tol and ev.constraint_error < tol and abs(c) < tol * abs(step):
             gkg = float(ev.g @ b)
-            # The tangent: K du = g dp, continuing the old direction.
+            # The tangent: K du = g dp, oriented along the step just made (the secant;
+            # the old tangent can point back after a step over a sharp turn).
             du = b / float(np.linalg.norm(b))
-            sign = 1.0 if du @ t_u >= 0 else -1.0
+            sign = 1.0 if du @ (u - start.u) >= 0 else -1.0
             return PathPoint(u, q, p, ev.volume_mm3,
                              volume_control_index(fac.negative_pivots, gkg), sign * du,
                              sign / float(np.linalg.norm(b)), it - 1)
@@ -285,7 +300,7 @@ def pass_fold(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float
     sign = 1.0 if gkg > 0 else -1.0
     point = PathPoint(u, q, p, ev.volume_mm3, volume_control_index(fac.negative_pivots, gkg),
                       sign * b / float(np.linalg.norm(b)), sign / float(np.linalg.norm(b)), 0)
-    scale = max(float(np.abs(u).max()), 1e-3)
+    scale = max(float(np.linalg.norm(u)), 1e-3)
     step = ARC_FIRST_STEP * scale
     left = False
     volumes = [point.volume_mm3]
@@ -293,8 +308,12 @@ def pass_fold(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float
         try:
             new = arc_length_point(model, point, step, tol, backend)
         except (ArithmeticError, FloatingPointError, np.linalg.LinAlgError, RuntimeError):
+            new = None
+        if new is None or new.iterations > ARC_MAX_ITERATIONS:
+            # (A hard step may have landed on another part of the path, past a sharp
+            # turn, and continued from there backwards: it is not taken.)
             step *= 0.5
-            if step < MIN_STEP * scale:
+            if step < ARC_MIN_STEP * scale:
                 break
             continue
         if log is not None:
@@ -309,12 +328,19 @@ def pass_fold(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float
                 return Switch(None, float("nan"), 0.0, float("nan"),
                               f"past the fold, the volume step back to the target failed: {exc}")
             index = volume_control_index(out.negative_pivots, out.g_kinv_g)
+            # Pi at the target volume: of the new state, and of the last one before the
+            # fold (to first order in its small volume difference).
+            drop = (potential(model, u, p, target_volume)
+                    - potential(model, out.u, out.pressure_pa, target_volume))
             if index == 0:
-                return Switch(out, float("nan"), float(np.abs(out.u - u).max()), float("nan"),
+                return Switch(out, float("nan"), float(np.abs(out.u - u).max()), drop,
                               f"passed a fold in volume by arc length ({len(volumes) - 1} "
-                              f"points, volume {min(volumes):.4g}-{max(volumes):.4g} mm^3)")
-        if new.iterations <= EASY_ITERATIONS:
+                              f"points, volume {min(volumes):.4g}-{max(volumes):.4g} mm^3, "
+                              f"potential drop {drop:.3g} nJ)")
+        if new.iterations <= ARC_EASY_ITERATIONS:
             step = min(step * GROWTH, ARC_MAX_STEP * scale)
+        elif new.iterations > EASY_ITERATIONS:
+            step *= 0.5
     return Switch(None, float("nan"), 0.0, float("nan"),
                   f"arc length from the fold found no stable state at the target volume "
                   f"({len(volumes) - 1} points, volume {min(volumes):.4g}-{max(volumes):.4g} "

@@ -47,7 +47,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from solver.branching import lowest_volume_neutral_mode, switch_branch
+from solver.branching import lowest_volume_neutral_mode, pass_fold, switch_branch
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
@@ -424,16 +424,26 @@ def inflate_model(model, settings: SolverSettings,
 
     def try_switch(u_, q_, p_, volume, at_target):
         """One branch-switch attempt from the converged state (u_, q_, p_) to a stable
-        state at the cavity volume ``volume`` (solver/branching.py)."""
-        switch = switch_branch(model, u_, q_, p_, volume,
-                               lambda us, qs, ps: mixed_newton_step(
-                                   model, us, qs, ps, switch_settings, volume, None, backend,
-                                   patient=True),
-                               backend, settings.newton_tol, at_target)
-        model.timings["branch_switch_attempts"] = (
-            model.timings.get("branch_switch_attempts", 0) + 1)
-        if debug:
-            print(f"branch switch after step {len(rows['p']) - 1}: {switch.reason}")
+        state at the cavity volume ``volume`` (solver/branching.py): along the unstable
+        mode if the state is at that volume; otherwise (a failed step) over a fold in
+        volume by arc length first, then along the lowest volume-neutral mode."""
+        def converge(us, qs, ps):
+            return mixed_newton_step(model, us, qs, ps, switch_settings, volume, None,
+                                     backend, patient=True)
+        attempts = ((switch_branch,) if at_target else (pass_fold, switch_branch))
+        for attempt in attempts:
+            if attempt is switch_branch:
+                switch = switch_branch(model, u_, q_, p_, volume, converge, backend,
+                                       settings.newton_tol, at_target)
+            else:
+                switch = pass_fold(model, u_, q_, p_, volume, converge, backend,
+                                   settings.newton_tol)
+            model.timings["branch_switch_attempts"] = (
+                model.timings.get("branch_switch_attempts", 0) + 1)
+            if debug:
+                print(f"branch switch after step {len(rows['p']) - 1}: {switch.reason}")
+            if switch.converged is not None:
+                break
         return switch
 
     def near_bifurcation(a, b, volume_a, volume_b):
