@@ -341,11 +341,13 @@ def solve(design: Design, settings: SolverSettings | None = None,
     """Inflate ``design`` until a stop criterion; return the curve.
 
     ``follow_stable_branch`` (volume control): where the state first becomes unstable
-    at constant volume (a bifurcation, solver/stability.py), inject the unstable mode
-    and continue on the stable branch (solver/branching.py); likewise when a step keeps
-    failing near one (``FAILURES_BEFORE_SWITCH``); the curve records the step in
-    ``branch_switch_index``. Off by default: the database's curves follow the
-    primary branch and flag the instability (``volume_control_negative_eigenvalues``).
+    at constant volume (a bifurcation, solver/stability.py), locate it and continue on
+    the stable branch by continuation in the unstable mode's amplitude; where a step
+    keeps failing (``FAILURES_BEFORE_SWITCH``: a fold in volume), pass the fold by arc
+    length (solver/branching.py); the curve records the step in
+    ``branch_switch_index`` (the first switch only). Off by default: the database's
+    curves follow the primary branch and flag the instability
+    (``volume_control_negative_eigenvalues``).
 
     Raises InputError for invalid input only; a solve that fails returns a Curve
     with status "failed" and the reason.
