@@ -485,6 +485,8 @@ def inflate_model(model, settings: SolverSettings,
                      path_rate(model, last, b0, float(last.g @ b0), volume_control))]
     extrapolate = True
     switch_index = -1
+    fold_attempted = False       # the switch at a failed step is tried once per curve (its
+                                 # arc length costs minutes on the actuator)
     failures_here = 0            # failed attempts from the current converged state
     for _ in range(settings.max_steps):
         # Under pressure control the last step lands on max_pressure_pa, not beyond it.
@@ -509,7 +511,8 @@ def inflate_model(model, settings: SolverSettings,
                 continue
             extrapolate = True
             if (follow_stable_branch and volume_control and switch_index < 0
-                    and failures_here == FAILURES_BEFORE_SWITCH):
+                    and failures_here == FAILURES_BEFORE_SWITCH and not fold_attempted):
+                fold_attempted = True
                 switch = try_switch(u, q, p, load, at_target=False)
                 if switch.converged is not None:
                     out = switch.converged

@@ -35,7 +35,9 @@ def symmetric_state(model: TwoBalloonModel, volume_mm3: float):
     settings = SolverSettings()
     u = np.zeros(model.n_free)
     q, p = model.consistent_pressures(u), 0.0
-    for target in np.linspace(model.volume0_mm3, volume_mm3, 41)[1:]:
+    stretch = np.cbrt(volume_mm3 / model.volume0_mm3)
+    for lam in np.linspace(1.0, stretch, 17)[1:]:
+        target = model.volume0_mm3 * lam**3
         out = mixed_newton_step(model, u, q, p, settings, target, None, "auto")
         u, q, p = out.u, out.q, out.pressure_pa
     return out
