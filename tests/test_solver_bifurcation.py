@@ -108,3 +108,17 @@ def test_without_following_the_solve_stays_on_the_flagged_equal_branch():
     assert abs(lam[0] - lam[1]) < 1e-6
     late = curve.volume_control_negative_eigenvalues[-3:]
     assert np.all(late == 1) and np.all(curve.negative_eigenvalues[-3:] == 2)
+
+
+def test_an_imperfect_pair_leaves_the_equal_state_without_a_switch():
+    # A 1 % thinner second wall makes the pitchfork imperfect; for this supercritical one
+    # the primary path itself turns smoothly onto the unequal branch (no fold): every
+    # state is stable at constant volume and the thinner balloon takes the volume.
+    # Measured: stretches 1.21 and 2.62 at 74 ul.
+    model = TwoBalloonModel(NEO_HOOKE, imperfection=0.01)
+    curve, u = inflate_model(model, SolverSettings(max_volume_ul=MAX_VOLUME_UL))
+    assert curve.status == "complete" and curve.branch_switch_index == -1
+    assert np.all(curve.volume_control_negative_eigenvalues == 0)
+    assert curve.negative_eigenvalues[-1] == 1
+    thick, thin = model.balloon_stretches(u)
+    assert thin > thick + 1.0
