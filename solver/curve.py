@@ -86,8 +86,8 @@ class Curve:
     def stability_notes(self) -> list[str]:
         """Plain-language notes on a loss of stability along the curve (empty if none):
         the first step whose tangent at fixed pressure is not positive definite (the
-        actuator would snap under pressure control: e.g. the two-balloon mode of thin
-        membranes), and a pressure maximum under volume control."""
+        actuator would snap under pressure control), the first step unstable at constant
+        volume, a branch switch, and a pressure maximum under volume control."""
         notes = []
         unstable = np.nonzero(np.asarray(self.negative_eigenvalues) > 0)[0]
         if len(unstable):
@@ -108,9 +108,11 @@ class Curve:
                     " the syringe-pump experiment would leave this branch")
         if self.branch_switch_index >= 0:
             i = self.branch_switch_index
-            notes.append(f"left the unstable branch along its unstable mode at step {i} "
-                         f"(angle = {self.angle_deg[i]:.1f} deg); later points are on the "
-                         "stable branch")
+            notes.append(f"left the primary branch at step {i} (angle = "
+                         f"{self.angle_deg[i]:.1f} deg): past a bifurcation along its "
+                         "unstable mode, or a snap over a fold in volume; later points "
+                         "follow the branch reached (stable at constant volume where no "
+                         "volume-neutral mode is flagged)")
         if self.pressure_maximum_index >= 0:
             i = self.pressure_maximum_index
             notes.append(f"pressure maximum {self.pressure_pa[i]:.0f} Pa at step {i} "

@@ -108,9 +108,12 @@ def _join(*segments: np.ndarray) -> np.ndarray:
 
 
 def build_mesh(design: Design, level: int,
-               divisions: MeshDivisions = DEFAULT_DIVISIONS) -> ActuatorMesh:
+               divisions: MeshDivisions = DEFAULT_DIVISIONS,
+               full_width: bool = False) -> ActuatorMesh:
     """Mesh the half actuator of a validated design at refinement ``level`` (>= 0):
-    every division of ``divisions`` times level + 1."""
+    every division of ``divisions`` times level + 1. ``full_width``: the whole width
+    instead, -W/2 <= y <= W/2 (the half mesh and its mirror image), for checking what
+    the symmetry plane hides (benchmarks/full_width_check.py); the solver uses the half."""
     d = design.validated()
     assert d.chamber_offset_mm is not None and d.body_length_mm is not None  # validated
     x0 = float(d.chamber_offset_mm)
@@ -133,6 +136,8 @@ def build_mesh(design: Design, level: int,
     yb, yw = 0.5 * d.b_mm, 0.5 * d.W_mm
     y = _join(np.linspace(0.0, yb, r * divisions.y_chamber + 1),
               _segment(yb, yw, r * divisions.y_side, "a"))
+    if full_width:
+        y = _join(-y, y)
 
     z_m, z_c = d.t_mm, d.t_mm + d.h_mm
     z_top = z_c + d.T_mm
@@ -142,7 +147,7 @@ def build_mesh(design: Design, level: int,
 
     mesh = MeshHex.init_tensor(x, y, z)
     centroids = mesh.p[:, mesh.t].mean(axis=1)
-    in_cavity = ((centroids[0] > x0) & (centroids[0] < x1) & (centroids[1] < yb)
+    in_cavity = ((centroids[0] > x0) & (centroids[0] < x1) & (np.abs(centroids[1]) < yb)
                  & (centroids[2] > z_m) & (centroids[2] < z_c))
     mesh = mesh.remove_elements(np.nonzero(in_cavity)[0])
     centroids = mesh.p[:, mesh.t].mean(axis=1)
@@ -151,7 +156,7 @@ def build_mesh(design: Design, level: int,
     tol = 1e-9 * max(xb, 1.0)
     bf = mesh.boundary_facets()
     mid = mesh.p[:, mesh.facets[:, bf]].mean(axis=1)
-    on_cavity = ((mid[0] > x0 - tol) & (mid[0] < x1 + tol) & (mid[1] < yb + tol)
-                 & (mid[1] > tol) & (mid[2] > z_m - tol) & (mid[2] < z_c + tol))
+    on_cavity = ((mid[0] > x0 - tol) & (mid[0] < x1 + tol) & (np.abs(mid[1]) < yb + tol)
+                 & ((mid[1] > tol) | full_width) & (mid[2] > z_m - tol) & (mid[2] < z_c + tol))
     return ActuatorMesh(mesh=mesh, membrane=membrane, cavity_facets=bf[on_cavity],
                         end_face_x_mm=xb)

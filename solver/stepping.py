@@ -47,7 +47,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from solver.branching import switch_at_failure, switch_branch
+from solver.branching import lowest_volume_neutral_mode, pass_fold, switch_branch
 from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
@@ -71,8 +71,10 @@ CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated with
 CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
 FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one converged state
                              # (extrapolated and plain, each size; the step cut to 1/4) before
-                             # the unstable mode is injected (towards the last failed volume)
-SWITCH_NEWTON_ITER = 12      # Newton iterations allowed from an injected mode
+                             # the branch switch is tried at the last failed volume
+SWITCH_NEWTON_ITER = 12      # Newton iterations allowed when the mode's amplitude is released
+BIFURCATION_OVERSHOOT = 0.25  # the switch is made this share of the way from the located
+                              # bifurcation to the unstable state that revealed it
 
 
 class StepFailed(Exception):
@@ -339,11 +341,13 @@ def solve(design: Design, settings: SolverSettings | None = None,
     """Inflate ``design`` until a stop criterion; return the curve.
 
     ``follow_stable_branch`` (volume control): where the state first becomes unstable
-    at constant volume (a bifurcation, solver/stability.py), inject the unstable mode
-    and continue on the stable branch (solver/branching.py); likewise when a step keeps
-    failing near one (``FAILURES_BEFORE_SWITCH``); the curve records the step in
-    ``branch_switch_index``. Off by default: the database's curves follow the
-    primary branch and flag the instability (``volume_control_negative_eigenvalues``).
+    at constant volume (a bifurcation, solver/stability.py), locate it and continue on
+    the stable branch by continuation in the unstable mode's amplitude; where a step
+    keeps failing (``FAILURES_BEFORE_SWITCH``: a fold in volume), pass the fold by arc
+    length (solver/branching.py); the curve records the step in
+    ``branch_switch_index`` (the first switch only). Off by default: the database's
+    curves follow the primary branch and flag the instability
+    (``volume_control_negative_eigenvalues``).
 
     Raises InputError for invalid input only; a solve that fails returns a Curve
     with status "failed" and the reason.
@@ -376,6 +380,22 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
              follow_stable_branch: bool) -> tuple[Curve, ActuatorModel, np.ndarray]:
     t_start = time.perf_counter()
     model = ActuatorModel(design, settings, divisions)
+    curve, u = inflate_model(model, settings, on_step, backend, debug, follow_stable_branch,
+                             t_start)
+    return curve, model, u
+
+
+def inflate_model(model, settings: SolverSettings,
+                  on_step: Callable[[dict], None] | None = None, backend: str = "auto",
+                  debug: bool = False, follow_stable_branch: bool = False,
+                  t_start: float | None = None) -> tuple[Curve, np.ndarray]:
+    """The load stepping of ``solve`` on a built model: an ``ActuatorModel``, or any
+    ``SolidModel`` with a cavity that also provides ``end_face_kinematics(u) -> (angle,
+    tip (2,))``, ``injected_volume_ul(half_volume)`` and ``tip_force_mn(evaluation)``
+    (the reference problems of solver/verification, e.g. two balloons sharing one
+    pressure). Returns the curve and the last converged displacement."""
+    if t_start is None:
+        t_start = time.perf_counter()
     volume_control = settings.control == "volume"
 
     u = np.zeros(model.n_free)
@@ -404,19 +424,53 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
 
     switch_settings = replace(settings, max_newton_iter=SWITCH_NEWTON_ITER)
 
-    def try_switch(switch_fn, u_, q_, p_, volume):
-        """One branch-switch attempt at the converged state (u_, q_, p_), Newton at the
-        cavity volume ``volume`` (solver/branching.py)."""
-        switch = switch_fn(model, u_, q_, p_, volume,
-                           lambda us, qs, ps: mixed_newton_step(
-                               model, us, qs, ps, switch_settings, volume, None, backend,
-                               patient=True),
-                           backend)
-        model.timings["branch_switch_attempts"] = (
-            model.timings.get("branch_switch_attempts", 0) + 1)
-        if debug:
-            print(f"branch switch after step {len(rows['p']) - 1}: {switch.reason}")
+    def try_switch(u_, q_, p_, volume, at_target):
+        """One branch-switch attempt from the converged state (u_, q_, p_) to a stable
+        state at the cavity volume ``volume`` (solver/branching.py): along the unstable
+        mode if the state is at that volume; otherwise (a failed step) over a fold in
+        volume by arc length first, then along the lowest volume-neutral mode."""
+        def converge(us, qs, ps):
+            return mixed_newton_step(model, us, qs, ps, switch_settings, volume, None,
+                                     backend, patient=True)
+        attempts = ((switch_branch,) if at_target else (pass_fold, switch_branch))
+        for attempt in attempts:
+            if attempt is switch_branch:
+                switch = switch_branch(model, u_, q_, p_, volume, converge, backend,
+                                       settings.newton_tol, at_target)
+            else:
+                switch = pass_fold(model, u_, q_, p_, volume, converge, backend,
+                                   settings.newton_tol)
+            model.timings["branch_switch_attempts"] = (
+                model.timings.get("branch_switch_attempts", 0) + 1)
+            if debug:
+                print(f"branch switch after step {len(rows['p']) - 1}: {switch.reason}")
+            if switch.converged is not None:
+                break
         return switch
+
+    def near_bifurcation(a, b, volume_a, volume_b):
+        """A converged primary state just past the bifurcation crossed between the
+        converged states a (stable at constant volume) and b (unstable), each (u, q, p):
+        the lowest volume-neutral eigenvalue interpolated linearly in volume to zero,
+        then ``BIFURCATION_OVERSHOOT`` of the way on towards b. Returns (Converged,
+        volume), or None if that state does not converge or is not unstable."""
+        mu_a = lowest_volume_neutral_mode(model, *a, backend)[0]
+        mu_b = lowest_volume_neutral_mode(model, *b, backend)[0]
+        if not mu_a > 0.0 > mu_b:
+            return None
+        critical = volume_a + (volume_b - volume_a) * mu_a / (mu_a - mu_b)
+        volume = critical + BIFURCATION_OVERSHOOT * (volume_b - critical)
+        try:
+            out = mixed_newton_step(model, *a, settings, volume, None, backend)
+        except (StepFailed, FloatingPointError):
+            return None
+        if lowest_volume_neutral_mode(model, out.u, out.q, out.pressure_pa, backend)[0] >= 0:
+            return None
+        if debug:
+            print(f"bifurcation located at {critical:.6g} mm^3 (eigenvalues {mu_a:.3g}, "
+                  f"{mu_b:.3g} uN/mm at {volume_a:.6g}, {volume_b:.6g}); switching at "
+                  f"{volume:.6g}")
+        return out, volume
 
     last = model.evaluate(u, p, pressures=q)
     record(u, p, 0, 0.0, 0, last)
@@ -431,10 +485,12 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                      path_rate(model, last, b0, float(last.g @ b0), volume_control))]
     extrapolate = True
     switch_index = -1
+    fold_attempted = False       # the switch at a failed step is tried once per curve (its
+                                 # arc length costs minutes on the actuator)
     failures_here = 0            # failed attempts from the current converged state
     for _ in range(settings.max_steps):
         # Under pressure control the last step lands on max_pressure_pa, not beyond it.
-        load = (model.volume0_mm3 + 0.5 * rows["v"][-1] + step) if volume_control else (
+        load = (last.volume_mm3 + step) if volume_control else (
             min(p + step, settings.max_pressure_pa))
         guess = predictor(history, load) if extrapolate else None
         try:
@@ -455,8 +511,9 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                 continue
             extrapolate = True
             if (follow_stable_branch and volume_control and switch_index < 0
-                    and failures_here == FAILURES_BEFORE_SWITCH):
-                switch = try_switch(switch_at_failure, u, q, p, load)
+                    and failures_here == FAILURES_BEFORE_SWITCH and not fold_attempted):
+                fold_attempted = True
+                switch = try_switch(u, q, p, load, at_target=False)
                 if switch.converged is not None:
                     out = switch.converged
                     u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
@@ -474,6 +531,7 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                                             f"cut-backs: {exc}")
                 break
             continue
+        before = (u, q, p, last.volume_mm3)
         u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
         extrapolate = True
         failures_here = 0
@@ -483,13 +541,24 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
                        step_out.g_kinv_g)
         if (follow_stable_branch and volume_control and switch_index < 0
                 and rows["negv"][-1] > 0):
-            switch = try_switch(switch_branch, u, q, p, load)
+            # Where the step crossed the bifurcation, switch just past it (the pump's
+            # path leaves the primary branch there); else, or if that fails, here.
+            near = (near_bifurcation(before[:3], (u, q, p), before[3], last.volume_mm3)
+                    if rows["negv"][-2] == 0 else None)
+            switch = None
+            if near is not None:
+                n_out, n_volume = near
+                switch = try_switch(n_out.u, n_out.q, n_out.pressure_pa, n_volume, True)
+                its += n_out.iterations
+            if switch is None or switch.converged is None:
+                n_volume = load
+                switch = try_switch(u, q, p, load, at_target=True)
             if switch.converged is not None:
                 out = switch.converged
                 for column in rows.values():
                     column.pop()
                 u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
-                history = [State(load, u, q, p, out.rate)]
+                history = [State(n_volume, u, q, p, out.rate)]
                 angle = record(u, p, its + out.iterations, out.residual, out.negative_pivots,
                                last, out.g_kinv_g)
                 switch_index = len(rows["p"]) - 1
@@ -531,4 +600,4 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
         wall_time_s=time.perf_counter() - t_start, timings_s=dict(model.timings),
         volume_control_negative_eigenvalues=np.array(rows["negv"], dtype=np.int64),
         branch_switch_index=switch_index)
-    return curve, model, u
+    return curve, u

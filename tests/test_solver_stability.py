@@ -110,3 +110,21 @@ def test_stability_fields_survive_the_store(tmp_path):
     assert back[design.L_mm].branch_switch_index == 4
     assert back[5.0].volume_control_negative_eigenvalues is None
     assert back[5.0].branch_switch_index == -1
+
+
+def test_the_full_width_mesh_is_the_half_mesh_and_its_mirror_image():
+    # benchmarks/full_width_check.py checks what the symmetry plane hides on this mesh.
+    from solver.design import Design
+    from solver.mesh import build_mesh
+
+    design = Design(t_mm=0.25).validated()
+    half = build_mesh(design, 0)
+    full = build_mesh(design, 0, full_width=True)
+    assert full.mesh.nelements == 2 * half.mesh.nelements
+    assert len(full.cavity_facets) == 2 * len(half.cavity_facets)
+    assert full.membrane.sum() == 2 * half.membrane.sum()
+    upper = full.mesh.p[:, full.mesh.p[1] >= 0]
+    assert np.allclose(np.unique(upper.round(9), axis=1), np.unique(half.mesh.p.round(9), axis=1))
+    mirrored = full.mesh.p * np.array([[1.0], [-1.0], [1.0]])
+    assert np.allclose(np.unique(mirrored.round(9), axis=1),
+                       np.unique(full.mesh.p.round(9), axis=1))

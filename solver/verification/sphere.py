@@ -98,6 +98,13 @@ def octant_shell_mesh(n: int = 2, m: int = 2, element: str = "hex2",
     mesh = _patch(0, n, m, inner_mm, outer_mm)
     for axis in (1, 2):
         mesh = mesh + _patch(axis, n, m, inner_mm, outer_mm)
+    return shell_mesh(mesh, m, element, inner_mm, outer_mm)
+
+
+def shell_mesh(mesh: MeshHex, m: int, element: str, inner_mm: float, outer_mm: float
+               ) -> SphereMesh:
+    """The trilinear shell mesh ``mesh`` (m elements through the wall, centred at the
+    origin) as a ``SphereMesh`` of ``element``, with its inner surface as the cavity."""
     if element == "hex2":
         straight = MeshHex2.from_mesh(mesh).doflocs
         radius = np.linalg.norm(mesh.p, axis=0)
