@@ -239,8 +239,8 @@ def test_the_emulator_by_volume_keeps_a_falling_pressure_and_flags_it(emulator, 
     falling = p_fe * (1 - 0.2 * np.clip((theta - 40) / 50, 0, 1))
     real = Emulator.curve_band
 
-    def with_limit_point(self, point, z):
-        pe, cb = real(self, point, z)
+    def with_limit_point(self, point, z, volume_band=True):
+        pe, cb = real(self, point, z, volume_band)
         return pe, dataclasses.replace(cb, pressure_raw_pa=falling / point.pressure_scale,
                                        pressure_pa=np.maximum.accumulate(falling)
                                        / point.pressure_scale)

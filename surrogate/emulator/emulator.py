@@ -204,9 +204,14 @@ class Emulator:
                              f"curves for {point.pair[0]}/{point.pair[1]} here",
                              ", ".join(sorted(self.pairs))) from None
 
-    def curve_band(self, point: BoxPoint, z: float) -> tuple[PairEmulator, CurveBand]:
+    def curve_band(self, point: BoxPoint, z: float, volume_band: bool = True
+                   ) -> tuple[PairEmulator, CurveBand]:
+        """The design's p(theta) with its band and V(theta); the band of V(theta)
+        (``volume_log_sd``) only with ``volume_band`` (NaN otherwise: half the cost of a
+        query with one GP per node)."""
         pe = self._pair(point)
-        mean, var = pe.curves.predict(point.coordinates())
+        which = None if volume_band or not pe.curves.per_output else slice(0, N_NODES)
+        mean, var = pe.curves.predict(point.coordinates(), variance_of=which)
         sd = np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES]
         p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
         p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
@@ -226,7 +231,7 @@ class Emulator:
             raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
                              "pressures >= 0 Pa")
         point = locate(design, reduced=True)
-        pe, cb = self.curve_band(point, z)
+        pe, cb = self.curve_band(point, z, volume_band=False)
         p_red = p / point.pressure_scale
         p_lim = cb.limit_pressure_pa
         past = p_red > p_lim * (1 + 1e-12)

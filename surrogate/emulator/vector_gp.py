@@ -60,11 +60,21 @@ class VectorGP:
             "a_inv": np.array([_a_inv(gp) for gp in self.gps]),                 # (m, p, p)
             "beta": np.array([gp.beta for gp in self.gps]),                     # (m, p)
             "s2": np.array([gp.signal_var for gp in self.gps]),
-            "varying": self.gps[0].varying, "x": x}
+            "varying": self.gps[0].varying, "x": x,
+            "identity": self.components.shape[0] == self.components.shape[1]
+            and bool(np.array_equal(self.components, np.eye(len(self.components))))}
         object.__setattr__(self, "_stack", stack)
 
-    def predict(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mean and variance of every output at one input row ``u``."""
+    @property
+    def per_output(self) -> bool:
+        """One GP per output (``fit_output_gps``): the components are the identity."""
+        return bool(self._stack["identity"])  # type: ignore[attr-defined]
+
+    def predict(self, u: np.ndarray, variance_of: slice | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and variance of every output at one input row ``u``. With one GP per
+        output (identity components), ``variance_of`` limits the variance, the costly part
+        of a query, to those outputs (NaN for the others)."""
         st = self._stack  # type: ignore[attr-defined]
         u = np.asarray(u, float).ravel()
         d2 = (st["x"] - u) ** 2                                   # (n, d)
@@ -72,12 +82,20 @@ class VectorGP:
         k = (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * np.exp(-SQRT5 * r)
         h = np.concatenate(([1.0], u[st["varying"]]))            # (p,)
         means = st["beta"] @ h + (k * st["alpha"]).sum(1)
-        v = np.matmul(st["linv"], k[:, :, None])[:, :, 0]        # L^-1 k
-        rr = h[None, :] - np.matmul(k[:, None, :], st["kinv_h"])[:, 0, :]
-        variances = st["s2"] * np.maximum(
-            1.0 - (v * v).sum(1) + np.einsum("mp,mpq,mq->m", rr, st["a_inv"], rr), 0.0)
         mean = self.center + self.scale * (means @ self.components)
-        var = self.scale**2 * (variances @ self.components**2) + self.residual_var
+        sel = slice(None) if variance_of is None else variance_of
+        if variance_of is not None and not self.per_output:
+            raise ValueError("variance_of needs one GP per output (identity components)")
+        ks = k[sel]
+        v = np.matmul(st["linv"][sel], ks[:, :, None])[:, :, 0]  # L^-1 k
+        rr = h[None, :] - np.matmul(ks[:, None, :], st["kinv_h"][sel])[:, 0, :]
+        variances = st["s2"][sel] * np.maximum(
+            1.0 - (v * v).sum(1) + np.einsum("mp,mpq,mq->m", rr, st["a_inv"][sel], rr), 0.0)
+        if variance_of is None:
+            var = self.scale**2 * (variances @ self.components**2) + self.residual_var
+        else:
+            var = np.full(len(mean), np.nan)
+            var[sel] = self.scale[sel] ** 2 * variances + self.residual_var[sel]
         return mean, var
 
     def predict_many(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
