@@ -40,6 +40,7 @@ the mixed iterate keeps the linearised, physical pressure (docs/physics.md).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -148,9 +149,11 @@ def node_pairs(nb: int) -> tuple[np.ndarray, np.ndarray]:
     return a, b
 
 
-def element_stiffness(block: MaterialBlock, A: np.ndarray) -> np.ndarray:
-    """K_e[a i, b k] = sum_q dN_aJ A_iJkL dN_bL for weighted tangents A (ne, nq, 9, 9),
-    symmetric under (iJ) <-> (kL). Returned in the symmetric pair layout
+def element_stiffness(block: MaterialBlock, A: np.ndarray,
+                      weights: np.ndarray | None = None) -> np.ndarray:
+    """K_e[a i, b k] = sum_q dN_aJ A_iJkL dN_bL w_q for tangents A (ne, nq, 9, 9),
+    symmetric under (iJ) <-> (kL), times ``weights`` (ne, nq) when given (A is then
+    not modified). Returned in the symmetric pair layout
     (npairs, ne, 3, 3): the 3 x 3 block of node pair (a, b), a <= b (``node_pairs``),
     K_e[b k, a i] being its transpose.
 
@@ -162,17 +165,34 @@ def element_stiffness(block: MaterialBlock, A: np.ndarray) -> np.ndarray:
     pa, pb = node_pairs(nb)
     if block.box_scale is not None:
         h = block.box_scale                                                   # (ne, 3)
-        At = A.reshape(ne, nq, 3, 3, 3, 3) / (h[:, None, None, :, None, None]
-                                              * h[:, None, None, None, None, :])
-        At = At.transpose(1, 3, 5, 0, 2, 4).reshape(nq * 9, ne * 9)         # (q J L), (e i k)
+        scale = 1.0 / (h[:, None, :, None] * h[:, None, None, :])             # (e, 1, J, L)
+        if weights is not None:
+            scale = scale * weights[:, :, None, None]                         # (e, q, J, L)
+        # Scaled and transposed to (q J L), (e i k) in one pass.
+        At = np.empty((nq, 3, 3, ne, 3, 3))
+        np.multiply(A.reshape(ne, nq, 3, 3, 3, 3).transpose(1, 3, 5, 0, 2, 4),
+                    scale.transpose(1, 2, 3, 0)[..., None, None], out=At)
         prod = block.box_products.reshape(nb, nb, nq * 9)[pa, pb]             # (pairs, q J L)
-        return (prod @ At).reshape(len(pa), ne, 3, 3)
+        return (prod @ At.reshape(nq * 9, ne * 9)).reshape(len(pa), ne, 3, 3)
+    if weights is not None:
+        A = A * weights[..., None, None]
     K = np.zeros((ne, nb, 3, nb, 3))
     A4 = A.reshape(ne, nq, 3, 3, 3, 3)
     for q in range(nq):
         C = np.einsum("eaJ,eiJkL->eaikL", block.dN[:, q], A4[:, q], optimize=True)
         K += np.einsum("eaikL,ebL->eaibk", C, block.dN[:, q], optimize=True)
     return np.ascontiguousarray(K[:, pa, :, pb, :])    # (pairs, ne, 3, 3)
+
+
+@functools.cache
+def _pair_entries(nb: int) -> np.ndarray:
+    """Flat indices (a i) 3 nb + (b k) of the pair layout's entries in a full
+    (3 nb x 3 nb) element matrix, in the order (pair, i, k)."""
+    pa, pb = node_pairs(nb)
+    i3 = np.arange(3)
+    rows = 3 * pa[:, None, None] + i3[None, :, None]
+    cols = 3 * pb[:, None, None] + i3[None, None, :]
+    return (rows * 3 * nb + cols).ravel()
 
 
 def full_element_matrices(pairs: np.ndarray) -> np.ndarray:
@@ -283,22 +303,34 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
         return BlockState(energy, r, None, lam, float(J.min()), constraint, D,
                           dilatation_error)
 
-    # + p_hat J (f_iJ f_kL - f_iL f_kJ), f = F^-T = cof / J, all times dV.
-    f = cof / J[..., None, None]
-    ff = f[..., :, :, None, None] * f[..., None, None, :, :]                 # (e, q, i, J, k, L)
-    ff -= np.swapaxes(ff, -3, -1).copy()
-    ff *= (p_hat * J)[..., None, None, None, None]
-    A += ff.reshape(ne, nq, 9, 9)
-    A *= block.wdV[..., None, None]
-    K = element_stiffness(block, A)
-    # + K D^T M^-1 D, on the same node pairs.
-    # Per node pair a <= b: the (3 x npr) @ (npr x 3) product D_a^T (K M^-1 D)_b.
-    pa, pb = node_pairs(nb)
-    Dn = np.ascontiguousarray(D.reshape(ne, -1, nb, 3).transpose(2, 0, 3, 1))  # (nb, e, 3, m)
-    Gn = np.ascontiguousarray((block.bulk_pa * (block.Minv @ D)).reshape(ne, -1, nb, 3)
-                              .transpose(2, 0, 1, 3))                          # (nb, e, m, 3)
-    K += Dn[pa] @ Gn[pb]
+    # + p_hat J (f_iJ f_kL - f_iL f_kJ) = p_hat d cof_iJ / d F_kL = p_hat e_ikm e_JLN F_mN
+    # (f = F^-T): 36 entries of the 81, where i != k and J != L.
+    A.reshape(ne, nq, 81)[..., _COF_SLOTS] += (
+        p_hat[..., None] * F.reshape(ne, nq, 9)[..., _COF_SOURCES]) * _COF_SIGNS
+    K = element_stiffness(block, A, block.wdV)
+    # + K D^T M^-1 D: the element's (3 nb x 3 nb) products (one small matrix product
+    # each), their node-pair blocks a <= b gathered into the pair layout.
+    KD = np.swapaxes(D, 1, 2) @ (block.bulk_pa * (block.Minv @ D))              # (e, a i, b k)
+    KD = np.take(KD.reshape(ne, -1), _pair_entries(nb), axis=1)                # (e, pairs i k)
+    K += KD.reshape(ne, -1, 3, 3).transpose(1, 0, 2, 3)
     return BlockState(energy, r, K, lam, float(J.min()), constraint, D, dilatation_error)
+
+
+def _cofactor_derivative_slots() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """d cof_iJ / d F_kL = e_ikm e_JLN F_mN as (slot 9 (3 i + J) + 3 k + L of the
+    flattened tangent, source 3 m + N in F, sign) over its 36 non-zero entries."""
+    slots, sources, signs = [], [], []
+    perm = {(0, 1): (2, 1.0), (1, 2): (0, 1.0), (2, 0): (1, 1.0),
+            (1, 0): (2, -1.0), (2, 1): (0, -1.0), (0, 2): (1, -1.0)}
+    for (i, k), (m, s1) in perm.items():
+        for (J, L), (n, s2) in perm.items():
+            slots.append(9 * (3 * i + J) + 3 * k + L)
+            sources.append(3 * m + n)
+            signs.append(s1 * s2)
+    return np.array(slots), np.array(sources), np.array(signs)
+
+
+_COF_SLOTS, _COF_SOURCES, _COF_SIGNS = _cofactor_derivative_slots()
 
 
 class Pattern:
