@@ -29,6 +29,7 @@ from solver.assembly import (
 )
 from solver.design import Design
 from solver.mesh import NAMED_DIVISIONS, MeshDivisions, build_mesh
+from solver.parallel import map_pair
 from solver.settings import SolverSettings
 
 
@@ -128,9 +129,12 @@ class SolidModel:
         lam_m = 1.0
         states = []
         constraint_error = 0.0
-        for i, block in enumerate(self.blocks):
-            st = evaluate_block(block, u, tangent,
-                                None if pressures is None else pressures[i])
+        # The blocks on two threads when the thread budget allows (solver/parallel.py).
+        block_states = map_pair(
+            lambda i: evaluate_block(self.blocks[i], u, tangent,
+                                     None if pressures is None else pressures[i]),
+            range(len(self.blocks)))
+        for block, st in zip(self.blocks, block_states):
             states.append(st)
             constraint_error = max(constraint_error, st.dilatation_error)
             energy += st.energy

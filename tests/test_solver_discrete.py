@@ -170,3 +170,18 @@ def test_tip_spring_tangent_and_force():
     # Force = k * mean tip z displacement: 2 N/m = 2e3 uN/mm on the whole actuator.
     uz = m.full(u)[3 * m.end_nodes + 2].mean()
     assert m.tip_force_mn(ev) == pytest.approx(2.0 * uz, rel=1e-12)
+
+
+def test_blocks_on_two_threads_give_the_same_bits(model, monkeypatch):
+    # solver/parallel.py: the material blocks are evaluated on two threads when the
+    # thread budget (MKL_NUM_THREADS, else OMP_NUM_THREADS) allows; same arithmetic.
+    u, p = _state(model), 300.0
+    q = model.consistent_pressures(u)
+    monkeypatch.delenv("MKL_NUM_THREADS", raising=False)
+    results = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("OMP_NUM_THREADS", threads)
+        results.append(model.evaluate(u, p, pressures=q))
+    one, two = results
+    assert np.array_equal(one.R, two.R) and np.array_equal(one.K.data, two.K.data)
+    assert one.energy == two.energy and one.constraint_error == two.constraint_error
