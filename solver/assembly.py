@@ -127,11 +127,13 @@ def _gradient_contraction(block: MaterialBlock, X: np.ndarray) -> np.ndarray:
     On box elements one matrix product with the common reference gradients."""
     ne, nq = X.shape[:2]
     if block.box_gradients is not None:
-        Xs = X / block.box_scale.reshape((ne,) + (1,) * (X.ndim - 2) + (3,))
-        Xs = np.moveaxis(Xs, -1, 2).reshape(ne, nq * 3, -1)                # (e, q J, ...)
-        Y = block.box_gradients @ np.swapaxes(Xs, 0, 1).reshape(nq * 3, -1)  # (a, e ...)
-        Y = Y.reshape((Y.shape[0], ne) + X.shape[2:-1])
-        return np.moveaxis(Y, 0, 1)
+        # X_J / h_J laid out as (q, J, e, ...) in one pass, then one matrix product.
+        rest = X.shape[2:-1]
+        Xs = np.empty((nq, 3, ne) + rest)
+        inv_h = (1.0 / block.box_scale).T.reshape((1, 3, ne) + (1,) * len(rest))
+        np.multiply(np.moveaxis(X, (1, -1), (0, 1)), inv_h, out=Xs)
+        Y = block.box_gradients @ Xs.reshape(nq * 3, -1)                    # (a, e ...)
+        return np.moveaxis(Y.reshape((-1, ne) + rest), 0, 1)
     return np.einsum("eqaJ,eq...J->ea...", block.dN, X, optimize=True)
 
 
