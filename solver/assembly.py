@@ -340,8 +340,11 @@ class Pattern:
 
     Material blocks (the first ``n_pair_lists`` dof lists, 3 nb dofs per element) give
     their element matrices in the symmetric pair layout of ``element_stiffness``; the
-    others (cavity, spring) as full (ne, m, m) matrices.
+    others (cavity, spring) as full, symmetric (ne, m, m) matrices.
     ``reduced[g]`` is the index of global dof g among the free dofs, or -1.
+
+    The values are summed into the upper triangle only (what PARDISO factorises) and
+    mirrored into the full matrix by one gather.
     """
 
     def __init__(self, dof_lists: list[np.ndarray], free: np.ndarray, ndofs: int,
@@ -353,12 +356,12 @@ class Pattern:
         self.reduced = reduced
         n = len(free)
         self.n = n
-        # Keys row * n + col (-1 where a fixed dof is involved), int32 when they fit:
-        # the pattern's set-up is the solve's peak memory.
+        # Keys row * n + col of the upper-triangle slot each value adds to (-1 where a
+        # fixed dof is involved, or for the lower half of a block that is stored in
+        # full), int32 when they fit: the pattern's set-up is the solve's peak memory.
         kind = np.int32 if n * n < 2**31 else np.int64
         rdofs = reduced.astype(kind)
-        keys = []          # per list: one key array, or (upper, mirror) for pair layout
-        sizes = []         # values per list
+        keys = []
         for index, dofs in enumerate(dof_lists):
             rd = rdofs[dofs]                                                # (ne, m)
             if index < n_pair_lists:
@@ -367,58 +370,71 @@ class Pattern:
                 r3 = rd.reshape(-1, nb, 3)
                 rows = r3[:, pa, :, None].transpose(1, 0, 2, 3)            # (P, ne, 3, 1)
                 cols = r3[:, pb, None, :].transpose(1, 0, 2, 3)            # (P, ne, 1, 3)
-                ok = (rows >= 0) & (cols >= 0)                              # (P, ne, 3, 3)
-                keys.append(np.where(ok, rows * n + cols, -1).ravel())
-                ok &= (pa != pb)[:, None, None, None]                       # no mirror
-                keys.append(np.where(ok, cols * n + rows, -1).ravel())      # on a diagonal
-                sizes.append(ok.size)
+                # A pair a < b feeds (r, c) and (c, r): its upper slot is (min, max); a
+                # block a = b is stored in full, so only its upper half counts.
+                low, high = np.minimum(rows, cols), np.maximum(rows, cols)
+                ok = (low >= 0) & ((pa != pb)[:, None, None, None] | (rows <= cols))
             else:
                 rows, cols = rd[:, :, None], rd[:, None, :]
-                keys.append(np.where((rows >= 0) & (cols >= 0), rows * n + cols,
-                                     -1).ravel())
-                sizes.append(keys[-1].size)
-            del rows, cols
-        # Value index of every key (a pair-layout value feeds its upper and its
-        # mirrored slot), in the order of the concatenated keys.
-        value_offsets = np.cumsum([0] + sizes)
-        sources = np.concatenate([np.arange(value_offsets[i], value_offsets[i + 1],
-                                            dtype=np.int32)
-                                  for i in range(len(sizes))
-                                  for _ in range(2 if i < n_pair_lists else 1)])
+                low, high = rows, cols
+                ok = (rows >= 0) & (cols >= 0) & (rows <= cols)
+            keys.append(np.where(ok, low * n + high, -1).ravel())
+            del rows, cols, low, high, ok
+        sizes = [len(k) for k in keys]
         keys = np.concatenate(keys)
         # One sort of all keys gives the pattern and the scatter of values into it: the
         # scatter is one sparse (nnz x values) 0/1 matrix, data = S @ values (~2x faster
         # than a bincount per slot list: benchmarks/RESULTS.md, issue 12, third session).
         order = np.argsort(keys, kind="stable")
         keys = keys[order]
-        first = int(np.searchsorted(keys, 0))                               # skip fixed dofs
+        first = int(np.searchsorted(keys, 0))                               # skip the -1s
         keys = keys[first:]
-        sources = sources[order[first:]]
+        sources = order[first:].astype(np.int32)
         del order
         new_key = np.empty(len(keys), dtype=bool)
         new_key[:1] = True
         np.not_equal(keys[1:], keys[:-1], out=new_key[1:])
         starts = np.flatnonzero(new_key)
-        unique = keys[starts].astype(np.int64)
+        upper = keys[starts].astype(np.int64)
         del keys, new_key
-        self.n_values = int(value_offsets[-1])
+        self.n_values = int(sum(sizes))
         self.scatter = sp.csr_matrix(
             (np.ones(len(sources)), sources,
              np.append(starts, len(sources)).astype(np.int32)),
-            shape=(len(unique), self.n_values))
-        rows = unique // n
-        self.indices = (unique % n).astype(np.int32)
-        self.indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n)))
-                                     ).astype(np.int32)
-        self.nnz = len(unique)
+            shape=(len(upper), self.n_values))
+        self.upper_indptr, self.upper_indices = _csr_structure(upper, n)
+        # The full pattern: the upper slots and the mirrors of those off the diagonal;
+        # full data = upper data[self.mirror].
+        urow, ucol = upper // n, upper % n
+        off = np.flatnonzero(urow != ucol)
+        full = np.concatenate((upper, ucol[off] * n + urow[off]))
+        slot = np.concatenate((np.arange(len(upper)), off)).astype(np.int32)
+        del urow, ucol, off
+        order = np.argsort(full)
+        self.mirror = slot[order].astype(np.intp)          # np.take's fastest index
+        self.indptr, self.indices = _csr_structure(full[order], n)
+        self.nnz = len(full)
 
     def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
+        """The full symmetric matrix, with its upper triangle (a CSR matrix of the
+        same values) as the attribute ``upper_triangle``."""
         values = np.concatenate([Ke.ravel() for Ke in element_matrices])
         if len(values) != self.n_values:
             raise ValueError(f"{len(values)} element-matrix entries for a pattern of "
                              f"{self.n_values}")
-        data = self.scatter @ values
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+        upper = self.scatter @ values
+        K = sp.csr_matrix((np.take(upper, self.mirror), self.indices, self.indptr),
+                          shape=(self.n, self.n))
+        K.upper_triangle = sp.csr_matrix((upper, self.upper_indices, self.upper_indptr),
+                                         shape=(self.n, self.n))
+        return K
+
+
+def _csr_structure(keys: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(indptr, indices) of sorted unique keys row * n + col."""
+    rows = keys // n
+    indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n))))
+    return indptr.astype(np.int32), (keys % n).astype(np.int32)
 
 
 def scatter_vector(ndofs: int, dofs: np.ndarray, values: np.ndarray) -> np.ndarray:

@@ -79,6 +79,7 @@ class _PardisoPattern:
                                rows[self.upper], minlength=K.shape[0]))))), shape=K.shape)
         U.sort_indices()
         self.U = U
+        self._upper_indices: np.ndarray | None = None
         self._call(11, np.zeros(K.shape[0]))     # PARDISO's defaults fill iparm here
         self.defaults = self.ps.iparm.copy()
 
@@ -90,6 +91,19 @@ class _PardisoPattern:
         if not careful:
             self.ps.iparm[IPARM_PIVOTING] = 0
             self.ps.iparm[IPARM_REFINEMENT] = 0
+
+    def upper_data(self, K: sp.csr_matrix) -> np.ndarray:
+        """K's upper-triangle values in the order of ``U``: from the upper triangle
+        that ``solver.assembly.Pattern`` attaches (``K.upper_triangle``), else picked
+        out of K."""
+        Ku = getattr(K, "upper_triangle", None)
+        if Ku is not None and Ku.nnz == self.U.nnz:
+            if Ku.indices is self._upper_indices or (
+                    np.array_equal(Ku.indptr, self.U.indptr)
+                    and np.array_equal(Ku.indices, self.U.indices)):
+                self._upper_indices = Ku.indices
+                return Ku.data
+        return K.data[self.upper]
 
     def matches(self, K: sp.csr_matrix) -> bool:
         return (K.indptr is self.indptr and K.indices is self.indices) or (
@@ -129,7 +143,7 @@ class PardisoFactor:
                 cached.release()
             cached = PardisoFactor._pattern = _PardisoPattern(K)
         self._p = cached
-        cached.U.data[:] = K.data[cached.upper]
+        cached.U.data[:] = cached.upper_data(K)
         # Diagonal pivoting first; a factorisation that had to perturb a pivot is
         # repeated with PARDISO's defaults (benchmarks/RESULTS.md, issue 12, fifth session).
         for careful in (False, True):
