@@ -129,11 +129,22 @@ class SolidModel:
         lam_m = 1.0
         states = []
         constraint_error = 0.0
-        # The blocks on two threads when the thread budget allows (solver/parallel.py).
-        block_states = map_pair(
-            lambda i: evaluate_block(self.blocks[i], u, tangent,
-                                     None if pressures is None else pressures[i]),
-            range(len(self.blocks)))
+        nblocks = len(self.blocks)
+
+        def part(i: int):
+            """Block i, or (i = nblocks) the cavity's volume, gradient and Hessian."""
+            if i < nblocks:
+                return evaluate_block(self.blocks[i], u, tangent,
+                                      None if pressures is None else pressures[i])
+            if self.cavity is None:
+                return None
+            return (self._volume(u), cav.volume_gradient(self.cavity, u),
+                    cav.volume_hessian(self.cavity, u) if tangent else None)
+
+        # Two threads when the thread budget allows (solver/parallel.py): the last
+        # block (the membrane) and the cavity on the helper, the others here.
+        *block_states, cavity_terms = map_pair(part, range(nblocks + 1),
+                                               split=max(nblocks - 1, 1))
         for block, st in zip(self.blocks, block_states):
             states.append(st)
             constraint_error = max(constraint_error, st.dilatation_error)
@@ -143,12 +154,11 @@ class SolidModel:
                 mats.append(st.stiffness)
             if block.membrane:
                 lam_m = float(st.lam_max.max())
-        if self.cavity is not None:
-            gv = cav.volume_gradient(self.cavity, u)
+        if cavity_terms is not None:
+            vol, gv, hessian = cavity_terms
             g = scatter_vector(self.ndofs, self.cavity.dofs, gv)[free]
         else:
-            g = np.zeros(len(free))
-        vol = self._volume(u)
+            vol, g = 0.0, np.zeros(len(free))
         tip_force = float("nan")
         if self.reaction_dofs is not None:
             # The support holds f_int - p dV/du = reaction; the solid pushes with -reaction.
@@ -167,8 +177,8 @@ class SolidModel:
             R = R - self.external_force[free]
         K = None
         if tangent:
-            if self.cavity is not None:
-                mats.append(-pressure_pa * cav.volume_hessian(self.cavity, u))
+            if cavity_terms is not None:
+                mats.append(-pressure_pa * hessian)
             if self.spring is not None:
                 mats.append((k * np.outer(weights, weights))[None])
             K = self.pattern.matrix(mats)

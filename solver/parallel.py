@@ -45,16 +45,17 @@ def _helper() -> ThreadPoolExecutor:
         return _pool
 
 
-def map_pair(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
-    """``[fn(x) for x in items]``, the last item on a helper thread while the calling
-    thread does the others, when the thread budget allows two and there are several
-    items; otherwise in order on this thread."""
-    if len(items) < 2 or thread_budget() < 2:
+def map_pair(fn: Callable[[T], R], items: Sequence[T], split: int | None = None) -> list[R]:
+    """``[fn(x) for x in items]``: ``items[split:]`` (default: the last item) on a helper
+    thread while the calling thread does the others, when the thread budget allows two
+    and both parts are non-empty; otherwise in order on this thread."""
+    k = len(items) - 1 if split is None else split
+    if not 0 < k < len(items) or thread_budget() < 2:
         return [fn(x) for x in items]
-    future = _helper().submit(fn, items[-1])
+    future = _helper().submit(lambda: [fn(x) for x in items[k:]])
     try:
-        head = [fn(x) for x in items[:-1]]
+        head = [fn(x) for x in items[:k]]
     except BaseException:
         wait([future])                           # no work left behind on the helper
         raise
-    return head + [future.result()]
+    return head + future.result()
