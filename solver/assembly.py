@@ -402,18 +402,16 @@ class Pattern:
             (np.ones(len(sources)), sources,
              np.append(starts, len(sources)).astype(np.int32)),
             shape=(len(upper), self.n_values))
-        self.upper_indptr, self.upper_indices = _csr_structure(upper, n)
+        urow, ucol = np.divmod(upper, n)
+        self.upper_indptr, self.upper_indices = _csr_structure(urow, ucol, n)
         # The full pattern: the upper slots and the mirrors of those off the diagonal;
         # full data = upper data[self.mirror].
-        urow, ucol = upper // n, upper % n
         off = np.flatnonzero(urow != ucol)
-        full = np.concatenate((upper, ucol[off] * n + urow[off]))
-        slot = np.concatenate((np.arange(len(upper)), off)).astype(np.int32)
-        del urow, ucol, off
-        order = np.argsort(full)
-        self.mirror = slot[order].astype(np.intp)          # np.take's fastest index
-        self.indptr, self.indices = _csr_structure(full[order], n)
-        self.nnz = len(full)
+        order = np.argsort(np.concatenate((upper, ucol[off] * n + urow[off])))
+        self.mirror = np.concatenate((np.arange(len(upper)), off))[order]   # intp: np.take's
+        self.indptr, self.indices = _csr_structure(                         # fastest index
+            np.concatenate((urow, ucol[off]))[order], np.concatenate((ucol, urow[off]))[order], n)
+        self.nnz = len(order)
 
     def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
         """The full symmetric matrix, with its upper triangle (a CSR matrix of the
@@ -430,11 +428,11 @@ class Pattern:
         return K
 
 
-def _csr_structure(keys: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(indptr, indices) of sorted unique keys row * n + col."""
-    rows = keys // n
+def _csr_structure(rows: np.ndarray, cols: np.ndarray, n: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(indptr, indices) of entries sorted by row, then column."""
     indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n))))
-    return indptr.astype(np.int32), (keys % n).astype(np.int32)
+    return indptr.astype(np.int32), cols.astype(np.int32)
 
 
 def scatter_vector(ndofs: int, dofs: np.ndarray, values: np.ndarray) -> np.ndarray:

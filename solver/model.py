@@ -62,9 +62,11 @@ class SolidModel:
     """
 
     def __init__(self, mesh, element: str, groups, cavity_facets: np.ndarray,
-                 fixed_fn, bulk_ratio: float, spring=None, reaction_dofs=None) -> None:
+                 fixed_fn, bulk_ratio: float, spring=None, reaction_dofs=None,
+                 basis=None) -> None:
+        """``basis``: the scalar ``make_basis(mesh, element)`` when the caller has it."""
         self.mesh = mesh
-        basis = make_basis(mesh, element)
+        basis = make_basis(mesh, element) if basis is None else basis
         self.doflocs = basis.doflocs                                      # (3, nnodes)
         nnodes = basis.N
         self.ndofs = 3 * nnodes
@@ -222,8 +224,8 @@ class ActuatorModel(SolidModel):
                 mask[np.abs(X[0] - x_end) < 1e-9, 2] = True
             return mask
 
-        end_nodes = np.nonzero(np.abs(self._node_positions(am.mesh, settings.element)[0]
-                                      - x_end) < 1e-9)[0]
+        basis = make_basis(am.mesh, settings.element)
+        end_nodes = np.nonzero(np.abs(basis.doflocs[0] - x_end) < 1e-9)[0]
         spring = reaction = None
         if settings.tip == "spring":
             # k in N/m = 1e3 uN/mm; the half model carries half of it.
@@ -232,12 +234,9 @@ class ActuatorModel(SolidModel):
         elif settings.tip == "blocked":
             reaction = 3 * end_nodes + 2
         super().__init__(am.mesh, settings.element, groups, am.cavity_facets, fixed,
-                         settings.bulk_ratio, spring=spring, reaction_dofs=reaction)
+                         settings.bulk_ratio, spring=spring, reaction_dofs=reaction,
+                         basis=basis)
         self.end_nodes = end_nodes
-
-    @staticmethod
-    def _node_positions(mesh, element: str) -> np.ndarray:
-        return make_basis(mesh, element).doflocs
 
     def tip_force_mn(self, ev: Evaluation) -> float:
         """Whole-actuator tip force in mN (the half model's uN x 2 / 1000)."""
