@@ -312,9 +312,13 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     K = element_stiffness(block, A, block.wdV)
     # + K D^T M^-1 D: the element's (3 nb x 3 nb) products (one small matrix product
     # each), their node-pair blocks a <= b gathered into the pair layout.
-    KD = np.swapaxes(D, 1, 2) @ (block.bulk_pa * (block.Minv @ D))              # (e, a i, b k)
-    KD = np.take(KD.reshape(ne, -1), _pair_entries(nb), axis=1)                # (e, pairs i k)
-    K += KD.reshape(ne, -1, 3, 3).transpose(1, 0, 2, 3)
+    # In chunks of elements: the full products are twice the pair layout's memory.
+    G = block.bulk_pa * (block.Minv @ D)
+    for start in range(0, ne, 64):
+        c = slice(start, min(start + 64, ne))
+        KD = np.swapaxes(D[c], 1, 2) @ G[c]                                  # (e, a i, b k)
+        KD = np.take(KD.reshape(c.stop - c.start, -1), _pair_entries(nb), axis=1)
+        K[:, c] += KD.reshape(c.stop - c.start, -1, 3, 3).transpose(1, 0, 2, 3)
     return BlockState(energy, r, K, lam, float(J.min()), constraint, D, dilatation_error)
 
 
@@ -343,8 +347,8 @@ class Pattern:
     others (cavity, spring) as full, symmetric (ne, m, m) matrices.
     ``reduced[g]`` is the index of global dof g among the free dofs, or -1.
 
-    The values are summed into the upper triangle only (what PARDISO factorises) and
-    mirrored into the full matrix by one gather.
+    The values are summed into the upper triangle only and mirrored into the full
+    matrix by one gather (half the scatter's work and memory).
     """
 
     def __init__(self, dof_lists: list[np.ndarray], free: np.ndarray, ndofs: int,
@@ -403,29 +407,25 @@ class Pattern:
              np.append(starts, len(sources)).astype(np.int32)),
             shape=(len(upper), self.n_values))
         urow, ucol = np.divmod(upper, n)
-        self.upper_indptr, self.upper_indices = _csr_structure(urow, ucol, n)
         # The full pattern: the upper slots and the mirrors of those off the diagonal;
         # full data = upper data[self.mirror].
         off = np.flatnonzero(urow != ucol)
         order = np.argsort(np.concatenate((upper, ucol[off] * n + urow[off])))
-        self.mirror = np.concatenate((np.arange(len(upper)), off))[order]   # intp: np.take's
-        self.indptr, self.indices = _csr_structure(                         # fastest index
+        self.mirror = np.concatenate((np.arange(len(upper)), off))[order].astype(np.int32)
+        self.indptr, self.indices = _csr_structure(
             np.concatenate((urow, ucol[off]))[order], np.concatenate((ucol, urow[off]))[order], n)
         self.nnz = len(order)
 
     def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
-        """The full symmetric matrix, with its upper triangle (a CSR matrix of the
-        same values) as the attribute ``upper_triangle``."""
+        """The full symmetric matrix."""
         values = np.concatenate([Ke.ravel() for Ke in element_matrices])
         if len(values) != self.n_values:
             raise ValueError(f"{len(values)} element-matrix entries for a pattern of "
                              f"{self.n_values}")
         upper = self.scatter @ values
-        K = sp.csr_matrix((np.take(upper, self.mirror), self.indices, self.indptr),
-                          shape=(self.n, self.n))
-        K.upper_triangle = sp.csr_matrix((upper, self.upper_indices, self.upper_indptr),
-                                         shape=(self.n, self.n))
-        return K
+        del values
+        return sp.csr_matrix((np.take(upper, self.mirror), self.indices, self.indptr),
+                             shape=(self.n, self.n))
 
 
 def _csr_structure(rows: np.ndarray, cols: np.ndarray, n: int

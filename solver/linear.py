@@ -73,13 +73,12 @@ class _PardisoPattern:
         self.ps = pypardiso.PyPardisoSolver(mtype=-2)       # real symmetric indefinite
         self.indptr, self.indices = K.indptr, K.indices
         rows = np.repeat(np.arange(K.shape[0]), np.diff(K.indptr))
-        self.upper = np.nonzero(K.indices >= rows)[0]        # CSR order is kept
+        self.upper = np.flatnonzero(K.indices >= rows)      # CSR order is kept
         U = sp.csr_matrix((K.data[self.upper], K.indices[self.upper],
                            np.concatenate(([0], np.cumsum(np.bincount(
                                rows[self.upper], minlength=K.shape[0]))))), shape=K.shape)
         U.sort_indices()
         self.U = U
-        self._upper_indices: np.ndarray | None = None
         self._call(11, np.zeros(K.shape[0]))     # PARDISO's defaults fill iparm here
         self.defaults = self.ps.iparm.copy()
 
@@ -91,19 +90,6 @@ class _PardisoPattern:
         if not careful:
             self.ps.iparm[IPARM_PIVOTING] = 0
             self.ps.iparm[IPARM_REFINEMENT] = 0
-
-    def upper_data(self, K: sp.csr_matrix) -> np.ndarray:
-        """K's upper-triangle values in the order of ``U``: from the upper triangle
-        that ``solver.assembly.Pattern`` attaches (``K.upper_triangle``), else picked
-        out of K."""
-        Ku = getattr(K, "upper_triangle", None)
-        if Ku is not None and Ku.nnz == self.U.nnz:
-            if Ku.indices is self._upper_indices or (
-                    np.array_equal(Ku.indptr, self.U.indptr)
-                    and np.array_equal(Ku.indices, self.U.indices)):
-                self._upper_indices = Ku.indices
-                return Ku.data
-        return K.data[self.upper]
 
     def matches(self, K: sp.csr_matrix) -> bool:
         return (K.indptr is self.indptr and K.indices is self.indices) or (
@@ -143,7 +129,7 @@ class PardisoFactor:
                 cached.release()
             cached = PardisoFactor._pattern = _PardisoPattern(K)
         self._p = cached
-        cached.U.data[:] = cached.upper_data(K)
+        np.take(K.data, cached.upper, out=cached.U.data)
         # Diagonal pivoting first; a factorisation that had to perturb a pivot is
         # repeated with PARDISO's defaults (benchmarks/RESULTS.md, issue 12, fifth session).
         for careful in (False, True):
