@@ -72,11 +72,12 @@ class _PardisoPattern:
         pypardiso = _import_pypardiso()
         self.ps = pypardiso.PyPardisoSolver(mtype=-2)       # real symmetric indefinite
         self.indptr, self.indices = K.indptr, K.indices
-        rows = np.repeat(np.arange(K.shape[0]), np.diff(K.indptr))
+        rows = np.repeat(np.arange(K.shape[0], dtype=np.int32), np.diff(K.indptr))
         self.upper = np.flatnonzero(K.indices >= rows)      # CSR order is kept
+        counts = np.bincount(rows[self.upper], minlength=K.shape[0])
+        del rows                                 # the analysis below is the solve's peak
         U = sp.csr_matrix((K.data[self.upper], K.indices[self.upper],
-                           np.concatenate(([0], np.cumsum(np.bincount(
-                               rows[self.upper], minlength=K.shape[0]))))), shape=K.shape)
+                           np.concatenate(([0], np.cumsum(counts)))), shape=K.shape)
         U.sort_indices()
         self.U = U
         self._call(11, np.zeros(K.shape[0]))     # PARDISO's defaults fill iparm here

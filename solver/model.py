@@ -184,6 +184,8 @@ class SolidModel:
             if self.spring is not None:
                 mats.append((k * np.outer(weights, weights))[None])
             K = self.pattern.matrix(mats)
+            for st in states:       # in K now; the pressure update needs only D and R_p
+                st.stiffness = None
         self.timings["assembly_s"] += time.perf_counter() - t0
         counter = "tangent_evaluations" if tangent else "residual_evaluations"
         self.timings[counter] = self.timings.get(counter, 0) + 1

@@ -37,6 +37,16 @@ def thread_budget() -> int:
         return os.cpu_count() or 1
 
 
+def _forget_helper() -> None:
+    """In a forked child the helper thread does not exist: start a new one on demand."""
+    global _lock, _pool
+    _lock, _pool = threading.Lock(), None
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_helper)
+
+
 def _helper() -> ThreadPoolExecutor:
     global _pool
     with _lock:
