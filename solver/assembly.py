@@ -41,7 +41,7 @@ the mixed iterate keeps the linearised, physical pressure (docs/physics.md).
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -98,6 +98,16 @@ def material_block(basis: Basis, elements: np.ndarray, mu_pa, alpha, bulk_pa: fl
                           dN, wdV, Np, np.linalg.inv(M), dofs, membrane, elements, M=M)
     _detect_boxes(block)
     return block
+
+
+def sub_block(block: MaterialBlock, elements: slice) -> MaterialBlock:
+    """The block restricted to a range of its elements (views, no copies)."""
+    def cut(x):
+        return None if x is None else x[elements]
+    return replace(block, dN=block.dN[elements], wdV=block.wdV[elements],
+                   Np=block.Np[elements], Minv=block.Minv[elements],
+                   dofs=block.dofs[elements], elements=cut(block.elements),
+                   box_scale=cut(block.box_scale), M=cut(block.M))
 
 
 def _detect_boxes(block: MaterialBlock) -> None:

@@ -19,6 +19,7 @@ import numpy as np
 
 from solver import cavity as cav
 from solver.assembly import (
+    MaterialBlock,
     Pattern,
     consistent_pressures,
     evaluate_block,
@@ -26,6 +27,7 @@ from solver.assembly import (
     material_block,
     pressure_update,
     scatter_vector,
+    sub_block,
 )
 from solver.design import Design
 from solver.mesh import NAMED_DIVISIONS, MeshDivisions, build_mesh
@@ -43,7 +45,7 @@ class Evaluation:
     max_membrane_stretch: float
     load_norm: float        # || p dV/du ||
     tip_force_un: float = float("nan")   # spring force or block reaction on the model, uN
-    block_states: list | None = None     # per block, for the mixed pressure update
+    block_states: list | None = None     # per evaluation unit, for the pressure update
     constraint_error: float = 0.0        # max |M^-1 R_p|: dilatation mismatch of the iterate
 
 
@@ -79,6 +81,7 @@ class SolidModel:
             self.blocks.append(material_block(basis, np.asarray(elements), mu, alpha,
                                               bulk_ratio * mu0, porder, is_membrane))
         self.mu0_min_pa = min(0.5 * float((b.mu_pa * b.alpha).sum()) for b in self.blocks)
+        self.units = evaluation_units(self.blocks)
         self.cavity = (cav.make_cavity(mesh, element, cavity_facets, basis.doflocs)
                        if len(cavity_facets) else None)
         self.external_force: np.ndarray | None = None
@@ -88,8 +91,8 @@ class SolidModel:
         self.spring = spring
         spring_dofs = [np.asarray(spring[0])[None, :]] if spring is not None else []
         self.reaction_dofs = reaction_dofs
-        self.pattern = Pattern([b.dofs for b in self.blocks] + cavity_dofs + spring_dofs,
-                               free, self.ndofs, n_pair_lists=len(self.blocks))
+        self.pattern = Pattern([unit.block.dofs for unit in self.units] + cavity_dofs
+                               + spring_dofs, free, self.ndofs, n_pair_lists=len(self.units))
         self.n_free = len(free)
         self.volume0_mm3 = self._volume(np.zeros(self.ndofs))
         self.timings = {"assembly_s": 0.0, "linear_solve_s": 0.0}
@@ -114,8 +117,10 @@ class SolidModel:
         ``constraint=False``: their rate along a displacement rate (no constraint residual)."""
         assert ev.block_states is not None
         du = self.full(du_free)
-        return [pressure_update(b, st, du, constraint)
-                for b, st in zip(self.blocks, ev.block_states)]
+        per_unit = [pressure_update(unit.block, st, du, constraint)
+                    for unit, st in zip(self.units, ev.block_states)]
+        return [np.concatenate([dq for unit, dq in zip(self.units, per_unit)
+                                if unit.index == i]) for i in range(len(self.blocks))]
 
     def evaluate(self, u_free: np.ndarray, pressure_pa: float, tangent: bool = True,
                  pressures: list[np.ndarray] | None = None) -> Evaluation:
@@ -128,26 +133,26 @@ class SolidModel:
         r = np.zeros(self.ndofs)
         mats: list[np.ndarray] = []
         energy = 0.0
-        lam_m = 1.0
+        lam_membrane: list[float] = []
         states = []
         constraint_error = 0.0
-        nblocks = len(self.blocks)
+        nunits = len(self.units)
 
         def part(i: int):
-            """Block i, or (i = nblocks) the cavity's volume, gradient and Hessian."""
-            if i < nblocks:
-                return evaluate_block(self.blocks[i], u, tangent,
-                                      None if pressures is None else pressures[i])
+            """Evaluation unit i, or (i = nunits) the cavity's volume, gradient and Hessian."""
+            if i < nunits:
+                unit = self.units[i]
+                return evaluate_block(unit.block, u, tangent, None if pressures is None
+                                      else pressures[unit.index][unit.elements])
             if self.cavity is None:
                 return None
             return (self._volume(u), cav.volume_gradient(self.cavity, u),
                     cav.volume_hessian(self.cavity, u) if tangent else None)
 
-        # Two threads when the thread budget allows (solver/parallel.py): the last
-        # block (the membrane) and the cavity on the helper, the others here.
-        *block_states, cavity_terms = map_pair(part, range(nblocks + 1),
-                                               split=max(nblocks - 1, 1))
-        for block, st in zip(self.blocks, block_states):
+        # Two threads when the thread budget allows (solver/parallel.py): the first
+        # unit here, the others and the cavity on the helper (``evaluation_units``).
+        *block_states, cavity_terms = map_pair(part, range(nunits + 1), split=1)
+        for block, st in zip((unit.block for unit in self.units), block_states):
             states.append(st)
             constraint_error = max(constraint_error, st.dilatation_error)
             energy += st.energy
@@ -155,7 +160,8 @@ class SolidModel:
             if st.stiffness is not None:
                 mats.append(st.stiffness)
             if block.membrane:
-                lam_m = float(st.lam_max.max())
+                lam_membrane.append(float(st.lam_max.max()))
+        lam_m = max(lam_membrane) if lam_membrane else 1.0
         if cavity_terms is not None:
             vol, gv, hessian = cavity_terms
             g = scatter_vector(self.ndofs, self.cavity.dofs, gv)[free]
@@ -193,6 +199,38 @@ class SolidModel:
                           tip_force, states if pressures is not None else None,
                           constraint_error)
 
+
+
+@dataclass
+class EvaluationUnit:
+    """A range of one material block's elements, evaluated as one piece."""
+
+    index: int              # the block
+    elements: slice         # its elements
+    block: MaterialBlock    # the block restricted to them
+
+
+# The first unit's share of the elements. It runs on the calling thread, which then
+# also assembles the sparse matrix alone (~a fifth of a tangent evaluation), while the
+# helper thread does the rest and the cavity (solver/parallel.py).
+FIRST_UNIT_SHARE = 0.45
+
+
+def evaluation_units(blocks: list[MaterialBlock]) -> list[EvaluationUnit]:
+    """The blocks as evaluation units: the first ``FIRST_UNIT_SHARE`` of all elements
+    (in block order, splitting the block that straddles it) and the rest. Splitting
+    changes only the order of summation in the sparse matrix."""
+    sizes = [len(b.dofs) for b in blocks]
+    cut = int(round(FIRST_UNIT_SHARE * sum(sizes)))
+    units, start = [], 0
+    for i, (block, n) in enumerate(zip(blocks, sizes)):
+        pieces = ([slice(0, cut - start), slice(cut - start, n)] if start < cut < start + n
+                  else [slice(0, n)])
+        for sl in pieces:
+            units.append(EvaluationUnit(i, sl, block if sl == slice(0, n)
+                                        else sub_block(block, sl)))
+        start += n
+    return units
 
 
 class ActuatorModel(SolidModel):
