@@ -434,8 +434,9 @@ class Pattern:
                              f"{self.n_values}")
         upper = self.scatter @ values
         del values
-        return sp.csr_matrix((np.take(upper, self.mirror), self.indices, self.indptr),
-                             shape=(self.n, self.n))
+        # (mode "clip" with out: numpy gathers without buffering or an intp index copy)
+        data = np.take(upper, self.mirror, out=np.empty(self.nnz), mode="clip")
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
 
 def _csr_structure(rows: np.ndarray, cols: np.ndarray, n: int

@@ -130,7 +130,7 @@ class PardisoFactor:
                 cached.release()
             cached = PardisoFactor._pattern = _PardisoPattern(K)
         self._p = cached
-        np.take(K.data, cached.upper, out=cached.U.data)
+        np.take(K.data, cached.upper, out=cached.U.data, mode="clip")   # unbuffered
         # Diagonal pivoting first; a factorisation that had to perturb a pivot is
         # repeated with PARDISO's defaults (benchmarks/RESULTS.md, issue 12, fifth session).
         for careful in (False, True):
