@@ -1,8 +1,9 @@
-"""A second core for the assembly: the material blocks evaluated in two threads.
+"""A second core for the assembly: the elements evaluated in two threads.
 
 numpy's array kernels (ufuncs, matmul, einsum, the batched eigh) and scipy's sparse
-products release the GIL, so two blocks evaluated in threads run on two cores; the
-result is the same to the bit (each block's arithmetic is unchanged).
+products release the GIL, so two groups of elements evaluated in threads run on two
+cores (``solver.model.evaluation_units``); the result is the same to the bit (each
+element's arithmetic is unchanged).
 
 The thread budget is the one MKL PARDISO takes for the factorisation: MKL_NUM_THREADS,
 else OMP_NUM_THREADS (what the precompute job sets per worker, cores // workers), else
