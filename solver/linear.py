@@ -93,9 +93,9 @@ class _PardisoPattern:
             self.ps.iparm[IPARM_REFINEMENT] = 0
 
     def matches(self, K: sp.csr_matrix) -> bool:
-        return (K.indptr is self.indptr and K.indices is self.indices) or (
-            K.shape == self.U.shape and np.array_equal(K.indptr, self.indptr)
-            and np.array_equal(K.indices, self.indices))
+        return (_same_memory(K.indptr, self.indptr) and _same_memory(K.indices, self.indices)
+                ) or (K.shape == self.U.shape and np.array_equal(K.indptr, self.indptr)
+                      and np.array_equal(K.indices, self.indices))
 
     def _call(self, phase: int, b: np.ndarray) -> np.ndarray:
         self.ps.set_phase(phase)
@@ -104,6 +104,14 @@ class _PardisoPattern:
     def release(self) -> None:
         self.ps.set_phase(-1)
         self.ps._call_pardiso(sp.csr_matrix((0, 0)), np.zeros(0))
+
+
+def _same_memory(a: np.ndarray, b: np.ndarray) -> bool:
+    """The same array memory (scipy hands out a new view of the pattern's index arrays
+    with every matrix; the analysed pattern keeps its own alive, so its address is not
+    reused by another array)."""
+    return (a is b) or (a.ctypes.data == b.ctypes.data and a.shape == b.shape
+                        and a.strides == b.strides and a.dtype == b.dtype)
 
 
 class PardisoFactor:
