@@ -322,12 +322,12 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
     K = element_stiffness(block, A, block.wdV)
     # + K D^T M^-1 D: the element's (3 nb x 3 nb) products (one small matrix product
     # each), their node-pair blocks a <= b gathered into the pair layout.
-    # In chunks of elements: the full products are twice the pair layout's memory.
+    # In chunks of 96 elements: the full products take twice the pair layout's memory.
     G = block.bulk_pa * (block.Minv @ D)
-    for start in range(0, ne, 64):
-        c = slice(start, min(start + 64, ne))
+    for start in range(0, ne, 96):
+        c = slice(start, min(start + 96, ne))
         KD = np.swapaxes(D[c], 1, 2) @ G[c]                                  # (e, a i, b k)
-        KD = np.take(KD.reshape(c.stop - c.start, -1), _pair_entries(nb), axis=1)
+        KD = np.take(KD.reshape(c.stop - c.start, -1), _pair_entries(nb), axis=1, mode="clip")
         K[:, c] += KD.reshape(c.stop - c.start, -1, 3, 3).transpose(1, 0, 2, 3)
     return BlockState(energy, r, K, lam, float(J.min()), constraint, D, dilatation_error)
 

@@ -31,7 +31,7 @@ from solver.assembly import (
 )
 from solver.design import Design
 from solver.mesh import NAMED_DIVISIONS, MeshDivisions, build_mesh
-from solver.parallel import map_pair
+from solver.parallel import map_pair, thread_budget
 from solver.settings import SolverSettings
 
 
@@ -81,7 +81,7 @@ class SolidModel:
             self.blocks.append(material_block(basis, np.asarray(elements), mu, alpha,
                                               bulk_ratio * mu0, porder, is_membrane))
         self.mu0_min_pa = min(0.5 * float((b.mu_pa * b.alpha).sum()) for b in self.blocks)
-        self.units = evaluation_units(self.blocks)
+        self.units = evaluation_units(self.blocks, thread_budget())
         self.cavity = (cav.make_cavity(mesh, element, cavity_facets, basis.doflocs)
                        if len(cavity_facets) else None)
         self.external_force: np.ndarray | None = None
@@ -216,12 +216,13 @@ class EvaluationUnit:
 FIRST_UNIT_SHARE = 0.45
 
 
-def evaluation_units(blocks: list[MaterialBlock]) -> list[EvaluationUnit]:
-    """The blocks as evaluation units: the first ``FIRST_UNIT_SHARE`` of all elements
-    (in block order, splitting the block that straddles it) and the rest. Splitting
-    changes only the order of summation in the sparse matrix."""
+def evaluation_units(blocks: list[MaterialBlock], threads: int) -> list[EvaluationUnit]:
+    """The blocks as evaluation units: with two threads or more, the first
+    ``FIRST_UNIT_SHARE`` of all elements (in block order, splitting the block that
+    straddles it) and the rest; with one, the blocks as they are. Splitting changes only
+    the order of summation in the sparse matrix."""
     sizes = [len(b.dofs) for b in blocks]
-    cut = int(round(FIRST_UNIT_SHARE * sum(sizes)))
+    cut = int(round(FIRST_UNIT_SHARE * sum(sizes))) if threads >= 2 else 0
     units, start = [], 0
     for i, (block, n) in enumerate(zip(blocks, sizes)):
         pieces = ([slice(0, cut - start), slice(cut - start, n)] if start < cut < start + n
