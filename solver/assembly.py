@@ -48,6 +48,7 @@ import scipy.sparse as sp
 from skfem import Basis, ElementHex1, ElementHex2
 
 from solver.ogden import stress_and_tangent
+from solver.parallel import map_pair
 
 
 @dataclass
@@ -362,7 +363,9 @@ class Pattern:
     """
 
     def __init__(self, dof_lists: list[np.ndarray], free: np.ndarray, ndofs: int,
-                 n_pair_lists: int = 0) -> None:
+                 n_pair_lists: int = 0, groups: list[tuple[int, int]] | None = None) -> None:
+        """``groups``: ranges (start, stop) of consecutive dof lists whose values are
+        scattered together (``upper_values``); default one group of all lists."""
         self.ndofs = ndofs
         self.free = free
         reduced = -np.ones(ndofs, dtype=np.int64)
@@ -412,10 +415,18 @@ class Pattern:
         upper = keys[starts].astype(np.int64)
         del keys, new_key
         self.n_values = int(sum(sizes))
-        self.scatter = sp.csr_matrix(
+        # Per group of lists, the columns of the scatter matrix (CSC: slicing columns
+        # keeps the memory of one matrix); data = sum over groups of S_g @ values_g.
+        scatter = sp.csr_matrix(
             (np.ones(len(sources)), sources,
              np.append(starts, len(sources)).astype(np.int32)),
-            shape=(len(upper), self.n_values))
+            shape=(len(upper), self.n_values)).tocsc()
+        del sources, starts
+        self.groups = groups if groups is not None else [(0, len(dof_lists))]
+        offsets = np.cumsum([0] + sizes)
+        self.group_sizes = [int(offsets[b] - offsets[a]) for a, b in self.groups]
+        self.scatter_groups = [scatter[:, offsets[a]:offsets[b]] for a, b in self.groups]
+        del scatter
         urow, ucol = np.divmod(upper, n)
         # The full pattern: the upper slots and the mirrors of those off the diagonal;
         # full data = upper data[self.mirror].
@@ -426,17 +437,34 @@ class Pattern:
             np.concatenate((urow, ucol[off]))[order], np.concatenate((ucol, urow[off]))[order], n)
         self.nnz = len(order)
 
-    def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
-        """The full symmetric matrix."""
+    def upper_values(self, group: int, element_matrices: list[np.ndarray]) -> np.ndarray:
+        """The upper triangle's values (CSR order) summed from the element matrices of
+        one group of dof lists: a part of ``assemble``'s argument."""
         values = np.concatenate([Ke.ravel() for Ke in element_matrices])
-        if len(values) != self.n_values:
-            raise ValueError(f"{len(values)} element-matrix entries for a pattern of "
-                             f"{self.n_values}")
-        upper = self.scatter @ values
-        del values
+        if len(values) != self.group_sizes[group]:
+            raise ValueError(f"{len(values)} element-matrix entries for a group of "
+                             f"{self.group_sizes[group]}")
+        return self.scatter_groups[group] @ values
+
+    def assemble(self, upper: np.ndarray) -> sp.csr_matrix:
+        """The full symmetric matrix from its upper triangle's values, gathered in two
+        halves (on two threads when the budget allows)."""
+        data = np.empty(self.nnz)
+        half = self.nnz // 2
         # (mode "clip" with out: numpy gathers without buffering or an intp index copy)
-        data = np.take(upper, self.mirror, out=np.empty(self.nnz), mode="clip")
+        map_pair(lambda part: np.take(upper, self.mirror[part], out=data[part], mode="clip"),
+                 [slice(0, half), slice(half, self.nnz)])
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+    def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
+        """The full symmetric matrix from the element matrices of all lists."""
+        if sum(Ke.size for Ke in element_matrices) != self.n_values:
+            raise ValueError(f"{sum(Ke.size for Ke in element_matrices)} element-matrix "
+                             f"entries for a pattern of {self.n_values}")
+        upper = 0.0
+        for g, (a, b) in enumerate(self.groups):
+            upper = upper + self.upper_values(g, element_matrices[a:b])
+        return self.assemble(upper)
 
 
 def _csr_structure(rows: np.ndarray, cols: np.ndarray, n: int

@@ -91,8 +91,14 @@ class SolidModel:
         self.spring = spring
         spring_dofs = [np.asarray(spring[0])[None, :]] if spring is not None else []
         self.reaction_dofs = reaction_dofs
+        # Scatter groups: the first unit (the calling thread's part), the other units and
+        # the cavity (the helper's), the spring (see ``evaluate``).
+        nlists = len(self.units) + len(cavity_dofs)
+        groups = [(0, 1)] + ([(1, nlists)] if nlists > 1 else [])
+        groups += [(nlists, nlists + 1)] if spring_dofs else []
         self.pattern = Pattern([unit.block.dofs for unit in self.units] + cavity_dofs
-                               + spring_dofs, free, self.ndofs, n_pair_lists=len(self.units))
+                               + spring_dofs, free, self.ndofs, n_pair_lists=len(self.units),
+                               groups=groups)
         self.n_free = len(free)
         self.volume0_mm3 = self._volume(np.zeros(self.ndofs))
         self.timings = {"assembly_s": 0.0, "linear_solve_s": 0.0}
@@ -131,39 +137,46 @@ class SolidModel:
         u = self.full(u_free)
         free = self.pattern.free
         r = np.zeros(self.ndofs)
-        mats: list[np.ndarray] = []
         energy = 0.0
         lam_membrane: list[float] = []
         states = []
         constraint_error = 0.0
-        nunits = len(self.units)
 
-        def part(i: int):
-            """Evaluation unit i, or (i = nunits) the cavity's volume, gradient and Hessian."""
-            if i < nunits:
-                unit = self.units[i]
-                return evaluate_block(unit.block, u, tangent, None if pressures is None
-                                      else pressures[unit.index][unit.elements])
-            if self.cavity is None:
-                return None
-            return (self._volume(u), cav.volume_gradient(self.cavity, u),
-                    cav.volume_hessian(self.cavity, u) if tangent else None)
+        def part(group: int):
+            """Scatter group 0 (the first unit) or 1 (the other units and the cavity's
+            volume, gradient and Hessian): their states, the cavity terms, and with the
+            tangent their part of the matrix's upper triangle (Pattern.upper_values)."""
+            units = self.units[:1] if group == 0 else self.units[1:]
+            sts = [evaluate_block(unit.block, u, tangent, None if pressures is None
+                                  else pressures[unit.index][unit.elements]) for unit in units]
+            terms = None
+            if group == 1 and self.cavity is not None:
+                terms = (self._volume(u), cav.volume_gradient(self.cavity, u),
+                         cav.volume_hessian(self.cavity, u) if tangent else None)
+            upper = None
+            if tangent:
+                mats = [st.stiffness for st in sts] + ([-pressure_pa * terms[2]] if terms
+                                                       else [])
+                upper = self.pattern.upper_values(group, mats) if mats else None
+            for st in sts:          # in the upper triangle now; the pressure update needs
+                st.stiffness = None  # only D and R_p
+            return sts, terms, upper
 
         # Two threads when the thread budget allows (solver/parallel.py): the first
         # unit here, the others and the cavity on the helper (``evaluation_units``).
-        *block_states, cavity_terms = map_pair(part, range(nunits + 1), split=1)
+        parts = map_pair(part, [0, 1], split=1)
+        block_states = [st for sts, _, _ in parts for st in sts]
+        cavity_terms = parts[1][1]
         for block, st in zip((unit.block for unit in self.units), block_states):
             states.append(st)
             constraint_error = max(constraint_error, st.dilatation_error)
             energy += st.energy
             r += scatter_vector(self.ndofs, block.dofs, st.residual)
-            if st.stiffness is not None:
-                mats.append(st.stiffness)
             if block.membrane:
                 lam_membrane.append(float(st.lam_max.max()))
         lam_m = max(lam_membrane) if lam_membrane else 1.0
         if cavity_terms is not None:
-            vol, gv, hessian = cavity_terms
+            vol, gv, _ = cavity_terms
             g = scatter_vector(self.ndofs, self.cavity.dofs, gv)[free]
         else:
             vol, g = 0.0, np.zeros(len(free))
@@ -185,13 +198,13 @@ class SolidModel:
             R = R - self.external_force[free]
         K = None
         if tangent:
-            if cavity_terms is not None:
-                mats.append(-pressure_pa * hessian)
+            upper = parts[0][2]
+            if parts[1][2] is not None:
+                upper += parts[1][2]
             if self.spring is not None:
-                mats.append((k * np.outer(weights, weights))[None])
-            K = self.pattern.matrix(mats)
-            for st in states:       # in K now; the pressure update needs only D and R_p
-                st.stiffness = None
+                upper += self.pattern.upper_values(len(self.pattern.groups) - 1,
+                                                   [(k * np.outer(weights, weights))[None]])
+            K = self.pattern.assemble(upper)
         self.timings["assembly_s"] += time.perf_counter() - t0
         counter = "tangent_evaluations" if tangent else "residual_evaluations"
         self.timings[counter] = self.timings.get(counter, 0) + 1
