@@ -146,7 +146,9 @@ class PardisoFactor:
             try:
                 self._p._call(22, np.zeros(K.shape[0]))
             except PyPardisoError as exc:
-                raise np.linalg.LinAlgError(f"PARDISO factorisation failed: {exc}") from None
+                if careful:
+                    raise np.linalg.LinAlgError(f"PARDISO factorisation failed: {exc}") from None
+                continue
             if cached.ps.iparm[IPARM_PERTURBED] == 0:
                 break
         self.careful = careful
