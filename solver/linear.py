@@ -48,6 +48,11 @@ def _import_pypardiso():
     variable ``PYPARDISO_MKL_RT`` skips the search; it is set here, when unset, to the
     library in ``sys.prefix/lib`` where pip puts it.
     """
+    # MKL's OpenMP threads spin for 200 ms after each parallel region by default: after a
+    # factorisation the spinning worker takes the second core from the assembly's helper
+    # thread (solver/parallel.py), ~2 s of CPU per curve. Sleep at once instead (read when
+    # MKL's OpenMP runtime starts, i.e. before its first call; a user's setting wins).
+    os.environ.setdefault("KMP_BLOCKTIME", "0")
     if "PYPARDISO_MKL_RT" not in os.environ:
         found = sorted(glob.glob(os.path.join(sys.prefix, "lib", "libmkl_rt.so*")), key=len)
         if found:
