@@ -13,7 +13,7 @@ are timed by the CPU time of their process (one thread), and compared in one run
   peak RSS; ``--threads T`` runs them with OMP_NUM_THREADS = MKL_NUM_THREADS = T (a
   wall-clock comparison on a quiet machine), ``--no-units`` skips the unit costs.
 
-Results are recorded in benchmarks/RESULTS.md (issue 12, third session).
+Results are recorded in benchmarks/RESULTS.md (issue 12, third to fifth sessions).
 """
 
 from __future__ import annotations
