@@ -375,7 +375,7 @@ class Pattern:
         self.n = n
         # Keys row * n + col of the upper-triangle slot each value adds to (-1 where a
         # fixed dof is involved, or for the lower half of a block that is stored in
-        # full), int32 when they fit: the pattern's set-up is the solve's peak memory.
+        # full), int32 when they fit (the set-up's memory).
         kind = np.int32 if n * n < 2**31 else np.int64
         rdofs = reduced.astype(kind)
         keys = []
