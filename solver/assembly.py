@@ -411,22 +411,25 @@ class Pattern:
         new_key = np.empty(len(keys), dtype=bool)
         new_key[:1] = True
         np.not_equal(keys[1:], keys[:-1], out=new_key[1:])
-        starts = np.flatnonzero(new_key)
-        upper = keys[starts].astype(np.int64)
-        del keys, new_key
+        upper = keys[new_key].astype(np.int64)
         self.n_values = int(sum(sizes))
-        # Per group of lists, the columns of the scatter matrix (CSC: slicing columns
-        # keeps the memory of one matrix); data = sum over groups of S_g @ values_g.
-        scatter = sp.csr_matrix(
-            (np.ones(len(sources)), sources,
-             np.append(starts, len(sources)).astype(np.int32)),
-            shape=(len(upper), self.n_values)).tocsc()
-        del sources, starts
+        # The upper-triangle slot of every value (-1: none), then per group of lists the
+        # columns of the 0/1 scatter matrix S in CSC form (one entry per column at most):
+        # data = sum over groups of S_g @ values_g.
+        target = np.full(self.n_values, -1, dtype=np.int32)
+        target[sources] = np.cumsum(new_key, dtype=np.int32) - 1
+        del keys, new_key, sources
         self.groups = groups if groups is not None else [(0, len(dof_lists))]
         offsets = np.cumsum([0] + sizes)
         self.group_sizes = [int(offsets[b] - offsets[a]) for a, b in self.groups]
-        self.scatter_groups = [scatter[:, offsets[a]:offsets[b]] for a, b in self.groups]
-        del scatter
+        self.scatter_groups = []
+        for a, b in self.groups:
+            t = target[offsets[a]:offsets[b]]
+            valid = t >= 0
+            colptr = np.concatenate(([0], np.cumsum(valid, dtype=np.int32)))
+            self.scatter_groups.append(sp.csc_matrix(
+                (np.ones(int(colptr[-1])), t[valid], colptr), shape=(len(upper), len(t))))
+        del target
         urow, ucol = np.divmod(upper, n)
         # The full pattern: the upper slots and the mirrors of those off the diagonal;
         # full data = upper data[self.mirror].
