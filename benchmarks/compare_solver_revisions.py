@@ -9,9 +9,11 @@ are timed by the CPU time of their process (one thread), and compared in one run
   (the revision's ``solver/`` exported with ``git archive`` and imported as ``solver_base``):
   model set-up, tangent and residual-only evaluation, PARDISO factorisation and solve;
 - ``--curves N``: N full standard curves per version, alternating, one process each
-  (``solve(Design(), SolverSettings())``): CPU time, counts, p at 30 / 60 deg, peak RSS.
+  (``solve(Design(), SolverSettings())``): CPU and wall time, counts, p at 30 / 60 deg,
+  peak RSS; ``--threads T`` runs them with OMP_NUM_THREADS = MKL_NUM_THREADS = T (a
+  wall-clock comparison on a quiet machine), ``--no-units`` skips the unit costs.
 
-Results are recorded in benchmarks/RESULTS.md (issue 12, third session).
+Results are recorded in benchmarks/RESULTS.md (issue 12, third to fifth sessions).
 """
 
 from __future__ import annotations
@@ -31,19 +33,31 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 CURVE = """
-import json, resource, time
+import json, os, resource, time
 import numpy as np
 from solver import Design, SolverSettings
 from solver.stepping import solve
-t0 = time.process_time()
+def peak_rss_mb():
+    # VmHWM: this process image's own peak (ru_maxrss also counts the pages the parent
+    # had when it forked this child, e.g. after the unit costs' two models).
+    try:
+        with open("/proc/self/status") as f:
+            kb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
+    except (OSError, StopIteration):
+        kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return round(kb / 1024)
+t0, w0 = time.process_time(), time.perf_counter()
 c = solve(Design(), SolverSettings())
 t = c.timings_s
-print(json.dumps({"cpu_s": round(time.process_time() - t0, 2), "steps": len(c) - 1,
+print(json.dumps({"cpu_s": round(time.process_time() - t0, 2),
+    "wall_s": round(time.perf_counter() - w0, 2), "steps": len(c) - 1,
     "solves": int(c.newton_iterations.sum()), "tangents": t.get("tangent_evaluations"),
     "residuals": t.get("residual_evaluations"), "factorisations": t.get("factorisations"),
     "cutbacks": t.get("cutbacks", 0),
-    "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024),
+    "peak_rss_mb": peak_rss_mb(),
     "p_at_30_60_deg_pa": [float(np.interp(a, c.angle_deg, c.pressure_pa)) for a in (30, 60)]}))
+np.savez(os.environ["CURVE_FILE"], volume_ul=c.volume_ul, pressure_pa=c.pressure_pa,
+         angle_deg=c.angle_deg)
 """
 
 
@@ -109,24 +123,49 @@ def unit_costs(renamed_parent: pathlib.Path, repeats: int = 8) -> None:
               flush=True)
 
 
-def curves(tree: pathlib.Path, n: int) -> None:
+def curves(tree: pathlib.Path, n: int, threads: int | None) -> None:
+    env = dict(os.environ)
+    if threads is not None:
+        for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+            env[name] = str(threads)
+    files = {tag: tree.parent / f"{tag}.npz" for tag in ("before", "after")}
     for _ in range(n):
         for tag, path in (("before", tree), ("after", ROOT)):
             out = subprocess.run([sys.executable, "-c", CURVE], check=True, text=True,
                                  capture_output=True, cwd=tempfile.gettempdir(),
-                                 env={**os.environ, "PYTHONPATH": str(path)})
+                                 env={**env, "PYTHONPATH": str(path),
+                                      "CURVE_FILE": str(files[tag])})
             print(json.dumps({"curve": tag, **json.loads(out.stdout)}), flush=True)
+    if n:
+        print(json.dumps(agreement(*(dict(np.load(files[t])) for t in ("before", "after")))))
+
+
+def agreement(before: dict, after: dict) -> dict:
+    """Whether the two curves have the same points (injected volumes to 1e-12), and the
+    largest relative difference of pressure and angle over the points after the first."""
+    same = (len(before["volume_ul"]) == len(after["volume_ul"])
+            and np.allclose(before["volume_ul"], after["volume_ul"], rtol=1e-12, atol=0.0))
+    out = {"same_volumes": bool(same), "points": len(after["volume_ul"])}
+    if same:
+        for key in ("pressure_pa", "angle_deg"):
+            b, a = before[key][1:], after[key][1:]
+            out[f"max_rel_diff_{key}"] = float(np.max(np.abs(a - b) / np.abs(b)))
+    return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("rev", help="the git revision to compare the working tree against")
     ap.add_argument("--curves", type=int, default=0, help="full curves per version")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="OMP_NUM_THREADS and MKL_NUM_THREADS for the curves (wall-clock runs)")
+    ap.add_argument("--no-units", action="store_true", help="skip the unit costs")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         tree = export(args.rev, pathlib.Path(tmp))
-        unit_costs(pathlib.Path(tmp) / "renamed")
-        curves(tree, args.curves)
+        if not args.no_units:
+            unit_costs(pathlib.Path(tmp) / "renamed")
+        curves(tree, args.curves, args.threads)
 
 
 if __name__ == "__main__":

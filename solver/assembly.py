@@ -40,13 +40,15 @@ the mixed iterate keeps the linearised, physical pressure (docs/physics.md).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
 from skfem import Basis, ElementHex1, ElementHex2
 
 from solver.ogden import stress_and_tangent
+from solver.parallel import map_pair
 
 
 @dataclass
@@ -99,6 +101,16 @@ def material_block(basis: Basis, elements: np.ndarray, mu_pa, alpha, bulk_pa: fl
     return block
 
 
+def sub_block(block: MaterialBlock, elements: slice) -> MaterialBlock:
+    """The block restricted to a range of its elements (views, no copies)."""
+    def cut(x):
+        return None if x is None else x[elements]
+    return replace(block, dN=block.dN[elements], wdV=block.wdV[elements],
+                   Np=block.Np[elements], Minv=block.Minv[elements],
+                   dofs=block.dofs[elements], elements=cut(block.elements),
+                   box_scale=cut(block.box_scale), M=cut(block.M))
+
+
 def _detect_boxes(block: MaterialBlock) -> None:
     """Enable the fast path when every element is an axis-aligned box of the same
     reference shape functions, i.e. dN[e] = dN[0] * h[0] / h[e] per direction."""
@@ -126,11 +138,13 @@ def _gradient_contraction(block: MaterialBlock, X: np.ndarray) -> np.ndarray:
     On box elements one matrix product with the common reference gradients."""
     ne, nq = X.shape[:2]
     if block.box_gradients is not None:
-        Xs = X / block.box_scale.reshape((ne,) + (1,) * (X.ndim - 2) + (3,))
-        Xs = np.moveaxis(Xs, -1, 2).reshape(ne, nq * 3, -1)                # (e, q J, ...)
-        Y = block.box_gradients @ np.swapaxes(Xs, 0, 1).reshape(nq * 3, -1)  # (a, e ...)
-        Y = Y.reshape((Y.shape[0], ne) + X.shape[2:-1])
-        return np.moveaxis(Y, 0, 1)
+        # X_J / h_J laid out as (q, J, e, ...) in one pass, then one matrix product.
+        rest = X.shape[2:-1]
+        Xs = np.empty((nq, 3, ne) + rest)
+        inv_h = (1.0 / block.box_scale).T.reshape((1, 3, ne) + (1,) * len(rest))
+        np.multiply(np.moveaxis(X, (1, -1), (0, 1)), inv_h, out=Xs)
+        Y = block.box_gradients @ Xs.reshape(nq * 3, -1)                    # (a, e ...)
+        return np.moveaxis(Y.reshape((-1, ne) + rest), 0, 1)
     return np.einsum("eqaJ,eq...J->ea...", block.dN, X, optimize=True)
 
 
@@ -148,9 +162,11 @@ def node_pairs(nb: int) -> tuple[np.ndarray, np.ndarray]:
     return a, b
 
 
-def element_stiffness(block: MaterialBlock, A: np.ndarray) -> np.ndarray:
-    """K_e[a i, b k] = sum_q dN_aJ A_iJkL dN_bL for weighted tangents A (ne, nq, 9, 9),
-    symmetric under (iJ) <-> (kL). Returned in the symmetric pair layout
+def element_stiffness(block: MaterialBlock, A: np.ndarray,
+                      weights: np.ndarray | None = None) -> np.ndarray:
+    """K_e[a i, b k] = sum_q dN_aJ A_iJkL dN_bL w_q for tangents A (ne, nq, 9, 9),
+    symmetric under (iJ) <-> (kL), times ``weights`` (ne, nq) when given (A is then
+    not modified). Returned in the symmetric pair layout
     (npairs, ne, 3, 3): the 3 x 3 block of node pair (a, b), a <= b (``node_pairs``),
     K_e[b k, a i] being its transpose.
 
@@ -162,17 +178,34 @@ def element_stiffness(block: MaterialBlock, A: np.ndarray) -> np.ndarray:
     pa, pb = node_pairs(nb)
     if block.box_scale is not None:
         h = block.box_scale                                                   # (ne, 3)
-        At = A.reshape(ne, nq, 3, 3, 3, 3) / (h[:, None, None, :, None, None]
-                                              * h[:, None, None, None, None, :])
-        At = At.transpose(1, 3, 5, 0, 2, 4).reshape(nq * 9, ne * 9)         # (q J L), (e i k)
+        scale = 1.0 / (h[:, None, :, None] * h[:, None, None, :])             # (e, 1, J, L)
+        if weights is not None:
+            scale = scale * weights[:, :, None, None]                         # (e, q, J, L)
+        # Scaled and transposed to (q J L), (e i k) in one pass.
+        At = np.empty((nq, 3, 3, ne, 3, 3))
+        np.multiply(A.reshape(ne, nq, 3, 3, 3, 3).transpose(1, 3, 5, 0, 2, 4),
+                    scale.transpose(1, 2, 3, 0)[..., None, None], out=At)
         prod = block.box_products.reshape(nb, nb, nq * 9)[pa, pb]             # (pairs, q J L)
-        return (prod @ At).reshape(len(pa), ne, 3, 3)
+        return (prod @ At.reshape(nq * 9, ne * 9)).reshape(len(pa), ne, 3, 3)
+    if weights is not None:
+        A = A * weights[..., None, None]
     K = np.zeros((ne, nb, 3, nb, 3))
     A4 = A.reshape(ne, nq, 3, 3, 3, 3)
     for q in range(nq):
         C = np.einsum("eaJ,eiJkL->eaikL", block.dN[:, q], A4[:, q], optimize=True)
         K += np.einsum("eaikL,ebL->eaibk", C, block.dN[:, q], optimize=True)
     return np.ascontiguousarray(K[:, pa, :, pb, :])    # (pairs, ne, 3, 3)
+
+
+@functools.cache
+def _pair_entries(nb: int) -> np.ndarray:
+    """Flat indices (a i) 3 nb + (b k) of the pair layout's entries in a full
+    (3 nb x 3 nb) element matrix, in the order (pair, i, k)."""
+    pa, pb = node_pairs(nb)
+    i3 = np.arange(3)
+    rows = 3 * pa[:, None, None] + i3[None, :, None]
+    cols = 3 * pb[:, None, None] + i3[None, None, :]
+    return (rows * 3 * nb + cols).ravel()
 
 
 def full_element_matrices(pairs: np.ndarray) -> np.ndarray:
@@ -283,22 +316,38 @@ def evaluate_block(block: MaterialBlock, u: np.ndarray, with_tangent: bool = Tru
         return BlockState(energy, r, None, lam, float(J.min()), constraint, D,
                           dilatation_error)
 
-    # + p_hat J (f_iJ f_kL - f_iL f_kJ), f = F^-T = cof / J, all times dV.
-    f = cof / J[..., None, None]
-    ff = f[..., :, :, None, None] * f[..., None, None, :, :]                 # (e, q, i, J, k, L)
-    ff -= np.swapaxes(ff, -3, -1).copy()
-    ff *= (p_hat * J)[..., None, None, None, None]
-    A += ff.reshape(ne, nq, 9, 9)
-    A *= block.wdV[..., None, None]
-    K = element_stiffness(block, A)
-    # + K D^T M^-1 D, on the same node pairs.
-    # Per node pair a <= b: the (3 x npr) @ (npr x 3) product D_a^T (K M^-1 D)_b.
-    pa, pb = node_pairs(nb)
-    Dn = np.ascontiguousarray(D.reshape(ne, -1, nb, 3).transpose(2, 0, 3, 1))  # (nb, e, 3, m)
-    Gn = np.ascontiguousarray((block.bulk_pa * (block.Minv @ D)).reshape(ne, -1, nb, 3)
-                              .transpose(2, 0, 1, 3))                          # (nb, e, m, 3)
-    K += Dn[pa] @ Gn[pb]
+    # + p_hat J (f_iJ f_kL - f_iL f_kJ) = p_hat d cof_iJ / d F_kL = p_hat e_ikm e_JLN F_mN
+    # (f = F^-T): 36 entries of the 81, where i != k and J != L.
+    A.reshape(ne, nq, 81)[..., _COF_SLOTS] += (
+        p_hat[..., None] * F.reshape(ne, nq, 9)[..., _COF_SOURCES]) * _COF_SIGNS
+    K = element_stiffness(block, A, block.wdV)
+    # + K D^T M^-1 D: the element's (3 nb x 3 nb) products (one small matrix product
+    # each), their node-pair blocks a <= b gathered into the pair layout.
+    # In chunks of 96 elements: the full products take twice the pair layout's memory.
+    G = block.bulk_pa * (block.Minv @ D)
+    for start in range(0, ne, 96):
+        c = slice(start, min(start + 96, ne))
+        KD = np.swapaxes(D[c], 1, 2) @ G[c]                                  # (e, a i, b k)
+        KD = np.take(KD.reshape(c.stop - c.start, -1), _pair_entries(nb), axis=1, mode="clip")
+        K[:, c] += KD.reshape(c.stop - c.start, -1, 3, 3).transpose(1, 0, 2, 3)
     return BlockState(energy, r, K, lam, float(J.min()), constraint, D, dilatation_error)
+
+
+def _cofactor_derivative_slots() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """d cof_iJ / d F_kL = e_ikm e_JLN F_mN as (slot 9 (3 i + J) + 3 k + L of the
+    flattened tangent, source 3 m + N in F, sign) over its 36 non-zero entries."""
+    slots, sources, signs = [], [], []
+    perm = {(0, 1): (2, 1.0), (1, 2): (0, 1.0), (2, 0): (1, 1.0),
+            (1, 0): (2, -1.0), (2, 1): (0, -1.0), (0, 2): (1, -1.0)}
+    for (i, k), (m, s1) in perm.items():
+        for (J, L), (n, s2) in perm.items():
+            slots.append(9 * (3 * i + J) + 3 * k + L)
+            sources.append(3 * m + n)
+            signs.append(s1 * s2)
+    return np.array(slots), np.array(sources), np.array(signs)
+
+
+_COF_SLOTS, _COF_SOURCES, _COF_SIGNS = _cofactor_derivative_slots()
 
 
 class Pattern:
@@ -306,12 +355,17 @@ class Pattern:
 
     Material blocks (the first ``n_pair_lists`` dof lists, 3 nb dofs per element) give
     their element matrices in the symmetric pair layout of ``element_stiffness``; the
-    others (cavity, spring) as full (ne, m, m) matrices.
+    others (cavity, spring) as full, symmetric (ne, m, m) matrices.
     ``reduced[g]`` is the index of global dof g among the free dofs, or -1.
+
+    The values are summed into the upper triangle only and mirrored into the full
+    matrix by one gather (half the scatter's work and memory).
     """
 
     def __init__(self, dof_lists: list[np.ndarray], free: np.ndarray, ndofs: int,
-                 n_pair_lists: int = 0) -> None:
+                 n_pair_lists: int = 0, groups: list[tuple[int, int]] | None = None) -> None:
+        """``groups``: ranges (start, stop) of consecutive dof lists whose values are
+        scattered together (``upper_values``); default one group of all lists."""
         self.ndofs = ndofs
         self.free = free
         reduced = -np.ones(ndofs, dtype=np.int64)
@@ -319,12 +373,12 @@ class Pattern:
         self.reduced = reduced
         n = len(free)
         self.n = n
-        # Keys row * n + col (-1 where a fixed dof is involved), int32 when they fit:
-        # the pattern's set-up is the solve's peak memory.
+        # Keys row * n + col of the upper-triangle slot each value adds to (-1 where a
+        # fixed dof is involved, or for the lower half of a block that is stored in
+        # full), int32 when they fit (the set-up's memory).
         kind = np.int32 if n * n < 2**31 else np.int64
         rdofs = reduced.astype(kind)
-        keys = []          # per list: one key array, or (upper, mirror) for pair layout
-        sizes = []         # values per list
+        keys = []
         for index, dofs in enumerate(dof_lists):
             rd = rdofs[dofs]                                                # (ne, m)
             if index < n_pair_lists:
@@ -333,58 +387,94 @@ class Pattern:
                 r3 = rd.reshape(-1, nb, 3)
                 rows = r3[:, pa, :, None].transpose(1, 0, 2, 3)            # (P, ne, 3, 1)
                 cols = r3[:, pb, None, :].transpose(1, 0, 2, 3)            # (P, ne, 1, 3)
-                ok = (rows >= 0) & (cols >= 0)                              # (P, ne, 3, 3)
-                keys.append(np.where(ok, rows * n + cols, -1).ravel())
-                ok &= (pa != pb)[:, None, None, None]                       # no mirror
-                keys.append(np.where(ok, cols * n + rows, -1).ravel())      # on a diagonal
-                sizes.append(ok.size)
+                # A pair a < b feeds (r, c) and (c, r): its upper slot is (min, max); a
+                # block a = b is stored in full, so only its upper half counts.
+                low, high = np.minimum(rows, cols), np.maximum(rows, cols)
+                ok = (low >= 0) & ((pa != pb)[:, None, None, None] | (rows <= cols))
             else:
                 rows, cols = rd[:, :, None], rd[:, None, :]
-                keys.append(np.where((rows >= 0) & (cols >= 0), rows * n + cols,
-                                     -1).ravel())
-                sizes.append(keys[-1].size)
-            del rows, cols
-        # Value index of every key (a pair-layout value feeds its upper and its
-        # mirrored slot), in the order of the concatenated keys.
-        value_offsets = np.cumsum([0] + sizes)
-        sources = np.concatenate([np.arange(value_offsets[i], value_offsets[i + 1],
-                                            dtype=np.int32)
-                                  for i in range(len(sizes))
-                                  for _ in range(2 if i < n_pair_lists else 1)])
+                low, high = rows, cols
+                ok = (rows >= 0) & (cols >= 0) & (rows <= cols)
+            keys.append(np.where(ok, low * n + high, -1).ravel())
+            del rows, cols, low, high, ok
+        sizes = [len(k) for k in keys]
         keys = np.concatenate(keys)
         # One sort of all keys gives the pattern and the scatter of values into it: the
         # scatter is one sparse (nnz x values) 0/1 matrix, data = S @ values (~2x faster
         # than a bincount per slot list: benchmarks/RESULTS.md, issue 12, third session).
         order = np.argsort(keys, kind="stable")
         keys = keys[order]
-        first = int(np.searchsorted(keys, 0))                               # skip fixed dofs
+        first = int(np.searchsorted(keys, 0))                               # skip the -1s
         keys = keys[first:]
-        sources = sources[order[first:]]
+        sources = order[first:].astype(np.int32)
         del order
         new_key = np.empty(len(keys), dtype=bool)
         new_key[:1] = True
         np.not_equal(keys[1:], keys[:-1], out=new_key[1:])
-        starts = np.flatnonzero(new_key)
-        unique = keys[starts].astype(np.int64)
-        del keys, new_key
-        self.n_values = int(value_offsets[-1])
-        self.scatter = sp.csr_matrix(
-            (np.ones(len(sources)), sources,
-             np.append(starts, len(sources)).astype(np.int32)),
-            shape=(len(unique), self.n_values))
-        rows = unique // n
-        self.indices = (unique % n).astype(np.int32)
-        self.indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n)))
-                                     ).astype(np.int32)
-        self.nnz = len(unique)
+        upper = keys[new_key].astype(np.int64)
+        self.n_values = int(sum(sizes))
+        # The upper-triangle slot of every value (-1: none), then per group of lists the
+        # columns of the 0/1 scatter matrix S in CSC form (one entry per column at most):
+        # data = sum over groups of S_g @ values_g.
+        target = np.full(self.n_values, -1, dtype=np.int32)
+        target[sources] = np.cumsum(new_key, dtype=np.int32) - 1
+        del keys, new_key, sources
+        self.groups = groups if groups is not None else [(0, len(dof_lists))]
+        offsets = np.cumsum([0] + sizes)
+        self.group_sizes = [int(offsets[b] - offsets[a]) for a, b in self.groups]
+        self.scatter_groups = []
+        for a, b in self.groups:
+            t = target[offsets[a]:offsets[b]]
+            valid = t >= 0
+            colptr = np.concatenate(([0], np.cumsum(valid, dtype=np.int32)))
+            self.scatter_groups.append(sp.csc_matrix(
+                (np.ones(int(colptr[-1])), t[valid], colptr), shape=(len(upper), len(t))))
+        del target
+        urow, ucol = np.divmod(upper, n)
+        # The full pattern: the upper slots and the mirrors of those off the diagonal;
+        # full data = upper data[self.mirror].
+        off = np.flatnonzero(urow != ucol)
+        order = np.argsort(np.concatenate((upper, ucol[off] * n + urow[off])))
+        self.mirror = np.concatenate((np.arange(len(upper)), off))[order].astype(np.int32)
+        self.indptr, self.indices = _csr_structure(
+            np.concatenate((urow, ucol[off]))[order], np.concatenate((ucol, urow[off]))[order], n)
+        self.nnz = len(order)
+
+    def upper_values(self, group: int, element_matrices: list[np.ndarray]) -> np.ndarray:
+        """The upper triangle's values (CSR order) summed from the element matrices of
+        one group of dof lists: a part of ``assemble``'s argument."""
+        values = np.concatenate([Ke.ravel() for Ke in element_matrices])
+        if len(values) != self.group_sizes[group]:
+            raise ValueError(f"{len(values)} element-matrix entries for a group of "
+                             f"{self.group_sizes[group]}")
+        return self.scatter_groups[group] @ values
+
+    def assemble(self, upper: np.ndarray) -> sp.csr_matrix:
+        """The full symmetric matrix from its upper triangle's values, gathered in two
+        halves (on two threads when the budget allows)."""
+        data = np.empty(self.nnz)
+        half = self.nnz // 2
+        # (mode "clip" with out: numpy gathers without buffering or an intp index copy)
+        map_pair(lambda part: np.take(upper, self.mirror[part], out=data[part], mode="clip"),
+                 [slice(0, half), slice(half, self.nnz)])
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
     def matrix(self, element_matrices: list[np.ndarray]) -> sp.csr_matrix:
-        values = np.concatenate([Ke.ravel() for Ke in element_matrices])
-        if len(values) != self.n_values:
-            raise ValueError(f"{len(values)} element-matrix entries for a pattern of "
-                             f"{self.n_values}")
-        data = self.scatter @ values
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+        """The full symmetric matrix from the element matrices of all lists."""
+        if sum(Ke.size for Ke in element_matrices) != self.n_values:
+            raise ValueError(f"{sum(Ke.size for Ke in element_matrices)} element-matrix "
+                             f"entries for a pattern of {self.n_values}")
+        upper = 0.0
+        for g, (a, b) in enumerate(self.groups):
+            upper = upper + self.upper_values(g, element_matrices[a:b])
+        return self.assemble(upper)
+
+
+def _csr_structure(rows: np.ndarray, cols: np.ndarray, n: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(indptr, indices) of entries sorted by row, then column."""
+    indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=n))))
+    return indptr.astype(np.int32), cols.astype(np.int32)
 
 
 def scatter_vector(ndofs: int, dofs: np.ndarray, values: np.ndarray) -> np.ndarray:

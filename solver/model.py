@@ -19,6 +19,7 @@ import numpy as np
 
 from solver import cavity as cav
 from solver.assembly import (
+    MaterialBlock,
     Pattern,
     consistent_pressures,
     evaluate_block,
@@ -26,9 +27,11 @@ from solver.assembly import (
     material_block,
     pressure_update,
     scatter_vector,
+    sub_block,
 )
 from solver.design import Design
 from solver.mesh import NAMED_DIVISIONS, MeshDivisions, build_mesh
+from solver.parallel import map_pair, thread_budget
 from solver.settings import SolverSettings
 
 
@@ -42,7 +45,7 @@ class Evaluation:
     max_membrane_stretch: float
     load_norm: float        # || p dV/du ||
     tip_force_un: float = float("nan")   # spring force or block reaction on the model, uN
-    block_states: list | None = None     # per block, for the mixed pressure update
+    block_states: list | None = None     # per evaluation unit, for the pressure update
     constraint_error: float = 0.0        # max |M^-1 R_p|: dilatation mismatch of the iterate
 
 
@@ -61,9 +64,11 @@ class SolidModel:
     """
 
     def __init__(self, mesh, element: str, groups, cavity_facets: np.ndarray,
-                 fixed_fn, bulk_ratio: float, spring=None, reaction_dofs=None) -> None:
+                 fixed_fn, bulk_ratio: float, spring=None, reaction_dofs=None,
+                 basis=None) -> None:
+        """``basis``: the scalar ``make_basis(mesh, element)`` when the caller has it."""
         self.mesh = mesh
-        basis = make_basis(mesh, element)
+        basis = make_basis(mesh, element) if basis is None else basis
         self.doflocs = basis.doflocs                                      # (3, nnodes)
         nnodes = basis.N
         self.ndofs = 3 * nnodes
@@ -76,6 +81,7 @@ class SolidModel:
             self.blocks.append(material_block(basis, np.asarray(elements), mu, alpha,
                                               bulk_ratio * mu0, porder, is_membrane))
         self.mu0_min_pa = min(0.5 * float((b.mu_pa * b.alpha).sum()) for b in self.blocks)
+        self.units = evaluation_units(self.blocks, thread_budget())
         self.cavity = (cav.make_cavity(mesh, element, cavity_facets, basis.doflocs)
                        if len(cavity_facets) else None)
         self.external_force: np.ndarray | None = None
@@ -85,8 +91,14 @@ class SolidModel:
         self.spring = spring
         spring_dofs = [np.asarray(spring[0])[None, :]] if spring is not None else []
         self.reaction_dofs = reaction_dofs
-        self.pattern = Pattern([b.dofs for b in self.blocks] + cavity_dofs + spring_dofs,
-                               free, self.ndofs, n_pair_lists=len(self.blocks))
+        # Scatter groups: the first unit (the calling thread's part), the other units and
+        # the cavity (the helper's), the spring (see ``evaluate``).
+        nlists = len(self.units) + len(cavity_dofs)
+        groups = [(0, 1)] + ([(1, nlists)] if nlists > 1 else [])
+        groups += [(nlists, nlists + 1)] if spring_dofs else []
+        self.pattern = Pattern([unit.block.dofs for unit in self.units] + cavity_dofs
+                               + spring_dofs, free, self.ndofs, n_pair_lists=len(self.units),
+                               groups=groups)
         self.n_free = len(free)
         self.volume0_mm3 = self._volume(np.zeros(self.ndofs))
         self.timings = {"assembly_s": 0.0, "linear_solve_s": 0.0}
@@ -111,8 +123,10 @@ class SolidModel:
         ``constraint=False``: their rate along a displacement rate (no constraint residual)."""
         assert ev.block_states is not None
         du = self.full(du_free)
-        return [pressure_update(b, st, du, constraint)
-                for b, st in zip(self.blocks, ev.block_states)]
+        per_unit = [pressure_update(unit.block, st, du, constraint)
+                    for unit, st in zip(self.units, ev.block_states)]
+        return [np.concatenate([dq for unit, dq in zip(self.units, per_unit)
+                                if unit.index == i]) for i in range(len(self.blocks))]
 
     def evaluate(self, u_free: np.ndarray, pressure_pa: float, tangent: bool = True,
                  pressures: list[np.ndarray] | None = None) -> Evaluation:
@@ -123,28 +137,49 @@ class SolidModel:
         u = self.full(u_free)
         free = self.pattern.free
         r = np.zeros(self.ndofs)
-        mats: list[np.ndarray] = []
         energy = 0.0
-        lam_m = 1.0
+        lam_membrane: list[float] = []
         states = []
         constraint_error = 0.0
-        for i, block in enumerate(self.blocks):
-            st = evaluate_block(block, u, tangent,
-                                None if pressures is None else pressures[i])
+
+        def part(group: int):
+            """Scatter group 0 (the first unit) or 1 (the other units and the cavity's
+            volume, gradient and Hessian): their states, the cavity terms, and with the
+            tangent their part of the matrix's upper triangle (Pattern.upper_values)."""
+            units = self.units[:1] if group == 0 else self.units[1:]
+            sts = [evaluate_block(unit.block, u, tangent, None if pressures is None
+                                  else pressures[unit.index][unit.elements]) for unit in units]
+            terms = None
+            if group == 1 and self.cavity is not None:
+                terms = (self._volume(u), cav.volume_gradient(self.cavity, u),
+                         cav.volume_hessian(self.cavity, u) if tangent else None)
+            upper = None
+            if tangent:
+                mats = [st.stiffness for st in sts] + ([-pressure_pa * terms[2]] if terms
+                                                       else [])
+                upper = self.pattern.upper_values(group, mats) if mats else None
+            for st in sts:          # in the upper triangle now; the pressure update needs
+                st.stiffness = None  # only D and R_p
+            return sts, terms, upper
+
+        # Two threads when the thread budget allows (solver/parallel.py): the first
+        # unit here, the others and the cavity on the helper (``evaluation_units``).
+        parts = map_pair(part, [0, 1], split=1)
+        block_states = [st for sts, _, _ in parts for st in sts]
+        cavity_terms = parts[1][1]
+        for block, st in zip((unit.block for unit in self.units), block_states):
             states.append(st)
             constraint_error = max(constraint_error, st.dilatation_error)
             energy += st.energy
             r += scatter_vector(self.ndofs, block.dofs, st.residual)
-            if st.stiffness is not None:
-                mats.append(st.stiffness)
             if block.membrane:
-                lam_m = float(st.lam_max.max())
-        if self.cavity is not None:
-            gv = cav.volume_gradient(self.cavity, u)
+                lam_membrane.append(float(st.lam_max.max()))
+        lam_m = max(lam_membrane) if lam_membrane else 1.0
+        if cavity_terms is not None:
+            vol, gv, _ = cavity_terms
             g = scatter_vector(self.ndofs, self.cavity.dofs, gv)[free]
         else:
-            g = np.zeros(len(free))
-        vol = self._volume(u)
+            vol, g = 0.0, np.zeros(len(free))
         tip_force = float("nan")
         if self.reaction_dofs is not None:
             # The support holds f_int - p dV/du = reaction; the solid pushes with -reaction.
@@ -163,11 +198,13 @@ class SolidModel:
             R = R - self.external_force[free]
         K = None
         if tangent:
-            if self.cavity is not None:
-                mats.append(-pressure_pa * cav.volume_hessian(self.cavity, u))
+            upper = parts[0][2]
+            if parts[1][2] is not None:
+                upper += parts[1][2]
             if self.spring is not None:
-                mats.append((k * np.outer(weights, weights))[None])
-            K = self.pattern.matrix(mats)
+                upper += self.pattern.upper_values(len(self.pattern.groups) - 1,
+                                                   [(k * np.outer(weights, weights))[None]])
+            K = self.pattern.assemble(upper)
         self.timings["assembly_s"] += time.perf_counter() - t0
         counter = "tangent_evaluations" if tangent else "residual_evaluations"
         self.timings[counter] = self.timings.get(counter, 0) + 1
@@ -175,6 +212,39 @@ class SolidModel:
                           tip_force, states if pressures is not None else None,
                           constraint_error)
 
+
+
+@dataclass
+class EvaluationUnit:
+    """A range of one material block's elements, evaluated as one piece."""
+
+    index: int              # the block
+    elements: slice         # its elements
+    block: MaterialBlock    # the block restricted to them
+
+
+# The first unit's share of the elements. It runs on the calling thread while the
+# helper thread does the rest and the cavity (solver/parallel.py); the sparse matrix is
+# assembled after both, so the two parts should take equally long.
+FIRST_UNIT_SHARE = 0.52
+
+
+def evaluation_units(blocks: list[MaterialBlock], threads: int) -> list[EvaluationUnit]:
+    """The blocks as evaluation units: with two threads or more, the first
+    ``FIRST_UNIT_SHARE`` of all elements (in block order, splitting the block that
+    straddles it) and the rest; with one, the blocks as they are. Splitting changes only
+    the order of summation in the sparse matrix."""
+    sizes = [len(b.dofs) for b in blocks]
+    cut = int(round(FIRST_UNIT_SHARE * sum(sizes))) if threads >= 2 else 0
+    units, start = [], 0
+    for i, (block, n) in enumerate(zip(blocks, sizes)):
+        pieces = ([slice(0, cut - start), slice(cut - start, n)] if start < cut < start + n
+                  else [slice(0, n)])
+        for sl in pieces:
+            units.append(EvaluationUnit(i, sl, block if sl == slice(0, n)
+                                        else sub_block(block, sl)))
+        start += n
+    return units
 
 
 class ActuatorModel(SolidModel):
@@ -208,8 +278,8 @@ class ActuatorModel(SolidModel):
                 mask[np.abs(X[0] - x_end) < 1e-9, 2] = True
             return mask
 
-        end_nodes = np.nonzero(np.abs(self._node_positions(am.mesh, settings.element)[0]
-                                      - x_end) < 1e-9)[0]
+        basis = make_basis(am.mesh, settings.element)
+        end_nodes = np.nonzero(np.abs(basis.doflocs[0] - x_end) < 1e-9)[0]
         spring = reaction = None
         if settings.tip == "spring":
             # k in N/m = 1e3 uN/mm; the half model carries half of it.
@@ -218,12 +288,9 @@ class ActuatorModel(SolidModel):
         elif settings.tip == "blocked":
             reaction = 3 * end_nodes + 2
         super().__init__(am.mesh, settings.element, groups, am.cavity_facets, fixed,
-                         settings.bulk_ratio, spring=spring, reaction_dofs=reaction)
+                         settings.bulk_ratio, spring=spring, reaction_dofs=reaction,
+                         basis=basis)
         self.end_nodes = end_nodes
-
-    @staticmethod
-    def _node_positions(mesh, element: str) -> np.ndarray:
-        return make_basis(mesh, element).doflocs
 
     def tip_force_mn(self, ev: Evaluation) -> float:
         """Whole-actuator tip force in mN (the half model's uN x 2 / 1000)."""

@@ -27,16 +27,18 @@ import numpy as np
 REPEATED_TOL = 1e-6
 
 
-def energy_derivatives(c: np.ndarray, mu: np.ndarray, alpha: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """w, its gradient w_i (..., 3) and Hessian w_ij (..., 3, 3) in the eigenvalues c_i.
+def energy_derivatives(c: np.ndarray, mu: np.ndarray, alpha: np.ndarray,
+                       hessian: bool = True
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """w, its gradient w_i (..., 3) and Hessian w_ij (..., 3, 3) in the eigenvalues c_i
+    (None unless ``hessian``).
 
     ``mu`` and ``alpha`` are 1D arrays of the Ogden terms (mu in Pa).
     """
     c = np.asarray(c, dtype=float)
     w = np.zeros(c.shape[:-1])
     dw = np.zeros(c.shape)
-    d2w = np.zeros(c.shape + (3,))
+    d2w = np.zeros(c.shape + (3,)) if hessian else None
     log_i3 = np.log(c).sum(axis=-1)
     inv_c = 1.0 / c
     eye = np.eye(3)
@@ -48,6 +50,8 @@ def energy_derivatives(c: np.ndarray, mu: np.ndarray, alpha: np.ndarray
         # g_i = -phi/(6 c_i) + c_i^(a/2 - 1)/2 ;  w_i = mu s g_i
         g = -phi[..., None] * inv_c / 6.0 + 0.5 * ca * inv_c
         dw += m * s[..., None] * g
+        if d2w is None:
+            continue
         # dg_i/dc_j = -(a/2) c_j^(a/2-1) / (6 c_i)
         #             + delta_ij (phi / (6 c_i^2) + (a/2 - 1) c_i^(a/2-2) / 2)
         dg = (-(a / 12.0) * (ca * inv_c)[..., None, :] * inv_c[..., :, None]
@@ -70,7 +74,7 @@ def stress_and_tangent(F: np.ndarray, mu: np.ndarray, alpha: np.ndarray,
     """
     C = np.swapaxes(F, -1, -2) @ F
     c, Q = np.linalg.eigh(C)
-    w, dw, d2w = energy_derivatives(c, mu, alpha)
+    w, dw, d2w = energy_derivatives(c, mu, alpha, hessian=tangent)
     S_eig = 2.0 * dw                                            # principal PK2 stresses
     S = (Q * S_eig[..., None, :]) @ np.swapaxes(Q, -1, -2)
     P = F @ S

@@ -170,3 +170,40 @@ def test_tip_spring_tangent_and_force():
     # Force = k * mean tip z displacement: 2 N/m = 2e3 uN/mm on the whole actuator.
     uz = m.full(u)[3 * m.end_nodes + 2].mean()
     assert m.tip_force_mn(ev) == pytest.approx(2.0 * uz, rel=1e-12)
+
+
+def test_blocks_on_two_threads_give_the_same_bits(model, monkeypatch):
+    # solver/parallel.py: the material blocks are evaluated on two threads when the
+    # thread budget (MKL_NUM_THREADS, else OMP_NUM_THREADS) allows; same arithmetic.
+    u, p = _state(model), 300.0
+    q = model.consistent_pressures(u)
+    monkeypatch.delenv("MKL_NUM_THREADS", raising=False)
+    results = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("OMP_NUM_THREADS", threads)
+        results.append(model.evaluate(u, p, pressures=q))
+    one, two = results
+    assert np.array_equal(one.R, two.R) and np.array_equal(one.K.data, two.K.data)
+    assert one.energy == two.energy and one.constraint_error == two.constraint_error
+
+
+@pytest.mark.parametrize("element", ["hex1", "hex2"])
+def test_evaluation_units_change_only_the_summation_order(element, monkeypatch):
+    # With a thread budget of two the first block is cut into two evaluation units
+    # (solver/model.py, evaluation_units); residual and tangent agree to round-off.
+    monkeypatch.delenv("MKL_NUM_THREADS", raising=False)
+    models = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("OMP_NUM_THREADS", threads)
+        models.append(ActuatorModel(Design(L_mm=4.1), SolverSettings(element=element,
+                                                                     bulk_ratio=50)))
+    whole, split = models
+    assert len(whole.units) == len(whole.blocks) < len(split.units)
+    u, p = _state(whole), 300.0
+    q = whole.consistent_pressures(u)
+    a, b = whole.evaluate(u, p, pressures=q), split.evaluate(u, p, pressures=q)
+    assert np.abs(a.R - b.R).max() < 1e-12 * np.abs(a.R).max()
+    assert abs(a.K - b.K).max() < 1e-12 * abs(a.K).max()
+    du = np.random.default_rng(9).standard_normal(whole.n_free) * 1e-3
+    for qa, qb in zip(whole.pressure_update(a, du), split.pressure_update(b, du)):
+        assert np.abs(qa - qb).max() < 1e-12 * np.abs(qa).max()

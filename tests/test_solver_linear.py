@@ -52,3 +52,22 @@ def test_unknown_backend_is_refused():
     K, _, _ = _indefinite()
     with pytest.raises(ValueError, match="auto | superlu | pardiso"):
         factorize(K, "cholmod")
+
+
+@pytest.mark.skipif("pardiso" not in available_backends(), reason="pypardiso not installed")
+def test_pardiso_falls_back_to_pivoting_where_a_diagonal_pivot_vanishes():
+    """Saddle blocks [[0, 1], [1, 0]] (eigenvalues +-1): 1 x 1 diagonal pivoting meets a
+    zero pivot, so the factorisation is repeated with Bunch-Kaufman pivoting."""
+    n = 20
+    A = sp.lil_matrix((n, n))
+    for i in range(0, 10, 2):
+        A[i, i + 1] = A[i + 1, i] = 1.0
+    for i in range(10, n):
+        A[i, i] = 2.0
+    A[0, 12] = A[12, 0] = 0.3
+    A = A.tocsr()
+    b = np.arange(1.0, n + 1.0)
+    fac = factorize(A, "pardiso")
+    assert fac.careful
+    assert fac.negative_pivots == int((np.linalg.eigvalsh(A.toarray()) < 0).sum()) == 5
+    assert np.abs(A @ fac.solve(b) - b).max() < 1e-12 * np.abs(b).max()
