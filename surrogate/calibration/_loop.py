@@ -154,7 +154,12 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
     y = obs.angle_deg
     as_is = AugmentedModel(obs, responses, (), baseline.open_parameters)
-    rmse_model = float(np.sqrt(np.mean((as_is.angles(as_is.layout.start) - y) ** 2)))
+    pred_as_is = as_is.angles(as_is.layout.start)
+    # by volume a gauge reading past the baseline's range has no angle at that pressure
+    rmse_model = float(np.sqrt(np.nanmean((pred_as_is - y) ** 2)))
+    radians = _radians_warning(y, pred_as_is)
+    if radians:
+        warnings.append(radians)
     base = get_fit(())
     rmse_before, resid_before = get_cv(())
 
@@ -307,6 +312,26 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     }
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
+
+
+RADIANS_MAX = 2.1  # |angle| in radians of a bend up to 120 deg
+
+
+def _radians_warning(y: np.ndarray, pred: np.ndarray) -> str | None:
+    """Angles that look like radians: none beyond RADIANS_MAX while the baseline bends
+    beyond 20 deg at those readings, and the data scale to the baseline's by about
+    pi / 180 (least squares, within a factor 2)."""
+    ok = np.isfinite(pred)
+    if not np.any(ok) or np.max(np.abs(y)) > RADIANS_MAX or np.max(np.abs(pred[ok])) < 20.0:
+        return None
+    k = float(y[ok] @ pred[ok] / (pred[ok] @ pred[ok]))
+    if not 0.5 < k * 180.0 / math.pi < 2.0:
+        return None
+    top = float(np.max(np.abs(y)))
+    return (f"angle_deg: angles reach only {top:.3g} while the baseline bends "
+            f"{float(np.max(np.abs(pred[ok]))):.0f} deg at these readings: they look like "
+            f"radians (x57.3 gives {math.degrees(top):.0f} deg); convert angle_deg to "
+            "degrees")
 
 
 def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
