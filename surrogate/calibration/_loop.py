@@ -236,8 +236,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             f"what it leaves is within the baseline's own uncertainty at the fitted design "
             f"only, while {better['effect']} (plausible) explains the data better (BIC "
             f"{better['bic'] - cand['bic']:.0f} lower, cross-validated "
-            f"{better['rmse_cv_deg']:.2f} vs {cand['rmse_cv_deg']:.2f} deg): the baseline's "
-            "uncertainty does not excuse the worse fit")
+            f"{better['rmse_cv_joint']:.2f} vs {cand['rmse_cv_joint']:.2f} deg"
+            + (", angle and gauge pressure together" if channel["used"] else "")
+            + "): the baseline's uncertainty does not excuse the worse fit")
         cand["outdone_by"] = better["effects"]
     xv_chosen = get_xv(chosen)
     for cand in candidates:
@@ -576,8 +577,20 @@ def _explains_better(cand: dict, candidates: list[dict]) -> dict | None:
     baseline's band at its fitted design excuses is not chosen over a better fit."""
     better = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
               and c["effects"] != cand["effects"] and c["bic"] < cand["bic"] + DELTA_BIC
-              and c["rmse_cv_joint"] < cand["rmse_cv_joint"]]
+              and c["rmse_cv_joint"] < cand["rmse_cv_joint"] and _adds_evidence(c, cand)]
     return min(better, key=lambda c: c["bic"]) if better else None
+
+
+def _adds_evidence(c: dict, cand: dict) -> bool:
+    """A set containing ``cand`` explains the data better only through its other
+    members: each must be significant (an added free parameter always lowers the
+    residual a little; the stiffer body of the tests was outdone by itself plus a
+    pressure offset of 28 +/- 23 Pa)."""
+    extra = set(c["effects"]) - set(cand["effects"])
+    if not set(cand["effects"]) < set(c["effects"]):
+        return True
+    tested = [p.name for e in extra for p in EFFECTS[e].parameters if p.tested]
+    return all((c["z"].get(n) or 0.0) > Z_SIGNIFICANT for n in tested)
 
 
 def _closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:
