@@ -54,9 +54,10 @@ def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray
 
 
 #: the bend decides an interval where a moving one bends by more than this fraction of
-#: the curve's bend (at least BEND_MIN_DEG): above a camera's reading noise
+#: the curve's bend (at least BEND_MIN_DEG: 3.5 x the difference of two readings with a
+#: camera's 0.7 deg noise); a still interval is told only where twice that
 BEND_INFORMATIVE = 0.05
-BEND_MIN_DEG = 1.0
+BEND_MIN_DEG = 2.5
 #: below this fraction of the top bend the actuator may be straight while the pump runs
 BEND_LOW = 0.2
 MOVING_SHARE = 0.5   # of the pump's bend rate at that bend: the pump ran
@@ -96,7 +97,8 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
         agrees = np.sign(da[i]) == np.sign(dp[i]) and abs(dp[i]) > HOLD_MIN_PA
         if abs(da[i]) >= MOVING_SHARE * expected and agrees:
             out[i] = np.sign(da[i])
-        elif abs(da[i]) <= STILL_SHARE * expected and (abs(dp[i]) <= 2 * tol_p or dp[i] < 0):
+        elif (abs(da[i]) <= STILL_SHARE * expected and expected > 2 * floor
+              and (abs(dp[i]) <= 2 * tol_p or dp[i] < 0)):
             out[i] = 0.0
     return out
 
