@@ -5,6 +5,7 @@ solves they are made from (docs/calibration.md, "Tests").
     .venv/bin/python benchmarks/calibration_cases.py camera_gain     # some cases
     .venv/bin/python benchmarks/calibration_cases.py --emulator-error
     .venv/bin/python benchmarks/calibration_cases.py --emulator PATH --reports DIR
+    .venv/bin/python benchmarks/calibration_cases.py --unseen [CASE ...]
 
 The cases are those of tests/test_calibration_loop.py (same labs, truths and seed), run
 against the shipped emulator (or ``--emulator PATH``); one markdown row per case:
@@ -12,7 +13,10 @@ selected set, recovered size +- sd (truth), CV error before -> after, noise floo
 ratio, and what else the report says (explanations the data cannot tell apart, ``*``: not
 backed by the emulator; a better fit it cannot back; structure left). ``--emulator-error``
 compares the emulator with every cached FE curve (to 60 deg): RMS error against the RMS of
-its band's sd (band / 1.96) -- what the band claims against what it is.
+its band's sd (band / 1.96) -- what the band claims against what it is. ``--unseen``
+runs the data sets of tests/test_calibration_unseen.py (database records, another lab's
+protocol, lab mishaps) against the shipped emulator: right or not per set, what the
+report says, CPU seconds, and the count.
 """
 
 from __future__ import annotations
@@ -102,13 +106,37 @@ def emulator_error(emulator) -> None:
               f"{err.mean():+.2f} | {np.sqrt(np.mean(sd**2)):.2f} |")
 
 
+def unseen(wanted: list[str]) -> int:
+    """The unseen-lab data sets: one line each (right or not, what the report says, CPU
+    seconds) and the count."""
+    import test_calibration_unseen as unseen_mod
+
+    right = n = 0
+    for case in unseen_mod.CASES:
+        if wanted and not any(w in case.id for w in wanted):
+            continue
+        t0 = time.process_time()
+        report, error, _ = unseen_mod.run_case(case)
+        ok, what = unseen_mod.judge(case, report, error)
+        n += 1
+        right += ok
+        print(f"{'right' if ok else 'WRONG'} | {case.id} | {what} | "
+              f"{time.process_time() - t0:.1f} s", flush=True)
+    print(f"right in {right} of {n}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("cases", nargs="*", help="case ids (default: every case)")
     parser.add_argument("--emulator", type=Path, default=lab_mod.EMULATOR_PATH)
     parser.add_argument("--emulator-error", action="store_true")
     parser.add_argument("--reports", type=Path, help="write each case's report here")
+    parser.add_argument("--unseen", action="store_true",
+                        help="the unseen-lab data sets (tests/test_calibration_unseen.py)")
     args = parser.parse_args(argv)
+    if args.unseen:
+        return unseen(args.cases)
     from surrogate.emulator.file import load_emulator
 
     emulator = load_emulator(args.emulator)

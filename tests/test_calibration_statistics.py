@@ -41,3 +41,24 @@ def test_paired_cv_tells_a_better_set_from_an_equal_one_by_curve():
          for _ in range(200)]
     assert np.mean(np.abs(z) < 2.0) > 0.85        # equal sets: |z| < 2 mostly
     assert np.isfinite(paired_cv(scatter, other, curve))
+
+
+def test_a_set_is_outdone_by_one_containing_it_only_through_significant_members():
+    # rule 8: the 1.5 x stiffer body of the loop's test cases was outdone by itself plus a
+    # pressure offset of 28 +/- 23 Pa (z 1.2): an added free parameter always lowers the
+    # residual a little, so it is no better explanation
+    from surrogate.calibration._loop import _adds_evidence, _explains_better
+
+    def cand(effects, bic, cv, z):
+        return {"effects": effects, "effect": "+".join(effects), "plausible": True,
+                "rmse_cv_deg": cv, "rmse_cv_joint": cv, "bic": bic, "z": z}
+
+    body = cand(["body_stiffness"], -439.0, 1.22, {"body_mu_scale": 3.6})
+    with_offset = cand(["body_stiffness", "pressure_offset"], -451.0, 1.21,
+                       {"body_mu_scale": 2.9, "p0_pa": 1.2})
+    assert not _adds_evidence(with_offset, body)
+    assert _explains_better(body, [body, with_offset]) is None
+    significant = dict(with_offset, z={"body_mu_scale": 2.9, "p0_pa": 4.0})
+    assert _explains_better(body, [body, significant]) is significant
+    other = cand(["camera_gain"], -460.0, 1.1, {"k_angle": 1.0})  # not a superset
+    assert _adds_evidence(other, body)

@@ -71,7 +71,8 @@ class Observations:
     def __post_init__(self) -> None:
         if self.direction is None:
             object.__setattr__(self, "direction",
-                               directions(self.curve, self.pressure_pa, self.angle_deg))
+                               directions(self.curve, self.pressure_pa, self.angle_deg,
+                                          self.time_s, self.group))
         if self.volume_ul is None:
             object.__setattr__(self, "volume_ul", injected_volume_ul(
                 self.curve, self.time_s, self.flow_ul_s, self.direction))
@@ -201,8 +202,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     known = set(REQUIRED) | set(OPTIONAL)
     for name in REQUIRED:
         if name not in columns:
-            raise DataError(name, "required column is missing", None,
-                            "columns " + ", ".join(REQUIRED))
+            raise _missing(name, columns)
     present = [c for c in OPTIONAL if c in columns]
     parsed = []
     for i, raw in enumerate(rows, start=1):
@@ -411,8 +411,7 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
         raise DataError("header", "a column name is repeated", 0)
     for name in REQUIRED:
         if name not in names:
-            raise DataError(name, "required column is missing", None,
-                            "columns " + ", ".join(REQUIRED))
+            raise _missing(name, set(names))
     out = []
     i = 0
     while True:
@@ -427,6 +426,24 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
             raise DataError("row", "more values than columns", i)
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
     return out
+
+
+def _missing(name: str, columns: set) -> DataError:
+    """A required column is missing: one line naming it, and the column the file has in
+    its place when one looks like it (a unit or case added: 'pressure_pa [Pa]',
+    'Angle_deg', 'pressure (kPa)')."""
+    def base(text: str) -> str:
+        text = str(text).lower().replace("(", "[").split("[")[0].strip()
+        return text.replace(" ", "_")
+
+    stem = name.rsplit("_", 1)[0]
+    near = sorted(c for c in map(str, columns)
+                  if base(c) in (name, stem) or base(c).rsplit("_", 1)[0] == stem)
+    unit = {"pa": "Pa", "deg": "deg", "mm": "mm"}.get(name.rsplit("_", 1)[-1])
+    found = (f" (found {near[0]!r}: the column must be named exactly {name}"
+             + (f", its values in {unit}" if unit else "") + ")") if near else ""
+    return DataError(name, "required column is missing" + found, None,
+                     "columns " + ", ".join(REQUIRED))
 
 
 def _csv_error(exc: csv.Error, lines: list[str], row: int) -> DataError:

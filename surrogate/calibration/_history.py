@@ -20,14 +20,17 @@ HOLD_MIN_PA = 8.0     # faster (1 % of the range per reading at 1 s, 2.5 ul/s)
 REST_FRACTION = 0.1
 
 
-def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray
+def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray,
+               time_s: np.ndarray | None = None, group: np.ndarray | None = None
                ) -> np.ndarray:
     """+1 / -1 / 0 per row; rows sorted by curve, then history. A reading is classified
     by the pressure's change from the previous one (the pump's state since then): within
     HOLD_FRACTION of the curve's pressure range (at least HOLD_MIN_PA, above a pressure
-    sensor's noise) it is a hold. A drop followed by a flat interval is the step into a
-    hold (the inlet's R Q vanishing when the pump stops), not unloading. Pressure alone
-    decides: angles are noisier, and creep moves them during a hold."""
+    sensor's noise) it is a hold, and a drop followed by a flat interval is the step into
+    a hold (the inlet's R Q vanishing when the pump stops), not unloading. Where the
+    pressure cannot tell, the bend does (``_by_bend``). Replicates taken with one pump
+    program (``group``, with the same reading times ``time_s``) share it: each reading
+    takes the majority of theirs (``_vote``)."""
     out = np.zeros(pressure_pa.size)
     for c in np.unique(curve):
         rows = np.flatnonzero(curve == c)
@@ -38,9 +41,95 @@ def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray
         back = np.where(flat, 0.0, np.sign(dp))
         fwd_flat = np.append(flat[1:], False)
         d = np.where((back < 0) & fwd_flat, 0.0, back)
+        t = time_s[rows] if time_s is not None and np.all(np.isfinite(time_s[rows])) \
+            else np.arange(rows.size, dtype=float)
+        a = angle_deg[rows]
+        bend = a * (1.0 if a[np.argmax(np.abs(a))] >= 0 else -1.0)  # reversed pairs too
+        d = _by_bend(d, dp, bend, t, tol)
         out[rows[1:]] = d
         out[rows[0]] = d[0] if d.size else 0.0
+    if time_s is not None and group is not None and np.all(np.isfinite(time_s)):
+        _vote(out, curve, time_s, group)
     return out
+
+
+#: the bend decides an interval where a moving one bends by more than this fraction of
+#: the curve's bend (at least BEND_MIN_DEG: 3.5 x the difference of two readings with a
+#: camera's 0.7 deg noise); a still interval is told only where twice that
+BEND_INFORMATIVE = 0.05
+BEND_MIN_DEG = 2.5
+#: below this fraction of the top bend the actuator may be straight while the pump runs
+BEND_LOW = 0.2
+MOVING_SHARE = 0.5   # of the pump's bend rate at that bend: the pump ran
+STILL_SHARE = 0.25   # below: it stood (creep of g = 0.25 bends at most g x the rate)
+
+
+def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
+             tol_p: float) -> np.ndarray:
+    """Directions of a curve's intervals checked against its bend (the angle, signed so
+    that the curve bends positive: a camera offset may take it below 0). The chamber's
+    bend follows its volume, so a pump running at a constant rate bends it at about the
+    rate its other running intervals show at the same bend (loading and unloading
+    alike; not near the bottom, where an emptied actuator may stay straight). Where that
+    rate is well above the camera's noise, an interval bending by at least MOVING_SHARE
+    of it, the way its pressure goes (beyond HOLD_MIN_PA), ran: at the top of a stiff
+    curve the pressure rises by < 1 % of its range per reading while the angle still
+    moves by 5-8 % of the bend. One bending by less than STILL_SHARE of it, its pressure
+    within twice the hold tolerance or falling, stood: a hold whose gauge noise exceeds
+    1 % of a soft curve's range, or the inlet's R Q vanishing when the pump stops (the
+    pressure drops, the bend stays)."""
+    if d.size < 3:
+        return d
+    da = np.diff(bend)
+    dt = np.maximum(np.diff(t), 1e-9)
+    rate = np.abs(da) / dt
+    level = 0.5 * (bend[1:] + bend[:-1])
+    floor = max(BEND_INFORMATIVE * float(np.ptp(bend)), BEND_MIN_DEG)
+    out = d.copy()
+    for i in range(d.size):
+        ran = np.flatnonzero((d != 0) & (np.arange(d.size) != i))
+        if ran.size < 2:
+            return d
+        near = ran[np.argsort(np.abs(level[ran] - level[i]))[:3]]
+        expected = float(np.median(rate[near])) * dt[i]
+        if expected <= floor or level[i] < BEND_LOW * float(np.max(bend)):
+            continue
+        agrees = np.sign(da[i]) == np.sign(dp[i]) and abs(dp[i]) > HOLD_MIN_PA
+        if abs(da[i]) >= MOVING_SHARE * expected and agrees:
+            out[i] = np.sign(da[i])
+        elif (abs(da[i]) <= STILL_SHARE * expected and expected > 2 * floor
+              and (abs(dp[i]) <= 2 * tol_p or dp[i] < 0)):
+            out[i] = 0.0
+    return out
+
+
+def _vote(out: np.ndarray, curve: np.ndarray, time_s: np.ndarray, group: np.ndarray) -> None:
+    """In place: replicates of one group read at the same times (within a tenth of their
+    reading interval) ran the same pump program; at each reading the direction most of
+    them show (a strict majority) is every one's. One specimen's noisy hold or a flat
+    step at the top of its curve then does not cut its history differently from the
+    others' (the noise floor compares replicates segment by segment)."""
+    for g in np.unique(group):
+        curves = np.unique(curve[group == g])
+        if curves.size < 3:
+            continue
+        rows = [np.flatnonzero(curve == c) for c in curves]
+        by_times: dict[tuple, list[np.ndarray]] = {}
+        for r in rows:
+            t = time_s[r]
+            step = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+            key = (t.size, *np.round(t / max(step, 1e-9) * 10).astype(int) // 10)
+            by_times.setdefault(key, []).append(r)
+        for same in by_times.values():
+            if len(same) < 3:
+                continue
+            d = np.array([out[r] for r in same])
+            for k in range(d.shape[1]):
+                values, counts = np.unique(d[:, k], return_counts=True)
+                if counts.max() * 2 > len(same):
+                    d[:, k] = values[np.argmax(counts)]
+            for r, dk in zip(same, d, strict=True):
+                out[r] = dk
 
 
 def history_traits(curve: np.ndarray, pressure_pa: np.ndarray, direction: np.ndarray

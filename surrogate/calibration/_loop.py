@@ -154,7 +154,12 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
     y = obs.angle_deg
     as_is = AugmentedModel(obs, responses, (), baseline.open_parameters)
-    rmse_model = float(np.sqrt(np.mean((as_is.angles(as_is.layout.start) - y) ** 2)))
+    pred_as_is = as_is.angles(as_is.layout.start)
+    # by volume a gauge reading past the baseline's range has no angle at that pressure
+    rmse_model = float(np.sqrt(np.nanmean((pred_as_is - y) ** 2)))
+    radians = _radians_warning(y, pred_as_is)
+    if radians:
+        warnings.append(radians)
     base = get_fit(())
     rmse_before, resid_before = get_cv(())
 
@@ -231,8 +236,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             f"what it leaves is within the baseline's own uncertainty at the fitted design "
             f"only, while {better['effect']} (plausible) explains the data better (BIC "
             f"{better['bic'] - cand['bic']:.0f} lower, cross-validated "
-            f"{better['rmse_cv_deg']:.2f} vs {cand['rmse_cv_deg']:.2f} deg): the baseline's "
-            "uncertainty does not excuse the worse fit")
+            f"{better['rmse_cv_joint']:.2f} vs {cand['rmse_cv_joint']:.2f} deg"
+            + (", angle and gauge pressure together" if channel["used"] else "")
+            + "): the baseline's uncertainty does not excuse the worse fit")
         cand["outdone_by"] = better["effects"]
     xv_chosen = get_xv(chosen)
     for cand in candidates:
@@ -307,6 +313,26 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     }
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
+
+
+RADIANS_MAX = 2.1  # |angle| in radians of a bend up to 120 deg
+
+
+def _radians_warning(y: np.ndarray, pred: np.ndarray) -> str | None:
+    """Angles that look like radians: none beyond RADIANS_MAX while the baseline bends
+    beyond 20 deg at those readings, and the data scale to the baseline's by about
+    pi / 180 (least squares, within a factor 2)."""
+    ok = np.isfinite(pred)
+    if not np.any(ok) or np.max(np.abs(y)) > RADIANS_MAX or np.max(np.abs(pred[ok])) < 20.0:
+        return None
+    k = float(y[ok] @ pred[ok] / (pred[ok] @ pred[ok]))
+    if not 0.5 < k * 180.0 / math.pi < 2.0:
+        return None
+    top = float(np.max(np.abs(y)))
+    return (f"angle_deg: angles reach only {top:.3g} while the baseline bends "
+            f"{float(np.max(np.abs(pred[ok]))):.0f} deg at these readings: they look like "
+            f"radians (x57.3 gives {math.degrees(top):.0f} deg); convert angle_deg to "
+            "degrees")
 
 
 def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
@@ -551,8 +577,20 @@ def _explains_better(cand: dict, candidates: list[dict]) -> dict | None:
     baseline's band at its fitted design excuses is not chosen over a better fit."""
     better = [c for c in candidates if c["plausible"] and c["rmse_cv_deg"] is not None
               and c["effects"] != cand["effects"] and c["bic"] < cand["bic"] + DELTA_BIC
-              and c["rmse_cv_joint"] < cand["rmse_cv_joint"]]
+              and c["rmse_cv_joint"] < cand["rmse_cv_joint"] and _adds_evidence(c, cand)]
     return min(better, key=lambda c: c["bic"]) if better else None
+
+
+def _adds_evidence(c: dict, cand: dict) -> bool:
+    """A set containing ``cand`` explains the data better only through its other
+    members: each must be significant (an added free parameter always lowers the
+    residual a little; the stiffer body of the tests was outdone by itself plus a
+    pressure offset of 28 +/- 23 Pa)."""
+    extra = set(c["effects"]) - set(cand["effects"])
+    if not set(cand["effects"]) < set(c["effects"]):
+        return True
+    tested = [p.name for e in extra for p in EFFECTS[e].parameters if p.tested]
+    return all((c["z"].get(n) or 0.0) > Z_SIGNIFICANT for n in tested)
 
 
 def _closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:

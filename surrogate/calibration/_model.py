@@ -185,33 +185,41 @@ class AugmentedModel:
     def _prepare_substeps(self) -> None:
         """Pressure (and injected volume) linear in time between readings, SUBSTEPS per
         interval; the lag is integrated exactly for a static angle linear between
-        substeps."""
+        substeps. ``time_s`` counts from the start of the pump with the chamber at rest
+        (docs/measured-data.md), so each curve starts at rest at t = 0 (pressure, volume
+        and bend 0), SUBSTEPS before its first reading: a first reading taken seconds
+        into the pumping already lags (a curve whose clock starts at its first reading
+        adds nothing: those substeps last 0 s)."""
         o = self.obs
         order = o.padded_order()
         n_curves, m = order.shape
-        width = (m - 1) * SUBSTEPS + 1
+        width = m * SUBSTEPS + 1
         valid = np.zeros((n_curves, width), bool)
         rows, p, q, d, t, v = [], [], [], [], [], []
         sample_rows, sample_pos = [], []
+        ramp = np.arange(0, SUBSTEPS + 1) / SUBSTEPS
         for c in range(n_curves):
             idx = order[c][order[c] >= 0]
             for j, r in enumerate(idx):
-                if j == 0:
-                    fr = [0.0]
+                if j == 0:  # from rest at t = 0 to the first reading
+                    fr, p0, v0 = ramp, 0.0, 0.0
+                    t0 = min(0.0, float(o.time_s[r]))
                 else:
-                    fr = list(np.arange(1, SUBSTEPS + 1) / SUBSTEPS)
-                prev = idx[j - 1] if j else r
+                    prev = idx[j - 1]
+                    fr = ramp[1:]
+                    t0, p0, v0 = o.time_s[prev], o.pressure_pa[prev], o.volume_ul[prev]
                 for k, w in enumerate(fr):
-                    pos = 0 if j == 0 else (j - 1) * SUBSTEPS + k + 1
+                    pos = k if j == 0 else j * SUBSTEPS + k + 1
                     valid[c, pos] = True
                     rows.append(r)
-                    p.append(o.pressure_pa[prev] + w * (o.pressure_pa[r] - o.pressure_pa[prev]))
-                    t.append(o.time_s[prev] + w * (o.time_s[r] - o.time_s[prev]))
-                    v.append(o.volume_ul[prev] + w * (o.volume_ul[r] - o.volume_ul[prev]))
+                    p.append(p0 + w * (o.pressure_pa[r] - p0))
+                    t.append(t0 + w * (o.time_s[r] - t0))
+                    v.append(v0 + w * (o.volume_ul[r] - v0) if np.isfinite(v0)
+                             else o.volume_ul[r])
                     q.append(o.flow_ul_s[r])
                     d.append(o.direction[r])
                 sample_rows.append(r)
-                sample_pos.append((c, 0 if j == 0 else j * SUBSTEPS))
+                sample_pos.append((c, (j + 1) * SUBSTEPS))
         # rows of a curve fill its first positions contiguously
         self._sub = {"rows": np.array(rows), "p": np.array(p), "q": np.nan_to_num(np.array(q)),
                      "d": np.array(d), "t": np.array(t), "v": np.array(v), "valid": valid,

@@ -58,7 +58,7 @@ class HydraulicResistance(Effect):
     def interpret(self, params, data):
         v = params["R_pa_per_ul_s"]
         q = max(data.get("flow_rates_ul_s") or [2.5])
-        return (f"Inlet channel and tubing resistance {v['value']:.0f} +/- {v['sd']:.0f} Pa "
+        return (f"Inlet channel and tubing resistance {v['value']:.3g} +/- {v['sd']:.2g} Pa "
                 f"per ul/s: while pumping at {q:g} ul/s the gauge reads about "
                 f"{v['value'] * q:.0f} Pa above the chamber (the 0.5 x 3 mm x 150 um channel "
                 f"alone accounts for about {R_CHANNEL:.0f} Pa per ul/s; the rest is tubing "

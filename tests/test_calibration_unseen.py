@@ -1,0 +1,576 @@
+"""The loop on measured data made the way other labs make them, from FE curves it was not
+tuned on: records of the shipped database (service/data/curves.h5, read with the store
+API; free tip, converged), at designs other than the test cases' (other L, t, T, b, h, the
+reversed pair, PDMS 1:15 and Ecoflex bodies), with a lab protocol of its own (below), and
+the mishaps labs make (kPa, radians, duplicated rows, a unit in a header, one specimen,
+readings past the FE's range, no time or flow columns).
+
+The generator (``lab_rows``) shares no code with tests/calibration_lab.py nor with the
+fitting code's forms: a syringe pump fills the chamber at q ul/s for as long as it takes
+to reach a target angle, holds, withdraws; a camera reads every ``read_s`` s (10 readings
+while loading at the first flow rate, 5 at twice that); each specimen has its own
+stiffness (chamber pressure at a volume x 1 + N(0, 3 %)) and amplitude (angle x 1 +
+N(0, 2 %)); readings carry 0.5-0.9 deg angle noise and 4 Pa gauge noise, rounded as a
+lab writes them (0.1 deg, 1 Pa). Truths act as the physics does:
+
+* a stiffer or softer body is a database record whose body is the preset scaled by k
+  (``pdms_1_15*k``): the lab calls it pdms_1_15, the truth is body_stiffness k;
+* a stiffer or softer membrane is the same record read through the exact invariance of
+  the hyperelastic problem (both layers' mu x s scale the pressure by s): the record's
+  pressures / k are those of the nominal body on a membrane x 1/k;
+* gauge and camera effects transform the readings; the inlet's drop R q d adds to the
+  gauge while the pump runs; creep is a one-term Prony retardation of the FE's angle on a
+  fine time grid;
+* outside the catalogue: compliance (an air bubble: the chamber gets the pump's volume
+  less C x pressure), a leak during the hold (volume lost at a rate proportional to the
+  pressure), a rate-independent friction loop on unloading, a contact saturation.
+
+``CASES`` pairs each data set with what a right answer is; ``judge`` says whether the
+report gives it. ``benchmarks/calibration_cases.py --unseen`` prints the table and the
+count; the cheap instructive cases run here, the rest are marked slow.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+DB_PATH = Path(__file__).resolve().parents[1] / "service" / "data" / "curves.h5"
+PRESSURE_NOISE_PA = 4.0
+
+
+@dataclass(frozen=True)
+class Record:
+    """One FE curve of the database, as a lab would name its design."""
+
+    key: str
+    body: str
+    membrane: str
+    scale: float          # the record's body mu scale (1 for a preset)
+    design: dict
+    pressure_pa: np.ndarray = field(repr=False)
+    volume_ul: np.ndarray = field(repr=False)
+    angle_deg: np.ndarray = field(repr=False)
+
+
+@functools.cache
+def _summaries() -> tuple[dict, ...]:
+    """Every converged free-tip record of the shipped database with a preset membrane."""
+    from solver.store.hdf5 import CurveStore
+
+    with CurveStore(DB_PATH) as store:
+        return tuple(s for s in store.summaries() if s["settings"]["tip"] == "free"
+                     and s["status"] == "complete" and "*" not in s["design"]["membrane_material"])
+
+
+@functools.cache
+def _load(key: str) -> Record:
+    from solver.store.hdf5 import CurveStore
+
+    s = next(s for s in _summaries() if s["key"] == key)
+    d = s["design"]
+    body, _, k = d["body_material"].partition("*")
+    with CurveStore(DB_PATH) as store:
+        c = store.get(key).curve
+    return Record(key, body, d["membrane_material"], float(k or 1.0), d,
+                  np.asarray(c.pressure_pa, float), np.asarray(c.volume_ul, float),
+                  np.asarray(c.angle_deg, float))
+
+
+def record(body: str, membrane: str, scale: float = 1.0, **geometry: float) -> Record:
+    """The record of this pair whose body scale and geometry are nearest the request."""
+    def distance(s: dict) -> float:
+        d = s["design"]
+        b, _, k = d["body_material"].partition("*")
+        out = abs(math.log(float(k or 1.0) / scale)) * 3
+        for name, v in geometry.items():
+            out += abs(d[name] - v) / v
+        return out if (b, d["membrane_material"]) == (body, membrane) else math.inf
+
+    best = min(_summaries(), key=distance)
+    assert distance(best) < 0.08, (body, membrane, scale, geometry, best["design"])
+    return _load(best["key"])
+
+
+@dataclass(frozen=True)
+class Truth:
+    """What acts on the data besides the FE curve of the record."""
+
+    membrane_from_record: bool = False   # read the record as membrane x 1/k, body preset
+    p0_pa: float = 0.0
+    k_pressure: float = 1.0
+    R_pa_per_ul_s: float = 0.0
+    offset_deg: float = 0.0
+    k_angle: float = 1.0
+    g_retarded: float = 0.0
+    tau_s: float = 3.0
+    compliance_ul_per_pa: float = 0.0    # outside the catalogue: air in the line
+    leak_per_s: float = 0.0              # outside: volume lost per s per (p / p_peak) x V
+    friction_deg: float = 0.0            # outside: unloading reads higher by this (bump)
+    contact_deg: float = 0.0             # outside: theta_c tanh(theta / theta_c)
+
+
+@dataclass(frozen=True)
+class Protocol:
+    flows_ul_s: tuple[float, ...] = (2.0,)   # the first sets read_s; others x2, x0.5 ...
+    peak_angle_deg: float = 60.0
+    hold_s: float = 0.0                      # 0: no hold
+    unload: bool = True
+    load_readings: int = 10
+    specimens: int = 3
+    noise_deg: float = 0.6
+    specimen_sd_p: float = 0.03
+    specimen_sd_a: float = 0.02
+    seed: int = 7
+    past_range: float = 1.0                  # > 1: load past the FE's last volume
+    switch_between: bool = False             # the pump stops between two readings
+
+
+def _extrap(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """np.interp, extended linearly past the last point (a lab keeps pumping after the
+    FE stopped)."""
+    y = np.interp(x, xp, fp)
+    hi = x > xp[-1]
+    if np.any(hi):
+        slope = (fp[-1] - fp[-3]) / (xp[-1] - xp[-3])
+        y[hi] = fp[-1] + slope * (x[hi] - xp[-1])
+    return y
+
+
+def _curve(rec: Record, truth: Truth) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    v, p, a = rec.volume_ul, rec.pressure_pa, rec.angle_deg
+    keep = np.concatenate([[True], np.diff(v) > 0])
+    v, p, a = v[keep], p[keep], a[keep]
+    if truth.membrane_from_record:
+        p = p / rec.scale
+    return v, p, a
+
+
+def _history(proto: Protocol, q: float, v_peak: float, read_s: float):
+    """Fine time grid, the pump's volume and direction on it, and the reading times. The
+    pump's program switches at readings (its durations are whole reading intervals)
+    unless ``proto.switch_between`` (then loading ends mid-interval)."""
+    t_load = max(round(v_peak / q / read_s), 2) * read_s
+    if proto.switch_between:
+        t_load -= 0.4 * read_s
+    segs = [("load", t_load)]
+    if proto.hold_s:
+        segs.append(("hold", max(round(proto.hold_s / read_s), 1) * read_s))
+    if proto.unload:
+        segs.append(("unload", t_load))
+    t_end = sum(d for _, d in segs)
+    dt = min(read_s, 1.0) / 100
+    t = np.arange(0.0, t_end + dt / 2, dt)
+    v, d = np.zeros_like(t), np.zeros_like(t)
+    t0 = v0 = 0.0
+    for kind, dur in segs:
+        m = (t > t0 + 1e-12) & (t <= t0 + dur + 1e-9)
+        rate = {"load": q, "hold": 0.0, "unload": -q}[kind]
+        v[m] = v0 + rate * (t[m] - t0)
+        d[m] = np.sign(rate)
+        t0, v0 = t0 + dur, v0 + rate * dur
+    reads = np.arange(read_s, t_end + 1e-9, read_s)
+    return t, np.maximum(v, 0.0), d, reads
+
+
+def lab_rows(designs: list[tuple[Record, dict]], truth: Truth = Truth(),
+             proto: Protocol = Protocol(), pump: dict | None = None) -> list[dict]:
+    """Rows of the measured-data contract (docs/measured-data.md). ``designs``: each
+    record with the nominal design a lab writes for it (L_mm, t_mm, T_mm, b_mm, h_mm,
+    body_material, membrane_material). ``pump``, when given, gets each curve's true pump
+    state before each reading (+1 in, 0 stopped, -1 out)."""
+    rng = np.random.default_rng(proto.seed)
+    rows = []
+    for rec, nominal in designs:
+        v_c, p_c, a_c = _curve(rec, truth)
+        sign = 1.0 if a_c[-1] > 0 else -1.0
+        assert sign * a_c[-1] > proto.peak_angle_deg, (rec.key, a_c[-1])  # it must bend
+        v_peak = float(np.interp(proto.peak_angle_deg, sign * a_c, v_c)) * proto.past_range
+        q0 = proto.flows_ul_s[0]
+        read_s = max(round(v_peak / q0 / proto.load_readings / 0.05) * 0.05, 0.05)
+        for q in proto.flows_ul_s:
+            t, v, d, reads = _history(proto, q, v_peak, read_s)
+            for s in range(proto.specimens):
+                kp = 1.0 + proto.specimen_sd_p * rng.standard_normal()
+                ka = 1.0 + proto.specimen_sd_a * rng.standard_normal()
+                v_ch = v.copy()
+                if truth.leak_per_s:
+                    p_top = float(np.max(p_c))
+                    lost = np.zeros_like(v)
+                    for i in range(1, t.size):
+                        here = max(v[i] - lost[i - 1], 0.0)
+                        p_here = float(np.interp(here, v_c, p_c))
+                        lost[i] = lost[i - 1] + (d[i] == 0) * truth.leak_per_s * (
+                            t[i] - t[i - 1]) * here * p_here / p_top
+                    v_ch = np.maximum(v - lost, 0.0)
+                if truth.compliance_ul_per_pa:  # V_pump = V_ch + C p(V_ch)
+                    g = v_c + truth.compliance_ul_per_pa * kp * p_c
+                    v_ch = np.interp(v_ch, g, v_c)
+                p_ch = kp * _extrap(v_ch, v_c, p_c)
+                static = ka * _extrap(v_ch, v_c, a_c)
+                if truth.contact_deg:
+                    static = truth.contact_deg * np.tanh(static / truth.contact_deg)
+                angle = static
+                if truth.g_retarded:
+                    y = np.empty_like(static)
+                    y[0] = static[0]
+                    for i in range(1, t.size):
+                        e = math.exp(-(t[i] - t[i - 1]) / truth.tau_s)
+                        y[i] = static[i] + (y[i - 1] - static[i]) * e
+                    angle = (1 - truth.g_retarded) * static + truth.g_retarded * y
+                if truth.friction_deg:
+                    x = np.clip(np.abs(static) / max(np.max(np.abs(static)), 1e-9), 0, 1)
+                    angle = angle + sign * (d < 0) * truth.friction_deg * 4 * x * (1 - x)
+                gauge = truth.k_pressure * (p_ch + truth.R_pa_per_ul_s * q * d) + truth.p0_pa
+                read = truth.k_angle * angle + truth.offset_deg
+                idx = np.clip(np.searchsorted(t, reads - 1e-9), 0, t.size - 1)
+                cid = (f"{nominal['body_material'][:4]}-L{nominal['L_mm']:g}"
+                       f"-t{nominal['t_mm']:g}-q{q:g}-{s + 1}")
+                if pump is not None:
+                    pump[cid] = d[idx].astype(int).tolist()
+                for k, i in enumerate(idx):
+                    rows.append({
+                        "curve_id": cid, **nominal,
+                        "pressure_pa": round(float(gauge[i] + PRESSURE_NOISE_PA
+                                                   * rng.standard_normal())),
+                        "angle_deg": round(float(read[i] + proto.noise_deg
+                                                 * rng.standard_normal()), 1),
+                        "time_s": round(float(reads[k]), 2), "flow_ul_s": q})
+    return rows
+
+
+def nominal(rec: Record, body: str | None = None, membrane: str | None = None) -> dict:
+    """The design as a lab writes it: the record's geometry to 0.01 mm, preset materials."""
+    d = rec.design
+    return {"L_mm": round(d["L_mm"], 2), "t_mm": round(d["t_mm"], 2),
+            "T_mm": round(d["T_mm"], 2), "b_mm": round(d["b_mm"], 2),
+            "h_mm": round(d["h_mm"], 3), "body_material": body or rec.body,
+            "membrane_material": membrane or rec.membrane}
+
+
+# ---- the data sets ---------------------------------------------------------------------
+
+def _std(pair: tuple[str, str], Lt: tuple[tuple[float, float], ...]) -> list:
+    out = []
+    for L, t in Lt:
+        r = record(*pair, 1.0, L_mm=L, t_mm=t, T_mm=1.0, b_mm=1.8, h_mm=0.15)
+        out.append((r, nominal(r)))
+    return out
+
+
+def _odd(pair: tuple[str, str], geometries: tuple[tuple[float, ...], ...]) -> list:
+    """Non-standard geometries (L, t, T, b, h) whose record's body is the preset (scale
+    within 2 %)."""
+    out = []
+    for L, t, T, b, h in geometries:
+        r = record(*pair, 1.0, L_mm=L, t_mm=t, T_mm=T, b_mm=b, h_mm=h)
+        out.append((r, nominal(r)))
+    return out
+
+
+PDMS10 = ("pdms_1_10", "ecoflex_00_30")
+PDMS15 = ("pdms_1_15", "ecoflex_00_30")
+REV = ("ecoflex_00_30", "pdms_1_15")
+ECO = ("ecoflex_00_30", "ecoflex_00_30")
+
+
+def designs_std10() -> list:
+    return _std(PDMS10, ((4.1, 0.75), (15.1, 0.5), (7.1, 1.0)))
+
+
+def designs_std15() -> list:
+    return _std(PDMS15, ((7.1, 0.75), (17.1, 0.5), (4.1, 0.5)))
+
+
+def designs_rev() -> list:
+    return _std(REV, ((4.1, 0.5), (7.1, 0.75), (17.1, 1.0)))
+
+
+def designs_odd_rev() -> list:
+    return _odd(REV, ((17.86, 0.53, 1.645, 2.342, 0.1646), (16.38, 0.513, 0.917, 1.585, 0.198),
+                      (10.37, 0.94, 0.988, 2.362, 0.1045)))
+
+
+def designs_odd_eco() -> list:
+    # (the ecoflex/ecoflex records at L 4.2 and 10.4 mm balloon rather than bend: 1-13 deg)
+    return _odd(ECO, ((17.86, 0.53, 1.645, 2.342, 0.1646), (16.38, 0.513, 0.917, 1.585, 0.198)))
+
+
+def scaled_body(k: float, L: float) -> list:
+    """One PDMS 1:15 body k x its preset at an odd geometry (the lab says pdms_1_15)."""
+    r = record(*PDMS15, k, L_mm=L)
+    return [(r, nominal(r))]
+
+
+@dataclass(frozen=True)
+class Expect:
+    """A right answer: ``select`` (that set, or named among the indistinguishable with
+    its sizes right), ``nothing`` (and nothing flagged), ``flag`` (nothing selected, the
+    residual flagged), ``none_selected`` (nothing selected, flagged or not), ``error`` (a
+    one-line input error naming this column), plus warnings naming these columns."""
+
+    kind: str
+    effect: str = ""
+    sizes: dict = field(default_factory=dict)
+    column: str = ""
+    warn: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Case:
+    id: str
+    rows: Callable[[], list[dict]]
+    expect: Expect
+    cheap: bool = False
+
+
+def _drop(rows: list[dict], *cols: str) -> list[dict]:
+    return [{k: v for k, v in r.items() if k not in cols} for r in rows]
+
+
+def _first_specimen(rows: list[dict]) -> list[dict]:
+    return [r for r in rows if r["curve_id"].endswith("-1")]
+
+
+# in the default suite (0.5-3 s CPU each; each failed before the loop read the bend,
+# voted across replicates or said radians and headers plainly); the rest are marked slow
+CHEAP = {"clean-one-design-2-flows", "clean-past-fe-range", "radian-angles",
+         "unit-in-header", "inlet-R-80-2flows", "membrane-0.61-L15.8", "friction-loop"}
+LOOP = Protocol(hold_s=4.0)
+LOOP2 = Protocol(hold_s=4.0, flows_ul_s=(1.5, 3.0))
+LOADING = Protocol(unload=False)
+
+
+def _cases() -> list[Case]:
+    c: list[Case] = []
+    nothing, flag = Expect("nothing"), Expect("flag")
+
+    def add(cid, rows, expect):
+        c.append(Case(cid, rows, expect, cid in CHEAP))
+
+    # clean data: nothing to select
+    add("clean-pdms10-std-loop", lambda: lab_rows(designs_std10(), proto=LOOP), nothing)
+    add("clean-pdms15-std-loading", lambda: lab_rows(designs_std15(), proto=LOADING), nothing)
+    add("clean-reversed-std-loop2", lambda: lab_rows(designs_rev(), proto=LOOP2), nothing)
+    add("clean-reversed-odd-loop", lambda: lab_rows(designs_odd_rev(), proto=LOOP), nothing)
+    add("clean-eco-odd-loop", lambda: lab_rows(designs_odd_eco(), proto=LOOP), nothing)
+    add("clean-pdms10-no-time", lambda: _drop(lab_rows(designs_std10(), proto=LOOP),
+                                              "time_s", "flow_ul_s"), nothing)
+    add("clean-pdms15-no-time-loading", lambda: _drop(lab_rows(designs_std15(),
+                                                               proto=LOADING),
+                                                      "time_s", "flow_ul_s"), nothing)
+    add("clean-2-specimens", lambda: lab_rows(designs_std10(),
+                                              proto=replace(LOOP, specimens=2)), nothing)
+    add("clean-4-specimens-noisy", lambda: lab_rows(designs_std15(), proto=replace(
+        LOOP, specimens=4, noise_deg=0.9, seed=3)), nothing)
+    add("clean-single-specimen", lambda: _first_specimen(lab_rows(designs_std10(),
+                                                                  proto=LOOP)), nothing)
+    add("clean-one-design-2-flows", lambda: lab_rows(designs_odd_eco()[:1], proto=LOOP2),
+        nothing)
+    add("clean-pump-stops-between-readings", lambda: lab_rows(designs_std15(), proto=replace(
+        LOOP, switch_between=True)), nothing)
+    add("clean-past-fe-range", lambda: lab_rows(designs_std15(), proto=replace(
+        LOOP, peak_angle_deg=85.0, past_range=1.3)),
+        Expect("nothing", warn=("time_s",)))
+    add("clean-duplicated-rows", lambda: (lambda r: r + r)(lab_rows(designs_std10(),
+                                                                    proto=LOOP)),
+        Expect("nothing", warn=("rows",)))
+    add("clean-duplicated-no-time", lambda: (lambda r: r + r)(_drop(
+        lab_rows(designs_std10(), proto=LOOP), "time_s", "flow_ul_s")),
+        Expect("nothing", warn=("rows",)))
+    add("kpa-pressures", lambda: [dict(r, pressure_pa=r["pressure_pa"] / 1000) for r in
+                                  lab_rows(designs_std10(), proto=LOOP)],
+        Expect("none_selected", warn=("pressure_pa",)))
+    add("radian-angles", lambda: [dict(r, angle_deg=round(math.radians(r["angle_deg"]), 4))
+                                  for r in lab_rows(designs_std10(), proto=LOOP)],
+        Expect("none_selected", warn=("angle_deg",)))
+    add("unit-in-header", lambda: [{("pressure_pa [Pa]" if k == "pressure_pa" else k): v
+                                    for k, v in r.items()}
+                                   for r in lab_rows(designs_std10()[:1], proto=LOOP)],
+        Expect("error", column="pressure_pa", warn=("pressure_pa [Pa]",)))
+    add("unit-in-values", lambda: [dict(r, pressure_pa=f"{r['pressure_pa']} Pa") for r in
+                                   lab_rows(designs_std10()[:1], proto=LOOP)],
+        Expect("error", column="pressure_pa"))
+    add("one-curve", lambda: _first_specimen(lab_rows(designs_std10()[:1], proto=LOADING)),
+        Expect("error", column="curve_id"))
+    # measurement effects, on designs other than the test cases'
+    add("pressure-offset-150", lambda: lab_rows(designs_std15(), Truth(p0_pa=150.0), LOADING),
+        Expect("select", "pressure_offset", {"p0_pa": 150.0}))
+    add("pressure-offset-rev", lambda: lab_rows(designs_rev(), Truth(p0_pa=-120.0), LOOP),
+        Expect("select", "pressure_offset", {"p0_pa": -120.0}))
+    add("pressure-gain-0.93", lambda: lab_rows(designs_std10(), Truth(k_pressure=0.93), LOOP),
+        Expect("select", "pressure_gain", {"k_pressure": 0.93}))
+    add("inlet-R-80-2flows", lambda: lab_rows(designs_std15(), Truth(R_pa_per_ul_s=80.0),
+                                              LOOP2),
+        Expect("select", "hydraulic_resistance", {"R_pa_per_ul_s": 80.0}))
+    add("inlet-R-50-odd", lambda: lab_rows(designs_odd_eco(), Truth(R_pa_per_ul_s=50.0), LOOP),
+        Expect("select", "hydraulic_resistance", {"R_pa_per_ul_s": 50.0}))
+    add("angle-offset-minus3", lambda: lab_rows(designs_std10(), Truth(offset_deg=-3.0),
+                                                LOOP),
+        Expect("select", "angle_offset", {"offset_deg": -3.0}))
+    add("angle-offset-rev", lambda: lab_rows(designs_rev(), Truth(offset_deg=2.5), LOADING),
+        Expect("select", "angle_offset", {"offset_deg": 2.5}))
+    add("camera-gain-0.9", lambda: lab_rows(designs_std10(), Truth(k_angle=0.9), LOOP),
+        Expect("select", "camera_gain", {"k_angle": 0.9}))
+    add("camera-gain-rev-1.1", lambda: lab_rows(designs_rev(), Truth(k_angle=1.1), LOOP),
+        Expect("select", "camera_gain", {"k_angle": 1.1}))
+    add("creep-0.2-hold", lambda: lab_rows(designs_std15(), Truth(g_retarded=0.2, tau_s=3.0),
+                                           LOOP2),
+        Expect("select", "viscoelastic_creep", {"g_retarded": 0.2, "tau_retardation_s": 3.0}))
+    add("creep-0.3-odd-one-flow", lambda: lab_rows(designs_odd_eco(),
+                                                   Truth(g_retarded=0.3, tau_s=2.0), LOOP),
+        Expect("select", "viscoelastic_creep", {"g_retarded": 0.3, "tau_retardation_s": 2.0}))
+    add("offset-no-time", lambda: _drop(lab_rows(designs_std10(), Truth(offset_deg=2.5),
+                                                 LOOP), "time_s", "flow_ul_s"),
+        Expect("select", "angle_offset", {"offset_deg": 2.5}))
+    add("creep-no-time", lambda: _drop(lab_rows(designs_std15(), Truth(g_retarded=0.3), LOOP),
+                                       "time_s", "flow_ul_s"), Expect("none_selected"))
+    # physical effects through the FE: a stiffer body, a softer membrane
+    add("body-1.65-L11.4", lambda: lab_rows(scaled_body(1.64719, 11.37), proto=LOOP2),
+        Expect("select", "body_stiffness", {"body_mu_scale": 1.64719}))
+    add("body-1.34-L6.4", lambda: lab_rows(scaled_body(1.34418, 6.406), proto=LOOP2),
+        Expect("select", "body_stiffness", {"body_mu_scale": 1.34418}))
+    add("membrane-0.74-L6.4", lambda: lab_rows(scaled_body(1.34418, 6.406),
+                                               Truth(membrane_from_record=True), LOOP2),
+        Expect("select", "membrane_stiffness", {"membrane_mu_scale": 1 / 1.34418}))
+    add("membrane-0.61-L15.8", lambda: lab_rows(scaled_body(1.63645, 15.79),
+                                                Truth(membrane_from_record=True), LOOP2),
+        Expect("select", "membrane_stiffness", {"membrane_mu_scale": 1 / 1.63645}))
+    # outside the catalogue
+    add("compliance-bubble", lambda: lab_rows(designs_std10(),
+                                              Truth(compliance_ul_per_pa=0.004), LOOP),
+        flag)
+    add("leak-during-hold", lambda: lab_rows(designs_std15(), Truth(leak_per_s=0.08),
+                                             replace(LOOP, hold_s=6.0)), flag)
+    add("friction-loop", lambda: lab_rows(designs_std10(), Truth(friction_deg=4.0), LOOP),
+        flag)
+    add("contact-rev", lambda: lab_rows(designs_rev(), Truth(contact_deg=30.0),
+                                        replace(LOOP, peak_angle_deg=75.0)), flag)
+    return c
+
+
+CASES = _cases()
+
+
+def judge(case: Case, report: dict | None, error: BaseException | None) -> tuple[bool, str]:
+    """Whether the answer is right, and what it was (one line)."""
+    from solver.errors import InputError
+
+    e = case.expect
+    if error is not None:
+        if not isinstance(error, InputError):
+            return False, f"traceback: {type(error).__name__}: {error}"
+        text = str(error)
+        if e.kind != "error":
+            return False, f"refused: {text}"
+        ok = (getattr(error, "field", None) == e.column and "\n" not in text
+              and all(w in text for w in e.warn))  # an error names what it found
+        return ok, f"error on {getattr(error, 'field', None)}: {text[:90]}"
+    assert report is not None
+    sel = report["selected_effects"]
+    flagged = report["residual_structured_after"]
+    left = f" (flagged {report['unexplained_rms_deg']:.2f})" if flagged else ""
+    what = (f"{'+'.join(sel) or 'nothing'}{left}"
+            f"; {report['rmse_before_deg']:.2f} -> {report['rmse_after_deg']:.2f}"
+            f" (floor {report['noise_floor_deg'] or float('nan'):.2f})")
+    if report["rmse_after_deg"] > report["rmse_before_deg"] + 1e-12:
+        return False, "rmse_after above rmse_before: " + what
+    for col in e.warn:
+        if not any(w.startswith(col) for w in report["warnings"]):
+            return False, f"no warning on {col}: " + what
+    if e.kind == "error":
+        return False, "accepted: " + what
+    if e.kind == "nothing":
+        return (not sel and not flagged), what
+    if e.kind == "flag":
+        return (not sel and flagged), what
+    if e.kind == "none_selected":
+        return not sel, what
+    # select
+    truth = e.sizes
+    fitted = report["fitted"]["effects"]
+    if sel == [e.effect]:
+        ok = all(abs(fitted[n]["value"] - v) <= 3 * fitted[n]["sd"] + 1e-12
+                 for n, v in truth.items())
+        sizes = ", ".join(f"{n} {fitted[n]['value']:.3g}+/-{fitted[n]['sd']:.2g} ({v:g})"
+                          for n, v in truth.items())
+        return ok, what + "; " + sizes
+    alike = {tuple(a["effects"]): a for a in report["indistinguishable"]}
+    if (e.effect,) in alike:
+        p = alike[(e.effect,)]["params"]
+        ok = all(abs(p[n]["value"] - v) <= 3 * p[n]["sd"] for n, v in truth.items())
+        return ok, what + f"; {e.effect} named indistinguishable"
+    return False, what
+
+
+def run_case(case: Case):
+    """(report or None, error or None, rows)."""
+    from surrogate.calibration import run_calibration
+
+    rows = case.rows()
+    try:
+        return run_calibration(rows, _emulator()).report, None, rows
+    except Exception as exc:  # an InputError is judged; any other is a traceback
+        return None, exc, rows
+
+
+@functools.cache
+def _emulator():
+    from surrogate.emulator.file import load_emulator
+
+    return load_emulator(Path(__file__).resolve().parents[1] / "service" / "data"
+                         / "emulator.json")
+
+
+@pytest.mark.parametrize("designs, truth, proto", [
+    (designs_std10, Truth(), LOOP),                      # top of stiff curves: flat gauge
+    (designs_std15, Truth(g_retarded=0.3, tau_s=2.0), LOOP2),   # creep during the hold
+    (designs_odd_eco, Truth(R_pa_per_ul_s=50.0), LOOP),  # one hold reading after R Q's step
+    (designs_std10, Truth(friction_deg=4.0), LOOP),      # a loop: unloading bends less
+    (designs_std10, Truth(offset_deg=-3.0), LOOP),       # the bend crosses zero
+    (designs_rev, Truth(), replace(LOOP, specimens=4, noise_deg=0.9, seed=3)),
+], ids=["stiff-top", "creep-hold", "inlet-step", "friction", "offset", "reversed-noisy"])
+def test_loading_holds_and_unloading_are_read_as_the_pump_ran(designs, truth, proto):
+    # the noise floor compares replicates segment by segment and the injected volume
+    # follows the pump's state: one misread reading shifts every later volume
+    from surrogate.calibration import observations_from_rows
+
+    pump: dict[str, list[int]] = {}
+    obs = observations_from_rows(lab_rows(designs(), truth, proto, pump))
+    wrong = [(obs.curve_ids[c], "".join("+0-"[1 - int(x)] for x in obs.direction[obs.curve == c]),
+              "".join("+0-"[1 - x] for x in pump[obs.curve_ids[c]]))
+             for c in range(obs.n_curves)
+             if obs.direction[obs.curve == c].tolist() != pump[obs.curve_ids[c]]]
+    assert not wrong, wrong
+
+
+# measured 2026-12-02 (663-record emulator, seed 7): what the loop still gets wrong
+WRONG = {
+    "clean-pump-stops-between-readings": "flagged 3.1 deg on clean data: the injected "
+    "volume assumes the pump changes state at readings; stopping 0.4 interval before one "
+    "puts volume in that the loop cannot see",
+    "inlet-R-50-odd": "selected, 50.6 +/- 0.15 for 50: the emulator's p(V) at these two "
+    "Ecoflex records (bodies x 0.992 and 1.005 of the preset) is 1-3 Pa off, not in the sd",
+    "creep-0.3-odd-one-flow": "selected, g 0.18 +/- 0.02 for 0.3 (tau 3.9 for 2): read every "
+    "3.4 s at one flow rate g and tau trade off, and the emulator's 0.3-0.9 deg error at "
+    "those records moves them (exact data: 0.297, 2.08)",
+    "offset-no-time": "nothing selected: against the gauge pressure alone the 3 % specimen "
+    "stiffness scatter makes a 3.5 deg floor on PDMS 1:10 curves; 2.2 +/- 0.85 deg, z 2.6",
+}
+
+
+@pytest.mark.parametrize("case", [
+    pytest.param(c, marks=([] if c.cheap else [pytest.mark.slow])
+                 + ([pytest.mark.xfail(reason=WRONG[c.id], strict=False)]
+                    if c.id in WRONG else []))
+    for c in CASES], ids=[c.id for c in CASES])
+def test_unseen_lab_data(case):
+    report, error, _ = run_case(case)
+    ok, what = judge(case, report, error)
+    assert ok, what
