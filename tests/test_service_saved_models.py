@@ -13,6 +13,11 @@ from fastapi.testclient import TestClient
 from service_fakes import assert_problem, settings_for
 from test_calibration_service import measured_rows as _shell_rows
 
+import surrogate.calibration._saved as saved
+from service.app import create_app
+from surrogate.calibration import load_model, run_calibration, save_model
+from surrogate.calibration._saved import ModelExistsError
+
 
 def measured_rows(effect: dict | None = None, reps: int = 3) -> list[dict]:
     """Shell-test rows (test_calibration_service): an angle offset, ``reps`` specimens
@@ -20,11 +25,6 @@ def measured_rows(effect: dict | None = None, reps: int = 3) -> list[dict]:
     rows = _shell_rows((effect or {}).get("offset", 0.0))
     keep = {f"-s{s}" for s in range(reps)}
     return [r for r in rows if any(r["curve_id"].endswith(k) for k in keep)]
-
-import surrogate.calibration._saved as saved
-from service.app import create_app
-from surrogate.calibration import load_model, run_calibration, save_model
-from surrogate.calibration._saved import ModelExistsError
 
 
 @pytest.fixture(scope="module")

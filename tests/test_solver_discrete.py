@@ -84,7 +84,8 @@ def _two_field(block, u, q):
     st = evaluate_block(block, u, True, q)
     kmr = block.bulk_pa * np.einsum("emn,en->em", block.Minv, st.constraint)
     r_u = st.residual - np.einsum("ema,em->ea", st.D, kmr)
-    K_uu = full_element_matrices(st.stiffness) - block.bulk_pa * np.matmul(st.D.transpose(0, 2, 1), block.Minv @ st.D)
+    K_uu = (full_element_matrices(st.stiffness)
+            - block.bulk_pa * np.matmul(st.D.transpose(0, 2, 1), block.Minv @ st.D))
     return r_u, st.constraint, K_uu, st.D
 
 
