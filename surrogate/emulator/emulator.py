@@ -2,7 +2,7 @@
 
 For each material pair, every free-tip FE curve of the database is a vector of node
 values (``features``: secant stiffness log(p/theta) and secant volume log(V/theta) at
-fixed angles); a PCA + Gaussian-process emulator (``vector_gp``) interpolates that
+fixed angles); one Gaussian process per node (``vector_gp.fit_output_gps``) interpolates that
 vector over the box's unit-cube coordinates (``solver.design_space``). A query
 
 1. maps the design to the reduced box (lengths / (W / 3 mm), body stiffness relative
