@@ -416,3 +416,32 @@ def test_the_range_ends_where_the_fe_would_stop_at_its_volume_limit(emulator):
     assert np.isfinite(by_volume.angle_deg[0]) and np.isnan(by_volume.angle_deg[1])
     # the 1x design reaches 90 deg well inside the stop
     assert emulator.predict(small, p).validity["fe_limit_angle_deg"] == 90.0
+
+
+def test_the_answer_lies_inside_its_own_band_across_the_box(emulator):
+    """The band is the horizontal band of the node-wise p(theta) curves made monotone
+    (asymmetric where it is wide, far from the database designs); at 120 designs drawn
+    uniformly in the box (each layer's stiffness scaled on its own) and 80 pressures each,
+    every answered angle lies inside its band, and the band's low side is below its high
+    side."""
+    rng = np.random.default_rng(99)
+    pairs = [("pdms_1_10", "ecoflex_00_30"), ("pdms_1_15", "ecoflex_00_30"),
+             ("ecoflex_00_30", "pdms_1_15"), ("ecoflex_00_30", "ecoflex_00_30")]
+    p = np.linspace(50, 4000, 80)
+    answered = 0
+    for i in range(120):
+        body, membrane = pairs[i % 4]
+        design = Design(body_material=scaled_material(body, rng.uniform(0.5, 2)),
+                        membrane_material=scaled_material(membrane, rng.uniform(0.5, 2)),
+                        L_mm=rng.uniform(4, 18), t_mm=rng.uniform(0.5, 1.2),
+                        T_mm=rng.uniform(0.6, 2.0), b_mm=rng.uniform(1.0, 2.4),
+                        h_mm=rng.uniform(0.1, 0.3))
+        try:
+            r = emulator.predict(design, p)
+        except InputError:                  # near the Ecoflex/Ecoflex balance: refused
+            continue
+        ok = np.isfinite(r.angle_deg)
+        answered += int(ok.sum())
+        assert (r.lower_deg[ok] <= r.angle_deg[ok] + 1e-9).all()
+        assert (r.angle_deg[ok] <= r.upper_deg[ok] + 1e-9).all()
+    assert answered > 5000
