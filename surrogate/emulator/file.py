@@ -27,9 +27,9 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 5   # 5: fe_max_volume_ul, GPs with per-point noise (early-ended curves;
-                     # 4 read: no volume stop); 4: force_form (3 read: F/p); 3: band_scale
-                     # per output node (2 read, one multiplier)
+FORMAT_VERSION = 5   # 5: fe_max_volume_ul, the FE's volume stop (4 read: none); 4:
+                     # force_form (3 read: F/p); 3: band_scale per output node (2 read, one
+                     # multiplier)
 
 
 def emulator_to_dict(e: Emulator) -> dict:
