@@ -12,6 +12,7 @@ import argparse
 import sys
 from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import NoReturn
 
 from solver.errors import BalloonError, InputError, NotFoundError
 
@@ -35,8 +36,17 @@ def package_version() -> str:
         return "0+unknown"
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with its usage errors on one line, like every other error of the
+    command: ``balloon predict: error: MESSAGE (see `balloon predict --help`)``.
+    Subcommand parsers are of the same class (argparse's default)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="balloon",
         description="Design bending balloon actuators: FE solves, curve database, "
                     "surrogate fits, inverse design and the REST service.")

@@ -81,3 +81,27 @@ def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys) -> None:
     assert cli.main(["inverse", "--angle-deg", "500", "--pressure-pa", "900",
                      "--model", "paper"]) == 1  # infeasible: explained, not an error
     assert "not reachable" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, names", [
+    (["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "100,abc"], "--pressures"),
+    (["predict", "--t", "3"], "--t-mm"),                      # ambiguous abbreviation
+    (["predict", "--L-mm", "7.1"], "--t-mm"),                 # missing required option
+    (["fit", "--db", "x.h5", "-o", "y.json", "--bogus"], "--bogus"),
+])
+def test_usage_errors_are_one_line(argv, names, capsys) -> None:
+    """argparse's own errors are one line too (no usage block), naming the option."""
+    with pytest.raises(SystemExit) as exc:
+        cli.main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and names in err and "--help" in err
+
+
+def test_number_lists_take_commas(capsys) -> None:
+    """Numbers pasted with commas (``500,1000``) read as with spaces (``500 1000``)."""
+    base = ["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--model", "paper", "--json"]
+    assert cli.main(base + ["--pressures", "500,1000", "1500"]) == 0
+    with_commas = json.loads(capsys.readouterr().out)
+    assert cli.main(base + ["--pressures", "500", "1000", "1500"]) == 0
+    assert json.loads(capsys.readouterr().out) == with_commas

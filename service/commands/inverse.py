@@ -18,6 +18,7 @@ import json
 from service.commands.predict import (
     add_design_arguments,
     add_model_arguments,
+    add_number_list,
     add_pump_arguments,
     as_flag,
     design_from_args,
@@ -33,8 +34,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description=__doc__.split("\n\n")[0].replace("``", ""),
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n")[1])
     add_design_arguments(parser, required=False)
-    parser.add_argument("--angles-deg", type=float, nargs="+", metavar="DEG",
-                        help="one design (--L-mm, --t-mm): the pressures for these angles")
+    add_number_list(parser, "--angles-deg", "DEG",
+                    "one design (--L-mm, --t-mm): the pressures for these angles")
     parser.add_argument("--kind", choices=("pressure_budget", "angle_at_pressure",
                                            "force_at_pressure"), default=None,
                         help="design target (default pressure_budget, or force_at_pressure "

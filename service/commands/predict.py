@@ -18,6 +18,32 @@ from pathlib import Path
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
 
+def number_list(text: str) -> list[float]:
+    """One command-line word of numbers: ``1000`` or ``500,1000,1500`` (commas, as
+    people paste them from a spreadsheet, or spaces between words)."""
+    words = text.replace(",", " ").split()
+    try:
+        return [float(w) for w in words] if words else [float("nan")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a list of numbers (numbers separated by spaces or commas)"
+        ) from None
+
+
+class NumberListAction(argparse.Action):
+    """``nargs="+"`` of ``number_list`` words, flattened into one list of floats."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: object, option_string: str | None = None) -> None:
+        setattr(namespace, self.dest, [v for word in values for v in word])  # type: ignore
+
+
+def add_number_list(parser: argparse._ActionsContainer, flag: str, metavar: str,
+                    help: str) -> None:
+    parser.add_argument(flag, type=number_list, nargs="+", action=NumberListAction,
+                        metavar=metavar, help=f"{help} (spaces or commas between them)")
+
+
 def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True) -> None:
     parser.add_argument("--L-mm", type=float, required=required, dest="L_mm",
                         help="chamber length, mm")
@@ -185,14 +211,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                    description=__doc__.split("\n\n")[0].replace("``", ""))
     add_design_arguments(parser)
     group = parser.add_mutually_exclusive_group(required=True)
-    group.add_argument("--pressures", type=float, nargs="+", metavar="PA",
-                       help="pressures, Pa")
+    add_number_list(group, "--pressures", "PA", "pressures, Pa")
     group.add_argument("--pressure-range", type=float, nargs=3, metavar=("START", "STOP", "NUM"),
                        help="NUM evenly spaced pressures from START to STOP, Pa")
-    group.add_argument("--volumes", type=float, nargs="+", metavar="UL",
-                       help="injected volumes, ul (the emulator)")
-    group.add_argument("--times", type=float, nargs="+", metavar="S",
-                       help="times since the pump started, s (with --flow-ul-s)")
+    add_number_list(group, "--volumes", "UL", "injected volumes, ul (the emulator)")
+    add_number_list(group, "--times", "S", "times since the pump started, s (with --flow-ul-s)")
     add_pump_arguments(parser)
     parser.add_argument("--pressures-at", choices=("chamber", "pump_gauge"), default="chamber",
                         help="where --pressures were read (pump_gauge: with --inlet and "
