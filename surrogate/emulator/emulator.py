@@ -123,11 +123,24 @@ class PairEmulator:
                           "(SolverSettings.max_volume_ul), which this design's emulated "
                           f"volume reaches at {limit:.1f} deg: the balloon grows more than "
                           "the actuator bends")
-        for fu, angle, why in self.failed:
-            if np.linalg.norm(np.asarray(fu) - u) < FAILED_RADIUS and angle < limit:
-                limit = float(angle)
-                reason = f"the FE curve of a nearby database design ended at {angle:.0f} deg: {why}"
+        if self.failed:
+            near = np.linalg.norm(self._failed_coordinates - u, axis=1) < FAILED_RADIUS
+            for i in np.flatnonzero(near):
+                _, angle, why = self.failed[i]
+                if angle < limit:
+                    limit = float(angle)
+                    reason = (f"the FE curve of a nearby database design ended at "
+                              f"{angle:.0f} deg: {why}")
         return limit, reason
+
+    @property
+    def _failed_coordinates(self) -> np.ndarray:
+        """(n_failed, 6) unit coordinates of the early-ended curves, stacked once."""
+        stacked = self.__dict__.get("_failed_u")
+        if stacked is None:
+            stacked = np.array([np.asarray(fu, float) for fu, _, _ in self.failed])
+            object.__setattr__(self, "_failed_u", stacked)
+        return stacked
 
     def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
         """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
