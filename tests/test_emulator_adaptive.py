@@ -41,3 +41,21 @@ def test_next_designs_keep_away_from_known_and_from_early_ended_curves(emulator)
 def test_a_count_outside_its_range_is_refused_with_the_option_named(emulator):
     with pytest.raises(InputError, match="--adaptive"):
         next_designs(emulator, 0)
+
+
+def test_no_design_whose_emulated_volume_reaches_the_fe_volume_stop(emulator):
+    """A candidate whose FE curve would stop at the volume limit before 90 deg adds no
+    curve to interpolate: none is proposed (reduced designs, length scale 1)."""
+    from surrogate.emulator.emulator import N_NODES
+    from surrogate.emulator.features import ANGLE_NODES_DEG
+
+    points = next_designs(emulator, 24)
+    for p in points:
+        bp = locate(p.design, reduced=True)
+        try:
+            pe = emulator._pair(bp, bp.coordinates())
+        except InputError:       # near the balance: no sign to check the volume of
+            continue
+        mean, _ = pe.curves.predict(bp.coordinates())
+        volume_at_90_ul = ANGLE_NODES_DEG[-1] * np.exp(mean[2 * N_NODES - 1])
+        assert volume_at_90_ul < pe.fe_max_volume_ul

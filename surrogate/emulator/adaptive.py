@@ -13,7 +13,11 @@ does not take every slot, and none within ``FAILED_RADIUS`` of a database curve 
 early (a Newton failure or the volume stop of a balloon that hardly bends): such a
 neighbour's curve ends early too, as 27 of the 47 designs of the first ``--adaptive 48``
 round on the 533-record database did, and adds no curve to interpolate; the emulator
-already caps its range there.
+already caps its range there. Nor any candidate whose emulated injected volume at 90 deg
+reaches the FE's volume stop (``PairEmulator.fe_max_volume_ul``): its FE curve would stop
+there too. Before that screen, an ``--adaptive 240`` round on the 663-record database
+added 65 curves to interpolate (175 ended early, most at the volume stop in
+Ecoflex/Ecoflex), where the space-filling sequence, continued, gave 86 of 96.
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ from solver.materials import MATERIALS
 from solver.precompute.grid import GridPoint
 from solver.settings import SolverSettings
 from solver.store.keys import record_key
-from surrogate.emulator.emulator import FAILED_RADIUS, N_NODES, Emulator
+from surrogate.emulator.emulator import FAILED_RADIUS, N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG
 
 CANDIDATES = 1024
@@ -57,6 +61,16 @@ def _design_for(group: str, u: np.ndarray) -> Design | None:
             return Design(body_material=scaled_material(pair[0], round(ratio, 6)),
                           membrane_material=MATERIALS[pair[1]], **geometry).validated()
     return None
+
+
+def _reaches_volume_stop(pe: PairEmulator, node_mean: np.ndarray) -> bool:
+    """Whether the emulated injected volume at the last angle node (reduced design: the
+    length scale is 1) reaches the FE's volume stop, so that its FE curve would end
+    early."""
+    if pe.fe_max_volume_ul is None:
+        return False
+    last = ANGLE_NODES_DEG[-1]
+    return bool(last * np.exp(node_mean[2 * N_NODES - 1]) >= pe.fe_max_volume_ul)
 
 
 def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = None
@@ -81,7 +95,9 @@ def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = N
                 pe = emulator._pair(point, uu)
             except InputError:
                 pe = max(models, key=lambda m: float(np.median(m.band_scale)))  # near a balance
-            _, var = pe.curves.predict(uu)
+            mean, var = pe.curves.predict(uu)
+            if _reaches_volume_stop(pe, mean):
+                continue
             score = float((np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES])[nodes].mean())
             scored.append((score, group, uu, design))
     scored.sort(key=lambda s: -s[0])
