@@ -184,7 +184,11 @@ def test_dask_local_cluster_runs_the_same_job(grid, tmp_path):
 
 
 RUNNER = """
-import json, sys
+import json, signal, sys
+# A shell without job control starts background commands with SIGINT ignored, and the
+# child inherits that (a suite run as `pytest ... &` from a script); Ctrl-C in a terminal
+# reaches a foreground job with Python's default handler, which is what this test is of.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from solver.precompute import load_grid, precompute
 from test_precompute_fakes import blocking_fake_solve
 if __name__ == "__main__":
