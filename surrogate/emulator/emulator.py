@@ -107,6 +107,11 @@ class PairEmulator:
     force_form: str = "per_kpa"
     fe_max_volume_ul: float | None = None   # the FE's volume stop (whole actuator, ul)
 
+    def __post_init__(self) -> None:
+        # the early-ended curves' unit coordinates, stacked once for fe_range's distances
+        object.__setattr__(self, "_failed_u", np.array(
+            [np.asarray(fu, float) for fu, _, _ in self.failed]) if self.failed else None)
+
     def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float
                  ) -> tuple[float, str]:
         """The FE's range for the design at unit coordinates ``u`` (deg) and why it ends
@@ -124,7 +129,7 @@ class PairEmulator:
                           f"volume reaches at {limit:.1f} deg: the balloon grows more than "
                           "the actuator bends")
         if self.failed:
-            near = np.linalg.norm(self._failed_coordinates - u, axis=1) < FAILED_RADIUS
+            near = np.linalg.norm(self._failed_u - u, axis=1) < FAILED_RADIUS
             for i in np.flatnonzero(near):
                 _, angle, why = self.failed[i]
                 if angle < limit:
@@ -132,15 +137,6 @@ class PairEmulator:
                     reason = (f"the FE curve of a nearby database design ended at "
                               f"{angle:.0f} deg: {why}")
         return limit, reason
-
-    @property
-    def _failed_coordinates(self) -> np.ndarray:
-        """(n_failed, 6) unit coordinates of the early-ended curves, stacked once."""
-        stacked = self.__dict__.get("_failed_u")
-        if stacked is None:
-            stacked = np.array([np.asarray(fu, float) for fu, _, _ in self.failed])
-            object.__setattr__(self, "_failed_u", stacked)
-        return stacked
 
     def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
         """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
