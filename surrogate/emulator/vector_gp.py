@@ -75,11 +75,11 @@ class VectorGP:
         """One GP per output (``fit_output_gps``): the components are the identity."""
         return bool(self._stack["identity"])  # type: ignore[attr-defined]
 
-    def predict(self, u: np.ndarray, variance_of: slice | None = None
+    def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and variance of every output at one input row ``u``. With one GP per
-        output (identity components), ``variance_of`` limits the variance, the costly part
-        of a query, to those outputs (NaN for the others)."""
+        output (identity components), ``variance_of`` (a slice or an index array) limits
+        the variance, the costly part of a query, to those outputs (NaN for the others)."""
         st = self._stack  # type: ignore[attr-defined]
         u = np.asarray(u, float).ravel()
         d2 = (st["x"] - u) ** 2                                   # (n, d)
@@ -92,7 +92,7 @@ class VectorGP:
         if variance_of is not None and not self.per_output:
             raise ValueError("variance_of needs one GP per output (identity components)")
         ks = k[sel]
-        rows = range(len(k))[sel]
+        rows = np.arange(len(k))[sel]
         v = np.array([trmv(st["linv_t"][j].T, k[j], lower=1) for j in rows])  # L^-1 k
         rr = h[None, :] - np.matmul(ks[:, None, :], st["kinv_h"][sel])[:, 0, :]
         variances = st["s2"][sel] * np.maximum(
