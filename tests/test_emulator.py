@@ -308,7 +308,8 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
     Per angle bin, the cross-validated bands of 50 of the reversed pair's database curves (5
     folds, each predicted by the emulator refitted without it) cover 95 % in
     every bin (at least 0.93: a bin's nodes also shape the band just outside it), by
-    pressure and by injected volume, and not every point (not needlessly wide)."""
+    pressure and by injected volume, and not every point (not needlessly wide), with no
+    multiplier near its cap."""
     from surrogate.band_level import z_value
     from surrogate.emulator.build import (
         ANGLE_BINS_DEG,
@@ -339,7 +340,10 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
             if (bins == b).sum() >= 50:
                 assert inside[bins == b].mean() >= 0.93, (axis, ANGLE_BINS_DEG[b])
         assert inside.mean() <= 0.99, axis
-    assert scales[:34].max() > 3 * np.median(scales[:34])   # the low angles need more
+    # no bin is held at the multiplier's cap: before the band's floor of 0.05 deg
+    # (emulator.floored_band) FE points of a few thousandths of a degree, covered
+    # relatively, held the lowest bin there in every group
+    assert scales.max() < 10
 
 
 def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tmp_path):
@@ -427,8 +431,8 @@ def test_the_answer_lies_inside_its_own_band_across_the_box(emulator):
     """The band is the horizontal band of the node-wise p(theta) curves made monotone
     (asymmetric where it is wide, far from the database designs); at 120 designs drawn
     uniformly in the box (each layer's stiffness scaled on its own) and 80 pressures each,
-    every answered angle lies inside its band, and the band's low side is below its high
-    side."""
+    every answered angle lies inside its band, at least ANGLE_BAND_FLOOR_DEG (0.05 deg)
+    from either side."""
     rng = np.random.default_rng(99)
     pairs = [("pdms_1_10", "ecoflex_00_30"), ("pdms_1_15", "ecoflex_00_30"),
              ("ecoflex_00_30", "pdms_1_15"), ("ecoflex_00_30", "ecoflex_00_30")]
@@ -447,8 +451,8 @@ def test_the_answer_lies_inside_its_own_band_across_the_box(emulator):
             continue
         ok = np.isfinite(r.angle_deg)
         answered += int(ok.sum())
-        assert (r.lower_deg[ok] <= r.angle_deg[ok] + 1e-9).all()
-        assert (r.angle_deg[ok] <= r.upper_deg[ok] + 1e-9).all()
+        assert (r.lower_deg[ok] <= r.angle_deg[ok] - 0.05 + 1e-9).all()
+        assert (r.angle_deg[ok] + 0.05 <= r.upper_deg[ok] + 1e-9).all()
     assert answered > 5000
 
 

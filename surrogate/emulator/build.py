@@ -41,6 +41,7 @@ from surrogate.emulator.emulator import (
     PairEmulator,
     _monotone,
     _with_origin,
+    floored_band,
     node_curves,
 )
 from surrogate.emulator.features import (
@@ -161,8 +162,8 @@ def held_out_curves(curves: list, mean: np.ndarray, var: np.ndarray, scales: np.
                     z: float, axis: str = "pressure"
                     ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """Per database curve: its FE angles (deg, up to the FE's stop, signed positive) and
-    the held-out (cross-validated) emulator's angle, band lower and upper at the curve's
-    own pressures (``axis`` "pressure": the log p nodes) or injected volumes ("volume":
+    the held-out (cross-validated) emulator's angle, band lower and upper (with the
+    query's floor, ``emulator.floored_band``) at the curve's own pressures (``axis`` "pressure": the log p nodes) or injected volumes ("volume":
     the log V nodes), from the held-out node means and variances."""
     half = slice(0, N_NODES) if axis == "pressure" else slice(N_NODES, 2 * N_NODES)
     out = []
@@ -172,8 +173,9 @@ def held_out_curves(curves: list, mean: np.ndarray, var: np.ndarray, scales: np.
         y, sd = mean[i, half], np.sqrt(var[i, half]) * scales[half]
         xm, xl, xu = (_with_origin(_monotone(c)) for c in node_curves(y, sd, z))
         q = (p_red if axis == "pressure" else v_red)[keep]
-        out.append((sign * a[keep], np.interp(q, xm, ANGLES0), np.interp(q, xu, ANGLES0),
-                    np.interp(q, xl, ANGLES0)))
+        angle = np.interp(q, xm, ANGLES0)
+        lower, upper = floored_band(angle, np.interp(q, xu, ANGLES0), np.interp(q, xl, ANGLES0))
+        out.append((sign * a[keep], angle, lower, upper))
     return out
 
 

@@ -186,6 +186,24 @@ class CurveBand:
         return float(np.interp(self.limit_angle_deg, FINE_ANGLES_DEG, self.pressure_pa))
 
 
+# The band is never narrower than this either side of the answer. A band that is a
+# multiple of the GP's sd in log(p / theta) is relative; at the first steps of curves
+# near the Ecoflex/Ecoflex stiffness balance the FE angle is a few thousandths of a
+# degree (some of the other sign), and covering those relatively took a multiplier of
+# 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope that made the
+# group's bands run from 0 to twice the angle at 60 deg. Half the 0.1 deg a camera
+# reading resolves; the calibration (build.node_band_scales) counts with it.
+ANGLE_BAND_FLOOR_DEG = 0.05
+
+
+def floored_band(angle: np.ndarray, lower: np.ndarray, upper: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The band (lower, upper) widened to at least ANGLE_BAND_FLOOR_DEG either side of
+    ``angle`` (deg; NaN stays NaN)."""
+    return (np.fmin(lower, angle - ANGLE_BAND_FLOOR_DEG),
+            np.fmax(upper, angle + ANGLE_BAND_FLOOR_DEG))
+
+
 def _monotone(p: np.ndarray) -> np.ndarray:
     return np.maximum.accumulate(p)
 
@@ -272,6 +290,7 @@ class Emulator:
         angle = np.interp(p_red, p0, ANGLES0)
         upper = np.interp(p_red, _with_origin(cb.pressure_lower_pa), ANGLES0)
         lower = np.interp(p_red, _with_origin(cb.pressure_upper_pa), ANGLES0)
+        lower, upper = floored_band(angle, lower, upper)
         volume = (np.interp(angle, ANGLES0, _with_origin(cb.volume_ul))
                   * point.length_scale**3)
         for a in (angle, upper, lower, volume):
@@ -316,6 +335,7 @@ class Emulator:
         angle = answer.angle_deg
         upper = np.interp(v_red, vl, ANGLES0)
         lower = np.interp(v_red, vh, ANGLES0)
+        lower, upper = floored_band(angle, lower, upper)
         p_red = answer.pressure_pa
         pressure = p_red * point.pressure_scale
         for a in (angle, upper, lower, pressure, p_red):
