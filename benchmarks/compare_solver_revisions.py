@@ -81,12 +81,15 @@ def export(rev: str, into: pathlib.Path) -> pathlib.Path:
 def unit_costs(renamed_parent: pathlib.Path, repeats: int = 8) -> None:
     sys.path.insert(0, str(renamed_parent))
     import solver_base.linear as base_linear
-    import solver_base.model as base_model
+    try:                                    # solver/model.py was renamed discrete.py
+        import solver_base.discrete as base_model
+    except ImportError:
+        import solver_base.model as base_model
     from solver_base import Design as BaseDesign
     from solver_base import SolverSettings as BaseSettings
 
     import solver.linear as new_linear
-    import solver.model as new_model
+    import solver.discrete as new_model
     from solver import Design, SolverSettings
     from solver.stepping import inflate
 

@@ -23,7 +23,7 @@ import numpy as np
 from solver import Design, SolverSettings
 from solver.linear import factorize
 from solver.mesh import build_mesh
-from solver.model import ActuatorModel, Evaluation, SolidModel
+from solver.discrete import ActuatorModel, Evaluation, SolidModel
 from solver.stability import constrained_modes
 from solver.stepping import inflate_model
 

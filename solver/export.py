@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from solver.assembly import deformation_gradient
-from solver.model import SolidModel
+from solver.discrete import SolidModel
 from solver.ogden import stress_and_tangent
 
 

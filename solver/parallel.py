@@ -2,7 +2,7 @@
 
 numpy's array kernels (ufuncs, matmul, einsum, the batched eigh) and scipy's sparse
 products release the GIL, so two groups of elements evaluated in threads run on two
-cores (``solver.model.evaluation_units``); the result is the same to the bit (each
+cores (``solver.discrete.evaluation_units``); the result is the same to the bit (each
 element's arithmetic is unchanged).
 
 The thread budget is the one MKL PARDISO takes for the factorisation: MKL_NUM_THREADS,

@@ -1,7 +1,7 @@
 """Stability of a converged state under pressure control and under volume control.
 
 Equilibrium is a stationary point of the potential Pi(u) = E(u) - p (V(u) - V_t). Its
-second variation is the tangent K = E'' - p V'' (solver/model.py).
+second variation is the tangent K = E'' - p V'' (solver/discrete.py).
 
 * Pressure control (p prescribed): stable when K is positive definite; the number of
   negative eigenvalues of K (its inertia, counted by the factorisation) is the index.

@@ -52,7 +52,7 @@ from solver.curve import Curve
 from solver.design import Design
 from solver.linear import factorize
 from solver.mesh import MeshDivisions
-from solver.model import ActuatorModel, Evaluation
+from solver.discrete import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
 from solver.stability import volume_control_index
 

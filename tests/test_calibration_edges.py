@@ -20,7 +20,7 @@ from service.app import create_app
 from service.routes.calibration import EXAMPLE_ROWS
 from solver.errors import InputError
 from surrogate.calibration import DataError, observations_from_rows, run_calibration
-from surrogate.calibration._fit import curve_folds
+from surrogate.calibration._least_squares import curve_folds
 
 TAU_PA = 731.2 * math.log10(7.179 * 0.5)  # 405.9 Pa (Eq. 6 with log10)
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from surrogate.calibration._backing import baseline_covariance
-from surrogate.calibration._fit import paired_cv
+from surrogate.calibration._least_squares import paired_cv
 
 
 def test_the_band_shifts_a_size_coherently_within_a_design_and_independently_between():

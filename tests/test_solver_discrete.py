@@ -7,7 +7,7 @@ import pytest
 from solver import Design, SolverSettings
 from solver import cavity as cav
 from solver.assembly import element_stiffness, evaluate_block, full_element_matrices
-from solver.model import ActuatorModel
+from solver.discrete import ActuatorModel
 
 
 @pytest.fixture(scope="module", params=["hex1", "hex2"])
@@ -191,7 +191,7 @@ def test_blocks_on_two_threads_give_the_same_bits(model, monkeypatch):
 @pytest.mark.parametrize("element", ["hex1", "hex2"])
 def test_evaluation_units_change_only_the_summation_order(element, monkeypatch):
     # With a thread budget of two the first block is cut into two evaluation units
-    # (solver/model.py, evaluation_units); residual and tangent agree to round-off.
+    # (solver/discrete.py, evaluation_units); residual and tangent agree to round-off.
     monkeypatch.delenv("MKL_NUM_THREADS", raising=False)
     models = []
     for threads in ("1", "2"):

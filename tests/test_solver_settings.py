@@ -39,7 +39,7 @@ def test_mesh_divisions_select_the_fine_x_mesh():
     # nothing else; "default" is the shipped database's mesh.
     from solver import Design
     from solver.mesh import FINE_X_DIVISIONS, build_mesh
-    from solver.model import ActuatorModel
+    from solver.discrete import ActuatorModel
 
     default = ActuatorModel(Design(), SolverSettings(element="hex1"))
     fine = ActuatorModel(Design(), settings_from_dict({"element": "hex1",

@@ -7,7 +7,7 @@ import scipy.sparse as sp
 
 from solver.linear import factorize
 from solver.materials import OgdenMaterial
-from solver.model import SolidModel
+from solver.discrete import SolidModel
 from solver.settings import SolverSettings
 from solver.stability import classify, constrained_modes, volume_control_index
 from solver.stepping import mixed_newton_step

@@ -14,7 +14,7 @@ from solver.assembly import make_basis
 from solver.linear import available_backends, factorize
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.mesh import xz_family
-from solver.model import ActuatorModel, SolidModel
+from solver.discrete import ActuatorModel, SolidModel
 from solver.stepping import StepFailed, newton_step
 from solver.verification.cantilever import (
     bar_mesh,

@@ -30,7 +30,7 @@ from skfem import MeshHex
 
 from solver import cavity as cav
 from solver.materials import OgdenMaterial
-from solver.model import Evaluation, SolidModel
+from solver.discrete import Evaluation, SolidModel
 from solver.verification.sphere import (
     INNER_RADIUS_MM,
     OUTER_RADIUS_MM,

@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from surrogate.calibration._fit import FitResult
+from surrogate.calibration._least_squares import FitResult
 from surrogate.calibration._response import Responses
 
 

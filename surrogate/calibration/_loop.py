@@ -40,7 +40,7 @@ from solver.errors import InputError
 from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._fit import (
+from surrogate.calibration._least_squares import (
     CrossValidation,
     FitResult,
     cross_validate,
@@ -48,7 +48,7 @@ from surrogate.calibration._fit import (
     paired_cv,
 )
 from surrogate.calibration._history import history_traits
-from surrogate.calibration._model import AugmentedModel
+from surrogate.calibration._augmented_model import AugmentedModel
 from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
 from surrogate.calibration._residual import excess_limit, residual_summary
 from surrogate.calibration._response import Responses, design_key
