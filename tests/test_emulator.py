@@ -358,10 +358,13 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
         recs = [r for r in db.records() if "pdms" in r.design.body_material.id]
     free = [r for r in recs if not is_force_record(r.settings)
             and r.curve.angle_deg[-1] >= 89.0][:16]
+    early = [r for r in recs if not is_force_record(r.settings)
+             and 5.0 < r.curve.angle_deg[-1] < 80.0][:4]
     blocked = [r for r in recs if is_force_record(r.settings)]
-    e = fit_emulator(free + blocked)
+    e = fit_emulator(free + early + blocked)
     pe = e.pairs["pdms/ecoflex_00_30+"]
     assert pe.force is not None and pe.force_form == "secant_ratio"
+    assert pe.range_model is not None and len(pe.failed) == len(early)
     path = save_emulator(e, tmp_path / "e.json")
     again = load(path)
     rec = blocked[0]
@@ -370,6 +373,12 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
     a, b = (m.predict(rec.design, c.pressure_pa[inside]) for m in (e, again))
     np.testing.assert_array_equal(a.force_mn, b.force_mn)
     np.testing.assert_array_equal(a.angle_deg, b.angle_deg)
+    assert a.validity["fe_limit_pa"] == b.validity["fe_limit_pa"]
+    # the emulated end of the FE curve (deg / 90) reproduces where each curve ended
+    ends = [a for _, a, _ in pe.failed] + [90.0] * len(free)
+    coords = np.array([np.asarray(u, float) for u, _, _ in pe.failed] + list(pe.coordinates))
+    emulated = 90.0 * again.pairs[pe.pair].range_model.predict_many(coords)[0][:, 0]
+    np.testing.assert_allclose(emulated, ends, atol=0.5)
     # a database design: the GP interpolates its own force curve
     fe = c.force_mn[inside]
     np.testing.assert_allclose(a.force_mn, fe, atol=0.02 * np.abs(fe).max())

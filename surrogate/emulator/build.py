@@ -52,7 +52,7 @@ from surrogate.emulator.features import (
     force_features,
     free_secant_deg_per_pa,
 )
-from surrogate.emulator.vector_gp import fit_output_gps, fit_vector_gp
+from surrogate.emulator.vector_gp import VectorGP, fit_output_gps, fit_vector_gp
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
 MIN_DESIGNS = 10
@@ -293,7 +293,8 @@ def force_range(u: np.ndarray, y: np.ndarray, share: float = FORCE_SHARE
 
 
 def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float, seed: int,
-             force_rows: tuple[list, list] | None) -> tuple[PairEmulator, dict]:
+             force_rows: tuple[list, list] | None, range_model: VectorGP | None = None
+             ) -> tuple[PairEmulator, dict]:
     u = np.array(rows.u)[keep]
     y = np.array(rows.y)[keep]
     curves = [c for c, k in zip(rows.curves, keep) if k]
@@ -327,7 +328,8 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
                        "(SolverSettings.max_angle_deg)",
         fe_max_volume_ul=default_free_settings().max_volume_ul,
         coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
-        force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[1])
+        force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[1],
+        range_model=range_model)
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gps),
               "force_designs": force_designs if force_gp is not None else 0,
@@ -358,6 +360,12 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
         both = (all_signs > 0).any() and (all_signs < 0).any()
         if both:
             sign_models[group] = fit_vector_gp(all_u, all_signs[:, None], seed=seed)
+        range_model = None
+        if rows.failed:
+            # where each curve of the group ends, over the box (emulator.RANGE_Z)
+            ends = np.concatenate((np.full(len(rows.u), LIMIT_ANGLE_DEG),
+                                   [a for _, a, _ in rows.failed])) / 90.0
+            range_model = fit_vector_gp(all_u, ends[:, None], seed=seed)
         for sign in (1.0, -1.0):
             keep = signs == sign
             key = group + ("+" if sign > 0 else "-")
@@ -366,7 +374,8 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
                     report["pairs"][key] = {"designs": int(keep.sum()),  # type: ignore
                                             "fitted": False}
                 continue
-            pe, rep = _fit_one(key, rows, keep, sign, level, seed, force.get(group))
+            pe, rep = _fit_one(key, rows, keep, sign, level, seed, force.get(group),
+                               range_model)
             models[key] = pe
             report["pairs"][key] = rep  # type: ignore[index]
     if not models:

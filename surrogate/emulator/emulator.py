@@ -46,6 +46,14 @@ from surrogate.volume_control import by_volume
 
 N_NODES = len(ANGLE_NODES_DEG)
 FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE curve limits
+# The emulated end of a design's FE curve (PairEmulator.range_model, a GP of where every
+# database curve of the group ends: 90 deg, or earlier at the volume stop or a Newton
+# failure) caps the range at its mean less RANGE_Z sd. The curves interpolated are the
+# complete ones only; where most neighbours ended early (near the Ecoflex/Ecoflex balance,
+# where the membrane balloons and the actuator hardly bends) the emulated V(theta) learnt
+# nothing of them and did not reach the volume stop: a held-out design there whose FE
+# stopped at 58 deg (500 ul) was answered to 88 deg, 30 deg off.
+RANGE_Z = 1.0
 SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness balance
 # A fall of the emulated p(theta) below its running maximum counts as a pressure maximum
 # from this relative size on: smaller wiggles (the shipped fit's largest is 2.5e-4) are far
@@ -125,6 +133,7 @@ class PairEmulator:
     failed: tuple = ()      # (unit coordinates, end angle deg, reason) of curves ended early
     force_form: str = "per_kpa"
     fe_max_volume_ul: float | None = None   # the FE's volume stop (whole actuator, ul)
+    range_model: VectorGP | None = None     # the end angle / 90 deg of the group's curves
 
     def __post_init__(self) -> None:
         # the early-ended curves' unit coordinates, stacked once for fe_range's distances
@@ -136,8 +145,19 @@ class PairEmulator:
         """The FE's range for the design at unit coordinates ``u`` (deg) and why it ends
         there: the FE's angle stop; the angle at which the emulated injected volume
         ``volume_red_ul`` (reduced, on FINE_ANGLES_DEG) reaches the FE's volume stop; the
-        end of an early-ended database curve within FAILED_RADIUS."""
+        emulated end of the design's FE curve less RANGE_Z sd (``range_model``); the end
+        of an early-ended database curve within FAILED_RADIUS."""
         limit, reason = self.fe_limit_angle_deg, self.fe_stop_reason
+        if self.range_model is not None:
+            m, var = self.range_model.predict(u)
+            mean_deg, sd_deg = 90.0 * float(m[0]), 90.0 * float(np.sqrt(max(var[0], 0.0)))
+            end = max(mean_deg - RANGE_Z * sd_deg, 0.0)
+            if end < limit:
+                limit = end
+                reason = ("the FE curves of nearby database designs end early (the volume "
+                          "stop, where the balloon grows more than the actuator bends, or a "
+                          f"Newton failure): this design's is emulated to end at "
+                          f"{min(mean_deg, 90.0):.0f} +- {sd_deg:.0f} deg")
         if self.fe_max_volume_ul is not None:
             v_stop = self.fe_max_volume_ul / length_scale**3
             over = np.flatnonzero(np.asarray(volume_red_ul) >= v_stop)

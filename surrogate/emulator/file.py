@@ -27,7 +27,8 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 5   # 5: fe_max_volume_ul, the FE's volume stop (4 read: none); 4:
+FORMAT_VERSION = 6   # 6: range_model, the emulated end of the FE curve (5 read: none);
+                     # 5: fe_max_volume_ul, the FE's volume stop (4 read: none); 4:
                      # force_form (3 read: F/p); 3: band_scale per output node (2 read, one
                      # multiplier)
 
@@ -43,7 +44,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "curves": pe.curves.as_dict(),
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
-            "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul})
+            "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul,
+            "range_model": None if pe.range_model is None else pe.range_model.as_dict()})
     return seal(plain_json({
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
@@ -77,7 +79,9 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                 failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]),
                 force_form=str(p.get("force_form", FORCE_FORMS[0])),
                 fe_max_volume_ul=None if p.get("fe_max_volume_ul") is None
-                else float(p["fe_max_volume_ul"]))
+                else float(p["fe_max_volume_ul"]),
+                range_model=None if p.get("range_model") is None
+                else vector_gp_from_dict(p["range_model"]))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
         if not pairs:
@@ -135,6 +139,8 @@ def _check_pair(pe: PairEmulator) -> None:
     _check_gp(pe.curves, f"pair {pe.pair}")
     if pe.force is not None:
         _check_gp(pe.force, f"pair {pe.pair} force")
+    if pe.range_model is not None:
+        _check_gp(pe.range_model, f"pair {pe.pair} range model")
 
 
 def save_emulator(e: Emulator, path: str | os.PathLike) -> Path:
