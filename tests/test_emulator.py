@@ -482,3 +482,25 @@ def test_the_band_read_between_variance_nodes_matches_the_exact_one(emulator):
             read = spread_variance(known)[:N_NODES]
             worst.append(np.abs(np.sqrt(read / exact[:N_NODES]) - 1).max())
     assert max(worst) < 0.04 and np.median(worst) < 0.01
+
+
+def test_where_nearby_fe_curves_end_early_the_answer_stops_too(emulator):
+    """Near the Ecoflex/Ecoflex stiffness balance about half the database's curves end at
+    the FE's volume stop (500 ul: the membrane balloons, the actuator hardly bends), and
+    only complete curves are interpolated. This held-out design (benchmarks/heldout_designs.py
+    --n 24 --seed 2028, not in the database) reached the volume stop at -58.4 deg and
+    1102 Pa with the default FE; before the emulated end of the FE curve
+    (PairEmulator.range_model) it was answered to -88 deg at 1100 Pa. Now the answer stops
+    short of the FE's end, says why, and where it answers it is within 6 deg of the FE."""
+    design = Design(L_mm=9.5184, t_mm=0.7342, T_mm=0.6765, b_mm=1.4828, h_mm=0.2402,
+                    body_material=scaled_material("ecoflex_00_30", 0.6112),
+                    membrane_material=scaled_material("ecoflex_00_30", 0.6536))
+    fe_pressure_pa = np.array([90.9, 520.2, 888.7, 970.8, 999.2, 1036.4, 1053.1, 1078.9])
+    fe_angle_deg = np.array([-0.08, -2.88, -19.48, -32.81, -39.31, -47.81, -50.83, -55.02])
+    r = emulator.predict(design, fe_pressure_pa)
+    ok = np.isfinite(r.angle_deg)
+    assert ok[:3].all() and not ok[-1]
+    assert "past_fe_range" in r.validity["flags"]
+    assert "end early" in r.validity["fe_stop_reason"]
+    assert r.validity["fe_limit_angle_deg"] < 58.4
+    assert np.abs(r.angle_deg[ok] - fe_angle_deg[ok]).max() < 6.0
