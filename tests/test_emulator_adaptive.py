@@ -59,3 +59,16 @@ def test_no_design_whose_emulated_volume_reaches_the_fe_volume_stop(emulator):
         mean, _ = pe.curves.predict(bp.coordinates())
         volume_at_90_ul = ANGLE_NODES_DEG[-1] * np.exp(mean[2 * N_NODES - 1])
         assert volume_at_90_ul < pe.fe_max_volume_ul
+
+
+def test_no_design_whose_fe_curve_is_emulated_to_end_early(emulator):
+    """The group's range model (where its database curves ended) keeps the candidates
+    whose FE curve would end before 85 deg out of an adaptive round."""
+    points = next_designs(emulator, 24)
+    assert points
+    for p in points:
+        bp = locate(p.design, reduced=True)
+        models = [pe for key, pe in emulator.pairs.items() if key[:-1] == bp.group]
+        for pe in models:
+            if pe.range_model is not None:
+                assert 90.0 * pe.range_model.predict(bp.coordinates())[0][0] >= 85.0

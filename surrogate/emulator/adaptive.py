@@ -15,7 +15,9 @@ neighbour's curve ends early too, as 27 of the 47 designs of the first ``--adapt
 round on the 533-record database did, and adds no curve to interpolate; the emulator
 already caps its range there. Nor any candidate whose emulated injected volume at 90 deg
 reaches the FE's volume stop (``PairEmulator.fe_max_volume_ul``): its FE curve would stop
-there too. Before that screen, an ``--adaptive 240`` round on the 663-record database
+there too; nor any whose FE curve the group's range model (``PairEmulator.range_model``,
+fitted to where every database curve ended) puts before 85 deg: the emulated volume learns
+from complete curves only and misses the balloons near the Ecoflex/Ecoflex balance. Before that screen, an ``--adaptive 240`` round on the 663-record database
 added 65 curves to interpolate (175 ended early, most at the volume stop in
 Ecoflex/Ecoflex), where the space-filling sequence, continued, gave 86 of 96.
 """
@@ -73,6 +75,17 @@ def _reaches_volume_stop(pe: PairEmulator, node_mean: np.ndarray) -> bool:
     return bool(last * np.exp(node_mean[2 * N_NODES - 1]) >= pe.fe_max_volume_ul)
 
 
+ADAPTIVE_END_DEG = 85.0     # no candidate whose FE curve is emulated to end before this
+
+
+def _ends_early(pe: PairEmulator, u: np.ndarray) -> bool:
+    """Whether the group's emulated end of the FE curve (``PairEmulator.range_model``,
+    its mean) at unit coordinates ``u`` lies before ADAPTIVE_END_DEG."""
+    if pe.range_model is None:
+        return False
+    return bool(90.0 * float(pe.range_model.predict(u)[0][0]) < ADAPTIVE_END_DEG)
+
+
 def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = None
                  ) -> list[GridPoint]:
     """The ``n`` most uncertain designs, as precompute grid points."""
@@ -96,7 +109,7 @@ def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = N
             except InputError:
                 pe = max(models, key=lambda m: float(np.median(m.band_scale)))  # near a balance
             mean, var = pe.curves.predict(uu)
-            if _reaches_volume_stop(pe, mean):
+            if _reaches_volume_stop(pe, mean) or _ends_early(pe, uu):
                 continue
             score = float((np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES])[nodes].mean())
             scored.append((score, group, uu, design))
