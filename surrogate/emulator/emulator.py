@@ -152,7 +152,7 @@ class PairEmulator:
             m, var = self.range_model.predict(u)
             mean_deg, sd_deg = 90.0 * float(m[0]), 90.0 * float(np.sqrt(max(var[0], 0.0)))
             end = max(mean_deg - RANGE_Z * sd_deg, 0.0)
-            if end < limit:
+            if end < limit - 1.0:       # not the GP's hundredths of a degree below 90
                 limit = end
                 reason = ("the FE curves of nearby database designs end early (the volume "
                           "stop, where the balloon grows more than the actuator bends, or a "
