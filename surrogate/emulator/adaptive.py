@@ -83,7 +83,7 @@ def _ends_early(pe: PairEmulator, u: np.ndarray) -> bool:
     its mean) at unit coordinates ``u`` lies before ADAPTIVE_END_DEG."""
     if pe.range_model is None:
         return False
-    return bool(90.0 * float(pe.range_model.predict(u)[0][0]) < ADAPTIVE_END_DEG)
+    return pe.emulated_end_deg(u)[0] < ADAPTIVE_END_DEG
 
 
 def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = None

@@ -140,6 +140,12 @@ class PairEmulator:
         object.__setattr__(self, "_failed_u", np.array(
             [np.asarray(fu, float) for fu, _, _ in self.failed]) if self.failed else None)
 
+    def emulated_end_deg(self, u: np.ndarray) -> tuple[float, float]:
+        """Where the FE curve of the design at unit coordinates ``u`` is emulated to end
+        (deg) and its sd (``range_model``; needs one)."""
+        m, var = self.range_model.predict(u)  # type: ignore[union-attr]
+        return 90.0 * float(m[0]), 90.0 * float(np.sqrt(max(var[0], 0.0)))
+
     def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float
                  ) -> tuple[float, str]:
         """The FE's range for the design at unit coordinates ``u`` (deg) and why it ends
@@ -149,8 +155,7 @@ class PairEmulator:
         of an early-ended database curve within FAILED_RADIUS."""
         limit, reason = self.fe_limit_angle_deg, self.fe_stop_reason
         if self.range_model is not None:
-            m, var = self.range_model.predict(u)
-            mean_deg, sd_deg = 90.0 * float(m[0]), 90.0 * float(np.sqrt(max(var[0], 0.0)))
+            mean_deg, sd_deg = self.emulated_end_deg(u)
             end = max(mean_deg - RANGE_Z * sd_deg, 0.0)
             if end < limit - 1.0:       # not the GP's hundredths of a degree below 90
                 limit = end
