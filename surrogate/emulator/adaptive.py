@@ -17,7 +17,8 @@ already caps its range there. Nor any candidate whose emulated injected volume a
 reaches the FE's volume stop (``PairEmulator.fe_max_volume_ul``): its FE curve would stop
 there too; nor any whose FE curve the group's range model (``PairEmulator.range_model``,
 fitted to where every database curve ended) puts before 85 deg: the emulated volume learns
-from complete curves only and misses the balloons near the Ecoflex/Ecoflex balance. Before that screen, an ``--adaptive 240`` round on the 663-record database
+from complete curves only and misses the balloons near the Ecoflex/Ecoflex balance. Before that
+screen, an ``--adaptive 240`` round on the 663-record database
 added 65 curves to interpolate (175 ended early, most at the volume stop in
 Ecoflex/Ecoflex), where the space-filling sequence, continued, gave 86 of 96.
 """

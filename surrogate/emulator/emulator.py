@@ -215,7 +215,8 @@ class CurveBand:
 # multiple of the GP's sd in log(p / theta) is relative; at the first steps of curves
 # near the Ecoflex/Ecoflex stiffness balance the FE angle is a few thousandths of a
 # degree (some of the other sign), and covering those relatively took a multiplier of
-# 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope that made the
+# 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope that
+# made the
 # group's bands run from 0 to twice the angle at 60 deg. Half the 0.1 deg a camera
 # reading resolves; the calibration (build.node_band_scales) counts with it.
 ANGLE_BAND_FLOOR_DEG = 0.05
