@@ -509,3 +509,30 @@ def test_where_nearby_fe_curves_end_early_the_answer_stops_too(emulator):
     assert "end early" in r.validity["fe_stop_reason"]
     assert r.validity["fe_limit_angle_deg"] < 58.4
     assert np.abs(r.angle_deg[ok] - fe_angle_deg[ok]).max() < 6.0
+
+
+def test_force_bands_calibrated_by_cross_validation_cover_designs_left_out(emulator):
+    """build.force_band_scale on two thirds of each group's blocked-tip database designs;
+    the bands of the GP fitted to them, read at the other third: pooled over the four
+    groups and two splits they cover >= 0.9 of the force variable's values. The closed-form
+    leave-one-out it replaces put every multiplier at 1, and those bands covered
+    them (0.33-0.98 by split: 0.70 pooled)."""
+    from surrogate.band_level import z_value
+    from surrogate.emulator import build
+    from surrogate.emulator.features import force_feature, free_secant_deg_per_pa
+
+    with CurveStore(DB) as db:
+        _, force = build._collect(r for r in db.records()
+                                  if build.is_force_record(r.settings))
+    inside = []
+    for key, pe in emulator.pairs.items():
+        _, fu, fy = build.force_range(*(np.array(a) for a in force[key[:-1]]))
+        fy = force_feature(fy, free_secant_deg_per_pa(pe.curves.predict_many(fu)[0], pe.sign))
+        for seed in (0, 1):
+            order = np.random.default_rng(seed).permutation(len(fu))
+            train, test = order[: 2 * len(fu) // 3], order[2 * len(fu) // 3:]
+            scale = build.force_band_scale(fu[train], fy[train], 0.95)
+            m, v = build.fit_vector_gp(fu[train], fy[train]).predict_many(fu[test])
+            inside.append((np.abs(m - fy[test]) <= z_value(0.95) * scale * np.sqrt(v)).ravel())
+    coverage = np.concatenate(inside).mean()
+    assert coverage >= 0.9, coverage
