@@ -36,8 +36,8 @@ import time
 import numpy as np
 
 from solver import Design, SolverSettings
-from solver.mesh import build_mesh
 from solver.discrete import ActuatorModel
+from solver.mesh import build_mesh
 from solver.verification.drive import drive_pressure
 
 # VTK hexahedron corner order as (x, y, z) bits of the box's corners.

@@ -88,8 +88,8 @@ def unit_costs(renamed_parent: pathlib.Path, repeats: int = 8) -> None:
     from solver_base import Design as BaseDesign
     from solver_base import SolverSettings as BaseSettings
 
-    import solver.linear as new_linear
     import solver.discrete as new_model
+    import solver.linear as new_linear
     from solver import Design, SolverSettings
     from solver.stepping import inflate
 

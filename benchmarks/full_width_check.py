@@ -21,9 +21,9 @@ import time
 import numpy as np
 
 from solver import Design, SolverSettings
+from solver.discrete import ActuatorModel, Evaluation, SolidModel
 from solver.linear import factorize
 from solver.mesh import build_mesh
-from solver.discrete import ActuatorModel, Evaluation, SolidModel
 from solver.stability import constrained_modes
 from solver.stepping import inflate_model
 

@@ -50,8 +50,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from solver.linear import factorize
 from solver.discrete import ActuatorModel
+from solver.linear import factorize
 from solver.stability import constrained_modes, volume_control_index
 
 FIRST_STEP = 0.01       # first amplitude increment, x the state's largest displacement

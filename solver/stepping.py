@@ -50,9 +50,9 @@ from threadpoolctl import ThreadpoolController
 from solver.branching import lowest_volume_neutral_mode, pass_fold, switch_branch
 from solver.curve import Curve
 from solver.design import Design
+from solver.discrete import ActuatorModel, Evaluation
 from solver.linear import factorize
 from solver.mesh import MeshDivisions
-from solver.discrete import ActuatorModel, Evaluation
 from solver.settings import SolverSettings
 from solver.stability import volume_control_index
 

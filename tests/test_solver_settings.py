@@ -38,8 +38,8 @@ def test_mesh_divisions_select_the_fine_x_mesh():
     # "fine_x" doubles every division along x (solver/mesh.py FINE_X_DIVISIONS) and
     # nothing else; "default" is the shipped database's mesh.
     from solver import Design
-    from solver.mesh import FINE_X_DIVISIONS, build_mesh
     from solver.discrete import ActuatorModel
+    from solver.mesh import FINE_X_DIVISIONS, build_mesh
 
     default = ActuatorModel(Design(), SolverSettings(element="hex1"))
     fine = ActuatorModel(Design(), settings_from_dict({"element": "hex1",

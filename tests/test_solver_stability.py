@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from solver.discrete import SolidModel
 from solver.linear import factorize
 from solver.materials import OgdenMaterial
-from solver.discrete import SolidModel
 from solver.settings import SolverSettings
 from solver.stability import classify, constrained_modes, volume_control_index
 from solver.stepping import mixed_newton_step

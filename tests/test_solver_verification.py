@@ -11,10 +11,10 @@ import pytest
 
 from solver import Design, SolverSettings, stepping
 from solver.assembly import make_basis
+from solver.discrete import ActuatorModel, SolidModel
 from solver.linear import available_backends, factorize
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.mesh import xz_family
-from solver.discrete import ActuatorModel, SolidModel
 from solver.stepping import StepFailed, newton_step
 from solver.verification.cantilever import (
     bar_mesh,

@@ -29,8 +29,8 @@ import numpy as np
 from skfem import MeshHex
 
 from solver import cavity as cav
-from solver.materials import OgdenMaterial
 from solver.discrete import Evaluation, SolidModel
+from solver.materials import OgdenMaterial
 from solver.verification.sphere import (
     INNER_RADIUS_MM,
     OUTER_RADIUS_MM,

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from surrogate.calibration._data import Observations
 from surrogate.calibration._augmented_model import AugmentedModel
+from surrogate.calibration._data import Observations
 
 # Residuals are capped while fitting: a trial step where the baseline has no answer (past
 # the FE range: NaN) stays a large finite penalty with a finite Jacobian.

@@ -37,9 +37,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from solver.errors import InputError
+from surrogate.calibration._augmented_model import AugmentedModel
 from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
+from surrogate.calibration._history import history_traits
 from surrogate.calibration._least_squares import (
     CrossValidation,
     FitResult,
@@ -47,8 +49,6 @@ from surrogate.calibration._least_squares import (
     fit,
     paired_cv,
 )
-from surrogate.calibration._history import history_traits
-from surrogate.calibration._augmented_model import AugmentedModel
 from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
 from surrogate.calibration._residual import excess_limit, residual_summary
 from surrogate.calibration._response import Responses, design_key
