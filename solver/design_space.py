@@ -136,15 +136,11 @@ class BoxPoint:
 
     def coordinates(self) -> np.ndarray:
         """Unit-cube coordinates (log scale) of the reduced design in its group: the five
-        lengths on the box's ranges, then the stiffness contrast on the group's range.
-        Computed once per point (a query asks three times: curves, range, force)."""
-        u = self.__dict__.get("_coordinates")
-        if u is None:
-            u = unit_coordinates(self.geometry_mm, REDUCED_RATIO_RANGE[0])
-            u[-1] = _log_unit(contrast(self.pair, self.stiffness_ratio),
-                              *contrast_range(self.group))
-            object.__setattr__(self, "_coordinates", u)
-        return u.copy()
+        lengths on the box's ranges, then the stiffness contrast on the group's range."""
+        u = unit_coordinates(self.geometry_mm, REDUCED_RATIO_RANGE[0])
+        u[-1] = _log_unit(contrast(self.pair, self.stiffness_ratio),
+                          *contrast_range(self.group))
+        return u
 
 
 def _log_unit(value: float, lo: float, hi: float) -> float:

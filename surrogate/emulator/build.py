@@ -164,9 +164,9 @@ def held_out_curves(curves: list, mean: np.ndarray, var: np.ndarray, scales: np.
                     ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """Per database curve: its FE angles (deg, up to the FE's stop, signed positive) and
     the held-out (cross-validated) emulator's angle, band lower and upper (with the
-    query's floor, ``emulator.floored_band``) at the curve's own pressures (``axis`` "pressure":
-    the log p nodes) or injected volumes ("volume":
-    the log V nodes), from the held-out node means and variances."""
+    query's floor, ``emulator.floored_band``) at the curve's own pressures (``axis``
+    "pressure": the log p nodes) or injected volumes ("volume": the log V nodes), from the
+    held-out node means and variances."""
     half = slice(0, N_NODES) if axis == "pressure" else slice(N_NODES, 2 * N_NODES)
     out = []
     for i, (p_red, v_red, a) in enumerate(curves):

@@ -205,6 +205,7 @@ class CurveBand:
     volume_log_sd: np.ndarray       # its sd, times the band scale
     pressure_raw_pa: np.ndarray     # the mean p(theta) before it is made monotone
     node_mean: np.ndarray           # the emulated node vector (force normalisation)
+    coordinates: np.ndarray         # the design's unit-cube coordinates (force model)
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -215,10 +216,9 @@ class CurveBand:
 # multiple of the GP's sd in log(p / theta) is relative; at the first steps of curves
 # near the Ecoflex/Ecoflex stiffness balance the FE angle is a few thousandths of a
 # degree (some of the other sign), and covering those relatively took a multiplier of
-# 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope that
-# made the
-# group's bands run from 0 to twice the angle at 60 deg. Half the 0.1 deg a camera
-# reading resolves; the calibration (build.node_band_scales) counts with it.
+# 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope,
+# that made the group's bands run from 0 to twice the angle at 60 deg. Half the 0.1 deg a
+# camera reading resolves; the calibration (build.node_band_scales) counts with it.
 ANGLE_BAND_FLOOR_DEG = 0.05
 
 
@@ -281,21 +281,23 @@ class Emulator:
         """The design's p(theta) with its band and V(theta); the band of V(theta)
         (``volume_log_sd``) only with ``volume_band`` (NaN otherwise: half the cost of a
         query with one GP per node)."""
-        pe = self._pair(point)
+        u = point.coordinates()     # once: the sign, curves, range and force models
+        pe = self._pair(point, u)
         if pe.curves.per_output:
             which = (np.concatenate((VARIANCE_NODES, np.arange(N_NODES, 2 * N_NODES)))
                      if volume_band else VARIANCE_NODES)
-            mean, var = pe.curves.predict(point.coordinates(), variance_of=which)
+            mean, var = pe.curves.predict(u, variance_of=which)
             var = spread_variance(var)
         else:
-            mean, var = pe.curves.predict(point.coordinates())
+            mean, var = pe.curves.predict(u)
         sd = np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES]
         p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
         p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
         v = FINE_ANGLES_DEG * np.exp(_B_ANGLE @ mean[N_NODES:])
-        limit, reason = pe.fe_range(point.coordinates(), v, point.length_scale)
+        limit, reason = pe.fe_range(u, v, point.length_scale)
         v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale[N_NODES:]
-        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean)
+        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean,
+                             u)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -407,7 +409,7 @@ class Emulator:
         nodes, linear between them), F scaling with s_membrane x length_scale^2."""
         if pe.force is None:
             return None
-        mean, var = pe.force.predict(point.coordinates())
+        mean, var = pe.force.predict(cb.coordinates)
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
         out = []
