@@ -148,3 +148,19 @@ def test_balloon_predict_with_a_damaged_surrogate_file_is_one_line(tmp_path, sur
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "surrogate.json" in err, err
     assert "Traceback" not in err
+
+
+def test_a_loaded_emulator_is_reused_only_while_its_file_is_unchanged(tmp_path, emulator_doc):
+    """load_emulator keeps what it built, keyed by the file's content: the same file gives
+    the same object (an app per test does not refactorise ~600 GPs), and a file changed in
+    place is read afresh, so a damaged replacement is refused, not masked by the cache."""
+    from surrogate.emulator import load_emulator
+
+    path = tmp_path / "emulator.json"
+    path.write_bytes((DATA / "emulator.json").read_bytes())
+    first = load_emulator(path)
+    assert load_emulator(path) is first
+    assert load_emulator(DATA / "emulator.json") is load_emulator(DATA / "emulator.json")
+    path.write_text(json.dumps(put(emulator_doc, *EMULATOR_DAMAGE["sign 0.5"])))
+    with pytest.raises(SurrogateFileError, match="emulator.json"):
+        load_emulator(path)

@@ -4,19 +4,32 @@
     emulator = load_emulator("service/data/emulator.json")
 
 The file holds each pair's training inputs and outputs and the GP hyperparameters (the
-factorisations are recomputed on load, in milliseconds), the band scales, the FE range
-data and the fit report. The angle and force nodes are stored and checked, so a file
-made with other nodes is refused rather than misread.
+factorisations are recomputed on load: some 600 Cholesky factorisations of n x n, n up to
+the largest group's design count), the band scales, the FE range data and the fit report.
+The angle and force nodes are stored and checked, so a file made with other nodes is
+refused rather than misread.
+
+Loading is the service's start-up cost, paid again by every app a test or a batch job
+builds, so ``load_emulator`` keeps the last ``LOAD_CACHE_SIZE`` emulators it built, keyed
+by the file's content (its BLAKE2 digest: a changed file is always read afresh; an
+Emulator is immutable, so sharing one is safe). The factorisations run with OpenBLAS held
+to one thread: numpy's Cholesky of a 370 x 370 matrix took 2.6 ms on one thread and 49 ms
+on two while the other core was busy (its threads spin-wait for each other), which made
+a load 21 s instead of a few on a shared machine (benchmarks/RESULTS.md, ninth session).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
+import threading
+from collections import OrderedDict
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from solver.atomic_file import write_text_atomic
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
@@ -147,14 +160,36 @@ def save_emulator(e: Emulator, path: str | os.PathLike) -> Path:
     return write_text_atomic(path, json.dumps(emulator_to_dict(e), separators=(",", ":")))
 
 
+LOAD_CACHE_SIZE = 2
+_loaded: OrderedDict[tuple[str, bytes], Emulator] = OrderedDict()
+_loaded_lock = threading.Lock()
+
+
 def load_emulator(path: str | os.PathLike) -> Emulator:
+    """The emulator in the file at ``path``, validated (SurrogateFileError naming the file,
+    never its directory); the same object again while the file's content is unchanged."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-        data = json.loads(text)
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+    except OSError as exc:
         raise SurrogateFileError(path.name, f"cannot be read ({type(exc).__name__})"
                                  ) from None
-    return emulator_from_dict(data, path.name)
+    key = (path.name, hashlib.blake2b(raw, digest_size=32).digest())
+    with _loaded_lock:
+        if key in _loaded:
+            _loaded.move_to_end(key)
+            return _loaded[key]
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise SurrogateFileError(path.name, f"cannot be read ({type(exc).__name__})"
+                                 ) from None
+    with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
+        emulator = emulator_from_dict(data, path.name)
+    with _loaded_lock:
+        _loaded[key] = emulator
+        while len(_loaded) > LOAD_CACHE_SIZE:
+            _loaded.popitem(last=False)
+    return emulator
