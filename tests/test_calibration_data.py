@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from solver.errors import InputError
@@ -212,3 +213,36 @@ def test_lab_protocols_load_without_false_warnings():
             b = again.direction[again.curve == again.curve_ids.index(cid)]
             assert a.tolist() == b.tolist(), cid
     assert obs.angle_deg.min() < -20.0  # the reversed pair: negative angles accepted
+
+
+def test_a_pump_switch_between_readings_moves_every_later_volume_by_hand():
+    """_history.pump_switches: a curve read every 2 s at 1.5 ul/s, loading (pressure
+    rising), then a hold, then unloading. injected_volume_ul puts each change at a reading;
+    a change s reading intervals away moves every later volume by s dt Q (d - d') and the
+    change's own reading by min(s, 0) dt Q (d - d'): 3 ul per interval here."""
+    from surrogate.calibration._history import pump_switches
+
+    t = [2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0]
+    p = [300, 600, 850, 851, 850, 600, 300, 40]
+    rows = [{"curve_id": f"c{c}", "L_mm": 7.1, "t_mm": 0.75, "body_material": "pdms_1_10",
+             "membrane_material": "ecoflex_00_30", "pressure_pa": pi,
+             "angle_deg": pi / 20, "time_s": ti, "flow_ul_s": 1.5}
+            for c in (1, 2) for ti, pi in zip(t, p, strict=True)]
+    obs = observations_from_rows(rows)
+    c1 = obs.curve == 0
+    assert obs.direction[c1].tolist() == [1, 1, 1, 0, 0, -1, -1, -1]
+    assert obs.volume_ul[c1].tolist() == [3, 6, 9, 9, 9, 6, 3, 0]
+    # two changes with fluid in the chamber (load -> hold at 6 s, hold -> unload at 10 s),
+    # shared by the two replicates (one design, one flow rate: one pump program)
+    assert len(obs.switch_names) == 2
+    after, at, _ = pump_switches(obs.curve, obs.time_s, obs.flow_ul_s, obs.direction,
+                                 obs.volume_ul, ["a", "a"])
+    np.testing.assert_allclose(after[c1, 0], [0, 0, 0, 3, 3, 3, 3, 3])
+    np.testing.assert_allclose(at[c1, 0], [0, 0, 3, 0, 0, 0, 0, 0])
+    np.testing.assert_allclose(after[c1, 1], [0, 0, 0, 0, 0, 3, 3, 3])
+    # the pump stopping 0.4 interval before the 6 s reading: that reading and every
+    # later one hold 1.2 ul less; restarting 0.4 before the 10 s reading: 1.2 ul less again
+    s = -0.4
+    shift = after[c1] @ [s, s] + at[c1] @ [min(s, 0), min(s, 0)]
+    np.testing.assert_allclose(obs.volume_ul[c1] + shift, [3, 6, 7.8, 7.8, 6.6, 3.6, 0.6,
+                                                           -2.4])

@@ -19,6 +19,15 @@ against volume; a physical change both, the FE's coupled way (docs/calibration.m
 k_A,f and k_p,f (amplitude and pressure scale per family) exist only when the baseline
 leaves them open (the exponential and paper models: their per-family constants); the
 emulator leaves nothing open (its material constants are the stiffness effects).
+
+By volume the data may leave one more thing open, whatever the baseline: when the pump
+changed state (stopped, restarted, reversed) between two readings, as a program that ends
+at a volume or a time does, every later reading's injected volume is off
+(``_history.pump_switches``). With ``switches`` each such change gets a shift s (reading
+intervals, within +-SWITCH_BOUND; 0 = at the reading the data put it at), shared by the
+replicates of one design and flow rate (one pump program), fitted with the baseline and
+with every candidate set alike. The loop frees them only where they explain the data
+(_loop.py, ``_pump_switches_open``).
 """
 
 from __future__ import annotations
@@ -33,6 +42,8 @@ from surrogate.calibration.effects import Effect
 
 SUBSTEPS = 4
 OPEN_BOUND = 0.7  # |log k| for the open amplitude and pressure scales
+SWITCH_BOUND = 0.75  # |s|, reading intervals: a state held for most of an interval gives
+                     # the interval its direction (_history.directions)
 
 
 @dataclass(frozen=True)
@@ -55,10 +66,12 @@ class AugmentedModel:
     """Evaluates angles at the rows of ``obs`` for parameter vectors of ``layout``."""
 
     def __init__(self, obs: Observations, responses: Responses, effects: tuple[Effect, ...],
-                 open_parameters: tuple[str, ...], pressure_weight: float = 0.0) -> None:
+                 open_parameters: tuple[str, ...], pressure_weight: float = 0.0,
+                 switches: bool = False) -> None:
         """``pressure_weight`` (deg per Pa): the pressure-by-volume channel's residuals
         count as ``pressure_weight`` x (predicted - read gauge pressure) beside the angle's
-        (the ratio of the two noise floors); 0 leaves the channel out."""
+        (the ratio of the two noise floors); 0 leaves the channel out. ``switches``: fit
+        the pump switches' shifts (by volume only)."""
         self.obs = obs
         self.pressure_weight = float(pressure_weight)
         self.by_volume = self.pressure_weight > 0.0
@@ -79,6 +92,16 @@ class AugmentedModel:
                 hi.append(OPEN_BOUND)
                 x0.append(0.0)
         n_open = len(names)
+        # the pump switches' shifts: by volume only (by pressure the gauge is read)
+        self.switch_cols = (np.flatnonzero(np.any(obs.switch_after != 0, axis=0)
+                                           | np.any(obs.switch_at != 0, axis=0))
+                            if switches and self.by_volume else np.zeros(0, int))
+        for j in self.switch_cols:
+            names.append(obs.switch_names[j])
+            units.append("reading intervals")
+            lo.append(-SWITCH_BOUND)
+            hi.append(SWITCH_BOUND)
+            x0.append(0.0)
         for e in effects:
             for p in e.parameters:
                 # a physical effect stays where the baseline answers (its reach)
@@ -98,13 +121,31 @@ class AugmentedModel:
         if self.time:
             self._prepare_substeps()
 
+    def switch_shifts(self, x: np.ndarray) -> np.ndarray:
+        """The pump switches' fitted shifts (reading intervals) in ``x``."""
+        n = self.layout.n_open
+        return x[n:n + self.switch_cols.size] if x.size else np.zeros(self.switch_cols.size)
+
+    def volume_shift(self, x: np.ndarray) -> np.ndarray:
+        """How much the pump switches' shifts move each row's injected volume (ul)."""
+        o = self.obs
+        if not self.switch_cols.size:
+            return np.zeros(o.n)
+        s = self.switch_shifts(x)
+        return (o.switch_after[:, self.switch_cols] @ s
+                + o.switch_at[:, self.switch_cols] @ np.minimum(s, 0.0))
+
+    def volumes(self, x: np.ndarray) -> np.ndarray:
+        """Injected volume (ul) at every row, the pump switches' shifts applied."""
+        return np.maximum(self.obs.volume_ul + self.volume_shift(x), 0.0)
+
     def gauge_pressures(self, x: np.ndarray) -> np.ndarray:
         """Predicted gauge reading (Pa) at every row's injected volume: the baseline's
         chamber pressure at that volume for the changed design, through the pressure
         effects' inverses (last applied first)."""
         values = self.values(x)
         o = self.obs
-        p = self._chamber_at_volume(values, self.design_index, o.volume_ul)
+        p = self._chamber_at_volume(values, self.design_index, self.volumes(x))
         q = np.nan_to_num(o.flow_ul_s)
         for e in reversed(self.pressure):
             p = e.gauge_pressure(p, q, o.direction, values)
@@ -126,11 +167,12 @@ class AugmentedModel:
         the gauge's, or by volume the baseline's at the injected volume."""
         if self.by_volume:
             return self._chamber_at_volume(self.values(x), self.design_index,
-                                           self.obs.volume_ul)
+                                           self.volumes(x))
         return np.clip(self.obs.pressure_pa, 0.0, None)
 
     def values(self, x: np.ndarray) -> dict[str, float]:
-        n = self.layout.n_open
+        """The effects' parameters by name."""
+        n = self.layout.n_open + self.switch_cols.size
         return {name: float(v) for name, v in zip(self.layout.names[n:], x[n:], strict=True)}
 
     def _scales(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -165,11 +207,16 @@ class AugmentedModel:
         o = self.obs
         if not self.time:
             out = self._static(values, self.design_index, o.pressure_pa, o.flow_ul_s,
-                               o.direction, k_a, k_p, o.volume_ul)
+                               o.direction, k_a, k_p, self.volumes(x))
         else:
             s = self._sub
+            v = s["v"]
+            if self.switch_cols.size:   # linear between the shifted readings' volumes
+                shift = np.concatenate([self.volume_shift(x), [0.0]])  # [-1]: at rest
+                v = np.maximum(v + (1.0 - s["w"]) * shift[s["prev"]]
+                               + s["w"] * shift[s["rows"]], 0.0)
             static = self._static(values, self.design_index[s["rows"]], s["p"], s["q"],
-                                  s["d"], k_a[s["rows"]], k_p[s["rows"]], s["v"])
+                                  s["d"], k_a[s["rows"]], k_p[s["rows"]], v)
             grid = np.full(s["shape"], np.nan)
             grid[s["valid"]] = static
             tgrid = np.zeros(s["shape"])
@@ -195,7 +242,7 @@ class AugmentedModel:
         n_curves, m = order.shape
         width = m * SUBSTEPS + 1
         valid = np.zeros((n_curves, width), bool)
-        rows, p, q, d, t, v = [], [], [], [], [], []
+        rows, p, q, d, t, v, prev_rows, weights = [], [], [], [], [], [], [], []
         sample_rows, sample_pos = [], []
         ramp = np.arange(0, SUBSTEPS + 1) / SUBSTEPS
         for c in range(n_curves):
@@ -204,6 +251,7 @@ class AugmentedModel:
                 if j == 0:  # from rest at t = 0 to the first reading
                     fr, p0, v0 = ramp, 0.0, 0.0
                     t0 = min(0.0, float(o.time_s[r]))
+                    prev = -1
                 else:
                     prev = idx[j - 1]
                     fr = ramp[1:]
@@ -218,10 +266,13 @@ class AugmentedModel:
                              else o.volume_ul[r])
                     q.append(o.flow_ul_s[r])
                     d.append(o.direction[r])
+                    prev_rows.append(prev)
+                    weights.append(w)
                 sample_rows.append(r)
                 sample_pos.append((c, (j + 1) * SUBSTEPS))
         # rows of a curve fill its first positions contiguously
         self._sub = {"rows": np.array(rows), "p": np.array(p), "q": np.nan_to_num(np.array(q)),
                      "d": np.array(d), "t": np.array(t), "v": np.array(v), "valid": valid,
+                     "prev": np.array(prev_rows, int), "w": np.array(weights, float),
                      "shape": (n_curves, width), "sample_rows": np.array(sample_rows),
                      "sample_pos": tuple(np.array(sample_pos).T)}

@@ -20,7 +20,7 @@ import numpy as np
 
 from solver.materials import MATERIALS
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._history import directions, injected_volume_ul
+from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
             "pressure_pa", "angle_deg")
@@ -67,6 +67,12 @@ class Observations:
     #: the pump's injected volume at each reading (ul; NaN without time_s and flow_ul_s),
     #: from the whole history of each curve (_history.injected_volume_ul)
     volume_ul: np.ndarray = None  # type: ignore[assignment]
+    #: where the pump changed state between readings (_history.pump_switches): per row
+    #: and switch, the injected volume (ul) one reading interval of shift moves; computed
+    #: on the whole history, so rows dropped later keep their switches
+    switch_after: np.ndarray = None  # type: ignore[assignment]
+    switch_at: np.ndarray = None  # type: ignore[assignment]
+    switch_names: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.direction is None:
@@ -76,6 +82,21 @@ class Observations:
         if self.volume_ul is None:
             object.__setattr__(self, "volume_ul", injected_volume_ul(
                 self.curve, self.time_s, self.flow_ul_s, self.direction))
+        if self.switch_after is None:
+            after, at, names = (np.zeros((self.n, 0)), np.zeros((self.n, 0)), ())
+            if self.has_volume:
+                keys = [self._program_key(c) for c in range(self.n_curves)]
+                after, at, names = pump_switches(self.curve, self.time_s, self.flow_ul_s,
+                                                 self.direction, self.volume_ul, keys)
+            object.__setattr__(self, "switch_after", after)
+            object.__setattr__(self, "switch_at", at)
+            object.__setattr__(self, "switch_names", names)
+
+    def _program_key(self, c: int) -> str:
+        """Replicates of one design at one flow rate: one pump program."""
+        row = int(np.flatnonzero(self.curve == c)[0])
+        return (f"{int(self.family[row])},{self.L_mm[row]:g},{self.t_mm[row]:g},"
+                f"{self.flow_ul_s[row]:g}")
 
     @property
     def has_volume(self) -> bool:
@@ -135,7 +156,8 @@ class Observations:
             self.family[keep], group, self.L_mm[keep], self.t_mm[keep],
             self.pressure_pa[keep], self.angle_deg[keep], self.time_s[keep],
             self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
-            self.direction[keep], self.warnings, self.volume_ul[keep])
+            self.direction[keep], self.warnings, self.volume_ul[keep],
+            self.switch_after[keep], self.switch_at[keep], self.switch_names)
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""

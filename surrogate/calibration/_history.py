@@ -159,3 +159,56 @@ def injected_volume_ul(curve: np.ndarray, time_s: np.ndarray, flow_ul_s: np.ndar
         dt = np.diff(np.concatenate([[0.0], t]))
         out[rows] = np.maximum(np.cumsum(flow_ul_s[rows] * direction[rows] * dt), 0.0)
     return out
+
+
+#: a switch of the pump's state is fitted only where the chamber holds at least this
+#: fraction of the curve's largest injected volume (at rest the actuator cannot tell)
+SWITCH_MIN_VOLUME = 0.1
+
+
+def pump_switches(curve: np.ndarray, time_s: np.ndarray, flow_ul_s: np.ndarray,
+                  direction: np.ndarray, volume_ul: np.ndarray, keys: list[str]
+                  ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Where the pump changed state between readings, and what that does to the injected
+    volume. ``injected_volume_ul`` puts each change at a reading (the direction of an
+    interval is the pump's state over all of it), but a lab's pump program switches when
+    its volume or time is reached, anywhere between two readings. A switch from state d
+    to d' assumed at reading j, really at t_j + s dt (s in reading intervals dt; s < 0:
+    before reading j), leaves every later reading's volume off by s dt Q (d - d'), and
+    reading j's by min(s, 0) dt Q (d - d').
+
+    Returns ``after`` and ``at`` (n rows x S switches: dt Q (d - d') where the shift acts
+    in full and at the switch's own reading) and the switches' names. Replicates of one
+    design and flow rate (``keys[curve]``) ran the same program: their i-th switches share
+    one name (one fitted shift). Switches where the chamber holds less than
+    SWITCH_MIN_VOLUME of the curve's largest volume are left out (the actuator at rest
+    cannot tell when the pump stopped)."""
+    names: list[str] = []
+    cols: dict[str, int] = {}
+    entries: list[tuple[int, np.ndarray, int, float]] = []
+    for c in np.unique(curve):
+        rows = np.flatnonzero(curve == c)
+        if rows.size < 3:
+            continue
+        t, d = time_s[rows], direction[rows]
+        dt = float(np.median(np.diff(t)))
+        top = float(np.max(volume_ul[rows]))
+        ordinal = 0
+        for j in range(rows.size - 1):
+            if d[j] == d[j + 1]:
+                continue
+            if volume_ul[rows[j]] < SWITCH_MIN_VOLUME * top:
+                continue
+            name = f"pump_switch_shift[{keys[int(c)]}#{ordinal}]"
+            ordinal += 1
+            if name not in cols:
+                cols[name] = len(names)
+                names.append(name)
+            amount = dt * float(flow_ul_s[rows[j]]) * float(d[j] - d[j + 1])
+            entries.append((cols[name], rows, j, amount))
+    after = np.zeros((curve.size, len(names)))
+    at = np.zeros((curve.size, len(names)))
+    for col, rows, j, amount in entries:
+        after[rows[j + 1:], col] += amount
+        at[rows[j], col] += amount
+    return after, at, tuple(names)
