@@ -82,10 +82,9 @@ class VectorGP:
         st = self._stack  # type: ignore[attr-defined]
         u = np.asarray(u, float).ravel()
         d2 = (st["x"] - u) ** 2                                   # (n, d)
-        r = np.sqrt(np.maximum(st["inv_l2"] @ d2.T, 0.0))         # (m, n)
-        k = (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * np.exp(-SQRT5 * r)
+        k = _matern52_in_place(st["inv_l2"] @ d2.T)              # (m, n)
         h = np.concatenate(([1.0], u[st["varying"]]))            # (p,)
-        means = st["beta"] @ h + (k * st["alpha"]).sum(1)
+        means = st["beta"] @ h + np.einsum("mn,mn->m", k, st["alpha"])
         mean = self.center + self.scale * (means @ self.components)
         sel = slice(None) if variance_of is None else variance_of
         if variance_of is not None and not self.per_output:
@@ -160,6 +159,21 @@ class VectorGP:
                 "components": self.components.tolist(),
                 "residual_var": self.residual_var.tolist(),
                 "gps": [gp.as_dict() for gp in self.gps]}
+
+
+def _matern52_in_place(r2: np.ndarray) -> np.ndarray:
+    """The Matern 5/2 kernel (1 + sqrt5 r + 5 r^2 / 3) exp(-sqrt5 r) from the scaled squared
+    distances ``r2``, overwritten (one query: no temporaries; ~0.1 of its time)."""
+    t = np.sqrt(np.maximum(r2, 0.0, out=r2), out=r2)
+    t *= SQRT5                                  # t = sqrt5 r; 5 r^2 / 3 = t^2 / 3
+    poly = t * t
+    poly *= 1.0 / 3.0
+    poly += t
+    poly += 1.0
+    np.negative(t, out=t)
+    np.exp(t, out=t)
+    poly *= t
+    return poly
 
 
 def _linv(gp: GaussianProcess) -> np.ndarray:
