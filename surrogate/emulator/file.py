@@ -76,6 +76,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                                  "refit it with `balloon fit`")
     check_seal(d, origin)
     try:
+        for p in d["pairs"]:   # the cheap checks first: a damaged file costs no factorisation
+            _precheck_pair(p)
         pairs = {}
         for p in d["pairs"]:
             pair = str(p["pair"])
@@ -109,6 +111,24 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
             np.linalg.LinAlgError) as exc:
         raise SurrogateFileError(origin, f"damaged emulator file ({type(exc).__name__}: "
                                  f"{exc})") from None
+
+
+def _precheck_pair(p: dict) -> None:
+    """A pair's stored numbers that need no GP, checked before any is factorised (the
+    same rules as ``_check_pair``; ValueError, TypeError or KeyError otherwise)."""
+    scales = _band_scales(p["band_scale"])
+    if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
+        raise ValueError(f"pair {p['pair']}: band scales must be {2 * N_NODES} positive "
+                         "numbers")
+    if abs(float(p["sign"])) != 1.0:
+        raise ValueError(f"pair {p['pair']}: sign must be +1 or -1")
+    coordinates = np.array(p["coordinates"], float)
+    if coordinates.ndim != 2 or len(coordinates) != len(p["keys"]):
+        raise ValueError(f"pair {p['pair']}: coordinates and keys do not agree")
+    for name in ("center", "scale", "residual_var"):
+        values = np.array(p["curves"][name], float)
+        if values.ndim != 1 or not np.isfinite(values).all():
+            raise ValueError(f"pair {p['pair']}: curves {name} must be finite numbers")
 
 
 def _check_gp(gp, what: str) -> None:
