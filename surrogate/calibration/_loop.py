@@ -129,7 +129,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     traits = data_traits(obs, baseline.open_parameters)
     fits: dict[tuple[str, ...], FitResult] = {}
     cvs: dict[tuple[str, ...], CrossValidation] = {}
-    switches = _pump_switches_open(obs, responses, baseline, channel, noise, k)
+    switches, without = _pump_switches_open(obs, responses, baseline, channel, noise, k)
+    if without is not None and not switches["open"]:   # the recalibrated baseline, done
+        fits[()], cvs[()] = without
 
     def make(effects: tuple[str, ...]):
         chosen = tuple(EFFECTS[e] for e in effects)
@@ -680,19 +682,21 @@ SWITCH_EXPLAINS = 1.3
 
 
 def _pump_switches_open(obs: Observations, responses: Responses, baseline: Baseline,
-                        channel: dict, noise: NoiseFloor, k: int) -> dict:
+                        channel: dict, noise: NoiseFloor, k: int
+                        ) -> tuple[dict, tuple[FitResult, CrossValidation] | None]:
     """Whether the loop fits when the pump changed state between readings
     (_history.pump_switches; one shift per change, shared by the replicates of one
-    design and flow rate), and why."""
+    design and flow rate), and why; with the baseline's fit and cross-validation
+    without them when they were computed (the loop reuses them)."""
     out = {"open": False, "switches": len(obs.switch_names), "why": None,
            "rmse_cv_without_deg": None, "rmse_cv_with_deg": None}
     if not channel["used"]:
         out["why"] = "the data are not read by injected volume"
-        return out
+        return out, None
     if not obs.switch_names:
         out["why"] = "the pump never changes state with fluid in the chamber (loading only)"
-        return out
-    cv = {}
+        return out, None
+    cv, runs = {}, {}
     for free in (False, True):
         def make(o, free=free):
             return AugmentedModel(o, responses, (), baseline.open_parameters,
@@ -700,6 +704,7 @@ def _pump_switches_open(obs: Observations, responses: Responses, baseline: Basel
         f = fit(make(obs))
         xv = cross_validate(obs, make, f, k)
         cv[free] = (xv.rmse_joint, xv.rmse_deg)
+        runs[free] = (f, xv)
     out["rmse_cv_without_deg"], out["rmse_cv_with_deg"] = cv[False][0], cv[True][0]
     gain = cv[True][0] <= (1.0 - SWITCH_GAIN) * cv[False][0]
     explains = noise.rms_deg is not None and cv[True][1] <= SWITCH_EXPLAINS * noise.rms_deg
@@ -710,7 +715,7 @@ def _pump_switches_open(obs: Observations, responses: Responses, baseline: Basel
         "scatter" if out["open"] else
         f"fitting when it changed state does not explain the data (cross-validated "
         f"{cv[False][0]:.2f} -> {cv[True][0]:.2f} deg): the changes are taken at readings")
-    return out
+    return out, runs[False]
 
 
 def _switch_table(f: FitResult) -> list[dict]:

@@ -114,8 +114,9 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
 
 
 def _precheck_pair(p: dict) -> None:
-    """A pair's stored numbers that need no GP, checked before any is factorised (the
-    same rules as ``_check_pair``; ValueError, TypeError or KeyError otherwise)."""
+    """A pair's stored numbers that need no GP, checked before any is factorised (band
+    scales, sign, coordinates against keys, the curves' centre and scale; ValueError,
+    TypeError or KeyError otherwise). ``_check_pair`` checks the rest once built."""
     scales = _band_scales(p["band_scale"])
     if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
         raise ValueError(f"pair {p['pair']}: band scales must be {2 * N_NODES} positive "
@@ -147,10 +148,8 @@ def _band_scales(value: object) -> np.ndarray:
 
 
 def _check_pair(pe: PairEmulator) -> None:
-    """The numbers of one pair that a prediction uses, in range (ValueError otherwise)."""
-    if pe.band_scale.shape != (2 * N_NODES,) or not np.isfinite(pe.band_scale).all() \
-            or (pe.band_scale <= 0).any():
-        raise ValueError(f"pair {pe.pair}: band scales must be {2 * N_NODES} positive numbers")
+    """The numbers of one built pair that a prediction uses, in range (ValueError
+    otherwise); what needs no GP was checked before building (``_precheck_pair``)."""
     scalars = {"sign": pe.sign,
                "fe_limit_angle_deg": pe.fe_limit_angle_deg,
                "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa}
@@ -165,8 +164,6 @@ def _check_pair(pe: PairEmulator) -> None:
     if pe.fe_max_volume_ul is not None and not (math.isfinite(pe.fe_max_volume_ul)
                                                 and pe.fe_max_volume_ul > 0):
         raise ValueError(f"pair {pe.pair}: fe_max_volume_ul must be a positive number")
-    if pe.coordinates.ndim != 2 or len(pe.coordinates) != len(pe.keys):
-        raise ValueError(f"pair {pe.pair}: coordinates and keys do not agree")
     if not np.isfinite(pe.coordinates).all():
         raise ValueError(f"pair {pe.pair}: coordinates are not finite")
     _check_gp(pe.curves, f"pair {pe.pair}")
