@@ -149,16 +149,18 @@ class PairEmulator:
         m, var = self.range_model.predict(u)  # type: ignore[union-attr]
         return 90.0 * float(m[0]), 90.0 * float(np.sqrt(max(var[0], 0.0)))
 
-    def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float
-                 ) -> tuple[float, str]:
+    def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float,
+                 emulated_end: tuple[float, float] | None = None) -> tuple[float, str]:
         """The FE's range for the design at unit coordinates ``u`` (deg) and why it ends
         there: the FE's angle stop; the angle at which the emulated injected volume
         ``volume_red_ul`` (reduced, on FINE_ANGLES_DEG) reaches the FE's volume stop; the
-        emulated end of the design's FE curve less RANGE_Z sd (``range_model``); the end
+        emulated end of the design's FE curve less RANGE_Z sd (``range_model``; pass
+        ``emulated_end_deg(u)`` as ``emulated_end`` when it is already known); the end
         of an early-ended database curve within FAILED_RADIUS."""
         limit, reason = self.fe_limit_angle_deg, self.fe_stop_reason
         if self.range_model is not None:
-            mean_deg, sd_deg = self.emulated_end_deg(u)
+            mean_deg, sd_deg = (self.emulated_end_deg(u) if emulated_end is None
+                                else emulated_end)
             end = max(mean_deg - RANGE_Z * sd_deg, 0.0)
             if end < limit - 1.0:       # not the GP's hundredths of a degree below 90
                 limit = end
@@ -269,6 +271,27 @@ class Emulator:
                              "a stiffness contrast further from 1 (a stiffer body or a softer "
                              "membrane), or an FE solve of this design (POST /v1/solve)")
         return 1.0 if m > 0 else -1.0
+
+    def _signed_groups(self, points: list[BoxPoint], coords: np.ndarray
+                       ) -> dict[str, list[int]]:
+        """Indices of ``points`` (unit coordinates ``coords``) by group and bending
+        direction, as ``_sign`` gives it one at a time (the sign models' means in one
+        batch); points near a balance are left out."""
+        out: dict[str, list[int]] = {}
+        by_group: dict[str, list[int]] = {}
+        for i, pt in enumerate(points):
+            by_group.setdefault(pt.group, []).append(i)
+        for group, idx in by_group.items():
+            model = self.sign_models.get(group)
+            if model is None:
+                key = group + ("+" if group + "+" in self.pairs else "-")
+                out.setdefault(key, []).extend(idx)
+                continue
+            m = model.predict_many(coords[idx], variance_of=np.array([], int))[0][:, 0]
+            for i, mi in zip(idx, m, strict=True):
+                if abs(mi) >= SIGN_MARGIN:
+                    out.setdefault(group + ("+" if mi > 0 else "-"), []).append(i)
+        return out
 
     def _pair(self, point: BoxPoint, u: np.ndarray | None = None) -> PairEmulator:
         key = point.group + ("+" if self._sign(point, u) > 0 else "-")
@@ -502,21 +525,22 @@ class Emulator:
         design outside the box."""
         z = z_value(level)
         points = [locate(d, reduced=True) for d in designs]
+        coords = np.array([pt.coordinates() for pt in points])
         out = {k: np.full(len(designs), np.nan) for k in (
             "angle", "angle_lo", "angle_hi", "needed", "needed_lo", "needed_hi", "force",
             "force_lo", "force_hi")}
         by_pair: dict[str, list[int]] = {}
-        for i, pt in enumerate(points):
-            try:
-                key = pt.group + ("+" if self._sign(pt) > 0 else "-")
-            except InputError:
-                continue
+        for key, idx in self._signed_groups(points, coords).items():
             if key in self.pairs:
-                by_pair.setdefault(key, []).append(i)
+                by_pair[key] = idx
         for key, idx in by_pair.items():
             pe = self.pairs[key]
-            u = np.array([points[i].coordinates() for i in idx])
-            mean, var = pe.curves.predict_many(u)
+            u = coords[idx]
+            # the variance as a single query reads it: exact at VARIANCE_NODES, spread
+            mean, var = (pe.curves.predict_many(u, variance_of=VARIANCE_NODES)
+                         if pe.curves.per_output else pe.curves.predict_many(u))
+            if pe.curves.per_output:
+                var = np.array([spread_variance(row) for row in var])
             y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * pe.band_scale[:N_NODES]
             curves = [np.maximum.accumulate(c, axis=1) for c in node_curves(y, sd, z)]
             fmean = fsd = None
@@ -524,9 +548,14 @@ class Emulator:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
             volumes = FINE_ANGLES_DEG * np.exp(mean[:, N_NODES:] @ _B_ANGLE.T)
+            ends: list[tuple[float, float] | None] = [None] * len(idx)
+            if pe.range_model is not None:
+                end_mean, end_var = pe.range_model.predict_many(u)
+                ends = [(90.0 * float(m), 90.0 * float(np.sqrt(max(v, 0.0))))
+                        for m, v in zip(end_mean[:, 0], end_var[:, 0], strict=True)]
             for row, i in enumerate(idx):
                 pt = points[i]
-                limit = pe.fe_range(u[row], volumes[row], pt.length_scale)[0]
+                limit = pe.fe_range(u[row], volumes[row], pt.length_scale, ends[row])[0]
                 pm, pl, pu = (_with_origin(c[row]) for c in curves)
                 p_lim = float(np.interp(limit, ANGLES0, pm))
                 q = pressure_pa / pt.pressure_scale

@@ -36,6 +36,9 @@ from surrogate.emulator.gp import (
 )
 
 MAX_COMPONENTS = 20
+# predict_many's rows per block: its kernel temporaries are (outputs, rows, designs), 15 MB
+# for 64 outputs of a 450-design group, and stay in cache.
+CHUNK_ROWS = 64
 WARM_STARTS = 2              # per-output GPs after the first: the neighbour's optimum + one
 
 
@@ -124,21 +127,39 @@ class VectorGP:
                 cache[key] = hit
         return hit
 
-    def predict_many(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Means and variances (N, c) at the N rows of ``u``."""
+    def predict_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """Means and variances (N, c) at the N rows of ``u``. As in ``predict``, with one GP
+        per output ``variance_of`` limits the variance (N n^2 per output, the costly part)
+        to those outputs, NaN for the others; an empty index array asks for means only."""
         st = self._stack  # type: ignore[attr-defined]
         u = np.atleast_2d(np.asarray(u, float))
-        d2 = (u[:, None, :] - st["x"][None, :, :]) ** 2                 # (N, n, d)
-        r = np.sqrt(np.maximum(np.einsum("md,Nnd->mNn", st["inv_l2"], d2), 0.0))
-        k = (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * np.exp(-SQRT5 * r)  # (m, N, n)
+        if len(u) > CHUNK_ROWS:     # bounded temporaries: (m, CHUNK_ROWS, n) at most
+            parts = [self.predict_many(u[i:i + CHUNK_ROWS], variance_of)
+                     for i in range(0, len(u), CHUNK_ROWS)]
+            return (np.concatenate([m for m, _ in parts]),
+                    np.concatenate([v for _, v in parts]))
+        n_rows, (n, d) = len(u), st["x"].shape
+        d2 = (u.T[:, :, None] - st["x"].T[:, None, :]) ** 2             # (d, N, n)
+        r2 = (st["inv_l2"] @ d2.reshape(d, -1)).reshape(-1, n_rows, n)   # one GEMM
+        k = _matern52_in_place(r2)                                       # (m, N, n)
         h = np.column_stack((np.ones(len(u)), u[:, st["varying"]]))     # (N, p)
         means = h @ st["beta"].T + np.einsum("mNn,mn->Nm", k, st["alpha"])
-        v = np.matmul(k, st["linv_t"])                                   # (L^-1 k)^T
-        rr = h[None, :, :] - np.matmul(k, st["kinv_h"])
-        quad = np.einsum("mNp,mpq,mNq->mN", rr, st["a_inv"], rr)
-        variances = st["s2"][:, None] * np.maximum(1.0 - (v * v).sum(2) + quad, 0.0)
         mean = self.center + self.scale * (means @ self.components)
-        var = self.scale**2 * (variances.T @ self.components**2) + self.residual_var
+        rows = np.arange(len(st["s2"]))[slice(None) if variance_of is None else variance_of]
+        if variance_of is not None and len(rows) and not self.per_output:
+            raise ValueError("variance_of needs one GP per output (identity components)")
+        variances = np.empty((len(rows), len(u)))
+        for i, j in enumerate(rows):      # one GEMM per output: no copy of L^-1
+            v = k[j] @ st["linv_t"][j]                                   # (L^-1 k)^T
+            rr = h - k[j] @ st["kinv_h"][j]
+            quad = np.einsum("Np,pq,Nq->N", rr, st["a_inv"][j], rr)
+            variances[i] = st["s2"][j] * np.maximum(1.0 - (v * v).sum(1) + quad, 0.0)
+        if variance_of is None:
+            var = self.scale**2 * (variances.T @ self.components**2) + self.residual_var
+        else:
+            var = np.full(mean.shape, np.nan)
+            var[:, rows] = self.scale[rows] ** 2 * variances.T + self.residual_var[rows]
         return mean, var
 
     def loo(self) -> tuple[np.ndarray, np.ndarray]:
