@@ -403,6 +403,9 @@ def test_an_emulator_file_with_an_unknown_force_form_is_refused_and_a_format_3_f
         emulator_from_dict(seal(body))
     old = {k: v for k, v in doc.items() if k != KEY}
     old["format_version"] = 3
+    # the smallest group alone (each group reads alike; the file's factorisations dominate)
+    old["pairs"] = [min(old["pairs"], key=lambda p: len(p["keys"]))]
+    old["sign_models"] = {}
     for p in old["pairs"]:             # (shared with body's: the bad value goes too)
         del p["force_form"]
     e3 = emulator_from_dict(seal(old))

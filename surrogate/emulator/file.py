@@ -115,8 +115,9 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
 
 def _precheck_pair(p: dict) -> None:
     """A pair's stored numbers that need no GP, checked before any is factorised (band
-    scales, sign, coordinates against keys, the curves' centre and scale; ValueError,
-    TypeError or KeyError otherwise). ``_check_pair`` checks the rest once built."""
+    scales, sign, coordinates against keys, the curves' centre and scale, the FE and force
+    limits, the force form; ValueError, TypeError or KeyError otherwise). ``_check_pair``
+    checks the GPs once built."""
     scales = _band_scales(p["band_scale"])
     if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
         raise ValueError(f"pair {p['pair']}: band scales must be {2 * N_NODES} positive "
@@ -130,6 +131,20 @@ def _precheck_pair(p: dict) -> None:
         values = np.array(p["curves"][name], float)
         if values.ndim != 1 or not np.isfinite(values).all():
             raise ValueError(f"pair {p['pair']}: curves {name} must be finite numbers")
+    scalars = {name: float(p[name]) for name in (
+        "fe_limit_angle_deg", "force_band_scale", "force_limit_pa")}
+    if not all(math.isfinite(v) and v > 0 for v in scalars.values()):
+        raise ValueError(f"pair {p['pair']}: FE limit, force band scale and force limit "
+                         "must be positive numbers")
+    form = str(p.get("force_form", FORCE_FORMS[0]))
+    if form not in FORCE_FORMS:
+        raise ValueError(f"pair {p['pair']}: force_form {form!r} is not one of "
+                         f"{', '.join(FORCE_FORMS)}")
+    volume = p.get("fe_max_volume_ul")
+    if volume is not None and not (math.isfinite(float(volume)) and float(volume) > 0):
+        raise ValueError(f"pair {p['pair']}: fe_max_volume_ul must be a positive number")
+    if not np.isfinite(coordinates).all():
+        raise ValueError(f"pair {p['pair']}: coordinates are not finite")
 
 
 def _check_gp(gp, what: str) -> None:
@@ -148,24 +163,9 @@ def _band_scales(value: object) -> np.ndarray:
 
 
 def _check_pair(pe: PairEmulator) -> None:
-    """The numbers of one built pair that a prediction uses, in range (ValueError
-    otherwise); what needs no GP was checked before building (``_precheck_pair``)."""
-    scalars = {"sign": pe.sign,
-               "fe_limit_angle_deg": pe.fe_limit_angle_deg,
-               "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa}
-    if not all(math.isfinite(v) for v in scalars.values()):
-        raise ValueError(f"pair {pe.pair}: a number is not finite")
-    if pe.force_form not in FORCE_FORMS:
-        raise ValueError(f"pair {pe.pair}: force_form {pe.force_form!r} is not one of "
-                         f"{', '.join(FORCE_FORMS)}")
-    if (abs(pe.sign) != 1.0 or pe.fe_limit_angle_deg <= 0
-            or pe.force_band_scale <= 0 or pe.force_limit_pa <= 0):
-        raise ValueError(f"pair {pe.pair}: sign, band scale or FE limit out of range")
-    if pe.fe_max_volume_ul is not None and not (math.isfinite(pe.fe_max_volume_ul)
-                                                and pe.fe_max_volume_ul > 0):
-        raise ValueError(f"pair {pe.pair}: fe_max_volume_ul must be a positive number")
-    if not np.isfinite(pe.coordinates).all():
-        raise ValueError(f"pair {pe.pair}: coordinates are not finite")
+    """The GPs of one built pair answer at their own training designs (ValueError
+    otherwise); every stored number that needs no GP was checked before building
+    (``_precheck_pair``)."""
     _check_gp(pe.curves, f"pair {pe.pair}")
     if pe.force is not None:
         _check_gp(pe.force, f"pair {pe.pair} force")
