@@ -6,7 +6,23 @@ over fakes or a temporary database, and a conftest fixture of that name would be
 shadowed there silently.
 """
 
+import os
+
 import pytest
+
+_BLAS_LIMIT = []
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """numpy's OpenBLAS on one thread for the run and its subprocesses: the suite's dense
+    algebra is small (GP fits of <= 600 designs), and on a shared 2-core machine two
+    OpenBLAS threads spin-wait for each other (a GP-fitting test took 117 s instead of 7 s
+    while a precompute job used both cores). MKL (the solver's PARDISO) is left alone:
+    limiting it after PARDISO has run on two threads crashes (benchmarks/RESULTS.md)."""
+    from threadpoolctl import ThreadpoolController
+
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    _BLAS_LIMIT.append(ThreadpoolController().select(internal_api="openblas").limit(limits=1))
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

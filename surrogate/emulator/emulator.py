@@ -40,7 +40,7 @@ from surrogate.emulator.features import (
     per_kpa_from_feature,
     spline_matrix,
 )
-from surrogate.emulator.vector_gp import VectorGP
+from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
 from surrogate.predictor import InversePrediction, Prediction, number_array
 from surrogate.volume_control import by_volume
 
@@ -263,7 +263,8 @@ class Emulator:
         model = self.sign_models.get(point.group)
         if model is None:
             return 1.0 if point.group + "+" in self.pairs else -1.0
-        m = float(model.predict(point.coordinates() if u is None else u)[0][0])
+        m = float(model.predict(point.coordinates() if u is None else u,
+                                variance_of=MEANS_ONLY)[0][0])
         if abs(m) < SIGN_MARGIN:
             raise InputError("design", "this design sits near the balance of the two layers' "
                              "stiffness, where the membrane and the body balloon alike: it "
@@ -287,7 +288,7 @@ class Emulator:
                 key = group + ("+" if group + "+" in self.pairs else "-")
                 out.setdefault(key, []).extend(idx)
                 continue
-            m = model.predict_many(coords[idx], variance_of=np.array([], int))[0][:, 0]
+            m = model.predict_many(coords[idx], variance_of=MEANS_ONLY)[0][:, 0]
             for i, mi in zip(idx, m, strict=True):
                 if abs(mi) >= SIGN_MARGIN:
                     out.setdefault(group + ("+" if mi > 0 else "-"), []).append(i)

@@ -39,6 +39,7 @@ MAX_COMPONENTS = 20
 # predict_many's rows per block: its kernel temporaries are (outputs, rows, designs), 15 MB
 # for 64 outputs of a 450-design group, and stay in cache.
 CHUNK_ROWS = 64
+MEANS_ONLY = np.array([], dtype=int)    # variance_of for the means alone
 WARM_STARTS = 2              # per-output GPs after the first: the neighbour's optimum + one
 
 
@@ -81,7 +82,8 @@ class VectorGP:
                 ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and variance of every output at one input row ``u``. With one GP per
         output (identity components), ``variance_of`` (a slice or an index array) limits
-        the variance, the costly part of a query, to those outputs (NaN for the others)."""
+        the variance, the costly part of a query, to those outputs (NaN for the others); an
+        empty index array asks for the means only (any GP)."""
         st = self._stack  # type: ignore[attr-defined]
         u = np.asarray(u, float).ravel()
         d2 = (st["x"] - u) ** 2                                   # (n, d)
@@ -90,6 +92,8 @@ class VectorGP:
         means = st["beta"] @ h + np.einsum("mn,mn->m", k, st["alpha"])
         mean = self.center + self.scale * (means @ self.components)
         sel = slice(None) if variance_of is None else variance_of
+        if variance_of is not None and len(np.arange(len(mean))[sel]) == 0:
+            return mean, np.full(len(mean), np.nan)              # the means only
         if variance_of is not None and not self.per_output:
             raise ValueError("variance_of needs one GP per output (identity components)")
         rows, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
