@@ -12,8 +12,10 @@ family) lists them with ``covered_slices()``; the search then pins those values.
 Method: 512 scrambled Sobol candidates per pair (log-uniform in every bound), each
 evaluated by the model's own inverse (the pressure that gives the target angle) or
 forward prediction (force); for targets hit exactly (angle or force at a pressure), the
-chamber length of the best candidates is then solved by bisection so that the target is
-met to 0.1 %. Ranking (lower score first):
+best candidates are then solved by bisection so that the target is met to 1 %: along the
+chamber length, or, where the user pins it (a fixed mould), along the first free one of
+t, the membrane's stiffness scale, h, b, T and the body's stiffness scale (KNOBS).
+Ranking (lower score first):
 
     pressure    pressure needed (pressure_budget)
     margin      the band's upper end of the pressure needed
@@ -194,38 +196,50 @@ def _screen(model: object, designs: list[Design], target: DesignTarget, level: f
     return res
 
 
-def _solve_lengths(model: object, evals: list[_Eval], target: DesignTarget, level: float,
-                   L_range: tuple[float, float]) -> list[_Eval]:
-    """Bisection in L (all candidates at once) so that the value at the target pressure
-    equals the target; a value past the FE's range counts as too large."""
+# The variables an exact target is solved along, in order of preference: the first whose
+# bounds are not pinned. The chamber length moves the angle most directly; a lab with a
+# fixed mould length still varies the membrane (thickness, then its stiffness).
+KNOBS = ("L_mm", "t_mm", "membrane_stiffness_scale", "h_mm", "b_mm", "T_mm",
+         "body_stiffness_scale")
+
+
+def solve_variable(ranges: dict[str, tuple[float, float]]) -> str | None:
+    """The variable an exact target is solved along (KNOBS), None when all are pinned."""
+    return next((n for n in KNOBS if ranges[n][1] > ranges[n][0]), None)
+
+
+def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level: float,
+                 name: str, bounds: tuple[float, float]) -> list[_Eval]:
+    """Bisection along the variable ``name`` within ``bounds`` (all candidates at once,
+    geometric) so that the value at the target pressure equals the target; a value past
+    the FE's range counts as too large. Either direction: a candidate is solved when the
+    value minus the target changes sign between the bounds."""
     if not evals:
         return []
-    lo = np.full(len(evals), L_range[0])
-    hi = np.full(len(evals), L_range[1])
+    lo = np.full(len(evals), bounds[0])
+    hi = np.full(len(evals), bounds[1])
 
-    def f(L: np.ndarray) -> tuple[np.ndarray, list[Design], dict]:
-        designs = []
-        for e, length in zip(evals, L):
-            designs.append(_design(e.pair, {**e.values, "L_mm": float(length)}))
+    def f(x: np.ndarray) -> tuple[np.ndarray, list[Design], dict]:
+        designs = [_design(e.pair, {**e.values, name: float(v)}) for e, v in zip(evals, x)]
         r = _screen(model, designs, target, level)
         v = np.where(np.isfinite(r["value"]), r["value"] - target.value, np.inf)
         return v, designs, r
 
     f_lo, _, _ = f(lo)
     f_hi, _, _ = f(hi)
-    ok = (f_lo <= 0) & (f_hi >= 0) & np.isfinite(f_lo)
+    ok = (np.sign(f_lo) != np.sign(f_hi)) & (np.isfinite(f_lo) | np.isfinite(f_hi))
     for _ in range(BISECTION_STEPS):
         mid = np.sqrt(lo * hi)
         f_mid, _, _ = f(mid)
-        up = f_mid > 0
-        hi = np.where(up, mid, hi)
-        lo = np.where(up, lo, mid)
+        same = np.sign(f_mid) == np.sign(f_lo)
+        lo, f_lo = np.where(same, mid, lo), np.where(same, f_mid, f_lo)
+        hi = np.where(same, hi, mid)
     mid = np.sqrt(lo * hi)
     f_mid, designs, r = f(mid)
     out = []
     for i, e in enumerate(evals):
         if ok[i] and np.isfinite(f_mid[i]) and abs(f_mid[i]) <= 0.01 * target.value:
-            out.append(_Eval(e.pair, {**e.values, "L_mm": float(mid[i])}, designs[i],
+            out.append(_Eval(e.pair, {**e.values, name: float(mid[i])}, designs[i],
                              *(float(r[k][i]) for k in ("needed", "needed_lo", "needed_hi",
                                                          "value", "value_lo", "value_hi"))))
     return out
@@ -294,9 +308,14 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             feasible += [e for e in evals if np.isfinite(e.needed)
                          and e.needed <= target.pressure_pa]
             continue
-        # exact targets: the candidates nearest the target, then L solved to hit it
+        # exact targets: the candidates nearest the target, then solved along a variable
         near = sorted(reachable, key=lambda e: abs(np.log(max(e.value, 1e-12) / target.value)))
-        hits = _solve_lengths(model, near[: 6 * n_results], target, level, ranges["L_mm"])
+        knob = solve_variable(ranges)
+        if knob is None:            # every variable pinned: the one design, if it hits
+            feasible += [e for e in near[:1] if abs(e.value - target.value)
+                         <= 0.01 * target.value]
+            continue
+        hits = _solve_along(model, near[: 6 * n_results], target, level, knob, ranges[knob])
         n_evaluated += (BISECTION_STEPS + 3) * len(near[: 6 * n_results])
         feasible += hits
     feasible = [e for e in feasible if np.isfinite(_score(e, objective, target))]
@@ -332,11 +351,22 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     else:
         what = "force" if target.kind == "force_at_pressure" else "angle"
         reach = best_reach.get("largest_value")
-        explanation = (f"the target {what} {target.value:g} at {target.pressure_pa:g} Pa is "
-                       "not reachable by any design inside the bounds"
-                       + (f"; the largest reachable is {reach:.3g}" if reach else "")
-                       + ": widen the bounds (longer chamber, thinner membrane, softer "
-                       "membrane) or raise the pressure")
+        if (target.kind != "pressure_budget" and reach is not None
+                and reach >= abs(target.value)):
+            free = [n for n in KNOBS if ranges[n][1] > ranges[n][0]]
+            explanation = (
+                f"no design inside the bounds was solved to the target {what} "
+                f"{target.value:g} at {target.pressure_pa:g} Pa within 1 %, although designs "
+                f"there reach {reach:.3g}: "
+                + (f"the value does not cross the target along {free[0]} within its bounds"
+                   if free else "every variable is pinned")
+                + "; widen the bounds of the chamber length or the membrane thickness")
+        else:
+            explanation = (f"the target {what} {target.value:g} at {target.pressure_pa:g} Pa "
+                           "is not reachable by any design inside the bounds"
+                           + (f"; the largest reachable is {reach:.3g}" if reach else "")
+                           + ": widen the bounds (longer chamber, thinner membrane, softer "
+                           "membrane) or raise the pressure")
     return InverseDesignResult(target=target, objective=objective,
                                feasible=bool(candidates), candidates=tuple(candidates),
                                explanation=explanation, best_reachable=best_reach,

@@ -114,3 +114,54 @@ def test_bad_targets_and_bounds_name_the_field(target, bounds, field) -> None:
     with pytest.raises(InputError) as err:
         inverse_design(paper_surrogate(), target, bounds)
     assert err.value.field == field
+
+
+@pytest.fixture(scope="module")
+def emulator():
+    from service.settings import DATA_DIR
+    from surrogate.emulator import load_emulator
+
+    return load_emulator(DATA_DIR / "emulator.json")
+
+
+@pytest.mark.parametrize("target, pinned, along", [
+    (DesignTarget("angle_at_pressure", 1500.0, angle_deg=30.0), {"L_mm": (10.0, 10.0)},
+     "t_mm"),
+    (DesignTarget("force_at_pressure", 1000.0, force_mn=0.1),
+     {"L_mm": (18.0, 18.0), "t_mm": (1.2, 1.2)}, "h_mm"),
+])
+def test_a_pinned_chamber_length_is_met_along_the_next_free_variable(emulator, target, pinned,
+                                                                     along):
+    """A lab with one mould: the chamber length fixed, an exact target is solved along the
+    membrane (thickness; with that fixed too, the next free variable). Before, only L was
+    solved along, and a pinned L answered "not reachable; the largest reachable is 85"."""
+    from surrogate.design_search import SearchBounds, search_designs, solve_variable
+
+    bounds = SearchBounds(**pinned)
+    assert solve_variable(bounds.ranges()) == along
+    res = search_designs(emulator, target, bounds, n_results=3)
+    assert res.feasible and len(res.candidates) == 3, res.explanation
+    for c in res.candidates:
+        for name, (lo, _) in pinned.items():
+            assert getattr(c.design, name) == pytest.approx(lo)
+        pred = emulator.predict(c.design, [target.pressure_pa])
+        got = pred.angle_deg[0] if target.kind == "angle_at_pressure" else pred.force_mn[0]
+        assert abs(got) == pytest.approx(abs(target.value), rel=0.011)
+
+
+def test_every_variable_pinned_answers_the_one_design_when_it_meets_the_target(emulator):
+    from solver.design import Design
+    from surrogate.design_search import SearchBounds, search_designs
+
+    geometry = {"L_mm": 9.0, "t_mm": 0.7, "T_mm": 1.2, "b_mm": 1.6, "h_mm": 0.2}
+    design = Design(W_mm=3.0, **geometry)
+    angle = float(emulator.predict(design, [1500.0]).angle_deg[0])
+    bounds = SearchBounds(**{n: (v, v) for n, v in geometry.items()},
+                          pairs=(("pdms_1_10", "ecoflex_00_30"),))
+    hit = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0, angle_deg=angle),
+                         bounds)
+    assert hit.feasible and len(hit.candidates) == 1
+    assert hit.candidates[0].design.L_mm == pytest.approx(9.0)
+    miss = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0,
+                                                 angle_deg=0.5 * angle), bounds)
+    assert not miss.feasible and "every variable is pinned" in miss.explanation
