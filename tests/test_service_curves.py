@@ -66,6 +66,20 @@ def test_list_filters_and_pages(client):
     assert [(i["L_mm"], i["t_mm"]) for i in r["items"]] == [(7.1, 0.75)]
     r = client.get("/v1/curves", params={"limit": 2, "offset": 2}).json()
     assert len(r["items"]) == 2 and r["next_offset"] == 4 and r["total"] == 5
+    h = first["h_mm"]
+    assert client.get("/v1/curves", params={"h_mm": h}).json()["total"] == 5
+    assert client.get("/v1/curves", params={"h_mm": h + 0.05}).json()["total"] == 0
+
+
+def test_the_list_follows_every_write_to_the_database(client, db_path):
+    """The records' summary rows are read once per version of the file, and a write
+    publishes a new version: the next page lists the new record."""
+    assert client.get("/v1/curves").json()["total"] == 5
+    with CurveStore(db_path, mode="a") as db:
+        db.put(make_record(design(9.1, 0.5, "pdms_1_10", "ecoflex_00_30"), SETTINGS,
+                           make_curve(6)))
+    page = client.get("/v1/curves", params={"body_material": "pdms_1_10"}).json()
+    assert page["total"] == 5 and 9.1 in [i["L_mm"] for i in page["items"]]
 
 
 def test_list_errors(client, tmp_path):

@@ -28,7 +28,7 @@ TOL_MM = 1e-6
 def _matches(row: dict[str, Any], query: CurvesQuery) -> bool:
     """``row`` is a store summary (flat design, material ids, status)."""
     d = row["design"]
-    for name in ("L_mm", "t_mm", "T_mm", "b_mm"):
+    for name in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm"):
         want = getattr(query, name)
         if want is not None and abs(float(d[name]) - want) > TOL_MM:
             return False

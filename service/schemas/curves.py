@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.schemas.common import MATERIAL_ID, Schema
+from service.schemas.common import MATERIAL_ID, Schema, mm
 
 
 class CurvesQuery(Schema):
@@ -14,10 +14,11 @@ class CurvesQuery(Schema):
 
     model_config = ConfigDict(strict=False)  # query values arrive as text
 
-    L_mm: float | None = Field(None, ge=0.5, le=60.0, description="chamber length, mm")
-    t_mm: float | None = Field(None, ge=0.05, le=5.0, description="membrane thickness, mm")
-    T_mm: float | None = Field(None, ge=0.1, le=10.0, description="body thickness, mm")
-    b_mm: float | None = Field(None, ge=0.1, le=20.0, description="chamber width, mm")
+    L_mm: float | None = mm("L_mm", "chamber length")
+    t_mm: float | None = mm("t_mm", "membrane thickness")
+    T_mm: float | None = mm("T_mm", "body thickness")
+    b_mm: float | None = mm("b_mm", "chamber width")
+    h_mm: float | None = mm("h_mm", "chamber height")
     body_material: str | None = Field(None, pattern=MATERIAL_ID)
     membrane_material: str | None = Field(None, pattern=MATERIAL_ID)
     status: Literal["complete", "stopped", "failed"] | None = None

@@ -264,7 +264,7 @@ async function familySummaries(q, signal) {
   let offset = 0;
   while (offset !== null && offset !== undefined) {
     const params = new URLSearchParams({ body_material: q.body_material, membrane_material: q.membrane_material,
-      T_mm: q.T_mm, b_mm: q.b_mm, limit: 500, offset });
+      T_mm: q.T_mm, b_mm: q.b_mm, h_mm: q.h_mm, limit: 500, offset });
     const page = await api(`/v1/curves?${params}`, { signal });
     items.push(...page.items);
     offset = page.next_offset;
