@@ -40,6 +40,9 @@ MAX_COMPONENTS = 20
 # for 64 outputs of a 450-design group, and stay in cache.
 CHUNK_ROWS = 64
 MEANS_ONLY = np.array([], dtype=int)    # variance_of for the means alone
+# Up to this many training designs a query's L^-1 k for all its outputs is one batched
+# product (the force GPs: 37-51 designs); above, one packed BLAS product per output.
+SMALL_N = 96
 WARM_STARTS = 2              # per-output GPs after the first: the neighbour's optimum + one
 
 
@@ -99,8 +102,11 @@ class VectorGP:
         rows, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
         ks = k[rows]
         n = ks.shape[1]
-        v = np.array([tpmv(n, ap, kj, lower=0, trans=1)      # L^-1 k
-                      for ap, kj in zip(packed, ks, strict=True)])
+        if n <= SMALL_N:      # one batched product beats a BLAS call per output
+            v = np.matmul(ks[:, None, :], st["linv_t"][rows])[:, 0, :]
+        else:
+            v = np.array([tpmv(n, ap, kj, lower=0, trans=1)      # L^-1 k
+                          for ap, kj in zip(packed, ks, strict=True)])
         rr = h[None, :] - np.matmul(ks[:, None, :], kinv_h)[:, 0, :]
         variances = s2 * np.maximum(
             1.0 - (v * v).sum(1) + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
