@@ -68,7 +68,26 @@ def test_fit_predict_inverse_commands(db, tmp_path, capsys) -> None:
 
     assert cli.main(["inverse", "--angle-deg", "30", "--pressure-pa", "1500", "--model",
                      str(out)]) == 0
-    assert "feasible design(s)" in capsys.readouterr().out
+    assert "evaluated designs meet the target" in capsys.readouterr().out
+
+
+def test_design_search_on_the_default_model_searches_the_box_like_the_api(capsys) -> None:
+    """``balloon inverse`` without --angles-deg runs the API's search (surrogate.design_search)
+    with every bound of POST /v1/inverse. Before, it ran the exponential model's own search,
+    and with the default model (the emulator) it ended in a traceback."""
+    argv = ["inverse", "--kind", "angle_at_pressure", "--angle-deg", "30", "--pressure-pa",
+            "1500", "-n", "2", "--L-range", "10", "10", "--membrane-stiffness-range", "0.8",
+            "1.2", "--json"]
+    assert cli.main(argv) == 0
+    body = json.loads(capsys.readouterr().out)
+    assert body["feasible"] and body["model"] == "emulator" and len(body["candidates"]) == 2
+    for c in body["candidates"]:
+        assert c["design"]["L_mm"] == pytest.approx(10.0)
+        assert c["value_at_pressure"] == pytest.approx(30.0, rel=0.011)
+    assert cli.main(["inverse", "--kind", "angle_at_pressure", "--angle-deg", "30",
+                     "--pressure-pa", "1500", "--T-range", "5", "6"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--T-range" in err and "0.6..2" in err
 
 
 def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys) -> None:

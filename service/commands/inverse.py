@@ -7,13 +7,16 @@
         --L-range 4 12 --t-range 0.5 1 --pair pdms_1_10/ecoflex_00_30 --objective compact
     balloon inverse --kind force_at_pressure --force-mn 2 --pressure-pa 1500
 
-Targets, objectives and defaults: docs/surrogate.md (``surrogate.exponential.inverse_design``).
+Targets, objectives and defaults: docs/surrogate.md (``surrogate.design_search``: the
+same search as POST /v1/inverse).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+from dataclasses import replace
 
 from service.commands.predict import (
     add_design_arguments,
@@ -26,6 +29,20 @@ from service.commands.predict import (
     print_validity,
     surrogate_from_args,
 )
+
+# The search's bounds (surrogate.design_search.SearchBounds field -> flag, help); a pinned
+# range (LO = HI) fixes that variable (one mould: --L-range 10 10).
+RANGE_FLAGS = {
+    "L_mm": ("--L-range", "chamber length bounds, mm (default: the box, 4-18)"),
+    "t_mm": ("--t-range", "membrane thickness bounds, mm (default: the box, 0.5-1.2)"),
+    "T_mm": ("--T-range", "body thickness bounds, mm (default: the box, 0.6-2.0)"),
+    "b_mm": ("--b-range", "chamber width bounds, mm (default: the box, 1.0-2.4)"),
+    "h_mm": ("--h-range", "chamber height bounds, mm (default: the box, 0.10-0.30)"),
+    "body_stiffness_scale": ("--body-stiffness-range",
+                             "body mu / preset mu bounds (default 1 1: as sold)"),
+    "membrane_stiffness_scale": ("--membrane-stiffness-range",
+                                 "membrane mu / preset mu bounds (default 1 1)"),
+}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -43,10 +60,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--angle-deg", type=float, help="target angle magnitude, deg")
     parser.add_argument("--force-mn", type=float, help="target force, mN")
     parser.add_argument("--pressure-pa", type=float, help="target pressure or budget, Pa")
-    parser.add_argument("--L-range", type=float, nargs=2, metavar=("LO", "HI"),
-                        help="chamber length bounds, mm (default: fitted range)")
-    parser.add_argument("--t-range", type=float, nargs=2, metavar=("LO", "HI"),
-                        help="membrane thickness bounds, mm (default: fitted, >= 0.5)")
+    for flag, what in RANGE_FLAGS.values():
+        parser.add_argument(flag, type=float, nargs=2, metavar=("LO", "HI"), help=what)
     parser.add_argument("--pair", action="append", metavar="BODY/MEMBRANE",
                         help="allowed material pair (repeatable; default: every family)")
     parser.add_argument("--objective", choices=("pressure", "margin", "compact", "certainty"),
@@ -100,8 +115,10 @@ def _one_design(s: object, args: argparse.Namespace) -> int:
 
 
 def _design_search(s: object, args: argparse.Namespace) -> int:
+    """Designs for a target over the box: the same search as POST /v1/inverse."""
     from solver.errors import InputError
-    from surrogate import DesignBounds, DesignTarget, inverse_design
+    from surrogate import DesignTarget
+    from surrogate.design_search import SearchBounds, search_designs
 
     kind = args.kind or ("force_at_pressure" if args.force_mn is not None
                          else "pressure_budget")
@@ -116,13 +133,22 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                 raise InputError("--pair", f"got {text!r}", "BODY/MEMBRANE material ids")
             found.append((body, membrane))
         pairs = tuple(found)
+    if not 1 <= args.n_results <= 50:
+        raise InputError("-n", f"got {args.n_results}", "1 <= n <= 50 designs")
     target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
                           force_mn=args.force_mn)
-    bounds = DesignBounds(L_mm=tuple(args.L_range) if args.L_range else None,
-                          t_mm=tuple(args.t_range) if args.t_range else None,
-                          material_pairs=pairs)
-    res = inverse_design(s, target, bounds, objective=args.objective,  # type: ignore[arg-type]
-                         n_results=args.n_results, level=args.level)
+    ranges = {name: (tuple(v) if (v := getattr(args, flag[2:].replace("-", "_"))) else None)
+              for name, (flag, _) in RANGE_FLAGS.items()}
+    try:
+        res = search_designs(s, target, SearchBounds(**ranges, pairs=pairs),
+                             objective=args.objective, n_results=args.n_results,
+                             level=args.level)
+    except InputError as exc:
+        flag = {**{n: f for n, (f, _) in RANGE_FLAGS.items()}, "material_pairs": "--pair",
+                "angle_deg": "--angle-deg", "force_mn": "--force-mn",
+                "pressure_pa": "--pressure-pa", "objective": "--objective"}.get(exc.field)
+        raise (InputError(flag, exc.detail, exc.allowed) if flag else exc) from None
+    res = replace(res, model=args.model or "emulator")
     if args.json:
         print(json.dumps(res.as_dict(), indent=1))
         return 0 if res.feasible else 1
@@ -130,12 +156,19 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     if not res.feasible:
         return 1
     unit = "mN" if kind == "force_at_pressure" else "deg"
-    print(f"{'rank':>4s} {'L_mm':>7s} {'t_mm':>6s} {'family':40s} {'score':>9s} "
+    print(f"{'rank':>4s} {'L_mm':>7s} {'t_mm':>6s} {'T_mm':>6s} {'b_mm':>6s} {'h_mm':>6s} "
+          f"{'body/membrane':36s} {'score':>9s} "
           f"{'p_need_pa':>10s} {'p_band_pa':>15s} {'at_p_' + unit:>8s} {'band':>15s} flags")
     for c in res.candidates:
         flags = ",".join(c.curve.validity["flags"]) or "-"
-        print(f"{c.rank:4d} {c.design.L_mm:7.3f} {c.design.t_mm:6.3f} {c.family:40s} "
-              f"{c.score:9.3g} {c.pressure_needed_pa:10.1f} "
-              f"{c.pressure_lower_pa:7.0f}-{c.pressure_upper_pa:<7.0f} "
-              f"{c.value_at_pressure:8.2f} {c.value_lower:7.2f}-{c.value_upper:<7.2f} {flags}")
+        d = c.design
+        materials = f"{d.body_material.id}/{d.membrane_material.id}"
+        print(f"{c.rank:4d} {d.L_mm:7.3f} {d.t_mm:6.3f} {d.T_mm:6.3f} {d.b_mm:6.3f} "
+              f"{d.h_mm:6.3f} {materials:36s} {c.score:9.3g} "
+              + (f"{c.pressure_needed_pa:10.1f} {c.pressure_lower_pa:7.0f}-"
+                 f"{c.pressure_upper_pa:<7.0f} " if math.isfinite(c.pressure_needed_pa)
+                 else f"{'--':>10s} {'--':>15s} ")
+              + (f"{c.value_at_pressure:8.2f} {c.value_lower:7.2f}-{c.value_upper:<7.2f} "
+                 if math.isfinite(c.value_at_pressure) else f"{'--':>8s} {'--':>15s} ")
+              + flags)
     return 0
