@@ -65,9 +65,13 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         return int(args.func(args) or 0)
-    except (InputError, NotFoundError, FileNotFoundError, IsADirectoryError,
-            PermissionError) as exc:
+    except (InputError, NotFoundError) as exc:
         print(f"balloon: error: {exc}", file=sys.stderr)
+        return 2
+    except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+        # the file as the user named it and why, without Python's "[Errno 2]"
+        what = f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else exc
+        print(f"balloon: error: {what}", file=sys.stderr)
         return 2
     except BalloonError as exc:
         print(f"balloon: error: {exc}", file=sys.stderr)
