@@ -97,15 +97,19 @@ def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys) -> None:
     assert err.count("\n") == 1 and "balloon precompute" in err
     assert cli.main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1",
                      "--model", str(tmp_path / "none.json")]) == 2
-    capsys.readouterr()
+    assert cli.main(["inverse", "--angle-deg", "500", "--pressure-pa", "900",
+                     "--model", "paper"]) == 1  # infeasible: explained, not an error
+    assert "not reachable" in capsys.readouterr().out
+
+
+def test_a_file_that_cannot_be_opened_is_named_with_the_reason(tmp_path, capsys,
+                                                               monkeypatch) -> None:
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("service.commands.calibrate",))
     assert cli.main(["calibrate", str(tmp_path / "none.csv"), "--report",
                      str(tmp_path / "rep")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "none.csv: No such file or directory" in err
     assert "Errno" not in err
-    assert cli.main(["inverse", "--angle-deg", "500", "--pressure-pa", "900",
-                     "--model", "paper"]) == 1  # infeasible: explained, not an error
-    assert "not reachable" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("argv, names", [
