@@ -353,13 +353,13 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         reach = best_reach.get("largest_value")
         if (target.kind != "pressure_budget" and reach is not None
                 and reach >= abs(target.value)):
-            free = [n for n in KNOBS if ranges[n][1] > ranges[n][0]]
+            knob = solve_variable(ranges)
             explanation = (
                 f"no design inside the bounds was solved to the target {what} "
                 f"{target.value:g} at {target.pressure_pa:g} Pa within 1 %, although designs "
                 f"there reach {reach:.3g}: "
-                + (f"the value does not cross the target along {free[0]} within its bounds"
-                   if free else "every variable is pinned")
+                + (f"the value does not cross the target along {knob} within its bounds"
+                   if knob else "every variable is pinned")
                 + "; widen the bounds of the chamber length or the membrane thickness")
         else:
             explanation = (f"the target {what} {target.value:g} at {target.pressure_pa:g} Pa "

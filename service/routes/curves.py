@@ -5,7 +5,8 @@ from __future__ import annotations
 import os
 import pathlib
 import re
-from functools import lru_cache
+import threading
+from collections import OrderedDict
 from typing import Annotated, Any
 
 import numpy as np
@@ -59,20 +60,14 @@ def summary(record: Any) -> CurveSummary:
                         max_pressure_pa=_peak(c.pressure_pa), max_angle_deg=_peak(c.angle_deg))
 
 
-@lru_cache(maxsize=2)
-def _index(path: str, inode: int, mtime_ns: int, size: int) -> tuple[dict[str, Any], ...]:
-    """Every record's summary row (no curves), in page order, for one version of the file:
-    the store publishes a new file on every write, so (inode, mtime, size) names a version.
-    Reading the 2155 shipped rows' attributes takes 3-4 s; a page's request then reads only
-    its own curves."""
-    with open_store(pathlib.Path(path)) as db:
-        return tuple(sorted(db.summaries(), key=_order))
-
-
-@lru_cache(maxsize=4096)
-def _summary(path: str, inode: int, mtime_ns: int, size: int, key: str) -> CurveSummary:
-    with open_store(pathlib.Path(path)) as db:
-        return summary(db.get(key))
+# Summary rows and page items of one version of the database file, read once: the store
+# publishes a new file on every write, so (path, inode, mtime, size) names a version.
+# Reading the 2155 shipped records' summary rows takes 3-4 s; a request then reads only
+# the page items not seen before, through the one store it opened.
+_INDEX: dict[tuple, tuple[dict[str, Any], ...]] = {}
+_ITEMS: OrderedDict[tuple, CurveSummary] = OrderedDict()
+_ITEMS_KEPT = 4096
+_LOCK = threading.Lock()
 
 
 def _version(path: pathlib.Path) -> tuple[str, int, int, int]:
@@ -80,15 +75,45 @@ def _version(path: pathlib.Path) -> tuple[str, int, int, int]:
     return str(path), st.st_ino, st.st_mtime_ns, st.st_size
 
 
+def _index(version: tuple, db: Any) -> tuple[dict[str, Any], ...]:
+    """Every record's summary row (no curves), in page order."""
+    with _LOCK:
+        rows = _INDEX.get(version)
+    if rows is None:
+        rows = tuple(sorted(db.summaries(), key=_order))
+        with _LOCK:
+            _INDEX.clear()          # one version kept: the current file
+            _INDEX[version] = rows
+    return rows
+
+
+def _item(version: tuple, key: str, db: Any) -> CurveSummary:
+    with _LOCK:
+        item = _ITEMS.get((version, key))
+    if item is None:
+        item = summary(db.get(key))
+        with _LOCK:
+            _ITEMS[(version, key)] = item
+            while len(_ITEMS) > _ITEMS_KEPT:
+                _ITEMS.popitem(last=False)
+    return item
+
+
 @router.get("/curves", response_model=CurvePage, summary="List FE records (filtered, paged)")
 def list_curves(query: Annotated[CurvesQuery, Query()], settings: SettingsDep) -> CurvePage:
     """Records ordered by (materials, L_mm, t_mm, id); filters are exact (to 1e-6 mm).
     Only the page's curves are read from the file (and each once per file version)."""
-    with open_store(settings.db_path):      # 503 when the file is missing or unreadable
+    # the version before opening: a write in between caches newer rows under the older
+    # version, which no later request asks for (the reverse would serve stale rows)
+    try:
         version = _version(settings.db_path)
-    rows = [r for r in _index(*version) if _matches(r, query)]
-    page = [_summary(*version, str(r["key"]))
-            for r in rows[query.offset:query.offset + query.limit]]
+    except OSError:
+        version = None
+    with open_store(settings.db_path) as db:    # 503 when missing or unreadable
+        version = version or _version(settings.db_path)
+        rows = [r for r in _index(version, db) if _matches(r, query)]
+        page = [_item(version, str(r["key"]), db)
+                for r in rows[query.offset:query.offset + query.limit]]
     end = query.offset + len(page)
     return CurvePage(items=page, total=len(rows), offset=query.offset, limit=query.limit,
                      next_offset=end if end < len(rows) else None)

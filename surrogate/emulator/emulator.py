@@ -99,6 +99,17 @@ def spread_variance(var: np.ndarray) -> np.ndarray:
     return out
 
 
+def _end_deg(mean: np.ndarray, var: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The range model's variable (end angle / 90 deg) as the end angle and its sd, deg."""
+    return 90.0 * np.asarray(mean), 90.0 * np.sqrt(np.maximum(var, 0.0))
+
+
+def _direction(m: np.ndarray) -> np.ndarray:
+    """+1 / -1 from a sign model's mean; 0 within SIGN_MARGIN of the balance, where the
+    FE data do not tell which way the design bends."""
+    return np.where(np.abs(m) < SIGN_MARGIN, 0.0, np.sign(m))
+
+
 FORCE_BAND_LIMIT = 2.0     # widest force band answered, relative to the force
 FORCE_FORMS = ("per_kpa", "secant_ratio")    # PairEmulator.force_form
 
@@ -147,7 +158,14 @@ class PairEmulator:
         """Where the FE curve of the design at unit coordinates ``u`` is emulated to end
         (deg) and its sd (``range_model``; needs one)."""
         m, var = self.range_model.predict(u)  # type: ignore[union-attr]
-        return 90.0 * float(m[0]), 90.0 * float(np.sqrt(max(var[0], 0.0)))
+        mean_deg, sd_deg = _end_deg(m[0], var[0])
+        return float(mean_deg), float(sd_deg)
+
+    def emulated_ends_deg(self, u: np.ndarray) -> list[tuple[float, float]]:
+        """``emulated_end_deg`` at every row of ``u``, in one batch."""
+        m, var = self.range_model.predict_many(u)  # type: ignore[union-attr]
+        mean_deg, sd_deg = _end_deg(m[:, 0], var[:, 0])
+        return list(zip(mean_deg.tolist(), sd_deg.tolist(), strict=True))
 
     def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float,
                  emulated_end: tuple[float, float] | None = None) -> tuple[float, str]:
@@ -262,16 +280,21 @@ class Emulator:
         both ways (InputError near the balance), else the one sign the data has."""
         model = self.sign_models.get(point.group)
         if model is None:
-            return 1.0 if point.group + "+" in self.pairs else -1.0
-        m = float(model.predict(point.coordinates() if u is None else u,
-                                variance_of=MEANS_ONLY)[0][0])
-        if abs(m) < SIGN_MARGIN:
+            return self._one_sign(point.group)
+        m = model.predict(point.coordinates() if u is None else u,
+                          variance_of=MEANS_ONLY)[0][:1]
+        sign = float(_direction(m)[0])
+        if sign == 0.0:
             raise InputError("design", "this design sits near the balance of the two layers' "
                              "stiffness, where the membrane and the body balloon alike: it "
                              "bends little and the FE data do not tell which way",
                              "a stiffness contrast further from 1 (a stiffer body or a softer "
                              "membrane), or an FE solve of this design (POST /v1/solve)")
-        return 1.0 if m > 0 else -1.0
+        return sign
+
+    def _one_sign(self, group: str) -> float:
+        """The sign of a group that bends one way only (no sign model)."""
+        return 1.0 if group + "+" in self.pairs else -1.0
 
     def _signed_groups(self, points: list[BoxPoint], coords: np.ndarray
                        ) -> dict[str, list[int]]:
@@ -284,14 +307,11 @@ class Emulator:
             by_group.setdefault(pt.group, []).append(i)
         for group, idx in by_group.items():
             model = self.sign_models.get(group)
-            if model is None:
-                key = group + ("+" if group + "+" in self.pairs else "-")
-                out.setdefault(key, []).extend(idx)
-                continue
-            m = model.predict_many(coords[idx], variance_of=MEANS_ONLY)[0][:, 0]
-            for i, mi in zip(idx, m, strict=True):
-                if abs(mi) >= SIGN_MARGIN:
-                    out.setdefault(group + ("+" if mi > 0 else "-"), []).append(i)
+            signs = (np.full(len(idx), self._one_sign(group)) if model is None else
+                     _direction(model.predict_many(coords[idx], variance_of=MEANS_ONLY)[0][:, 0]))
+            for i, sign in zip(idx, signs, strict=True):
+                if sign != 0.0:
+                    out.setdefault(group + ("+" if sign > 0 else "-"), []).append(i)
         return out
 
     def _pair(self, point: BoxPoint, u: np.ndarray | None = None) -> PairEmulator:
@@ -549,11 +569,8 @@ class Emulator:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
             volumes = FINE_ANGLES_DEG * np.exp(mean[:, N_NODES:] @ _B_ANGLE.T)
-            ends: list[tuple[float, float] | None] = [None] * len(idx)
-            if pe.range_model is not None:
-                end_mean, end_var = pe.range_model.predict_many(u)
-                ends = [(90.0 * float(m), 90.0 * float(np.sqrt(max(v, 0.0))))
-                        for m, v in zip(end_mean[:, 0], end_var[:, 0], strict=True)]
+            ends: list[tuple[float, float] | None] = (
+                [None] * len(idx) if pe.range_model is None else pe.emulated_ends_deg(u))
             for row, i in enumerate(idx):
                 pt = points[i]
                 limit = pe.fe_range(u[row], volumes[row], pt.length_scale, ends[row])[0]
