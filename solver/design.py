@@ -54,6 +54,15 @@ class Design:
     membrane_material: OgdenMaterial = field(
         default_factory=lambda: MATERIALS["ecoflex_00_30"])
 
+    def __post_init__(self) -> None:
+        """Either material may also be given as a preset id (``Design(body_material=
+        "pdms_1_15")``) or as ``{"id", "mu_kpa", "alpha"}``; anything else is an
+        InputError naming the field and the preset ids."""
+        for name in ("body_material", "membrane_material"):
+            value = getattr(self, name)
+            if not isinstance(value, OgdenMaterial):
+                object.__setattr__(self, name, material_from_input(value, name))
+
     @property
     def resolved_body_length_mm(self) -> float:
         if self.body_length_mm is not None:

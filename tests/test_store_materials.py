@@ -88,3 +88,17 @@ def test_by_physics_renames_only_what_is_ambiguous():
     assert names[0] == ("pdms_1_10", "ecoflex_00_30") and names[3][1] == "mine"
     assert names[1][1].startswith("soft~") and names[2][1].startswith("soft~")
     assert names[1][1] != names[2][1] and names[4][0].startswith("pdms_1_10~")
+
+
+def test_a_design_takes_materials_by_preset_id_and_names_the_field_when_it_cannot():
+    """A Python client writes Design(body_material="pdms_1_15"); before, the string went
+    through and failed deep in the emulator with AttributeError ('str' has no 'alpha')."""
+    from solver.errors import InputError
+
+    d = Design(L_mm=9.0, body_material="pdms_1_15", membrane_material="ecoflex_00_30")
+    assert d.body_material == MATERIALS["pdms_1_15"]
+    assert d == Design(L_mm=9.0, body_material=MATERIALS["pdms_1_15"])
+    for bad, words in (("pdms", "unknown material 'pdms'"), (3, "cannot read a material")):
+        with pytest.raises(InputError) as info:
+            Design(membrane_material=bad)
+        assert info.value.field == "membrane_material" and words in str(info.value)
