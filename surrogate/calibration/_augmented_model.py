@@ -38,6 +38,7 @@ import numpy as np
 
 from surrogate.calibration._data import Observations
 from surrogate.calibration._response import Responses, design_key
+from surrogate.calibration._specimens import SpecimenScatter
 from surrogate.calibration.effects import Effect
 
 SUBSTEPS = 4
@@ -67,12 +68,16 @@ class AugmentedModel:
 
     def __init__(self, obs: Observations, responses: Responses, effects: tuple[Effect, ...],
                  open_parameters: tuple[str, ...], pressure_weight: float = 0.0,
-                 switches: bool = False) -> None:
+                 switches: bool = False, scatter: SpecimenScatter | None = None) -> None:
         """``pressure_weight`` (deg per Pa): the pressure-by-volume channel's residuals
         count as ``pressure_weight`` x (predicted - read gauge pressure) beside the angle's
         (the ratio of the two noise floors); 0 leaves the channel out. ``switches``: fit
-        the pump switches' shifts (by volume only)."""
+        the pump switches' shifts (by volume only). ``scatter``: the specimens' pressure
+        scale as a random effect, the residuals weighted by it (``whiten``,
+        _specimens.py); None: ordinary least squares."""
         self.obs = obs
+        self.scatter = scatter
+        self._scale_direction: np.ndarray | None = None
         self.pressure_weight = float(pressure_weight)
         self.by_volume = self.pressure_weight > 0.0
         self.responses = responses
@@ -228,6 +233,36 @@ class AugmentedModel:
         for e in self.angle:
             out = e.observed(out, values)
         return out
+
+    def pressure_scale_direction(self, x: np.ndarray) -> np.ndarray:
+        """d residual / d e at every residual row for a pressure scale (1 + e) of the
+        baseline's curves (what scaling both layers' stiffness does): by pressure the
+        angle's change when each curve is read at p / (1 + e); by injected volume 0 for
+        the angle (the invariance leaves angle(V) unchanged) and the weighted chamber
+        pressure for the gauge channel. NaN (past the baseline's range) as 0."""
+        if self.by_volume:
+            dp = self.pressure_weight * self.reading_pressure(x)
+            return np.nan_to_num(np.concatenate([np.zeros(self.obs.n), dp]))
+        h = 1e-3
+        base = self.angles(x)
+        return np.nan_to_num((self.angles(x, pscale=1.0 + h) - base) / h)
+
+    def residual_curves(self) -> np.ndarray:
+        """The curve of every residual row (the pressure channel's rows repeat the
+        angles')."""
+        c = self.obs.curve
+        return np.concatenate([c, c]) if self.by_volume else c
+
+    def whiten(self, r: np.ndarray) -> np.ndarray:
+        """The residual rows ``r`` weighted for the specimens' scatter (_specimens.py),
+        along the pressure-scale direction at the layout's start (every candidate set
+        starts at the recalibrated baseline, so all are weighted alike); ``r`` itself
+        without ``scatter``."""
+        if self.scatter is None or self.scatter.tau <= 0.0:
+            return r
+        if self._scale_direction is None:
+            self._scale_direction = self.pressure_scale_direction(self.layout.start)
+        return self.scatter.whiten(r, self._scale_direction, self.residual_curves())
 
     def _prepare_substeps(self) -> None:
         """Pressure (and injected volume) linear in time between readings, SUBSTEPS per

@@ -1,5 +1,5 @@
-"""The baseline's own uncertainty at a fitted physical change, carried into the fitted
-parameters' standard errors.
+"""The baseline's own uncertainty, carried into the fitted parameters' standard errors:
+its band at a fitted physical change, and its pressure scale at every fit.
 
 A physical effect is read off the baseline at a changed design (a stiffer membrane, a
 longer chamber). Where the baseline is uncertain there (an emulator's band at the changed
@@ -17,6 +17,18 @@ fitted design) and J the model's Jacobian at the fit,
 (delta_d: the shift least squares makes when the baseline is off by one standard
 deviation along its whole band at design d). Significance and the reported sd use
 cov_total; ``sd_data`` and ``sd_baseline`` are reported apart.
+
+A second coherent error acts on every fit, whatever its effects: the baseline's pressure
+scale. The FE the baseline stands in for reads the pressure at a given angle +0.4 to
++0.9 % above its mesh-converged value (default mesh, docs/verification.md), and a
+design's nominal dimensions (written to 0.01 mm) move it by as much again, so the
+baseline's pressure scale at each design is known to ``PRESSURE_SCALE_SD`` (relative sd),
+independently between designs. Its direction is exact: a common pressure scale is what
+scaling both layers' stiffness does (docs/surrogate.md, the invariance), so by pressure
+the angle is read at p / (1 + e), and by injected volume the angle is unchanged and the
+chamber pressure is (1 + e) p. A gauge gain or inlet resistance read off the gauge
+channel is therefore uncertain by at least that much (a gauge reading 1 % high and two
+layers 1 % stiffer than their presets are the same data).
 """
 
 from __future__ import annotations
@@ -27,6 +39,8 @@ import numpy as np
 
 from surrogate.calibration._least_squares import FitResult
 from surrogate.calibration._response import Responses
+
+PRESSURE_SCALE_SD = 0.01
 
 
 def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray | None:
@@ -42,17 +56,25 @@ def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray | None:
 
 
 def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
-    """``f`` with the baseline's uncertainty at its fitted design in its covariance."""
-    s = baseline_sd_rows(f, responses)
-    if s is None or f.jac is None or not f.k:
+    """``f`` with the baseline's own uncertainty in its covariance: its band at the
+    fitted design (a physical change) and its pressure scale (every fit)."""
+    if f.jac is None or not f.k:
         return f
     design = f.model.design_index
-    if f.jac.shape[0] > s.size:  # the pressure channel: no band for V(p) (0 there)
-        s = np.concatenate([s, np.zeros(f.jac.shape[0] - s.size)])
+    if f.jac.shape[0] > design.size:   # the pressure channel's rows repeat the designs
         design = np.concatenate([design, design])
-    cov = baseline_covariance(f.jac, s, design)
+    m = f.model   # f.jac is of the weighted residuals (_specimens.py): so are the shifts
+    cov = baseline_covariance(
+        f.jac, m.whiten(PRESSURE_SCALE_SD * m.pressure_scale_direction(f.x)), design)
+    band_sd = None
+    s = baseline_sd_rows(f, responses)
+    if s is not None:
+        if f.jac.shape[0] > s.size:  # the pressure channel: no band for V(p) (0 there)
+            s = np.concatenate([s, np.zeros(f.jac.shape[0] - s.size)])
+        cov = cov + baseline_covariance(f.jac, m.whiten(s), design)
+        band_sd = float(np.sqrt(np.mean(s**2)))
     return replace(f, cov=f.cov + cov, baseline_shift=np.sqrt(np.diag(cov)),
-                   baseline_sd_deg=float(np.sqrt(np.mean(s**2))))
+                   baseline_sd_deg=band_sd)
 
 
 def baseline_covariance(jac: np.ndarray, s: np.ndarray, design: np.ndarray) -> np.ndarray:

@@ -106,7 +106,7 @@ def pressure_residual(model: AugmentedModel, x: np.ndarray) -> np.ndarray | None
     return model.pressure_weight * (model.gauge_pressures(x) - model.obs.pressure_pa)
 
 
-def _residual_fn(model: AugmentedModel) -> Callable[[np.ndarray], np.ndarray]:
+def _raw_residual_fn(model: AugmentedModel) -> Callable[[np.ndarray], np.ndarray]:
     y = model.obs.angle_deg
 
     def residual(x: np.ndarray) -> np.ndarray:
@@ -117,28 +117,29 @@ def _residual_fn(model: AugmentedModel) -> Callable[[np.ndarray], np.ndarray]:
     return residual
 
 
-def channel_curves(model: AugmentedModel) -> np.ndarray:
-    """The curve of every residual (the pressure channel's rows repeat the angles')."""
-    c = model.obs.curve
-    return c if model.pressure_weight <= 0.0 else np.concatenate([c, c])
-
-
 def fit(model: AugmentedModel, x0: np.ndarray | None = None) -> FitResult:
+    """Least squares of the residuals weighted for the specimens' scatter
+    (``AugmentedModel.whiten``; ordinary least squares without it): SSE, BIC, Jacobian
+    and covariance are the weighted ones, ``residual`` and ``residual_pressure`` the
+    unweighted (deg)."""
     lay = model.layout
-    residual = _residual_fn(model)
+    raw = _raw_residual_fn(model)
     n = model.obs.n
     if lay.k == 0:
-        r = residual(np.zeros(0))
+        r0 = raw(np.zeros(0))
+        r = model.whiten(r0)
         return FitResult(model, np.zeros(0), float(r @ r), r.size, np.zeros((0, 0)), True,
-                         r[:n], residual_pressure=r[n:] if r.size > n else None)
+                         r0[:n], residual_pressure=r0[n:] if r0.size > n else None)
     start = lay.start if x0 is None else x0
     start = np.clip(start, lay.lower, lay.upper)
-    res = least_squares(residual, start, bounds=(lay.lower, lay.upper), x_scale="jac",
-                        method="trf", diff_step=1e-4, max_nfev=60 * max(lay.k, 1))
+    res = least_squares(lambda x: model.whiten(raw(x)), start, bounds=(lay.lower, lay.upper),
+                        x_scale="jac", method="trf", diff_step=1e-4,
+                        max_nfev=60 * max(lay.k, 1))
     r = res.fun
-    cov = cluster_covariance(res.jac, r, channel_curves(model))
-    return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r[:n],
-                     res.jac, residual_pressure=r[n:] if r.size > n else None)
+    r0 = r if model.scatter is None else raw(res.x)
+    cov = cluster_covariance(res.jac, r, model.residual_curves())
+    return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r0[:n],
+                     res.jac, residual_pressure=r0[n:] if r0.size > n else None)
 
 
 def cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np.ndarray:

@@ -38,7 +38,7 @@ import numpy as np
 
 from solver.errors import InputError
 from surrogate.calibration._augmented_model import AugmentedModel
-from surrogate.calibration._backing import with_baseline_uncertainty
+from surrogate.calibration._backing import PRESSURE_SCALE_SD, with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import history_traits
@@ -52,6 +52,7 @@ from surrogate.calibration._least_squares import (
 from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
 from surrogate.calibration._residual import excess_limit, residual_summary
 from surrogate.calibration._response import Responses, design_key
+from surrogate.calibration._specimens import SpecimenScatter, specimen_scatter
 from surrogate.calibration._start import Baseline
 from surrogate.calibration._structure import structure_test
 from surrogate.calibration.effects import CATALOGUE, EFFECTS, DataTraits, Effect
@@ -133,10 +134,13 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     if without is not None and not switches["open"]:   # the recalibrated baseline, done
         fits[()], cvs[()] = without
 
+    scatter = _specimen_scatter(obs, responses, baseline, channel)
+
     def make(effects: tuple[str, ...]):
         chosen = tuple(EFFECTS[e] for e in effects)
         return lambda o: AugmentedModel(o, responses, chosen, baseline.open_parameters,
-                                        channel["weight_deg_per_pa"], switches["open"])
+                                        channel["weight_deg_per_pa"], switches["open"],
+                                        scatter)
 
     def get_fit(effects: tuple[str, ...]) -> FitResult:
         if effects not in fits:
@@ -282,6 +286,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "noise_floor_deg": _num(noise.rms_deg),
         "noise_floor_source": noise.source,
         "noise_floor_basis": channel["angle_floor_basis"],
+        "specimen_scatter": None if scatter is None else scatter.as_dict(),
         "pressure_channel": channel,
         "rmse_pressure_before_pa": _pressure_rms(get_xv(()), channel),
         "rmse_pressure_after_pa": _pressure_rms(get_xv(chosen), channel),
@@ -531,9 +536,12 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
     unbacked = not significant and all(v > Z_SIGNIFICANT for v in z_data.values())
     if not significant:
         if unbacked:
+            own = (f"its band at the fitted design ({f.baseline_sd_deg:.2f} deg) and "
+                   if f.baseline_sd_deg is not None else "")
             reasons.append(f"not significant (z <= 3) once the baseline's own uncertainty "
-                           f"at the fitted design ({f.baseline_sd_deg:.2f} deg) is counted: "
-                           "the baseline cannot back this size there")
+                           f"({own}its pressure scale, known to "
+                           f"{100 * PRESSURE_SCALE_SD:g} %) is counted: the baseline "
+                           "cannot back this size there")
         else:
             reasons.append("not significant (z <= 3): within what replicate scatter "
                            "explains")
@@ -679,6 +687,18 @@ def _nuisance(f: FitResult) -> np.ndarray:
 #: of it and hide it (1.28 -> 1.21 deg against 0.67)
 SWITCH_GAIN = 0.25
 SWITCH_EXPLAINS = 1.3
+
+
+def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baseline,
+                      channel: dict) -> SpecimenScatter | None:
+    """The specimens' pressure-scale scatter, from the recalibrated baseline's residuals
+    (_specimens.py), where the angle is read against the gauge pressure; None by injected
+    volume (the specimens' stiffness does not move the angle there)."""
+    if channel["used"]:
+        return None
+    m = AugmentedModel(obs, responses, (), baseline.open_parameters)
+    f = fit(m)
+    return specimen_scatter(f.residual, m.pressure_scale_direction(f.x), obs.curve, obs.group)
 
 
 def _pump_switches_open(obs: Observations, responses: Responses, baseline: Baseline,
