@@ -152,7 +152,7 @@ def test_the_pump_gauge_reads_r_q_above_the_chamber(shipped_client):
 @pytest.mark.parametrize(("body", "field", "allowed"), [
     ({"volumes_ul": [20000]}, "volumes_ul", "10000"),
     ({"volumes_ul": [5], "pressures_pa": [100]}, "volumes_ul", "each 0 <= volumes_ul"),
-    ({"times_s": [5]}, "flow_ul_s", "0 < flow_ul_s <= 1000"),
+    ({"times_s": [5]}, "flow_ul_s", "1e-06 <= flow_ul_s <= 1000"),
     ({"times_s": [5], "flow_ul_s": 0}, "flow_ul_s", "0"),
     ({"times_s": [5], "flow_ul_s": 2000}, "flow_ul_s", "1000"),
     ({"volumes_ul": [5], "inlet": {}}, "flow_ul_s", "with inlet"),

@@ -7,7 +7,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.pump import AXES, MAX_FLOW_UL_S
+from service.pump import AXES, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import MATERIAL_ID, DesignIn, Schema
 from surrogate import hydraulics
 
@@ -49,9 +49,9 @@ class InletIn(Schema):
                                   "(default water at 20 degC)")
 
 
-FLOW = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the pump's flow rate, ul/s (with "
-             "times_s; with any axis it adds time_s = volume / flow, and with inlet the "
-             "pump-gauge pressure)")
+FLOW = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S, description="the pump's flow rate, "
+             "ul/s (with times_s; with any axis it adds time_s = volume / flow, and with "
+             "inlet the pump-gauge pressure)")
 INLET = Field(None, description="the inlet's hydraulic resistance R: with flow_ul_s the "
               "answer adds pump_pressure_pa = chamber pressure + R Q")
 
@@ -157,7 +157,7 @@ class PlotQuery(Schema):
     p_max_pa: float = Field(2000.0, gt=0.0, le=MAX_PRESSURE_PA,
                             description="largest pressure plotted, Pa")
     nearby: int = Field(3, ge=0, le=10, description="FE curves of the family to overlay")
-    flow_ul_s: float | None = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the "
+    flow_ul_s: float | None = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S, description="the "
                                     "pump's flow rate, ul/s: plot angle against time, with "
                                     "the pressure on a second axis (the paper's protocol)")
     t_max_s: float = Field(10.0, gt=0.0, le=AXES["times_s"][1], description="largest time "
