@@ -39,6 +39,7 @@ MAX_FLOW_UL_S = 1000.0     # 1e-320 ul/s made every time volume / flow infinite)
                            # solver's own lower limit (SolverSettings.flow_ul_s)
 FLOW_RANGE = f"{MIN_FLOW_UL_S:g} <= flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s"
 PRESSURE_SITES = ("chamber", "pump_gauge")
+MAX_ANGLE_DEG = 360.0      # |target angle| <= this (a full turn), degrees
 
 
 @dataclass(frozen=True)
@@ -167,6 +168,10 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
     bands (PressureResponse of /v1/inverse/pressure, ``balloon inverse --angles-deg``)."""
     from service.convert import finite_list, jsonable
 
+    angles = np.asarray(angles_deg, float)
+    if angles.size == 0 or not np.all(np.isfinite(angles) & (np.abs(angles) <= MAX_ANGLE_DEG)):
+        raise InputError("angles_deg", "needs one or more finite angles within a full turn",
+                         f"each -{MAX_ANGLE_DEG:g} <= angles_deg <= {MAX_ANGLE_DEG:g}")
     check_flow(flow_ul_s, inlet)
     drop = inlet_drop(inlet, flow_ul_s)
     result = surrogate.inverse(design, angles_deg, level=level)

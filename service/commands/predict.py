@@ -96,6 +96,7 @@ def add_pump_arguments(parser: argparse.ArgumentParser) -> None:
 
 # the request fields of service/pump.py -> the flags that set them
 PUMP_FLAGS = {"pressures_pa": "--pressures", "volumes_ul": "--volumes", "times_s": "--times",
+              "angles_deg": "--angles-deg",
               "flow_ul_s": "--flow-ul-s", "pressures_at": "--pressures-at",
               "inlet.channel_width_mm": "--channel-mm", "inlet.channel_length_mm": "--channel-mm",
               "inlet.channel_height_mm": "--channel-mm", "inlet.tubing_length_mm": "--tubing-mm",
