@@ -14,7 +14,7 @@ from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
 from solver.design import Design, design_from_dict
 from solver.errors import InputError
-from solver.materials import MATERIALS
+from solver.materials import MATERIALS, OgdenMaterial
 from solver.settings import SolverSettings, settings_from_dict
 
 
@@ -28,13 +28,43 @@ def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body",
         raise located(exc, loc) from None
     for role in ("body_material", "membrane_material"):
         material = getattr(resolved, role)
-        preset = MATERIALS.get(material.id)
-        if preset is not None and material != preset:  # one id, one set of parameters
-            raise FieldError((*loc, role, "id"), f"inline material reuses the preset id "
+        named = named_material(material.id)
+        if named is not None and not _same_parameters(material, named, material.id):
+            # one id, one set of parameters
+            what = "preset id" if material.id in MATERIALS else "scaled preset id"
+            raise FieldError((*loc, role, "id"), f"inline material reuses the {what} "
                              f"{material.id!r} with other parameters",
-                             f"a new id (presets: {', '.join(sorted(MATERIALS))}), or the "
-                             "preset by its id as a string")
+                             f"a new id (presets: {', '.join(sorted(MATERIALS))}), the "
+                             "preset by its id as a string, or <preset>*<scale> with every "
+                             "mu_kpa of the preset times the scale")
     return resolved
+
+
+def _same_parameters(material: OgdenMaterial, named: OgdenMaterial, material_id: str
+                     ) -> bool:
+    """A preset's parameters exactly; a scaled preset's to the 6 significant digits its
+    id gives the scale with (``f"{scale:.6g}"``)."""
+    rtol = 1e-5 if "*" in material_id else 0.0
+    return (material.alpha == named.alpha and len(material.mu_kpa) == len(named.mu_kpa)
+            and bool(np.allclose(material.mu_kpa, named.mu_kpa, rtol=rtol, atol=0.0)))
+
+
+def named_material(material_id: str) -> OgdenMaterial | None:
+    """The material an id names: a preset (``pdms_1_10``), or a preset with every mu
+    scaled (``pdms_1_10*1.25``, named so by ``solver.design_space.scaled_material``);
+    None for any other name."""
+    from solver.design_space import scaled_material
+
+    preset_id, star, scale_text = material_id.partition("*")
+    if not star:
+        return MATERIALS.get(material_id)
+    try:
+        scale = float(scale_text)
+    except ValueError:
+        return None
+    if preset_id not in MATERIALS or not (math.isfinite(scale) and scale > 0):
+        return None
+    return scaled_material(preset_id, scale)
 
 
 @lru_cache(maxsize=4096)

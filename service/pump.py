@@ -34,8 +34,12 @@ AXES: dict[str, tuple[float, float, str]] = {
     "volumes_ul": (0.0, 10000.0, "ul"),
     "times_s": (0.0, 1e5, "s"),
 }
-MAX_FLOW_UL_S = 1000.0     # 0 < flow_ul_s <= this
+MIN_FLOW_UL_S = 1e-6       # MIN <= flow_ul_s <= MAX: a slower pump is no pump (a flow of
+MAX_FLOW_UL_S = 1000.0     # 1e-320 ul/s made every time volume / flow infinite); the
+                           # solver's own lower limit (SolverSettings.flow_ul_s)
+FLOW_RANGE = f"{MIN_FLOW_UL_S:g} <= flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s"
 PRESSURE_SITES = ("chamber", "pump_gauge")
+MAX_ANGLE_DEG = 360.0      # |target angle| <= this (a full turn), degrees
 
 
 @dataclass(frozen=True)
@@ -80,15 +84,14 @@ class PumpQuestion:
 def check_flow(flow_ul_s: float | None, inlet: Inlet | None, by_time: bool = False) -> None:
     """The flow rate in range, and given where times or an inlet need it."""
     if flow_ul_s is not None and not (math.isfinite(flow_ul_s)
-                                      and 0 < flow_ul_s <= MAX_FLOW_UL_S):
-        raise InputError("flow_ul_s", f"{flow_ul_s:g} ul/s is out of range",
-                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s")
+                                      and MIN_FLOW_UL_S <= flow_ul_s <= MAX_FLOW_UL_S):
+        raise InputError("flow_ul_s", f"{flow_ul_s:g} ul/s is out of range", FLOW_RANGE)
     if flow_ul_s is None and by_time:
         raise InputError("flow_ul_s", "times_s needs the pump's flow rate",
-                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with times_s")
+                         f"{FLOW_RANGE} with times_s")
     if flow_ul_s is None and inlet is not None:
         raise InputError("flow_ul_s", "the inlet's pressure drop R Q needs the flow rate",
-                         f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with inlet")
+                         f"{FLOW_RANGE} with inlet")
 
 
 def inlet_drop(inlet: Inlet | None, flow_ul_s: float | None) -> dict[str, Any] | None:
@@ -165,6 +168,10 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
     bands (PressureResponse of /v1/inverse/pressure, ``balloon inverse --angles-deg``)."""
     from service.convert import finite_list, jsonable
 
+    angles = np.asarray(angles_deg, float)
+    if angles.size == 0 or not np.all(np.isfinite(angles) & (np.abs(angles) <= MAX_ANGLE_DEG)):
+        raise InputError("angles_deg", "needs one or more finite angles within a full turn",
+                         f"each -{MAX_ANGLE_DEG:g} <= angles_deg <= {MAX_ANGLE_DEG:g}")
     check_flow(flow_ul_s, inlet)
     drop = inlet_drop(inlet, flow_ul_s)
     result = surrogate.inverse(design, angles_deg, level=level)

@@ -41,6 +41,7 @@ from solver.design_space import (
     scaled_material,
 )
 from solver.errors import InputError
+from surrogate.band_level import z_value
 from surrogate.exponential.inverse_design import (
     DesignCandidate,
     DesignTarget,
@@ -87,8 +88,10 @@ class SearchBounds:
         if value is None:
             return default or box
         lo, hi = (float(v) for v in value)
-        if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
-            raise InputError(name, f"bounds {list(value)!r}", "[low, high] with low <= high")
+        if not (np.isfinite(lo) and np.isfinite(hi)) or not 0 < lo <= hi:
+            # lengths and stiffness scales are positive: [-1, 5] is no bound to clip
+            raise InputError(name, f"bounds {list(value)!r}",
+                             "[low, high] with 0 < low <= high")
         if hi < box[0] or lo > box[1]:
             raise InputError(name, f"bounds {list(value)!r} lie outside the box",
                              f"within {box[0]:g}..{box[1]:g} {unit}".rstrip())
@@ -191,8 +194,9 @@ def _screen(model: object, designs: list[Design], target: DesignTarget, level: f
                 res["needed_lo"][i], res["needed_hi"][i] = inv.lower_pa[0], inv.upper_pa[0]
             except InputError:
                 pass
+        finite = vals[np.isfinite(vals)]  # none past the FE's range: no band (nanmin warns)
         res["value"][i], res["value_lo"][i], res["value_hi"][i] = (
-            vals[0], np.nanmin(vals), np.nanmax(vals))
+            vals[0], *((finite.min(), finite.max()) if finite.size else (np.nan, np.nan)))
     return res
 
 
@@ -268,6 +272,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                    objective: str | None = None, n_results: int = 5, level: float = 0.95,
                    seed: int = 0) -> InverseDesignResult:
     """Ranked designs meeting ``target`` (see the module docstring)."""
+    z_value(level)   # a level outside 0.5..1 (NaN) is refused, not searched as "unreachable"
     target = target.validated()
     objective = resolve_objective(target, objective)
     ranges = bounds.ranges()

@@ -38,6 +38,14 @@ CHANNEL_HEIGHT_MM = 0.15
 
 _SERIES_TERMS = 200   # odd n = 1 .. 399; the tail is below 1e-12 of the sum
 
+# The inlet's allowed values, (lowest, highest), mm and Pa s: the one table of the Inlet
+# and the HTTP schema (service.schemas.InletIn). Beyond them the numbers stop being an
+# inlet: a viscosity of 1e308 Pa s made the pump-gauge pressure infinite.
+LIMITS: dict[str, tuple[float, float]] = {
+    "channel_width_mm": (0.005, 20.0), "channel_length_mm": (0.01, 1000.0),
+    "channel_height_mm": (0.005, 20.0), "tubing_length_mm": (0.0, 1e5),
+    "tubing_bore_mm": (0.05, 20.0), "viscosity_pa_s": (1e-4, 100.0)}
+
 
 def rectangular_channel_resistance_pa_per_ul_s(length_mm: float, width_mm: float,
                                                height_mm: float,
@@ -72,16 +80,12 @@ class Inlet:
     viscosity_pa_s: float = WATER_VISCOSITY_PA_S
 
     def __post_init__(self) -> None:
-        for name in ("channel_width_mm", "channel_length_mm", "channel_height_mm",
-                     "viscosity_pa_s"):
+        for name, (lo, hi) in LIMITS.items():
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise InputError(f"inlet.{name}", f"got {value:g}", "> 0")
-        if not (math.isfinite(self.tubing_length_mm) and self.tubing_length_mm >= 0):
-            raise InputError("inlet.tubing_length_mm", f"got {self.tubing_length_mm:g}", ">= 0")
+            if value is not None and not (math.isfinite(value) and lo <= value <= hi):
+                raise InputError(f"inlet.{name}", f"got {value:g}",
+                                 f"{lo:g} <= {name} <= {hi:g}")
         bore = self.tubing_bore_mm
-        if bore is not None and not (math.isfinite(bore) and bore > 0):
-            raise InputError("inlet.tubing_bore_mm", f"got {bore:g}", "> 0 mm")
         if self.tubing_length_mm > 0 and bore is None:
             raise InputError("inlet.tubing_bore_mm", "tubing of a given length needs its bore",
                              "> 0 mm with tubing_length_mm")

@@ -152,7 +152,7 @@ def test_the_pump_gauge_reads_r_q_above_the_chamber(shipped_client):
 @pytest.mark.parametrize(("body", "field", "allowed"), [
     ({"volumes_ul": [20000]}, "volumes_ul", "10000"),
     ({"volumes_ul": [5], "pressures_pa": [100]}, "volumes_ul", "each 0 <= volumes_ul"),
-    ({"times_s": [5]}, "flow_ul_s", "0 < flow_ul_s <= 1000"),
+    ({"times_s": [5]}, "flow_ul_s", "1e-06 <= flow_ul_s <= 1000"),
     ({"times_s": [5], "flow_ul_s": 0}, "flow_ul_s", "0"),
     ({"times_s": [5], "flow_ul_s": 2000}, "flow_ul_s", "1000"),
     ({"volumes_ul": [5], "inlet": {}}, "flow_ul_s", "with inlet"),
@@ -290,7 +290,7 @@ def test_cli_by_volume_and_time_and_its_one_line_errors(capsys, monkeypatch):
             (["--times", "3"], "--flow-ul-s", "1000 ul/s"),
             (["--times", "3", "--flow-ul-s", "5000"], "--flow-ul-s", "1000 ul/s"),
             (["--volumes", "3", "--inlet", "--flow-ul-s", "1", "--tubing-mm", "10", "-1"],
-             "--tubing-mm", "> 0 mm")):
+             "--tubing-mm", "0.05 <= tubing_bore_mm <= 20")):
         assert main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", *argv]) == 2
         err = capsys.readouterr().err.strip()
         assert err.count("\n") == 0 and err.startswith(f"balloon: error: {flag}:"), err

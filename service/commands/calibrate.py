@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if not 2 <= args.folds <= 50:
         raise InputError("--folds", f"got {args.folds}", "2 <= folds <= 50")
     obs = load_observations(args.data, strict=args.strict)  # validates before any work
-    if args.save:  # a bad or taken name is refused before the work, not after it
+    if args.save is not None:  # a bad or taken name ("" too) is refused before the work
         from surrogate.calibration._saved import ModelExistsError, _check_name
 
         _check_name(args.save)
@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
     report = jsonable(cal.report)
-    if args.save:
+    if args.save is not None:
         from surrogate.calibration import saveable
 
         saveable(cal)
@@ -92,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     args.report.write_text(json.dumps(report, indent=1) + "\n")
     if args.plot:
         plot_calibration(cal, args.plot)
-    if args.save:
+    if args.save is not None:
         path = save_model(cal, args.save, args.models_dir)
         print(f"saved model {args.save!r} to {path}", file=sys.stderr)
     def deg(x: float | None) -> str:

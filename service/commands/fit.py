@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -32,10 +33,34 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Refuse a band level and output paths that cannot work before reading the database
+    and fitting (minutes on a full one), as ``balloon solve`` does."""
+    from solver.errors import InputError
+    from surrogate.band_level import z_value
+
+    try:
+        z_value(args.level)
+    except InputError as exc:
+        raise InputError("--level", exc.detail, exc.allowed) from None
+    for flag, name in (("--output", args.output), ("--emulator-output", args.emulator_output)):
+        if name is None:
+            continue
+        if Path(name).is_dir():
+            raise InputError(flag, f"{name} is a directory", "a file path")
+        if not Path(name).parent.is_dir():
+            raise InputError(flag, f"directory {Path(name).parent} does not exist",
+                             "a path in an existing directory")
+    if args.report_dir is not None and Path(args.report_dir).exists() and not Path(
+            args.report_dir).is_dir():
+        raise InputError("--report-dir", f"{args.report_dir} is a file", "a directory path")
+
+
 def run(args: argparse.Namespace) -> int:
     from surrogate import fit_surrogate, save_surrogate
     from surrogate.dataset import curves_from_store
 
+    _check_arguments(args)
     curves, _ = curves_from_store(args.db)
     s = fit_surrogate(args.db, name=args.name, level=args.level,
                       progress=not args.no_progress and sys.stderr.isatty())

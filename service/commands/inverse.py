@@ -146,7 +146,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     except InputError as exc:
         flag = {**{n: f for n, (f, _) in RANGE_FLAGS.items()}, "material_pairs": "--pair",
                 "angle_deg": "--angle-deg", "force_mn": "--force-mn",
-                "pressure_pa": "--pressure-pa", "objective": "--objective"}.get(exc.field)
+                "pressure_pa": "--pressure-pa", "objective": "--objective",
+                "level": "--level"}.get(exc.field)
         raise (InputError(flag, exc.detail, exc.allowed) if flag else exc) from None
     res = replace(res, model=args.model or "emulator")
     if args.json:

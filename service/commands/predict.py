@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
@@ -96,6 +97,7 @@ def add_pump_arguments(parser: argparse.ArgumentParser) -> None:
 
 # the request fields of service/pump.py -> the flags that set them
 PUMP_FLAGS = {"pressures_pa": "--pressures", "volumes_ul": "--volumes", "times_s": "--times",
+              "angles_deg": "--angles-deg",
               "flow_ul_s": "--flow-ul-s", "pressures_at": "--pressures-at",
               "inlet.channel_width_mm": "--channel-mm", "inlet.channel_length_mm": "--channel-mm",
               "inlet.channel_height_mm": "--channel-mm", "inlet.tubing_length_mm": "--tubing-mm",
@@ -227,7 +229,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from service.pump import PumpQuestion, predict_answer
+    from service.pump import AXES, PumpQuestion, predict_answer
     from solver.errors import InputError
 
     design = design_from_args(args)
@@ -238,6 +240,10 @@ def run(args: argparse.Namespace) -> int:
         start, stop, num = args.pressure_range
         if not 1 <= num <= 100_000 or num != int(num):
             raise InputError("--pressure-range", f"NUM = {num:g}", "an integer 1..100000")
+        lo, hi, unit = AXES["pressures_pa"]   # checked before linspace (inf: a warning)
+        if not all(math.isfinite(x) and lo <= x <= hi for x in (start, stop)):
+            raise InputError("--pressure-range", f"START = {start:g}, STOP = {stop:g}",
+                             f"{lo:g} <= START, STOP <= {hi:g} {unit}")
         pressures = np.linspace(start, stop, int(num)).tolist()
     question = PumpQuestion(pressures, args.volumes, args.times, args.flow_ul_s, inlet,  # type: ignore[arg-type]
                             args.pressures_at)

@@ -13,7 +13,7 @@ from pydantic_core import to_json
 from service.convert import to_design
 from service.deps import ModelsDep, SettingsDep
 from service.errors import FieldError, located
-from service.pump import MAX_FLOW_UL_S
+from service.pump import FLOW_RANGE
 from service.schemas import PlotQuery, PredictRequest, PredictResponse
 from solver.errors import InputError
 
@@ -73,7 +73,7 @@ def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
                          "are drawn on the pressure plot", "no measured points with flow_ul_s")
     if query.inlet and query.flow_ul_s is None:
         raise FieldError(("query", "flow_ul_s"), "the inlet's pressure drop R Q needs the "
-                         "flow rate", f"0 < flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s with inlet")
+                         "flow rate", f"{FLOW_RANGE} with inlet")
     design = to_design(query.model_dump(include={"L_mm", "t_mm", "T_mm", "b_mm", "h_mm",
                                                  "body_material", "membrane_material"}),
                        loc=("query",))

@@ -10,6 +10,10 @@ from solver.design import LIMITS_MM
 from solver.settings import MAX_MESH_LEVEL, SolverSettings
 
 MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
+# An inline material's id: a name, or a preset scaled as the store and the design search
+# name it (``ecoflex_00_30*1.5``: solver.design_space.scaled_material), so that a design
+# /v1/inverse answers is taken back by /v1/predict.
+INLINE_MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}(\*[0-9][0-9.eE+\-]{0,15})?$"
 
 
 class Schema(BaseModel):
@@ -33,7 +37,8 @@ class MaterialIn(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"id": "my_silicone", "mu_kpa": [1.2, 0.01], "alpha": [3.0, 13.0]}]})
 
-    id: str = Field("custom", pattern=MATERIAL_ID, description="a name for the material")
+    id: str = Field("custom", pattern=INLINE_MATERIAL_ID,
+                    description="a name for the material (a scaled preset: <preset>*<scale>)")
     mu_kpa: list[Annotated[float, Field(ge=-1e6, le=1e6)]] = Field(
         min_length=1, max_length=6, description="Ogden moduli mu_p, kPa")
     alpha: list[Annotated[float, Field(ge=-50, le=50)]] = Field(

@@ -7,11 +7,11 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.pump import MAX_FLOW_UL_S
+from service.pump import MAX_ANGLE_DEG, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import MATERIAL_ID, DesignIn, Schema
 from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
 
-Angle = Annotated[float, Field(ge=-360.0, le=360.0)]
+Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
 OptFloats = list[float | None] | None
 
 
@@ -117,8 +117,9 @@ class PressureRequest(Schema):
     design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
     angles_deg: list[Angle] = Field(min_length=1, max_length=1000,
                                     description="target angles, degrees")
-    flow_ul_s: float | None = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the pump's "
-                                    "flow rate, ul/s: adds the time needed, s")
+    flow_ul_s: float | None = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S,
+                                    description="the pump's flow rate, ul/s: adds the time "
+                                    "needed, s")
     inlet: InletIn | None = INLET
     model: str = MODEL
     level: float = LEVEL

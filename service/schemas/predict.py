@@ -7,7 +7,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.pump import AXES, MAX_FLOW_UL_S
+from service.pump import AXES, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import MATERIAL_ID, DesignIn, Schema
 from surrogate import hydraulics
 
@@ -25,6 +25,12 @@ def _axis(name: str) -> Any:
     return Annotated[float, Field(ge=lo, le=hi)]
 
 
+def _inlet(name: str, default: float | None, description: str) -> Any:
+    """An inlet field with the limits of ``surrogate.hydraulics.LIMITS``."""
+    lo, hi = hydraulics.LIMITS[name]
+    return Field(default, ge=lo, le=hi, description=description)
+
+
 class InletIn(Schema):
     """The path from the pump's gauge to the chamber (Hagen-Poiseuille, laminar): the
     inlet channel (default the paper's: 0.5 mm wide, 3 mm long, 0.15 mm high) and, with
@@ -34,24 +40,23 @@ class InletIn(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"tubing_length_mm": 500, "tubing_bore_mm": 0.5}]})
 
-    channel_width_mm: float = Field(hydraulics.CHANNEL_WIDTH_MM, ge=0.005, le=20.0,
-                                    description="inlet channel width, mm")
-    channel_length_mm: float = Field(hydraulics.CHANNEL_LENGTH_MM, ge=0.01, le=1000.0,
-                                     description="inlet channel length, mm")
-    channel_height_mm: float = Field(hydraulics.CHANNEL_HEIGHT_MM, ge=0.005, le=20.0,
-                                     description="inlet channel height, mm")
-    tubing_length_mm: float = Field(0.0, ge=0.0, le=1e5, description="tubing length, mm "
-                                    "(0: none)")
-    tubing_bore_mm: float | None = Field(None, ge=0.05, le=20.0, description="tubing inner "
-                                         "diameter, mm (with tubing_length_mm)")
-    viscosity_pa_s: float = Field(hydraulics.WATER_VISCOSITY_PA_S, ge=1e-4, le=100.0,
-                                  description="the fluid's dynamic viscosity, Pa s "
-                                  "(default water at 20 degC)")
+    channel_width_mm: float = _inlet("channel_width_mm", hydraulics.CHANNEL_WIDTH_MM,
+                                     "inlet channel width, mm")
+    channel_length_mm: float = _inlet("channel_length_mm", hydraulics.CHANNEL_LENGTH_MM,
+                                      "inlet channel length, mm")
+    channel_height_mm: float = _inlet("channel_height_mm", hydraulics.CHANNEL_HEIGHT_MM,
+                                      "inlet channel height, mm")
+    tubing_length_mm: float = _inlet("tubing_length_mm", 0.0, "tubing length, mm (0: none)")
+    tubing_bore_mm: float | None = _inlet("tubing_bore_mm", None, "tubing inner diameter, "
+                                          "mm (with tubing_length_mm)")
+    viscosity_pa_s: float = _inlet("viscosity_pa_s", hydraulics.WATER_VISCOSITY_PA_S,
+                                   "the fluid's dynamic viscosity, Pa s (default water at "
+                                   "20 degC)")
 
 
-FLOW = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the pump's flow rate, ul/s (with "
-             "times_s; with any axis it adds time_s = volume / flow, and with inlet the "
-             "pump-gauge pressure)")
+FLOW = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S, description="the pump's flow rate, "
+             "ul/s (with times_s; with any axis it adds time_s = volume / flow, and with "
+             "inlet the pump-gauge pressure)")
 INLET = Field(None, description="the inlet's hydraulic resistance R: with flow_ul_s the "
               "answer adds pump_pressure_pa = chamber pressure + R Q")
 
@@ -157,7 +162,7 @@ class PlotQuery(Schema):
     p_max_pa: float = Field(2000.0, gt=0.0, le=MAX_PRESSURE_PA,
                             description="largest pressure plotted, Pa")
     nearby: int = Field(3, ge=0, le=10, description="FE curves of the family to overlay")
-    flow_ul_s: float | None = Field(None, gt=0.0, le=MAX_FLOW_UL_S, description="the "
+    flow_ul_s: float | None = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S, description="the "
                                     "pump's flow rate, ul/s: plot angle against time, with "
                                     "the pressure on a second axis (the paper's protocol)")
     t_max_s: float = Field(10.0, gt=0.0, le=AXES["times_s"][1], description="largest time "

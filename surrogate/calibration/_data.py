@@ -521,7 +521,8 @@ def load_observations(path: str | Path, strict: bool = False) -> Observations:
     if path.suffix.lower() == ".json":
         try:
             data = json.loads(text)
-        except ValueError as exc:  # JSONDecodeError, or an integer of > 4300 digits
+        except (ValueError, RecursionError) as exc:  # JSONDecodeError, an integer of
+            # > 4300 digits, or nesting deeper than the parser's recursion limit
             raise DataError("file", f"{path.name}: not valid JSON: {_short(str(exc))}",
                             None) from None
         rows = data.get("rows") if isinstance(data, dict) else data

@@ -312,8 +312,8 @@ def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
         known = sorted(p.stem for p in models_dir.glob("*.json")) if models_dir.is_dir() else []
         raise ModelNotFoundError(f"no model {name!r} in {models_dir}; known: "
                                  + ", ".join(["fitted", "paper"] + known))
-    try:
+    try:  # ValueError: JSONDecodeError, UnicodeDecodeError, an integer of > 4300 digits
         doc = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:
         raise SavedModelError(name, f"not valid JSON ({type(exc).__name__})") from None
     return _checked(doc, name)

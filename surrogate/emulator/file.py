@@ -198,9 +198,9 @@ def load_emulator(path: str | os.PathLike) -> Emulator:
         if key in _loaded:
             _loaded.move_to_end(key)
             return _loaded[key]
-    try:
+    try:  # ValueError: JSONDecodeError, UnicodeDecodeError, an integer of > 4300 digits
         data = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:
         raise SurrogateFileError(path.name, f"cannot be read ({type(exc).__name__})"
                                  ) from None
     with ThreadpoolController().select(internal_api="openblas").limit(limits=1):

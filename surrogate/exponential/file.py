@@ -121,9 +121,9 @@ def load_surrogate(path: str | os.PathLike) -> Surrogate:
     if not path.is_file():
         raise NotFoundError(f"surrogate file {path} does not exist (make one with "
                             "`balloon fit --db DB -o FILE`, or use the model `paper`)")
-    try:
+    try:  # ValueError: JSONDecodeError, UnicodeDecodeError, an integer of > 4300 digits
         data = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:
         raise SurrogateFileError(str(path), f"not valid JSON ({exc})") from None
     return surrogate_from_dict(data, str(path))
 

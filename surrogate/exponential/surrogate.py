@@ -127,10 +127,15 @@ class Surrogate:
         if (p < 0).any():
             raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
                              "pressures >= 0 Pa (the model ignores suction)")
-        m, lo, hi = bands.angle_band(par, design.L_mm, design.t_mm, p, level)
-        force: tuple[np.ndarray | None, ...] = (None, None, None)
-        if fam.force is not None:
-            force = bands.angle_band(fam.force, design.L_mm, design.t_mm, p, level)
+        # far past the FE's range (the calibration asks up to 1.6 x its largest reading,
+        # 1.6e6 Pa) the exponential overflows to inf and its band to NaN: expected, and no
+        # warning (`balloon calibrate` printed six, with source paths). Answers past the
+        # range are NaN below; the calibration refuses infinite ones by name.
+        with np.errstate(over="ignore", invalid="ignore"):
+            m, lo, hi = bands.angle_band(par, design.L_mm, design.t_mm, p, level)
+            force: tuple[np.ndarray | None, ...] = (None, None, None)
+            if fam.force is not None:
+                force = bands.angle_band(fam.force, design.L_mm, design.t_mm, p, level)
         validity = check(fam.domain, design, p, m)
         past = past_fe(fam.domain, p, m)   # no number past the FE's range
         m, lo, hi = (np.where(past, np.nan, x) for x in (m, lo, hi))
