@@ -604,13 +604,6 @@ def test_a_design_the_search_answers_is_taken_back(fuzz):
     assert r.json()["errors"][0]["field"] == "design.membrane_material.id"
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "surrogate/calibration/_loop.py: the baseline's pressure table spans 0 .. 1.6 x the "
-    "largest reading (241 points), so one reading of 1e6 Pa (allowed: pressure_pa <= "
-    "1e6) makes its step 6.7 kPa, past the paper model's FE end (~3 kPa); every reading "
-    "then interpolates towards NaN and all curves are dropped as 'past the baseline's "
-    "range'. The fix (the table only up to the readings the baseline answers) changes "
-    "the table, and so the results, of every data set with readings past the FE range"))
 def test_one_far_reading_does_not_discard_every_curve(fuzz):
     """A reading of 1e6 Pa among good curves is dropped alone (200, with a warning) or
     refused by its row and column; not every curve as 'past the baseline's range'."""

@@ -117,7 +117,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     for c in range(obs.n_curves):
         d = obs.design(c)
         designs.setdefault(design_key(d), d)
-    p_max = 1.6 * float(np.max(np.abs(obs.pressure_pa))) + 200.0
+    p_max = _table_end_pa(baseline.predictor, designs,
+                          1.6 * float(np.max(np.abs(obs.pressure_pa))) + 200.0)
     v_max = 1.25 * float(np.max(obs.volume_ul)) + 1.0 if obs.has_volume else None
     responses = Responses(baseline.predictor, designs, p_max, v_max)
     channel, noise = pressure_channel(obs, responses, baseline)
@@ -325,6 +326,26 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
 
 
 RADIANS_MAX = 2.1  # |angle| in radians of a bend up to 120 deg
+
+
+def _table_end_pa(predictor, designs: dict, p_max_pa: float) -> float:
+    """Where the baseline's pressure table ends: ``p_max_pa`` (1.6 x the largest reading),
+    but no further than twice the highest pressure at which the baseline answers any of
+    the ``designs``. One reading far past the FE's range (a typo of 1e6 Pa) would
+    otherwise stretch the table's 241 steps over it, so that every curve fell between its
+    first two points and was dropped as past the baseline's range; now that reading alone
+    is (with a warning naming pressure_pa)."""
+    probe = np.concatenate([[0.0], np.geomspace(1.0, max(p_max_pa, 2.0), 400)])
+    answered = 0.0
+    for d in designs.values():
+        try:
+            a = np.asarray(predictor.predict(d, probe).angle_deg, dtype=float)
+        except InputError:
+            continue
+        finite = np.flatnonzero(np.isfinite(a))
+        if finite.size:
+            answered = max(answered, float(probe[finite[-1]]))
+    return min(p_max_pa, 2.0 * answered) if answered > 0.0 else p_max_pa
 
 
 def _radians_warning(y: np.ndarray, pred: np.ndarray) -> str | None:
