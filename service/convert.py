@@ -13,6 +13,7 @@ import numpy as np
 from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
 from solver.design import Design, design_from_dict
+from solver.design_space import named_material
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.settings import SolverSettings, settings_from_dict
@@ -47,24 +48,6 @@ def _same_parameters(material: OgdenMaterial, named: OgdenMaterial, material_id:
     rtol = 1e-5 if "*" in material_id else 0.0
     return (material.alpha == named.alpha and len(material.mu_kpa) == len(named.mu_kpa)
             and bool(np.allclose(material.mu_kpa, named.mu_kpa, rtol=rtol, atol=0.0)))
-
-
-def named_material(material_id: str) -> OgdenMaterial | None:
-    """The material an id names: a preset (``pdms_1_10``), or a preset with every mu
-    scaled (``pdms_1_10*1.25``, named so by ``solver.design_space.scaled_material``);
-    None for any other name."""
-    from solver.design_space import scaled_material
-
-    preset_id, star, scale_text = material_id.partition("*")
-    if not star:
-        return MATERIALS.get(material_id)
-    try:
-        scale = float(scale_text)
-    except ValueError:
-        return None
-    if preset_id not in MATERIALS or not (math.isfinite(scale) and scale > 0):
-        return None
-    return scaled_material(preset_id, scale)
 
 
 @lru_cache(maxsize=4096)

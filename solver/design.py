@@ -19,8 +19,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from solver.errors import InputError, NotFoundError
-from solver.materials import MATERIALS, OgdenMaterial, get_material
+from solver.errors import InputError
+from solver.materials import MATERIALS, OgdenMaterial
 
 DEFAULT_BODY_LENGTH_MM = 12.0
 END_WALL_MM = 1.0
@@ -120,11 +120,14 @@ def material_from_input(value: str | OgdenMaterial | dict, field_name: str) -> O
     if isinstance(value, OgdenMaterial):
         return value
     if isinstance(value, str):
-        try:
-            return get_material(value)
-        except NotFoundError:
+        from solver.design_space import named_material
+
+        found = named_material(value)
+        if found is None:
             raise InputError(field_name, f"unknown material {value!r}",
-                             ", ".join(sorted(MATERIALS))) from None
+                             ", ".join(sorted(MATERIALS)) + ", or <preset>*<scale> (every "
+                             "mu_kpa of the preset times scale > 0)")
+        return found
     if isinstance(value, dict):
         try:
             return make_material(str(value.get("id", "custom")), value["mu_kpa"], value["alpha"])

@@ -88,6 +88,22 @@ def scaled_material(preset_id: str, scale: float) -> OgdenMaterial:
                          list(base.alpha))
 
 
+def named_material(material_id: str) -> OgdenMaterial | None:
+    """The material an id names: a preset (``pdms_1_10``), or a preset with every mu
+    scaled (``pdms_1_10*1.25``, as ``scaled_material`` names it); None for any other
+    name."""
+    preset_id, star, scale_text = material_id.partition("*")
+    if not star:
+        return MATERIALS.get(material_id)
+    try:
+        scale = float(scale_text)
+    except ValueError:
+        return None
+    if preset_id not in MATERIALS or not (math.isfinite(scale) and scale > 0):
+        return None
+    return scaled_material(preset_id, scale)
+
+
 def recognise(material: OgdenMaterial) -> tuple[str, float] | None:
     """(preset id, s) when ``material`` is a preset with mu scaled by s (alpha equal,
     mu ratios equal within SCALE_TOLERANCE); None otherwise."""

@@ -102,3 +102,30 @@ def test_a_design_takes_materials_by_preset_id_and_names_the_field_when_it_canno
         with pytest.raises(InputError) as info:
             Design(membrane_material=bad)
         assert info.value.field == "membrane_material" and words in str(info.value)
+
+
+def test_a_scaled_preset_is_named_by_its_id_in_python_and_over_http(shipped_client):
+    """``pdms_1_10*1.25`` (as the store and the design search name a preset with every mu
+    scaled) is that material wherever a preset id is taken; a bad scale names the field."""
+    from solver.design_space import scaled_material
+    from solver.errors import InputError
+
+    d = Design(body_material="ecoflex_00_30*1.5")
+    assert d.body_material == scaled_material("ecoflex_00_30", 1.5)
+    for bad in ("ecoflex_00_30*0", "ecoflex_00_30*x", "nosuch*1.5", "pdms_1_10*-2"):
+        with pytest.raises(InputError) as info:
+            Design(body_material=bad)
+        assert info.value.field == "body_material" and "<preset>*<scale>" in str(info.value)
+    by_id = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 9.0, "body_material": "ecoflex_00_30*1.5",
+                   "membrane_material": "ecoflex_00_30"}, "pressures_pa": [400, 800]})
+    inline = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 9.0, "membrane_material": "ecoflex_00_30",
+                   "body_material": scaled_material("ecoflex_00_30", 1.5).as_dict()},
+        "pressures_pa": [400, 800]})
+    assert by_id.status_code == inline.status_code == 200, by_id.text
+    assert by_id.json()["angle_deg"] == inline.json()["angle_deg"]
+    r = shipped_client.post("/v1/predict", json={"design": {"body_material": "pdms_1_10*zero"},
+                                         "pressures_pa": [400]})
+    assert_problem(r, 422)
+    assert "body_material" in r.text

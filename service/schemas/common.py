@@ -45,7 +45,7 @@ class MaterialIn(Schema):
         min_length=1, max_length=6, description="Ogden exponents alpha_p (dimensionless)")
 
 
-MaterialRef = Annotated[str, Field(pattern=MATERIAL_ID)] | MaterialIn
+MaterialRef = Annotated[str, Field(pattern=INLINE_MATERIAL_ID)] | MaterialIn
 
 
 class DesignIn(Schema):
