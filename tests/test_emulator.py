@@ -123,6 +123,40 @@ def test_refusal_names_the_nearest_in_box_design(emulator):
     assert info.value.nearest is not None and info.value.nearest.L_mm == 18.0
 
 
+def test_a_design_near_an_early_ended_database_curve_is_flagged(emulator):
+    """Within NEAR_FAILED_RADIUS of a database curve that ended early the answer carries
+    the flag and says why and what to do; the standard design is far from every one."""
+    import math
+
+    from solver.design_space import contrast_range, from_unit
+    from surrogate.emulator.emulator import NEAR_FAILED_RADIUS
+
+    pe = emulator.pairs["ecoflex_00_30/pdms_1_15-"]          # the reversed pair
+    lo, hi = contrast_range("ecoflex_00_30/pdms_1_15")
+    answered = 0
+    for fu, _, _ in pe.failed[:20]:     # beside early-ended curves the sign may flip
+        u = np.clip(np.asarray(fu, float) + 0.02, 0.0, 1.0)
+        geometry, _ = from_unit(u)
+        contrast = math.exp(math.log(lo) + u[-1] * (math.log(hi) - math.log(lo)))
+        ratio = contrast * MATERIALS["pdms_1_15"].mu0_kpa / MATERIALS["ecoflex_00_30"].mu0_kpa
+        design = Design(body_material=scaled_material("ecoflex_00_30", ratio),
+                        membrane_material=MATERIALS["pdms_1_15"], **geometry)
+        point = locate(design, reduced=True)
+        assert np.linalg.norm(point.coordinates() - u) < 1e-4
+        assert pe.distance_to_failed(point.coordinates()) < NEAR_FAILED_RADIUS
+        try:
+            out = emulator.predict(design, [100.0, 500.0])
+        except InputError:
+            continue
+        answered += 1
+        assert "near_early_ended_fe_curves" in out.validity["flags"]
+        assert any("ended early" in m and "POST /v1/solve" in m
+                   for m in out.validity["messages"])
+    assert answered >= 3
+    assert "near_early_ended_fe_curves" not in emulator.predict(Design(), [500.0]).validity[
+        "flags"]
+
+
 def test_inverse_round_trip(emulator):
     d = Design(L_mm=11.0, t_mm=0.8, T_mm=1.4, b_mm=2.0, h_mm=0.2)
     inv = emulator.inverse(d, [10.0, 45.0, 80.0])

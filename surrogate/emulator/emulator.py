@@ -45,6 +45,12 @@ from surrogate.predictor import InversePrediction, Prediction, number_array
 from surrogate.volume_control import by_volume
 
 N_NODES = len(ANGLE_NODES_DEG)
+# Unit-cube distance within which a database curve that ended early (volume stop, Newton
+# failure) marks the emulator as least reliable (flag near_early_ended_fe_curves): on the
+# 36 free-tip curves of two held-out sets of random box designs (2026-12-03, shipped
+# 2155-record fit), 6 of the 9 designs within 0.3 of one missed the per-curve target
+# (RMSE 1.1-6.2 deg) and 7 had band coverage 0.35-0.76; of the 27 further away, 3 and 4.
+NEAR_FAILED_RADIUS = 0.3
 FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE curve limits
 # The emulated end of a design's FE curve (PairEmulator.range_model, a GP of where every
 # database curve of the group ends: 90 deg, or earlier at the volume stop or a Newton
@@ -153,6 +159,13 @@ class PairEmulator:
         # the early-ended curves' unit coordinates, stacked once for fe_range's distances
         object.__setattr__(self, "_failed_u", np.array(
             [np.asarray(fu, float) for fu, _, _ in self.failed]) if self.failed else None)
+
+    def distance_to_failed(self, u: np.ndarray) -> float:
+        """Unit-cube distance from ``u`` to the nearest database curve of the group that
+        ended early (inf when none did)."""
+        if self._failed_u is None:
+            return float("inf")
+        return float(np.sqrt(np.min(np.sum((self._failed_u - u) ** 2, axis=1))))
 
     def emulated_end_deg(self, u: np.ndarray) -> tuple[float, float]:
         """Where the FE curve of the design at unit coordinates ``u`` is emulated to end
@@ -484,6 +497,17 @@ class Emulator:
                 f"{cb.limit_angle_deg:g} deg): no angle is given there; an FE solve "
                 "(POST /v1/solve) with a larger max_angle_deg or max_volume_ul can go "
                 "further")
+        near = pe.distance_to_failed(cb.coordinates)
+        if near < NEAR_FAILED_RADIUS:
+            flags.append("near_early_ended_fe_curves")
+            messages.append(
+                f"a database design {near:.2f} away (unit cube; {NEAR_FAILED_RADIUS:g} or "
+                "less counts as near) has an FE curve that ended early (the volume stop, "
+                "where the balloon grows more than the actuator bends, or a Newton "
+                "failure): there the FE's response changes abruptly and the emulator is "
+                "least reliable, its error on held-out designs often larger than its band "
+                "(docs/surrogate.md); an FE solve (POST /v1/solve) gives this design's own "
+                "curve")
         if force is not None:
             unbacked = np.isnan(force[0]) & (p <= pe.force_limit_pa * point.pressure_scale)
             if unbacked.any():
