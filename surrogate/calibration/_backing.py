@@ -72,7 +72,7 @@ def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
         if f.jac.shape[0] > s.size:  # the pressure channel: no band for V(p) (0 there)
             s = np.concatenate([s, np.zeros(f.jac.shape[0] - s.size)])
         cov = cov + baseline_covariance(f.jac, m.whiten(s), design)
-        band_sd = float(np.sqrt(np.mean(s**2)))
+        band_sd = float(np.sqrt(np.mean(s[:f.model.obs.n] ** 2)))   # the angle rows
     return replace(f, cov=f.cov + cov, baseline_shift=np.sqrt(np.diag(cov)),
                    baseline_sd_deg=band_sd)
 
