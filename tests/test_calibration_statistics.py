@@ -125,3 +125,17 @@ def test_a_set_is_outdone_by_one_containing_it_only_through_significant_members(
     assert _explains_better(body, [body, significant]) is significant
     other = cand(["camera_gain"], -460.0, 1.1, {"k_angle": 1.0})  # not a superset
     assert _adds_evidence(other, body)
+
+
+def test_readings_without_an_answer_do_not_enter_the_scatter():
+    """A reading past the baseline's range (NaN) leaves tau and sigma as without it."""
+    g, curve, group = _steep_curves(3, 3, 10)
+    rng = np.random.default_rng(4)
+    r = np.repeat(rng.normal(0.0, 0.03, 9), 10) * g + rng.normal(0.0, 0.6, g.size)
+    full = specimen_scatter(r, g, curve, group)
+    r_nan = r.copy()
+    r_nan[9] = np.nan                      # the last reading of the first curve
+    keep = np.arange(g.size) != 9
+    assert np.isclose(specimen_scatter(r_nan, g, curve, group).tau,
+                      specimen_scatter(r[keep], g[keep], curve[keep], group[keep]).tau)
+    assert full.groups == 3

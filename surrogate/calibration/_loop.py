@@ -43,6 +43,7 @@ from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._least_squares import (
+    R_CAP_DEG,
     CrossValidation,
     FitResult,
     cross_validate,
@@ -719,7 +720,8 @@ def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baselin
         return None
     m = AugmentedModel(obs, responses, (), baseline.open_parameters)
     f = fit(m)
-    return specimen_scatter(f.residual, m.pressure_scale_direction(f.x), obs.curve, obs.group)
+    r = np.where(np.abs(f.residual) < R_CAP_DEG, f.residual, np.nan)  # capped: no answer
+    return specimen_scatter(r, m.pressure_scale_direction(f.x), obs.curve, obs.group)
 
 
 def _pump_switches_open(obs: Observations, responses: Responses, baseline: Baseline,
