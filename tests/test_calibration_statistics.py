@@ -139,3 +139,23 @@ def test_readings_without_an_answer_do_not_enter_the_scatter():
     assert np.isclose(specimen_scatter(r_nan, g, curve, group).tau,
                       specimen_scatter(r[keep], g[keep], curve[keep], group[keep]).tau)
     assert full.groups == 3
+
+
+def test_an_unbacked_measurement_effect_is_interpreted_without_a_band():
+    """A gauge effect is backed against the baseline's 1 % pressure scale, not against a
+    band at a fitted design (it changes no design): the interpretation of a better-fitting
+    but unbacked gauge gain once ended in a TypeError (clean data with the pump stopping
+    between readings, a seed of the unseen lab sets)."""
+    from test_calibration_unseen import CASES, run_case
+
+    from surrogate.calibration._loop import interpret
+
+    report, error, _ = run_case(next(c for c in CASES if c.id == "inlet-R-80-2flows"))
+    assert error is None
+    report["unbacked_better"] = {
+        "effects": ["pressure_gain"], "instead_of": [], "rmse_cv_deg": 1.0,
+        "baseline_sd_at_fit_deg": None,
+        "params": {"k_pressure": {"value": 0.99, "sd": 0.011, "unit": "-"}}}
+    text = interpret(report, {"structured": False, "unexplained_rms_deg": 0.0,
+                              "sentence": ""})
+    assert "pressure scale is known to 1 % only" in text and "pressure_gain" in text

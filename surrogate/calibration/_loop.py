@@ -882,11 +882,14 @@ def interpret(report: dict, left: dict) -> str:
         s.append(f"{' and '.join(u['effects'])} fits the data best ({sizes}; cross-validated "
                  f"error {u['rmse_cv_deg']:.2f} deg"
                  + (f", better than {' and '.join(u['instead_of'])}" if u["instead_of"]
-                    else "") + "), but the baseline cannot back that size: its own "
-                 f"uncertainty at the fitted design is {u['baseline_sd_at_fit_deg']:.2f} deg "
-                 "RMS, so its better fit may be the baseline's own error there. An FE solve "
-                 "of the fitted design (`balloon solve`) or a baseline with more FE data "
-                 "there would decide.")
+                    else "") + "), but the baseline cannot back that size: "
+                 + (f"its own uncertainty at the fitted design is "
+                    f"{u['baseline_sd_at_fit_deg']:.2f} deg RMS"
+                    if u["baseline_sd_at_fit_deg"] is not None else
+                    f"its pressure scale is known to {100 * PRESSURE_SCALE_SD:g} % only")
+                 + ", so its better fit may be the baseline's own error there. An FE solve "
+                 "of the design (`balloon solve`) or a baseline with more FE data there "
+                 "would decide.")
     for c in report["not_identifiable"]:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
