@@ -160,12 +160,17 @@ class PairEmulator:
         object.__setattr__(self, "_failed_u", np.array(
             [np.asarray(fu, float) for fu, _, _ in self.failed]) if self.failed else None)
 
-    def distance_to_failed(self, u: np.ndarray) -> float:
-        """Unit-cube distance from ``u`` to the nearest database curve of the group that
-        ended early (inf when none did)."""
+    def failed_distances(self, u: np.ndarray) -> np.ndarray:
+        """Unit-cube distance from ``u`` to each database curve of the group that ended
+        early (empty when none did)."""
         if self._failed_u is None:
-            return float("inf")
-        return float(np.sqrt(np.min(np.sum((self._failed_u - u) ** 2, axis=1))))
+            return np.zeros(0)
+        return np.sqrt(np.sum((self._failed_u - u) ** 2, axis=1))
+
+    def distance_to_failed(self, u: np.ndarray) -> float:
+        """Unit-cube distance from ``u`` to the nearest of them (inf when none)."""
+        d = self.failed_distances(u)
+        return float(d.min()) if d.size else float("inf")
 
     def emulated_end_deg(self, u: np.ndarray) -> tuple[float, float]:
         """Where the FE curve of the design at unit coordinates ``u`` is emulated to end
@@ -181,13 +186,15 @@ class PairEmulator:
         return list(zip(mean_deg.tolist(), sd_deg.tolist(), strict=True))
 
     def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float,
-                 emulated_end: tuple[float, float] | None = None) -> tuple[float, str]:
+                 emulated_end: tuple[float, float] | None = None,
+                 failed_distances: np.ndarray | None = None) -> tuple[float, str]:
         """The FE's range for the design at unit coordinates ``u`` (deg) and why it ends
         there: the FE's angle stop; the angle at which the emulated injected volume
         ``volume_red_ul`` (reduced, on FINE_ANGLES_DEG) reaches the FE's volume stop; the
         emulated end of the design's FE curve less RANGE_Z sd (``range_model``; pass
         ``emulated_end_deg(u)`` as ``emulated_end`` when it is already known); the end
-        of an early-ended database curve within FAILED_RADIUS."""
+        of an early-ended database curve within FAILED_RADIUS (``failed_distances(u)``
+        when already known)."""
         limit, reason = self.fe_limit_angle_deg, self.fe_stop_reason
         if self.range_model is not None:
             mean_deg, sd_deg = (self.emulated_end_deg(u) if emulated_end is None
@@ -209,7 +216,8 @@ class PairEmulator:
                           f"volume reaches at {limit:.1f} deg: the balloon grows more than "
                           "the actuator bends")
         if self.failed:
-            near = np.linalg.norm(self._failed_u - u, axis=1) < FAILED_RADIUS
+            near = (self.failed_distances(u) if failed_distances is None
+                    else failed_distances) < FAILED_RADIUS
             for i in np.flatnonzero(near):
                 _, angle, why = self.failed[i]
                 if angle < limit:
@@ -242,6 +250,7 @@ class CurveBand:
     pressure_raw_pa: np.ndarray     # the mean p(theta) before it is made monotone
     node_mean: np.ndarray           # the emulated node vector (force normalisation)
     coordinates: np.ndarray         # the design's unit-cube coordinates (force model)
+    failed_distance: float = float("inf")  # to the nearest early-ended database curve
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -354,10 +363,11 @@ class Emulator:
         p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
         p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
         v = FINE_ANGLES_DEG * np.exp(_B_ANGLE @ mean[N_NODES:])
-        limit, reason = pe.fe_range(u, v, point.length_scale)
+        failed = pe.failed_distances(u)
+        limit, reason = pe.fe_range(u, v, point.length_scale, failed_distances=failed)
         v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale[N_NODES:]
         return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean,
-                             u)
+                             u, float(failed.min()) if failed.size else float("inf"))
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -497,7 +507,7 @@ class Emulator:
                 f"{cb.limit_angle_deg:g} deg): no angle is given there; an FE solve "
                 "(POST /v1/solve) with a larger max_angle_deg or max_volume_ul can go "
                 "further")
-        near = pe.distance_to_failed(cb.coordinates)
+        near = cb.failed_distance
         if near < NEAR_FAILED_RADIUS:
             flags.append("near_early_ended_fe_curves")
             messages.append(
