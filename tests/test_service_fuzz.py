@@ -449,6 +449,12 @@ def _send(client: TestClient, method: str, path: str, **kw: Any) -> tuple[Any, f
     return response, time.perf_counter() - start
 
 
+def _bad(label: str, r: Any, sent: str, seconds: float, width: int = 300) -> list[str]:
+    """One failure line per violation of the answer ``r`` to the request ``label``."""
+    return [f"{label}: {v}: {r.status_code} {r.text[:width]}"
+            for v in violations(r, sent, seconds)]
+
+
 def _report(failures: list[str]) -> None:
     assert not failures, f"{len(failures)} bad answers:\n" + "\n".join(failures[:200])
 
@@ -483,8 +489,7 @@ def test_hostile_bodies(fuzz, op_id):
         if ctype is not None:
             h["content-type"] = ctype
         r, seconds = _send(client, method, path, content=data, headers=h)
-        for v in violations(r, data.decode("utf-8", "replace"), seconds):
-            failures.append(f"{op_id} [{name}]: {v}: {r.status_code} {r.text[:300]}")
+        failures += _bad(f"{op_id} [{name}]", r, data.decode("utf-8", "replace"), seconds)
         if name.endswith("= list-100k") and r.status_code != 413:
             failures.append(f"{op_id} [{name}]: {r.status_code}, not 413")
     _report(failures)
@@ -501,8 +506,7 @@ def test_hostile_query_parameters(fuzz, op_id):
     failures = []
     for name, params in _sample(query_cases(op, QUERY_BASES[op_id]), PER_OPERATION[op_id]):
         r, seconds = _send(client, method, path, params=params)
-        for v in violations(r, json.dumps(params), seconds):
-            failures.append(f"{op_id} [{name}]: {v}: {r.status_code} {r.text[:300]}")
+        failures += _bad(f"{op_id} [{name}]", r, json.dumps(params), seconds)
     _report(failures)
 
 
@@ -515,8 +519,7 @@ def test_hostile_path_ids(fuzz, op_id):
     for raw in PATH_IDS:
         for text in {quote(raw, safe=""), raw if raw.isprintable() else quote(raw)}:
             r, seconds = _send(client, method, template + text, headers=KEY)
-            for v in violations(r, raw + text, seconds):
-                failures.append(f"{op_id} [{text[:40]!r}]: {v}: {r.status_code} {r.text[:300]}")
+            failures += _bad(f"{op_id} [{text[:40]!r}]", r, raw + text, seconds)
             if r.status_code < 300 and len(raw) > 100:
                 failures.append(f"{op_id} [{text[:40]!r}]: found")
     _report(failures)
@@ -533,8 +536,7 @@ def test_a_real_job_through_get_and_delete(fuzz):
     for suffix in ("", "/", "/../" + job, "%00", "?x=1", "/extra"):
         for method in ("GET", "DELETE"):
             r, seconds = _send(client, method, f"/v1/jobs/{job}{suffix}", headers=KEY)
-            for v in violations(r, suffix, seconds):
-                failures.append(f"{method} job{suffix}: {v}: {r.status_code} {r.text[:200]}")
+            failures += _bad(f"{method} job{suffix}", r, suffix, seconds, 200)
     _report(failures)
     assert client.get(f"/v1/jobs/{job}").json()["status"] == "cancelled"
 
@@ -564,8 +566,7 @@ def test_hostile_methods_and_paths(fuzz):
                          ("GET", "/static/%00"), ("OPTIONS", "/v1/predict"),
                          ("GET", "/v1/predict/plot/extra")):
         r, seconds = _send(client, method, path)
-        for v in violations(r, path, seconds):
-            failures.append(f"{method} {path[:40]}: {v}: {r.status_code} {r.text[:200]}")
+        failures += _bad(f"{method} {path[:40]}", r, path, seconds, 200)
         if "[project]" in r.text or "root:" in r.text:
             failures.append(f"{method} {path[:40]}: serves a file outside static/")
     _report(failures)
