@@ -106,10 +106,16 @@ def emulator_error(emulator) -> None:
               f"{err.mean():+.2f} | {np.sqrt(np.mean(sd**2)):.2f} |")
 
 
-def unseen(wanted: list[str]) -> int:
+def unseen(wanted: list[str], emulator_path: Path | None = None) -> int:
     """The unseen-lab data sets: one line each (right or not, what the report says, CPU
-    seconds) and the count."""
+    seconds) and the count; with ``emulator_path`` that emulator as the baseline instead
+    of the shipped one."""
     import test_calibration_unseen as unseen_mod
+
+    if emulator_path is not None:
+        from surrogate.emulator.file import load_emulator
+
+        unseen_mod._emulator = lambda: load_emulator(emulator_path)
 
     right = n = 0
     for case in unseen_mod.CASES:
@@ -136,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="the unseen-lab data sets (tests/test_calibration_unseen.py)")
     args = parser.parse_args(argv)
     if args.unseen:
-        return unseen(args.cases)
+        return unseen(args.cases, args.emulator)
     from surrogate.emulator.file import load_emulator
 
     emulator = load_emulator(args.emulator)

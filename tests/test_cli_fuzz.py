@@ -301,7 +301,11 @@ def _cases() -> list[tuple[str, list[str]]]:
         add(["fit", "--db", "{tmp}/" + db, "-o", "{tmp}/out.json"])
     for extra in (["--level", "nan"], ["--level", "2"], ["--level", "-1"],
                   ["-o", "{tmp}/adir"], ["-o", "{tmp}/missing-dir/s.json"],
-                  ["--emulator-output", "{tmp}/adir"], ["--report-dir", "{tmp}/garbage.csv"]):
+                  ["--emulator-output", "{tmp}/adir"], ["--report-dir", "{tmp}/garbage.csv"],
+                  ["--band-calibration-db", "{tmp}/db.h5"],     # without --emulator-output
+                  *(["--emulator-output", "{tmp}/e.json", "--band-calibration-db",
+                     "{tmp}/" + db] for db in ("missing.h5", "adir.h5", "garbage.h5",
+                                               "empty.h5", "text.h5"))):
         add(["fit", "--db", "{tmp}/db.h5", "-o", "{tmp}/out.json", *extra])
     # calibrate: hostile data files, then hostile options on good data
     for name in FILES:

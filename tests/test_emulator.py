@@ -384,6 +384,95 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
     assert scales.max() < 10
 
 
+def _shifted_records(scale: float, count: int = 12):
+    """Complete default-FE curves of the shipped database, PDMS group, their pressures
+    times ``scale``: FE-shaped curves the emulator misses by a known stiffness error."""
+    from dataclasses import replace
+
+    from solver.settings import SolverSettings
+
+    with CurveStore(DB) as db:
+        recs = [r for r in db.records() if r.settings == SolverSettings()
+                and "pdms" in r.design.body_material.id and r.curve.angle_deg[-1] >= 89.0]
+    return [replace(r, curve=replace(r.curve, pressure_pa=r.curve.pressure_pa * scale))
+            for r in recs[:count]]
+
+
+def test_bands_are_calibrated_on_random_designs_fe_curves(emulator):
+    """The second calibration: where the calibration curves lie outside the bands (here FE
+    curves whose pressures read 25 % high: the emulator misses them by a known stiffness
+    error), the bands widen per angle bin until ``level`` of their points are inside;
+    where the curves lie inside (the same curves unshifted: database designs, which it
+    reproduces), nothing changes; the report says what was done."""
+    from surrogate.emulator.random_calibration import (
+        calibrate_on_random_designs,
+        coverage,
+        point_factors,
+    )
+
+    shifted = _shifted_records(1.25)
+    before = coverage(point_factors(emulator, shifted))
+    assert before["pressure"]["all"] < 0.5
+    cal = calibrate_on_random_designs(emulator, shifted, source={"database_name": "x.h5"})
+    rep = cal.report["random_design_calibration"]
+    assert rep["coverage_before"]["pressure"]["all"] == pytest.approx(
+        before["pressure"]["all"])
+    assert rep["coverage_after"]["pressure"]["all"] >= 0.93
+    assert rep["coverage_after"]["volume"]["all"] >= 0.93
+    assert max(rep["factors"]["pressure"]["far"]) > 1.5
+    assert rep["curves"] == 12 and rep["source"]["database_name"] == "x.h5"
+    for key, pe in cal.pairs.items():       # every group alike, by the same factors
+        ratio = pe.band_scale / emulator.pairs[key].band_scale
+        np.testing.assert_allclose(ratio, cal.pairs["pdms/ecoflex_00_30+"].band_scale
+                                   / emulator.pairs["pdms/ecoflex_00_30+"].band_scale)
+    wide = cal.predict(Design(), [1500.0])
+    narrow = emulator.predict(Design(), [1500.0])
+    assert (wide.upper_deg - wide.lower_deg)[0] > 1.4 * (narrow.upper_deg
+                                                          - narrow.lower_deg)[0]
+    same = calibrate_on_random_designs(emulator, _shifted_records(1.0))
+    for key, pe in same.pairs.items():
+        np.testing.assert_allclose(pe.band_scale, emulator.pairs[key].band_scale)
+    # the mask of the fit's report is the query's flag: within NEAR_FAILED_RADIUS
+    from surrogate.emulator.build import near_failed_mask
+
+    u = np.random.default_rng(0).uniform(size=(50, 6))
+    mask = near_failed_mask(u, [(u[0] + 0.1, 40.0, "x")])
+    np.testing.assert_array_equal(mask, np.linalg.norm(u - (u[0] + 0.1), axis=1) < 0.3)
+    assert not near_failed_mask(u, []).any()
+
+
+def test_a_calibration_database_that_shares_curves_with_the_fit_is_refused(emulator,
+                                                                           tmp_path):
+    from solver.errors import InputError
+    from surrogate.emulator.command import _calibrate
+
+    with pytest.raises(InputError) as info:
+        _calibrate(emulator, DB, 0.95)
+    assert info.value.field == "--band-calibration-db"
+
+
+def test_the_widened_band_applies_only_near_early_ended_curves(emulator):
+    """A pair's ``near_failed_band_scale`` multiplies the sd of a query within
+    NEAR_FAILED_RADIUS of an early-ended curve, and of no other; single and batch
+    queries agree."""
+    from dataclasses import replace
+
+    from surrogate.emulator.emulator import N_NODES, NEAR_FAILED_RADIUS
+
+    pe = emulator.pairs["ecoflex_00_30/pdms_1_15-"]
+    wide = replace(pe, near_failed_band_scale=np.full(2 * N_NODES, 2.0))
+    d = np.array([0.0, NEAR_FAILED_RADIUS * 0.99, NEAR_FAILED_RADIUS * 1.01, np.inf])
+    got = wide.band_scales(d)
+    np.testing.assert_allclose(got[:2], 2.0 * np.tile(pe.band_scale, (2, 1)))
+    np.testing.assert_allclose(got[2:], np.tile(pe.band_scale, (2, 1)))
+    np.testing.assert_allclose(replace(pe, near_failed_band_scale=None).band_scales(d),
+                               np.tile(pe.band_scale, (4, 1)))
+    fu = np.asarray(pe.failed[0][0], float)
+    near_u = np.clip(fu + 0.01, 0, 1)
+    assert wide.nearest_failed(near_u[None])[0] == pytest.approx(
+        wide.distance_to_failed(near_u))
+
+
 def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tmp_path):
     """The fit end to end on a slice of the shipped database (the PDMS group's first 16
     complete free-tip curves and its blocked-tip curves): the force model is the secant-normalised

@@ -25,6 +25,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="surrogate file to write (JSON)")
     parser.add_argument("--emulator-output", metavar="PATH",
                         help="also fit the design-space emulator and write it here (JSON)")
+    parser.add_argument("--band-calibration-db", metavar="PATH",
+                        help="with --emulator-output: FE curves of random designs of the box, "
+                             "not in --db, on which the emulator's bands are calibrated too "
+                             "(the shipped one: service/data/band-calibration.h5)")
     parser.add_argument("--report-dir", metavar="DIR", help="also write report.json and PNGs")
     parser.add_argument("--name", default="fe-fit", help="the surrogate's name")
     parser.add_argument("--level", type=float, default=0.95,
@@ -51,9 +55,35 @@ def _check_arguments(args: argparse.Namespace) -> None:
         if not Path(name).parent.is_dir():
             raise InputError(flag, f"directory {Path(name).parent} does not exist",
                              "a path in an existing directory")
+    if args.band_calibration_db is not None:
+        if args.emulator_output is None:
+            raise InputError("--band-calibration-db", "given without --emulator-output",
+                             "use it with --emulator-output")
+        if not Path(args.band_calibration_db).is_file():
+            raise InputError("--band-calibration-db", f"no file {args.band_calibration_db}",
+                             "an existing curve database (HDF5)")
+        _check_calibration_db(args.band_calibration_db)
     if args.report_dir is not None and Path(args.report_dir).exists() and not Path(
             args.report_dir).is_dir():
         raise InputError("--report-dir", f"{args.report_dir} is a file", "a directory path")
+
+
+def _check_calibration_db(path: str) -> None:
+    """The band-calibration database opens and holds at least one free-tip curve of the
+    default FE (checked before the fit, which takes minutes)."""
+    from solver.errors import InputError
+    from solver.settings import SolverSettings
+    from solver.store import CurveStore
+
+    try:
+        with CurveStore(path) as db:
+            count = sum(1 for r in db.records() if r.settings == SolverSettings())
+    except InputError as exc:   # not a curve database, or damaged
+        raise InputError("--band-calibration-db", exc.detail, exc.allowed) from None
+    if not count:
+        raise InputError("--band-calibration-db", f"{Path(path).name} holds no free-tip "
+                         "curve of the default FE", "FE curves of random designs of the box "
+                         "(benchmarks/heldout_designs.py)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -70,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
     if args.emulator_output:
         from surrogate.emulator.command import fit_and_save, side_by_side
 
-        emulator, lines = fit_and_save(args.db, args.emulator_output, args.level)
+        emulator, lines = fit_and_save(args.db, args.emulator_output, args.level,
+                                       args.band_calibration_db)
         lines += side_by_side(s.report["families"], emulator)  # type: ignore[attr-defined]
         print("\n".join(lines))
     if args.report_dir:

@@ -37,11 +37,13 @@ from surrogate.emulator.emulator import (
     ANGLES0,
     FORCE_FORMS,
     N_NODES,
+    NEAR_FAILED_RADIUS,
     Emulator,
     PairEmulator,
     _monotone,
     _with_origin,
     floored_band,
+    nearest_distance,
     node_curves,
 )
 from surrogate.emulator.features import (
@@ -237,6 +239,14 @@ def node_band_scales(curves: list, mean: np.ndarray, var: np.ndarray, level: flo
     return np.clip(scales, MIN_BAND_SCALE, 50.0)
 
 
+def near_failed_mask(u: np.ndarray, failed: list) -> np.ndarray:
+    """Which designs (rows of ``u``, unit cube) lie within NEAR_FAILED_RADIUS of an
+    early-ended curve of ``failed`` ((u, end angle, reason) tuples), as a query there
+    would be flagged (``near_early_ended_fe_curves``)."""
+    points = np.array([np.asarray(f[0], float) for f in failed]) if failed else None
+    return nearest_distance(u, points) < NEAR_FAILED_RADIUS
+
+
 def _coverage(held: list) -> float:
     """Share of all held-out FE points inside their band."""
     return float(np.mean(np.concatenate([(fe >= lo - 1e-9) & (fe <= hi + 1e-9)
@@ -278,6 +288,26 @@ def _cv_angle_report(curves: list, mean: np.ndarray, var: np.ndarray,
                                                                z_value(level), "volume")),
             "band_scale_median": float(np.median(scales[:N_NODES])),
             "band_scale_range": [float(scales.min()), float(scales.max())]}
+
+
+def _near_failed_report(curves: list, mean: np.ndarray, var: np.ndarray,
+                        band_scale: np.ndarray, near: np.ndarray, level: float) -> dict:
+    """Cross-validated angle RMSE and band coverage of the curves near an early-ended one
+    and of the others, by pressure (the random designs' calibration,
+    ``random_calibration``, widens the bands of the near ones)."""
+    z = z_value(level)
+    out: dict = {"curves": int(near.sum()), "far_curves": int((~near).sum())}
+    for name, sel in (("far", ~near), ("near", near)):
+        idx = np.flatnonzero(sel)
+        if not len(idx):
+            continue
+        sub = [curves[i] for i in idx]
+        out[f"{name}_cv_coverage"] = _coverage(held_out_curves(
+            sub, mean[idx], var[idx], band_scale, z))
+        out[f"{name}_cv_rmse_deg"] = float(np.sqrt(np.mean(np.concatenate(
+            [(m - fe) ** 2 for fe, m, _, _ in held_out_curves(sub, mean[idx], var[idx],
+                                                              band_scale, z)]))))
+    return out
 
 
 def force_range(u: np.ndarray, y: np.ndarray, share: float = FORCE_SHARE
@@ -330,7 +360,9 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     vgp = fit_output_gps(u, y, seed=seed)
     cv_mean, cv_var = cross_validated(u, y, seed)
     band_scale = node_band_scales(curves, cv_mean, cv_var, cv_band_target(level))
+    near = near_failed_mask(u, rows.failed)
     cv = _cv_angle_report(curves, cv_mean, cv_var, band_scale, level)
+    cv["near_failed"] = _near_failed_report(curves, cv_mean, cv_var, band_scale, near, level)
     force_gp, force_scale, force_nodes, force_designs = None, 1.0, 0, 0
     if force_rows is not None:
         force_nodes, fu, fy = force_range(np.array(force_rows[0]), np.array(force_rows[1]))

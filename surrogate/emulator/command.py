@@ -15,10 +15,12 @@ from surrogate.emulator.emulator import Emulator
 from surrogate.emulator.file import save_emulator
 
 
-def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95
-                 ) -> tuple[Emulator, list[str]]:
+def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95,
+                 calibration_db: str | Path | None = None) -> tuple[Emulator, list[str]]:
     """Fit the emulator to ``db_path``, write it to ``output``; the emulator and summary
-    lines (one per material group and bending side)."""
+    lines (one per material group and bending side). With ``calibration_db`` (FE curves
+    of random designs of the box, none of them in ``db_path``), the bands are calibrated
+    on those too (``random_calibration``)."""
     t0 = time.perf_counter()
     with CurveStore(db_path) as db:
         records = list(db.records(status=None))
@@ -28,6 +30,8 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95
                   "git_commit": git_commit(), "created_utc": time.strftime(
                       "%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     emulator = fit_emulator(records, name="emulator", level=level, provenance=provenance)
+    if calibration_db is not None:
+        emulator = _calibrate(emulator, calibration_db, level)
     fit_s = time.perf_counter() - t0
     path = save_emulator(emulator, output)
     lines = ["", f"{'emulator group':32s} {'designs':>7s} {'failed':>6s} {'comp':>4s} "
@@ -42,8 +46,48 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95
                      f"{rep['components']:4d} {rep['cv_rmse_deg']:12.2f} "
                      f"{rep['cv_max_deg']:11.2f} {rep['band_scale_median']:7.2f} "
                      f"{rep['cv_coverage']:9.3f} {rep['force_designs']:13d}")
+    cal = emulator.report.get("random_design_calibration")
+    if cal:
+        lines.append(random_calibration_lines(cal))
     lines.append(f"emulator fitted in {fit_s:.1f} s; wrote {path}")
     return emulator, lines
+
+
+def _calibrate(emulator: Emulator, calibration_db: str | Path, level: float) -> Emulator:
+    """``calibrate_on_random_designs`` on the curves of ``calibration_db``; its records
+    must not be in the fit's database (InputError naming the option otherwise)."""
+    from solver.errors import InputError
+    from surrogate.emulator.random_calibration import calibrate_on_random_designs
+
+    with CurveStore(calibration_db) as db:
+        records = list(db.records())
+        commands = [r.get("command", "") for r in db.metadata.get("runs", [])]
+    fitted = {k for pe in emulator.pairs.values() for k in pe.keys}
+    shared = [r.key for r in records if r.key in fitted]
+    if shared:
+        raise InputError("--band-calibration-db", f"{len(shared)} of its curves are in the "
+                         "fitted database", "FE curves of designs the database does not hold")
+    return calibrate_on_random_designs(emulator, records, level, source={
+        "database_name": Path(calibration_db).name, "database_records": len(records),
+        "database_commands": commands})
+
+
+def random_calibration_lines(cal: dict) -> str:
+    """The random designs' calibration in a few lines: factors and coverage by axis."""
+    out = [f"bands calibrated on {cal['curves']} random-design FE curves "
+           f"({cal['source'].get('database_name', '?')}), factor per angle bin "
+           f"{', '.join(f'{a:g}' for a in cal['bins_deg'])} deg:"]
+    for axis, f in cal["factors"].items():
+        before, after = cal["coverage_before"][axis], cal["coverage_after"][axis]
+        out.append(f"  by {axis}: far {' '.join(f'{x:.2f}' for x in f['far'])}, near x "
+                   f"{' '.join(f'{x:.2f}' for x in f['near'])}; coverage {before['all']:.3f}"
+                   f" -> {after['all']:.3f} (far {before['far']:.3f} -> {after['far']:.3f}, "
+                   f"near {_fmt(before['near'])} -> {_fmt(after['near'])})")
+    return "\n".join(out)
+
+
+def _fmt(x: float | None) -> str:
+    return "-" if x is None else f"{x:.3f}"
 
 
 def cv_rmse_by_key(emulator: Emulator) -> dict[str, float]:

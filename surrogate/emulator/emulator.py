@@ -105,6 +105,16 @@ def spread_variance(var: np.ndarray) -> np.ndarray:
     return out
 
 
+def nearest_distance(u: np.ndarray, points: np.ndarray | None) -> np.ndarray:
+    """Unit-cube distance from each row of ``u`` to the nearest row of ``points`` (inf
+    when there are none)."""
+    u = np.atleast_2d(u)
+    if points is None or not len(points):
+        return np.full(len(u), np.inf)
+    d2 = np.sum((u[:, None, :] - np.asarray(points)[None, :, :]) ** 2, axis=2)
+    return np.sqrt(d2.min(axis=1))
+
+
 def _end_deg(mean: np.ndarray, var: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The range model's variable (end angle / 90 deg) as the end angle and its sd, deg."""
     return 90.0 * np.asarray(mean), 90.0 * np.sqrt(np.maximum(var, 0.0))
@@ -134,6 +144,10 @@ class PairEmulator:
     force_form           what that variable is: "secant_ratio" (``features.force_feature``,
                          F/p over the free tip's emulated secant; fits since 2026-12-02)
                          or "per_kpa" (F_j / p_j in mN/kPa, signed; older files)
+    near_failed_band_scale  (2 N_NODES,) further multipliers (>= 1) for a design within
+                         NEAR_FAILED_RADIUS of an early-ended database curve, calibrated
+                         as band_scale on the cross-validated curves that lie so near one
+                         (None: older files, no widening)
     force_band_scale     as band_scale, for force
     coordinates          (n, 6) unit-cube coordinates of the database designs
     keys                 their record keys (nearest FE curves)
@@ -154,6 +168,7 @@ class PairEmulator:
     force_form: str = "per_kpa"
     fe_max_volume_ul: float | None = None   # the FE's volume stop (whole actuator, ul)
     range_model: VectorGP | None = None     # the end angle / 90 deg of the group's curves
+    near_failed_band_scale: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         # the early-ended curves' unit coordinates, stacked once for fe_range's distances
@@ -166,6 +181,23 @@ class PairEmulator:
         if self._failed_u is None:
             return np.zeros(0)
         return np.sqrt(np.sum((self._failed_u - u) ** 2, axis=1))
+
+    def nearest_failed(self, u: np.ndarray) -> np.ndarray:
+        """Unit-cube distance from each row of ``u`` (m, 6) to the nearest early-ended
+        database curve of the group (inf when none ended early)."""
+        return nearest_distance(u, self._failed_u)
+
+    def band_scales(self, failed_distance: np.ndarray | float) -> np.ndarray:
+        """The sd multipliers of every output node for designs this far (unit cube) from
+        the nearest early-ended database curve: ``band_scale``, times
+        ``near_failed_band_scale`` within NEAR_FAILED_RADIUS. Rows follow
+        ``failed_distance`` (one row for a scalar)."""
+        d = np.atleast_1d(np.asarray(failed_distance, float))
+        out = np.tile(self.band_scale, (len(d), 1))
+        if self.near_failed_band_scale is not None:
+            near = d < NEAR_FAILED_RADIUS
+            out[near] *= self.near_failed_band_scale
+        return out
 
     def distance_to_failed(self, u: np.ndarray) -> float:
         """Unit-cube distance from ``u`` to the nearest of them (inf when none)."""
@@ -359,15 +391,17 @@ class Emulator:
             var = spread_variance(var)
         else:
             mean, var = pe.curves.predict(u)
-        sd = np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES]
+        failed = pe.failed_distances(u)
+        nearest = float(failed.min()) if failed.size else float("inf")
+        scales = pe.band_scales(nearest)[0]
+        sd = np.sqrt(var[:N_NODES]) * scales[:N_NODES]
         p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
         p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
         v = FINE_ANGLES_DEG * np.exp(_B_ANGLE @ mean[N_NODES:])
-        failed = pe.failed_distances(u)
         limit, reason = pe.fe_range(u, v, point.length_scale, failed_distances=failed)
-        v_sd = np.sqrt(var[N_NODES:]) * pe.band_scale[N_NODES:]
+        v_sd = np.sqrt(var[N_NODES:]) * scales[N_NODES:]
         return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean,
-                             u, float(failed.min()) if failed.size else float("inf"))
+                             u, nearest)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -515,9 +549,9 @@ class Emulator:
                 "less counts as near) has an FE curve that ended early (the volume stop, "
                 "where the balloon grows more than the actuator bends, or a Newton "
                 "failure): there the FE's response changes abruptly and the emulator is "
-                "least reliable, its error on held-out designs often larger than its band "
-                "(docs/surrogate.md); an FE solve (POST /v1/solve) gives this design's own "
-                "curve")
+                "least reliable, its error on random designs two to three times that "
+                "elsewhere and its band widened to match (docs/surrogate.md); an FE solve "
+                "(POST /v1/solve) gives this design's own curve")
         if force is not None:
             unbacked = np.isnan(force[0]) & (p <= pe.force_limit_pa * point.pressure_scale)
             if unbacked.any():
@@ -596,7 +630,8 @@ class Emulator:
                          if pe.curves.per_output else pe.curves.predict_many(u))
             if pe.curves.per_output:
                 var = np.array([spread_variance(row) for row in var])
-            y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * pe.band_scale[:N_NODES]
+            scales = pe.band_scales(pe.nearest_failed(u))
+            y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * scales[:, :N_NODES]
             curves = [np.maximum.accumulate(c, axis=1) for c in node_curves(y, sd, z)]
             fmean = fsd = None
             if pe.force is not None:

@@ -40,7 +40,8 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 6   # 6: range_model, the emulated end of the FE curve (5 read: none);
+FORMAT_VERSION = 7   # 7: near_failed_band_scale (6 read: none, the group's bands);
+                     # 6: range_model, the emulated end of the FE curve (5 read: none);
                      # 5: fe_max_volume_ul, the FE's volume stop (4 read: none); 4:
                      # force_form (3 read: F/p); 3: band_scale per output node (2 read, one
                      # multiplier)
@@ -58,7 +59,9 @@ def emulator_to_dict(e: Emulator) -> dict:
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
             "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul,
-            "range_model": None if pe.range_model is None else pe.range_model.as_dict()})
+            "range_model": None if pe.range_model is None else pe.range_model.as_dict(),
+            "near_failed_band_scale": None if pe.near_failed_band_scale is None
+            else pe.near_failed_band_scale.tolist()})
     return seal(plain_json({
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
@@ -96,7 +99,9 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                 fe_max_volume_ul=None if p.get("fe_max_volume_ul") is None
                 else float(p["fe_max_volume_ul"]),
                 range_model=None if p.get("range_model") is None
-                else vector_gp_from_dict(p["range_model"]))
+                else vector_gp_from_dict(p["range_model"]),
+                near_failed_band_scale=None if p.get("near_failed_band_scale") is None
+                else _band_scales(p["near_failed_band_scale"]))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
         if not pairs:
@@ -122,6 +127,12 @@ def _precheck_pair(p: dict) -> None:
     if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
         raise ValueError(f"pair {p['pair']}: band scales must be {2 * N_NODES} positive "
                          "numbers")
+    near = p.get("near_failed_band_scale")
+    if near is not None:
+        near = _band_scales(near)
+        if near.shape != (2 * N_NODES,) or not np.isfinite(near).all() or (near < 1).any():
+            raise ValueError(f"pair {p['pair']}: near_failed_band_scale must be "
+                             f"{2 * N_NODES} numbers >= 1")
     if abs(float(p["sign"])) != 1.0:
         raise ValueError(f"pair {p['pair']}: sign must be +1 or -1")
     coordinates = np.array(p["coordinates"], float)
