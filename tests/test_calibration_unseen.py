@@ -373,6 +373,10 @@ def _cases() -> list[Case]:
         LOOP, specimens=4, noise_deg=0.9, seed=3)), nothing)
     add("clean-single-specimen", lambda: _first_specimen(lab_rows(designs_std10(),
                                                                   proto=LOOP)), nothing)
+    # three curves of one specimen each: a pair of effects fitted its folds' two curves'
+    # own deviations and "predicted" the third (loop._judge, MIN_SPARE_CURVES)
+    add("clean-single-specimen-seed-107", lambda: _first_specimen(
+        lab_rows(designs_std10(), proto=replace(LOOP, seed=107))), nothing)
     add("clean-one-design-2-flows", lambda: lab_rows(designs_odd_eco()[:1], proto=LOOP2),
         nothing)
     add("clean-pump-stops-between-readings", lambda: lab_rows(designs_std15(), proto=replace(

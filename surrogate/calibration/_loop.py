@@ -530,6 +530,14 @@ def _at_reach(f: FitResult, responses: Responses) -> list[str]:
     return out
 
 
+# A set of effects with k tested parameters is selectable from k + MIN_SPARE_CURVES
+# curves on: a specimen's own stiffness and camera shift its whole curve, so with k + 1
+# curves each fold of the cross-validation by curve fits k parameters to k specimens'
+# deviations, and a pair of effects "predicted" the third of three single-specimen curves
+# (tests/test_calibration_unseen.py, clean-single-specimen at seeds 107 and 207).
+MIN_SPARE_CURVES = 2
+
+
 def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_joint: float,
            responses: Responses, weight: float) -> dict:
     f = get_fit(effects)
@@ -582,6 +590,13 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
         reasons.append("cross-validated error of angle and pressure by volume together not "
                        "below the recalibrated baseline's: it moves the gauge pressure at the "
                        "injected volume the wrong way")
+    n_params = sum(1 for e in effects for p in EFFECTS[e].parameters if p.tested)
+    n_curves = f.model.obs.n_curves
+    if n_curves < n_params + MIN_SPARE_CURVES:
+        reasons.append(f"{n_params} tested parameters from {n_curves} curves: each curve "
+                       "is one specimen's own stiffness and camera, so a cross-validation "
+                       f"by curve needs {n_params + MIN_SPARE_CURVES} curves to back them "
+                       "(measure more specimens)")
     if len(effects) > 1:
         alone = [(get_fit((m,)).bic, get_xv((m,)).rmse_joint) for m in effects]
         if f.bic >= min(b for b, _ in alone) + DELTA_BIC:
