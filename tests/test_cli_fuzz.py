@@ -305,7 +305,7 @@ def _cases() -> list[tuple[str, list[str]]]:
                   ["--band-calibration-db", "{tmp}/db.h5"],     # without --emulator-output
                   *(["--emulator-output", "{tmp}/e.json", "--band-calibration-db",
                      "{tmp}/" + db] for db in ("missing.h5", "adir.h5", "garbage.h5",
-                                               "empty.h5", "text.h5"))):
+                                               "empty.h5", "text.h5", "db.h5"))):
         add(["fit", "--db", "{tmp}/db.h5", "-o", "{tmp}/out.json", *extra])
     # calibrate: hostile data files, then hostile options on good data
     for name in FILES:

@@ -62,15 +62,16 @@ def _check_arguments(args: argparse.Namespace) -> None:
         if not Path(args.band_calibration_db).is_file():
             raise InputError("--band-calibration-db", f"no file {args.band_calibration_db}",
                              "an existing curve database (HDF5)")
-        _check_calibration_db(args.band_calibration_db)
+        _check_calibration_db(args.band_calibration_db, args.db)
     if args.report_dir is not None and Path(args.report_dir).exists() and not Path(
             args.report_dir).is_dir():
         raise InputError("--report-dir", f"{args.report_dir} is a file", "a directory path")
 
 
-def _check_calibration_db(path: str) -> None:
-    """The band-calibration database opens and holds at least one free-tip curve of the
-    default FE (checked before the fit, which takes minutes)."""
+def _check_calibration_db(path: str, fit_db: str) -> None:
+    """The band-calibration database opens, holds at least one free-tip curve of the
+    default FE and shares no record with the fitted database (checked before the fit,
+    which takes minutes; the fit checks the last again against the curves it used)."""
     from solver.errors import InputError
     from solver.settings import SolverSettings
     from solver.store import CurveStore
@@ -78,12 +79,21 @@ def _check_calibration_db(path: str) -> None:
     try:
         with CurveStore(path) as db:
             count = sum(1 for r in db.records() if r.settings == SolverSettings())
+            keys = set(db.keys())
     except InputError as exc:   # not a curve database, or damaged
         raise InputError("--band-calibration-db", exc.detail, exc.allowed) from None
     if not count:
         raise InputError("--band-calibration-db", f"{Path(path).name} holds no free-tip "
                          "curve of the default FE", "FE curves of random designs of the box "
                          "(benchmarks/heldout_designs.py)")
+    try:
+        with CurveStore(fit_db) as db:
+            shared = keys & set(db.keys())
+    except (InputError, OSError):
+        return                      # --db's own check reports it
+    if shared:
+        raise InputError("--band-calibration-db", f"{len(shared)} of its curves are in the "
+                         "fitted database", "FE curves of designs the database does not hold")
 
 
 def run(args: argparse.Namespace) -> int:
