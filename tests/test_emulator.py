@@ -453,8 +453,8 @@ def test_a_calibration_database_that_shares_curves_with_the_fit_is_refused(emula
 
 def test_the_widened_band_applies_only_near_early_ended_curves(emulator):
     """A pair's ``near_failed_band_scale`` multiplies the sd of a query within
-    NEAR_FAILED_RADIUS of an early-ended curve, and of no other; single and batch
-    queries agree."""
+    NEAR_FAILED_RADIUS of an early-ended curve, and of no other; the batch distance
+    (``nearest_failed``) is the single one."""
     from dataclasses import replace
 
     from surrogate.emulator.emulator import N_NODES, NEAR_FAILED_RADIUS

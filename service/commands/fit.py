@@ -69,31 +69,18 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 
 def _check_calibration_db(path: str, fit_db: str) -> None:
-    """The band-calibration database opens, holds at least one free-tip curve of the
-    default FE and shares no record with the fitted database (checked before the fit,
-    which takes minutes; the fit checks the last again against the curves it used)."""
+    """The band-calibration database checked before the fit (which takes minutes), against
+    the records of ``fit_db``; the fit checks it again against the curves it used."""
     from solver.errors import InputError
-    from solver.settings import SolverSettings
     from solver.store import CurveStore
+    from surrogate.emulator.command import read_calibration_db
 
     try:
-        with CurveStore(path) as db:
-            count = sum(1 for r in db.records() if r.settings == SolverSettings())
-            keys = set(db.keys())
-    except InputError as exc:   # not a curve database, or damaged
-        raise InputError("--band-calibration-db", exc.detail, exc.allowed) from None
-    if not count:
-        raise InputError("--band-calibration-db", f"{Path(path).name} holds no free-tip "
-                         "curve of the default FE", "FE curves of random designs of the box "
-                         "(benchmarks/heldout_designs.py)")
-    try:
         with CurveStore(fit_db) as db:
-            shared = keys & set(db.keys())
+            keys = set(db.keys())
     except (InputError, OSError):
-        return                      # --db's own check reports it
-    if shared:
-        raise InputError("--band-calibration-db", f"{len(shared)} of its curves are in the "
-                         "fitted database", "FE curves of designs the database does not hold")
+        keys = set()                # --db's own check reports it
+    read_calibration_db(path, keys)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -301,12 +301,10 @@ def _near_failed_report(curves: list, mean: np.ndarray, var: np.ndarray,
         idx = np.flatnonzero(sel)
         if not len(idx):
             continue
-        sub = [curves[i] for i in idx]
-        out[f"{name}_cv_coverage"] = _coverage(held_out_curves(
-            sub, mean[idx], var[idx], band_scale, z))
+        held = held_out_curves([curves[i] for i in idx], mean[idx], var[idx], band_scale, z)
+        out[f"{name}_cv_coverage"] = _coverage(held)
         out[f"{name}_cv_rmse_deg"] = float(np.sqrt(np.mean(np.concatenate(
-            [(m - fe) ** 2 for fe, m, _, _ in held_out_curves(sub, mean[idx], var[idx],
-                                                              band_scale, z)]))))
+            [(m - fe) ** 2 for fe, m, _, _ in held]))))
     return out
 
 

@@ -55,21 +55,39 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95,
 
 def _calibrate(emulator: Emulator, calibration_db: str | Path, level: float) -> Emulator:
     """``calibrate_on_random_designs`` on the curves of ``calibration_db``; its records
-    must not be in the fit's database (InputError naming the option otherwise)."""
-    from solver.errors import InputError
+    must not be in the fit's database (``read_calibration_db``)."""
     from surrogate.emulator.random_calibration import calibrate_on_random_designs
 
-    with CurveStore(calibration_db) as db:
-        records = list(db.records())
-        commands = [r.get("command", "") for r in db.metadata.get("runs", [])]
     fitted = {k for pe in emulator.pairs.values() for k in pe.keys}
-    shared = [r.key for r in records if r.key in fitted]
-    if shared:
-        raise InputError("--band-calibration-db", f"{len(shared)} of its curves are in the "
-                         "fitted database", "FE curves of designs the database does not hold")
+    records, commands = read_calibration_db(calibration_db, fitted)
     return calibrate_on_random_designs(emulator, records, level, source={
         "database_name": Path(calibration_db).name, "database_records": len(records),
         "database_commands": commands})
+
+
+def read_calibration_db(path: str | Path, fitted_keys: set[str]
+                        ) -> tuple[list, list[str]]:
+    """The records of the band-calibration database at ``path`` and the commands of its
+    runs; InputError naming ``--band-calibration-db`` when it is not a curve database,
+    holds no free-tip curve of the default FE, or shares a record with ``fitted_keys``."""
+    from solver.errors import InputError
+    from solver.settings import SolverSettings
+
+    try:
+        with CurveStore(path) as db:
+            records = list(db.records())
+            commands = [r.get("command", "") for r in db.metadata.get("runs", [])]
+    except InputError as exc:   # not a curve database, or damaged
+        raise InputError("--band-calibration-db", exc.detail, exc.allowed) from None
+    if not any(r.settings == SolverSettings() for r in records):
+        raise InputError("--band-calibration-db", f"{Path(path).name} holds no free-tip "
+                         "curve of the default FE", "FE curves of random designs of the box "
+                         "(benchmarks/heldout_designs.py)")
+    shared = sum(1 for r in records if r.key in fitted_keys)
+    if shared:
+        raise InputError("--band-calibration-db", f"{shared} of its curves are in the "
+                         "fitted database", "FE curves of designs the database does not hold")
+    return records, commands
 
 
 def random_calibration_lines(cal: dict) -> str:

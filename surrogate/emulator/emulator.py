@@ -146,8 +146,8 @@ class PairEmulator:
                          or "per_kpa" (F_j / p_j in mN/kPa, signed; older files)
     near_failed_band_scale  (2 N_NODES,) further multipliers (>= 1) for a design within
                          NEAR_FAILED_RADIUS of an early-ended database curve, calibrated
-                         as band_scale on the cross-validated curves that lie so near one
-                         (None: older files, no widening)
+                         on FE curves of random designs of the box (random_calibration;
+                         None: no widening, as in files before format 7)
     force_band_scale     as band_scale, for force
     coordinates          (n, 6) unit-cube coordinates of the database designs
     keys                 their record keys (nearest FE curves)
@@ -201,8 +201,7 @@ class PairEmulator:
 
     def distance_to_failed(self, u: np.ndarray) -> float:
         """Unit-cube distance from ``u`` to the nearest of them (inf when none)."""
-        d = self.failed_distances(u)
-        return float(d.min()) if d.size else float("inf")
+        return float(self.nearest_failed(u)[0])
 
     def emulated_end_deg(self, u: np.ndarray) -> tuple[float, float]:
         """Where the FE curve of the design at unit coordinates ``u`` is emulated to end
