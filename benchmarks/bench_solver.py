@@ -6,6 +6,7 @@ available (SuperLU always; MKL PARDISO, installed by default on x86_64).
 
     python benchmarks/bench_solver.py [--mesh LEVEL] [--element hex2] [--max-angle-deg 90]
     python benchmarks/bench_solver.py --corners    # corners of the database's design box
+    python benchmarks/bench_solver.py --divisions balanced [--corners]   # a named level 0
 
 ``--corners``: the default settings on designs at the corners of the box the curve
 database spans (L 4-18 mm, t 0.5-1.2, T 0.6-2.0, b 1.0-2.4, h 0.10-0.30, W = 3; the
@@ -26,7 +27,7 @@ import numpy as np
 from solver import Design, SolverSettings
 from solver.linear import available_backends
 from solver.materials import MATERIALS, OgdenMaterial
-from solver.mesh import DEFAULT_DIVISIONS, MeshDivisions, xz_family
+from solver.mesh import DEFAULT_DIVISIONS, NAMED_DIVISIONS, MeshDivisions, xz_family
 from solver.stepping import solve
 
 
@@ -86,10 +87,10 @@ def corner_cases() -> list[tuple[str, Design, SolverSettings]]:
     ]
 
 
-def run_corners() -> None:
+def run_corners(divisions: MeshDivisions = DEFAULT_DIVISIONS) -> None:
     for name, design, settings in corner_cases():
         t0 = time.perf_counter()
-        curve = solve(design, settings)
+        curve = solve(design, settings, divisions=divisions)
         t = curve.timings_s
         print(json.dumps({
             "case": name, "status": curve.status, "reason": curve.reason,
@@ -115,15 +116,19 @@ def main() -> None:
     ap.add_argument("--corners", action="store_true", help="the design box's corners")
     ap.add_argument("--former-mesh", action="store_true",
                     help="the former default level 0 (before issue 12), for speed comparisons")
+    ap.add_argument("--divisions", choices=tuple(NAMED_DIVISIONS), default="default",
+                    help="a named level-0 resolution (solver/mesh.py)")
     args = ap.parse_args()
+    divisions = NAMED_DIVISIONS[args.divisions]
     print(f"# machine: {platform.processor() or platform.machine()}, "
           f"{platform.python_version()}, numpy {np.__version__}")
     if args.corners:
-        run_corners()
+        run_corners(divisions)
         return
     for backend in args.backends or available_backends():
         result = run(args.mesh, args.element, args.max_angle_deg, backend,
-                     xz_family(1) if args.former_mesh else DEFAULT_DIVISIONS)
+                     xz_family(1) if args.former_mesh else divisions)
+        result["divisions"] = "former" if args.former_mesh else args.divisions
         result["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
         print(json.dumps(result))
 

@@ -10,7 +10,8 @@ from solver.errors import InputError
 CONTROLS = ("volume", "pressure")
 ELEMENTS = ("hex2", "hex1")
 TIPS = ("free", "spring", "blocked")
-MESH_DIVISIONS = ("default", "fine_x")   # keys of solver.mesh.NAMED_DIVISIONS
+# the keys of solver.mesh.NAMED_DIVISIONS, least accurate first
+MESH_DIVISIONS = ("default", "balanced", "fine_x")
 
 DEFAULT_MESH_LEVEL = 0  # within 2 % of the mesh-converged curve (docs/verification.md)
 MAX_MESH_LEVEL = 2   # level 2: every division x 3, ~500k dofs at the standard design (a
@@ -23,9 +24,11 @@ class SolverSettings:
 
     mesh_level        0 (coarsest) .. MAX_MESH_LEVEL; level n has n + 1 times the divisions
                       of level 0 in every direction (solver/mesh.py)
-    mesh_divisions    the level-0 resolution: "default" (the shipped database's), or
-                      "fine_x" (twice the divisions along x, ~2x the dofs; within the
-                      issue-12 mesh targets, docs/verification.md)
+    mesh_divisions    the level-0 resolution: "default" (the shipped database's),
+                      "balanced" (graded along the chamber, two chamber layers: 0.94x the
+                      dofs, within the issue-12 mesh targets) or "fine_x" (twice the
+                      divisions along x, ~2x the dofs; within them too;
+                      docs/verification.md)
     element           "hex2" (27-node triquadratic, default) or "hex1" (8-node trilinear)
     control           "volume" (injected volume, pressure is an unknown) or "pressure"
     max_angle_deg     stop once the bending angle's magnitude exceeds this

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from solver.design import Design
+from solver.settings import MESH_DIVISIONS
 
 
 @dataclass(frozen=True)
@@ -144,7 +145,7 @@ def curves_from_store(path: str | os.PathLike) -> tuple[list[CurveData], dict]:
                 angle_deg=np.asarray(c.angle_deg, dtype=float),
                 force_mn=np.asarray(c.force_mn, dtype=float), key=rec.key, tip=s.tip,
                 spring_k_n_per_m=float(s.spring_k_n_per_m),
-                mesh_rank=(int(s.mesh_level), 1 if s.mesh_divisions == "fine_x" else 0,
+                mesh_rank=(int(s.mesh_level), MESH_DIVISIONS.index(s.mesh_divisions),
                            1 if s.element == "hex2" else 0),
                 volume_ul=np.asarray(c.volume_ul, dtype=float)))
     return curves, metadata

@@ -339,7 +339,12 @@ def _cases() -> list[tuple[str, list[str]]]:
                   ["--db", "{tmp}/adir"], ["--db", "{tmp}/missing-dir/x.h5"],
                   ["--adaptive", "3", "--emulator", "{tmp}/garbage.json"],
                   ["--adaptive", "3", "--emulator", "{tmp}/missing.json"],
-                  ["--adaptive", "3", "--db", "{tmp}/missing.h5"]):
+                  ["--adaptive", "3", "--db", "{tmp}/missing.h5"],
+                  ["--designs-from", "{tmp}/missing.h5"], ["--designs-from", "{tmp}/adir.h5"],
+                  ["--designs-from", "{tmp}/garbage.h5"], ["--designs-from", "{tmp}/text.h5"],
+                  ["--designs-from", "{tmp}/empty.h5"],
+                  ["--designs-from", "{tmp}/new.h5", "--db", "{tmp}/new.h5"],
+                  ["--designs-from", "{tmp}/db.h5", "--adaptive", "3"]):
         add(["precompute", str(REPO / "grids" / "default.toml"), "--db", "{tmp}/new.h5",
              "--dry-run", *extra])
     # serve: never starts the server

@@ -338,3 +338,45 @@ def test_balloon_precompute_on_a_full_file_system_says_where_and_why(tmp_path):
     assert rerun.unparked == len(parked) and rerun.skipped_done == 2 + len(parked)
     with CurveStore(db_path) as db:
         assert len(db) == 5
+
+
+def test_designs_from_another_database_keep_their_tips_and_take_the_grid_settings(
+        tmp_path, capsys):
+    """``balloon precompute GRID --designs-from OLD.h5``: the database rebuilt on new
+    settings (a mesh): every design of OLD with its own tip, the grid's settings on top,
+    new keys; the planned run solves exactly those and skips what the target holds."""
+    from service.cli import main
+    from solver import Design, SolverSettings
+    from solver.store import make_record, record_key
+
+    old = tmp_path / "old.h5"
+    designs = [Design(L_mm=4.1), Design(L_mm=7.1), Design(L_mm=7.1)]
+    tips = [SolverSettings(), SolverSettings(), SolverSettings(tip="blocked")]
+    with CurveStore(old, mode="a") as db:
+        db.put_many([make_record(d, s, fake_curve(d)) for d, s in zip(designs, tips)])
+    grid = tmp_path / "grid.toml"
+    grid.write_text('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n'
+                    '[settings]\nmesh_divisions = "balanced"\n')
+    new = tmp_path / "new.h5"
+    wanted = {record_key(d, SolverSettings(tip=s.tip, mesh_divisions="balanced"))
+              for d, s in zip(designs, tips)}
+    # one of them already solved in the target: skipped
+    d0 = designs[0]
+    with CurveStore(new, mode="a") as db:
+        db.put(make_record(d0, SolverSettings(mesh_divisions="balanced"), fake_curve(d0)))
+    assert main(["precompute", str(grid), "--db", str(new), "--designs-from", str(old),
+                 "--dry-run"]) == 0
+    out = capsys.readouterr()
+    assert "3 designs; in" in out.out and "1 done" in out.out and "would solve 2" in out.out
+    assert "mesh_divisions = 'balanced'" in out.err
+
+    from argparse import Namespace
+
+    from service.commands.precompute import _designs_from_grid
+    rebuilt = _designs_from_grid(load_grid(grid), Namespace(designs_from=str(old),
+                                                            db=str(new)))
+    assert {p.key for p in rebuilt.points} == wanted
+    assert sorted(p.settings.tip for p in rebuilt.points) == ["blocked", "free", "free"]
+    assert all(p.settings.mesh_divisions == "balanced" for p in rebuilt.points)
+    with CurveStore(old) as db:
+        assert not wanted & set(db.keys())       # new settings, new keys

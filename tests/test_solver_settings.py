@@ -15,7 +15,7 @@ from solver.settings import MAX_MESH_LEVEL, settings_from_dict
     ({"mesh_level": MAX_MESH_LEVEL + 1}, "mesh_level", f"0 <= mesh_level <= {MAX_MESH_LEVEL}"),
     ({"newton_tol": 0.5}, "newton_tol", "newton_tol <= 0.01"),
     ({"element": "tet4"}, "element", "hex2 | hex1"),
-    ({"mesh_divisions": "fine"}, "mesh_divisions", "default | fine_x"),
+    ({"mesh_divisions": "fine"}, "mesh_divisions", "default | balanced | fine_x"),
     ({"mesh_lvl": 1}, "mesh_lvl", "mesh_level"),
     ({"max_steps": "many"}, "max_steps", None),
 ])

@@ -36,6 +36,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "certain; the grid file still gives the settings")
     parser.add_argument("--emulator", default=None, metavar="PATH",
                         help="emulator file for --adaptive (default: fit one from --db)")
+    parser.add_argument("--designs-from", default=None, metavar="PATH",
+                        help="instead of the grid's designs, every design of this curve "
+                             "database, each with its record's settings (tip, spring) and "
+                             "the grid's [settings] on top: the database rebuilt on new "
+                             "settings, e.g. another mesh")
     parser.add_argument("--dry-run", action="store_true",
                         help="validate the grid and report what would be solved")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -55,6 +60,8 @@ def command_line(args: argparse.Namespace) -> str:
         words += ["--adaptive", str(args.adaptive)]
         if args.emulator:
             words += ["--emulator", args.emulator]
+    if getattr(args, "designs_from", None):
+        words += ["--designs-from", args.designs_from]
     return shlex.join(words)
 
 
@@ -81,6 +88,47 @@ def _adaptive_grid(grid: object, args: argparse.Namespace) -> object:
     return replace(grid, points=tuple(points))  # type: ignore[type-var]
 
 
+def _designs_from_grid(grid: object, args: argparse.Namespace) -> object:
+    """The grid with its points replaced by the designs of the database ``--designs-from``
+    (in the order they were stored), each with its record's settings and the settings the
+    grid sets (those that differ from SolverSettings' defaults) on top."""
+    from dataclasses import fields, replace
+
+    from solver.errors import InputError
+    from solver.precompute.grid import GridPoint
+    from solver.settings import SolverSettings
+    from solver.store import CurveStore, record_key
+
+    source = Path(args.designs_from)
+    if not source.is_file():
+        raise InputError("--designs-from", f"{args.designs_from} is not a file",
+                         "the path of a curve database (HDF5)")
+    if source.resolve() == Path(args.db).resolve():
+        raise InputError("--designs-from", "is the database being filled (--db)",
+                         "another curve database")
+    defaults = SolverSettings()
+    own = {f.name: getattr(grid.settings, f.name)  # type: ignore[attr-defined]
+           for f in fields(SolverSettings)
+           if getattr(grid.settings, f.name) != getattr(defaults, f.name)}  # type: ignore[attr-defined]
+    try:
+        with CurveStore(source) as db:
+            records = sorted(db.records(),
+                             key=lambda r: (str(r.provenance.get("created_utc", "")), r.key))
+    except InputError as e:        # not HDF5, not a curve database: named as this option
+        raise InputError("--designs-from", e.detail, e.allowed) from None
+    points, seen = [], set()
+    for rec in records:
+        settings = replace(rec.settings, **own).validated()
+        key = record_key(rec.design, settings)
+        if key not in seen:
+            seen.add(key)
+            points.append(GridPoint(key=key, design=rec.design, settings=settings))
+    print(f"--designs-from {args.designs_from}: {len(points)} designs, with "
+          f"{', '.join(f'{k} = {v!r}' for k, v in own.items()) or 'their own settings'}",
+          file=sys.stderr)
+    return replace(grid, points=tuple(points))  # type: ignore[type-var]
+
+
 def _interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
@@ -101,8 +149,13 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--db", f"directory {str(db_path.parent)!r} does not exist",
                          "a path in an existing directory")
     grid = load_grid(args.grid)
+    if args.adaptive is not None and args.designs_from:
+        raise InputError("--designs-from", "given with --adaptive",
+                         "one source of designs: --adaptive N or --designs-from PATH")
     if args.adaptive is not None:
         grid = _adaptive_grid(grid, args)
+    if args.designs_from:
+        grid = _designs_from_grid(grid, args)
     if args.dry_run:
         statuses: dict[str, str] = {}
         if Path(args.db).exists():

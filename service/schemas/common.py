@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from solver.design import LIMITS_MM
-from solver.settings import MAX_MESH_LEVEL, SolverSettings
+from solver.settings import MAX_MESH_LEVEL, MESH_DIVISIONS, SolverSettings
 
 MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
 # An inline material's id: a name, or a preset scaled as the store and the design search
@@ -87,10 +87,11 @@ class SolveSettingsIn(Schema):
 
     mesh_level: int = Field(_SOLVER.mesh_level, ge=0, le=MAX_MESH_LEVEL,
                             description="0 = coarsest")
-    mesh_divisions: Literal["default", "fine_x"] = Field(  # type: ignore[assignment]
+    mesh_divisions: Literal[MESH_DIVISIONS] = Field(  # type: ignore[assignment,valid-type]
         _SOLVER.mesh_divisions,
-        description="level-0 resolution: default (the database's) or fine_x (twice the x "
-                    "divisions, ~2x the solve time; within 2 % in angle)")
+        description="level-0 resolution: default (the database's), balanced (graded along "
+                    "the chamber, two chamber layers: the default's cost, within 2 % in "
+                    "angle) or fine_x (twice the x divisions, ~2x the solve time)")
     element: Literal["hex2", "hex1"] = _SOLVER.element  # type: ignore[assignment]
     control: Literal["volume", "pressure"] = _SOLVER.control  # type: ignore[assignment]
     max_angle_deg: float = Field(_SOLVER.max_angle_deg, ge=0.1, le=360.0,
