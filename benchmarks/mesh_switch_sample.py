@@ -24,8 +24,13 @@ from solver.store import CurveStore
 
 
 def _p_at(curve, angles):
+    """Pressure at ``angles`` (deg, magnitudes) on the curve's rising branch: its points
+    above 2 deg up to where |angle| first stops rising (a curve near the stiffness
+    balance can turn back)."""
     a, p = np.abs(curve.angle_deg), curve.pressure_pa
-    keep = a > 2.0
+    falls = np.flatnonzero(np.diff(a) <= 0)
+    rising = np.arange(len(a)) <= (falls[0] if len(falls) else len(a))
+    keep = (a > 2.0) & rising
     ok = [x for x in angles if keep.sum() > 3 and x < a[keep].max()]
     return ok, (PchipInterpolator(a[keep], p[keep])(ok) if ok else np.array([]))
 

@@ -373,10 +373,21 @@ def test_designs_from_another_database_keep_their_tips_and_take_the_grid_setting
     from argparse import Namespace
 
     from service.commands.precompute import _designs_from_grid
-    rebuilt = _designs_from_grid(load_grid(grid), Namespace(designs_from=str(old),
-                                                            db=str(new)))
+    rebuilt, origin = _designs_from_grid(load_grid(grid), Namespace(designs_from=str(old),
+                                                                    db=str(new)))
+    assert origin["n_records"] == 3 and origin["path"] == str(old)
     assert {p.key for p in rebuilt.points} == wanted
     assert sorted(p.settings.tip for p in rebuilt.points) == ["blocked", "free", "free"]
     assert all(p.settings.mesh_divisions == "balanced" for p in rebuilt.points)
     with CurveStore(old) as db:
         assert not wanted & set(db.keys())       # new settings, new keys
+
+
+def test_a_run_records_where_its_designs_came_from(tmp_path, grid):
+    db_path = tmp_path / "c.h5"
+    origin = {"path": "old.h5", "n_records": 9, "runs": [{"command": "balloon precompute x"}]}
+    precompute(grid, db_path, solve_fn=always_ok_solve, progress=False,
+               metadata={"designs_from": origin})
+    with CurveStore(db_path) as db:
+        assert db.metadata["designs_from"] == origin
+        assert len(db.metadata["runs"]) == 1

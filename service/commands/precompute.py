@@ -88,10 +88,12 @@ def _adaptive_grid(grid: object, args: argparse.Namespace) -> object:
     return replace(grid, points=tuple(points))  # type: ignore[type-var]
 
 
-def _designs_from_grid(grid: object, args: argparse.Namespace) -> object:
+def _designs_from_grid(grid: object, args: argparse.Namespace) -> tuple[object, dict]:
     """The grid with its points replaced by the designs of the database ``--designs-from``
     (in the order they were stored), each with its record's settings and the settings the
-    grid sets (those that differ from SolverSettings' defaults) on top."""
+    grid sets (those that differ from SolverSettings' defaults) on top; and the source's
+    provenance (its generating command, grid and runs), recorded in the new file as
+    ``designs_from``."""
     from dataclasses import fields, replace
 
     from solver.errors import InputError
@@ -114,6 +116,7 @@ def _designs_from_grid(grid: object, args: argparse.Namespace) -> object:
         with CurveStore(source) as db:
             records = sorted(db.records(),
                              key=lambda r: (str(r.provenance.get("created_utc", "")), r.key))
+            meta = db.metadata
     except InputError as e:        # not HDF5, not a curve database: named as this option
         raise InputError("--designs-from", e.detail, e.allowed) from None
     points, seen = [], set()
@@ -126,7 +129,9 @@ def _designs_from_grid(grid: object, args: argparse.Namespace) -> object:
     print(f"--designs-from {args.designs_from}: {len(points)} designs, with "
           f"{', '.join(f'{k} = {v!r}' for k, v in own.items()) or 'their own settings'}",
           file=sys.stderr)
-    return replace(grid, points=tuple(points))  # type: ignore[type-var]
+    origin = {"path": args.designs_from, "n_records": len(records),
+              **{k: meta[k] for k in ("generator_command", "grid_toml", "runs") if k in meta}}
+    return replace(grid, points=tuple(points)), origin  # type: ignore[type-var]
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -154,8 +159,9 @@ def run(args: argparse.Namespace) -> int:
                          "one source of designs: --adaptive N or --designs-from PATH")
     if args.adaptive is not None:
         grid = _adaptive_grid(grid, args)
+    origin = None
     if args.designs_from:
-        grid = _designs_from_grid(grid, args)
+        grid, origin = _designs_from_grid(grid, args)
     if args.dry_run:
         statuses: dict[str, str] = {}
         if Path(args.db).exists():
@@ -170,7 +176,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         summary = precompute(grid, args.db, workers=args.workers, scheduler=args.scheduler,
                              retry_failed=args.retry_failed, progress=not args.no_progress,
-                             command=command_line(args))
+                             command=command_line(args),
+                             metadata=None if origin is None else {"designs_from": origin})
     finally:
         signal.signal(signal.SIGTERM, previous)
     for line in summary.lines():

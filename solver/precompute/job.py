@@ -227,9 +227,11 @@ class _WriteFailed(Exception):
 def precompute(grid: Any, db_path: str | Path, workers: int = 1,
                scheduler: str | None = None, client: Any = None,
                solve_fn: SolveFn | None = None, retry_failed: bool = False,
-               progress: bool = True, command: str | None = None) -> JobSummary:
+               progress: bool = True, command: str | None = None,
+               metadata: dict[str, object] | None = None) -> JobSummary:
     """Open ``db_path`` as a writer, record this run in the file's metadata (command,
-    grid text and hash, versions), run the job, and record how it ended.
+    grid text and hash, versions), run the job, and record how it ended. ``metadata``:
+    further file attributes to record with the run (where its designs came from).
 
     ``grid`` is a ``Grid`` (from ``load_grid``); the backend is a pool of ``workers``
     processes, or Dask when ``scheduler`` (an address) or ``client`` is given.
@@ -249,7 +251,7 @@ def precompute(grid: Any, db_path: str | Path, workers: int = 1,
                    "grid_sha256": grid.sha256, "started_utc": utc_now(),
                    "package_version": package_version(), "git_commit": git_commit()}
             db.set_metadata(generator_command=command or "", grid_toml=grid.text,
-                            runs=[*db.metadata.get("runs", []), run])
+                            runs=[*db.metadata.get("runs", []), run], **(metadata or {}))
             unparked = unpark(db)  # results an earlier run could not write
             backend = (DaskBackend(scheduler, client) if scheduler or client is not None
                        else PoolBackend(workers))
