@@ -34,17 +34,22 @@ ANGLE_REF_DEG = np.array([5.879, 10.620, 18.605, 32.764, 61.325])
 
 D = DEFAULT_DIVISIONS
 CANDIDATES = {
-    "default": D,
-    "grading4": replace(D, x_chamber_grading=4.0),
-    "grading6": replace(D, x_chamber_grading=6.0),
+    "former": D,
+    "chamber_graded4": replace(D, x_chamber_grading=4.0),
+    "chamber_graded6": replace(D, x_chamber_grading=6.0),
     "chamber2": replace(D, chamber=2),
     "body3": replace(D, body=3),
-    "grading6_chamber2": replace(D, x_chamber_grading=6.0, chamber=2),
+    "chamber_graded6_chamber2": replace(D, x_chamber_grading=6.0, chamber=2),
+    "chamber_graded6_chamber2_x1.25": replace(D, x_chamber_grading=6.0, chamber=2,
+                                              x_chamber_mm=1.25),
+    "chamber_graded3_chamber2": replace(D, x_chamber_grading=3.0, chamber=2),
+    "wall3": replace(D, x_wall_grading=3.0),
+    "wall5": replace(D, x_wall_grading=5.0),
+    "wall3_chamber2": replace(D, x_wall_grading=3.0, chamber=2),
+    "wall5_chamber2_x1.25": replace(D, x_wall_grading=5.0, chamber=2, x_chamber_mm=1.25),
     "balanced": BALANCED_DIVISIONS,
-    "balanced_x_wall1": replace(BALANCED_DIVISIONS, x_wall_mm=1.0),
-    "balanced_x_chamber1.5": replace(BALANCED_DIVISIONS, x_chamber_mm=1.5),
-    "balanced_y_chamber3": replace(BALANCED_DIVISIONS, y_chamber=3),
-    "balanced_y_side1": replace(BALANCED_DIVISIONS, y_side=1),
+    "balanced_x1.25": replace(BALANCED_DIVISIONS, x_chamber_mm=1.25),
+    "balanced_wall2.5": replace(BALANCED_DIVISIONS, x_wall_grading=2.5),
     "fine_x": FINE_X_DIVISIONS,
 }
 

@@ -34,6 +34,8 @@ class MeshDivisions:
     x_refine: int = 1               # every x count above times this (nested x families)
     x_chamber_grading: float = 1.0  # largest / smallest element along the chamber (dense
                                     # at both chamber ends, where the membrane is bonded)
+    x_wall_grading: float = 1.6     # largest / smallest along each end wall (dense at the
+                                    # chamber end; GRADING_RATIO)
 
 
 # The default level 0 stays the former level 0 (x_refine = 1): the shipped curve database
@@ -47,14 +49,17 @@ class MeshDivisions:
 # SolverSettings(mesh_divisions="fine_x") (own record keys, solver/store/keys.py).
 DEFAULT_DIVISIONS = MeshDivisions()
 FINE_X_DIVISIONS = MeshDivisions(x_refine=2)
-# The former level 0's divisions spent where its error sits (docs/verification.md, "a
-# balanced level 0"): the x elements along the chamber graded 6:1 towards its bonded ends
-# (1.25 mm on average instead of a uniform 1.0), and two layers through the chamber height
-# instead of one. 0.94 x the dofs of the default on the standard design; against the
-# three-level extrapolation it reads the angle at 1000-2000 Pa within -1.3 to -1.8 % and
-# the pressure at 10-60 deg within +0.3 to +0.5 %: both issue-12 targets at the default's
-# cost. The candidate default once the database is rebuilt on it.
-BALANCED_DIVISIONS = MeshDivisions(x_chamber_mm=1.25, chamber=2, x_chamber_grading=6.0)
+# The former level 0's divisions spent where its error sits (docs/verification.md, "A
+# balanced level 0"): the end walls graded 3:1 towards the chamber's bonded ends (was
+# 1.6:1), two layers through the chamber height instead of one, and 1.1 mm along the
+# chamber instead of 1.0 (uniform: chambers graded towards their ends, or walls graded
+# 5:1, reached the targets too but ended database curves early with Newton failures at
+# membrane stretches of 8-9). 1.03 x the dofs of the default on the standard design and
+# its full curve in 1.02 x the time; against the three-level extrapolation it reads the
+# angle at 1000-2000 Pa within -0.7 to -1.3 % and the pressure at 10-60 deg within +0.1
+# to +0.5 %: both issue-12 targets at the default's cost. The candidate default once the
+# database is rebuilt on it.
+BALANCED_DIVISIONS = MeshDivisions(x_chamber_mm=1.1, chamber=2, x_wall_grading=3.0)
 # The level-0 resolutions a user selects by name (SolverSettings.mesh_divisions), least
 # accurate first (the order ranks a database's records, surrogate/dataset.py).
 NAMED_DIVISIONS = {"default": DEFAULT_DIVISIONS, "balanced": BALANCED_DIVISIONS,
@@ -90,11 +95,13 @@ def refinement(level: int) -> int:
     return level + 1
 
 
-def _segment(a: float, b: float, n: int, dense_at: str | None = None) -> np.ndarray:
-    """n elements on [a, b]; geometric grading with the small ones at 'a' or 'b'."""
+def _segment(a: float, b: float, n: int, dense_at: str | None = None,
+             ratio: float = 0.0) -> np.ndarray:
+    """n elements on [a, b]; geometric grading with the small ones at 'a' or 'b', largest /
+    smallest = ``ratio`` (GRADING_RATIO when 0)."""
     if n == 1 or dense_at is None:
         return np.linspace(a, b, n + 1)
-    q = GRADING_RATIO ** (1.0 / (n - 1))
+    q = (ratio or GRADING_RATIO) ** (1.0 / (n - 1))
     sizes = q ** np.arange(n)
     if dense_at == "b":
         sizes = sizes[::-1]
@@ -148,9 +155,9 @@ def build_mesh(design: Design, level: int,
     n_ch = rx * max(2, int(np.ceil(d.L_mm / (k * divisions.x_chamber_mm) - 1e-9)))
     n_left = rx * max(1, int(np.ceil(x0 / (k * divisions.x_wall_mm) - 1e-9)))
     n_right = rx * max(1, int(np.ceil((xb - x1) / (k * divisions.x_wall_mm) - 1e-9)))
-    x = _join(_segment(0.0, x0, n_left, "b"),
+    x = _join(_segment(0.0, x0, n_left, "b", divisions.x_wall_grading),
               _symmetric_segment(x0, x1, n_ch, divisions.x_chamber_grading),
-              _segment(x1, xb, n_right, "a"))
+              _segment(x1, xb, n_right, "a", divisions.x_wall_grading))
 
     yb, yw = 0.5 * d.b_mm, 0.5 * d.W_mm
     y = _join(np.linspace(0.0, yb, r * divisions.y_chamber + 1),
