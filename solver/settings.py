@@ -25,7 +25,7 @@ class SolverSettings:
     mesh_level        0 (coarsest) .. MAX_MESH_LEVEL; level n has n + 1 times the divisions
                       of level 0 in every direction (solver/mesh.py)
     mesh_divisions    the level-0 resolution: "default" (the shipped database's),
-                      "balanced" (walls graded to the chamber, two chamber layers: 0.94x the
+                      "balanced" (walls graded to the chamber, two chamber layers: 1.03x the
                       dofs, within the issue-12 mesh targets) or "fine_x" (twice the
                       divisions along x, ~2x the dofs; within them too;
                       docs/verification.md)
