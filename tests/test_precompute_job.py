@@ -391,3 +391,24 @@ def test_a_run_records_where_its_designs_came_from(tmp_path, grid):
     with CurveStore(db_path) as db:
         assert db.metadata["designs_from"] == origin
         assert len(db.metadata["runs"]) == 1
+
+
+def test_designs_from_take_a_setting_the_grid_names_even_at_its_default(tmp_path):
+    """A grid that names the default value of a setting moves records solved with another
+    value to it (after a change of default, rebuilding on the new default mesh)."""
+    from argparse import Namespace
+
+    from service.commands.precompute import _designs_from_grid
+    from solver import Design, SolverSettings
+    from solver.store import make_record
+
+    old = tmp_path / "old.h5"
+    with CurveStore(old, mode="a") as db:
+        db.put(make_record(Design(), SolverSettings(element="hex1", tip="blocked"),
+                           fake_curve(Design())))
+    grid = tmp_path / "grid.toml"
+    grid.write_text('pairs = [["pdms_1_10", "ecoflex_00_30"]]\n[settings]\nelement = "hex2"\n')
+    rebuilt, _ = _designs_from_grid(load_grid(grid), Namespace(designs_from=str(old),
+                                                               db=str(tmp_path / "new.h5")))
+    (point,) = rebuilt.points
+    assert point.settings.element == "hex2" and point.settings.tip == "blocked"

@@ -91,9 +91,10 @@ def _adaptive_grid(grid: object, args: argparse.Namespace) -> object:
 def _designs_from_grid(grid: object, args: argparse.Namespace) -> tuple[object, dict]:
     """The grid with its points replaced by the designs of the database ``--designs-from``
     (in the order they were stored), each with its record's settings and the settings the
-    grid sets (those that differ from SolverSettings' defaults) on top; and the source's
+    grid's [settings] table names on top; and the source's
     provenance (its generating command, grid and runs), recorded in the new file as
     ``designs_from``."""
+    import tomllib
     from dataclasses import fields, replace
 
     from solver.errors import InputError
@@ -108,10 +109,11 @@ def _designs_from_grid(grid: object, args: argparse.Namespace) -> tuple[object, 
     if source.resolve() == Path(args.db).resolve():
         raise InputError("--designs-from", "is the database being filled (--db)",
                          "another curve database")
-    defaults = SolverSettings()
+    # the settings the grid's [settings] table names, whether or not they are defaults
+    # (a grid that asks for the default mesh must move records of another mesh to it)
+    named = tomllib.loads(grid.text).get("settings", {})  # type: ignore[attr-defined]
     own = {f.name: getattr(grid.settings, f.name)  # type: ignore[attr-defined]
-           for f in fields(SolverSettings)
-           if getattr(grid.settings, f.name) != getattr(defaults, f.name)}  # type: ignore[attr-defined]
+           for f in fields(SolverSettings) if f.name in named}
     try:
         with CurveStore(source) as db:
             records = sorted(db.records(),
