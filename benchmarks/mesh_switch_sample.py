@@ -17,22 +17,10 @@ import time
 from dataclasses import replace
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
+from compare_rebuild import pressure_at
 
 from solver.stepping import solve
 from solver.store import CurveStore
-
-
-def _p_at(curve, angles):
-    """Pressure at ``angles`` (deg, magnitudes) on the curve's rising branch: its points
-    above 2 deg up to where |angle| first stops rising (a curve near the stiffness
-    balance can turn back)."""
-    a, p = np.abs(curve.angle_deg), curve.pressure_pa
-    falls = np.flatnonzero(np.diff(a) <= 0)
-    rising = np.arange(len(a)) <= (falls[0] if len(falls) else len(a))
-    keep = (a > 2.0) & rising
-    ok = [x for x in angles if keep.sum() > 3 and x < a[keep].max()]
-    return ok, (PchipInterpolator(a[keep], p[keep])(ok) if ok else np.array([]))
 
 
 def main() -> None:
@@ -63,9 +51,10 @@ def main() -> None:
                          "end_angle_deg": round(float(c.angle_deg[-1]), 1),
                          "end_pressure_pa": round(float(c.pressure_pa[-1]))}
         if rec.settings.tip == "free":
-            angles, p_def = _p_at(curves["default"], (10.0, 30.0, 60.0))
-            _, p_bal = _p_at(curves["balanced"], angles)
-            n = min(len(p_def), len(p_bal))
+            angles = (10.0, 30.0, 60.0)
+            p_def = pressure_at(curves["default"], angles)
+            p_bal = pressure_at(curves["balanced"], angles)
+            n = len(angles)
             row["p_balanced_over_default_pct"] = dict(zip(
                 [f"{a:g}deg" for a in angles[:n]],
                 np.round(100 * (p_bal[:n] / p_def[:n] - 1), 2).tolist(), strict=True))
