@@ -6,6 +6,7 @@ solves they are made from (docs/calibration.md, "Tests").
     .venv/bin/python benchmarks/calibration_cases.py --emulator-error
     .venv/bin/python benchmarks/calibration_cases.py --emulator PATH --reports DIR
     .venv/bin/python benchmarks/calibration_cases.py --unseen [CASE ...]
+    .venv/bin/python benchmarks/calibration_cases.py --unseen --seed-offset 100   # other noise
 
 The cases are those of tests/test_calibration_loop.py (same labs, truths and seed), run
 against the shipped emulator (or ``--emulator PATH``); one markdown row per case:
@@ -106,11 +107,13 @@ def emulator_error(emulator) -> None:
               f"{err.mean():+.2f} | {np.sqrt(np.mean(sd**2)):.2f} |")
 
 
-def unseen(wanted: list[str], emulator_path: Path | None = None) -> int:
+def unseen(wanted: list[str], emulator_path: Path | None = None, seed_offset: int = 0) -> int:
     """The unseen-lab data sets: one line each (right or not, what the report says, CPU
     seconds) and the count; with ``emulator_path`` that emulator as the baseline instead
-    of the shipped one."""
+    of the shipped one; ``seed_offset`` added to every protocol's noise seed."""
     import test_calibration_unseen as unseen_mod
+
+    unseen_mod.SEED_OFFSET = seed_offset
 
     if emulator_path is not None:
         from surrogate.emulator.file import load_emulator
@@ -140,9 +143,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--reports", type=Path, help="write each case's report here")
     parser.add_argument("--unseen", action="store_true",
                         help="the unseen-lab data sets (tests/test_calibration_unseen.py)")
+    parser.add_argument("--seed-offset", type=int, default=0,
+                        help="with --unseen: added to every protocol's noise seed")
     args = parser.parse_args(argv)
     if args.unseen:
-        return unseen(args.cases, args.emulator)
+        return unseen(args.cases, args.emulator, args.seed_offset)
     from surrogate.emulator.file import load_emulator
 
     emulator = load_emulator(args.emulator)

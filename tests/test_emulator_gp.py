@@ -66,3 +66,39 @@ def test_a_single_query_and_the_batch_agree_on_both_variance_paths():
             m0, v0 = vgp.predict(test[i], variance_of=MEANS_ONLY)
             np.testing.assert_allclose(m0, mean[i], rtol=1e-10)
             assert np.isnan(v0).all()
+
+
+def _dense_neg_reml(params: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
+    """The restricted likelihood written out on dense matrices (the textbook form):
+    1/2 [(n - p) log s2 + log|K| + log|H^T K^-1 H|], s2 = y^T P y / (n - p)."""
+    n, d = x.shape
+    lengths, nugget = np.exp(params[:d]), np.exp(params[d])
+    r = np.sqrt((((x[:, None, :] - x[None, :, :]) / lengths) ** 2).sum(-1))
+    k = (1 + np.sqrt(5) * r + 5 / 3 * r**2) * np.exp(-np.sqrt(5) * r) + nugget * np.eye(n)
+    h = np.column_stack((np.ones(n), x))
+    kinv = np.linalg.inv(k)
+    hk = h.T @ kinv @ h
+    p = kinv - kinv @ h @ np.linalg.inv(hk) @ h.T @ kinv
+    s2 = y @ p @ y / (n - h.shape[1])
+    return 0.5 * ((n - h.shape[1]) * np.log(s2) + np.linalg.slogdet(k)[1]
+                  + np.linalg.slogdet(hk)[1])
+
+
+def test_the_restricted_likelihood_and_its_gradient_against_the_dense_form():
+    # _neg_reml works on the pairs i > j and LAPACK's packed factorisation: its value is
+    # the dense form's, and its gradient the dense form's central differences
+    from surrogate.emulator.gp import TrainingPairs, _neg_reml
+
+    rng = np.random.default_rng(3)
+    x = rng.uniform(size=(40, 3))
+    y = curves(x)[:, 3] + 0.01 * rng.standard_normal(40)
+    pairs = TrainingPairs.of(x)
+    for params in (np.log([0.6, 0.6, 0.6, 1e-6]), np.log([0.3, 1.5, 0.8, 1e-3])):
+        value, grad = _neg_reml(params, x, y, pairs)
+        assert value == _neg_reml(params, x, y)[0]       # pairs computed on the fly alike
+        np.testing.assert_allclose(value, _dense_neg_reml(params, x, y), rtol=1e-9)
+        step = 1e-5
+        numeric = [(_dense_neg_reml(params + step * e, x, y)
+                    - _dense_neg_reml(params - step * e, x, y)) / (2 * step)
+                   for e in np.eye(len(params))]
+        np.testing.assert_allclose(grad, numeric, rtol=1e-4, atol=1e-6)
