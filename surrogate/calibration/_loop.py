@@ -51,7 +51,7 @@ from surrogate.calibration._least_squares import (
     paired_cv,
 )
 from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
-from surrogate.calibration._residual import excess_limit, residual_summary
+from surrogate.calibration._residual import residual_summary
 from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._specimens import SpecimenScatter, specimen_scatter
 from surrogate.calibration._start import Baseline
@@ -309,7 +309,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "baseline_sd_deg": math.sqrt(baseline_var),
         "baseline_sd_after_deg": math.sqrt(own_var(chosen)),
         "noise_floor_rel_se": _num(noise.rel_se),
-        "excess_allowance": excess_limit(noise) if noise.source == "replicates" else None,
+        "excess_allowance": left["excess_allowance"],
         "structure_after": structure,
         "selection_rule": {"z_significant": Z_SIGNIFICANT, "delta_bic_below": DELTA_BIC,
                            "cv_below": "rmse_before_deg", "pairs": "each member earns its "
