@@ -139,7 +139,7 @@ def excess_limit(noise: NoiseFloor, cv_rel: float = float("nan")) -> float:
     or 1 + 2 relative standard errors of their ratio when that is larger. Both are
     measured on the same few specimens, whose scatter is shared along each curve: with 9
     curves of 3 % stiffness scatter read against the gauge pressure, a right model's ratio
-    ranged over 0.81-1.89 in 60 noise draws (docs/calibration.md, "What is left"). The two
+    ranged over 0.80-1.89 in 60 noise draws (docs/calibration.md, "What is left"). The two
     relative errors are added in quadrature, their positive correlation (a specimen far
     off raises both) left out, which errs towards the wider allowance."""
     rel_f = noise.rel_se if math.isfinite(noise.rel_se) else 0.0
