@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import cho_solve, solve_triangular
-from scipy.linalg.blas import dtpmv as tpmv
+from scipy.linalg.blas import stpmv
 
 from surrogate.emulator.gp import (
     SQRT5,
@@ -56,12 +56,10 @@ class VectorGP:
 
     def __post_init__(self) -> None:
         # Stacked per-component arrays: one query is a few small matrix products
-        # (no triangular solves). L^-1 stays in double precision: the variance is
-        # 1 - |L^-1 k|^2, a cancellation near the data; in single precision (2.5x
-        # faster) the held-out band coverage fell from 0.91 to 0.79. It is stored
-        # transposed and C-contiguous ("linv_t") for the batched product of predict_many;
-        # a single query reads the outputs it needs packed (``_variance_stack``: BLAS
-        # dtpmv, half the work of a full mat-vec).
+        # (no triangular solves). L^-1 is stored in double precision, transposed and
+        # C-contiguous ("linv_t"), for the batched product of predict_many; a single
+        # query reads the outputs it needs packed in single precision
+        # (``_variance_stack``, ``_shifted_variance``).
         x = self.gps[0].x
         stack = {
             "inv_l2": np.array([1.0 / gp.lengths**2 for gp in self.gps]),      # (m, d)
@@ -71,6 +69,7 @@ class VectorGP:
             "a_inv": np.array([_a_inv(gp) for gp in self.gps]),                 # (m, p, p)
             "beta": np.array([gp.beta for gp in self.gps]),                     # (m, p)
             "s2": np.array([gp.signal_var for gp in self.gps]),
+            "nugget": np.array([gp.nugget for gp in self.gps]),
             "varying": self.gps[0].varying, "x": x,
             "identity": self.components.shape[0] == self.components.shape[1]
             and bool(np.array_equal(self.components, np.eye(len(self.components))))}
@@ -101,15 +100,14 @@ class VectorGP:
             raise ValueError("variance_of needs one GP per output (identity components)")
         rows, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
         ks = k[rows]
-        n = ks.shape[1]
-        if n <= SMALL_N:      # one batched product beats a BLAS call per output
+        if ks.shape[1] <= SMALL_N:      # one batched product beats a BLAS call per output
             v = np.matmul(ks[:, None, :], st["linv_t"][rows])[:, 0, :]
+            left = 1.0 - (v * v).sum(1)
         else:
-            v = np.array([tpmv(n, ap, kj, lower=0, trans=1)      # L^-1 k
-                          for ap, kj in zip(packed, ks, strict=True)])
+            left = _shifted_variance(ks, st["x"], st["inv_l2"][rows], st["nugget"][rows],
+                                     packed)
         rr = h[None, :] - np.matmul(ks[:, None, :], kinv_h)[:, 0, :]
-        variances = s2 * np.maximum(
-            1.0 - (v * v).sum(1) + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
+        variances = s2 * np.maximum(left + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
         if variance_of is None:
             var = self.scale**2 * (variances @ self.components**2) + self.residual_var
         else:
@@ -119,10 +117,10 @@ class VectorGP:
 
     def _variance_stack(self, sel: slice | np.ndarray) -> tuple:
         """The per-output arrays a variance over outputs ``sel`` reads: their indices,
-        L^-1 packed (its lower triangle row by row, n (n + 1) / 2 numbers: BLAS dtpmv
-        reads exactly that, 12 % faster than dtrmv on the square array at n = 450, half
-        its memory), K^-1 H, A^-1 and the signal variances, gathered once per distinct
-        ``sel`` (a query asks for the same few)."""
+        L^-1 packed in single precision (its lower triangle row by row, n (n + 1) / 2
+        numbers: BLAS stpmv reads exactly that; ``_shifted_variance``), K^-1 H, A^-1 and
+        the signal variances, gathered once per distinct ``sel`` (a query asks for the
+        same few)."""
         st = self._stack  # type: ignore[attr-defined]
         rows = np.arange(len(st["s2"]))[sel]
         key = rows.tobytes()
@@ -130,7 +128,8 @@ class VectorGP:
         hit = cache.get(key)
         if hit is None:
             lower = np.tril_indices(len(st["x"]))
-            hit = (rows, tuple(np.ascontiguousarray(st["linv_t"][j].T)[lower] for j in rows),
+            hit = (rows, tuple(np.ascontiguousarray(st["linv_t"][j].T)[lower]
+                               .astype(np.float32) for j in rows),
                    np.ascontiguousarray(st["kinv_h"][rows]),
                    np.ascontiguousarray(st["a_inv"][rows]), st["s2"][rows].copy())
             if len(cache) < 8:
@@ -205,6 +204,33 @@ def _matern52_in_place(r2: np.ndarray) -> np.ndarray:
     np.exp(t, out=t)
     poly *= t
     return poly
+
+
+def _shifted_variance(ks: np.ndarray, x: np.ndarray, inv_l2: np.ndarray,
+                      nugget: np.ndarray, packed_linv: tuple[np.ndarray, ...]) -> np.ndarray:
+    """1 - k^T K^-1 k for each output's correlations ``ks`` (m, n) with the training
+    inputs ``x`` (n, d), K = L L^T = C + g I (unit signal variance, nugget g), from L^-1
+    packed in single precision (``packed_linv``).
+
+    For any training row i, K^-1 k = e_i + K^-1 delta with delta = k - K e_i, so
+
+        1 - k^T K^-1 k = 2 (1 - k_i) + g - |L^-1 delta|^2      (K_ii = 1 + g).
+
+    With i the training design most correlated with the query, delta is small near the
+    data and so is the single-precision error of |L^-1 delta|^2; the direct form
+    1 - |L^-1 k|^2 cancels two numbers near 1 there, and in single precision it lost the
+    variance (held-out band coverage 0.91 -> 0.79). On the shipped emulator's four groups,
+    300 queries each (random, and 0.001 and 0.03 from database designs), this variance is
+    within 5 % of the double-precision one (median 0.1 %), at 0.6 of the time
+    (benchmarks/RESULTS.md, fifteenth session)."""
+    n = ks.shape[1]
+    i = int(np.argmax(ks.sum(0)))               # one row for all outputs: one GEMM
+    k_col = _matern52_in_place(inv_l2 @ ((x - x[i]) ** 2).T)          # C e_i, (m, n)
+    k_col[:, i] += nugget                                              # K e_i
+    delta = (ks - k_col).astype(np.float32)
+    v = np.array([stpmv(n, ap, dj, lower=0, trans=1)                   # L^-1 delta
+                  for ap, dj in zip(packed_linv, delta, strict=True)], dtype=float)
+    return 2.0 * (1.0 - ks[:, i]) + nugget - (v * v).sum(1)
 
 
 def _linv(gp: GaussianProcess) -> np.ndarray:
