@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate.calibration._backing import baseline_covariance
+from surrogate.calibration._backing import baseline_covariance, resolution_mm
 from surrogate.calibration._least_squares import paired_cv
 from surrogate.calibration._specimens import SpecimenScatter, specimen_scatter
 
@@ -159,3 +159,13 @@ def test_an_unbacked_measurement_effect_is_interpreted_without_a_band():
     text = interpret(report, {"structured": False, "unexplained_rms_deg": 0.0,
                               "sentence": ""})
     assert "pressure scale is known to 1 % only" in text and "pressure_gain" in text
+
+
+def test_a_dimension_is_known_to_its_last_written_decimal_at_most_to_0_01_mm():
+    """The resolution behind the nominal dimensions' term (_backing.py): what a lab wrote,
+    read back from the number, never claimed coarser than 0.01 mm for a round value."""
+    assert resolution_mm(0.165) == 0.001
+    assert resolution_mm(17.86) == 0.01
+    assert resolution_mm(0.15) == 0.01
+    assert resolution_mm(1.0) == resolution_mm(1) == resolution_mm(4.1) == 0.01
+    assert abs(resolution_mm(0.164552) - 1e-6) < 1e-18

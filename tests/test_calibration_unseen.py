@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import functools
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -566,9 +567,11 @@ def test_loading_holds_and_unloading_are_read_as_the_pump_ran(designs, truth, pr
 # since the baseline's pressure scale and the specimens' scatter are counted: _backing.py,
 # _specimens.py)
 WRONG = {
-    "creep-0.3-odd-one-flow": "selected, g 0.18 +/- 0.02 for 0.3 (tau 3.9 for 2): read every "
-    "3.4 s at one flow rate g and tau trade off, and the emulator's 0.3-0.9 deg error at "
-    "those records moves them (exact data: 0.297, 2.08)",
+    "creep-0.3-odd-one-flow": "selected, g 0.17 +/- 0.02 for 0.3 (tau 4.0 for 2): read every "
+    "3.4 s at one flow rate g and tau trade off, and the designs' dimensions written to "
+    "0.01 mm move them: the emulator reproduces both records at their own dimensions to "
+    "0.02 deg, at the written ones (T 1.6453 -> 1.65, b 2.3416 -> 2.34, ...) it differs by "
+    "up to 1.3 deg (measured 2026-12-04; exact data: 0.297, 2.08)",
 }
 
 
@@ -581,6 +584,21 @@ def test_unseen_lab_data(case):
     report, error, _ = run_case(case)
     ok, what = judge(case, report, error)
     assert ok, what
+
+
+def test_clean_data_on_designs_written_to_0_01_mm_select_no_physical_change(monkeypatch):
+    """Clean FE data of two Ecoflex/Ecoflex records whose dimensions the lab wrote to 0.01
+    mm (T 1.6453 -> 1.65, b 2.3416 -> 2.34): the emulator, exact at the records' own
+    dimensions to 0.02 deg, differs at the written ones by up to 1.3 deg. With the noise
+    of seed offset 100 a stiffer body of 0.988 +/- 0.003 was selected for that rounding;
+    the nominal dimensions' resolution in the baseline's uncertainty (_backing.py) makes
+    it 0.988 +/- 0.012, not significant."""
+    monkeypatch.setattr(sys.modules[__name__], "SEED_OFFSET", 100)
+    case = next(c for c in CASES if c.id == "clean-eco-odd-loop")
+    report, error, _ = run_case(case)
+    assert error is None and report["selected_effects"] == [], judge(case, report, error)[1]
+    body = next(c for c in report["candidates"] if c["effects"] == ["body_stiffness"])
+    assert body["params"]["body_mu_scale"]["sd"] > 0.008
 
 
 def test_a_pump_stopping_between_readings_is_found_and_timed():

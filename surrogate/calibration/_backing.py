@@ -29,10 +29,21 @@ the angle is read at p / (1 + e), and by injected volume the angle is unchanged 
 chamber pressure is (1 + e) p. A gauge gain or inlet resistance read off the gauge
 channel is therefore uncertain by at least that much (a gauge reading 1 % high and two
 layers 1 % stiffer than their presets are the same data).
+
+A third acts on every size read off a physical change: the nominal dimensions. A lab
+writes a design's L, t, T, b and h to some resolution (0.01 mm, or finer when it writes
+more decimals), and its specimens' true dimensions lie anywhere within it. Each dimension
+of each design is taken as uniform over its last written decimal (at most
+``DIMENSION_RESOLUTION_MM``; sd = resolution / sqrt 12), independent of the others, and
+its coherent direction is the baseline's own: the angle's change at every reading when
+that dimension moves by its sd, at the fitted physical change (by pressure, as the band;
+none on the gauge channel). A stiffer body of 0.988 +- 0.003 fitted on clean FE data
+whose designs were written to 0.01 mm is that rounding, not a stiffer body.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -41,6 +52,40 @@ from surrogate.calibration._least_squares import FitResult
 from surrogate.calibration._response import Responses
 
 PRESSURE_SCALE_SD = 0.01
+DIMENSION_RESOLUTION_MM = 0.01          # the coarsest resolution a written dimension has
+DIMENSIONS = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
+
+
+def resolution_mm(value: float) -> float:
+    """The resolution (mm) a dimension written as ``value`` implies: its last decimal
+    (the shortest text that reads back as the same number: 0.165 -> 0.001), at most
+    DIMENSION_RESOLUTION_MM (1.0 and 1 are 0.01)."""
+    text = repr(float(value))
+    if "e" in text or "E" in text:
+        return DIMENSION_RESOLUTION_MM
+    decimals = len(text.split(".")[1].rstrip("0")) if "." in text else 0
+    return min(10.0 ** -decimals, DIMENSION_RESOLUTION_MM)
+
+
+def dimension_rows(f: FitResult, responses: Responses) -> list[np.ndarray]:
+    """For each dimension, the angle's change (deg) at every reading when that dimension
+    of every design moves by its resolution's sd, at the fitted physical change; [] when
+    the fit changes no design."""
+    m = f.model
+    if not m.physical:
+        return []
+    values = f.values
+    thetas = [values[e.parameters[0].name] for e in m.physical]
+    at = m.reading_pressure(f.x)
+    base = responses.angle_at(m.physical, thetas)
+    out = []
+    for name in DIMENSIONS:
+        def moved(d, name=name):
+            v = getattr(d, name)
+            return replace(d, **{name: v + resolution_mm(v) / math.sqrt(12.0)})
+        change = responses.angle_at(m.physical, thetas, moved) - base
+        out.append(np.nan_to_num(responses.lookup(change, m.design_index, at), nan=0.0))
+    return out
 
 
 def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray | None:
@@ -57,7 +102,8 @@ def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray | None:
 
 def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
     """``f`` with the baseline's own uncertainty in its covariance: its band at the
-    fitted design (a physical change) and its pressure scale (every fit)."""
+    fitted design and the nominal dimensions' resolution (a physical change), and its
+    pressure scale (every fit)."""
     if f.jac is None or not f.k:
         return f
     design = f.model.design_index
@@ -73,6 +119,10 @@ def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
             s = np.concatenate([s, np.zeros(f.jac.shape[0] - s.size)])
         cov = cov + baseline_covariance(f.jac, m.whiten(s), design)
         band_sd = float(np.sqrt(np.mean(s[:f.model.obs.n] ** 2)))   # the angle rows
+    for g in dimension_rows(f, responses):
+        if f.jac.shape[0] > g.size:  # the pressure channel: none (as the band)
+            g = np.concatenate([g, np.zeros(f.jac.shape[0] - g.size)])
+        cov = cov + baseline_covariance(f.jac, m.whiten(g), design)
     return replace(f, cov=f.cov + cov, baseline_shift=np.sqrt(np.diag(cov)),
                    baseline_sd_deg=band_sd)
 

@@ -566,7 +566,8 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
     unbacked = not significant and all(v > Z_SIGNIFICANT for v in z_data.values())
     if not significant:
         if unbacked:
-            own = (f"its band at the fitted design ({f.baseline_sd_deg:.2f} deg) and "
+            own = (f"its band at the fitted design ({f.baseline_sd_deg:.2f} deg), the "
+                   "nominal dimensions' last written decimal and "
                    if f.baseline_sd_deg is not None else "")
             reasons.append(f"not significant (z <= 3) once the baseline's own uncertainty "
                            f"({own}its pressure scale, known to "

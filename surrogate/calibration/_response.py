@@ -155,13 +155,23 @@ class Responses:
     def sd_at(self, effects: tuple[Effect, ...], thetas: list[float]) -> np.ndarray:
         """(n_designs, pressures): the baseline's own sd at the designs changed by the
         physical ``effects`` at ``thetas`` (asked afresh, not interpolated)."""
+        return np.array([self._predict(d, True)[1] for d in self._changed(effects, thetas)])
+
+    def angle_at(self, effects: tuple[Effect, ...], thetas: list[float],
+                 edit=None) -> np.ndarray:
+        """(n_designs, pressures): the baseline's angle (deg) at the designs changed by
+        ``edit`` (a function of a design, or None) and then by the physical ``effects`` at
+        ``thetas`` (asked afresh)."""
+        return np.array([self._predict(d) for d in self._changed(effects, thetas, edit)])
+
+    def _changed(self, effects: tuple[Effect, ...], thetas: list[float], edit=None) -> list:
         out = []
         for k in self.keys:
-            d = self.designs[k]
+            d = self.designs[k] if edit is None else edit(self.designs[k])
             for e, theta in zip(effects, thetas, strict=True):
                 d = e.design(d, float(theta))
-            out.append(self._predict(d, True)[1])
-        return np.array(out)
+            out.append(d)
+        return out
 
     def nominal_sd(self) -> np.ndarray:
         """(n_designs, pressures): the baseline's own standard deviation for an FE solve
