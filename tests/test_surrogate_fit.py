@@ -214,3 +214,19 @@ def test_band_scale_is_calibrated_on_held_out_designs_when_errors_are_correlated
     path = save_surrogate(s, tmp_path / "s.json")
     assert load_surrogate(path).family_fits[0].parameters["exponential"].band_scale == \
         pytest.approx(par.band_scale)
+
+
+def test_a_family_of_one_design_is_left_to_the_emulator_and_counted() -> None:
+    """The design-space database holds families of one design each (their own T, b, h or
+    stiffness scale): the exponential's constants are not determined there, so the fit
+    skips them and says how many, and fits the grid's family as before."""
+    grid = synthetic_curves(noise_deg=0.0)
+    lone = [replace(c, key=c.key + "-lone", design=replace(c.design, T_mm=1.37))
+            for c in grid if c.design.L_mm == 7.1]         # one L, three t: not determined
+    s = fit_surrogate(grid + lone, forms=("exponential",))
+    assert len(s.family_fits) == 1 and s.family_fits[0].T_mm == grid[0].design.T_mm
+    skipped = s.report["skipped_families"]
+    assert skipped["count"] == 1 and skipped["curves"] == len(lone)
+    assert s.provenance["n_records"] == len(grid)
+    np.testing.assert_allclose(s.family_fits[0].parameters["exponential"].theta, PAPER_THETA,
+                               rtol=1e-6)

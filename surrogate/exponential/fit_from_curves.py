@@ -35,6 +35,12 @@ from surrogate.exponential.volume_relation import VolumeCurve, fit_volume_relati
 from surrogate.json_plain import plain_json
 
 EXTENDED_GAIN = 0.9  # extended becomes the default when its LODO RMSE < 0.9 x the paper's
+# A family's constants need designs that tell them apart: tau = a_t log10(b_t t) two
+# membrane thicknesses, A = a L (and its leave-one-design-out test) two chamber lengths.
+# The design-space database's random designs are families of one design each (their own
+# T, b, h and stiffness scales): the emulator answers those, not an exponential.
+MIN_THICKNESSES = 2
+MIN_LENGTHS = 2
 
 
 def package_version() -> str:
@@ -75,6 +81,14 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
     groups: dict[tuple, list[CurveData]] = {}
     for c in angle_curves:
         groups.setdefault(_group_key(c), []).append(c)
+    skipped = {k: g for k, g in groups.items() if not _determined(g)}
+    groups = {k: g for k, g in groups.items() if k not in skipped}
+    if not groups:
+        raise InputError("db", f"no family with free-tip curves at {MIN_THICKNESSES} or more "
+                         f"membrane thicknesses and {MIN_LENGTHS} or more chamber lengths "
+                         f"({len(skipped)} families fall short): the exponential model's "
+                         "constants are not determined",
+                         "a database with a grid of L and t per family (grids/default.toml)")
     force_groups: dict[tuple, list[CurveData]] = {}
     for c in select_force_curves(curves):
         force_groups.setdefault(_group_key(c), []).append(c)
@@ -88,8 +102,8 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
         reports.append(rep)
         bar.update(1)
     bar.close()
-    used = sorted(c.key for c in angle_curves) + sorted(
-        c.key for group in force_groups.values() for c in group)
+    used = sorted(c.key for g in groups.values() for c in g) + sorted(
+        c.key for key, group in force_groups.items() if key in groups for c in group)
     provenance = {
         "format_version": FORMAT_VERSION, "created_utc": datetime.now(UTC).isoformat(),
         "package_version": package_version(), "git_commit": git_commit(),
@@ -97,11 +111,25 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
         "record_keys": used, "n_records": len(used), "level": level, "forms": list(forms),
         "source": "fit of FE curves",
     }
+    n_force = sum(key in groups for key in force_groups)
     report = {"level": level, "families": reports,
-              "force": "no record holds a force curve" if not force_groups else
-              f"force models for {len(force_groups)} famil(ies)"}
+              "force": "no record holds a force curve" if not n_force else
+              f"force models for {n_force} famil(ies)",
+              "skipped_families": {
+                  "count": len(skipped),
+                  "curves": sum(len(g) for g in skipped.values()),
+                  "why": f"fewer than {MIN_THICKNESSES} membrane thicknesses or "
+                         f"{MIN_LENGTHS} chamber lengths: the constants are not determined "
+                         "(the design-space emulator answers these designs)"}}
     return Surrogate(name=name, family_fits=tuple(families), provenance=provenance,
                      report=plain_json(report))
+
+
+def _determined(members: list[CurveData]) -> bool:
+    """Whether a family's curves span enough thicknesses and lengths for its constants."""
+    t = {round(c.design.t_mm, 6) for c in members}
+    L = {round(c.design.L_mm, 6) for c in members}
+    return len(t) >= MIN_THICKNESSES and len(L) >= MIN_LENGTHS
 
 
 def _group_key(c: CurveData) -> tuple:
