@@ -54,6 +54,7 @@ from surrogate.emulator.features import (
     force_features,
     free_secant_deg_per_pa,
 )
+from surrogate.emulator.variance_nodes import choose as choose_variance_nodes
 from surrogate.emulator.vector_gp import VectorGP, fit_output_gps, fit_vector_gp
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
@@ -434,5 +435,6 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
     if not models:
         raise InputError("db", "no material pair has enough default-FE curves in the box",
                          f">= {MIN_DESIGNS} complete free-tip curves per pair")
+    nodes, report["variance_nodes"] = choose_variance_nodes(models.values())
     return Emulator(name=name, pairs=models, provenance=dict(provenance or {}), report=report,
-                    sign_models=sign_models)  # type: ignore[arg-type]
+                    sign_models=sign_models, variance_nodes=nodes)  # type: ignore[arg-type]

@@ -40,6 +40,7 @@ from surrogate.emulator.features import (
     per_kpa_from_feature,
     spline_matrix,
 )
+from surrogate.emulator.variance_nodes import FORMAT_7_NODES, spline, spread_variance
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
 from surrogate.predictor import InversePrediction, Prediction, number_array
 from surrogate.volume_control import by_volume
@@ -66,19 +67,6 @@ SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness bala
 # inside the band (a few per cent) and say nothing about the physics.
 EMULATED_PRESSURE_DROP = 1e-3
 _B_ANGLE = spline_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
-# A query's variance, its costly part (one O(n^2) triangular product per node), is exact
-# at these 17 of the 32 pressure nodes and read at the others off the natural cubic
-# spline of log variance in log angle. Each node's GP has its own hyperparameters, so
-# the sd along a curve is not smooth everywhere: on the 2155-record fit the 6.5-deg
-# node's sd sits above its neighbours' and the former set (every third node at 3-70 deg)
-# read the 4-10 deg nodes up to 13 % off. This set was chosen by greedy removal from all
-# 32 nodes on 200 random designs of the box and checked on 100 others: within 2.9 %
-# (largest) and 1.0 % (median) of the exact sd there (benchmarks/RESULTS.md, ninth
-# session). The band's calibration (band_scale, from exact leave-one-out variances) is
-# itself some 10 % uncertain.
-VARIANCE_NODES = np.array([0, 1, 2, 3, 6, 9, 10, 11, 12, 14, 15, 17, 21, 25, 28, 30, 31])
-_B_VARIANCE = spline_matrix(ANGLE_NODES_DEG[VARIANCE_NODES], ANGLE_NODES_DEG)
-_VARIANCE_FLOOR = 1e-14   # (log units)^2: a node's variance at a database design
 _L_ANGLE = linear_matrix(ANGLE_NODES_DEG, FINE_ANGLES_DEG)
 
 
@@ -94,15 +82,6 @@ def node_curves(y: np.ndarray, sd: np.ndarray, z: float
     half = z * (sd @ _L_ANGLE.T)
     return (theta * np.exp(centre), theta * np.exp(centre - half),
             theta * np.exp(centre + half))
-
-
-def spread_variance(var: np.ndarray) -> np.ndarray:
-    """Every pressure node's variance from those at VARIANCE_NODES (the volume nodes, whose
-    sd bends more along the curve, up to 9 % off so read, keep theirs)."""
-    out = var.copy()
-    known = np.maximum(var[VARIANCE_NODES], _VARIANCE_FLOOR)
-    out[:N_NODES] = np.exp(_B_VARIANCE @ np.log(known))
-    return out
 
 
 def nearest_distance(u: np.ndarray, points: np.ndarray | None) -> np.ndarray:
@@ -326,6 +305,17 @@ class Emulator:
     provenance: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
     sign_models: dict[str, VectorGP] = field(default_factory=dict)
+    # the pressure nodes a query computes the exact variance at, chosen by the fit
+    # (surrogate.emulator.variance_nodes; files before format 8: FORMAT_7_NODES)
+    variance_nodes: np.ndarray = field(default_factory=FORMAT_7_NODES.copy)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_variance_spline", spline(self.variance_nodes))
+
+    def spread_variance(self, var: np.ndarray) -> np.ndarray:
+        """``var`` with every pressure node's variance read off those at variance_nodes."""
+        return spread_variance(var, self.variance_nodes,
+                               self._variance_spline)  # type: ignore[attr-defined]
 
     # -- the curve of one design --------------------------------------------------------
     def _sign(self, point: BoxPoint, u: np.ndarray | None = None) -> float:
@@ -384,10 +374,11 @@ class Emulator:
         u = point.coordinates()     # once: the sign, curves, range and force models
         pe = self._pair(point, u)
         if pe.curves.per_output:
-            which = (np.concatenate((VARIANCE_NODES, np.arange(N_NODES, 2 * N_NODES)))
-                     if volume_band else VARIANCE_NODES)
+            nodes = self.variance_nodes
+            which = (np.concatenate((nodes, np.arange(N_NODES, 2 * N_NODES)))
+                     if volume_band else nodes)
             mean, var = pe.curves.predict(u, variance_of=which)
-            var = spread_variance(var)
+            var = self.spread_variance(var)
         else:
             mean, var = pe.curves.predict(u)
         failed = pe.failed_distances(u)
@@ -624,11 +615,11 @@ class Emulator:
         for key, idx in by_pair.items():
             pe = self.pairs[key]
             u = coords[idx]
-            # the variance as a single query reads it: exact at VARIANCE_NODES, spread
-            mean, var = (pe.curves.predict_many(u, variance_of=VARIANCE_NODES)
+            # the variance as a single query reads it: exact at variance_nodes, spread
+            mean, var = (pe.curves.predict_many(u, variance_of=self.variance_nodes)
                          if pe.curves.per_output else pe.curves.predict_many(u))
             if pe.curves.per_output:
-                var = np.array([spread_variance(row) for row in var])
+                var = np.array([self.spread_variance(row) for row in var])
             scales = pe.band_scales(pe.nearest_failed(u))
             y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * scales[:, :N_NODES]
             curves = [np.maximum.accumulate(c, axis=1) for c in node_curves(y, sd, z)]

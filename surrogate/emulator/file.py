@@ -34,13 +34,15 @@ from threadpoolctl import ThreadpoolController
 from solver.atomic_file import write_text_atomic
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
+from surrogate.emulator.variance_nodes import FORMAT_7_NODES
 from surrogate.emulator.vector_gp import vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
 from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 7   # 7: near_failed_band_scale (6 read: none, the group's bands);
+FORMAT_VERSION = 8   # 8: variance_nodes, chosen per fit (7 read: FORMAT_7_NODES);
+                     # 7: near_failed_band_scale (6 read: none, the group's bands);
                      # 6: range_model, the emulated end of the FE curve (5 read: none);
                      # 5: fe_max_volume_ul, the FE's volume stop (4 read: none); 4:
                      # force_form (3 read: F/p); 3: band_scale per output node (2 read, one
@@ -67,7 +69,8 @@ def emulator_to_dict(e: Emulator) -> dict:
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
         "force_pressure_nodes_pa": FORCE_PRESSURE_NODES_PA.tolist(),
         "provenance": e.provenance, "report": e.report, "pairs": pairs,
-        "sign_models": {g: m.as_dict() for g, m in e.sign_models.items()}}))
+        "sign_models": {g: m.as_dict() for g, m in e.sign_models.items()},
+        "variance_nodes": np.asarray(e.variance_nodes).tolist()}))
 
 
 def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
@@ -111,7 +114,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
         for group, m in sign_models.items():
             _check_gp(m, f"sign model {group}")
         return Emulator(name=str(d["name"]), pairs=pairs, provenance=dict(d["provenance"]),
-                        report=dict(d.get("report") or {}), sign_models=sign_models)
+                        report=dict(d.get("report") or {}), sign_models=sign_models,
+                        variance_nodes=_variance_nodes(d.get("variance_nodes")))
     except (KeyError, TypeError, ValueError, IndexError, AttributeError, ArithmeticError,
             np.linalg.LinAlgError) as exc:
         raise SurrogateFileError(origin, f"damaged emulator file ({type(exc).__name__}: "
@@ -182,6 +186,19 @@ def _check_pair(pe: PairEmulator) -> None:
         _check_gp(pe.force, f"pair {pe.pair} force")
     if pe.range_model is not None:
         _check_gp(pe.range_model, f"pair {pe.pair} range model")
+
+
+def _variance_nodes(nodes: object) -> np.ndarray:
+    """The file's variance nodes (FORMAT_7_NODES before format 8): increasing pressure-node
+    indices from the first to the last (ValueError otherwise: damage)."""
+    if nodes is None:
+        return FORMAT_7_NODES.copy()
+    out = np.asarray(nodes)
+    if (out.ndim != 1 or out.size < 2 or out.dtype.kind not in "iu" or out[0] != 0
+            or out[-1] != len(ANGLE_NODES_DEG) - 1 or (np.diff(out) <= 0).any()):
+        raise ValueError(f"variance_nodes {nodes!r}: increasing node indices from 0 to "
+                         f"{len(ANGLE_NODES_DEG) - 1}")
+    return out.astype(int)
 
 
 def save_emulator(e: Emulator, path: str | os.PathLike) -> Path:
