@@ -497,6 +497,7 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
     # the fit chose its own variance nodes (variance_nodes.py), and the file keeps them
     from surrogate.emulator.variance_nodes import COUNT
     assert e.report["variance_nodes"]["chosen"] and len(e.variance_nodes) == COUNT
+    assert e.report["variance_nodes"]["check_median_rel_sd_error"] < 0.05
     np.testing.assert_array_equal(again.variance_nodes, e.variance_nodes)
     rec = blocked[0]
     c = rec.curve

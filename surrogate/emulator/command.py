@@ -46,6 +46,12 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95,
                      f"{rep['components']:4d} {rep['cv_rmse_deg']:12.2f} "
                      f"{rep['cv_max_deg']:11.2f} {rep['band_scale_median']:7.2f} "
                      f"{rep['cv_coverage']:9.3f} {rep['force_designs']:13d}")
+    nodes = emulator.report.get("variance_nodes") or {}
+    if nodes.get("chosen"):
+        lines.append(f"variance exact at pressure nodes {nodes['nodes']}, the others read off "
+                     f"their spline: on {nodes['check_designs']} other random designs within "
+                     f"{100 * nodes['check_largest_rel_sd_error']:.1f} % (median "
+                     f"{100 * nodes['check_median_rel_sd_error']:.1f} %) of the exact sd")
     cal = emulator.report.get("random_design_calibration")
     if cal:
         lines.append(random_calibration_lines(cal))

@@ -86,6 +86,8 @@ def choose(pairs, count: int = COUNT) -> tuple[np.ndarray, dict]:
                                        "chosen": False}
     fit = np.vstack([exact_variances(pairs, s) for s in SEEDS])
     nodes = greedy(fit, count)
-    big, med = errors(nodes, exact_variances(pairs, 123))
+    check = exact_variances(pairs, 123)
+    big, med = errors(nodes, check)
     return nodes, {"nodes": nodes.tolist(), "chosen": True, "designs": len(fit),
-                   "check_largest_rel_sd_error": big, "check_median_rel_sd_error": med}
+                   "check_designs": len(check), "check_largest_rel_sd_error": big,
+                   "check_median_rel_sd_error": med}
