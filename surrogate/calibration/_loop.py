@@ -132,7 +132,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     traits = data_traits(obs, baseline.open_parameters)
     fits: dict[tuple[str, ...], FitResult] = {}
     cvs: dict[tuple[str, ...], CrossValidation] = {}
-    switches, without = _pump_switches_open(obs, responses, baseline, channel, noise, k)
+    switches, without = _pump_switches_open(obs, responses, baseline, channel, k)
     if without is not None and not switches["open"]:   # the recalibrated baseline, done
         fits[()], cvs[()] = without
 
@@ -716,15 +716,16 @@ def _nuisance(f: FitResult) -> np.ndarray:
                             (f.model.angles(f.x, pscale=1 + h) - base) / h])
 
 
-#: the pump's switch times are freed only when that lowers the recalibrated baseline's
-#: cross-validated error (angle and gauge pressure by volume) by SWITCH_GAIN and leaves it
-#: within SWITCH_EXPLAINS x the noise floor: a switch between readings misplaces the
-#: volume of every later reading, a misfit no physical effect explains (3.25 -> 0.97 deg
-#: against a 0.98 deg floor on clean FE data, tests/test_calibration_unseen.py), while
-#: freed on data a catalogued effect explains (creep during holds) the shifts take part
-#: of it and hide it (1.28 -> 1.21 deg against 0.67)
-SWITCH_GAIN = 0.25
-SWITCH_EXPLAINS = 1.3
+#: the pump's switch times are freed when that lowers the recalibrated baseline's
+#: cross-validated error (angle and gauge pressure by volume): a switch between readings
+#: misplaces the volume of every later reading, a misfit no physical effect explains
+#: (3.25 -> 0.97 deg against a 0.98 deg floor on clean FE data,
+#: tests/test_calibration_unseen.py). Until 2026-12-04 they were freed only when that also
+#: lowered it by a quarter and left it within 1.3 x the floor, decided on the baseline
+#: alone: data with an effect (a camera gain, creep) failed the test for the effect's
+#: misfit, the effect then took up the switches' and the loop read a wrong size or
+#: flagged (unseen sets at seed offset 100: 37 -> 39 of 42 right; seed 0: 41 -> 42; the
+#: loop's cases unchanged, creep 0.265 +/- 0.059 for 0.25; benchmarks/RESULTS.md).
 
 
 def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baseline,
@@ -741,7 +742,7 @@ def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baselin
 
 
 def _pump_switches_open(obs: Observations, responses: Responses, baseline: Baseline,
-                        channel: dict, noise: NoiseFloor, k: int
+                        channel: dict, k: int
                         ) -> tuple[dict, tuple[FitResult, CrossValidation] | None]:
     """Whether the loop fits when the pump changed state between readings
     (_history.pump_switches; one shift per change, shared by the replicates of one
@@ -765,15 +766,12 @@ def _pump_switches_open(obs: Observations, responses: Responses, baseline: Basel
         cv[free] = (xv.rmse_joint, xv.rmse_deg)
         runs[free] = (f, xv)
     out["rmse_cv_without_deg"], out["rmse_cv_with_deg"] = cv[False][0], cv[True][0]
-    gain = cv[True][0] <= (1.0 - SWITCH_GAIN) * cv[False][0]
-    explains = noise.rms_deg is not None and cv[True][1] <= SWITCH_EXPLAINS * noise.rms_deg
-    out["open"] = bool(gain and explains)
+    out["open"] = bool(cv[True][0] < cv[False][0])
     out["why"] = (
         "the pump changed state between readings: fitting when lowers the cross-validated "
-        f"error from {cv[False][0]:.2f} to {cv[True][0]:.2f} deg and leaves only replicate "
-        "scatter" if out["open"] else
-        f"fitting when it changed state does not explain the data (cross-validated "
-        f"{cv[False][0]:.2f} -> {cv[True][0]:.2f} deg): the changes are taken at readings")
+        f"error from {cv[False][0]:.2f} to {cv[True][0]:.2f} deg" if out["open"] else
+        f"fitting when it changed state does not lower the cross-validated error "
+        f"({cv[False][0]:.2f} -> {cv[True][0]:.2f} deg): the changes are taken at readings")
     return out, runs[False]
 
 
