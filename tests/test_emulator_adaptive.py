@@ -72,3 +72,25 @@ def test_no_design_whose_fe_curve_is_emulated_to_end_early(emulator):
         for pe in models:
             if pe.range_model is not None:
                 assert 90.0 * pe.range_model.predict(bp.coordinates())[0][0] >= 85.0
+
+
+def test_the_score_is_the_angle_sd_on_the_worse_axis_by_hand():
+    """Power-law curves p ~ theta^3 and V ~ theta^1.5: an sd s in log(x/theta) moves the
+    angle at a given x by theta x s / (d log x / d log theta); the score takes the larger
+    of the pressure's and the volume's."""
+    from surrogate.emulator.adaptive import angle_sd_deg
+    from surrogate.emulator.features import ANGLE_NODES_DEG
+
+    log_theta = np.log(ANGLE_NODES_DEG)
+    mean = np.concatenate((2.0 + (3.0 - 1.0) * log_theta, -1.0 + (1.5 - 1.0) * log_theta))
+    n = len(ANGLE_NODES_DEG)
+    sd = np.concatenate((np.full(n, 0.01), np.full(n, 0.01)))
+    # pressure: theta 0.01 / 3; volume: theta 0.01 / 1.5 (the larger)
+    np.testing.assert_allclose(angle_sd_deg(mean, sd), ANGLE_NODES_DEG * 0.01 / 1.5,
+                               rtol=1e-9)
+    sd[:n] = 0.1                 # now the pressure's: theta 0.1 / 3
+    np.testing.assert_allclose(angle_sd_deg(mean, sd), ANGLE_NODES_DEG * 0.1 / 3.0,
+                               rtol=1e-9)
+    # past a pressure maximum (p falling with theta) the slope is floored, not negative
+    mean[:n] = 2.0 - 1.5 * log_theta
+    assert (angle_sd_deg(mean, sd) > 0).all()

@@ -716,18 +716,6 @@ def _nuisance(f: FitResult) -> np.ndarray:
                             (f.model.angles(f.x, pscale=1 + h) - base) / h])
 
 
-#: the pump's switch times are freed when that lowers the recalibrated baseline's
-#: cross-validated error (angle and gauge pressure by volume): a switch between readings
-#: misplaces the volume of every later reading, a misfit no physical effect explains
-#: (3.25 -> 0.97 deg against a 0.98 deg floor on clean FE data,
-#: tests/test_calibration_unseen.py). Until 2026-12-04 they were freed only when that also
-#: lowered it by a quarter and left it within 1.3 x the floor, decided on the baseline
-#: alone: data with an effect (a camera gain, creep) failed the test for the effect's
-#: misfit, the effect then took up the switches' and the loop read a wrong size or
-#: flagged (unseen sets at seed offset 100: 37 -> 39 of 42 right; seed 0: 41 -> 42; the
-#: loop's cases unchanged, creep 0.265 +/- 0.059 for 0.25; benchmarks/RESULTS.md).
-
-
 def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baseline,
                       channel: dict) -> SpecimenScatter | None:
     """The specimens' pressure-scale scatter, from the recalibrated baseline's residuals
@@ -747,7 +735,18 @@ def _pump_switches_open(obs: Observations, responses: Responses, baseline: Basel
     """Whether the loop fits when the pump changed state between readings
     (_history.pump_switches; one shift per change, shared by the replicates of one
     design and flow rate), and why; with the baseline's fit and cross-validation
-    without them when they were computed (the loop reuses them)."""
+    without them when they were computed (the loop reuses them).
+
+    The pump's switch times are freed when that lowers the recalibrated baseline's
+    cross-validated error (angle and gauge pressure by volume): a switch between readings
+    misplaces the volume of every later reading, a misfit no physical effect explains
+    (3.25 -> 0.97 deg against a 0.98 deg floor on clean FE data,
+    tests/test_calibration_unseen.py). Until 2026-12-04 they were freed only when that also
+    lowered it by a quarter and left it within 1.3 x the floor, decided on the baseline
+    alone: data with an effect (a camera gain, creep) failed the test for the effect's
+    misfit, the effect then took up the switches' and the loop read a wrong size or
+    flagged (unseen sets at seed offset 100: 37 -> 39 of 42 right; seed 0: 41 -> 42; the
+    loop's cases unchanged, creep 0.265 +/- 0.059 for 0.25; benchmarks/RESULTS.md)."""
     out = {"open": False, "switches": len(obs.switch_names), "why": None,
            "rmse_cv_without_deg": None, "rmse_cv_with_deg": None}
     if not channel["used"]:
@@ -768,9 +767,10 @@ def _pump_switches_open(obs: Observations, responses: Responses, baseline: Basel
     out["rmse_cv_without_deg"], out["rmse_cv_with_deg"] = cv[False][0], cv[True][0]
     out["open"] = bool(cv[True][0] < cv[False][0])
     out["why"] = (
-        "the pump changed state between readings: fitting when lowers the cross-validated "
-        f"error from {cv[False][0]:.2f} to {cv[True][0]:.2f} deg" if out["open"] else
-        f"fitting when it changed state does not lower the cross-validated error "
+        "the pump changed state between readings: fitting when it did lowers the "
+        f"cross-validated error from {cv[False][0]:.2f} to {cv[True][0]:.2f} deg"
+        if out["open"] else
+        "fitting when it changed state does not lower the cross-validated error "
         f"({cv[False][0]:.2f} -> {cv[True][0]:.2f} deg): the changes are taken at readings")
     return out, runs[False]
 

@@ -2,14 +2,18 @@
 
     points = next_designs(emulator, n=16)       # GridPoints for the precompute job
 
-Candidates are scrambled Sobol points of every group's reduced box (``CANDIDATES``
-per group, a seed different from the grid's); each is scored by the emulator's
-predictive standard deviation of log p times the node's band multiplier (so that a
-group whose cross-validated errors exceed its GP variance is refined first), averaged
-over the angle nodes from 10 to 90 deg (below 10 deg the angle hardly depends on p's
-error). The n best are taken greedily, each at least ``MIN_SPACING`` (unit-cube
-distance) from the others and from the database designs, so that one uncertain corner
-does not take every slot, and none within ``FAILED_RADIUS`` of a database curve that ended
+Candidates are scrambled Sobol points of every group's reduced box (``CANDIDATES`` per
+group, a seed different from the grid's); each is scored by ``angle_sd_deg``: the emulated
+angle's standard deviation (deg) on the worse of its two axes, by pressure and by injected
+volume, averaged over the angle nodes from 10 to 90 deg (below 10 deg the angle hardly
+depends on the nodes' errors). The sds are the GP's times the node's band multiplier (so
+that a group whose cross-validated errors exceed its GP variance is refined first). Until
+2026-12-04 the score was log p's sd alone: the volume nodes, whose cross-validated error
+is 3-10x log p's at 20-80 deg (benchmarks/RESULTS.md), were never the reason a design was
+chosen, and the held-out curves met the accuracy target by volume less often than by
+pressure. The n best are taken greedily, each at least ``MIN_SPACING`` (unit-cube
+distance) from the others and from the database designs, so that one uncertain corner does
+not take every slot, and none within ``FAILED_RADIUS`` of a database curve that ended
 early (a Newton failure or the volume stop of a balloon that hardly bends): such a
 neighbour's curve ends early too, as 27 of the 47 designs of the first ``--adaptive 48``
 round on the 533-record database did, and adds no curve to interpolate; the emulator
@@ -17,10 +21,10 @@ already caps its range there. Nor any candidate whose emulated injected volume a
 reaches the FE's volume stop (``PairEmulator.fe_max_volume_ul``): its FE curve would stop
 there too; nor any whose FE curve the group's range model (``PairEmulator.range_model``,
 fitted to where every database curve ended) puts before 85 deg: the emulated volume learns
-from complete curves only and misses the balloons near the Ecoflex/Ecoflex balance. Before that
-screen, an ``--adaptive 240`` round on the 663-record database
-added 65 curves to interpolate (175 ended early, most at the volume stop in
-Ecoflex/Ecoflex), where the space-filling sequence, continued, gave 86 of 96.
+from complete curves only and misses the balloons near the Ecoflex/Ecoflex balance. Before
+that screen, an ``--adaptive 240`` round on the 663-record database added 65 curves to
+interpolate (175 ended early, most at the volume stop in Ecoflex/Ecoflex), where the
+space-filling sequence, continued, gave 86 of 96.
 """
 
 from __future__ import annotations
@@ -77,6 +81,26 @@ def _reaches_volume_stop(pe: PairEmulator, node_mean: np.ndarray) -> bool:
 
 
 ADAPTIVE_END_DEG = 85.0     # no candidate whose FE curve is emulated to end before this
+SCORE_FROM_DEG = 10.0       # the score's angle nodes: from here to 90 deg
+MIN_LOG_SLOPE = 0.1         # d log p / d log theta, d log V / d log theta: floor
+
+
+def angle_sd_deg(mean: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """The emulated angle's sd (deg) at each angle node, the larger of the two axes.
+
+    ``mean`` and ``sd`` are a design's node values (log(p/theta), then log(V/theta)) and
+    their sds (band multipliers included). An error d in y = log(x/theta) at a fixed
+    angle moves the angle read at a given x (pressure or volume) by
+    d log theta = d / (d log x / d log theta), so the angle's sd is
+    theta x sd / (d log x / d log theta), the slope taken along the emulated curve
+    (floored at MIN_LOG_SLOPE: past a pressure maximum the angle at a pressure is
+    undefined)."""
+    log_theta = np.log(ANGLE_NODES_DEG)
+    out = np.zeros(N_NODES)
+    for axis in (slice(0, N_NODES), slice(N_NODES, 2 * N_NODES)):
+        slope = np.gradient(log_theta + mean[axis], log_theta)
+        out = np.maximum(out, ANGLE_NODES_DEG * sd[axis] / np.maximum(slope, MIN_LOG_SLOPE))
+    return out
 
 
 def _ends_early(pe: PairEmulator, u: np.ndarray) -> bool:
@@ -93,7 +117,7 @@ def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = N
     if not 1 <= n <= 10_000:
         raise InputError("--adaptive", f"got {n}", "1 <= N <= 10000")
     settings = settings or SolverSettings()
-    nodes = ANGLE_NODES_DEG >= 10.0
+    nodes = ANGLE_NODES_DEG >= SCORE_FROM_DEG
     scored: list[tuple[float, str, np.ndarray, Design]] = []
     for group in sorted(set(GROUPS.values())):
         models = [pe for key, pe in emulator.pairs.items() if key[:-1] == group]
@@ -112,7 +136,7 @@ def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = N
             mean, var = pe.curves.predict(uu)
             if _reaches_volume_stop(pe, mean) or _ends_early(pe, uu):
                 continue
-            score = float((np.sqrt(var[:N_NODES]) * pe.band_scale[:N_NODES])[nodes].mean())
+            score = float(angle_sd_deg(mean, np.sqrt(var) * pe.band_scale)[nodes].mean())
             scored.append((score, group, uu, design))
     scored.sort(key=lambda s: -s[0])
     taken: dict[str, list[np.ndarray]] = {
