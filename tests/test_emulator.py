@@ -701,3 +701,33 @@ def test_a_single_querys_single_precision_band_keeps_the_double_one(emulator):
         single = np.array([pe.curves.predict(q, variance_of=which)[1] for q in queries])
         np.testing.assert_allclose(np.sqrt(single[:, which]), np.sqrt(var[:, which]),
                                    rtol=0.02, err_msg=pe.pair)
+
+
+def test_the_emulated_volume_rises_at_least_as_the_fe_volumes_do():
+    """volume_shape: a V(theta) that flattens at high angles (a GP artefact; every FE
+    curve's d log V / d log theta stays above 0.41 from 20 deg) is lifted to rise as
+    theta^0.4 from its last point; one that rises faster, and any fall below 20 deg
+    (to the running maximum), is left as the running maximum leaves it."""
+    from surrogate.emulator.emulator import (
+        FINE_ANGLES_DEG,
+        VOLUME_EXPONENT_FLOOR,
+        VOLUME_FLOOR_FROM_DEG,
+        volume_shape,
+    )
+
+    theta = FINE_ANGLES_DEG
+    steep = 0.02 * theta**1.5
+    np.testing.assert_allclose(volume_shape(steep), steep, rtol=1e-12)
+    flat = np.where(theta < 60.0, steep, 0.02 * 60.0**1.5)      # flat from 60 deg
+    shaped = volume_shape(flat)
+    late = theta >= 60.0
+    expected = 0.02 * 60.0**1.5 * (theta[late] / theta[late][0]) ** VOLUME_EXPONENT_FLOOR
+    np.testing.assert_allclose(shaped[late], expected, rtol=1e-9)
+    np.testing.assert_allclose(shaped[~late], flat[~late], rtol=1e-12)
+    dip = steep.copy()
+    low = (theta > 5.0) & (theta < 10.0)
+    dip[low] = 0.02 * 5.0**1.5                                 # flat below 20 deg
+    np.testing.assert_allclose(volume_shape(dip)[theta < VOLUME_FLOOR_FROM_DEG],
+                               np.maximum.accumulate(dip)[theta < VOLUME_FLOOR_FROM_DEG])
+    # rows are designs
+    np.testing.assert_allclose(volume_shape(np.vstack((steep, flat)))[1], shaped)

@@ -45,6 +45,7 @@ from surrogate.emulator.emulator import (
     floored_band,
     nearest_distance,
     node_curves,
+    volume_shape,
 )
 from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
@@ -176,7 +177,8 @@ def held_out_curves(curves: list, mean: np.ndarray, var: np.ndarray, scales: np.
         sign = 1.0 if a[np.argmax(np.abs(a))] >= 0 else -1.0
         keep = np.abs(a) <= LIMIT_ANGLE_DEG
         y, sd = mean[i, half], np.sqrt(var[i, half]) * scales[half]
-        xm, xl, xu = (_with_origin(_monotone(c)) for c in node_curves(y, sd, z))
+        shape = _monotone if axis == "pressure" else volume_shape
+        xm, xl, xu = (_with_origin(shape(c)) for c in node_curves(y, sd, z))
         q = (p_red if axis == "pressure" else v_red)[keep]
         angle = np.interp(q, xm, ANGLES0)
         lower, upper = floored_band(angle, np.interp(q, xu, ANGLES0), np.interp(q, xl, ANGLES0))
