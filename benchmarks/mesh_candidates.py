@@ -22,7 +22,7 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from solver import Design, SolverSettings
-from solver.mesh import BALANCED_DIVISIONS, DEFAULT_DIVISIONS, FINE_X_DIVISIONS
+from solver.mesh import BALANCED_DIVISIONS, FINE_X_DIVISIONS, FORMER_DIVISIONS
 from solver.stepping import solve
 
 # The extrapolated standard-design curve (docs/verification.md, "extrapolated (observed
@@ -32,7 +32,7 @@ PRESSURE_REF_PA = np.array([1223.6, 1711.9, 1992.3])
 PRESSURES_PA = (1000.0, 1250.0, 1500.0, 1750.0, 2000.0)
 ANGLE_REF_DEG = np.array([5.879, 10.620, 18.605, 32.764, 61.325])
 
-D = DEFAULT_DIVISIONS
+D = FORMER_DIVISIONS
 CANDIDATES = {
     "former": D,
     "chamber_graded4": replace(D, x_chamber_grading=4.0),

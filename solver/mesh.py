@@ -38,31 +38,29 @@ class MeshDivisions:
                                     # chamber end; GRADING_RATIO)
 
 
-# The default level 0 stays the former level 0 (x_refine = 1): the shipped curve database
-# and the emulator fitted from it were built on it, and the emulator must match the
-# default FE. The convergence study (docs/verification.md) found its remaining error
-# along x: against the three-level extrapolation (observed order 2.3-2.8) the angle at
-# 1000-2000 Pa is -2.3 to -2.9 % and the pressure at 10-60 deg +0.4 to +0.9 %;
-# FINE_X_DIVISIONS (twice the x divisions, ~2x the dofs) is within -0.6 to -1.7 % and
-# +0.3 to +0.4 %. Switching the default to it means regenerating the database (record key
-# version 3) and refitting the emulator. Until then it is selectable by name:
-# SolverSettings(mesh_divisions="fine_x") (own record keys, solver/store/keys.py).
-DEFAULT_DIVISIONS = MeshDivisions()
+# The former level 0 (x_refine = 1), the default until the database was rebuilt on the
+# balanced mesh (issue 12). The convergence study (docs/verification.md) found its error
+# along x and in the chamber layer: against the three-level extrapolation (observed order
+# 2.3-2.8) the angle at 1000-2000 Pa is -2.3 to -2.9 % and the pressure at 10-60 deg +0.4
+# to +0.9 %. Selectable as mesh_divisions = "former" (records stored before the switch
+# say "default", read as "former": solver/store/schema.py; their keys hold,
+# solver/store/keys.py).
+FORMER_DIVISIONS = MeshDivisions()
 FINE_X_DIVISIONS = MeshDivisions(x_refine=2)
-# The former level 0's divisions spent where its error sits (docs/verification.md, "A
-# balanced level 0"): the end walls graded 3:1 towards the chamber's bonded ends (was
-# 1.6:1), two layers through the chamber height instead of one, and 1.1 mm along the
-# chamber instead of 1.0 (uniform: chambers graded towards their ends, or walls graded
-# 5:1, reached the targets too but ended database curves early with Newton failures at
-# membrane stretches of 8-9). 1.03 x the dofs of the default on the standard design and
-# its full curve in 1.02 x the time; against the three-level extrapolation it reads the
-# angle at 1000-2000 Pa within -0.7 to -1.3 % and the pressure at 10-60 deg within +0.1
-# to +0.5 %: both issue-12 targets at the default's cost. The candidate default once the
-# database is rebuilt on it.
+# The default: the former level 0's divisions spent where its error sits
+# (docs/verification.md, "A balanced level 0"): the end walls graded 3:1 towards the
+# chamber's bonded ends (was 1.6:1), two layers through the chamber height instead of one,
+# and 1.1 mm along the chamber instead of 1.0 (uniform: chambers graded towards their
+# ends, or walls graded 5:1, reached the targets too but ended database curves early with
+# Newton failures at membrane stretches of 8-9). 1.03 x the dofs of the former level 0 on
+# the standard design and its full curve in 1.02 x the time; against the three-level
+# extrapolation it reads the angle at 1000-2000 Pa within -0.7 to -1.3 % and the pressure
+# at 10-60 deg within +0.1 to +0.5 %: both issue-12 targets.
 BALANCED_DIVISIONS = MeshDivisions(x_chamber_mm=1.1, chamber=2, x_wall_grading=3.0)
+DEFAULT_DIVISIONS = BALANCED_DIVISIONS
 # The level-0 resolutions a user selects by name (SolverSettings.mesh_divisions), least
 # accurate first (the order ranks a database's records, surrogate/dataset.py).
-NAMED_DIVISIONS = {"default": DEFAULT_DIVISIONS, "balanced": BALANCED_DIVISIONS,
+NAMED_DIVISIONS = {"former": FORMER_DIVISIONS, "balanced": BALANCED_DIVISIONS,
                    "fine_x": FINE_X_DIVISIONS}
 COARSE_DIVISIONS = MeshDivisions(y_chamber=2, y_side=1, membrane=1)
 GRADING_RATIO = 1.6     # largest / smallest element in a graded segment
@@ -71,8 +69,7 @@ REFERENCE_WIDTH_MM = 3.0   # the x element sizes are given at this width (the pa
 # (docs/verification.md): member r has r times the x, chamber and body divisions of the
 # former level 0 and its divisions across the width and through the membrane (where
 # doubling moves p at 30 deg by 0.2 Pa).
-XZ_BASE = MeshDivisions(x_chamber_mm=1.0, x_wall_mm=1.5, y_chamber=4, y_side=2, membrane=2,
-                        chamber=1, body=2)
+XZ_BASE = FORMER_DIVISIONS
 
 
 def xz_family(r: int) -> MeshDivisions:

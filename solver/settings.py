@@ -11,7 +11,10 @@ CONTROLS = ("volume", "pressure")
 ELEMENTS = ("hex2", "hex1")
 TIPS = ("free", "spring", "blocked")
 # the keys of solver.mesh.NAMED_DIVISIONS, least accurate first
-MESH_DIVISIONS = ("default", "balanced", "fine_x")
+MESH_DIVISIONS = ("former", "balanced", "fine_x")
+# What records stored before the balanced mesh became the default call the former level 0
+# (solver/store/schema.py reads it as "former"; users are told the new name).
+LEGACY_MESH_DIVISIONS = {"default": "former"}
 
 DEFAULT_MESH_LEVEL = 0  # within 2 % of the mesh-converged curve (docs/verification.md)
 MAX_MESH_LEVEL = 2   # level 2: every division x 3, ~500k dofs at the standard design (a
@@ -24,11 +27,11 @@ class SolverSettings:
 
     mesh_level        0 (coarsest) .. MAX_MESH_LEVEL; level n has n + 1 times the divisions
                       of level 0 in every direction (solver/mesh.py)
-    mesh_divisions    the level-0 resolution: "default" (the shipped database's),
-                      "balanced" (walls graded to the chamber, two chamber layers: 1.03x the
-                      dofs, within the issue-12 mesh targets) or "fine_x" (twice the
-                      divisions along x, ~2x the dofs; within them too;
-                      docs/verification.md)
+    mesh_divisions    the level-0 resolution: "balanced" (the default and the shipped
+                      database's: walls graded to the chamber, two chamber layers; within
+                      the issue-12 mesh targets), "former" (the default before it: 2.3-2.9
+                      % low in angle) or "fine_x" (twice the former's divisions along x,
+                      ~2x the dofs; docs/verification.md)
     element           "hex2" (27-node triquadratic, default) or "hex1" (8-node trilinear)
     control           "volume" (injected volume, pressure is an unknown) or "pressure"
     max_angle_deg     stop once the bending angle's magnitude exceeds this
@@ -45,7 +48,7 @@ class SolverSettings:
     """
 
     mesh_level: int = DEFAULT_MESH_LEVEL
-    mesh_divisions: str = "default"
+    mesh_divisions: str = "balanced"
     element: str = "hex2"
     control: str = "volume"
     max_angle_deg: float = 90.0
@@ -71,6 +74,11 @@ class SolverSettings:
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or value != value or not lo <= value <= hi:
                 raise InputError(name, f"got {value!r}", f"{lo} <= {name} <= {hi}")
+        if self.mesh_divisions in LEGACY_MESH_DIVISIONS:
+            raise InputError("mesh_divisions", f"{self.mesh_divisions!r} is the former name of "
+                             f"{LEGACY_MESH_DIVISIONS[self.mesh_divisions]!r}; the default "
+                             "mesh is 'balanced' (omit the setting for it)",
+                             " | ".join(MESH_DIVISIONS))
         for name, allowed in (("element", ELEMENTS), ("control", CONTROLS), ("tip", TIPS),
                               ("mesh_divisions", MESH_DIVISIONS)):
             if getattr(self, name) not in allowed:

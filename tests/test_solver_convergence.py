@@ -18,7 +18,7 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 
 from solver import Design, SolverSettings
-from solver.mesh import BALANCED_DIVISIONS, DEFAULT_DIVISIONS, FINE_X_DIVISIONS, xz_family
+from solver.mesh import BALANCED_DIVISIONS, FINE_X_DIVISIONS, FORMER_DIVISIONS, xz_family
 from solver.stepping import solve
 from solver.verification.richardson import observed_order, richardson
 
@@ -50,7 +50,7 @@ def _extrapolated(values: np.ndarray) -> np.ndarray:
 def test_candidate_meshes_are_within_the_targets_of_the_extrapolated_curve():
     settings = SolverSettings(max_angle_deg=65)
     assert settings.mesh_level == 0
-    assert DEFAULT_DIVISIONS == xz_family(1)       # the shipped default: the former level 0
+    assert FORMER_DIVISIONS == xz_family(1)        # the former level 0
     candidates = [solve(Design(), settings, divisions=d)
                   for d in (BALANCED_DIVISIONS, FINE_X_DIVISIONS)]
     family = [solve(Design(), settings, divisions=xz_family(r)) for r in (1, 2, 3)]

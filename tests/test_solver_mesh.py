@@ -10,6 +10,7 @@ from solver import Design
 from solver.mesh import (
     BALANCED_DIVISIONS,
     DEFAULT_DIVISIONS,
+    FORMER_DIVISIONS,
     NAMED_DIVISIONS,
     build_mesh,
 )
@@ -22,7 +23,7 @@ from solver.settings import MESH_DIVISIONS
     # 16 graded chamber elements on the standard design's 7.1 mm: the rounded end of the
     # graded segment used to sit 1e-15 mm off the chamber end, and the joined x
     # coordinates kept both: an element of zero width (zero Jacobian at assembly)
-    replace(DEFAULT_DIVISIONS, x_chamber_mm=0.75, x_chamber_grading=3.0),
+    replace(FORMER_DIVISIONS, x_chamber_mm=0.75, x_chamber_grading=3.0),
 ])
 @pytest.mark.parametrize("design", [Design(), Design(L_mm=17.3, t_mm=0.55, T_mm=1.9)])
 def test_graded_segments_join_without_slivers(divisions, design):
@@ -49,6 +50,13 @@ def test_the_balanced_mesh_is_graded_towards_the_bonded_chamber_ends():
     z = np.unique(build_mesh(d, 0, BALANCED_DIVISIONS).mesh.p[2])
     in_chamber = (z > d.t_mm + 1e-12) & (z < d.t_mm + d.h_mm - 1e-12)
     assert in_chamber.sum() == 1         # two layers through the chamber height
+
+
+def test_the_default_mesh_is_the_balanced_one():
+    from solver.settings import SolverSettings
+
+    assert NAMED_DIVISIONS[SolverSettings().mesh_divisions] == DEFAULT_DIVISIONS
+    assert DEFAULT_DIVISIONS == BALANCED_DIVISIONS
 
 
 def test_named_resolutions_are_the_settings_choices_least_accurate_first():

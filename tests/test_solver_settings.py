@@ -15,7 +15,8 @@ from solver.settings import MAX_MESH_LEVEL, settings_from_dict
     ({"mesh_level": MAX_MESH_LEVEL + 1}, "mesh_level", f"0 <= mesh_level <= {MAX_MESH_LEVEL}"),
     ({"newton_tol": 0.5}, "newton_tol", "newton_tol <= 0.01"),
     ({"element": "tet4"}, "element", "hex2 | hex1"),
-    ({"mesh_divisions": "fine"}, "mesh_divisions", "default | balanced | fine_x"),
+    ({"mesh_divisions": "fine"}, "mesh_divisions", "former | balanced | fine_x"),
+    ({"mesh_divisions": "default"}, "mesh_divisions", "former | balanced | fine_x"),
     ({"mesh_lvl": 1}, "mesh_lvl", "mesh_level"),
     ({"max_steps": "many"}, "max_steps", None),
 ])
@@ -36,12 +37,12 @@ def test_whole_floats_and_defaults_are_read():
 
 def test_mesh_divisions_select_the_fine_x_mesh():
     # "fine_x" doubles every division along x (solver/mesh.py FINE_X_DIVISIONS) and
-    # nothing else; "default" is the shipped database's mesh.
+    # nothing else to the former level 0 ("former").
     from solver import Design
     from solver.discrete import ActuatorModel
     from solver.mesh import FINE_X_DIVISIONS, build_mesh
 
-    default = ActuatorModel(Design(), SolverSettings(element="hex1"))
+    default = ActuatorModel(Design(), SolverSettings(element="hex1", mesh_divisions="former"))
     fine = ActuatorModel(Design(), settings_from_dict({"element": "hex1",
                                                        "mesh_divisions": "fine_x"}))
     expected = build_mesh(Design(), 0, FINE_X_DIVISIONS).mesh

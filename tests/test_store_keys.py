@@ -21,7 +21,8 @@ STANDARD_KEY = "b8183475f8bbcdba8151ed6fd5c94bed"
 PINNED_SETTINGS = SolverSettings(
     mesh_level=1, element="hex2", control="volume", max_angle_deg=90.0,
     max_pressure_pa=20000.0, max_volume_ul=50.0, flow_ul_s=2.5, bulk_ratio=1000.0,
-    newton_tol=1e-8, max_newton_iter=25, max_steps=400, tip="free", spring_k_n_per_m=0.0)
+    newton_tol=1e-8, max_newton_iter=25, max_steps=400, tip="free", spring_k_n_per_m=0.0,
+    mesh_divisions="former")      # the mesh of every version-2 record: left out of the key
 
 
 def test_key_is_pinned_for_the_standard_design():
@@ -70,11 +71,43 @@ def test_every_setting_changes_the_key():
 
 
 def test_a_setting_added_after_version_2_keeps_the_version_2_keys():
-    # mesh_divisions = "default" is left out of the canonical text (the shipped database's
-    # keys stay valid); "fine_x" is in it, so the two never share a record.
-    assert "mesh_divisions" not in canonical_json(Design(), SolverSettings())
+    # mesh_divisions = "former" (every version-2 record's mesh) is left out of the
+    # canonical text, so those keys stay valid; the default "balanced" and "fine_x" are in
+    # it, so no two meshes share a record.
+    former = canonical_json(Design(), SolverSettings(mesh_divisions="former"))
+    assert "mesh_divisions" not in former
+    assert '"mesh_divisions":"balanced"' in canonical_json(Design(), SolverSettings())
     fine = canonical_json(Design(), SolverSettings(mesh_divisions="fine_x"))
     assert '"mesh_divisions":"fine_x"' in fine
+
+
+def test_a_record_stored_as_default_mesh_reads_as_the_former_mesh_with_its_key(tmp_path):
+    """Records written before the balanced mesh became the default say "default": read as
+    "former", their key unchanged; a user's "default" is refused with the new names."""
+    import h5py
+    import pytest
+    from test_precompute_fakes import fake_curve
+
+    from solver.errors import InputError
+    from solver.settings import settings_from_dict
+    from solver.store import CurveStore, make_record
+    from solver.store.integrity import seal
+
+    rec = make_record(Design(), SolverSettings(mesh_divisions="former"), fake_curve(Design()))
+    path = tmp_path / "old.h5"
+    with CurveStore(path, mode="a") as db:
+        db.put(rec)
+    with h5py.File(path, "r+") as f:       # what an older release wrote
+        for group in f["records"].values():
+            group["settings"].attrs["mesh_divisions"] = "default"
+    image = bytearray(path.read_bytes())   # sealed again, as that release published it
+    seal(memoryview(image))
+    path.write_bytes(bytes(image))
+    with CurveStore(path) as db:
+        (back,) = list(db.records())
+    assert back.key == rec.key and back.settings.mesh_divisions == "former"
+    with pytest.raises(InputError, match="former name"):
+        settings_from_dict({"mesh_divisions": "default"})
 
 
 def test_material_parameters_not_just_the_id_enter_the_key():

@@ -57,10 +57,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help=f"mesh level 0 to {MAX_MESH_LEVEL}: level n has n + 1 times the "
                         "divisions of level 0 (default %(default)s)")
     s.add_argument("--mesh-divisions", choices=MESH_DIVISIONS, default=d.mesh_divisions,
-                   help="level-0 resolution: default (the database's), balanced (end "
-                        "walls graded to the chamber, two chamber layers: the default's "
-                        "cost, within 2 %% in angle) or fine_x (twice the divisions along "
-                        "x, ~2x the time; default %(default)s)")
+                   help="level-0 resolution: balanced (the database's: end walls graded "
+                        "to the chamber, two chamber layers; within 2 %% in angle), former "
+                        "(the default before it, 2.3-2.9 %% low in angle) or fine_x (twice "
+                        "the former's divisions along x, ~2x the time; default "
+                        "%(default)s)")
     s.add_argument("--max-angle-deg", type=float, default=d.max_angle_deg,
                    help="stop at this bending angle, degrees (0.1 to 360; default "
                         "%(default)s)")

@@ -89,9 +89,10 @@ class SolveSettingsIn(Schema):
                             description="0 = coarsest")
     mesh_divisions: Literal[MESH_DIVISIONS] = Field(  # type: ignore[assignment,valid-type]
         _SOLVER.mesh_divisions,
-        description="level-0 resolution: default (the database's), balanced (end walls "
-                    "graded to the chamber, two chamber layers: the default's cost, within 2 "
-                    "% in angle) or fine_x (twice the x divisions, ~2x the solve time)")
+        description="level-0 resolution: balanced (the default and the database's: end "
+                    "walls graded to the chamber, two chamber layers; within 2 % in angle), "
+                    "former (the default before it, 2.3-2.9 % low in angle) or fine_x "
+                    "(twice the former's x divisions, ~2x the solve time)")
     element: Literal["hex2", "hex1"] = _SOLVER.element  # type: ignore[assignment]
     control: Literal["volume", "pressure"] = _SOLVER.control  # type: ignore[assignment]
     max_angle_deg: float = Field(_SOLVER.max_angle_deg, ge=0.1, le=360.0,

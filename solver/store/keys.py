@@ -5,8 +5,9 @@ A key is the first 32 hex digits (128 bits) of the SHA-256 of a canonical JSON t
     {"design": Design.as_dict(), "key_version": 2, "settings": SolverSettings.as_dict()}
 
 except that settings added after version 2 (``ADDED_SETTINGS``) are left out while they
-hold their default value, so every key of version 2 stays valid (the shipped database)
-and a record with a non-default value still gets a key of its own.
+hold the value every version-2 record was solved with (for mesh_divisions the former
+level 0, "former"; the default is now "balanced"), so every key of version 2 stays valid
+and a record with another value gets a key of its own.
 
 Canonical means: the design is validated first (so a default body length and an
 explicit 12 mm give the same key), every number is a float rounded to
@@ -31,7 +32,9 @@ from solver.settings import SolverSettings
 KEY_VERSION = 2   # 2: mesh levels redefined (solver/mesh.py), so a level names a new mesh
                   # (3 is reserved for the day the default divisions become FINE_X_DIVISIONS)
 # Settings added after version 2, with the value that keeps a version-2 key.
-ADDED_SETTINGS = {"mesh_divisions": "default"}
+# mesh_divisions: left out at the former level 0 (called "default" until the balanced mesh
+# became the default), so the keys of every record solved on it before hold.
+ADDED_SETTINGS = {"mesh_divisions": "former"}
 SIGNIFICANT_DIGITS = 10
 KEY_HEX_DIGITS = 32
 

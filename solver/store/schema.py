@@ -41,7 +41,7 @@ import numpy as np
 from solver.curve import STATUSES, Curve
 from solver.design import LIMITS_MM, Design, design_from_dict
 from solver.errors import InputError
-from solver.settings import SolverSettings, settings_from_dict
+from solver.settings import LEGACY_MESH_DIVISIONS, SolverSettings, settings_from_dict
 from solver.store.errors import NotACurveStoreError, SchemaVersionError
 from solver.store.keys import record_key
 from solver.store.record import Record
@@ -204,7 +204,14 @@ def read_design(group: h5py.Group) -> Design:
 
 
 def read_settings(group: h5py.Group) -> SolverSettings:
-    return settings_from_dict(read_attrs(group["settings"]))
+    """A record's settings; a record stored before the balanced mesh became the default
+    names the former level 0 "default": read as "former" (its key is unchanged,
+    solver/store/keys.py)."""
+    attrs = dict(read_attrs(group["settings"]))
+    name = attrs.get("mesh_divisions")
+    if isinstance(name, str) and name in LEGACY_MESH_DIVISIONS:
+        attrs["mesh_divisions"] = LEGACY_MESH_DIVISIONS[name]
+    return settings_from_dict(attrs)
 
 
 def read_curve(group: h5py.Group) -> Curve:
