@@ -111,6 +111,9 @@ def measure(lab: Lab, truth: Truth = Truth()) -> list[dict]:
             for s in range(lab.specimens):
                 sp, sa = 1.0 + lab.specimen_sd * rng.standard_normal(2)
                 tt, v, d, reads = _pump(lab.protocol, q, lab.read_s)
+                if float(np.max(v)) > float(c.volume_ul[-1]):
+                    raise ValueError(f"{L} mm / {t_mm} mm: the pump's {np.max(v):.1f} ul "
+                                     f"is past the FE curve's {c.volume_ul[-1]:.1f} ul")
                 p_ch = sp * np.interp(v, c.volume_ul, c.pressure_pa)
                 static = sa * np.interp(v, c.volume_ul, c.angle_deg)
                 if truth.contact_deg:

@@ -55,6 +55,11 @@ class CaseSpec:
 
 PERTURBED_BASES = ((7.1, 0.75), (11.1, 0.5), (4.1, 0.5))  # solved in this order
 
+# A curve that ends in a Newton failure is kept when it got this far: the labs' protocols
+# read the curves to 25-40 ul, far below the volume at 60 deg of every case (50-130 ul).
+# ``tests/calibration_lab.py`` refuses to read a curve past its last volume.
+KEEP_FAILED_FROM_DEG = 60.0
+
 
 def cases() -> list[CaseSpec]:
     out = [CaseSpec(L, t) for L in (4.1, 7.1, 11.1) for t in (0.5, 0.75)]
@@ -132,7 +137,8 @@ def main(argv: list[str] | None = None) -> int:
         c = solve(design_of(case), settings)
         print(f"{case.key}: {c.status} ({c.reason}), {len(c)} steps, "
               f"{time.perf_counter() - t0:.0f} s", flush=True)
-        if not c.converged or len(c) < 5:
+        reached_deg = float(np.max(np.abs(c.angle_deg))) if len(c) else 0.0
+        if len(c) < 5 or (not c.converged and reached_deg < KEEP_FAILED_FROM_DEG):
             print(f"  skipped: {c.reason}", file=sys.stderr)
             continue
         curves[case.key] = FECurve(replace(case), np.asarray(c.pressure_pa),
