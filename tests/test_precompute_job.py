@@ -351,7 +351,9 @@ def test_designs_from_another_database_keep_their_tips_and_take_the_grid_setting
 
     old = tmp_path / "old.h5"
     designs = [Design(L_mm=4.1), Design(L_mm=7.1), Design(L_mm=7.1)]
-    tips = [SolverSettings(), SolverSettings(), SolverSettings(tip="blocked")]
+    # made on the former level 0, rebuilt on the balanced one (the default)
+    tips = [SolverSettings(mesh_divisions="former"), SolverSettings(mesh_divisions="former"),
+            SolverSettings(tip="blocked", mesh_divisions="former")]
     with CurveStore(old, mode="a") as db:
         db.put_many([make_record(d, s, fake_curve(d)) for d, s in zip(designs, tips)])
     grid = tmp_path / "grid.toml"

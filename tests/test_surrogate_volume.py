@@ -55,7 +55,14 @@ def test_by_volume_reproduces_the_fe_records_own_volume_column(shipped, records)
         fam = shipped.family_for(rec.design)
         top = fam.volume.angle_max_deg
         inside = np.abs(a) <= top
-        assert np.isfinite(pred.angle_deg[inside]).all()
+        # at the top of the range the model's own pressure for that angle may pass the
+        # family's FE pressure range: no number there, flagged (2 of 23 curves on the
+        # balanced mesh, at 99-100 % of the range)
+        missing = inside & ~np.isfinite(pred.angle_deg)
+        if missing.any():
+            assert "pressure_beyond_fe" in pred.validity["flags"]
+            assert (np.abs(a[missing]) >= 0.98 * top).all()
+            inside &= ~missing
         worst = max(worst, float(np.max(np.abs(pred.angle_deg[inside] - a[inside]))))
         checked += int(inside.sum())
         # past the relation's largest angle: no number, flagged as every model flags it
