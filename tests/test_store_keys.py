@@ -110,6 +110,31 @@ def test_a_record_stored_as_default_mesh_reads_as_the_former_mesh_with_its_key(t
         settings_from_dict({"mesh_divisions": "default"})
 
 
+def test_a_record_stored_before_the_mesh_setting_existed_reads_as_the_former_mesh(tmp_path):
+    """The shipped database's oldest records carry no mesh_divisions at all: they were
+    solved on the former level 0 (ADDED_SETTINGS), not on today's default, and keep their
+    keys (read as the default, the balanced mesh, every one was refused as damaged)."""
+    import h5py
+    from test_precompute_fakes import fake_curve
+
+    from solver.store import CurveStore, make_record
+    from solver.store.integrity import seal
+
+    rec = make_record(Design(), SolverSettings(mesh_divisions="former"), fake_curve(Design()))
+    path = tmp_path / "older.h5"
+    with CurveStore(path, mode="a") as db:
+        db.put(rec)
+    with h5py.File(path, "r+") as f:       # what a release before the setting wrote
+        for group in f["records"].values():
+            del group["settings"].attrs["mesh_divisions"]
+    image = bytearray(path.read_bytes())
+    seal(memoryview(image))
+    path.write_bytes(bytes(image))
+    with CurveStore(path) as db:
+        (back,) = list(db.records())
+    assert back.key == rec.key and back.settings.mesh_divisions == "former"
+
+
 def test_material_parameters_not_just_the_id_enter_the_key():
     fake = make_material("ecoflex_00_30", [1.3], [3.0])  # a preset's id, other parameters
     assert record_key(Design(membrane_material=fake)) != record_key(Design())

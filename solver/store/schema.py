@@ -43,7 +43,7 @@ from solver.design import LIMITS_MM, Design, design_from_dict
 from solver.errors import InputError
 from solver.settings import LEGACY_MESH_DIVISIONS, SolverSettings, settings_from_dict
 from solver.store.errors import NotACurveStoreError, SchemaVersionError
-from solver.store.keys import record_key
+from solver.store.keys import ADDED_SETTINGS, record_key
 from solver.store.record import Record
 
 FORMAT = "balloon-actuator-curves"
@@ -206,8 +206,12 @@ def read_design(group: h5py.Group) -> Design:
 def read_settings(group: h5py.Group) -> SolverSettings:
     """A record's settings; a record stored before the balanced mesh became the default
     names the former level 0 "default": read as "former" (its key is unchanged,
-    solver/store/keys.py)."""
+    solver/store/keys.py), and one stored before a setting existed was solved with the
+    value ``ADDED_SETTINGS`` gives it (no mesh_divisions: the former level 0), not with
+    today's default."""
     attrs = dict(read_attrs(group["settings"]))
+    for added, value in ADDED_SETTINGS.items():
+        attrs.setdefault(added, value)
     name = attrs.get("mesh_divisions")
     if isinstance(name, str) and name in LEGACY_MESH_DIVISIONS:
         attrs["mesh_divisions"] = LEGACY_MESH_DIVISIONS[name]
