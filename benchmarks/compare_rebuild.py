@@ -6,8 +6,11 @@ that ended early on one mesh only, and for free tips complete on both the pressu
 30 / 60 deg (PCHIP on the rising branch above 2 deg) of the rebuilt curve relative to the
 source's. The figures a switch of the solver's defaults changes in the shipped data.
 
-    python benchmarks/compare_rebuild.py --db rebuild/curves-balanced.h5 \\
-        --source service/data/curves.h5 --source-mesh default
+    python benchmarks/compare_rebuild.py --db REBUILT.h5 --source SOURCE.h5 \\
+        --source-mesh former
+
+(the switch to the balanced mesh: the shipped database against the former one,
+benchmarks/RESULTS.md, "Issue 12, sixteenth session")
 """
 
 from __future__ import annotations
@@ -40,8 +43,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--db", required=True, help="the rebuilt database")
     ap.add_argument("--source", required=True, help="the database its designs came from")
-    ap.add_argument("--source-mesh", default="default",
-                    help="the source records' mesh_divisions (default: default)")
+    ap.add_argument("--source-mesh", default="former",
+                    help="the source records' mesh_divisions (default: former)")
     args = ap.parse_args()
     rows = []
     with CurveStore(args.db) as new, CurveStore(args.source) as old:

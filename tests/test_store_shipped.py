@@ -16,17 +16,25 @@ DB = REPO / "service" / "data" / "curves.h5"
 GRID = REPO / "grids" / "emulator.toml"
 COMMAND = "balloon precompute grids/emulator.toml --db service/data/curves.h5"
 # the shipped database rebuilt on the balanced mesh from the former one (issue 12)
-REBUILD_COMMAND = "balloon precompute grids/balanced-mesh.toml --db rebuild/curves-balanced.h5"
+REBUILD_COMMAND = ("balloon precompute grids/balanced-mesh.toml --db "
+                   "rebuild/curves-balanced.h5")   # rebuild/: the folder it was made in
 
 
 def _provenance(meta: dict) -> dict:
     """The metadata that says how the designs were chosen: the file's own, or, for a
     database rebuilt on new settings (``balloon precompute grids/balanced-mesh.toml
-    --designs-from OLD``), the source's, recorded as ``designs_from``."""
+    --designs-from OLD``), the source's, recorded as ``designs_from``, followed by the
+    ``--adaptive`` rounds run on the rebuilt file since."""
     if "designs_from" not in meta:
         return meta
-    assert all(r["command"].startswith(REBUILD_COMMAND) for r in meta["runs"])
-    return meta["designs_from"]
+    rebuild = [r for r in meta["runs"] if r["command"].startswith(REBUILD_COMMAND)]
+    since = meta["runs"][len(rebuild):]
+    assert meta["runs"][:len(rebuild)] == rebuild            # the rebuild came first
+    assert all(r["command"].startswith(COMMAND) and "--adaptive " in r["command"]
+               for r in since)
+    source = dict(meta["designs_from"])
+    source["runs"] = list(source["runs"]) + since
+    return source
 
 
 def test_shipped_database_holds_exactly_the_default_grid():
