@@ -116,7 +116,8 @@ def main() -> None:
     ap.add_argument("--corners", action="store_true", help="the design box's corners")
     ap.add_argument("--former-mesh", action="store_true",
                     help="the former default level 0 (before issue 12), for speed comparisons")
-    ap.add_argument("--divisions", choices=tuple(NAMED_DIVISIONS), default="default",
+    ap.add_argument("--divisions", choices=tuple(NAMED_DIVISIONS),
+                    default=SolverSettings().mesh_divisions,
                     help="a named level-0 resolution (solver/mesh.py)")
     args = ap.parse_args()
     divisions = NAMED_DIVISIONS[args.divisions]
