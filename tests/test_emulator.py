@@ -738,3 +738,30 @@ def test_the_emulated_volume_rises_at_least_as_the_fe_volumes_do():
                                np.maximum.accumulate(dip)[theta < VOLUME_FLOOR_FROM_DEG])
     # rows are designs
     np.testing.assert_allclose(volume_shape(np.vstack((steep, flat)))[1], shaped)
+
+
+def test_a_group_with_enough_calibration_points_takes_its_own_band_factors():
+    """random_calibration.group_cells: a group whose points lie inside its bands keeps
+    them (factor 1) though another group's points need 5x; a group with fewer than
+    GROUP_MIN_POINTS points on an axis takes the pooled factors."""
+    from surrogate.emulator.random_calibration import (
+        GROUP_MIN_POINTS,
+        PointFactors,
+        cell_factors,
+        group_cells,
+    )
+
+    n = GROUP_MIN_POINTS
+    angle = np.tile(np.linspace(1.0, 89.0, n), 3)
+    pair = np.repeat(["good+", "bad-", "few+"], n)
+    factor = np.where(pair == "bad-", 5.0, 0.1)
+    factor[(pair == "few+")] = 3.0
+    keep = (pair != "few+") | (np.arange(3 * n) % n < 10)     # "few+": 10 points
+    pf = PointFactors(angle[keep], factor[keep], np.zeros(keep.sum(), bool),
+                      np.full(keep.sum(), "volume"), pair[keep])
+    pooled = cell_factors(pf)
+    good, bad, few = (group_cells(pf, pooled, k) for k in ("good+", "bad-", "few+"))
+    assert good["volume"]["far"] == [1.0] * 6
+    assert bad["volume"]["far"] == pytest.approx([5.0] * 6)
+    assert few["volume"]["far"] == pooled["volume"]["far"]
+    assert max(pooled["volume"]["far"]) > 1.0

@@ -107,6 +107,13 @@ def random_calibration_lines(cal: dict) -> str:
                    f"{' '.join(f'{x:.2f}' for x in f['near'])}; coverage {before['all']:.3f}"
                    f" -> {after['all']:.3f} (far {before['far']:.3f} -> {after['far']:.3f}, "
                    f"near {_fmt(before['near'])} -> {_fmt(after['near'])})")
+    for key, g in cal.get("group_factors", {}).items():
+        own = [f"{axis} {side}" for axis, f in g.items() for side in ("far", "near")
+               if f[side] != cal["factors"][axis][side]]
+        if own:
+            out.append(f"  {key}, its own points ({', '.join(own)}): " + "; ".join(
+                f"{axis} far {' '.join(f'{x:.2f}' for x in f['far'])}"
+                for axis, f in g.items()))
     return "\n".join(out)
 
 

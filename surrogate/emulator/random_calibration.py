@@ -14,10 +14,15 @@ for every answered FE point (deg, at the FE's own pressure or injected volume) t
 by which the band's half-width (log p, or log V, at the FE angle) would have to grow to
 reach it; per angle bin (``build.ANGLE_BINS_DEG``), separately for designs near an
 early-ended curve and the others, the ``level`` quantile of those factors (never below 1)
-multiplies the nodes' band multipliers of that bin: for every group alike (the random
-designs are too few per group), the far factor into ``band_scale``, the near one's excess
-over it into ``near_failed_band_scale``. A cell with fewer than MIN_CELL_POINTS points
-pools its neighbouring bins until it has them.
+multiplies the nodes' band multipliers of that bin: the far factor into ``band_scale``,
+the near one's excess over it into ``near_failed_band_scale``. A cell with fewer than
+MIN_CELL_POINTS points pools its neighbouring bins until it has them. Each group (and
+bending sign) gets the factors of its own points where it has GROUP_MIN_POINTS of them on
+that axis and side, and the factors of every group's points pooled otherwise. Until
+2026-12-04 every group took the pooled factors: on the balanced database the volume
+band of far designs at 20-40 deg was widened 7.97x for all because of 14 points of the
+reversed-bending Ecoflex/Ecoflex group, while for the rest that band stood some 50x wider
+than their errors (benchmarks/RESULTS.md).
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ from surrogate.emulator.emulator import (
 from surrogate.emulator.features import ANGLE_NODES_DEG
 
 MIN_CELL_POINTS = 40
+GROUP_MIN_POINTS = 3 * MIN_CELL_POINTS     # a group's own factors from this many points
 AXES = ("pressure", "volume")
 
 
@@ -115,14 +121,15 @@ def point_factors(emulator: Emulator, records: Iterable, level: float = 0.95
                           ("angle", "factor", "near", "axis", "pair")))
 
 
-def cell_factors(pf: PointFactors, level: float = 0.95) -> dict:
+def cell_factors(pf: PointFactors, level: float = 0.95, pair: str | None = None) -> dict:
     """Per axis, {"far": [...], "near": [...]}: the factor for each angle bin (the ``level``
     quantile of the cell's point factors, >= 1), the near one counted on top of the far
-    one (``near`` = max(1, quantile / far))."""
+    one (``near`` = max(1, quantile / far)); of one group's points with ``pair`` (its
+    emulator key), of all otherwise."""
     n_bins = len(ANGLE_BINS_DEG) - 1
     out: dict = {}
     for axis in AXES:
-        sel_axis = pf.axis == axis
+        sel_axis = (pf.axis == axis) & (True if pair is None else pf.pair == pair)
         bins = angle_bin(pf.angle_deg)
         out[axis] = {}
         for side, near in (("far", False), ("near", True)):
@@ -144,6 +151,24 @@ def cell_factors(pf: PointFactors, level: float = 0.95) -> dict:
 def node_factors(factors: list[float]) -> np.ndarray:
     """The bin factors spread over the angle nodes (N_NODES) by each node's angle bin."""
     return np.asarray(factors)[angle_bin(ANGLE_NODES_DEG)]
+
+
+def group_cells(pf: PointFactors, pooled: dict, pair: str, level: float = 0.95) -> dict:
+    """The factors group ``pair`` takes (``cell_factors`` layout): per axis, its own
+    far and near factors where it has GROUP_MIN_POINTS points on that axis and side (the
+    near ones only where the far ones are its own too), the ``pooled`` ones otherwise."""
+    own = cell_factors(pf, level, pair)
+    out: dict = {}
+    for axis in AXES:
+        mine = pf.pair == pair
+        counts = {side: int((mine & (pf.axis == axis) & (pf.near == near)).sum())
+                  for side, near in (("far", False), ("near", True))}
+        far_own = counts["far"] >= GROUP_MIN_POINTS
+        out[axis] = {
+            "far": own[axis]["far"] if far_own else pooled[axis]["far"],
+            "near": (own[axis]["near"] if far_own and counts["near"] >= GROUP_MIN_POINTS
+                     else pooled[axis]["near"])}
+    return out
 
 
 def coverage(pf: PointFactors) -> dict:
@@ -168,11 +193,13 @@ def calibrate_on_random_designs(emulator: Emulator, records: Iterable, level: fl
     records = list(records)
     before = point_factors(emulator, records, level)
     cells = cell_factors(before, level)
-    far = np.concatenate([node_factors(cells[a]["far"]) for a in AXES])
-    near = np.concatenate([node_factors(cells[a]["near"]) for a in AXES])
-    assert far.shape == near.shape == (2 * N_NODES,)
-    pairs = {}
+    pairs, by_group = {}, {}
     for key, pe in emulator.pairs.items():
+        own = group_cells(before, cells, key, level)
+        by_group[key] = own
+        far = np.concatenate([node_factors(own[a]["far"]) for a in AXES])
+        near = np.concatenate([node_factors(own[a]["near"]) for a in AXES])
+        assert far.shape == near.shape == (2 * N_NODES,)
         pairs[key] = replace(pe, band_scale=pe.band_scale * far,
                              near_failed_band_scale=near if (near > 1.0).any() else None)
     calibrated = replace(emulator, pairs=pairs)
@@ -181,6 +208,6 @@ def calibrate_on_random_designs(emulator: Emulator, records: Iterable, level: fl
     report = dict(emulator.report)
     report["random_design_calibration"] = {
         "level": level, "curves": curves, "bins_deg": list(ANGLE_BINS_DEG),
-        "factors": cells, "coverage_before": coverage(before),
+        "factors": cells, "group_factors": by_group, "coverage_before": coverage(before),
         "coverage_after": coverage(after), "source": dict(source or {})}
     return replace(calibrated, report=report)
