@@ -83,6 +83,7 @@ def _reaches_volume_stop(pe: PairEmulator, node_mean: np.ndarray) -> bool:
 ADAPTIVE_END_DEG = 85.0     # no candidate whose FE curve is emulated to end before this
 SCORE_FROM_DEG = 10.0       # the score's angle nodes: from here to 90 deg
 MIN_LOG_SLOPE = 0.1         # d log p / d log theta, d log V / d log theta: floor
+_LOG_THETA = np.log(ANGLE_NODES_DEG)
 
 
 def angle_sd_deg(mean: np.ndarray, sd: np.ndarray) -> np.ndarray:
@@ -95,10 +96,9 @@ def angle_sd_deg(mean: np.ndarray, sd: np.ndarray) -> np.ndarray:
     theta x sd / (d log x / d log theta), the slope taken along the emulated curve
     (floored at MIN_LOG_SLOPE: past a pressure maximum the angle at a pressure is
     undefined)."""
-    log_theta = np.log(ANGLE_NODES_DEG)
     out = np.zeros(N_NODES)
     for axis in (slice(0, N_NODES), slice(N_NODES, 2 * N_NODES)):
-        slope = np.gradient(log_theta + mean[axis], log_theta)
+        slope = np.gradient(_LOG_THETA + mean[axis], _LOG_THETA)
         out = np.maximum(out, ANGLE_NODES_DEG * sd[axis] / np.maximum(slope, MIN_LOG_SLOPE))
     return out
 
