@@ -158,9 +158,9 @@ def group_cells(pf: PointFactors, pooled: dict, pair: str, level: float = 0.95) 
     far and near factors where it has GROUP_MIN_POINTS points on that axis and side (the
     near ones only where the far ones are its own too), the ``pooled`` ones otherwise."""
     own = cell_factors(pf, level, pair)
+    mine = pf.pair == pair
     out: dict = {}
     for axis in AXES:
-        mine = pf.pair == pair
         counts = {side: int((mine & (pf.axis == axis) & (pf.near == near)).sum())
                   for side, near in (("far", False), ("near", True))}
         far_own = counts["far"] >= GROUP_MIN_POINTS
