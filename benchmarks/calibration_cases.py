@@ -107,10 +107,21 @@ def emulator_error(emulator) -> None:
               f"{err.mean():+.2f} | {np.sqrt(np.mean(sd**2)):.2f} |")
 
 
-def unseen(wanted: list[str], emulator_path: Path | None = None, seed_offset: int = 0) -> int:
+def write_report(reports: Path | None, case_id: str, report: dict | None) -> None:
+    """``report`` as ``reports/<case_id>.json`` (nothing without a directory or a report)."""
+    if reports is None or report is None:
+        return
+    reports.mkdir(parents=True, exist_ok=True)
+    (reports / f"{case_id}.json").write_text(json.dumps(
+        report, default=lambda o: o.item() if hasattr(o, "item") else str(o)))
+
+
+def unseen(wanted: list[str], emulator_path: Path | None = None, seed_offset: int = 0,
+           reports: Path | None = None) -> int:
     """The unseen-lab data sets: one line each (right or not, what the report says, CPU
     seconds) and the count; with ``emulator_path`` that emulator as the baseline instead
-    of the shipped one; ``seed_offset`` added to every protocol's noise seed."""
+    of the shipped one; ``seed_offset`` added to every protocol's noise seed; each report
+    written to ``reports`` when given."""
     import test_calibration_unseen as unseen_mod
 
     unseen_mod.SEED_OFFSET = seed_offset
@@ -127,6 +138,7 @@ def unseen(wanted: list[str], emulator_path: Path | None = None, seed_offset: in
         t0 = time.process_time()
         report, error, _ = unseen_mod.run_case(case)
         ok, what = unseen_mod.judge(case, report, error)
+        write_report(reports, case.id, report)
         n += 1
         right += ok
         print(f"{'right' if ok else 'WRONG'} | {case.id} | {what} | "
@@ -147,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="with --unseen: added to every protocol's noise seed")
     args = parser.parse_args(argv)
     if args.unseen:
-        return unseen(args.cases, args.emulator, args.seed_offset)
+        return unseen(args.cases, args.emulator, args.seed_offset, args.reports)
     from surrogate.emulator.file import load_emulator
 
     emulator = load_emulator(args.emulator)
@@ -164,10 +176,7 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         report = run_calibration(measure(lab, truth), emulator).report
         print(row(case_id, report, values, time.perf_counter() - t0), flush=True)
-        if args.reports:
-            args.reports.mkdir(parents=True, exist_ok=True)
-            (args.reports / f"{case_id}.json").write_text(json.dumps(
-                report, default=lambda o: o.item() if hasattr(o, "item") else str(o)))
+        write_report(args.reports, case_id, report)
     return 0
 
 
