@@ -30,7 +30,8 @@ from solver.errors import InputError
 from solver.settings import SolverSettings
 
 KEY_VERSION = 2   # 2: mesh levels redefined (solver/mesh.py), so a level names a new mesh
-                  # (3 is reserved for the day the default divisions become FINE_X_DIVISIONS)
+                  # (the default's move to the balanced level 0 needed no new version:
+                  # mesh_divisions is in the key whenever it is not "former", below)
 # Settings added after version 2, with the value that keeps a version-2 key.
 # mesh_divisions: left out at the former level 0 (called "default" until the balanced mesh
 # became the default), so the keys of every record solved on it before hold.

@@ -127,15 +127,16 @@ def cell_factors(pf: PointFactors, level: float = 0.95, pair: str | None = None)
     one (``near`` = max(1, quantile / far)); of one group's points with ``pair`` (its
     emulator key), of all otherwise."""
     n_bins = len(ANGLE_BINS_DEG) - 1
+    bins = angle_bin(pf.angle_deg)
+    mine = np.ones(pf.pair.shape, bool) if pair is None else pf.pair == pair
     out: dict = {}
     for axis in AXES:
-        sel_axis = (pf.axis == axis) & (True if pair is None else pf.pair == pair)
-        bins = angle_bin(pf.angle_deg)
+        sel_axis = mine & (pf.axis == axis)
         out[axis] = {}
         for side, near in (("far", False), ("near", True)):
             factors = []
+            sel = sel_axis & (pf.near == near)
             for b in range(n_bins):
-                sel = sel_axis & (pf.near == near)
                 for width in range(n_bins):
                     cell = sel & (np.abs(bins - b) <= width)
                     if cell.sum() >= MIN_CELL_POINTS:
