@@ -170,6 +170,8 @@ def main() -> None:
     ap.add_argument("--exponential", default="service/data/surrogate.json")
     ap.add_argument("--axis", choices=("pressure", "volume", "both"), default="both",
                     help="compare at the FE's own pressures, its own injected volumes, or both")
+    ap.add_argument("--compare", help="a second emulator file, timed interleaved with the "
+                    "first in the same run (a ratio)")
     args = ap.parse_args()
     e = load_emulator(args.emulator)
     with CurveStore(args.heldout) as db:
@@ -194,6 +196,19 @@ def main() -> None:
     te, tx = timed(e), timed(exp)
     print(f"query, 100 pressures with bands: emulator {1e3 * te:.3f} ms, exponential "
           f"{1e3 * tx:.3f} ms (ratio {te / tx:.2f})")
+    if args.compare:
+        models = {args.emulator: e, args.compare: load_emulator(args.compare), "exponential": exp}
+        times: dict[str, list[float]] = {k: [] for k in models}
+        for _ in range(40):                 # interleaved: the machine's load hits all alike
+            for k, m in models.items():
+                for _ in range(100):
+                    t0 = time.perf_counter()
+                    m.predict(d, pressures)
+                    times[k].append(time.perf_counter() - t0)
+        first = float(np.median(times[args.emulator]))
+        for k, t in times.items():
+            print(f"interleaved, {k}: median {1e3 * np.median(t):.3f} ms, ratio to the first "
+                  f"{np.median(t) / first:.2f}")
 
 
 if __name__ == "__main__":

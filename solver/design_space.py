@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, replace
+from functools import cache, lru_cache
 
 import numpy as np
 
@@ -71,8 +72,10 @@ def contrast(pair: tuple[str, str], stiffness_ratio: float) -> float:
     return stiffness_ratio * MATERIALS[pair[0]].mu0_kpa / MATERIALS[pair[1]].mu0_kpa
 
 
+@cache
 def contrast_range(group: str) -> tuple[float, float]:
-    """The contrast range the group's pairs cover in the reduced box."""
+    """The contrast range the group's pairs cover in the reduced box (a constant of the
+    box: computed once per group)."""
     pairs = [p for p, g in GROUPS.items() if g == group]
     lo, hi = REDUCED_RATIO_RANGE
     return (min(contrast(p, lo) for p in pairs), max(contrast(p, hi) for p in pairs))
@@ -104,9 +107,11 @@ def named_material(material_id: str) -> OgdenMaterial | None:
     return scaled_material(preset_id, scale)
 
 
+@lru_cache(maxsize=1024)
 def recognise(material: OgdenMaterial) -> tuple[str, float] | None:
     """(preset id, s) when ``material`` is a preset with mu scaled by s (alpha equal,
-    mu ratios equal within SCALE_TOLERANCE); None otherwise."""
+    mu ratios equal within SCALE_TOLERANCE); None otherwise. Remembered per material (a
+    frozen value): a query asks it twice for the same two layers."""
     for preset_id, base in MATERIALS.items():
         if len(base.alpha) != len(material.alpha):
             continue

@@ -529,10 +529,13 @@ class Emulator:
         mean, var = pe.force.predict(cb.coordinates)
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
+        per_kpa = pe.force_per_kpa(np.stack((mean, mean - z * sd, mean + z * sd)),
+                                   cb.node_mean)           # mean, lower, upper at once
+        past = p_red > pe.force_limit_pa * (1 + 1e-12)
         out = []
-        for y in (mean, mean - z * sd, mean + z * sd):
-            f = scale * force_at(pe.force_per_kpa(y, cb.node_mean), p_red)
-            f[p_red > pe.force_limit_pa * (1 + 1e-12)] = np.nan
+        for y in per_kpa:
+            f = scale * force_at(y, p_red)
+            f[past] = np.nan
             out.append(f)
         lo, hi = np.fmin(out[1], out[2]), np.fmax(out[1], out[2])
         # no force where its band is wider than FORCE_BAND_LIMIT x the force itself:
