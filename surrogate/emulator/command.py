@@ -111,9 +111,9 @@ def random_calibration_lines(cal: dict) -> str:
         own = [f"{axis} {side}" for axis, f in g.items() for side in ("far", "near")
                if f[side] != cal["factors"][axis][side]]
         if own:
-            out.append(f"  {key}, its own points ({', '.join(own)}): " + "; ".join(
-                f"{axis} far {' '.join(f'{x:.2f}' for x in f['far'])}"
-                for axis, f in g.items()))
+            out.append(f"  {key}, its own points: " + "; ".join(
+                f"{axis} {side} {' '.join(f'{x:.2f}' for x in g[axis][side])}"
+                for axis, side in (o.split() for o in own)))
     return "\n".join(out)
 
 
