@@ -47,6 +47,7 @@ class HeldOut:
     fe_deg: list[np.ndarray] = field(default_factory=list)
     inside_points: list[np.ndarray] = field(default_factory=list)
     near_failed: list[bool] = field(default_factory=list)   # flag near_early_ended_fe_curves
+    undercover: list[bool] = field(default_factory=list)    # band_undercovers_random_designs
 
     def summary(self) -> str:
         flat = np.concatenate(self.errors_deg) if self.errors_deg else np.array([np.nan])
@@ -57,16 +58,19 @@ class HeldOut:
                 f"95 % band coverage {self.inside / max(self.total, 1):.3f}; per-curve rmse "
                 f"median {np.median(self.curve_rmse_deg) if self.curve_rmse_deg else np.nan:.2f}"
                 f"; curves with rmse <= 1 and max <= 3 deg: {both}")
-        for flagged in (True, False):
-            sel = [i for i, f in enumerate(self.near_failed) if f == flagged]
-            if not sel:
-                continue
-            ok = sum(self.curve_rmse_deg[i] <= 1 and self.curve_max_deg[i] <= 3 for i in sel)
-            cov = (float(np.mean(np.concatenate([self.inside_points[i] for i in sel])))
-                   if any(self.inside_points[i].size for i in sel) else float("nan"))
-            text += (f"\n{'flagged' if flagged else 'not flagged'} near_early_ended_fe_curves: "
-                     f"{len(sel)} curves, {ok} within the per-curve target, band coverage "
-                     f"{cov:.3f}")
+        for name, marks in (("near_early_ended_fe_curves", self.near_failed),
+                            ("band_undercovers_random_designs", self.undercover)):
+            for flagged in (True, False):
+                sel = [i for i, f in enumerate(marks) if f == flagged]
+                if not sel:
+                    continue
+                ok = sum(self.curve_rmse_deg[i] <= 1 and self.curve_max_deg[i] <= 3
+                         for i in sel)
+                cov = (float(np.mean(np.concatenate([self.inside_points[i] for i in sel])))
+                       if any(self.inside_points[i].size for i in sel) else float("nan"))
+                text += (f"\n{'flagged' if flagged else 'not flagged'} {name}: "
+                         f"{len(sel)} curves, {ok} within the per-curve target, band "
+                         f"coverage {cov:.3f}")
         if self.fe_deg:
             fe, ins = np.abs(np.concatenate(self.fe_deg)), np.concatenate(self.inside_points)
             bins = angle_bin(fe)
@@ -157,6 +161,7 @@ def evaluate(e, records, axis: str = "pressure") -> HeldOut:
         out.curve_rmse_deg.append(rmse)
         out.curve_max_deg.append(worst)
         out.near_failed.append("near_early_ended_fe_curves" in p.validity["flags"])
+        out.undercover.append("band_undercovers_random_designs" in p.validity["flags"])
         out.lines.append(f"{label(rec)}: rmse {rmse:.2f} max {worst:.2f} deg, band covers "
                          f"{cover.mean():.2f}, {int((~ok).sum())} of {ok.size} points past "
                          "the emulated FE range")

@@ -759,7 +759,7 @@ def test_a_group_with_enough_calibration_points_takes_its_own_band_factors():
     factor[(pair == "few+")] = 3.0
     keep = (pair != "few+") | (np.arange(3 * n) % n < 10)     # "few+": 10 points
     pf = PointFactors(angle[keep], factor[keep], np.zeros(keep.sum(), bool),
-                      np.full(keep.sum(), "volume"), pair[keep])
+                      np.full(keep.sum(), "volume"), pair[keep], np.arange(keep.sum()) // 20)
     pooled = cell_factors(pf)
     good, bad, few = (group_cells(pf, pooled, k) for k in ("good+", "bad-", "few+"))
     assert good["volume"]["far"] == [1.0] * 6

@@ -62,6 +62,12 @@ FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE cu
 # stopped at 58 deg (500 ul) was answered to 88 deg, 30 deg off.
 RANGE_Z = 1.0
 SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness balance
+# A design whose group and side (near or far from early-ended curves) had its band cover
+# less than this share of the points of FE curves of random designs, after the band's
+# second calibration, on at least UNDERCOVER_MIN_POINTS of them, is flagged
+# ``band_undercovers_random_designs`` (the issue's honest range is 0.90-0.98).
+UNDERCOVER_LEVEL = 0.90
+UNDERCOVER_MIN_POINTS = 40
 # A fall of the emulated p(theta) below its running maximum counts as a pressure maximum
 # from this relative size on: smaller wiggles (the shipped fit's largest is 2.5e-4) are far
 # inside the band (a few per cent) and say nothing about the physics.
@@ -488,7 +494,8 @@ class Emulator:
         if pe.sign < 0:
             angle, lower, upper = -angle, -upper, -lower
         force = self._force(pe, cb, point, p_red, z)
-        validity = self._validity(pe, cb, point, np.nan_to_num(pressure), past, force)
+        validity = self._validity(pe, cb, point, np.nan_to_num(pressure), past, force,
+                                  "volume")
         if past.any():
             validity["messages"][0] = (
                 f"{int(past.sum())} volume(s) above {v_lim * ls3:.1f} ul are past the FE's "
@@ -544,8 +551,35 @@ class Emulator:
         return (np.where(unbacked, np.nan, out[0]), np.where(unbacked, np.nan, lo),
                 np.where(unbacked, np.nan, hi))
 
+    def random_design_coverage(self, pair: str, axis: str, near: bool) -> dict | None:
+        """How well the bands of group ``pair`` (``axis`` "pressure" or "volume", designs
+        near an early-ended curve or not) covered the FE curves of random designs after
+        the second calibration: {"coverage", "points", "curves"}, or None (files before
+        2026-12-04, or no such points)."""
+        cal = self.report.get("random_design_calibration") or {}
+        cell = ((cal.get("group_coverage_after") or {}).get(pair) or {}).get(axis) or {}
+        found = cell.get("near" if near else "far")
+        return found if found and found.get("coverage") is not None else None
+
+    def _undercover(self, pe: PairEmulator, cb: CurveBand, axis: str
+                    ) -> tuple[str, str] | None:
+        """The flag and message when this design's group and side covered too little."""
+        near = cb.failed_distance < NEAR_FAILED_RADIUS
+        cell = self.random_design_coverage(pe.pair, axis, near)
+        if (cell is None or cell["points"] < UNDERCOVER_MIN_POINTS
+                or cell["coverage"] >= UNDERCOVER_LEVEL):
+            return None
+        where = "near" if near else "away from"
+        return ("band_undercovers_random_designs",
+                f"on FE curves of random designs of this group {where} curves that ended "
+                f"early ({cell['curves']} curves, {cell['points']} points), the band by "
+                f"{axis} covered only {100 * cell['coverage']:.0f} % of the FE's points, "
+                "against the 95 % it states: the emulator is off by more than its band "
+                "says here; an FE solve (POST /v1/solve) gives this design's own curve")
+
     def _validity(self, pe: PairEmulator, cb: CurveBand, point: BoxPoint, p: np.ndarray,
-                  past: np.ndarray, force: object) -> dict[str, object]:
+                  past: np.ndarray, force: object, axis: str = "pressure"
+                  ) -> dict[str, object]:
         flags: list[str] = []
         messages: list[str] = []
         fe_limit_pa = cb.limit_pressure_pa * point.pressure_scale
@@ -568,6 +602,10 @@ class Emulator:
                 "least reliable, its error on random designs two to three times that "
                 "elsewhere and its band widened to match (docs/surrogate.md); an FE solve "
                 "(POST /v1/solve) gives this design's own curve")
+        under = self._undercover(pe, cb, axis)
+        if under is not None:
+            flags.append(under[0])
+            messages.append(under[1])
         if force is not None:
             unbacked = np.isnan(force[0]) & (p <= pe.force_limit_pa * point.pressure_scale)
             if unbacked.any():

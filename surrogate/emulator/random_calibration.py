@@ -57,13 +57,15 @@ AXES = ("pressure", "volume")
 class PointFactors:
     """Per answered FE point of the calibration curves: |FE angle| (deg), the factor its
     band would need (<= 1: inside), whether its design is near an early-ended curve, the
-    axis (pressure or volume) and the emulator group."""
+    axis (pressure or volume), the emulator group and the curve (its index among the
+    calibration records)."""
 
     angle_deg: np.ndarray
     factor: np.ndarray
     near: np.ndarray
     axis: np.ndarray
     pair: np.ndarray
+    curve: np.ndarray
 
 
 def _needed(x_fe: np.ndarray, theta: np.ndarray, mean: np.ndarray, low: np.ndarray,
@@ -86,8 +88,9 @@ def point_factors(emulator: Emulator, records: Iterable, level: float = 0.95
     (designs the emulator refuses are skipped), by pressure and by injected volume."""
     z = z_value(level)
     default = SolverSettings()
-    cols: dict[str, list] = {k: [] for k in ("angle", "factor", "near", "axis", "pair")}
-    for rec in records:
+    cols: dict[str, list] = {k: [] for k in ("angle", "factor", "near", "axis", "pair",
+                                             "curve")}
+    for index, rec in enumerate(records):
         if rec.settings != default:
             continue
         try:
@@ -114,11 +117,12 @@ def point_factors(emulator: Emulator, records: Iterable, level: float = 0.95
             cols["near"].append(np.full(len(f), cb.failed_distance < NEAR_FAILED_RADIUS))
             cols["axis"].append(np.full(len(f), axis))
             cols["pair"].append(np.full(len(f), pe.pair))
+            cols["curve"].append(np.full(len(f), index))
     if not cols["angle"]:
         raise InputError("band calibration", "no free-tip default-FE curve of the calibration "
                          "database is answered by the emulator", "random designs of the box")
     return PointFactors(*(np.concatenate(cols[k]) for k in
-                          ("angle", "factor", "near", "axis", "pair")))
+                          ("angle", "factor", "near", "axis", "pair", "curve")))
 
 
 def cell_factors(pf: PointFactors, level: float = 0.95, pair: str | None = None) -> dict:
@@ -186,6 +190,23 @@ def coverage(pf: PointFactors) -> dict:
     return out
 
 
+def group_coverage(pf: PointFactors) -> dict:
+    """Per group, axis and side (far, near): the share of its points inside their band,
+    and how many points and curves that share stands on (``Emulator`` flags a design
+    whose cell covered too little: ``band_undercovers_random_designs``)."""
+    out: dict = {}
+    for pair in sorted(set(pf.pair.tolist())):
+        out[pair] = {}
+        for axis in AXES:
+            out[pair][axis] = {}
+            for side, near in (("far", False), ("near", True)):
+                s = (pf.pair == pair) & (pf.axis == axis) & (pf.near == near)
+                out[pair][axis][side] = {
+                    "coverage": float(np.mean(pf.factor[s] <= 1.0)) if s.any() else None,
+                    "points": int(s.sum()), "curves": int(len(np.unique(pf.curve[s])))}
+    return out
+
+
 def calibrate_on_random_designs(emulator: Emulator, records: Iterable, level: float = 0.95,
                                 source: dict | None = None) -> Emulator:
     """The emulator with every group's band multipliers scaled by the factors from the
@@ -210,5 +231,6 @@ def calibrate_on_random_designs(emulator: Emulator, records: Iterable, level: fl
     report["random_design_calibration"] = {
         "level": level, "curves": curves, "bins_deg": list(ANGLE_BINS_DEG),
         "factors": cells, "group_factors": by_group, "coverage_before": coverage(before),
-        "coverage_after": coverage(after), "source": dict(source or {})}
+        "coverage_after": coverage(after), "group_coverage_after": group_coverage(after),
+        "source": dict(source or {})}
     return replace(calibrated, report=report)

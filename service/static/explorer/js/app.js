@@ -34,6 +34,8 @@ const FLAG_WORDS = {
   t_outside_fitted_range: "t outside the fitted box",
   L_outside_fitted_range: "L outside the fitted box",
   outside_box: "outside the design box",
+  near_early_ended_fe_curves: "near FE curves that ended early",
+  band_undercovers_random_designs: "band too narrow here (random designs)",
 };
 
 const app = {
