@@ -99,7 +99,8 @@ class Design:
             raise InputError("chamber_offset_mm", f"chamber from x = {offset:g} to "
                              f"{offset + self.L_mm:g} mm does not fit in a body of {body:g} mm",
                              f"0.1 <= chamber_offset_mm <= {body - self.L_mm - 0.1:g}")
-        if self.body_length_mm == body and self.chamber_offset_mm == offset:
+        if (type(self.body_length_mm) is float and type(self.chamber_offset_mm) is float
+                and self.body_length_mm == body and self.chamber_offset_mm == offset):
             return self             # already resolved: a query validates its design twice
         return replace(self, body_length_mm=body, chamber_offset_mm=offset)
 
