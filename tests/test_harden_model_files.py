@@ -88,6 +88,8 @@ def test_any_change_to_a_sealed_surrogate_file_is_refused(tmp_path):
         load_surrogate(path)
 
 
+COVERAGE = ("report", "random_design_calibration", "group_coverage_after",
+            "pdms/ecoflex_00_30+", "pressure", "far")
 EMULATOR_DAMAGE = {
     "band scale a string": (("pairs", 0, "band_scale"), "x"),
     "band scales cut": (("pairs", 0, "band_scale"), [1.0, 2.0]),
@@ -99,6 +101,9 @@ EMULATOR_DAMAGE = {
     "lengths cut": (("pairs", 0, "curves", "gps", 0, "lengths"), [1.0]),
     "coordinates missing a row": (("pairs", 1, "coordinates", 0), DELETE),
     "centre null": (("pairs", 0, "curves", "center"), None),
+    "group coverage a string": ((*COVERAGE, "coverage"), "x"),
+    "group coverage above 1": ((*COVERAGE, "coverage"), 1.5),
+    "group coverage points negative": ((*COVERAGE, "points"), -1),
 }
 
 

@@ -113,8 +113,10 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
             _check_pair(pe)
         for group, m in sign_models.items():
             _check_gp(m, f"sign model {group}")
+        report = dict(d.get("report") or {})
+        _check_group_coverage(report)
         return Emulator(name=str(d["name"]), pairs=pairs, provenance=dict(d["provenance"]),
-                        report=dict(d.get("report") or {}), sign_models=sign_models,
+                        report=report, sign_models=sign_models,
                         variance_nodes=_variance_nodes(d.get("variance_nodes")))
     except (KeyError, TypeError, ValueError, IndexError, AttributeError, ArithmeticError,
             np.linalg.LinAlgError) as exc:
@@ -160,6 +162,25 @@ def _precheck_pair(p: dict) -> None:
         raise ValueError(f"pair {p['pair']}: fe_max_volume_ul must be a positive number")
     if not np.isfinite(coordinates).all():
         raise ValueError(f"pair {p['pair']}: coordinates are not finite")
+
+
+def _check_group_coverage(report: dict) -> None:
+    """The calibration's per-group coverage, which queries read for the flag
+    ``band_undercovers_random_designs`` (``Emulator.random_design_coverage``): each cell a
+    share in [0, 1] or None, with non-negative counts of points and curves."""
+    cal = report.get("random_design_calibration") or {}
+    for pair, axes in (cal.get("group_coverage_after") or {}).items():
+        for axis, sides in axes.items():
+            for side, cell in sides.items():
+                share = cell["coverage"]
+                counts = (cell["points"], cell["curves"])
+                if (share is not None and not (isinstance(share, (int, float))
+                                               and 0.0 <= share <= 1.0)) or not all(
+                        isinstance(c, int) and not isinstance(c, bool) and c >= 0
+                        for c in counts):
+                    raise ValueError(f"report: group_coverage_after {pair} {axis} {side} "
+                                     "must hold a coverage in [0, 1] (or null) and counts "
+                                     "of points and curves >= 0")
 
 
 def _check_gp(gp, what: str) -> None:
