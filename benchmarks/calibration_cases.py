@@ -55,6 +55,9 @@ def cases() -> list[tuple[str, Lab, Truth, dict[str, float]]]:
         _, truth, values, protocol, flows = getattr(c, "values", c)
         out.append((case_id, Lab(designs=bases, protocol=protocol, flows_ul_s=flows), truth,
                     values))
+        if case_id == "camera_gain":   # the strict case: where the designs tell it apart
+            out.append(("camera_gain-6", Lab(designs=paper, protocol=protocol,
+                                             flows_ul_s=flows), truth, values))
     for case_id, (_, truth, values, designs, _) in zip(cases_mod.PHYSICAL_IDS,
                                                        cases_mod.PHYSICAL_CASES, strict=True):
         out.append((case_id, Lab(designs=designs, protocol=FULL_LOOP), truth, values))

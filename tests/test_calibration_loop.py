@@ -13,10 +13,12 @@ the error against the noise floor, never the emulator's exact numbers.
 
 For every catalogued effect: the loop selects it alone, recovers its size within 3
 standard errors, reaches a cross-validated error within 1.3 x the noise floor, and never
-reports rmse_after above rmse_before. Clean data (the paper's designs, the reversed pair)
-select nothing; two effects outside the catalogue (a rate-independent hysteresis loop and
-a contact saturation of the bend) are flagged with nothing selected. Where the emulator
-cannot back a case, the case is xfail with the figures measured on it.
+reports rmse_after above rmse_before (a camera gain on the six paper designs: on three
+the data do not tell it from a softer body, and the loop must say so). Clean data (the
+paper's designs, the reversed pair) select nothing; two effects outside the catalogue (a
+rate-independent hysteresis loop and a contact saturation of the bend) are flagged with
+nothing selected. Where the emulator cannot back a case, the case is xfail with the figures
+measured on it (none since 2026-12-04).
 """
 
 from __future__ import annotations
@@ -127,26 +129,7 @@ MEASUREMENT_CASES = [
     ("hydraulic_resistance", Truth(R_pa_per_ul_s=60.0), {"R_pa_per_ul_s": 60.0}, LOOP,
      (2.5,)),
     ("angle_offset", Truth(offset_deg=2.0), {"offset_deg": 2.0}, LOADING, (2.5,)),
-    pytest.param("camera_gain", Truth(k_angle=1.08), {"k_angle": 1.08}, LOOP, (2.5,),
-                 marks=pytest.mark.xfail(reason=(
-                     "measured 2026-12-02 (emulator of 533 records, seed 1, angle and gauge "
-                     "pressure by injected volume; still xfail on the 663-record one): "
-                     "camera_gain fits 1.087 +/- 0.010 with "
-                     "the lowest angle CV (0.80 deg, floor 0.82) and no pressure offset or "
-                     "gain ties with it any more; but body_stiffness 0.84 +/- 0.03 raises "
-                     "the angle at a volume nearly alike (CV 0.85 deg) and also lowers the "
-                     "pressure at a volume, where these 9 specimens read ~1.2 % below their "
-                     "designs' FE by chance (2 % specimen scatter, s.e. 0.7 %): gauge CV "
-                     "31.4 vs 36.2 Pa (floor 30). BIC counts the 144 gauge readings as "
-                     "independent while that scatter is shared along a curve, so it picks "
-                     "body_stiffness (delta BIC -269 vs -222); held-out curves do not tell "
-                     "them apart (paired z 0.35): camera_gain is reported indistinguishable "
-                     "with what to measure (the honesty test passes). Again on the "
-                     "balanced 2275-record emulator (2026-12-04): body_stiffness 0.842 +/- "
-                     "0.037; weighting the gauge rows for the specimens' scatter selects "
-                     "camera_gain 1.091 +/- 0.012 but loses the thinner membrane and three "
-                     "unseen sets (benchmarks/RESULTS.md), so it is not used"),
-                     strict=False)),
+    ("camera_gain", Truth(k_angle=1.08), {"k_angle": 1.08}, LOOP, (2.5,)),
     # by volume a gauge gain leaves the angle against volume alone: told from the
     # membrane_stiffness + chamber_length pair that tied with it against pressure alone
     ("pressure_gain", Truth(k_pressure=1.06), {"k_pressure": 1.06}, LOOP, (2.5,)),
@@ -159,16 +142,34 @@ MEASUREMENT_IDS = ["pressure_offset", "hydraulic_resistance", "angle_offset", "c
                    "pressure_gain", "viscoelastic_creep"]
 
 
-@pytest.mark.parametrize("effect, truth, values, protocol, flows", MEASUREMENT_CASES,
-                         ids=MEASUREMENT_IDS)
+# On the three bases a camera gain is told from a softer body only by the gauge's level at
+# a volume (a body 16 % softer raises the angle at a volume much as a gain of 1.08 does and
+# lowers the gauge by ~1.5 %), which the specimens' mean (2 % scatter, 9 specimens: s.e.
+# 0.7 %) and the emulator's pressure scale (1 %) leave open: measured 2026-12-04 over lab
+# seeds 1-5, camera_gain selected at 2, 4 and 5; body_stiffness 0.842 +/- 0.037 at seed 1
+# (this case's), a stiffer membrane with a gauge gain at 3, each naming camera_gain among
+# the explanations the data do not tell apart. So the three bases test the honest answer
+# (below), and the six paper designs, where the two differ in the angle's shape, test the
+# recovery (selected at every seed 1-5, 1.068-1.097 for 1.08, each within 1.5 sd).
+STRICT_MEASUREMENT_IDS = [i for i in MEASUREMENT_IDS if i != "camera_gain"]
+
+
+@pytest.mark.parametrize("effect, truth, values, protocol, flows",
+                         [c for c in MEASUREMENT_CASES if c[0] != "camera_gain"],
+                         ids=STRICT_MEASUREMENT_IDS)
 def test_each_measurement_and_time_effect_is_found_and_sized(effect, truth, values, protocol,
                                                              flows):
     lab = Lab(designs=BASES, protocol=protocol, flows_ul_s=flows)
     assert_recovers(calibrate(lab, truth), effect, values)
 
 
-@pytest.mark.parametrize("effect, truth, values, protocol, flows",
-                         [getattr(c, "values", c) for c in MEASUREMENT_CASES],
+@pytest.mark.slow
+def test_a_camera_gain_is_found_where_the_designs_tell_it_from_a_softer_body():
+    lab = Lab(designs=PAPER_DESIGNS, protocol=LOOP)
+    assert_recovers(calibrate(lab, Truth(k_angle=1.08)), "camera_gain", {"k_angle": 1.08})
+
+
+@pytest.mark.parametrize("effect, truth, values, protocol, flows", MEASUREMENT_CASES,
                          ids=MEASUREMENT_IDS)
 def test_each_measurement_effect_is_found_or_named_among_its_equivalents(effect, truth, values,
                                                                          protocol, flows):
