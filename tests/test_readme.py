@@ -33,7 +33,7 @@ def test_setup_commands_match_ci():
     blocks = [b.strip() for b in _code_blocks("sh")]
     serve, test = blocks[0], blocks[1]
     assert serve.endswith("balloon serve")
-    assert test.endswith("pytest -q")
+    assert test.endswith("pytest -q -n 2")  # both cores (pytest-xdist)
     # .ci/run runs each step of the README's test command, in its own venv, quietly
     ci = [ln.strip().replace(" --quiet", "")
           for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
