@@ -7,6 +7,7 @@ the expected numbers are the generating parameters themselves. The covariance is
 coordinates (log10 b_t in place of b_t, ``surrogate.exponential.equations.to_fit``).
 """
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -230,3 +231,23 @@ def test_a_family_of_one_design_is_left_to_the_emulator_and_counted() -> None:
     assert s.provenance["n_records"] == len(grid)
     np.testing.assert_allclose(s.family_fits[0].parameters["exponential"].theta, PAPER_THETA,
                                rtol=1e-6)
+
+
+def test_a_tau_flat_in_thickness_gives_b_t_inf_without_a_warning_and_a_finite_start():
+    """tau = a_t log10(b_t t) with tau the same at every t: a_t -> 0 and b_t = 10^(i/s)
+    overflows; the line says b_t = inf (plain_json writes null) without a RuntimeWarning,
+    and the joint fit's start falls back to the default b_t."""
+    import warnings
+
+    from surrogate.exponential.family_fit import start_values
+    from surrogate.exponential.per_curve_fits import thickness_constants
+
+    t = np.array([0.5, 0.75, 1.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        line = thickness_constants(t, np.array([800.0, 800.0 + 1e-9, 800.0 + 2e-9]))
+    assert line.values[1] == math.inf
+    p = np.linspace(100.0, 1500.0, 8)
+    curves = [(7.1, ti, p, 20.0 * (np.exp(p / 800.0) - 1.0)) for ti in t]
+    start = start_values(make_points(curves))
+    assert np.all(np.isfinite(start)), start

@@ -72,7 +72,7 @@ def start_values(pts: Points) -> np.ndarray:
     if len(np.unique(t_)) >= 2:
         line = thickness_constants(t_, tau_)
         a_t, b_t = line.values
-        if a_t > 0 and b_t * t_.min() > 1.0:
+        if a_t > 0 and math.isfinite(b_t) and b_t * t_.min() > 1.0:
             return np.array([a, a_t, b_t])
     b_t = _default_b_t(t_)
     a_t = float(np.mean(tau_ / np.log10(b_t * t_)))

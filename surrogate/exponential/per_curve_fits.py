@@ -135,7 +135,8 @@ def thickness_constants(t_mm: np.ndarray, tau: np.ndarray) -> LineFit:
     X = np.column_stack([x, np.ones_like(x)])
     (slope, icept), *_ = np.linalg.lstsq(X, y, rcond=None)
     resid = y - X @ [slope, icept]
-    b_t = 10.0 ** (icept / slope)
+    with np.errstate(over="ignore", divide="ignore"):  # tau flat in t: b_t = inf, said so
+        b_t = float(np.float64(10.0) ** (icept / slope)) if slope != 0 else math.inf
     n = len(x)
     if n > 2:
         cov = np.linalg.inv(X.T @ X) * float(resid @ resid) / (n - 2)
