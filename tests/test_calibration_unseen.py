@@ -566,9 +566,14 @@ def test_loading_holds_and_unloading_are_read_as_the_pump_ran(designs, truth, pr
 # inlet resistance at the Ecoflex designs and the camera offset without time_s are right
 # since the baseline's pressure scale and the specimens' scatter are counted: _backing.py,
 # _specimens.py)
-WRONG: dict[str, str] = {}   # none at seed 0 since the pump's switch times are freed
-# whenever they lower the cross-validated error (2026-12-04; creep-0.3-odd-one-flow was
-# wrong, g 0.17 for 0.3: the creep absorbed the switches' misfit)
+WRONG: dict[str, str] = {
+    "creep-0.3-odd-one-flow": (
+        "measured 2026-12-04 on the emulator whose pressure nodes share one kernel: 30 % creep "
+        "at one flow rate on the odd Ecoflex designs reads g 0.194 +/- 0.035 for 0.3, 3.03 sd "
+        "off; the emulator before it read the same 0.194 +/- 0.035 and passed by 0.3 % of an "
+        "sd: at one flow rate the creep trades with the pump's switch times")}
+# (before the switch times were freed whenever they help, 2026-12-04, this set read g 0.17:
+# the creep absorbed the switches' misfit)
 
 
 @pytest.mark.parametrize("case", [

@@ -134,3 +134,44 @@ def test_the_restricted_likelihood_and_its_gradient_against_the_dense_form():
                     - _dense_neg_reml(params - step * e, x, y)) / (2 * step)
                    for e in np.eye(len(params))]
         np.testing.assert_allclose(grad, numeric, rtol=1e-4, atol=1e-6)
+
+
+def test_outputs_sharing_one_kernel_fit_their_summed_likelihood_and_share_the_variance():
+    """fit_output_gps(shared=...): the columns of ``shared`` get one kernel (lengths and
+    nugget) that maximises the sum of their restricted likelihoods (its gradient: the
+    dense form's central differences, summed over the columns); each keeps its own signal
+    variance and mean and interpolates its designs. A query's variance of those columns is
+    one product (``kernels``), and equals each column's own GP's variance on every path."""
+    from surrogate.emulator.gp import TrainingPairs, _neg_reml
+    from surrogate.emulator.vector_gp import SMALL_N
+
+    rng = np.random.default_rng(5)
+    x = rng.uniform(size=(40, 3))
+    y = curves(x)[:, 2:6]
+    params = np.log([0.5, 1.1, 0.7, 1e-5])
+    value, grad = _neg_reml(params, x, y, TrainingPairs.of(x))
+    np.testing.assert_allclose(value, sum(_dense_neg_reml(params, x, y[:, j])
+                                          for j in range(4)), rtol=1e-9)
+    step = 1e-5
+    numeric = [sum(_dense_neg_reml(params + step * e, x, y[:, j])
+                   - _dense_neg_reml(params - step * e, x, y[:, j]) for j in range(4))
+               / (2 * step) for e in np.eye(len(params))]
+    np.testing.assert_allclose(grad, numeric, rtol=1e-4, atol=1e-6)
+
+    for n in (SMALL_N // 3, SMALL_N + 40):
+        u = rng.uniform(size=(n, 3))
+        vgp = fit_output_gps(u, curves(u), shared=slice(0, 6))
+        gps = vgp.gps
+        assert all(np.array_equal(g.lengths, gps[0].lengths) and g.nugget == gps[0].nugget
+                   for g in gps[:6])
+        assert vgp.kernels(slice(0, 6)) == 1 and vgp.kernels(slice(None)) == 3
+        np.testing.assert_allclose(vgp.predict_many(u)[0], curves(u), atol=1e-3)
+        test = rng.uniform(size=(5, 3))
+        mean, var = vgp.predict_many(test)
+        own = np.array([[g.predict(test)[1][i] for g in gps] for i in range(5)])
+        np.testing.assert_allclose(var, own * vgp.scale**2, rtol=1e-8, atol=1e-14)
+        atol = 1e-14 if n <= SMALL_N else 1e-7 * prior_variance(vgp).max()
+        for i in range(5):
+            m1, v1 = vgp.predict(test[i], variance_of=np.arange(8))
+            np.testing.assert_allclose(m1, mean[i], rtol=1e-10)
+            np.testing.assert_allclose(v1, var[i], rtol=1e-7, atol=atol)

@@ -137,6 +137,10 @@ def _neg_reml(params: np.ndarray, x: np.ndarray, y: np.ndarray,
     gradient in (log lengths, log nugget): with P = K^-1 - K^-1 H (H^T K^-1 H)^-1 H^T K^-1
     and a = P y, d(-log L) = 1/2 tr((P - a a^T / s2) dK), s2 = y^T P y / (n - p).
 
+    ``y`` (n,) or (n, m): m outputs sharing the kernel (lengths and nugget), each with its
+    own signal variance s2_j and mean coefficients, independent given the kernel: the sum
+    of their likelihoods, gradient 1/2 tr((m P - sum_j a_j a_j^T / s2_j) dK).
+
     K is symmetric with a constant diagonal, so the kernel and the trace of the gradient
     are evaluated on the pairs i > j only (``pairs``: once per fit), K is filled in its
     lower triangle for LAPACK's Cholesky factorisation (dpotrf) and inverted from that
@@ -144,6 +148,8 @@ def _neg_reml(params: np.ndarray, x: np.ndarray, y: np.ndarray,
     at n = 450, d = 7 one evaluation takes 0.16x the time of the dense form it replaced,
     to 1e-13 in value and gradient (benchmarks/RESULTS.md)."""
     n, d = x.shape
+    ys = y.reshape(n, -1)
+    m = ys.shape[1]
     pr = pairs if pairs is not None else TrainingPairs.of(x)
     inv_l2 = np.exp(-2.0 * params[:d])
     nugget = float(np.exp(params[d]))
@@ -169,17 +175,19 @@ def _neg_reml(params: np.ndarray, x: np.ndarray, y: np.ndarray,
     except np.linalg.LinAlgError:
         return 1e12, np.zeros_like(params)
     pm = kinv - kh @ cho_solve((hk_chol, True), kh.T)
-    a = pm @ y
-    s2 = float(y @ a) / (n - p_dim)
-    if not s2 > 0:
+    a = pm @ ys                                               # (n, m)
+    s2 = np.einsum("nm,nm->m", ys, a) / (n - p_dim)
+    if not np.all(s2 > 0):
         return 1e12, np.zeros_like(params)
-    value = 0.5 * ((n - p_dim) * np.log(s2) + logdet_k + 2 * np.log(np.diag(hk_chol)).sum())
+    value = 0.5 * ((n - p_dim) * float(np.log(s2).sum())
+                   + m * (logdet_k + 2 * np.log(np.diag(hk_chol)).sum()))
     # tr(W dK_j) over the full symmetric matrices = 2 sum over the pairs (dK_j's diagonal
     # is zero): dk/dlog l_j = 5/3 (1 + sqrt5 r) exp(-sqrt5 r) (x_i - x_j)^2 / l_j^2
-    w = pm[pr.rows, pr.cols] - a[pr.rows] * a[pr.cols] / s2
+    aw = a / np.sqrt(s2)
+    w = m * pm[pr.rows, pr.cols] - np.einsum("pm,pm->p", aw[pr.rows], aw[pr.cols])
     grad = np.empty_like(params)
     grad[:d] = inv_l2 * (pr.squares @ (w * (5.0 / 3.0) * (1.0 + SQRT5 * r) * e))
-    grad[d] = 0.5 * nugget * (float(np.trace(pm)) - float(a @ a) / s2)
+    grad[d] = 0.5 * nugget * (m * float(np.trace(pm)) - float(np.einsum("nm,nm->", aw, aw)))
     return value, grad
 
 
@@ -203,6 +211,18 @@ def fit_gp(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
     """Maximise the restricted likelihood over (log lengths, log nugget), from ``starts``
     starting points: the first at ``warm``'s hyperparameters when given (a neighbouring
     output's fit), else at length 0.6 everywhere."""
+    return fit_shared_gps(x, np.asarray(y, float)[:, None], starts, seed, min_nugget,
+                          warm)[0]
+
+
+def fit_shared_gps(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
+                   min_nugget: float = NUGGET_BOUNDS[0],
+                   warm: GaussianProcess | None = None) -> tuple[GaussianProcess, ...]:
+    """One GP per column of ``y`` (n, m), all with one kernel (length scales and nugget)
+    that maximises the sum of their restricted likelihoods (``fit_gp``'s starts); each
+    its own signal variance and mean. A query's variance is then one product for all m
+    (``VectorGP.predict``). The nugget is the smallest any column's interpolation cap
+    allows (below)."""
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     n, d = x.shape
@@ -229,14 +249,15 @@ def fit_gp(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
         if best is None or res.fun < best.fun:
             best = res
     assert best is not None
-    gp = from_hyperparameters(x, y, np.exp(best.x[:d]), float(np.exp(best.x[d])))
+    lengths, nugget = np.exp(best.x[:d]), float(np.exp(best.x[d]))
+    gps = [from_hyperparameters(x, y[:, j], lengths, nugget) for j in range(y.shape[1])]
     # The data are FE curves, not noisy measurements: keep the nugget's absolute sd below
     # INTERPOLATION_SD of the outputs' spread, so that the GP reproduces its database
     # designs (a smooth, long-length-scale score has a large signal variance, and a
     # relative nugget of 1e-6 would then smooth it by 2 % of its spread).
-    cap = (INTERPOLATION_SD * float(np.std(y))) ** 2 / gp.signal_var
-    if gp.nugget > cap and cap > NUGGET_BOUNDS[0]:
-        gp = from_hyperparameters(x, y, gp.lengths, cap)
-    elif gp.nugget > cap:
-        gp = from_hyperparameters(x, y, gp.lengths, NUGGET_BOUNDS[0])
-    return gp
+    cap = min((INTERPOLATION_SD * float(np.std(y[:, j]))) ** 2 / g.signal_var
+              for j, g in enumerate(gps))
+    if nugget > cap:
+        nugget = cap if cap > NUGGET_BOUNDS[0] else NUGGET_BOUNDS[0]
+        gps = [from_hyperparameters(x, y[:, j], lengths, nugget) for j in range(y.shape[1])]
+    return tuple(gps)

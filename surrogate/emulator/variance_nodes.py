@@ -12,6 +12,11 @@ by greedy removal from all 32 (always the one whose removal raises the largest +
 median relative sd error least; the first and last stay), on PER_GROUP random designs of
 the box per group, with the two seeds of SEEDS. The band's calibration (band_scale) is
 itself some 10 % uncertain.
+
+Since 2026-12-04 the fit gives the pressure nodes one kernel per group
+(``build.fit_curve_gps``): their variances are then one product for all, and ``choose``
+returns every node (nothing is read off the spline). The choice stays for files whose
+pressure nodes have a kernel each.
 """
 
 from __future__ import annotations
@@ -89,6 +94,11 @@ def choose(pairs, count: int = COUNT) -> tuple[np.ndarray, dict]:
     if not pairs:
         return FORMAT_7_NODES.copy(), {"nodes": FORMAT_7_NODES.tolist(),
                                        "chosen": False}
+    if all(pe.curves.kernels(slice(0, N_NODES)) == 1 for pe in pairs):
+        # the pressure nodes share one kernel (build.fit_curve_gps): their variances are
+        # one product for all, so every node's is exact and none is read off the spline
+        nodes = np.arange(N_NODES)
+        return nodes, {"nodes": nodes.tolist(), "chosen": False, "shared_kernel": True}
     fit = np.vstack([exact_variances(pairs, s) for s in SEEDS])
     nodes = greedy(fit, count)
     check = exact_variances(pairs, 123)

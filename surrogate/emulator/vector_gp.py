@@ -16,7 +16,10 @@ database's reversed pair, 5-fold cross-validated, the per-curve angle RMSE media
 from 1.70 deg with 20 principal components of the joint pressure-and-volume vector to
 0.86 deg; benchmarks/RESULTS.md). Principal components tie every node to a few shared
 length scales, while the low-angle stiffness and the high-angle plateau of a curve depend
-on the design's lengths differently.
+on the design's lengths differently. Its ``shared`` columns share one kernel instead
+(``gp.fit_shared_gps``: one set of length scales and nugget for all, each column its own
+signal variance and mean), so that a query's variance of all of them is one product over
+the database: the emulator's 32 pressure nodes since 2026-12-04 (``build.fit_curve_gps``).
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ from surrogate.emulator.gp import (
     GaussianProcess,
     basis,
     fit_gp,
+    fit_shared_gps,
     from_hyperparameters,
 )
 
@@ -61,12 +65,21 @@ class VectorGP:
         # query reads the outputs it needs packed in single precision
         # (``_variance_stack``, ``_shifted_variance``).
         x = self.gps[0].x
+        # outputs that share a kernel (fit_shared_gps) share K and what is made of it:
+        # each output's representative is the first output with its kernel
+        first: dict[bytes, int] = {}
+        kernel = np.array([first.setdefault(gp.lengths.tobytes()
+                                            + np.float64(gp.nugget).tobytes(), i)
+                           for i, gp in enumerate(self.gps)])
+        made = {int(i): (_linv(self.gps[i]).T, _kinv_h(self.gps[i]), _a_inv(self.gps[i]))
+                for i in np.unique(kernel)}
         stack = {
             "inv_l2": np.array([1.0 / gp.lengths**2 for gp in self.gps]),      # (m, d)
             "alpha": np.array([gp.alpha for gp in self.gps]),                   # (m, n)
-            "linv_t": np.array([_linv(gp).T for gp in self.gps]),               # (m, n, n)
-            "kinv_h": np.array([_kinv_h(gp) for gp in self.gps]),               # (m, n, p)
-            "a_inv": np.array([_a_inv(gp) for gp in self.gps]),                 # (m, p, p)
+            "linv_t": np.array([made[int(r)][0] for r in kernel]),              # (m, n, n)
+            "kinv_h": np.array([made[int(r)][1] for r in kernel]),              # (m, n, p)
+            "a_inv": np.array([made[int(r)][2] for r in kernel]),               # (m, p, p)
+            "kernel": kernel,                                                   # (m,)
             "beta": np.array([gp.beta for gp in self.gps]),                     # (m, p)
             "s2": np.array([gp.signal_var for gp in self.gps]),
             "nugget": np.array([gp.nugget for gp in self.gps]),
@@ -74,6 +87,11 @@ class VectorGP:
             "identity": self.components.shape[0] == self.components.shape[1]
             and bool(np.array_equal(self.components, np.eye(len(self.components))))}
         object.__setattr__(self, "_stack", stack)
+
+    def kernels(self, sel: slice | np.ndarray) -> int:
+        """How many distinct kernels the outputs ``sel`` have (one product each in a
+        query's variance)."""
+        return int(np.unique(self._stack["kernel"][sel]).size)  # type: ignore[attr-defined]
 
     @property
     def per_output(self) -> bool:
@@ -98,16 +116,17 @@ class VectorGP:
             return mean, np.full(len(mean), np.nan)              # the means only
         if variance_of is not None and not self.per_output:
             raise ValueError("variance_of needs one GP per output (identity components)")
-        rows, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
-        ks = k[rows]
+        rows, reps, inverse, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
+        ks = k[reps]                    # one product per distinct kernel, not per output
         if ks.shape[1] <= SMALL_N:      # one batched product beats a BLAS call per output
-            v = np.matmul(ks[:, None, :], st["linv_t"][rows])[:, 0, :]
+            v = np.matmul(ks[:, None, :], st["linv_t"][reps])[:, 0, :]
             left = 1.0 - (v * v).sum(1)
         else:
-            left = _shifted_variance(ks, st["x"], st["inv_l2"][rows], st["nugget"][rows],
+            left = _shifted_variance(ks, st["x"], st["inv_l2"][reps], st["nugget"][reps],
                                      packed)
         rr = h[None, :] - np.matmul(ks[:, None, :], kinv_h)[:, 0, :]
-        variances = s2 * np.maximum(left + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
+        shared = np.maximum(left + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
+        variances = s2 * shared[inverse]
         if variance_of is None:
             var = self.scale**2 * (variances @ self.components**2) + self.residual_var
         else:
@@ -116,11 +135,12 @@ class VectorGP:
         return mean, var
 
     def _variance_stack(self, sel: slice | np.ndarray) -> tuple:
-        """The per-output arrays a variance over outputs ``sel`` reads: their indices,
-        L^-1 packed in single precision (its lower triangle row by row, n (n + 1) / 2
-        numbers: BLAS stpmv reads exactly that; ``_shifted_variance``), K^-1 H, A^-1 and
-        the signal variances, gathered once per distinct ``sel`` (a query asks for the
-        same few)."""
+        """The arrays a variance over outputs ``sel`` reads: their indices, the distinct
+        kernels among them (a representative output each) and each output's kernel among
+        those, per kernel L^-1 packed in single precision (its lower triangle row by row,
+        n (n + 1) / 2 numbers: BLAS stpmv reads exactly that; ``_shifted_variance``), K^-1 H
+        and A^-1, and the outputs' signal variances; gathered once per distinct ``sel`` (a
+        query asks for the same few)."""
         st = self._stack  # type: ignore[attr-defined]
         rows = np.arange(len(st["s2"]))[sel]
         key = rows.tobytes()
@@ -128,10 +148,12 @@ class VectorGP:
         hit = cache.get(key)
         if hit is None:
             lower = np.tril_indices(len(st["x"]))
-            hit = (rows, tuple(np.ascontiguousarray(st["linv_t"][j].T)[lower]
-                               .astype(np.float32) for j in rows),
-                   np.ascontiguousarray(st["kinv_h"][rows]),
-                   np.ascontiguousarray(st["a_inv"][rows]), st["s2"][rows].copy())
+            reps, inverse = np.unique(st["kernel"][rows], return_inverse=True)
+            hit = (rows, reps, inverse.ravel(),
+                   tuple(np.ascontiguousarray(st["linv_t"][j].T)[lower]
+                         .astype(np.float32) for j in reps),
+                   np.ascontiguousarray(st["kinv_h"][reps]),
+                   np.ascontiguousarray(st["a_inv"][reps]), st["s2"][rows].copy())
             if len(cache) < 8:
                 cache[key] = hit
         return hit
@@ -159,11 +181,15 @@ class VectorGP:
         if variance_of is not None and len(rows) and not self.per_output:
             raise ValueError("variance_of needs one GP per output (identity components)")
         variances = np.empty((len(rows), len(u)))
-        for i, j in enumerate(rows):      # one GEMM per output: no copy of L^-1
-            v = k[j] @ st["linv_t"][j]                                   # (L^-1 k)^T
-            rr = h - k[j] @ st["kinv_h"][j]
-            quad = np.einsum("Np,pq,Nq->N", rr, st["a_inv"][j], rr)
-            variances[i] = st["s2"][j] * np.maximum(1.0 - (v * v).sum(1) + quad, 0.0)
+        shared: dict[int, np.ndarray] = {}   # per kernel: outputs sharing it share this
+        for i, j in enumerate(rows):      # one GEMM per kernel: no copy of L^-1
+            r = int(st["kernel"][j])
+            if r not in shared:
+                v = k[r] @ st["linv_t"][r]                               # (L^-1 k)^T
+                rr = h - k[r] @ st["kinv_h"][r]
+                quad = np.einsum("Np,pq,Nq->N", rr, st["a_inv"][r], rr)
+                shared[r] = np.maximum(1.0 - (v * v).sum(1) + quad, 0.0)
+            variances[i] = st["s2"][j] * shared[r]
         if variance_of is None:
             var = self.scale**2 * (variances.T @ self.components**2) + self.residual_var
         else:
@@ -267,16 +293,26 @@ def _standardised(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return center, scale, (y - center) / scale
 
 
-def fit_output_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> VectorGP:
+def fit_output_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
+                   shared: slice | None = None) -> VectorGP:
     """One GP per (standardised) output column of ``y`` (n, c) over inputs ``u`` (n, d):
-    a VectorGP whose components are the identity, with no truncation variance."""
+    a VectorGP whose components are the identity, with no truncation variance. The
+    columns of ``shared`` share one kernel (``gp.fit_shared_gps``: a query's variance of
+    all of them is one product); the others have their own."""
     u = np.asarray(u, float)
     center, scale, z = _standardised(y)
-    gps = [fit_gp(u, z[:, 0], seed=seed)]
-    for j in range(1, z.shape[1]):
+    cols = np.arange(z.shape[1])
+    tied = cols[shared] if shared is not None else cols[:0]
+    gps: list[GaussianProcess | None] = [None] * z.shape[1]
+    if tied.size:
+        for j, gp in zip(tied, fit_shared_gps(u, z[:, tied], seed=seed), strict=True):
+            gps[j] = gp
+    warm = None
+    for j in np.setdiff1d(cols, tied):
         # neighbouring nodes of a curve have nearly the same length scales: start from
         # the previous node's optimum (and once from the default), not 4 cold starts
-        gps.append(fit_gp(u, z[:, j], starts=WARM_STARTS, seed=seed + j, warm=gps[-1]))
+        gps[j] = warm = (fit_gp(u, z[:, j], seed=seed + j) if warm is None else
+                         fit_gp(u, z[:, j], starts=WARM_STARTS, seed=seed + j, warm=warm))
     return VectorGP(center, scale, np.eye(z.shape[1]), tuple(gps), np.zeros(z.shape[1]))
 
 
