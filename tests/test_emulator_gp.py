@@ -175,3 +175,10 @@ def test_outputs_sharing_one_kernel_fit_their_summed_likelihood_and_share_the_va
             m1, v1 = vgp.predict(test[i], variance_of=np.arange(8))
             np.testing.assert_allclose(m1, mean[i], rtol=1e-10)
             np.testing.assert_allclose(v1, var[i], rtol=1e-7, atol=atol)
+        # read back from its file form, the shared kernel is factorised once
+        again = vector_gp_from_dict(vgp.as_dict())
+        assert all(g.chol is again.gps[0].chol for g in again.gps[1:6])
+        assert again.gps[6].chol is not again.gps[0].chol
+        m2, v2 = again.predict_many(test)
+        np.testing.assert_array_equal(m2, mean)
+        np.testing.assert_array_equal(v2, var)

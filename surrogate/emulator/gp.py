@@ -97,10 +97,11 @@ class GaussianProcess:
                 "signal_var": self.signal_var, "nugget": self.nugget}
 
 
-def _factor(x: np.ndarray, y: np.ndarray, lengths: np.ndarray, nugget: float):
+def _factor(x: np.ndarray, y: np.ndarray, lengths: np.ndarray, nugget: float,
+            chol: np.ndarray | None = None):
     n = len(y)
-    k = matern52(x, x, lengths) + nugget * np.eye(n)
-    chol = np.linalg.cholesky(k)
+    if chol is None:
+        chol = np.linalg.cholesky(matern52(x, x, lengths) + nugget * np.eye(n))
     h = basis(x, varying_inputs(x))
     w = solve_triangular(chol, h, lower=True)
     z = solve_triangular(chol, y, lower=True)
@@ -192,10 +193,11 @@ def _neg_reml(params: np.ndarray, x: np.ndarray, y: np.ndarray,
 
 
 def from_hyperparameters(x: np.ndarray, y: np.ndarray, lengths: np.ndarray,
-                         nugget: float) -> GaussianProcess:
+                         nugget: float, chol: np.ndarray | None = None) -> GaussianProcess:
     """The GP conditioned on (x, y) for given length scales and nugget (the signal
-    variance profiled out)."""
-    chol, hk_chol, beta, resid = _factor(x, y, lengths, nugget)
+    variance profiled out). ``chol``: the kernel's Cholesky factor when already made (a
+    GP with the same x, lengths and nugget: outputs sharing a kernel)."""
+    chol, hk_chol, beta, resid = _factor(x, y, lengths, nugget, chol)
     varying = varying_inputs(x)
     n, p = len(y), int(varying.sum()) + 1
     s2 = float(resid @ resid) / max(n - p, 1)
@@ -250,7 +252,7 @@ def fit_shared_gps(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
             best = res
     assert best is not None
     lengths, nugget = np.exp(best.x[:d]), float(np.exp(best.x[d]))
-    gps = [from_hyperparameters(x, y[:, j], lengths, nugget) for j in range(y.shape[1])]
+    gps = _conditioned(x, y, lengths, nugget)
     # The data are FE curves, not noisy measurements: keep the nugget's absolute sd below
     # INTERPOLATION_SD of the outputs' spread, so that the GP reproduces its database
     # designs (a smooth, long-length-scale score has a large signal variance, and a
@@ -259,5 +261,13 @@ def fit_shared_gps(x: np.ndarray, y: np.ndarray, starts: int = 4, seed: int = 0,
               for j, g in enumerate(gps))
     if nugget > cap:
         nugget = cap if cap > NUGGET_BOUNDS[0] else NUGGET_BOUNDS[0]
-        gps = [from_hyperparameters(x, y[:, j], lengths, nugget) for j in range(y.shape[1])]
+        gps = _conditioned(x, y, lengths, nugget)
     return tuple(gps)
+
+
+def _conditioned(x: np.ndarray, y: np.ndarray, lengths: np.ndarray, nugget: float
+                 ) -> list[GaussianProcess]:
+    """One GP per column of ``y`` with one kernel, factorised once."""
+    first = from_hyperparameters(x, y[:, 0], lengths, nugget)
+    return [first] + [from_hyperparameters(x, y[:, j], lengths, nugget, first.chol)
+                      for j in range(1, y.shape[1])]

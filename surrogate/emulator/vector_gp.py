@@ -273,9 +273,17 @@ def _a_inv(gp: GaussianProcess) -> np.ndarray:
 
 def vector_gp_from_dict(d: dict) -> VectorGP:
     """Rebuild from ``as_dict`` (the factorisations are recomputed, not stored)."""
-    gps = tuple(from_hyperparameters(np.array(g["x"], float), np.array(g["y"], float),
-                                     np.array(g["lengths"], float), float(g["nugget"]))
-                for g in d["gps"])
+    factors: dict[bytes, np.ndarray] = {}     # outputs sharing a kernel: one Cholesky
+    gps_: list[GaussianProcess] = []
+    for g in d["gps"]:
+        x, lengths, nugget = (np.array(g["x"], float), np.array(g["lengths"], float),
+                              float(g["nugget"]))
+        key = x.tobytes() + lengths.tobytes() + np.float64(nugget).tobytes()
+        gp = from_hyperparameters(x, np.array(g["y"], float), lengths, nugget,
+                                  factors.get(key))
+        factors.setdefault(key, gp.chol)
+        gps_.append(gp)
+    gps = tuple(gps_)
     return VectorGP(np.array(d["center"], float), np.array(d["scale"], float),
                     np.array(d["components"], float), gps,
                     np.array(d["residual_var"], float))
