@@ -65,21 +65,21 @@ class VectorGP:
         # query reads the outputs it needs packed in single precision
         # (``_variance_stack``, ``_shifted_variance``).
         x = self.gps[0].x
-        # outputs that share a kernel (fit_shared_gps) share K and what is made of it:
-        # each output's representative is the first output with its kernel
+        # outputs that share a kernel (fit_shared_gps) share K and what is made of it,
+        # kept once per kernel: "kernel" is each output's kernel, "rep" each kernel's
+        # first output (its correlations k, length scales and nugget)
         first: dict[bytes, int] = {}
         kernel = np.array([first.setdefault(gp.lengths.tobytes()
-                                            + np.float64(gp.nugget).tobytes(), i)
-                           for i, gp in enumerate(self.gps)])
-        made = {int(i): (_linv(self.gps[i]).T, _kinv_h(self.gps[i]), _a_inv(self.gps[i]))
-                for i in np.unique(kernel)}
+                                            + np.float64(gp.nugget).tobytes(), len(first))
+                           for gp in self.gps])
+        rep = np.array([int(np.flatnonzero(kernel == q)[0]) for q in range(len(first))])
         stack = {
             "inv_l2": np.array([1.0 / gp.lengths**2 for gp in self.gps]),      # (m, d)
             "alpha": np.array([gp.alpha for gp in self.gps]),                   # (m, n)
-            "linv_t": np.array([made[int(r)][0] for r in kernel]),              # (m, n, n)
-            "kinv_h": np.array([made[int(r)][1] for r in kernel]),              # (m, n, p)
-            "a_inv": np.array([made[int(r)][2] for r in kernel]),               # (m, p, p)
-            "kernel": kernel,                                                   # (m,)
+            "linv_t": np.array([_linv(self.gps[i]).T for i in rep]),            # (K, n, n)
+            "kinv_h": np.array([_kinv_h(self.gps[i]) for i in rep]),            # (K, n, p)
+            "a_inv": np.array([_a_inv(self.gps[i]) for i in rep]),              # (K, p, p)
+            "kernel": kernel, "rep": rep,                                       # (m,), (K,)
             "beta": np.array([gp.beta for gp in self.gps]),                     # (m, p)
             "s2": np.array([gp.signal_var for gp in self.gps]),
             "nugget": np.array([gp.nugget for gp in self.gps]),
@@ -116,13 +116,14 @@ class VectorGP:
             return mean, np.full(len(mean), np.nan)              # the means only
         if variance_of is not None and not self.per_output:
             raise ValueError("variance_of needs one GP per output (identity components)")
-        rows, reps, inverse, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
-        ks = k[reps]                    # one product per distinct kernel, not per output
+        rows, kernels, inverse, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
+        outs = st["rep"][kernels]       # one product per distinct kernel, not per output
+        ks = k[outs]
         if ks.shape[1] <= SMALL_N:      # one batched product beats a BLAS call per output
-            v = np.matmul(ks[:, None, :], st["linv_t"][reps])[:, 0, :]
+            v = np.matmul(ks[:, None, :], st["linv_t"][kernels])[:, 0, :]
             left = 1.0 - (v * v).sum(1)
         else:
-            left = _shifted_variance(ks, st["x"], st["inv_l2"][reps], st["nugget"][reps],
+            left = _shifted_variance(ks, st["x"], st["inv_l2"][outs], st["nugget"][outs],
                                      packed)
         rr = h[None, :] - np.matmul(ks[:, None, :], kinv_h)[:, 0, :]
         shared = np.maximum(left + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
@@ -136,11 +137,11 @@ class VectorGP:
 
     def _variance_stack(self, sel: slice | np.ndarray) -> tuple:
         """The arrays a variance over outputs ``sel`` reads: their indices, the distinct
-        kernels among them (a representative output each) and each output's kernel among
-        those, per kernel L^-1 packed in single precision (its lower triangle row by row,
-        n (n + 1) / 2 numbers: BLAS stpmv reads exactly that; ``_shifted_variance``), K^-1 H
-        and A^-1, and the outputs' signal variances; gathered once per distinct ``sel`` (a
-        query asks for the same few)."""
+        kernels among them and each output's place among those, per kernel L^-1 packed in
+        single precision (its lower triangle row by row, n (n + 1) / 2 numbers: BLAS stpmv
+        reads exactly that; ``_shifted_variance``), K^-1 H and A^-1, and the outputs'
+        signal variances; gathered once per distinct ``sel`` (a query asks for the same
+        few)."""
         st = self._stack  # type: ignore[attr-defined]
         rows = np.arange(len(st["s2"]))[sel]
         key = rows.tobytes()
@@ -148,12 +149,12 @@ class VectorGP:
         hit = cache.get(key)
         if hit is None:
             lower = np.tril_indices(len(st["x"]))
-            reps, inverse = np.unique(st["kernel"][rows], return_inverse=True)
-            hit = (rows, reps, inverse.ravel(),
-                   tuple(np.ascontiguousarray(st["linv_t"][j].T)[lower]
-                         .astype(np.float32) for j in reps),
-                   np.ascontiguousarray(st["kinv_h"][reps]),
-                   np.ascontiguousarray(st["a_inv"][reps]), st["s2"][rows].copy())
+            kernels, inverse = np.unique(st["kernel"][rows], return_inverse=True)
+            hit = (rows, kernels, inverse.ravel(),
+                   tuple(np.ascontiguousarray(st["linv_t"][q].T)[lower]
+                         .astype(np.float32) for q in kernels),
+                   np.ascontiguousarray(st["kinv_h"][kernels]),
+                   np.ascontiguousarray(st["a_inv"][kernels]), st["s2"][rows].copy())
             if len(cache) < 8:
                 cache[key] = hit
         return hit
@@ -183,13 +184,14 @@ class VectorGP:
         variances = np.empty((len(rows), len(u)))
         shared: dict[int, np.ndarray] = {}   # per kernel: outputs sharing it share this
         for i, j in enumerate(rows):      # one GEMM per kernel: no copy of L^-1
-            r = int(st["kernel"][j])
-            if r not in shared:
-                v = k[r] @ st["linv_t"][r]                               # (L^-1 k)^T
-                rr = h - k[r] @ st["kinv_h"][r]
-                quad = np.einsum("Np,pq,Nq->N", rr, st["a_inv"][r], rr)
-                shared[r] = np.maximum(1.0 - (v * v).sum(1) + quad, 0.0)
-            variances[i] = st["s2"][j] * shared[r]
+            q = int(st["kernel"][j])
+            if q not in shared:
+                kq = k[st["rep"][q]]
+                v = kq @ st["linv_t"][q]                                 # (L^-1 k)^T
+                rr = h - kq @ st["kinv_h"][q]
+                quad = np.einsum("Np,pq,Nq->N", rr, st["a_inv"][q], rr)
+                shared[q] = np.maximum(1.0 - (v * v).sum(1) + quad, 0.0)
+            variances[i] = st["s2"][j] * shared[q]
         if variance_of is None:
             var = self.scale**2 * (variances.T @ self.components**2) + self.residual_var
         else:
