@@ -2,12 +2,14 @@
 
     python benchmarks/heldout_designs.py --n 12 --seed 2026 --db heldout.h5 --workers 2
     python benchmarks/heldout_designs.py --n 12 --seed 2026 --db heldout.h5 --blocked 4
+    python benchmarks/heldout_designs.py --n 48 --seed 3040 --db cal.h5 --blocked-only
 
 Draws designs uniformly (linear in every length and in each layer's stiffness scale, the
 pairs in turn) with numpy's generator -- not the database's Sobol sequence -- and solves
 them with the default FE through the precompute job (resumable); ``--blocked K`` also
 solves the first K of them with the tip held (the database's force variant, to
-BLOCKED_MAX_PRESSURE_PA). The emulator is then
+BLOCKED_MAX_PRESSURE_PA); ``--blocked-only`` solves every design with the tip held and
+none free (the force band's calibration set). The emulator is then
 compared with them by benchmarks/bench_emulator.py.
 """
 
@@ -49,17 +51,22 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--blocked", type=int, default=0, metavar="K",
                     help="also solve the first K designs with the tip held (force)")
+    ap.add_argument("--blocked-only", action="store_true",
+                    help="solve every design with the tip held, none free")
     args = ap.parse_args()
     settings = SolverSettings()
     blocked = replace(settings, tip="blocked", max_pressure_pa=BLOCKED_MAX_PRESSURE_PA)
     designs = random_designs(args.n, args.seed)
-    points = tuple(GridPoint(record_key(d, settings), d, settings) for d in designs)
-    points += tuple(GridPoint(record_key(d, blocked), d, blocked)
-                    for d in designs[:args.blocked])
+    free = () if args.blocked_only else designs
+    held = designs if args.blocked_only else designs[:args.blocked]
+    points = tuple(GridPoint(record_key(d, settings), d, settings) for d in free)
+    points += tuple(GridPoint(record_key(d, blocked), d, blocked) for d in held)
     grid = Grid("heldout", f"heldout n={args.n} seed={args.seed}", settings, points)
     summary = precompute(grid, args.db, workers=args.workers, progress=False,
                          command=f"python benchmarks/heldout_designs.py --n {args.n} "
-                                 f"--seed {args.seed} --blocked {args.blocked}")
+                                 f"--seed {args.seed} "
+                                 + ("--blocked-only" if args.blocked_only
+                                    else f"--blocked {args.blocked}"))
     print("\n".join(summary.lines()))
 
 

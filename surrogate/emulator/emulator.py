@@ -15,9 +15,11 @@ vector over the box's unit-cube coordinates (``solver.design_space``). A query
    stop (``fe_limit_angle_deg``, 90 deg unless a curve failed earlier) and past it the
    answer is NaN with the flag ``past_fe_range``.
 
-Force: blocked-tip FE curves, F / p at fixed pressures, emulated the same way;
-F scales with the membrane's stiffness scale s (p / s fixed) and with the square of
-the length scale. Volume scales with the cube of the length scale.
+Force: blocked-tip FE curves, read at fixed pressures as the ratio of the blocked tip's
+force to the free tip's emulated angle at the same pressure (``features.force_angle_feature``),
+emulated the same way; the answer is that ratio times the free tip's emulated angle, its
+band the two bands combined. F scales with the membrane's stiffness scale s (p / s fixed)
+and with the square of the length scale. Volume scales with the cube of the length scale.
 """
 
 from __future__ import annotations
@@ -34,7 +36,9 @@ from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
+    angle_ratio_from_feature,
     force_at,
+    force_from_angle_ratio,
     free_secant_deg_per_pa,
     linear_matrix,
     per_kpa_from_feature,
@@ -90,6 +94,18 @@ def node_curves(y: np.ndarray, sd: np.ndarray, z: float
             theta * np.exp(centre + half))
 
 
+def free_angles_deg(node_mean: np.ndarray, p_red: np.ndarray) -> np.ndarray:
+    """|theta| (deg) of the emulated free tip at reduced pressures ``p_red`` (Pa), one row
+    per row of ``node_mean`` (emulated node vectors, log(p_k / theta_k) first), read off
+    the monotone p(theta) as a query reads it; NaN past the curve's last angle (90 deg)."""
+    y = np.atleast_2d(node_mean)[:, :N_NODES]
+    curves = np.maximum.accumulate(FINE_ANGLES_DEG * np.exp(y @ _B_ANGLE.T), axis=1)
+    q = np.asarray(p_red, float)
+    out = np.array([np.interp(q, _with_origin(c), ANGLES0) for c in curves])
+    out[q[None, :] > curves[:, -1:] * (1 + 1e-12)] = np.nan
+    return out
+
+
 def nearest_distance(u: np.ndarray, points: np.ndarray | None) -> np.ndarray:
     """Unit-cube distance from each row of ``u`` to the nearest row of ``points`` (inf
     when there are none)."""
@@ -112,7 +128,7 @@ def _direction(m: np.ndarray) -> np.ndarray:
 
 
 FORCE_BAND_LIMIT = 2.0     # widest force band answered, relative to the force
-FORCE_FORMS = ("per_kpa", "secant_ratio")    # PairEmulator.force_form
+FORCE_FORMS = ("per_kpa", "secant_ratio", "angle_ratio")    # PairEmulator.force_form
 
 
 @dataclass(frozen=True)
@@ -126,9 +142,11 @@ class PairEmulator:
     fe_limit_angle_deg   the FE's last angle on every database curve of the pair
     fe_stop_reason       why the FE curves end there
     force                VectorGP of the force variable at the force nodes, or None
-    force_form           what that variable is: "secant_ratio" (``features.force_feature``,
-                         F/p over the free tip's emulated secant; fits since 2026-12-02)
-                         or "per_kpa" (F_j / p_j in mN/kPa, signed; older files)
+    force_form           what that variable is: "angle_ratio" (``features.force_angle_feature``,
+                         F over the free tip's emulated angle at the same pressure; fits
+                         since 2026-12-04), "secant_ratio" (``features.force_feature``, F/p
+                         over the free tip's emulated secant at 0.1 deg; 2026-12-02) or
+                         "per_kpa" (F_j / p_j in mN/kPa, signed; older files)
     near_failed_band_scale  (2 N_NODES,) further multipliers (>= 1) for a design within
                          NEAR_FAILED_RADIUS of an early-ended database curve, calibrated
                          on FE curves of random designs of the box (random_calibration;
@@ -241,6 +259,28 @@ class PairEmulator:
                     reason = (f"the FE curve of a nearby database design ended at "
                               f"{angle:.0f} deg: {why}")
         return limit, reason
+
+    def force_reduced(self, mean: np.ndarray, sd: np.ndarray, node_mean: np.ndarray,
+                      p_red: np.ndarray, angle: np.ndarray, angle_lo: np.ndarray,
+                      angle_hi: np.ndarray, z: float
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The blocked tip's force (mN, signed, membrane at its preset and W = 3 mm) and its
+        band at reduced pressures ``p_red`` (Pa), from the force GP's ``mean`` and ``sd``
+        (band scale included) at the force nodes and, for "angle_ratio", the free tip's
+        |angle| with its band at the same pressures (deg; NaN past its range). Below the
+        first node the first node's value holds (the linear regime)."""
+        if self.force_form != "angle_ratio":
+            per_kpa = self.force_per_kpa(np.stack((mean, mean - z * sd, mean + z * sd)),
+                                         node_mean)
+            f, a, b = (force_at(y, p_red) for y in per_kpa)
+            return f, np.fmin(a, b), np.fmax(a, b)
+        q = FORCE_PRESSURE_NODES_PA[:len(mean)]
+        y, s = np.interp(p_red, q, mean), np.interp(p_red, q, sd)
+        ratio, lo, hi = (angle_ratio_from_feature(v) for v in (y, y - z * s, y + z * s))
+        f, f_lo, f_hi = force_from_angle_ratio(angle, angle_lo, angle_hi, ratio, lo, hi)
+        if self.sign < 0:       # the ratio is F / theta with theta signed
+            return -f, -f_hi, -f_lo
+        return f, f_lo, f_hi
 
     def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
         """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
@@ -536,20 +576,28 @@ class Emulator:
         mean, var = pe.force.predict(cb.coordinates)
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
-        per_kpa = pe.force_per_kpa(np.stack((mean, mean - z * sd, mean + z * sd)),
-                                   cb.node_mean)           # mean, lower, upper at once
-        past = p_red > pe.force_limit_pa * (1 + 1e-12)
-        out = []
-        for y in per_kpa:
-            f = scale * force_at(y, p_red)
+        past = p_red > self.force_limit_red_pa(pe, cb) * (1 + 1e-12)
+        angle = np.interp(p_red, _with_origin(cb.pressure_pa), ANGLES0)
+        angle_hi = np.interp(p_red, _with_origin(cb.pressure_lower_pa), ANGLES0)
+        angle_lo = np.interp(p_red, _with_origin(cb.pressure_upper_pa), ANGLES0)
+        out = [scale * f for f in pe.force_reduced(mean, sd, cb.node_mean, p_red, angle,
+                                                    angle_lo, angle_hi, z)]
+        for f in out:
             f[past] = np.nan
-            out.append(f)
-        lo, hi = np.fmin(out[1], out[2]), np.fmax(out[1], out[2])
+        lo, hi = out[1], out[2]
         # no force where its band is wider than FORCE_BAND_LIMIT x the force itself:
         # the group's few blocked-tip designs do not back a number there
         unbacked = (hi - lo) > FORCE_BAND_LIMIT * np.abs(out[0]) + 1e-9
         return (np.where(unbacked, np.nan, out[0]), np.where(unbacked, np.nan, lo),
                 np.where(unbacked, np.nan, hi))
+
+    @staticmethod
+    def force_limit_red_pa(pe: PairEmulator, cb: CurveBand) -> float:
+        """The highest reduced pressure (Pa) the force is given at: the end of the group's
+        blocked-tip FE curves and, for "angle_ratio", of the design's free curve."""
+        if pe.force_form == "angle_ratio":
+            return min(pe.force_limit_pa, cb.limit_pressure_pa)
+        return pe.force_limit_pa
 
     def random_design_coverage(self, pair: str, axis: str, near: bool) -> dict | None:
         """How well the bands of group ``pair`` (``axis`` "pressure" or "volume", designs
@@ -607,18 +655,22 @@ class Emulator:
             flags.append(under[0])
             messages.append(under[1])
         if force is not None:
-            unbacked = np.isnan(force[0]) & (p <= pe.force_limit_pa * point.pressure_scale)
+            f_lim = self.force_limit_red_pa(pe, cb) * point.pressure_scale
+            unbacked = np.isnan(force[0]) & (p <= f_lim)
             if unbacked.any():
                 flags.append("force_band_too_wide")
                 messages.append(f"no force at {int(unbacked.sum())} pressure(s): its band "
                                 f"is wider than {FORCE_BAND_LIMIT:g} x the force there (too "
                                 "few blocked-tip FE curves near this design; an FE solve "
                                 "with tip = blocked gives it)")
-            f_lim = pe.force_limit_pa * point.pressure_scale
             if (p > f_lim * (1 + 1e-12)).any():
                 flags.append("force_past_fe_range")
-                messages.append(f"force is given up to {f_lim:.0f} Pa, the end of the "
-                                "blocked-tip FE curves")
+                why = ("the end of the blocked-tip FE curves"
+                       if f_lim >= pe.force_limit_pa * point.pressure_scale * (1 - 1e-12)
+                       else "the end of this design's free-tip range (the force is "
+                            "emulated as its ratio to the free tip's angle at the same "
+                            "pressure)")
+                messages.append(f"force is given up to {f_lim:.0f} Pa, {why}")
         return {"in_domain": not past.any(), "flags": flags, "messages": messages,
                 "fe_limit_pa": fe_limit_pa, "fe_limit_angle_deg": cb.limit_angle_deg,
                 "fe_stop_reason": cb.stop_reason}
@@ -710,12 +762,15 @@ class Emulator:
                     out["needed"][i] = np.interp(a, ANGLES0, pm) * s
                     out["needed_lo"][i] = np.interp(a, ANGLES0, pl) * s
                     out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
-                if fmean is not None and q <= pe.force_limit_pa:
+                f_lim = (min(pe.force_limit_pa, p_lim) if pe.force_form == "angle_ratio"
+                         else pe.force_limit_pa)
+                if fmean is not None and q <= f_lim:
                     scale = pt.pressure_scale * pt.length_scale**2
-                    vals = [scale * float(force_at(pe.force_per_kpa(yy, mean[row]), q))
-                            for yy in (fmean[row], fmean[row] - z * fsd[row],
-                                       fmean[row] + z * fsd[row])]
-                    lo_f, hi_f = min(vals[1:]), max(vals[1:])
+                    qa = np.array([q])
+                    a, a_lo, a_hi = (np.interp(qa, c, ANGLES0) for c in (pm, pu, pl))
+                    vals = [scale * float(v[0]) for v in pe.force_reduced(
+                        fmean[row], fsd[row], mean[row], qa, a, a_lo, a_hi, z)]
+                    lo_f, hi_f = vals[1], vals[2]
                     if hi_f - lo_f <= FORCE_BAND_LIMIT * abs(vals[0]) + 1e-9:
                         out["force"][i] = vals[0]
                         out["force_lo"][i], out["force_hi"][i] = lo_f, hi_f

@@ -157,6 +157,51 @@ def force_at(per_kpa: np.ndarray, pressure_pa: np.ndarray | float) -> np.ndarray
     return q / 1000.0 * np.interp(q, nodes, np.concatenate(([y[0]], y)))
 
 
+# The blocked tip's force over the free tip's angle at the same pressure (mN/deg, reduced:
+# the membrane at its preset, W = 3 mm): where asinh of it turns from linear to log. The
+# ratio is 1e-3-3e-2 mN/deg from 50 Pa on and crosses zero only at the first node (25 Pa),
+# where the blocked tip's small initial reaction can have the other sign.
+FORCE_ANGLE_UNIT = 2e-4
+
+
+def force_angle_feature(force_mn: np.ndarray, angle_deg: np.ndarray) -> np.ndarray:
+    """The force variable of ``angle_ratio`` emulators: asinh((F / theta) / FORCE_ANGLE_UNIT),
+    F the blocked tip's force (mN) and theta the free tip's angle (deg, same sign
+    convention) at the same pressure; NaN where theta is 0 or either is not finite.
+
+    Why: for a cantilever the blocked tip's force is the free tip's deflection over the
+    tip's compliance, F ~ 1.5 EI theta / L^2. Along the database's blocked-tip curves,
+    from 200 to 2500 Pa, F / theta (theta emulated) changes by a factor of 1.2-2.0 (the
+    median per group; max / min along a curve) where F / p changes 20-27x with the free
+    curve's nonlinearity: the free-curve emulator (~10x as many designs) carries that
+    nonlinearity, the force GP only the tip's stiffness over its arm."""
+    f = np.asarray(force_mn, float)
+    a = np.asarray(angle_deg, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = np.where((a != 0) & np.isfinite(a) & np.isfinite(f), f / a, np.nan)
+    return np.arcsinh(k / FORCE_ANGLE_UNIT)
+
+
+def angle_ratio_from_feature(feature: np.ndarray) -> np.ndarray:
+    """F / theta (mN/deg) back from ``force_angle_feature`` (monotone in it)."""
+    return FORCE_ANGLE_UNIT * np.sinh(np.asarray(feature, float))
+
+
+def force_from_angle_ratio(angle: np.ndarray, angle_lo: np.ndarray, angle_hi: np.ndarray,
+                           ratio: np.ndarray, ratio_lo: np.ndarray, ratio_hi: np.ndarray
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """F = theta x k (mN) with its band, from the free tip's |angle| (deg) with its band
+    and the ratio k = F / theta (mN/deg) with its band: the two errors independent, each
+    side's half-width the root sum of squares of the deviations each band alone gives."""
+    f = angle * ratio
+    # the angle's deviations move F in the direction of k's sign
+    da_up, da_dn = angle_hi - angle, angle - angle_lo
+    up_a = np.maximum(np.maximum(ratio * da_up, -ratio * da_dn), 0.0)
+    dn_a = np.maximum(np.maximum(-ratio * da_up, ratio * da_dn), 0.0)
+    up_k, dn_k = angle * (ratio_hi - ratio), angle * (ratio - ratio_lo)
+    return f, f - np.hypot(dn_a, dn_k), f + np.hypot(up_a, up_k)
+
+
 def linear_matrix(nodes: np.ndarray, fine: np.ndarray) -> np.ndarray:
     """Matrix L with L @ f(log nodes) = f linear in log angle between the nodes at log
     ``fine`` (clamped to the node range); every weight is >= 0, so L maps a

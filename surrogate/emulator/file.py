@@ -41,7 +41,8 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 8   # 8: variance_nodes, chosen per fit (7 read: FORMAT_7_NODES);
+FORMAT_VERSION = 9   # 9: force_form "angle_ratio" (8 read: their own form);
+                     # 8: variance_nodes, chosen per fit (7 read: FORMAT_7_NODES);
                      # 7: near_failed_band_scale (6 read: none, the group's bands);
                      # 6: range_model, the emulated end of the FE curve (5 read: none);
                      # 5: fe_max_volume_ul, the FE's volume stop (4 read: none); 4:
