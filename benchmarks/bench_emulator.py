@@ -44,6 +44,8 @@ class HeldOut:
     force_inside: int = 0
     force_total: int = 0
     force_withheld: int = 0
+    force_answered: int = 0             # points the answer gives (band within the limit)
+    force_answered_inside: int = 0
     fe_deg: list[np.ndarray] = field(default_factory=list)
     inside_points: list[np.ndarray] = field(default_factory=list)
     near_failed: list[bool] = field(default_factory=list)   # flag near_early_ended_fe_curves
@@ -52,7 +54,8 @@ class HeldOut:
     def summary(self) -> str:
         flat = np.concatenate(self.errors_deg) if self.errors_deg else np.array([np.nan])
         both = sum(r <= 1 and m <= 3 for r, m in zip(self.curve_rmse_deg, self.curve_max_deg))
-        text = (f"{len(self.errors_deg)} answered curves ({self.total} points, "
+        text = ("no free-tip curves" if not self.errors_deg and not self.refused else
+                f"all {len(self.errors_deg)} answered curves ({self.total} points, "
                 f"{self.refused} refused), by {self.axis}: rmse "
                 f"{np.sqrt(np.mean(flat**2)):.2f} deg, max {np.nanmax(np.abs(flat)):.2f} deg, "
                 f"95 % band coverage {self.inside / max(self.total, 1):.3f}; per-curve rmse "
@@ -90,7 +93,10 @@ class HeldOut:
             fl = np.concatenate(self.force_errors_mn)
             text += (f"\nforce: {len(self.force_errors_mn)} blocked-tip curves, rmse "
                      f"{np.sqrt(np.mean(fl**2)):.3f} mN, max {np.abs(fl).max():.3f} mN, "
-                     f"band coverage {self.force_inside / max(self.force_total, 1):.3f}")
+                     f"band coverage {self.force_inside / max(self.force_total, 1):.3f}; "
+                     f"answered at {self.force_answered} of {self.force_total} points, "
+                     "band coverage there "
+                     f"{self.force_answered_inside / max(self.force_answered, 1):.3f}")
         return text
 
 
@@ -120,8 +126,10 @@ def _force(e, rec, out: HeldOut) -> None:
     out.force_withheld += int((ok & ~answered).sum())
     fe = c.force_mn[keep][ok]
     out.force_errors_mn.append(p.force_mn[ok] - fe)
-    out.force_inside += int(((fe >= p.force_lower_mn[ok] - 1e-9)
-                             & (fe <= p.force_upper_mn[ok] + 1e-9)).sum())
+    inside = (fe >= p.force_lower_mn[ok] - 1e-9) & (fe <= p.force_upper_mn[ok] + 1e-9)
+    out.force_inside += int(inside.sum())
+    out.force_answered += int(answered[ok].sum())
+    out.force_answered_inside += int(inside[answered[ok]].sum())
     out.force_total += int(ok.sum())
     out.lines.append(f"{label(rec)} blocked tip: force rmse "
                      f"{np.sqrt(np.mean((p.force_mn[ok] - fe) ** 2)):.3f} mN over "
@@ -183,7 +191,7 @@ def main() -> None:
         records = [r for r in db.records() if r.status == "complete"]
     for axis in (("pressure", "volume") if args.axis == "both" else (args.axis,)):
         result = evaluate(e, records, axis)
-        print(f"-- by {axis}\n" + "\n".join(result.lines) + "\n\nall " + result.summary())
+        print(f"-- by {axis}\n" + "\n".join(result.lines) + "\n\n" + result.summary())
     from solver import Design
 
     d = Design().validated()
