@@ -24,16 +24,21 @@ def _provenance(meta: dict) -> dict:
     """The metadata that says how the designs were chosen: the file's own, or, for a
     database rebuilt on new settings (``balloon precompute grids/balanced-mesh.toml
     --designs-from OLD``), the source's, recorded as ``designs_from``, followed by the
-    ``--adaptive`` rounds run on the rebuilt file since."""
+    runs on the rebuilt file since: ``--adaptive`` rounds, and runs of the grid grown by
+    later ``[[sample]]`` tables (its text the source's plus those tables), whose grid and
+    command are then the file's own."""
     if "designs_from" not in meta:
         return meta
     rebuild = [r for r in meta["runs"] if r["command"].startswith(REBUILD_COMMAND)]
     since = meta["runs"][len(rebuild):]
     assert meta["runs"][:len(rebuild)] == rebuild            # the rebuild came first
-    assert all(r["command"].startswith(COMMAND) and "--adaptive " in r["command"]
-               for r in since)
+    assert all(r["command"].startswith(COMMAND) for r in since)
     source = dict(meta["designs_from"])
     source["runs"] = list(source["runs"]) + since
+    if any("--adaptive " not in r["command"] for r in since):
+        assert meta["grid_toml"].startswith(source["grid_toml"].rstrip())   # only grown
+        source["grid_toml"] = meta["grid_toml"]
+        source["generator_command"] = meta["generator_command"]
     return source
 
 
