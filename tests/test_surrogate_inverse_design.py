@@ -127,7 +127,10 @@ def emulator():
 @pytest.mark.parametrize("target, pinned, along", [
     (DesignTarget("angle_at_pressure", 1500.0, angle_deg=30.0), {"L_mm": (10.0, 10.0)},
      "t_mm"),
-    (DesignTarget("force_at_pressure", 1000.0, force_mn=0.1),
+    # 0.03 mN: what PDMS bodies at L 18, t 1.2 mm give at 1000 Pa (0.015-0.08 mN). The force
+    # model before 2026-12-04 (F/p over the free secant) met 0.1 mN at three designs; the
+    # FE gives 0.078 mN at the first (T 1.47, b 2.37, h 0.195 mm), the model now 0.074.
+    (DesignTarget("force_at_pressure", 1000.0, force_mn=0.03),
      {"L_mm": (18.0, 18.0), "t_mm": (1.2, 1.2)}, "h_mm"),
 ])
 def test_a_pinned_chamber_length_is_met_along_the_next_free_variable(emulator, target, pinned,
