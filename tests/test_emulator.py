@@ -348,7 +348,7 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(emu
         except InputError:
             continue                         # near the Ecoflex/Ecoflex balance
         c = rec.curve
-        limit_red = emulator.force_limit_red_pa(pe, cb)
+        limit_red = pe.force_end_pa(cb.limit_pressure_pa)
         if (c.pressure_pa.max() < pe.force_limit_pa * point.pressure_scale
                 or limit_red < pe.force_limit_pa or pe.sign * c.force_mn[-1] <= 0):
             continue     # its blocked or free curve ends before the group's force range

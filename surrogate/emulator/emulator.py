@@ -282,6 +282,14 @@ class PairEmulator:
             return -f, -f_hi, -f_lo
         return f, f_lo, f_hi
 
+    def force_end_pa(self, free_end_pa: float) -> float:
+        """The highest reduced pressure (Pa) the force is given at: the end of the group's
+        blocked-tip FE curves and, for "angle_ratio" (read off the free curve), of the
+        design's free curve, which ends at ``free_end_pa``."""
+        if self.force_form == "angle_ratio":
+            return min(self.force_limit_pa, free_end_pa)
+        return self.force_limit_pa
+
     def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
         """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
         vector(s) ``node_mean`` at the same design(s)."""
@@ -576,7 +584,7 @@ class Emulator:
         mean, var = pe.force.predict(cb.coordinates)
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
-        past = p_red > self.force_limit_red_pa(pe, cb) * (1 + 1e-12)
+        past = p_red > pe.force_end_pa(cb.limit_pressure_pa) * (1 + 1e-12)
         angle = np.interp(p_red, _with_origin(cb.pressure_pa), ANGLES0)
         angle_hi = np.interp(p_red, _with_origin(cb.pressure_lower_pa), ANGLES0)
         angle_lo = np.interp(p_red, _with_origin(cb.pressure_upper_pa), ANGLES0)
@@ -590,14 +598,6 @@ class Emulator:
         unbacked = (hi - lo) > FORCE_BAND_LIMIT * np.abs(out[0]) + 1e-9
         return (np.where(unbacked, np.nan, out[0]), np.where(unbacked, np.nan, lo),
                 np.where(unbacked, np.nan, hi))
-
-    @staticmethod
-    def force_limit_red_pa(pe: PairEmulator, cb: CurveBand) -> float:
-        """The highest reduced pressure (Pa) the force is given at: the end of the group's
-        blocked-tip FE curves and, for "angle_ratio", of the design's free curve."""
-        if pe.force_form == "angle_ratio":
-            return min(pe.force_limit_pa, cb.limit_pressure_pa)
-        return pe.force_limit_pa
 
     def random_design_coverage(self, pair: str, axis: str, near: bool) -> dict | None:
         """How well the bands of group ``pair`` (``axis`` "pressure" or "volume", designs
@@ -655,7 +655,7 @@ class Emulator:
             flags.append(under[0])
             messages.append(under[1])
         if force is not None:
-            f_lim = self.force_limit_red_pa(pe, cb) * point.pressure_scale
+            f_lim = pe.force_end_pa(cb.limit_pressure_pa) * point.pressure_scale
             unbacked = np.isnan(force[0]) & (p <= f_lim)
             if unbacked.any():
                 flags.append("force_band_too_wide")
@@ -762,9 +762,7 @@ class Emulator:
                     out["needed"][i] = np.interp(a, ANGLES0, pm) * s
                     out["needed_lo"][i] = np.interp(a, ANGLES0, pl) * s
                     out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
-                f_lim = (min(pe.force_limit_pa, p_lim) if pe.force_form == "angle_ratio"
-                         else pe.force_limit_pa)
-                if fmean is not None and q <= f_lim:
+                if fmean is not None and q <= pe.force_end_pa(p_lim):
                     scale = pt.pressure_scale * pt.length_scale**2
                     qa = np.array([q])
                     a, a_lo, a_hi = (np.interp(qa, c, ANGLES0) for c in (pm, pu, pl))
