@@ -236,6 +236,7 @@ def _force_against_fe(emulator, records) -> tuple[int, int, int]:
             pred = emulator.predict(rec.design, c.pressure_pa[keep])
         except InputError:
             continue                         # near the Ecoflex/Ecoflex balance
+        assert pred.force_mn is not None            # every group has a force model
         fe, f = c.force_mn[keep], pred.force_mn
         ok = np.isfinite(f)
         points += int(keep.sum())
@@ -270,6 +271,7 @@ def test_force_on_blocked_tip_fe_solves_the_test_draws_itself(emulator):
     to the database's blocked-tip pressure: the band covers at least 80 % of the points
     the force is given at, and a force is given at some of them for every pair."""
     from dataclasses import replace
+    from types import SimpleNamespace
 
     from solver import SolverSettings, solve
     from solver.design_space import PAIRS, STIFFNESS_SCALE_RANGE
@@ -277,10 +279,6 @@ def test_force_on_blocked_tip_fe_solves_the_test_draws_itself(emulator):
 
     blocked = replace(SolverSettings(), tip="blocked", max_pressure_pa=BLOCKED_MAX_PRESSURE_PA)
     rng = np.random.default_rng()
-
-    class Solved:                     # what _force_against_fe reads of a record
-        def __init__(self, design):
-            self.design, self.curve = design, solve(design, blocked)
 
     total = [0, 0, 0]
     for body, membrane in PAIRS:
@@ -296,7 +294,8 @@ def test_force_on_blocked_tip_fe_solves_the_test_draws_itself(emulator):
                 emulator.predict(design, [100.0])
             except InputError:
                 continue
-            points, given, inside = _force_against_fe(emulator, [Solved(design)])
+            solved = SimpleNamespace(design=design, curve=solve(design, blocked))
+            points, given, inside = _force_against_fe(emulator, [solved])
             print(f"{body}/{membrane}: {given} of {points} given, {inside} inside the band")
             total = [a + b for a, b in zip(total, (points, given, inside), strict=True)]
             break
@@ -820,9 +819,8 @@ def test_force_bands_calibrated_by_cross_validation_cover_designs_left_out(emula
     inside = []
     for key, pe in emulator.pairs.items():
         fu, per_kpa = (np.array(a) for a in force[key[:-1]])
-        same = build.pushes_with(per_kpa, pe.sign)
-        _, fu, fy = build.force_range(fu[same], build.force_angle_rows(
-            fu[same], per_kpa[same], pe.curves, pe.sign))
+        _, fu, fy = build.force_range(*build.force_angle_rows(fu, per_kpa, pe.curves,
+                                                              pe.sign))
         if 2 * len(fu) // 3 < build.MIN_DESIGNS:
             continue                    # too few to fit on two thirds
         for seed in (0, 1):

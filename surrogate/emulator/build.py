@@ -56,7 +56,7 @@ from surrogate.emulator.features import (
     force_features,
 )
 from surrogate.emulator.variance_nodes import choose as choose_variance_nodes
-from surrogate.emulator.vector_gp import VectorGP, fit_output_gps, fit_vector_gp
+from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP, fit_output_gps, fit_vector_gp
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
 MIN_DESIGNS = 10
@@ -346,14 +346,18 @@ def pushes_with(per_kpa: np.ndarray, sign: float) -> np.ndarray:
 
 
 def force_angle_rows(u: np.ndarray, per_kpa: np.ndarray, curves: VectorGP, sign: float
-                     ) -> np.ndarray:
-    """The force variable of an "angle_ratio" fit (``features.force_angle_feature``) for
-    blocked-tip rows: F / p at the force nodes (``_collect``; mN/kPa, reduced) over the
-    group's emulated free-tip angle at the same pressure, at the rows' designs ``u``
-    (the free-curve GPs ``curves``, bending ``sign``): the force designs are few, the free
-    curves many. NaN where the free curve has ended (past 90 deg)."""
-    angle = sign * free_angles_deg(curves.predict_many(u)[0], FORCE_PRESSURE_NODES_PA)
-    return force_angle_feature(per_kpa * FORCE_PRESSURE_NODES_PA / 1000.0, angle)
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The rows an "angle_ratio" force model of bending ``sign`` is fitted to: of the
+    group's blocked-tip rows (designs ``u``, F / p at the force nodes from ``_collect``;
+    mN/kPa, reduced), those that push its way (``pushes_with``), and their force variable
+    (``features.force_angle_feature``): F over the group's emulated free-tip angle at the
+    same pressure (the free-curve GPs ``curves``: the force designs are few, the free
+    curves many). NaN where the free curve has ended (past 90 deg)."""
+    same = pushes_with(per_kpa, sign)
+    u, per_kpa = u[same], per_kpa[same]
+    means = curves.predict_many(u, variance_of=MEANS_ONLY)[0]
+    angle = sign * free_angles_deg(means, FORCE_PRESSURE_NODES_PA)
+    return u, force_angle_feature(per_kpa * FORCE_PRESSURE_NODES_PA / 1000.0, angle)
 
 
 def force_range(u: np.ndarray, y: np.ndarray, share: float = FORCE_SHARE
@@ -411,10 +415,8 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     cv["near_failed"] = _near_failed_report(curves, cv_mean, cv_var, band_scale, near, level)
     force_gp, force_scale, force_nodes, force_designs = None, 1.0, 0, 0
     if force_rows is not None:
-        fu, per_kpa = np.array(force_rows[0]), np.array(force_rows[1])
-        same = pushes_with(per_kpa, sign)
-        force_nodes, fu, fy = force_range(
-            fu[same], force_angle_rows(fu[same], per_kpa[same], vgp, sign))
+        force_nodes, fu, fy = force_range(*force_angle_rows(
+            np.array(force_rows[0]), np.array(force_rows[1]), vgp, sign))
         force_designs = len(fu)
     if force_designs >= MIN_DESIGNS:
         force_gp = fit_force_gps(fu, fy, seed=seed)

@@ -99,7 +99,7 @@ def free_angles_deg(node_mean: np.ndarray, p_red: np.ndarray) -> np.ndarray:
     per row of ``node_mean`` (emulated node vectors, log(p_k / theta_k) first), read off
     the monotone p(theta) as a query reads it; NaN past the curve's last angle (90 deg)."""
     y = np.atleast_2d(node_mean)[:, :N_NODES]
-    curves = np.maximum.accumulate(FINE_ANGLES_DEG * np.exp(y @ _B_ANGLE.T), axis=1)
+    curves = np.maximum.accumulate(node_curves(y, np.zeros_like(y), 0.0)[0], axis=1)
     q = np.asarray(p_red, float)
     out = np.array([np.interp(q, _with_origin(c), ANGLES0) for c in curves])
     out[q[None, :] > curves[:, -1:] * (1 + 1e-12)] = np.nan
