@@ -195,34 +195,121 @@ def test_predict_by_volume_or_time_over_http(shipped_client):
     assert lone.status_code == 422 and "flow_ul_s" in lone.text
 
 
+HELD_OUT_SETS = ("ho2028", "ho2029", "ho2030", "ho2031")
+
+
+def _free_curve_scores(emulator, records) -> dict:
+    """Per axis (pressure, volume) over free-tip FE ``records``: answered FE points (|angle|
+    <= 90 deg), those inside the 95 % band, curves within the issue's per-curve target
+    (RMSE <= 1 and max <= 3 deg over the answered points); and the queries past an
+    early-ended FE curve's last pressure that were answered with a number."""
+    scores = {"pressure": [0, 0, 0], "volume": [0, 0, 0], "curves": 0, "past": [0, 0]}
+    for rec in records:
+        c = rec.curve
+        keep = (np.abs(c.angle_deg) <= 90.0) & (c.pressure_pa > 0)
+        try:
+            answers = {"pressure": emulator.predict(rec.design, c.pressure_pa[keep]),
+                       "volume": emulator.predict_volume(rec.design, c.volume_ul[keep])}
+        except InputError:
+            continue                         # refused: too near the Ecoflex/Ecoflex balance
+        scores["curves"] += 1
+        for axis, pred in answers.items():
+            ok = np.isfinite(pred.angle_deg)
+            fe = c.angle_deg[keep][ok]
+            err = pred.angle_deg[ok] - fe
+            s = scores[axis]
+            s[0] += int(ok.sum())
+            s[1] += int(((fe >= pred.lower_deg[ok]) & (fe <= pred.upper_deg[ok])).sum())
+            s[2] += int(ok.any() and np.sqrt(np.mean(err**2)) <= 1.0
+                        and np.abs(err).max() <= 3.0)
+        if np.abs(c.angle_deg).max() < 89.0:        # the FE stopped early: nothing past it
+            past = emulator.predict(rec.design, c.pressure_pa.max() * np.array([1.02, 1.3]))
+            scores["past"][0] += 2
+            scores["past"][1] += int(np.isfinite(past.angle_deg).sum())
+    return scores
+
+
+def test_free_curves_of_random_designs_outside_the_database(emulator):
+    """The cheap version of the slow test below: 80 free-tip FE curves of random designs of
+    the box the database does not hold (benchmarks/heldout/ho2028-ho2031.h5, drawn by
+    benchmarks/heldout_designs.py: uniform in every length and each layer's stiffness
+    scale, the four pairs in turn), asked by their own pressures and by their own injected
+    volumes. The 95 % band covers 0.90-0.98 of the answered points on both axes, no
+    number is given past the pressure where an FE curve stopped early, and at least 70 %
+    of the curves meet the issue's per-curve target (0.76 and 0.74 on the shipped fit;
+    benchmarks/RESULTS.md says where the rest miss)."""
+    heldout = Path(__file__).resolve().parents[1] / "benchmarks" / "heldout"
+    records = []
+    for name in HELD_OUT_SETS:
+        with CurveStore(heldout / f"{name}.h5") as db:
+            records += [r for r in db.records()
+                        if r.status == "complete" and r.settings.tip != "blocked"]
+    assert len(records) >= 80
+    scores = _free_curve_scores(emulator, records)
+    print(scores)
+    assert scores["curves"] >= 75
+    for axis in ("pressure", "volume"):
+        answered, inside, within = scores[axis]
+        assert 0.90 <= inside / answered <= 0.98, (axis, inside / answered)
+        assert within >= 0.7 * scores["curves"], (axis, within)
+    assert scores["past"][0] >= 20 and scores["past"][1] == 0, scores["past"]
+
+
+def _answered_draws(emulator, body: str, membrane: str, ranges: dict, rng, tries: int = 6):
+    """Up to ``tries`` random designs of a pair (uniform in each length of ``ranges`` and
+    each layer's stiffness scale) that the emulator answers: a draw at the
+    Ecoflex/Ecoflex balance is refused and the next one taken."""
+    from solver.design_space import STIFFNESS_SCALE_RANGE
+
+    for _ in range(tries):
+        s_b, s_m = rng.uniform(*STIFFNESS_SCALE_RANGE, size=2)
+        design = Design(body_material=scaled_material(body, round(s_b, 3)),
+                        membrane_material=scaled_material(membrane, round(s_m, 3)),
+                        **{k: round(rng.uniform(lo, hi), 3) for k, (lo, hi) in ranges.items()})
+        try:
+            emulator.predict(design, [100.0])
+        except InputError:
+            continue
+        yield design
+
+
 @pytest.mark.slow
 def test_held_out_random_designs_solved_by_the_fe(emulator):
-    """Designs the test draws itself (not the database's Sobol points), solved by the
-    default FE. Asserted: the honesty guarantees (the 95 % band covers at least 85 % of the
-    FE points, no angle past the FE's range is a number). The issue's accuracy target
-    (RMSE <= 1 deg) is reported, not asserted: benchmarks/RESULTS.md says where it stands."""
+    """Designs the test draws itself over the whole box (uniform in every length and each
+    layer's stiffness scale, two per material pair; not the database's Sobol points),
+    solved by the default FE. Asserted: the honesty guarantees (the 95 % band covers at
+    least 80 % of the answered FE points on each axis, no angle past the FE's range is a
+    number). The issue's accuracy target (RMSE <= 1 deg, max <= 3 deg per curve) is
+    printed, not asserted: benchmarks/RESULTS.md says where it stands."""
+    from types import SimpleNamespace
+
     from solver import SolverSettings, solve
+    from solver.design_space import BOX_MM, PAIRS
 
     rng = np.random.default_rng()
-    inside = total = 0
-    for pair in (("pdms_1_10", "ecoflex_00_30"), ("pdms_1_15", "ecoflex_00_30")):
-        geometry = {"L_mm": rng.uniform(5, 16), "t_mm": rng.uniform(0.55, 1.1),
-                    "T_mm": rng.uniform(0.7, 1.8), "b_mm": rng.uniform(1.2, 2.2),
-                    "h_mm": rng.uniform(0.12, 0.28)}
-        design = Design(body_material=MATERIALS[pair[0]], membrane_material=MATERIALS[pair[1]],
-                        **{k: round(v, 3) for k, v in geometry.items()})
-        curve = solve(design, SolverSettings())
-        keep = (np.abs(curve.angle_deg) <= 90) & (curve.pressure_pa > 0)
-        pred = emulator.predict(design, curve.pressure_pa[keep])
-        ok = np.isfinite(pred.angle_deg)
-        fe = curve.angle_deg[keep][ok]
-        inside += int(((fe >= pred.lower_deg[ok]) & (fe <= pred.upper_deg[ok])).sum())
-        total += int(ok.sum())
-        rmse = float(np.sqrt(np.mean((pred.angle_deg[ok] - fe) ** 2)))
-        print(f"{pair} {geometry}: rmse {rmse:.2f} deg")
-        far = emulator.predict(design, [curve.pressure_pa.max() * 3])
-        assert np.isnan(far.angle_deg[0])
-    assert inside / total >= 0.85
+    records = []
+    for body, membrane in PAIRS:
+        kept = 0
+        for design in _answered_draws(emulator, body, membrane, BOX_MM, rng):
+            curve = solve(design, SolverSettings())
+            if curve.status == "failed" or len(curve.pressure_pa) < 3:
+                continue
+            records.append(SimpleNamespace(design=design, curve=curve))
+            one = _free_curve_scores(emulator, records[-1:])
+            print(f"{design.body_material.id}/{design.membrane_material.id} "
+                  f"{ {k: getattr(design, k) for k in BOX_MM} }: {one}")
+            far = emulator.predict(design, [curve.pressure_pa.max() * 3])
+            assert np.isnan(far.angle_deg[0])
+            kept += 1
+            if kept == 2:
+                break
+    scores = _free_curve_scores(emulator, records)
+    print(scores)
+    assert scores["curves"] >= 6
+    for axis in ("pressure", "volume"):
+        answered, inside, _ = scores[axis]
+        assert inside >= 0.8 * answered, (axis, inside, answered)
+    assert scores["past"][1] == 0, scores["past"]
 
 
 def _force_against_fe(emulator, records) -> tuple[int, int, int]:
@@ -274,26 +361,16 @@ def test_force_on_blocked_tip_fe_solves_the_test_draws_itself(emulator):
     from types import SimpleNamespace
 
     from solver import SolverSettings, solve
-    from solver.design_space import PAIRS, STIFFNESS_SCALE_RANGE
+    from solver.design_space import PAIRS
     from solver.precompute.grid import BLOCKED_MAX_PRESSURE_PA
 
     blocked = replace(SolverSettings(), tip="blocked", max_pressure_pa=BLOCKED_MAX_PRESSURE_PA)
     rng = np.random.default_rng()
-
+    interior = {"L_mm": (5, 16), "t_mm": (0.55, 1.1), "T_mm": (0.7, 1.8), "b_mm": (1.2, 2.2),
+                "h_mm": (0.12, 0.28)}
     total = [0, 0, 0]
     for body, membrane in PAIRS:
-        for _ in range(5):                    # a draw off the Ecoflex/Ecoflex balance
-            s_b, s_m = rng.uniform(*STIFFNESS_SCALE_RANGE, size=2)
-            lengths = {name: round(rng.uniform(lo, hi), 3) for name, (lo, hi) in (
-                ("L_mm", (5, 16)), ("t_mm", (0.55, 1.1)), ("T_mm", (0.7, 1.8)),
-                ("b_mm", (1.2, 2.2)), ("h_mm", (0.12, 0.28)))}
-            design = Design(body_material=scaled_material(body, round(s_b, 3)),
-                            membrane_material=scaled_material(membrane, round(s_m, 3)),
-                            **lengths)
-            try:
-                emulator.predict(design, [100.0])
-            except InputError:
-                continue
+        for design in _answered_draws(emulator, body, membrane, interior, rng, tries=5):
             solved = SimpleNamespace(design=design, curve=solve(design, blocked))
             points, given, inside = _force_against_fe(emulator, [solved])
             print(f"{body}/{membrane}: {given} of {points} given, {inside} inside the band")
