@@ -40,6 +40,7 @@ class HeldOut:
     inside: int = 0
     total: int = 0
     refused: int = 0
+    unanswered: int = 0                 # curves past the emulated range at every point
     force_errors_mn: list[np.ndarray] = field(default_factory=list)
     force_inside: int = 0
     force_total: int = 0
@@ -60,7 +61,9 @@ class HeldOut:
                 f"{np.sqrt(np.mean(flat**2)):.2f} deg, max {np.nanmax(np.abs(flat)):.2f} deg, "
                 f"95 % band coverage {self.inside / max(self.total, 1):.3f}; per-curve rmse "
                 f"median {np.median(self.curve_rmse_deg) if self.curve_rmse_deg else np.nan:.2f}"
-                f"; curves with rmse <= 1 and max <= 3 deg: {both}")
+                f"; curves with rmse <= 1 and max <= 3 deg: {both}"
+                + (f"; {self.unanswered} curves answered at no point (past the emulated "
+                   "range from the start)" if self.unanswered else ""))
         for name, marks in (("near_early_ended_fe_curves", self.near_failed),
                             ("band_undercovers_random_designs", self.undercover)):
             for flagged in (True, False):
@@ -157,6 +160,11 @@ def evaluate(e, records, axis: str = "pressure") -> HeldOut:
             continue
         fe = c.angle_deg[keep]
         ok = np.isfinite(p.angle_deg)
+        if not ok.any():
+            out.unanswered += 1
+            out.lines.append(f"{label(rec)}: no point answered, all {ok.size} past the "
+                             f"emulated FE range ({p.validity['fe_stop_reason']})")
+            continue
         err = p.angle_deg[ok] - fe[ok]
         cover = (fe[ok] >= p.lower_deg[ok] - 1e-9) & (fe[ok] <= p.upper_deg[ok] + 1e-9)
         out.fe_deg.append(fe[ok])
@@ -164,8 +172,8 @@ def evaluate(e, records, axis: str = "pressure") -> HeldOut:
         out.inside += int(cover.sum())
         out.total += int(ok.sum())
         out.errors_deg.append(err)
-        rmse = float(np.sqrt(np.mean(err**2))) if err.size else float("nan")
-        worst = float(np.abs(err).max()) if err.size else float("nan")
+        rmse = float(np.sqrt(np.mean(err**2)))
+        worst = float(np.abs(err).max())
         out.curve_rmse_deg.append(rmse)
         out.curve_max_deg.append(worst)
         out.near_failed.append("near_early_ended_fe_curves" in p.validity["flags"])
