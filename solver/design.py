@@ -10,7 +10,10 @@ Defaults are the paper's standard design (Table 3): L = 7.1, t = 0.5, T = 1,
 b = 1.8, h = 0.15, W = 3, PDMS 1:10 body, Ecoflex 00-30 membrane.
 
 Body length: 12 mm (the paper's), grown to L + 2 x 1 mm when the chamber and a
-1 mm wall at each end would not fit. Chamber position: centred along the body
+1 mm wall at each end would not fit; both lengths are the paper's at its width W = 3 mm
+and scale with W (max(12, L + 2) x W / 3 in the W = 3 mm design's terms), so that the
+default design at any width is a scaled copy of one at 3 mm (scaling every length
+leaves angle(p) unchanged: docs/physics.md). Chamber position: centred along the body
 unless ``chamber_offset_mm`` is given (distance from the clamped end to the
 chamber's start).
 """
@@ -22,8 +25,9 @@ from dataclasses import dataclass, field, replace
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial
 
-DEFAULT_BODY_LENGTH_MM = 12.0
-END_WALL_MM = 1.0
+DEFAULT_BODY_LENGTH_MM = 12.0      # at PAPER_WIDTH_MM; scaled with W
+END_WALL_MM = 1.0                  # at PAPER_WIDTH_MM; scaled with W
+PAPER_WIDTH_MM = 3.0
 
 # (min, max) for every length, in mm; checked by Design.validated().
 LIMITS_MM: dict[str, tuple[float, float]] = {
@@ -67,7 +71,8 @@ class Design:
     def resolved_body_length_mm(self) -> float:
         if self.body_length_mm is not None:
             return float(self.body_length_mm)
-        return max(DEFAULT_BODY_LENGTH_MM, self.L_mm + 2 * END_WALL_MM)
+        k = self.W_mm / PAPER_WIDTH_MM
+        return max(k * DEFAULT_BODY_LENGTH_MM, self.L_mm + 2 * k * END_WALL_MM)
 
     @property
     def resolved_chamber_offset_mm(self) -> float:

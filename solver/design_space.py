@@ -190,7 +190,8 @@ class OutOfBoxError(InputError):
     def __init__(self, field: str, detail: str, allowed: str, nearest: Design | None):
         offer = "or solve this design with the FE (POST /v1/solve, `balloon solve`)"
         if nearest is not None:
-            lengths = ", ".join(f"{n}={getattr(nearest, n):g}" for n in GEOMETRY)
+            names = GEOMETRY + (("W_mm",) if nearest.W_mm != BOX_WIDTH_MM else ())
+            lengths = ", ".join(f"{n}={getattr(nearest, n):g}" for n in names)
             detail = (f"{detail}; the nearest design inside the box: {lengths} mm, "
                       f"{nearest.body_material.id}/{nearest.membrane_material.id}; {offer}")
         else:
@@ -225,10 +226,11 @@ def locate(design: Design, reduced: bool = False) -> BoxPoint:
     near_sb, near_sm = (min(max(s, lo_s), hi_s) for s in (s_body, s_membrane))
 
     def nearest(pair: tuple[str, str] = (body, membrane)) -> Design:
+        # at the design's own width: the in-box design's scaled copy, default body
         return Design(body_material=scaled_material(pair[0], near_sb),
                       membrane_material=scaled_material(pair[1], near_sm),
-                      W_mm=BOX_WIDTH_MM, **{n: round(v, 6) for n, v in
-                                            nearest_geometry.items()}).validated()
+                      W_mm=design.W_mm, **{n: round(k * v, 6) for n, v in
+                                           nearest_geometry.items()}).validated()
 
     if (body, membrane) not in PAIRS:
         allowed = ", ".join(f"{b}/{m}" for b, m in PAIRS)
@@ -257,8 +259,9 @@ def locate(design: Design, reduced: bool = False) -> BoxPoint:
         if abs(getattr(design, name) - expected) > 1e-6 * max(1.0, expected):
             raise OutOfBoxError(name, f"{name} = {getattr(design, name):g} mm differs from "
                                 "the solver's rule that the emulator was built with",
-                                f"{name} = {expected:.6g} mm for this design (the rule: body "
-                                "max(12, L + 2) mm at W = 3, chamber centred, scaled with W)",
+                                f"{name} = {expected:.6g} mm for this design (the default: "
+                                "body max(12, L + 2) mm at W = 3, scaled with W; chamber "
+                                "centred)",
                                 nearest())
     return BoxPoint((body, membrane), geometry, s_body / s_membrane, s_membrane, k)
 

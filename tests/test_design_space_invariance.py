@@ -33,8 +33,11 @@ def _angle_at(curve, pressure_pa):
 
 def test_scaling_every_length_leaves_the_curve_unchanged(base_curve):
     k = 2.0
-    scaled = Design(**{n: k * v for n, v in BASE.items()}, W_mm=3.0 * k,
-                    body_length_mm=12.0 * k)
+    # the default body length and chamber position scale with W: no need to set them
+    scaled = Design(**{n: k * v for n, v in BASE.items()}, W_mm=3.0 * k).validated()
+    base = Design(**BASE).validated()
+    assert scaled.body_length_mm == pytest.approx(k * base.body_length_mm) == 12.0 * k
+    assert scaled.chamber_offset_mm == pytest.approx(k * base.chamber_offset_mm)
     curve = solve(scaled, SETTINGS)
     assert curve.status == base_curve.status == "complete"
     # the same mesh scaled by k: the same curve, read at the scaled solve's own points

@@ -118,6 +118,27 @@ def test_outside_the_box_is_refused_with_the_nearest_design(shipped_client):
     assert "nearest" in text and "/v1/solve" in text
 
 
+def test_the_default_design_at_another_width_is_answered_as_its_scaled_copy(emulator):
+    """The default body length (12 mm, or L + 2 mm) and centred chamber scale with W, so a
+    design given at W = 6 mm with every length doubled is the W = 3 mm design's scaled
+    copy (the same angle(p), 8x the volume), not a refusal; a body length that breaks the
+    rule is refused naming the field and the length the rule gives, and the nearest
+    design offered is at the user's own width."""
+    small = Design(L_mm=9.0, t_mm=0.7, T_mm=1.3, b_mm=1.9, h_mm=0.2)
+    big = Design(L_mm=18.0, t_mm=1.4, T_mm=2.6, b_mm=3.8, h_mm=0.4, W_mm=6.0)
+    p = np.array([200.0, 800.0, 1500.0])
+    a, b = emulator.predict(small, p), emulator.predict(big, p)
+    np.testing.assert_allclose(b.angle_deg, a.angle_deg, rtol=1e-12)
+    np.testing.assert_allclose(b.volume_ul, 8 * a.volume_ul, rtol=1e-9)
+    from dataclasses import replace
+
+    with pytest.raises(OutOfBoxError) as info:
+        emulator.predict(replace(big, body_length_mm=20.0), p)
+    assert info.value.field == "body_length_mm" and "24" in info.value.allowed
+    assert info.value.nearest.W_mm == 6.0 and info.value.nearest.L_mm == 18.0
+    assert "W_mm=6" in info.value.detail
+
+
 def test_refusal_names_the_nearest_in_box_design(emulator):
     with pytest.raises(InputError) as info:
         emulator.predict(Design(L_mm=20.0, body_length_mm=24.0), [100])

@@ -40,7 +40,8 @@ export function renderSketch(svg, design, angleDeg, pressureFraction = 0) {
   svg.setAttribute("font-family", "system-ui, sans-serif");
   el("rect", { x: 0, y: 0, width: W, height: Hpx, fill: "#ffffff" }, svg);
   const L = design.L_mm, t = design.t_mm, h = design.h_mm, T = design.T_mm;
-  const Lb = design.body_length_mm || Math.max(12, L + 2);
+  const k = (design.W_mm || 3) / 3;  // the body-length rule scales with W (solver/design.py)
+  const Lb = design.body_length_mm || Math.max(12 * k, L + 2 * k);
   const c0 = design.chamber_offset_mm ?? (Lb - L) / 2;
   const angle = Number.isFinite(angleDeg) ? angleDeg : 0;
   const kappa = (angle * Math.PI / 180) / L;
