@@ -25,9 +25,9 @@ from dataclasses import dataclass, field, replace
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial
 
+PAPER_WIDTH_MM = 3.0               # the standard design's W (Table 3)
 DEFAULT_BODY_LENGTH_MM = 12.0      # at PAPER_WIDTH_MM; scaled with W
 END_WALL_MM = 1.0                  # at PAPER_WIDTH_MM; scaled with W
-PAPER_WIDTH_MM = 3.0
 
 # (min, max) for every length, in mm; checked by Design.validated().
 LIMITS_MM: dict[str, tuple[float, float]] = {
@@ -51,7 +51,7 @@ class Design:
     T_mm: float = 1.0
     b_mm: float = 1.8
     h_mm: float = 0.15
-    W_mm: float = 3.0
+    W_mm: float = PAPER_WIDTH_MM
     body_length_mm: float | None = None
     chamber_offset_mm: float | None = None
     body_material: OgdenMaterial = field(default_factory=lambda: MATERIALS["pdms_1_10"])

@@ -30,11 +30,11 @@ from functools import cache, lru_cache
 
 import numpy as np
 
-from solver.design import Design
+from solver.design import PAPER_WIDTH_MM, Design
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial, make_material
 
-BOX_WIDTH_MM = 3.0
+BOX_WIDTH_MM = PAPER_WIDTH_MM        # the box is at the standard design's width
 BOX_MM: dict[str, tuple[float, float]] = {
     "L_mm": (4.0, 18.0),
     "t_mm": (0.5, 1.2),

@@ -36,7 +36,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--W-mm", type=float, default=3.0, help=_mm("W_mm", "actuator width"))
     g.add_argument("--body-length-mm", type=float, default=None,
                    help=_mm("body_length_mm", "body length").replace(
-                       "default %(default)s", "default max(12, L + 2) at W = 3 mm, scaled with W"))
+                       "default %(default)s", "default max(12, L + 2) at W = 3, scaled with W"))
     g.add_argument("--chamber-offset-mm", type=float, default=None,
                    help=_mm("chamber_offset_mm", "clamped end to chamber start").replace(
                        "default %(default)s", "default: centred"))

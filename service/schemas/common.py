@@ -62,8 +62,8 @@ class DesignIn(Schema):
     h_mm: float = mm("h_mm", "chamber height", 0.15)  # type: ignore[assignment]
     W_mm: float = mm("W_mm", "actuator width", 3.0)  # type: ignore[assignment]
     body_length_mm: float | None = mm(  # type: ignore[assignment]
-        "body_length_mm", "body length (default max(12, L + 2) x W / 3 in W = 3 mm terms: "
-        "12 mm, or L + 2 mm if longer, at W = 3 mm; scaled with W)")
+        "body_length_mm", "body length (default: 12 mm, or L + 2 mm if longer, at W = 3 mm; "
+        "scaled with W)")
     chamber_offset_mm: float | None = mm(  # type: ignore[assignment]
         "chamber_offset_mm", "clamped end to chamber start (default: centred)")
     body_material: MaterialRef = Field(
