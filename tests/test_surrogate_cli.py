@@ -91,6 +91,25 @@ def test_design_search_on_the_default_model_searches_the_box_like_the_api(capsys
     assert err.count("\n") == 1 and "--T-range" in err and "0.6..2" in err
 
 
+def test_predict_at_another_width_answers_the_scaled_copy(capsys) -> None:
+    """``balloon predict --W-mm`` (like the API's W_mm): every length doubled at W = 6 mm is
+    the W = 3 mm design's scaled copy (default body length scaled with W): the same angles,
+    8x the volume; a body length off that rule is refused in one line naming the field."""
+    small = ["--L-mm", "7.1", "--t-mm", "0.5"]
+    big = ["--L-mm", "14.2", "--t-mm", "1.0", "--T-mm", "2", "--b-mm", "3.6", "--h-mm", "0.3",
+           "--W-mm", "6"]
+    answers = []
+    for design in (small, big):
+        assert cli.main(["predict", *design, "--pressures", "500", "1500", "--json"]) == 0
+        answers.append(json.loads(capsys.readouterr().out))
+    assert answers[1]["design"]["body_length_mm"] == pytest.approx(24.0)
+    assert answers[1]["angle_deg"] == pytest.approx(answers[0]["angle_deg"], rel=1e-12)
+    assert np.allclose(answers[1]["volume_ul"], 8 * np.array(answers[0]["volume_ul"]))
+    assert cli.main(["predict", *big, "--body-length-mm", "16", "--pressures", "500"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "body_length_mm" in err and "24" in err
+
+
 def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys) -> None:
     assert cli.main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1",
                      "--body", "pdms_1_15", "--model", "paper"]) == 2

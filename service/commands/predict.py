@@ -56,6 +56,15 @@ def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True)
                         help="chamber width, mm (default 1.8)")
     parser.add_argument("--h-mm", type=float, default=None, dest="h_mm",
                         help="chamber height, mm (default 0.15)")
+    parser.add_argument("--W-mm", type=float, default=None, dest="W_mm",
+                        help="actuator width, mm (default 3; the emulator answers every "
+                             "scaled copy of its box: the same ratios to W)")
+    parser.add_argument("--body-length-mm", type=float, default=None, dest="body_length_mm",
+                        help="body length, mm (default 12, or L + 2 if longer, at W = 3; "
+                             "scaled with W)")
+    parser.add_argument("--chamber-offset-mm", type=float, default=None,
+                        dest="chamber_offset_mm",
+                        help="clamped end to chamber start, mm (default: centred)")
     # the flag names of `balloon solve`; --body and --membrane are kept as aliases
     parser.add_argument("--body-material", "--body", default=None, dest="body_material",
                         help="body material id (default pdms_1_10)")
@@ -143,8 +152,8 @@ def design_from_args(args: argparse.Namespace) -> object:
     from solver.design_space import STIFFNESS_SCALE_RANGE, scaled_material
     from solver.errors import InputError
 
-    data: dict[str, object] = {k: getattr(args, k) for k in ("L_mm", "t_mm", "T_mm", "b_mm",
-                                                              "h_mm")
+    data: dict[str, object] = {k: getattr(args, k) for k in (
+        "L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm", "chamber_offset_mm")
                                if getattr(args, k, None) is not None}
     for layer, default in (("body", "pdms_1_10"), ("membrane", "ecoflex_00_30")):
         preset = getattr(args, f"{layer}_material", None) or default
