@@ -89,6 +89,14 @@ def test_design_search_on_the_default_model_searches_the_box_like_the_api(capsys
                      "--pressure-pa", "1500", "--T-range", "5", "6"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--T-range" in err and "0.6..2" in err
+    # one design's flags do not steer a search: refused, naming the flag that does
+    for flags, names in ((["--L-mm", "9"], ("--L-mm", "--L-range")),
+                         (["--W-mm", "6"], ("--W-mm", "W = 3 mm")),
+                         (["--body-material", "pdms_1_15"], ("--body-material", "--pair"))):
+        assert cli.main(["inverse", "--kind", "angle_at_pressure", "--angle-deg", "30",
+                         "--pressure-pa", "1500", *flags]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and all(n in err for n in names), err
 
 
 def test_predict_at_another_width_answers_the_scaled_copy(capsys) -> None:
