@@ -120,23 +120,19 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     from surrogate import DesignTarget
     from surrogate.design_search import SearchBounds, search_designs
 
-    # one design's flags do not steer the search: refused, naming what does
-    for dest, flag, instead in (
-            ("L_mm", "--L-mm", "--L-range LO HI (LO = HI pins it)"),
-            ("t_mm", "--t-mm", "--t-range LO HI"), ("T_mm", "--T-mm", "--T-range LO HI"),
-            ("b_mm", "--b-mm", "--b-range LO HI"), ("h_mm", "--h-mm", "--h-range LO HI"),
-            ("body_material", "--body-material", "--pair BODY/MEMBRANE"),
-            ("membrane_material", "--membrane-material", "--pair BODY/MEMBRANE"),
-            ("body_stiffness_scale", "--body-stiffness-scale",
-             "--body-stiffness-range LO HI"),
-            ("membrane_stiffness_scale", "--membrane-stiffness-scale",
-             "--membrane-stiffness-range LO HI"),
-            ("W_mm", "--W-mm", "the search's W = 3 mm (scale its designs' lengths by W / 3)"),
-            ("body_length_mm", "--body-length-mm", "the default body length"),
-            ("chamber_offset_mm", "--chamber-offset-mm", "the centred chamber")):
+    # one design's flags (--L-mm for L_mm, ...) do not steer the search: refused, naming
+    # what does (the range flags, RANGE_FLAGS, for the variables it searches)
+    others = {"body_material": "--pair BODY/MEMBRANE",
+              "membrane_material": "--pair BODY/MEMBRANE",
+              "W_mm": "the search's W = 3 mm (scale its designs' lengths by W / 3)",
+              "body_length_mm": "the default body length",
+              "chamber_offset_mm": "the centred chamber"}
+    instead = {**{dest: f"{flag} LO HI (LO = HI pins it)"
+                  for dest, (flag, _) in RANGE_FLAGS.items()}, **others}
+    for dest, allowed in instead.items():
         if getattr(args, dest, None) is not None:
-            raise InputError(flag, "sets one design (with --angles-deg); a design search "
-                             "does not read it", instead)
+            raise InputError("--" + dest.replace("_", "-"), "sets one design (with "
+                             "--angles-deg); a design search does not read it", allowed)
     kind = args.kind or ("force_at_pressure" if args.force_mn is not None
                          else "pressure_budget")
     if args.pressure_pa is None:

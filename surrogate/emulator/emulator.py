@@ -140,6 +140,8 @@ def force_backed(force: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.
     or narrower than FORCE_BAND_FLOOR_MN."""
     width = np.asarray(upper) - np.asarray(lower)
     return (width <= FORCE_BAND_LIMIT * np.abs(force) + 1e-9) | (width <= FORCE_BAND_FLOOR_MN)
+
+
 FORCE_FORMS = ("per_kpa", "secant_ratio", "angle_ratio")    # PairEmulator.force_form
 
 
