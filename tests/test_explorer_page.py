@@ -116,6 +116,51 @@ def test_moving_the_L_slider_redraws_the_curve_with_the_numbers_of_v1_predict(wa
     assert watched.errors == []
 
 
+def test_a_new_width_scales_the_design_and_its_ranges_and_the_curve_is_the_scaled_copys(
+        watched, server):
+    """W = 6 mm: every length doubles (a scaled copy), the lengths' ranges are the box at W =
+    3 mm doubled, the drawn curve is /v1/predict's for the doubled design (the same angle at
+    each pressure as at W = 3 mm, 8 x the volume), the nearest FE records are drawn scaled
+    with their scale in the label; Reset returns to W = 3 mm."""
+    page = open_explorer(watched, server.url)
+    page.wait_for_selector('#plot g[data-series^="fe-"]')
+    standard = series(page, "prediction")
+    fe_before = page.locator('#plot g[data-series^="fe-"]').first.get_attribute("data-series")
+    page.fill("#W_mm", "6")
+    wait_prediction(page, W_mm=6)
+    assert page.input_value("#L_mm") == "14.2"
+    assert page.input_value("#t_mm") == "1"
+    assert page.input_value("#h_mm") == "0.3"
+    assert page.get_attribute("#L_mm", "max") == "36"
+    assert page.get_attribute("#L_mm-range", "min") == "8"
+    assert page.locator("#L_mm-range-text").inner_text() == "8 - 36 mm"
+    assert page.get_attribute("#body_scale", "max") == "2"  # the stiffness scales keep theirs
+    drawn = series(page, "prediction")
+    body = {"design": {"L_mm": 14.2, "t_mm": 1.0, "T_mm": 2.0, "b_mm": 3.6, "h_mm": 0.3,
+                       "W_mm": 6.0, "body_material": "pdms_1_10",
+                       "membrane_material": "ecoflex_00_30"},
+            "pressures_pa": grid(2000.0), "model": "emulator", "level": 0.95}
+    api = httpx.post(server.url + "/v1/predict", json=body).json()
+    assert drawn["y"] == pytest.approx(api["angle_deg"], abs=1e-9)
+    assert drawn["y"] == pytest.approx(standard["y"], abs=1e-6)  # the scaled copy's curve
+    pred = page.evaluate("window.explorer.prediction")
+    base = httpx.post(server.url + "/v1/predict", json={**body, "design": {
+        **body["design"], "L_mm": 7.1, "t_mm": 0.5, "T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15,
+        "W_mm": 3.0}}).json()
+    i = 40
+    assert pred["volume_ul"][i] == pytest.approx(8 * base["volume_ul"][i], rel=1e-6)
+    page.wait_for_function("[...document.querySelectorAll('#plot text')].some("
+                           "t => t.textContent.includes('scaled x2'))")
+    fe = page.locator('#plot g[data-series^="fe-"]').first
+    assert fe.get_attribute("data-series") == fe_before  # the same records, scaled
+    screenshot(page, "explorer-width-6mm")
+    page.click("#reset")
+    wait_prediction(page, W_mm=3)
+    assert page.input_value("#L_mm") == "7.1"
+    assert page.get_attribute("#L_mm", "max") == "18"
+    assert watched.errors == []
+
+
 def test_a_stale_prediction_is_cancelled_and_never_drawn_over_a_newer_one(watched, server):
     page = open_explorer(watched, server.url)
     held, failed = [], []

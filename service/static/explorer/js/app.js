@@ -8,7 +8,8 @@
 import { api, ApiError, clearProblems, isAbort, showProblem } from "./api.js";
 import { setupCalibration } from "./calibration.js";
 import {
-  FIELDS, PAIRS, defaultState, designBody, designLabel, materialId, materialLabel, pairLabel, axisGrid,
+  FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
+  materialLabel, pairLabel, scaledLengths,
 } from "./design.js";
 import { setupInverse } from "./inverse.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
@@ -59,34 +60,58 @@ const app = {
 window.explorer = app;
 
 // ---------------------------------------------------------------- design panel
+function addField(box, f, onValue) {
+  const div = document.createElement("div");
+  div.className = "field slider";
+  const unit = f.unit === "x" ? "" : ` (${f.unit})`;
+  div.innerHTML = `
+    <label for="${f.name}">${f.label}${unit}</label>
+    <div class="pair">
+      <input type="range" id="${f.name}-range" min="${f.min}" max="${f.max}" step="${f.step}"
+        value="${f.value}" aria-label="${f.label} slider" tabindex="-1">
+      <input type="number" id="${f.name}" name="${f.name}" min="${f.min}" max="${f.max}" step="${f.step}"
+        value="${f.value}" required aria-describedby="${f.name}-range-text">
+    </div>
+    <span class="muted small" id="${f.name}-range-text">${rangeText(f, f)}</span>
+    <p class="field-error" id="err-${f.name}" data-for="${f.name}" hidden></p>`;
+  box.appendChild(div);
+  const range = div.querySelector(`#${f.name}-range`);
+  const num = div.querySelector(`#${f.name}`);
+  range.tabIndex = 0;
+  range.addEventListener("input", () => { num.value = range.value; onValue(Number(range.value)); });
+  num.addEventListener("input", () => {
+    const v = Number(num.value);
+    if (num.value.trim() === "" || !Number.isFinite(v)) return;
+    range.value = String(v);
+    onValue(v);
+  });
+}
+
+function rangeText(f, r) {
+  return `${r.min} - ${r.max}${f.unit === "x" ? " x preset moduli" : " " + f.unit}`;
+}
+
+// The lengths' ranges at the design's width (the box scaled by W / 3 mm), on both inputs.
+function showRanges() {
+  for (const f of FIELDS) {
+    const r = fieldRange(f, app.state.W_mm);
+    for (const id of [f.name, `${f.name}-range`]) { $(id).min = String(r.min); $(id).max = String(r.max); }
+    $(`${f.name}-range-text`).textContent = rangeText(f, r);
+  }
+}
+
+function showValues() {
+  for (const f of [W_FIELD, ...FIELDS]) {
+    $(f.name).value = String(app.state[f.name]);
+    $(`${f.name}-range`).value = String(app.state[f.name]);
+  }
+  $("pair").value = String(app.state.pair);
+}
+
 function buildFields() {
   const box = $("design-fields");
-  for (const f of FIELDS) {
-    const div = document.createElement("div");
-    div.className = "field slider";
-    const unit = f.unit === "x" ? "" : ` (${f.unit})`;
-    div.innerHTML = `
-      <label for="${f.name}">${f.label}${unit}</label>
-      <div class="pair">
-        <input type="range" id="${f.name}-range" min="${f.min}" max="${f.max}" step="${f.step}"
-          value="${f.value}" aria-label="${f.label} slider" tabindex="-1">
-        <input type="number" id="${f.name}" name="${f.name}" min="${f.min}" max="${f.max}" step="${f.step}"
-          value="${f.value}" required aria-describedby="${f.name}-range-text">
-      </div>
-      <span class="muted small" id="${f.name}-range-text">${f.min} - ${f.max}${f.unit === "x" ? " x preset moduli" : " " + f.unit}</span>
-      <p class="field-error" id="err-${f.name}" data-for="${f.name}" hidden></p>`;
-    box.appendChild(div);
-    const range = div.querySelector(`#${f.name}-range`);
-    const num = div.querySelector(`#${f.name}`);
-    range.tabIndex = 0;
-    range.addEventListener("input", () => { num.value = range.value; onInput(f.name, Number(range.value)); });
-    num.addEventListener("input", () => {
-      const v = Number(num.value);
-      if (num.value.trim() === "" || !Number.isFinite(v)) return;
-      range.value = String(v);
-      onInput(f.name, v);
-    });
-  }
+  addField(box, W_FIELD, onWidth);
+  for (const f of FIELDS) addField(box, f, (v) => onInput(f.name, v));
   const pair = $("pair");
   PAIRS.forEach(([b, m], k) => pair.add(new Option(pairLabel(b, m), String(k))));
   pair.addEventListener("change", () => onInput("pair", Number(pair.value)));
@@ -102,13 +127,26 @@ function onInput(name, value) {
   schedule(DEBOUNCE_MS);
 }
 
-export function loadDesign(values) {
-  Object.assign(app.state, values);
+// A new width scales every length with it (a scaled copy bends alike at the same pressure)
+// and the lengths' ranges with them; the user then changes any length within its range.
+function onWidth(W) {
+  if (!(W > 0)) return;
+  Object.assign(app.state, scaledLengths(app.state, W));
+  showRanges();
   for (const f of FIELDS) {
     $(f.name).value = String(app.state[f.name]);
     $(`${f.name}-range`).value = String(app.state[f.name]);
   }
-  $("pair").value = String(app.state.pair);
+  app.inputMark = performance.now();
+  schedule(DEBOUNCE_MS);
+}
+
+// ``values``: any of the state's keys; a design without a width is at W = 3 mm (the
+// design search's box, the stored records).
+export function loadDesign(values) {
+  Object.assign(app.state, { W_mm: W_MM }, values);
+  showRanges();
+  showValues();
   app.inputMark = performance.now();
   schedule(0);
 }
@@ -163,7 +201,7 @@ function onAskAxis() {
 
 const DESIGN_SLOTS = () => {
   const slots = {};
-  for (const f of FIELDS) if (f.name.endsWith("_mm")) slots[`design.${f.name}`] = $(`err-${f.name}`);
+  for (const f of [W_FIELD, ...FIELDS]) if (f.name.endsWith("_mm")) slots[`design.${f.name}`] = $(`err-${f.name}`);
   slots["design.body_material"] = $("err-body_material");
   slots["design.membrane_material"] = $("err-membrane_material");
   slots.design = $("err-design");
@@ -253,10 +291,21 @@ async function offersSolve(err, body) {
 }
 
 // ---------------------------------------------------------------- nearest FE curves
+// The stored FE records are at W = 3 mm: a design at another width is compared with them
+// as its copy scaled to W = 3 mm (lengths x 3 / W, to 1 um), and their curves are drawn
+// scaled back (the same angle at the same pressure; volume x k^3, tip force x k^2).
+function widthScale(state) {
+  return (state.W_mm ?? W_MM) / W_MM;
+}
+
+function reduced(state, name) {
+  return Math.round((state[name] / widthScale(state)) * 1e3) / 1e3;
+}
+
 function familyQuery(state) {
   const d = designBody(state, app.presets);
   return { body_material: materialId(d.body_material), membrane_material: materialId(d.membrane_material),
-           T_mm: state.T_mm, b_mm: state.b_mm, h_mm: state.h_mm };
+           T_mm: reduced(state, "T_mm"), b_mm: reduced(state, "b_mm"), h_mm: reduced(state, "h_mm") };
 }
 
 async function familySummaries(q, signal) {
@@ -282,7 +331,7 @@ async function loadNearest(controller) {
   try {
     const rows = count ? await familySummaries(familyQuery(state), controller.signal) : [];
     // nearest in (L, t), the same scales as the server's plot (10 mm, 0.5 mm)
-    const ranked = rows.map((r) => [Math.hypot((r.L_mm - state.L_mm) / 10, (r.t_mm - state.t_mm) / 0.5), r])
+    const ranked = rows.map((r) => [Math.hypot((r.L_mm - reduced(state, "L_mm")) / 10, (r.t_mm - reduced(state, "t_mm")) / 0.5), r])
       .sort((a, b) => a[0] - b[0]).slice(0, count).map(([, r]) => r);
     const records = [];
     for (const r of ranked) {
@@ -325,17 +374,22 @@ function curveSeries() {
   app.nearest.forEach((rec, k) => {
     const d = rec.design;
     const c = rec.curve;
+    // the record scaled to the design's width (k = W / 3 mm): volume x k^3, force x k^2
+    const kw = widthScale(app.state);
+    const volume = c.volume_ul ? c.volume_ul.map((v) => v * kw ** 3) : c.volume_ul;
+    const force = c.force_mn ? c.force_mn.map((f) => (f === null ? f : f * kw ** 2)) : c.force_mn;
     // an FE record's clock at the page's flow rate: its own injected volume over the flow
     const q = flowRate();
-    const time = q > 0 && c.volume_ul ? c.volume_ul.map((v) => v / q) : c.time_s;
-    const along = { pressure_pa: c.pressure_pa, volume_ul: c.volume_ul, time_s: time }[askAxis()] || c.pressure_pa;
+    const time = q > 0 && volume ? volume.map((v) => v / q) : (c.time_s && c.time_s.map((t) => t * kw ** 3));
+    const along = { pressure_pa: c.pressure_pa, volume_ul: volume, time_s: time }[askAxis()] || c.pressure_pa;
     const keep = along.map((x) => x <= gridMax() * 1.05);
     const cut = (a) => (a ? a.filter((_, i) => keep[i]) : a);
-    const data = { pressure_pa: cut(c.pressure_pa), volume_ul: cut(c.volume_ul), time_s: cut(time),
-      angle_deg: cut(c.angle_deg), force_mn: cut(c.force_mn) };
+    const data = { pressure_pa: cut(c.pressure_pa), volume_ul: cut(volume), time_s: cut(time),
+      angle_deg: cut(c.angle_deg), force_mn: cut(force) };
     // labelled with its materials: the pooled PDMS group holds PDMS 1:10 and 1:15 records
     const pair = `${materialLabel(d.body_material, app.presets)} / ${materialLabel(d.membrane_material, app.presets)}`;
-    add(`fe-${rec.id}`, `FE ${pair}, L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm`, data, ["#6b7280", "#9ca3af", "#4b5563", "#a3a3a3", "#737373", "#525252"][k], { dash: "5 4", width: 1.4 });
+    const size = kw === 1 ? `L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm` : `L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm at W = 3 mm, scaled x${fmtSig(kw)}`;
+    add(`fe-${rec.id}`, `FE ${pair}, ${size}`, data, ["#6b7280", "#9ca3af", "#4b5563", "#a3a3a3", "#737373", "#525252"][k], { dash: "5 4", width: 1.4 });
   });
   // pinned curves without their bands (the table gives the band at the chosen pressure)
   app.pinned.forEach((pin) => { if (pin.prediction) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pin.prediction, pin.color, { width: 1.6, lower: null, upper: null }); });

@@ -2,9 +2,12 @@
 //
 // Ranges: the design box of the whole-box emulator (geometry L 4-18 mm, t 0.5-1.2 mm,
 // T 0.6-2.0 mm, b 1.0-2.4 mm, h 0.10-0.30 mm at W = 3 mm; four material pairs; each
-// layer's stiffness scale s in [0.5, 2]). Defaults: the paper's standard design (Table 3),
-// which is also what the API assumes for an omitted field. The server, not this table,
-// decides what it can answer: a design it refuses comes back as a problem document.
+// layer's stiffness scale s in [0.5, 2]). At another width W the lengths' ranges are the
+// box scaled by W / 3 mm: a design with every length scaled by one factor bends alike at the
+// same pressure (solver/design_space.py), so the emulator answers every scaled copy of the
+// box. Defaults: the paper's standard design (Table 3), which is also what the API assumes
+// for an omitted field. The server, not this table, decides what it can answer: a design
+// it refuses comes back as a problem document.
 
 export const FIELDS = [
   { name: "L_mm", label: "Chamber length L", unit: "mm", min: 4, max: 18, step: 0.1, value: 7.1 },
@@ -15,7 +18,26 @@ export const FIELDS = [
   { name: "body_scale", label: "Body stiffness scale s", unit: "x", min: 0.5, max: 2, step: 0.05, value: 1 },
   { name: "membrane_scale", label: "Membrane stiffness scale s", unit: "x", min: 0.5, max: 2, step: 0.05, value: 1 },
 ];
-export const W_MM = 3.0;
+export const W_MM = 3.0;  // the paper's width, at which FIELDS give the box
+// The width: 1-10 mm keeps the scaled box inside the API's length limits (L <= 60 mm).
+export const W_FIELD = { name: "W_mm", label: "Actuator width W", unit: "mm", min: 1, max: 10, step: 0.1, value: W_MM };
+
+// A length field's range at width W (mm): the box's, scaled by W / 3 mm; the stiffness
+// scales' ranges do not change with W.
+export function fieldRange(f, W) {
+  if (!f.name.endsWith("_mm") || f.name === W_FIELD.name) return { min: f.min, max: f.max };
+  const k = W / W_MM;
+  const r = (v) => Math.round(v * k * 1e4) / 1e4;
+  return { min: r(f.min), max: r(f.max) };
+}
+
+// The design's lengths scaled by W_new / W_old (a scaled copy: the same angle-pressure curve).
+export function scaledLengths(state, W) {
+  const k = W / (state.W_mm || W_MM);
+  const out = { W_mm: W };
+  for (const f of FIELDS) if (f.name.endsWith("_mm")) out[f.name] = Math.round(state[f.name] * k * 1e4) / 1e4;
+  return out;
+}
 export const PAIRS = [
   ["pdms_1_10", "ecoflex_00_30"],
   ["pdms_1_15", "ecoflex_00_30"],
@@ -29,7 +51,7 @@ export function pairLabel(body, membrane) {
 }
 
 export function defaultState() {
-  const s = { pair: 0 };
+  const s = { pair: 0, W_mm: W_MM };
   for (const f of FIELDS) s[f.name] = f.value;
   return s;
 }
@@ -56,7 +78,7 @@ export function designBody(state, presets) {
   const [body, membrane] = PAIRS[state.pair];
   return {
     L_mm: state.L_mm, t_mm: state.t_mm, T_mm: state.T_mm, b_mm: state.b_mm, h_mm: state.h_mm,
-    W_mm: W_MM,
+    W_mm: state.W_mm ?? W_MM,
     body_material: material(body, state.body_scale, presets),
     membrane_material: material(membrane, state.membrane_scale, presets),
   };
@@ -84,7 +106,8 @@ export function materialLabel(m, presets) {
 export function designLabel(state) {
   const [body, membrane] = PAIRS[state.pair];
   const sc = (s) => (Math.abs(s - 1) < 1e-9 ? "" : ` x${scaleText(s)}`);
-  return `L ${state.L_mm} t ${state.t_mm} T ${state.T_mm} b ${state.b_mm} h ${state.h_mm} mm, ` +
+  const W = state.W_mm ?? W_MM;
+  return `L ${state.L_mm} t ${state.t_mm} T ${state.T_mm} b ${state.b_mm} h ${state.h_mm}${W === W_MM ? "" : ` W ${W}`} mm, ` +
     `${MATERIAL_NAMES[body] || body}${sc(state.body_scale)} / ${MATERIAL_NAMES[membrane] || membrane}${sc(state.membrane_scale)}`;
 }
 

@@ -116,6 +116,7 @@ export function setupInverse({ loadDesign }) {
     // the candidate's whole design: L, t, T, b, h (to 0.1 um) and each layer's stiffness scale
     const round = (v) => Math.round(v * 1e4) / 1e4;
     const geometry = Object.fromEntries(Object.entries(familyGeometry(c)).map(([k, v]) => [k, round(v)]));
+    // the design search's box is at W = 3 mm (loadDesign's width when none is given)
     const values = { L_mm: round(c.L_mm), t_mm: round(c.t_mm), ...geometry,
       body_scale: c.body_stiffness_scale ?? 1, membrane_scale: c.membrane_stiffness_scale ?? 1 };
     if (pair >= 0) values.pair = pair;
