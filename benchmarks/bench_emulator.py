@@ -51,6 +51,7 @@ class HeldOut:
     inside_points: list[np.ndarray] = field(default_factory=list)
     near_failed: list[bool] = field(default_factory=list)   # flag near_early_ended_fe_curves
     undercover: list[bool] = field(default_factory=list)    # band_undercovers_random_designs
+    ended_early: list[bool] = field(default_factory=list)   # the FE curve stops short of 90 deg
 
     def summary(self) -> str:
         flat = np.concatenate(self.errors_deg) if self.errors_deg else np.array([np.nan])
@@ -64,8 +65,13 @@ class HeldOut:
                 f"; curves with rmse <= 1 and max <= 3 deg: {both}"
                 + (f"; {self.unanswered} curves answered at no point (past the emulated "
                    "range from the start)" if self.unanswered else ""))
-        for name, marks in (("near_early_ended_fe_curves", self.near_failed),
-                            ("band_undercovers_random_designs", self.undercover)):
+        for (yes, no), marks in (
+                (("flagged near_early_ended_fe_curves", "not flagged near_early_ended_fe_curves"),
+                 self.near_failed),
+                (("flagged band_undercovers_random_designs",
+                  "not flagged band_undercovers_random_designs"), self.undercover),
+                (("FE curve ended early (short of 90 deg)", "FE curve complete (to 90 deg)"),
+                 self.ended_early)):
             for flagged in (True, False):
                 sel = [i for i, f in enumerate(marks) if f == flagged]
                 if not sel:
@@ -74,9 +80,8 @@ class HeldOut:
                          for i in sel)
                 cov = (float(np.mean(np.concatenate([self.inside_points[i] for i in sel])))
                        if any(self.inside_points[i].size for i in sel) else float("nan"))
-                text += (f"\n{'flagged' if flagged else 'not flagged'} {name}: "
-                         f"{len(sel)} curves, {ok} within the per-curve target, band "
-                         f"coverage {cov:.3f}")
+                text += (f"\n{yes if flagged else no}: {len(sel)} curves, {ok} within the "
+                         f"per-curve target, band coverage {cov:.3f}")
         if self.fe_deg:
             fe, ins = np.abs(np.concatenate(self.fe_deg)), np.concatenate(self.inside_points)
             bins = angle_bin(fe)
@@ -178,6 +183,7 @@ def evaluate(e, records, axis: str = "pressure") -> HeldOut:
         out.curve_max_deg.append(worst)
         out.near_failed.append("near_early_ended_fe_curves" in p.validity["flags"])
         out.undercover.append("band_undercovers_random_designs" in p.validity["flags"])
+        out.ended_early.append(bool(np.abs(c.angle_deg).max() < 90.0 - 1e-6))
         out.lines.append(f"{label(rec)}: rmse {rmse:.2f} max {worst:.2f} deg, band covers "
                          f"{cover.mean():.2f}, {int((~ok).sum())} of {ok.size} points past "
                          "the emulated FE range")
