@@ -161,6 +161,54 @@ def test_a_new_width_scales_the_design_and_its_ranges_and_the_curve_is_the_scale
     assert watched.errors == []
 
 
+def test_the_address_holds_the_view_and_a_link_reopens_it(watched, server):
+    """A page opened with a fragment starts from its design and curve request; every answer
+    rewrites the fragment; a hostile fragment's unknown keys and bad values are ignored and
+    named, never interpreted."""
+    page = watched.page
+    page.goto(server.url + "/#W_mm=6&L_mm=20&t_mm=1.2&T_mm=2.4&b_mm=3&h_mm=0.4&pair=2"
+              "&ask=volume_ul&max=40&flow=5&model=emulator")
+    page.wait_for_selector("body[data-ready=true]")
+    wait_prediction(page, W_mm=6, L_mm=20)
+    assert page.input_value("#W_mm") == "6" and page.input_value("#t_mm") == "1.2"
+    assert page.input_value("#pair") == "2" and page.input_value("#ask_axis") == "volume_ul"
+    assert page.get_attribute("#L_mm", "max") == "36"  # the ranges at W = 6 mm
+    request = page.evaluate("window.explorer.request")
+    assert request["volumes_ul"][-1] == pytest.approx(40) and request["flow_ul_s"] == 5
+    assert request["design"]["body_material"] == "ecoflex_00_30"
+    assert request["design"]["membrane_material"] == "pdms_1_15"
+    assert page.locator("#link-note").is_hidden()
+    # a moved slider rewrites the fragment: the link reopens what is shown
+    page.focus("#L_mm-range")
+    page.keyboard.press("ArrowRight")
+    wait_prediction(page, L_mm=20.1)
+    page.wait_for_function("location.hash.includes('L_mm=20.1')")
+    link = page.evaluate("location.href")
+    assert "ask=volume_ul" in link and "W_mm=6" in link and "pair=2" in link
+    again = watched.page.context.new_page()
+    try:
+        again.goto(link)
+        again.wait_for_selector("body[data-ready=true]")
+        again.wait_for_function("window.explorer.prediction && "
+                                "window.explorer.prediction.design.L_mm === 20.1")
+        assert again.evaluate("window.explorer.request") == page.evaluate(
+            "window.explorer.request")
+    finally:
+        again.close()
+    # hostile: unknown keys, non-numbers, an out-of-list pair and axis, a path as model
+    page.goto(server.url + "/#L_mm=%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E&pair=9&foo=1"
+              "&ask=bogus&model=..%2F..%2Fetc&t_mm=-1&W_mm=Infinity")
+    page.reload()
+    page.wait_for_selector("body[data-ready=true]")
+    wait_prediction(page, L_mm=7.1, W_mm=3)
+    note = page.locator("#link-note").inner_text()
+    for key in ("L_mm", "pair", "foo", "ask", "model", "t_mm", "W_mm"):
+        assert key in note, (key, note)
+    assert page.locator("img").count() == 0
+    assert page.input_value("#pair") == "0" and page.input_value("#t_mm") == "0.5"
+    assert watched.errors == []
+
+
 def test_a_stale_prediction_is_cancelled_and_never_drawn_over_a_newer_one(watched, server):
     page = open_explorer(watched, server.url)
     held, failed = [], []

@@ -12,6 +12,7 @@ import {
   materialLabel, pairLabel, scaledLengths,
 } from "./design.js";
 import { setupInverse } from "./inverse.js";
+import { readLink, writeLink } from "./link.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
 import { renderSketch } from "./sketch.js";
 import { $, csvCell, download, fmt, fmtSig } from "./util.js";
@@ -186,6 +187,13 @@ function predictBody(state, grid) {
 }
 
 function onAskAxis() {
+  showAskAxis();
+  $("p_op").value = String(gridMax() / 2);
+  schedule(0);
+}
+
+// The inputs and headings of the asked axis.
+function showAskAxis() {
   const axis = askAxis();
   for (const el of document.querySelectorAll("[data-ask]")) el.hidden = el.dataset.ask !== axis;
   const option = $("x_axis").querySelector(`option[value="${axis}"]`);
@@ -195,8 +203,32 @@ function onAskAxis() {
   $("p_op-h").textContent = `At one ${a.label}`;
   $("p_op-label").textContent = `${a.label[0].toUpperCase()}${a.label.slice(1)} (${a.unit})`;
   $("curve-h").textContent = `${a.label[0].toUpperCase()}${a.label.slice(1)} - angle curve`;
+}
+
+// ---------------------------------------------------------------- the view's link
+// The address's fragment holds the design and the curve request (link.js): each answer
+// rewrites it, a page opened with one starts from it.
+function view() {
+  return { ask: askAxis(), max: gridMax(), flow: flowRate() ?? undefined, inlet: $("inlet").checked,
+           model: $("model").value.trim() || "emulator" };
+}
+
+function applyLink(hash) {
+  const link = readLink(hash);
+  Object.assign(app.state, link.design);
+  showRanges();
+  showValues();
+  const v = link.view;
+  if (v.ask) $("ask_axis").value = v.ask;
+  if (v.max) $(ASK[askAxis()].input).value = String(v.max);
+  if (v.flow) $("flow").value = String(v.flow);
+  if (v.inlet !== undefined) $("inlet").checked = v.inlet;
+  if (v.model) $("model").value = v.model;
+  showAskAxis();
   $("p_op").value = String(gridMax() / 2);
-  schedule(0);
+  const note = $("link-note");
+  note.hidden = link.ignored.length === 0;
+  note.textContent = link.ignored.length ? `The link's ${link.ignored.join(", ")} ignored (unknown or not a valid value).` : "";
 }
 
 const DESIGN_SLOTS = () => {
@@ -246,6 +278,7 @@ async function update() {
     $("status").textContent = app.refused ? "No prediction: the model refuses this design (below)."
       : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
+  history.replaceState(null, "", writeLink(app.state, view()));
   refreshPinned(grid);
   showRefused();
   showValidity();
@@ -683,6 +716,9 @@ async function start() {
   }).catch(() => { $("health").textContent = "service health unknown"; });
   setupInverse({ loadDesign, presets: app.presets });
   setupCalibration({ presets: app.presets });
+  applyLink(location.hash);
+  // a stiffness scale != 1 needs the presets to send its inline material
+  if (app.state.body_scale !== 1 || app.state.membrane_scale !== 1) await materials;
   await Promise.all([update(), materials]);
   document.body.dataset.ready = "true";
 }
