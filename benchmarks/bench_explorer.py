@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import platform
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -88,7 +89,11 @@ def main() -> int:
                 browser.close()
         finally:
             proc.terminate()
-            proc.wait(timeout=30)
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:  # a server slow to shut down loses no figures
+                proc.kill()
+                proc.wait()
     out = {"machine": f"{platform.machine()} {platform.processor() or ''}".strip(),
            "chromium": version, "first_render": stats(first), "slider_move": stats(moves),
            "bare_predict_fetch": stats(bare)}
