@@ -101,8 +101,9 @@ function showRanges() {
   }
 }
 
-function showValues() {
-  for (const f of [W_FIELD, ...FIELDS]) {
+// The state's values on the inputs of ``fields`` (all of them and the pair by default).
+function showValues(fields = [W_FIELD, ...FIELDS]) {
+  for (const f of fields) {
     $(f.name).value = String(app.state[f.name]);
     $(`${f.name}-range`).value = String(app.state[f.name]);
   }
@@ -134,10 +135,7 @@ function onWidth(W) {
   if (!(W > 0)) return;
   Object.assign(app.state, scaledLengths(app.state, W));
   showRanges();
-  for (const f of FIELDS) {
-    $(f.name).value = String(app.state[f.name]);
-    $(`${f.name}-range`).value = String(app.state[f.name]);
-  }
+  showValues(FIELDS);  // not W's own input, which the user is typing in
   app.inputMark = performance.now();
   schedule(DEBOUNCE_MS);
 }
@@ -404,11 +402,11 @@ function curveSeries() {
     if (!x || !data[keys[0]]) return;
     out.push({ id, label, color, x, y: data[keys[0]], lower: data[keys[1]], upper: data[keys[2]], ...extra });
   };
+  // the records scaled to the design's width (kw = W / 3 mm): volume x kw^3, force x kw^2
+  const kw = widthScale(app.state);
   app.nearest.forEach((rec, k) => {
     const d = rec.design;
     const c = rec.curve;
-    // the record scaled to the design's width (k = W / 3 mm): volume x k^3, force x k^2
-    const kw = widthScale(app.state);
     const volume = c.volume_ul ? c.volume_ul.map((v) => v * kw ** 3) : c.volume_ul;
     const force = c.force_mn ? c.force_mn.map((f) => (f === null ? f : f * kw ** 2)) : c.force_mn;
     // an FE record's clock at the page's flow rate: its own injected volume over the flow
