@@ -943,7 +943,7 @@ def test_a_single_querys_single_precision_band_keeps_the_double_one(emulator):
     rng = np.random.default_rng(2026)
     which = np.concatenate((emulator.variance_nodes, np.arange(N_NODES, 2 * N_NODES)))
     for pe in emulator.pairs.values():
-        x = pe.curves.gps[0].x
+        x = pe.curves.gp.gps[0].x
         n, d = x.shape
         queries = np.vstack((rng.random((20, d)),
                              x[rng.integers(0, n, 20)] + 1e-3 * rng.standard_normal((20, d)),

@@ -33,6 +33,7 @@ from solver.design_space import GROUPS, locate
 from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
+from surrogate.emulator.curve_gps import CurveGPs, anchor_index, rise_outputs
 from surrogate.emulator.emulator import (
     ANGLES0,
     FORCE_FORMS,
@@ -137,13 +138,16 @@ CV_FOLDS = 5                      # band calibration: K-fold cross-validation
 GEOMETRY_COORDINATES = 5          # the first five unit-cube coordinates: L, t, T, b, h
 
 
-def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> VectorGP:
-    """The curve GPs of a group: the 32 pressure nodes share one kernel (a query's band is
-    one product over the database, not one per node), each volume node has its own. On
-    the FE curves of 252 random designs (benchmarks/RESULTS.md, nineteenth session) one
-    kernel for the pressure nodes put 190 curves within the per-curve target where one
-    per node put 188."""
-    return fit_output_gps(u, y, seed=seed, shared=slice(0, N_NODES))
+def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> CurveGPs:
+    """The curve GPs of a group from node outputs ``y`` (n, 64): the 32 pressure nodes
+    share one kernel (a query's band is one product over the database, not one per node),
+    each volume node has its own, the volume nodes above 30 deg as the log of their rise
+    in log V (``curve_gps``). On the FE curves of 252 random designs (benchmarks/
+    RESULTS.md, nineteenth session) one kernel for the pressure nodes put 190 curves
+    within the per-curve target where one per node put 188."""
+    anchor = anchor_index()
+    return CurveGPs(fit_output_gps(u, rise_outputs(y, anchor), seed=seed,
+                                   shared=slice(0, N_NODES)), anchor)
 
 
 def fit_force_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> VectorGP:
@@ -345,7 +349,7 @@ def pushes_with(per_kpa: np.ndarray, sign: float) -> np.ndarray:
     return (reached > 0) & (sign * last > 0)
 
 
-def force_angle_rows(u: np.ndarray, per_kpa: np.ndarray, curves: VectorGP, sign: float
+def force_angle_rows(u: np.ndarray, per_kpa: np.ndarray, curves: CurveGPs, sign: float
                      ) -> tuple[np.ndarray, np.ndarray]:
     """The rows an "angle_ratio" force model of bending ``sign`` is fitted to: of the
     group's blocked-tip rows (designs ``u``, F / p at the force nodes from ``_collect``;
@@ -433,7 +437,7 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[2],
         range_model=range_model)
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
-              "components": len(vgp.gps),
+              "components": len(vgp.gp.gps),
               "force_designs": force_designs if force_gp is not None else 0,
               "force_band_scale": force_scale,
               "force_limit_pa": force_limit_pa if force_gp is not None else None,

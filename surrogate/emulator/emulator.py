@@ -32,6 +32,7 @@ from solver.design import Design
 from solver.design_space import PAIRS, BoxPoint, locate
 from solver.errors import InputError
 from surrogate.band_level import z_value
+from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
@@ -150,7 +151,8 @@ class PairEmulator:
     """The emulator of one material pair (body, membrane).
 
     sign                 +1 bends away from the membrane, -1 towards it (reversed pair)
-    curves               VectorGP of (log p_k/theta_k, log V_k/theta_k), k over nodes
+    curves               CurveGPs (``curve_gps``) of (log p_k/theta_k, log V_k/theta_k),
+                         k over nodes
     band_scale           (2 N_NODES,) multipliers of the GP sd, one per output node, so
                          that LOO bands cover ``level`` at every angle node
     fe_limit_angle_deg   the FE's last angle on every database curve of the pair
@@ -172,7 +174,7 @@ class PairEmulator:
 
     pair: str                    # group and sign, e.g. "pdms/ecoflex_00_30+"
     sign: float
-    curves: VectorGP
+    curves: CurveGPs
     band_scale: np.ndarray
     fe_limit_angle_deg: float
     fe_stop_reason: str

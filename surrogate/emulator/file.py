@@ -32,6 +32,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from solver.atomic_file import write_text_atomic
+from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES
@@ -41,7 +42,9 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 9   # 9: force_form "angle_ratio" (8 read: their own form);
+FORMAT_VERSION = 10  # 10: volume_rise_anchor, the volume nodes above it as their rise
+                     # (curve_gps; 9 read: none, plain log V / theta);
+                     # 9: force_form "angle_ratio" (8 read: their own form);
                      # 8: variance_nodes, chosen per fit (7 read: FORMAT_7_NODES);
                      # 7: near_failed_band_scale (6 read: none, the group's bands);
                      # 6: range_model, the emulated end of the FE curve (5 read: none);
@@ -58,7 +61,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "fe_limit_angle_deg": pe.fe_limit_angle_deg, "fe_stop_reason": pe.fe_stop_reason,
             "coordinates": pe.coordinates.tolist(), "keys": list(pe.keys),
             "failed": [[np.asarray(u).tolist(), a, r] for u, a, r in pe.failed],
-            "curves": pe.curves.as_dict(),
+            "curves": pe.curves.gp.as_dict(),
+            "volume_rise_anchor": pe.curves.volume_rise_anchor,
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
             "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul,
@@ -89,7 +93,9 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
         for p in d["pairs"]:
             pair = str(p["pair"])
             pairs[pair] = PairEmulator(
-                pair=pair, sign=float(p["sign"]), curves=vector_gp_from_dict(p["curves"]),
+                pair=pair, sign=float(p["sign"]),
+                curves=CurveGPs(vector_gp_from_dict(p["curves"]),
+                                _rise_anchor(p.get("volume_rise_anchor"))),
                 band_scale=_band_scales(p["band_scale"]),
                 fe_limit_angle_deg=float(p["fe_limit_angle_deg"]),
                 fe_stop_reason=str(p["fe_stop_reason"]),
@@ -130,6 +136,7 @@ def _precheck_pair(p: dict) -> None:
     scales, sign, coordinates against keys, the curves' centre and scale, the FE and force
     limits, the force form; ValueError, TypeError or KeyError otherwise). ``_check_pair``
     checks the GPs once built."""
+    _rise_anchor(p.get("volume_rise_anchor"))
     scales = _band_scales(p["band_scale"])
     if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
         raise ValueError(f"pair {p['pair']}: band scales must be {2 * N_NODES} positive "
@@ -184,12 +191,23 @@ def _check_group_coverage(report: dict) -> None:
                                      "of points and curves >= 0")
 
 
-def _check_gp(gp, what: str) -> None:
+def _check_gp(gp, what: str, at: np.ndarray | None = None) -> None:
     """A GP that gives finite means and non-negative variances at its own first training
-    input (the shapes of every stored array must agree for that)."""
-    mean, var = gp.predict(gp.gps[0].x[0])
+    input (or ``at``; the shapes of every stored array must agree for that)."""
+    mean, var = gp.predict(gp.gps[0].x[0] if at is None else at)
     if not (np.isfinite(mean).all() and np.isfinite(var).all() and (var >= 0).all()):
         raise ValueError(f"{what}: no finite answer at its own training design")
+
+
+def _rise_anchor(value: object) -> int | None:
+    """The file's volume rise anchor: an angle-node index below the last, or none (files
+    before format 10; ValueError otherwise: damage)."""
+    if value is None:
+        return None
+    if type(value) is not int or not 0 <= value < N_NODES - 1:
+        raise ValueError(f"volume_rise_anchor {value!r}: an angle-node index from 0 to "
+                         f"{N_NODES - 2}")
+    return value
 
 
 def _band_scales(value: object) -> np.ndarray:
@@ -203,7 +221,8 @@ def _check_pair(pe: PairEmulator) -> None:
     """The GPs of one built pair answer at their own training designs (ValueError
     otherwise); every stored number that needs no GP was checked before building
     (``_precheck_pair``)."""
-    _check_gp(pe.curves, f"pair {pe.pair}")
+    _check_gp(pe.curves.gp, f"pair {pe.pair}")
+    _check_gp(pe.curves, f"pair {pe.pair} nodes", pe.curves.gp.gps[0].x[0])
     if pe.force is not None:
         _check_gp(pe.force, f"pair {pe.pair} force")
     if pe.range_model is not None:
