@@ -6,9 +6,9 @@ the log of their rise in log V above the anchor node,
 
     z_j = log(log V_j - log V_a),      log V_j = log V_a + exp(z_j),
 
-and turned back into log(V / theta) for the query (``node_outputs``). Why: between 30 and
-90 deg the injected volume of one design grows 1.3x to 6x (Ecoflex/Ecoflex; the quartiles
-of log V90 / V60 are 0.28 / 0.42 / 0.92 in its database), most where the membrane
+and turned back into log(V / theta) for the query (``node_outputs``). Why: between 60 and
+90 deg the injected volume of one design grows 1.3x to 6.4x (Ecoflex/Ecoflex's database;
+log V90 / V60 0.28 / 0.42 / 0.92 at its 10th / 50th / 90th percentiles), most where the membrane
 balloons near its pressure maximum, so log V at the top nodes is a heavy-tailed function
 of the design that the GPs interpolated 0.2-0.66 off (in log V) on the designs they
 missed by volume, while the pressure at the same nodes was within 0.02. The log of the
