@@ -236,6 +236,20 @@ def main() -> None:
         for k, t in times.items():
             print(f"interleaved, {k}: median {1e3 * np.median(t):.3f} ms, ratio to the first "
                   f"{np.median(t) / first:.2f}")
+        # a query by injected volume asks the variance of every volume node (one product
+        # per node's kernel): the two emulator files, interleaved the same way
+        volumes = np.linspace(0.5, 60.0, 100)
+        by_volume: dict[str, list[float]] = {k: [] for k in (args.emulator, args.compare)}
+        for _ in range(20):
+            for k in by_volume:
+                for _ in range(50):
+                    t0 = time.perf_counter()
+                    models[k].predict_volume(d, volumes)
+                    by_volume[k].append(time.perf_counter() - t0)
+        first = float(np.median(by_volume[args.emulator]))
+        for k, t in by_volume.items():
+            print(f"interleaved, 100 volumes with bands, {k}: median {1e3 * np.median(t):.3f} "
+                  f"ms, ratio to the first {np.median(t) / first:.2f}")
 
 
 if __name__ == "__main__":

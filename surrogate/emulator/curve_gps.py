@@ -46,6 +46,7 @@ MIN_LOG_RISE = 1e-6
 # such curve long before
 MAX_LOG_RISE = 6.0
 _LOG_THETA = np.log(ANGLE_NODES_DEG)
+_LOG_MAX_RISE = np.log(MAX_LOG_RISE)
 
 
 def anchor_index(anchor_deg: float = VOLUME_RISE_ANCHOR_DEG) -> int:
@@ -77,12 +78,10 @@ def node_outputs(mean: np.ndarray, var: np.ndarray, anchor: int | None
     if anchor is None:
         return mean, var
     mean, var = np.array(mean, float), np.array(var, float)
-    top = np.arange(anchor + 1, N_NODES)
-    a, cols = N_NODES + anchor, N_NODES + top
-    rise = np.exp(np.minimum(mean[..., cols], np.log(MAX_LOG_RISE)))
-    lv_a = mean[..., a:a + 1] + _LOG_THETA[anchor]
+    a, cols = N_NODES + anchor, slice(N_NODES + anchor + 1, 2 * N_NODES)
+    rise = np.exp(np.minimum(mean[..., cols], _LOG_MAX_RISE))
     var[..., cols] = var[..., a:a + 1] + np.minimum(rise**2 * var[..., cols], MAX_LOG_RISE**2)
-    mean[..., cols] = lv_a + rise - _LOG_THETA[top]
+    mean[..., cols] = (mean[..., a:a + 1] + _LOG_THETA[anchor]) + rise - _LOG_THETA[anchor + 1:]
     return mean, var
 
 
@@ -99,34 +98,34 @@ class CurveGPs:
     def kernels(self, sel: slice | np.ndarray) -> int:
         return self.gp.kernels(sel)
 
-    def _asked(self, variance_of: slice | np.ndarray | None) -> slice | np.ndarray | None:
-        """The GP outputs whose variance a node output's needs (the anchor with any top
-        volume node)."""
+    def _asked(self, variance_of: slice | np.ndarray | None
+               ) -> tuple[slice | np.ndarray | None, bool]:
+        """The GP outputs whose variance the asked node outputs' need (the anchor with any
+        top volume node), and whether the anchor was added (its variance then not
+        returned)."""
         if variance_of is None or self.volume_rise_anchor is None:
-            return variance_of
+            return variance_of, False
         idx = np.arange(2 * N_NODES)[variance_of]
-        if idx.size and (idx > N_NODES + self.volume_rise_anchor).any():
-            idx = np.union1d(idx, [N_NODES + self.volume_rise_anchor])
-        return idx
+        anchor = N_NODES + self.volume_rise_anchor
+        if idx.size and (idx > anchor).any() and anchor not in idx:
+            return np.sort(np.append(idx, anchor)), True
+        return variance_of, False
 
-    def _masked(self, var: np.ndarray, variance_of: slice | np.ndarray | None
-                ) -> np.ndarray:
-        if variance_of is None or self.volume_rise_anchor is None:
-            return var
-        keep = np.zeros(2 * N_NODES, bool)
-        keep[variance_of] = True
-        return np.where(keep, var, np.nan)
+    def _answer(self, mean: np.ndarray, var: np.ndarray, added: bool
+                ) -> tuple[np.ndarray, np.ndarray]:
+        mean, var = node_outputs(mean, var, self.volume_rise_anchor)
+        if added:
+            var[..., N_NODES + self.volume_rise_anchor] = np.nan
+        return mean, var
 
     def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
         """Node outputs and variances at one input row (``VectorGP.predict``)."""
-        mean, var = self.gp.predict(u, variance_of=self._asked(variance_of))
-        mean, var = node_outputs(mean, var, self.volume_rise_anchor)
-        return mean, self._masked(var, variance_of)
+        asked, added = self._asked(variance_of)
+        return self._answer(*self.gp.predict(u, variance_of=asked), added)
 
     def predict_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
                      ) -> tuple[np.ndarray, np.ndarray]:
         """Node outputs and variances at input rows ``u`` (``VectorGP.predict_many``)."""
-        mean, var = self.gp.predict_many(u, variance_of=self._asked(variance_of))
-        mean, var = node_outputs(mean, var, self.volume_rise_anchor)
-        return mean, self._masked(var, variance_of)
+        asked, added = self._asked(variance_of)
+        return self._answer(*self.gp.predict_many(u, variance_of=asked), added)
