@@ -109,7 +109,7 @@ def per_curve(test: list, means: np.ndarray, axis: str = "pressure"
     emulated V(theta), ``axis`` "volume"), per test curve (deg)."""
     out = []
     for row, m in zip(test, means, strict=True):
-        _, _, end, x, a = row
+        end, x, a = row[2], row[3], row[4]
         if axis == "pressure":
             nodes, angles = np.maximum.accumulate(ANGLE_NODES_DEG * np.exp(m)), ANGLE_NODES_DEG
         else:
