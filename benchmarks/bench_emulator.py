@@ -190,6 +190,22 @@ def evaluate(e, records, axis: str = "pressure") -> HeldOut:
     return out
 
 
+def interleaved(models: dict, call, rounds: int, per_round: int) -> dict[str, str]:
+    """Median time of ``call(model)`` per model, the models taking turns (``rounds`` of
+    ``per_round`` calls each: the machine's load hits all alike), and its ratio to the
+    first model's."""
+    times: dict[str, list[float]] = {k: [] for k in models}
+    for _ in range(rounds):
+        for k, m in models.items():
+            for _ in range(per_round):
+                t0 = time.perf_counter()
+                call(m)
+                times[k].append(time.perf_counter() - t0)
+    first = float(np.median(next(iter(times.values()))))
+    return {k: f"median {1e3 * np.median(t):.3f} ms, ratio to the first "
+               f"{np.median(t) / first:.2f}" for k, t in times.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--heldout", required=True)
@@ -225,31 +241,14 @@ def main() -> None:
           f"{1e3 * tx:.3f} ms (ratio {te / tx:.2f})")
     if args.compare:
         models = {args.emulator: e, args.compare: load_emulator(args.compare), "exponential": exp}
-        times: dict[str, list[float]] = {k: [] for k in models}
-        for _ in range(40):                 # interleaved: the machine's load hits all alike
-            for k, m in models.items():
-                for _ in range(100):
-                    t0 = time.perf_counter()
-                    m.predict(d, pressures)
-                    times[k].append(time.perf_counter() - t0)
-        first = float(np.median(times[args.emulator]))
-        for k, t in times.items():
-            print(f"interleaved, {k}: median {1e3 * np.median(t):.3f} ms, ratio to the first "
-                  f"{np.median(t) / first:.2f}")
+        for k, t in interleaved(models, lambda m: m.predict(d, pressures), 40, 100).items():
+            print(f"interleaved, {k}: {t}")
         # a query by injected volume asks the variance of every volume node (one product
         # per node's kernel): the two emulator files, interleaved the same way
         volumes = np.linspace(0.5, 60.0, 100)
-        by_volume: dict[str, list[float]] = {k: [] for k in (args.emulator, args.compare)}
-        for _ in range(20):
-            for k in by_volume:
-                for _ in range(50):
-                    t0 = time.perf_counter()
-                    models[k].predict_volume(d, volumes)
-                    by_volume[k].append(time.perf_counter() - t0)
-        first = float(np.median(by_volume[args.emulator]))
-        for k, t in by_volume.items():
-            print(f"interleaved, 100 volumes with bands, {k}: median {1e3 * np.median(t):.3f} "
-                  f"ms, ratio to the first {np.median(t) / first:.2f}")
+        files = {k: models[k] for k in (args.emulator, args.compare)}
+        for k, t in interleaved(files, lambda m: m.predict_volume(d, volumes), 20, 50).items():
+            print(f"interleaved, 100 volumes with bands, {k}: {t}")
 
 
 if __name__ == "__main__":

@@ -23,14 +23,13 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from solver.design_space import locate
 from solver.errors import InputError
 from solver.settings import SolverSettings
 from solver.store import CurveStore
 from surrogate.emulator.curve_gps import anchor_index, node_outputs, rise_outputs
-from surrogate.emulator.emulator import volume_shape
+from surrogate.emulator.emulator import emulated_volume_ul
 from surrogate.emulator.features import ANGLE_NODES_DEG, FINE_ANGLES_DEG, curve_features
 from surrogate.emulator.gp import fit_gp
 
@@ -97,10 +96,7 @@ def volume_nodes_ul(z_means: np.ndarray) -> np.ndarray:
     n = len(ANGLE_NODES_DEG)
     log_v = node_outputs(np.concatenate((np.zeros(n), z_means)), np.zeros(2 * n),
                          anchor_index())[0][n:]
-    ln = np.log(ANGLE_NODES_DEG)
-    spline = CubicSpline(ln, log_v, bc_type="natural")
-    return volume_shape(FINE_ANGLES_DEG * np.exp(spline(np.clip(np.log(FINE_ANGLES_DEG),
-                                                                ln[0], ln[-1]))))
+    return emulated_volume_ul(log_v)
 
 
 def per_curve(test: list, means: np.ndarray, axis: str = "pressure"

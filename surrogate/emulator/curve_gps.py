@@ -31,10 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from surrogate.emulator.features import ANGLE_NODES_DEG
+from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES
 from surrogate.emulator.vector_gp import VectorGP
 
-N_NODES = len(ANGLE_NODES_DEG)
 VOLUME_RISE_ANCHOR_DEG = 30.0
 # the smallest rise in log V a training curve is given (V grows with theta on the rising
 # branch; the shipped database's smallest rise above 30 deg is far above this)

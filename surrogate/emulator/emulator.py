@@ -37,6 +37,7 @@ from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
+    N_NODES,
     angle_ratio_from_feature,
     force_at,
     force_from_angle_ratio,
@@ -50,7 +51,6 @@ from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
 from surrogate.predictor import InversePrediction, Prediction, number_array
 from surrogate.volume_control import by_volume
 
-N_NODES = len(ANGLE_NODES_DEG)
 # Unit-cube distance within which a database curve that ended early (volume stop, Newton
 # failure) marks the emulator as least reliable (flag near_early_ended_fe_curves): on the
 # 36 free-tip curves of two held-out sets of random box designs (2026-12-03, shipped
@@ -382,6 +382,13 @@ def volume_shape(v: np.ndarray) -> np.ndarray:
     return np.exp(np.maximum.accumulate(lv, axis=-1) + _VOLUME_FLOOR)
 
 
+def emulated_volume_ul(log_v_nodes: np.ndarray) -> np.ndarray:
+    """The emulated V(theta) on FINE_ANGLES_DEG (reduced ul; rows of a 2-D input are
+    designs) from the volume nodes' log(V / theta): the natural spline through them, made
+    to rise as the FE volumes do (``volume_shape``)."""
+    return volume_shape(FINE_ANGLES_DEG * np.exp(log_v_nodes @ _B_ANGLE.T))
+
+
 def _with_origin(x: np.ndarray) -> np.ndarray:
     return np.concatenate(([0.0], x))
 
@@ -480,7 +487,7 @@ class Emulator:
         sd = np.sqrt(var[:N_NODES]) * scales[:N_NODES]
         p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
         p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
-        v = volume_shape(FINE_ANGLES_DEG * np.exp(_B_ANGLE @ mean[N_NODES:]))
+        v = emulated_volume_ul(mean[N_NODES:])
         limit, reason = pe.fe_range(u, v, point.length_scale, failed_distances=failed)
         v_sd = np.sqrt(var[N_NODES:]) * scales[N_NODES:]
         return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean,
@@ -759,7 +766,7 @@ class Emulator:
             if pe.force is not None:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
-            volumes = volume_shape(FINE_ANGLES_DEG * np.exp(mean[:, N_NODES:] @ _B_ANGLE.T))
+            volumes = emulated_volume_ul(mean[:, N_NODES:])
             ends: list[tuple[float, float] | None] = (
                 [None] * len(idx) if pe.range_model is None else pe.emulated_ends_deg(u))
             for row, i in enumerate(idx):

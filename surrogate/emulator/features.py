@@ -35,6 +35,7 @@ ANGLE_NODES_DEG = np.array([0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 5
                             8.0, 10.0, 12.5, 15.0, 18.0, 21.0, 25.0, 30.0, 35.0, 40.0,
                             45.0, 50.0, 55.0, 60.0,
                             65.0, 70.0, 75.0, 80.0, 85.0, 90.0])
+N_NODES = len(ANGLE_NODES_DEG)   # a curve's nodes: N_NODES pressure, then N_NODES volume outputs
 FORCE_PRESSURE_NODES_PA = np.array([25.0, 50.0, 100.0, 200.0, 300.0, 400.0, 500.0, 750.0,
                                     1000.0, 1250.0, 1500.0, 1750.0, 2000.0, 2500.0])
 FINE_ANGLES_DEG = np.concatenate((np.linspace(0.01, 0.5, 50),

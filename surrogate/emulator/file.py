@@ -191,10 +191,10 @@ def _check_group_coverage(report: dict) -> None:
                                      "of points and curves >= 0")
 
 
-def _check_gp(gp, what: str, at: np.ndarray | None = None) -> None:
+def _check_gp(gp, what: str) -> None:
     """A GP that gives finite means and non-negative variances at its own first training
-    input (or ``at``; the shapes of every stored array must agree for that)."""
-    mean, var = gp.predict(gp.gps[0].x[0] if at is None else at)
+    input (the shapes of every stored array must agree for that)."""
+    mean, var = gp.predict(gp.gps[0].x[0])
     if not (np.isfinite(mean).all() and np.isfinite(var).all() and (var >= 0).all()):
         raise ValueError(f"{what}: no finite answer at its own training design")
 
@@ -221,8 +221,7 @@ def _check_pair(pe: PairEmulator) -> None:
     """The GPs of one built pair answer at their own training designs (ValueError
     otherwise); every stored number that needs no GP was checked before building
     (``_precheck_pair``)."""
-    _check_gp(pe.curves.gp, f"pair {pe.pair}")
-    _check_gp(pe.curves, f"pair {pe.pair} nodes", pe.curves.gp.gps[0].x[0])
+    _check_gp(pe.curves.gp, f"pair {pe.pair}")   # finite GP outputs: finite node outputs
     if pe.force is not None:
         _check_gp(pe.force, f"pair {pe.pair} force")
     if pe.range_model is not None:

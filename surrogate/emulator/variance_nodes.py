@@ -23,9 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate.emulator.features import ANGLE_NODES_DEG, spline_matrix
+from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES, spline_matrix
 
-N_NODES = len(ANGLE_NODES_DEG)
 # 12 of 32: the O(n^2) part of a query is memory-bound (the nodes' packed L^-1, 4.8 MB for
 # 12 on a 447-design group), and 17 took a query to 1.03-1.9 ms on the shared 2-core
 # machine; 12 read the sd within 3.8 % (largest) and 1.6 % (median) of the exact one on
