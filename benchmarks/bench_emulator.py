@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from solver.design_space import locate
 from solver.errors import InputError
 from solver.store import CurveStore
 from surrogate import load_surrogate
@@ -249,6 +250,26 @@ def main() -> None:
         files = {k: models[k] for k in (args.emulator, args.compare)}
         for k, t in interleaved(files, lambda m: m.predict_volume(d, volumes), 20, 50).items():
             print(f"interleaved, 100 volumes with bands, {k}: {t}")
+        # a design emulated to end early also reads the means conditioned on the
+        # early-ended database curves (early_ended_nodes): the held-out design whose FE
+        # curve the first file's range model ends earliest
+        rec = min(records, key=lambda r: _emulated_end_deg(e, r.design))
+        print(f"the earliest-ending held-out design (emulated end "
+              f"{_emulated_end_deg(e, rec.design):.0f} deg): {label(rec)}")
+        for k, t in interleaved(files, lambda m: m.predict(rec.design, pressures), 40,
+                                100).items():
+            print(f"interleaved, 100 pressures with bands there, {k}: {t}")
+
+
+def _emulated_end_deg(e, design) -> float:
+    """Where the emulator's range model ends the design's FE curve (deg; inf where it
+    does not answer or has no range model)."""
+    try:
+        point = locate(design, reduced=True)
+        pe = e._pair(point)
+    except InputError:
+        return float("inf")
+    return float("inf") if pe.range_model is None else pe.emulated_end_deg(point.coordinates())[0]
 
 
 if __name__ == "__main__":

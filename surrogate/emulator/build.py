@@ -34,6 +34,7 @@ from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.curve_gps import CurveGPs, anchor_index, rise_outputs
+from surrogate.emulator.early_ended_nodes import EarlyEndedRows, short_of_the_end
 from surrogate.emulator.emulator import (
     ANGLES0,
     FORCE_FORMS,
@@ -73,6 +74,7 @@ class _Rows:
     failed: list          # (u, end angle, reason)
     signs: list
     failed_signs: list
+    failed_y: list        # node outputs of the early-ended curves (NaN past their end)
 
 
 def default_free_settings() -> SolverSettings:
@@ -100,7 +102,7 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
             continue
         c = rec.curve
         if rec.settings == free_settings:
-            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], []))
+            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], [], []))
             f = curve_features(c.pressure_pa / point.pressure_scale,
                                c.volume_ul / point.length_scale**3, c.angle_deg)
             u = point.coordinates()
@@ -108,6 +110,7 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
                 rows.failed.append((u.tolist(), min(f.end_angle_deg, LIMIT_ANGLE_DEG),
                                     c.reason))
                 rows.failed_signs.append(f.sign)
+                rows.failed_y.append(np.concatenate((f.log_p, f.log_v)))
                 continue
             rows.u.append(u)
             rows.y.append(np.concatenate((f.log_p, f.log_v)))
@@ -138,16 +141,27 @@ CV_FOLDS = 5                      # band calibration: K-fold cross-validation
 GEOMETRY_COORDINATES = 5          # the first five unit-cube coordinates: L, t, T, b, h
 
 
-def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> CurveGPs:
-    """The curve GPs of a group from node outputs ``y`` (n, 64): the 32 pressure nodes
-    share one kernel (a query's band is one product over the database, not one per node),
-    each volume node has its own, the volume nodes above 30 deg as the log of their rise
-    in log V (``curve_gps``). On the FE curves of 252 random designs (benchmarks/
-    RESULTS.md, nineteenth session) one kernel for the pressure nodes put 190 curves
-    within the per-curve target where one per node put 188."""
+def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
+                  early_u: np.ndarray | None = None, early_y: np.ndarray | None = None
+                  ) -> CurveGPs:
+    """The curve GPs of a group from node outputs ``y`` (n, 64) of its complete curves:
+    the 32 pressure nodes share one kernel (a query's band is one product over the
+    database, not one per node), each volume node has its own, the volume nodes above 30
+    deg as the log of their rise in log V (``curve_gps``). On the FE curves of 252 random
+    designs (benchmarks/RESULTS.md, nineteenth session) one kernel for the pressure nodes
+    put 190 curves within the per-curve target where one per node put 188. With the
+    early-ended curves' coordinates ``early_u`` and node outputs ``early_y`` (NaN past
+    their end), their means for designs emulated to end early (``early_ended_nodes``; each
+    curve short of its last reached node)."""
     anchor = anchor_index()
+    early = None
+    if early_u is not None and early_y is not None and len(early_u):
+        z = rise_outputs(short_of_the_end(early_y, N_NODES), anchor)
+        reached = np.isfinite(z[:, 0])
+        if reached.any():
+            early = EarlyEndedRows(np.asarray(early_u, float)[reached], z[reached])
     return CurveGPs(fit_output_gps(u, rise_outputs(y, anchor), seed=seed,
-                                   shared=slice(0, N_NODES)), anchor)
+                                   shared=slice(0, N_NODES)), anchor, early)
 
 
 def fit_force_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> VectorGP:
@@ -355,8 +369,9 @@ def force_angle_rows(u: np.ndarray, per_kpa: np.ndarray, curves: CurveGPs, sign:
     group's blocked-tip rows (designs ``u``, F / p at the force nodes from ``_collect``;
     mN/kPa, reduced), those that push its way (``pushes_with``), and their force variable
     (``features.force_angle_feature``): F over the group's emulated free-tip angle at the
-    same pressure (the free-curve GPs ``curves``: the force designs are few, the free
-    curves many). NaN where the free curve has ended (past 90 deg)."""
+    same pressure (the complete-curve GPs ``curves``, without the early-ended curves'
+    blend, as a query's force reads them: ``CurveBand.force_reference``; the force designs
+    are few, the free curves many). NaN where the free curve has ended (past 90 deg)."""
     same = pushes_with(per_kpa, sign)
     u, per_kpa = u[same], per_kpa[same]
     means = curves.predict_many(u, variance_of=MEANS_ONLY)[0]
@@ -411,12 +426,26 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     y = np.array(rows.y)[keep]
     curves = [c for c, k in zip(rows.curves, keep) if k]
     keys = tuple(k for k, kk in zip(rows.keys, keep) if kk)
-    vgp = fit_curve_gps(u, y, seed=seed)
+    # the early-ended curves of this sign that reach the first node
+    early = [i for i, s in enumerate(rows.failed_signs)
+             if s == sign and np.isfinite(rows.failed_y[i][0])]
+    early_u = np.array([rows.failed[i][0] for i in early]).reshape(-1, u.shape[1])
+    early_y = np.array([rows.failed_y[i] for i in early]).reshape(-1, y.shape[1])
+    vgp = fit_curve_gps(u, y, seed=seed, early_u=early_u, early_y=early_y)
     cv_mean, cv_var = cross_validated(u, y, seed)
     band_scale = node_band_scales(curves, cv_mean, cv_var, cv_band_target(level))
     near = near_failed_mask(u, rows.failed)
     cv = _cv_angle_report(curves, cv_mean, cv_var, band_scale, level)
     cv["near_failed"] = _near_failed_report(curves, cv_mean, cv_var, band_scale, near, level)
+    failed = tuple((np.array(fu), fa, fr) for fu, fa, fr in rows.failed)
+    free = PairEmulator(
+        pair=key, sign=sign, curves=vgp, band_scale=band_scale,
+        fe_limit_angle_deg=LIMIT_ANGLE_DEG,
+        fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
+                       "(SolverSettings.max_angle_deg)",
+        fe_max_volume_ul=default_free_settings().max_volume_ul,
+        coordinates=u, keys=keys, failed=failed, force_form=FORCE_FORMS[2],
+        range_model=range_model)
     force_gp, force_scale, force_nodes, force_designs = None, 1.0, 0, 0
     if force_rows is not None:
         force_nodes, fu, fy = force_range(*force_angle_rows(
@@ -426,16 +455,8 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         force_gp = fit_force_gps(fu, fy, seed=seed)
         force_scale = force_band_scale(fu, fy, level, seed)
     force_limit_pa = float(FORCE_PRESSURE_NODES_PA[max(force_nodes, 1) - 1])
-    failed = tuple((np.array(fu), fa, fr) for fu, fa, fr in rows.failed)
-    pe = PairEmulator(
-        pair=key, sign=sign, curves=vgp, band_scale=band_scale,
-        fe_limit_angle_deg=LIMIT_ANGLE_DEG,
-        fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
-                       "(SolverSettings.max_angle_deg)",
-        fe_max_volume_ul=default_free_settings().max_volume_ul,
-        coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
-        force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[2],
-        range_model=range_model)
+    pe = replace(free, force=force_gp, force_band_scale=force_scale,
+                 force_limit_pa=force_limit_pa)
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gp.gps),
               "force_designs": force_designs if force_gp is not None else 0,

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from surrogate.emulator.early_ended_nodes import ConditionedMeans, EarlyEndedRows
 from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES
 from surrogate.emulator.vector_gp import VectorGP
 
@@ -86,9 +87,31 @@ def node_outputs(mean: np.ndarray, var: np.ndarray, anchor: int | None
 
 @dataclass(frozen=True)
 class CurveGPs:
-    """A pair's curve GPs (``gp``, on ``rise_outputs``) read as node outputs."""
+    """A pair's curve GPs (``gp``, on ``rise_outputs``) read as node outputs; with
+    ``early_ended`` (its early-ended database curves' outputs, ``early_ended_nodes``) a
+    query's ``early_weight`` > 0 blends in the means conditioned on them too."""
     gp: VectorGP
     volume_rise_anchor: int | None = None
+    early_ended: EarlyEndedRows | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_conditioned", None if self.early_ended is None
+                           else ConditionedMeans(self.gp, self.early_ended))
+
+    def _blended(self, u: np.ndarray, mean: np.ndarray, weight: np.ndarray | float
+                 ) -> np.ndarray:
+        """The GP means ``mean`` (rows of ``u``) with the conditioned means blended in at
+        ``weight`` (0: unchanged)."""
+        w = np.asarray(weight, float)
+        cond: ConditionedMeans | None = self._conditioned  # type: ignore[attr-defined]
+        if cond is None or not (w > 0).any():
+            return mean
+        if mean.ndim == 1:
+            return (1.0 - w) * mean + w * cond.predict(u)
+        out = mean.copy()
+        on = np.flatnonzero(w > 0)
+        out[on] = (1.0 - w[on, None]) * mean[on] + w[on, None] * cond.predict_many(u[on])
+        return out
 
     @property
     def per_output(self) -> bool:
@@ -117,14 +140,38 @@ class CurveGPs:
             var[..., N_NODES + self.volume_rise_anchor] = np.nan
         return mean, var
 
-    def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """Node outputs and variances at one input row (``VectorGP.predict``)."""
-        asked, added = self._asked(variance_of)
-        return self._answer(*self.gp.predict(u, variance_of=asked), added)
+    def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
+                early_weight: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Node outputs and variances at one input row (``VectorGP.predict``); the means
+        blended with the early-ended-conditioned ones at ``early_weight``."""
+        return self.predict_with_plain(u, variance_of, early_weight)[:2]
 
-    def predict_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
-                     ) -> tuple[np.ndarray, np.ndarray]:
-        """Node outputs and variances at input rows ``u`` (``VectorGP.predict_many``)."""
+    def predict_with_plain(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
+                           early_weight: float = 0.0
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``predict``, and the pressure nodes' means of the complete-curve GPs alone
+        (what the force model's angle reads: ``build.force_angle_rows``)."""
         asked, added = self._asked(variance_of)
-        return self._answer(*self.gp.predict_many(u, variance_of=asked), added)
+        mean, var = self.gp.predict(u, variance_of=asked)
+        plain = mean[:N_NODES].copy()
+        return (*self._answer(self._blended(u, mean, early_weight), var, added), plain)
+
+    def predict_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
+                     early_weight: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Node outputs and variances at input rows ``u`` (``VectorGP.predict_many``);
+        row i's means blended at ``early_weight[i]`` (None: all 0)."""
+        return self.predict_many_with_plain(u, variance_of, early_weight)[:2]
+
+    def predict_many_with_plain(self, u: np.ndarray,
+                                variance_of: slice | np.ndarray | None = None,
+                                early_weight: np.ndarray | None = None
+                                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``predict_many``, and the rows' pressure-node means of the complete-curve GPs
+        alone (``predict_with_plain``)."""
+        asked, added = self._asked(variance_of)
+        u = np.atleast_2d(np.asarray(u, float))
+        mean, var = self.gp.predict_many(u, variance_of=asked)
+        plain = mean[:, :N_NODES].copy()
+        if early_weight is not None:
+            mean = self._blended(u, mean, early_weight)
+        return (*self._answer(mean, var, added), plain)

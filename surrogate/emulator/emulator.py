@@ -33,6 +33,7 @@ from solver.design_space import PAIRS, BoxPoint, locate
 from solver.errors import InputError
 from surrogate.band_level import z_value
 from surrogate.emulator.curve_gps import CurveGPs
+from surrogate.emulator.early_ended_nodes import early_weight
 from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
@@ -235,6 +236,29 @@ class PairEmulator:
         mean_deg, sd_deg = _end_deg(m[:, 0], var[:, 0])
         return list(zip(mean_deg.tolist(), sd_deg.tolist(), strict=True))
 
+    def curve_nodes(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None, np.ndarray]:
+        """Node outputs and variances of the design at unit coordinates ``u``
+        (``CurveGPs.predict``), the means conditioned on the early-ended database curves
+        too as far as the design is emulated to end early (``early_ended_nodes``), that
+        emulated end (deg, with its sd; None without a range model), and the pressure
+        nodes' means without that blend (the force model's angle)."""
+        end = None if self.range_model is None else self.emulated_end_deg(u)
+        weight = 0.0 if end is None else float(early_weight(end[0]))
+        mean, var, plain = self.curves.predict_with_plain(u, variance_of, weight)
+        return mean, var, end, plain
+
+    def curve_nodes_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
+                         ) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float] | None],
+                                    np.ndarray]:
+        """``curve_nodes`` at every row of ``u``, in one batch."""
+        ends: list[tuple[float, float] | None] = (
+            [None] * len(u) if self.range_model is None else self.emulated_ends_deg(u))
+        weight = (None if self.range_model is None else
+                  early_weight(np.array([e[0] for e in ends])))  # type: ignore[index]
+        mean, var, plain = self.curves.predict_many_with_plain(u, variance_of, weight)
+        return mean, var, ends, plain
+
     def fe_range(self, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float,
                  emulated_end: tuple[float, float] | None = None,
                  failed_distances: np.ndarray | None = None) -> tuple[float, str]:
@@ -331,6 +355,10 @@ class CurveBand:
     node_mean: np.ndarray           # the emulated node vector (force normalisation)
     coordinates: np.ndarray         # the design's unit-cube coordinates (force model)
     failed_distance: float = float("inf")  # to the nearest early-ended database curve
+    # p(theta), lower and upper, of the complete-curve GPs alone, where the answer's
+    # blends in the early-ended curves (early_ended_nodes): the force model's angle
+    # (None: the answer's own)
+    force_reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -477,10 +505,10 @@ class Emulator:
             nodes = self.variance_nodes
             which = (np.concatenate((nodes, np.arange(N_NODES, 2 * N_NODES)))
                      if volume_band else nodes)
-            mean, var = pe.curves.predict(u, variance_of=which)
+            mean, var, end, plain = pe.curve_nodes(u, variance_of=which)
             var = self.spread_variance(var)
         else:
-            mean, var = pe.curves.predict(u)
+            mean, var, end, plain = pe.curve_nodes(u)
         failed = pe.failed_distances(u)
         nearest = float(failed.min()) if failed.size else float("inf")
         scales = pe.band_scales(nearest)[0]
@@ -488,10 +516,16 @@ class Emulator:
         p_raw, lo, hi = node_curves(mean[:N_NODES], sd, z)
         p, lo, hi = _monotone(p_raw), _monotone(lo), _monotone(hi)
         v = emulated_volume_ul(mean[N_NODES:])
-        limit, reason = pe.fe_range(u, v, point.length_scale, failed_distances=failed)
+        limit, reason = pe.fe_range(u, v, point.length_scale, emulated_end=end,
+                                    failed_distances=failed)
         v_sd = np.sqrt(var[N_NODES:]) * scales[N_NODES:]
+        reference = None
+        if pe.force is not None and end is not None and early_weight(end[0]) > 0:
+            # the force model's F / theta was fitted to the complete-curve GPs' angle
+            # (build.force_angle_rows): the same angle multiplies it here
+            reference = tuple(_monotone(c) for c in node_curves(plain, sd, z))
         return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean,
-                             u, nearest)
+                             u, nearest, reference)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -608,9 +642,11 @@ class Emulator:
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
         past = p_red > pe.force_end_pa(cb.limit_pressure_pa) * (1 + 1e-12)
-        angle = np.interp(p_red, _with_origin(cb.pressure_pa), ANGLES0)
-        angle_hi = np.interp(p_red, _with_origin(cb.pressure_lower_pa), ANGLES0)
-        angle_lo = np.interp(p_red, _with_origin(cb.pressure_upper_pa), ANGLES0)
+        pm, pl, pu = cb.force_reference or (cb.pressure_pa, cb.pressure_lower_pa,
+                                            cb.pressure_upper_pa)
+        angle = np.interp(p_red, _with_origin(pm), ANGLES0)
+        angle_hi = np.interp(p_red, _with_origin(pl), ANGLES0)
+        angle_lo = np.interp(p_red, _with_origin(pu), ANGLES0)
         out = [scale * f for f in pe.force_reduced(mean, sd, cb.node_mean, p_red, angle,
                                                     angle_lo, angle_hi, z)]
         for f in out:
@@ -755,20 +791,24 @@ class Emulator:
             pe = self.pairs[key]
             u = coords[idx]
             # the variance as a single query reads it: exact at variance_nodes, spread
-            mean, var = (pe.curves.predict_many(u, variance_of=self.variance_nodes)
-                         if pe.curves.per_output else pe.curves.predict_many(u))
+            mean, var, ends, plain = (
+                pe.curve_nodes_many(u, variance_of=self.variance_nodes)
+                if pe.curves.per_output else pe.curve_nodes_many(u))
             if pe.curves.per_output:
                 var = np.array([self.spread_variance(row) for row in var])
             scales = pe.band_scales(pe.nearest_failed(u))
             y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * scales[:, :N_NODES]
             curves = [np.maximum.accumulate(c, axis=1) for c in node_curves(y, sd, z)]
             fmean = fsd = None
+            force_curves = curves
             if pe.force is not None:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
+                if any(e is not None and early_weight(e[0]) > 0 for e in ends):
+                    # the force model's angle: the complete-curve GPs' (as curve_band)
+                    force_curves = [np.maximum.accumulate(c, axis=1)
+                                    for c in node_curves(plain, sd, z)]
             volumes = emulated_volume_ul(mean[:, N_NODES:])
-            ends: list[tuple[float, float] | None] = (
-                [None] * len(idx) if pe.range_model is None else pe.emulated_ends_deg(u))
             for row, i in enumerate(idx):
                 pt = points[i]
                 limit = pe.fe_range(u[row], volumes[row], pt.length_scale, ends[row])[0]
@@ -788,7 +828,8 @@ class Emulator:
                 if fmean is not None and q <= pe.force_end_pa(p_lim):
                     scale = pt.pressure_scale * pt.length_scale**2
                     qa = np.array([q])
-                    a, a_lo, a_hi = (np.interp(qa, c, ANGLES0) for c in (pm, pu, pl))
+                    fm, fl, fu = (_with_origin(c[row]) for c in force_curves)
+                    a, a_lo, a_hi = (np.interp(qa, c, ANGLES0) for c in (fm, fu, fl))
                     vals = [scale * float(v[0]) for v in pe.force_reduced(
                         fmean[row], fsd[row], mean[row], qa, a, a_lo, a_hi, z)]
                     lo_f, hi_f = vals[1], vals[2]

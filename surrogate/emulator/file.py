@@ -32,7 +32,9 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from solver.atomic_file import write_text_atomic
+from solver.design_space import SAMPLED
 from surrogate.emulator.curve_gps import CurveGPs
+from surrogate.emulator.early_ended_nodes import EarlyEndedRows
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES
@@ -42,7 +44,9 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 10  # 10: volume_rise_anchor, the volume nodes above it as their rise
+FORMAT_VERSION = 11  # 11: early_ended_nodes, the early-ended database curves' GP
+                     # outputs (early_ended_nodes; 10 read: none);
+                     # 10: volume_rise_anchor, the volume nodes above it as their rise
                      # (curve_gps; 9 read: none, plain log V / theta);
                      # 9: force_form "angle_ratio" (8 read: their own form);
                      # 8: variance_nodes, chosen per fit (7 read: FORMAT_7_NODES);
@@ -63,6 +67,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "failed": [[np.asarray(u).tolist(), a, r] for u, a, r in pe.failed],
             "curves": pe.curves.gp.as_dict(),
             "volume_rise_anchor": pe.curves.volume_rise_anchor,
+            "early_ended_nodes": None if pe.curves.early_ended is None else {
+                "u": pe.curves.early_ended.u, "y": pe.curves.early_ended.y},
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
             "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul,
@@ -95,7 +101,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
             pairs[pair] = PairEmulator(
                 pair=pair, sign=float(p["sign"]),
                 curves=CurveGPs(vector_gp_from_dict(p["curves"]),
-                                _rise_anchor(p.get("volume_rise_anchor"))),
+                                _rise_anchor(p.get("volume_rise_anchor")),
+                                _early_ended_rows(p.get("early_ended_nodes"))),
                 band_scale=_band_scales(p["band_scale"]),
                 fe_limit_angle_deg=float(p["fe_limit_angle_deg"]),
                 fe_stop_reason=str(p["fe_stop_reason"]),
@@ -137,6 +144,10 @@ def _precheck_pair(p: dict) -> None:
     limits, the force form; ValueError, TypeError or KeyError otherwise). ``_check_pair``
     checks the GPs once built."""
     _rise_anchor(p.get("volume_rise_anchor"))
+    early = _early_ended_rows(p.get("early_ended_nodes"))
+    if early is not None and early.y.shape[1] != 2 * N_NODES:
+        raise ValueError(f"pair {p['pair']}: early_ended_nodes y must have {2 * N_NODES} "
+                         "outputs per curve")
     scales = _band_scales(p["band_scale"])
     if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
         raise ValueError(f"pair {p['pair']}: band scales must be {2 * N_NODES} positive "
@@ -210,6 +221,21 @@ def _rise_anchor(value: object) -> int | None:
     return value
 
 
+def _early_ended_rows(value: object) -> EarlyEndedRows | None:
+    """The file's early-ended curves' GP outputs (None before format 11; ValueError,
+    TypeError or KeyError when damaged: EarlyEndedRows checks shapes and the pattern)."""
+    if value is None:
+        return None
+    if not isinstance(value, dict) or not {"u", "y"} <= value.keys():
+        raise ValueError("early_ended_nodes must be an object with u and y")
+    u = np.array(value["u"], float)
+    if (u.ndim != 2 or u.shape[1] != len(SAMPLED)
+            or not ((u >= -1e-6) & (u <= 1 + 1e-6)).all()):
+        raise ValueError(f"early_ended_nodes u must be unit-cube coordinates (m, "
+                         f"{len(SAMPLED)})")
+    return EarlyEndedRows(u, np.array(value["y"], float))
+
+
 def _band_scales(value: object) -> np.ndarray:
     """Per-node band multipliers; a format-2 file's single multiplier applies to all."""
     if isinstance(value, (int, float)):
@@ -222,6 +248,11 @@ def _check_pair(pe: PairEmulator) -> None:
     otherwise); every stored number that needs no GP was checked before building
     (``_precheck_pair``)."""
     _check_gp(pe.curves.gp, f"pair {pe.pair}")   # finite GP outputs: finite node outputs
+    if pe.curves.early_ended is not None:
+        mean = pe.curves.predict(pe.curves.early_ended.u[0], early_weight=1.0)[0]
+        if not np.isfinite(mean).all():
+            raise ValueError(f"pair {pe.pair}: early_ended_nodes give no finite answer at "
+                             "their own first design")
     if pe.force is not None:
         _check_gp(pe.force, f"pair {pe.pair} force")
     if pe.range_model is not None:
