@@ -258,7 +258,7 @@ def test_free_curves_of_random_designs_outside_the_database(emulator):
     volumes. The 95 % band covers 0.90-0.98 of the answered points on both axes, no
     number is given past the pressure where an FE curve stopped early, and at least 70 %
     of the curves meet the issue's per-curve target (on the shipped fit: coverage 0.961 by
-    pressure and 0.948 by volume; 81 and 80 of 101 curves within the target;
+    pressure and 0.963 by volume; 81 and 80 of 101 curves within the target;
     benchmarks/RESULTS.md says where the rest miss)."""
     heldout = Path(__file__).resolve().parents[1] / "benchmarks" / "heldout"
     records = []

@@ -91,7 +91,9 @@ def test_rows_that_do_not_stop_like_a_curve_are_refused():
     assert (np.diff(reach) <= 0).all()
 
 
-def test_the_blend_weight_moves_only_the_means():
+def test_the_blend_moves_the_means_and_adds_its_spread_to_the_variance():
+    """mean = m0 + w (m1 - m0), variance = v0 + w (m1 - m0)^2: the complete-curve GPs'
+    variance and the two means' disagreement, as far as the blend reaches."""
     u, y, ue, ye = _rows(40, 15)
     vgp = fit_output_gps(u, y, shared=slice(0, 6))
     plain = CurveGPs(vgp)
@@ -105,9 +107,14 @@ def test_the_blend_weight_moves_only_the_means():
     m_w, v_w = with_rows.predict_many(q, early_weight=w)
     m1 = with_rows._conditioned.predict_many(q)
     np.testing.assert_allclose(m_w, (1 - w[:, None]) * m0 + w[:, None] * m1, atol=1e-12)
-    np.testing.assert_array_equal(v_w, v0)
-    single, _ = with_rows.predict(q[2], variance_of=MEANS_ONLY, early_weight=0.5)
+    np.testing.assert_allclose(v_w, v0 + w[:, None] * (m1 - m0) ** 2, rtol=1e-9, atol=1e-10)
+    assert (v_w[w == 0] == v0[w == 0]).all()
+    single, single_var = with_rows.predict(q[2], early_weight=0.5)
     np.testing.assert_allclose(single, m_w[2], atol=1e-12)
+    np.testing.assert_allclose(single_var, v_w[2], rtol=1e-3)   # single precision there
+    means_only, nan_var = with_rows.predict(q[2], variance_of=MEANS_ONLY, early_weight=0.5)
+    np.testing.assert_allclose(means_only, m_w[2], atol=1e-12)
+    assert np.isnan(nan_var).all()             # a variance not asked stays not asked
 
 
 def test_the_shipped_emulator_reproduces_its_early_ended_curves_where_they_end_early():

@@ -93,7 +93,10 @@ def test_the_shipped_fit_covers_every_group_and_widens_ecoflex_bending_towards_i
            and c["points"] >= UNDERCOVER_MIN_POINTS and c["coverage"] < UNDERCOVER_LEVEL}
     assert low == set()
     towards = cal["group_factors"]["ecoflex_00_30/ecoflex_00_30-"]
-    assert min(towards["pressure"]["far"]) > 2 and min(towards["volume"]["far"]) > 5
+    # its own factors widen both axes (by volume 5-8x until 2026-12-05; since, the
+    # variance carries the early-ended curves' spread for its many designs that end
+    # early, and the factor left is 1.5-1.7)
+    assert min(towards["pressure"]["far"]) > 2 and min(towards["volume"]["far"]) > 1.2
     # a soft body on Ecoflex bends towards the membrane: not flagged, a wide band
     d = Design(body_material="ecoflex_00_30*0.5", membrane_material="ecoflex_00_30*2",
                L_mm=12.0).validated()

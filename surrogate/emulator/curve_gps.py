@@ -89,7 +89,8 @@ def node_outputs(mean: np.ndarray, var: np.ndarray, anchor: int | None
 class CurveGPs:
     """A pair's curve GPs (``gp``, on ``rise_outputs``) read as node outputs; with
     ``early_ended`` (its early-ended database curves' outputs, ``early_ended_nodes``) a
-    query's ``early_weight`` > 0 blends in the means conditioned on them too."""
+    query's ``early_weight`` > 0 blends in the means conditioned on them too and adds the
+    two means' spread to the variance (``_blended``)."""
     gp: VectorGP
     volume_rise_anchor: int | None = None
     early_ended: EarlyEndedRows | None = None
@@ -98,20 +99,25 @@ class CurveGPs:
         object.__setattr__(self, "_conditioned", None if self.early_ended is None
                            else ConditionedMeans(self.gp, self.early_ended))
 
-    def _blended(self, u: np.ndarray, mean: np.ndarray, weight: np.ndarray | float
-                 ) -> np.ndarray:
+    def _blended(self, u: np.ndarray, mean: np.ndarray, var: np.ndarray,
+                 weight: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """The GP means ``mean`` (rows of ``u``) with the conditioned means blended in at
-        ``weight`` (0: unchanged)."""
+        ``weight`` (0: unchanged), and the variances ``var`` with the blend's spread
+        added: w (m_conditioned - m_complete)^2 (the two means disagree where the
+        early-ended curves pull; the answer is not surer than that)."""
         w = np.asarray(weight, float)
         cond: ConditionedMeans | None = self._conditioned  # type: ignore[attr-defined]
         if cond is None or not (w > 0).any():
-            return mean
+            return mean, var
         if mean.ndim == 1:
-            return (1.0 - w) * mean + w * cond.predict(u)
-        out = mean.copy()
+            d = cond.predict(u) - mean
+            return mean + w * d, var + w * d * d
+        out, out_var = mean.copy(), var.copy()
         on = np.flatnonzero(w > 0)
-        out[on] = (1.0 - w[on, None]) * mean[on] + w[on, None] * cond.predict_many(u[on])
-        return out
+        d = cond.predict_many(u[on]) - mean[on]
+        out[on] = mean[on] + w[on, None] * d
+        out_var[on] = var[on] + w[on, None] * d * d
+        return out, out_var
 
     @property
     def per_output(self) -> bool:
@@ -154,7 +160,7 @@ class CurveGPs:
         asked, added = self._asked(variance_of)
         mean, var = self.gp.predict(u, variance_of=asked)
         plain = mean[:N_NODES].copy()
-        return (*self._answer(self._blended(u, mean, early_weight), var, added), plain)
+        return (*self._answer(*self._blended(u, mean, var, early_weight), added), plain)
 
     def predict_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
                      early_weight: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -173,5 +179,5 @@ class CurveGPs:
         mean, var = self.gp.predict_many(u, variance_of=asked)
         plain = mean[:, :N_NODES].copy()
         if early_weight is not None:
-            mean = self._blended(u, mean, early_weight)
+            mean, var = self._blended(u, mean, var, early_weight)
         return (*self._answer(mean, var, added), plain)
