@@ -437,15 +437,6 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     near = near_failed_mask(u, rows.failed)
     cv = _cv_angle_report(curves, cv_mean, cv_var, band_scale, level)
     cv["near_failed"] = _near_failed_report(curves, cv_mean, cv_var, band_scale, near, level)
-    failed = tuple((np.array(fu), fa, fr) for fu, fa, fr in rows.failed)
-    free = PairEmulator(
-        pair=key, sign=sign, curves=vgp, band_scale=band_scale,
-        fe_limit_angle_deg=LIMIT_ANGLE_DEG,
-        fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
-                       "(SolverSettings.max_angle_deg)",
-        fe_max_volume_ul=default_free_settings().max_volume_ul,
-        coordinates=u, keys=keys, failed=failed, force_form=FORCE_FORMS[2],
-        range_model=range_model)
     force_gp, force_scale, force_nodes, force_designs = None, 1.0, 0, 0
     if force_rows is not None:
         force_nodes, fu, fy = force_range(*force_angle_rows(
@@ -455,8 +446,16 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         force_gp = fit_force_gps(fu, fy, seed=seed)
         force_scale = force_band_scale(fu, fy, level, seed)
     force_limit_pa = float(FORCE_PRESSURE_NODES_PA[max(force_nodes, 1) - 1])
-    pe = replace(free, force=force_gp, force_band_scale=force_scale,
-                 force_limit_pa=force_limit_pa)
+    failed = tuple((np.array(fu), fa, fr) for fu, fa, fr in rows.failed)
+    pe = PairEmulator(
+        pair=key, sign=sign, curves=vgp, band_scale=band_scale,
+        fe_limit_angle_deg=LIMIT_ANGLE_DEG,
+        fe_stop_reason=f"the default FE curves stop at {LIMIT_ANGLE_DEG:g} deg "
+                       "(SolverSettings.max_angle_deg)",
+        fe_max_volume_ul=default_free_settings().max_volume_ul,
+        coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
+        force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[2],
+        range_model=range_model)
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gp.gps),
               "force_designs": force_designs if force_gp is not None else 0,

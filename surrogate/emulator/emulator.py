@@ -237,12 +237,14 @@ class PairEmulator:
         return list(zip(mean_deg.tolist(), sd_deg.tolist(), strict=True))
 
     def curve_nodes(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
-                    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None, np.ndarray]:
+                    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None,
+                               np.ndarray | None]:
         """Node outputs and variances of the design at unit coordinates ``u``
         (``CurveGPs.predict``), the means conditioned on the early-ended database curves
         too as far as the design is emulated to end early (``early_ended_nodes``), that
         emulated end (deg, with its sd; None without a range model), and the pressure
-        nodes' means without that blend (the force model's angle)."""
+        nodes' means without that blend (the force model's angle; None where nothing was
+        blended)."""
         end = None if self.range_model is None else self.emulated_end_deg(u)
         weight = 0.0 if end is None else float(early_weight(end[0]))
         mean, var, plain = self.curves.predict_with_plain(u, variance_of, weight)
@@ -250,7 +252,7 @@ class PairEmulator:
 
     def curve_nodes_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
                          ) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float] | None],
-                                    np.ndarray]:
+                                    np.ndarray | None]:
         """``curve_nodes`` at every row of ``u``, in one batch."""
         ends: list[tuple[float, float] | None] = (
             [None] * len(u) if self.range_model is None else self.emulated_ends_deg(u))
@@ -520,7 +522,7 @@ class Emulator:
                                     failed_distances=failed)
         v_sd = np.sqrt(var[N_NODES:]) * scales[N_NODES:]
         reference = None
-        if pe.force is not None and end is not None and early_weight(end[0]) > 0:
+        if pe.force is not None and plain is not None:
             # the force model's F / theta was fitted to the complete-curve GPs' angle
             # (build.force_angle_rows): the same angle multiplies it here
             reference = tuple(_monotone(c) for c in node_curves(plain, sd, z))
@@ -804,7 +806,7 @@ class Emulator:
             if pe.force is not None:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
-                if any(e is not None and early_weight(e[0]) > 0 for e in ends):
+                if plain is not None:
                     # the force model's angle: the complete-curve GPs' (as curve_band)
                     force_curves = [np.maximum.accumulate(c, axis=1)
                                     for c in node_curves(plain, sd, z)]
