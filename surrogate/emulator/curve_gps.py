@@ -154,15 +154,16 @@ class CurveGPs:
 
     def predict_with_plain(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
                            early_weight: float = 0.0
-                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """``predict``, and the pressure nodes' means of the complete-curve GPs alone where
-        the blend changed them (what the force model's angle reads:
+                           ) -> tuple[np.ndarray, np.ndarray,
+                                      tuple[np.ndarray, np.ndarray] | None]:
+        """``predict``, and the pressure nodes' means and variances of the complete-curve
+        GPs alone where the blend changed them (what the force model's angle reads:
         ``build.force_angle_rows``; None where nothing was blended)."""
         asked, added = self._asked(variance_of)
         mean, var = self.gp.predict(u, variance_of=asked)
-        blended, var = self._blended(u, mean, var, early_weight)
-        plain = None if blended is mean else mean[:N_NODES]
-        return (*self._answer(blended, var, added), plain)
+        blended, blended_var = self._blended(u, mean, var, early_weight)
+        plain = None if blended is mean else (mean[:N_NODES], var[:N_NODES])
+        return (*self._answer(blended, blended_var, added), plain)
 
     def predict_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
                      early_weight: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -173,14 +174,16 @@ class CurveGPs:
     def predict_many_with_plain(self, u: np.ndarray,
                                 variance_of: slice | np.ndarray | None = None,
                                 early_weight: np.ndarray | None = None
-                                ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """``predict_many``, and the rows' pressure-node means of the complete-curve GPs
-        alone where the blend changed any row (``predict_with_plain``; None otherwise)."""
+                                ) -> tuple[np.ndarray, np.ndarray,
+                                           tuple[np.ndarray, np.ndarray] | None]:
+        """``predict_many``, and the rows' pressure-node means and variances of the
+        complete-curve GPs alone where the blend changed any row (``predict_with_plain``;
+        None otherwise)."""
         asked, added = self._asked(variance_of)
         u = np.atleast_2d(np.asarray(u, float))
         mean, var = self.gp.predict_many(u, variance_of=asked)
-        blended = mean
+        blended, blended_var = mean, var
         if early_weight is not None:
-            blended, var = self._blended(u, mean, var, early_weight)
-        plain = None if blended is mean else mean[:, :N_NODES]
-        return (*self._answer(blended, var, added), plain)
+            blended, blended_var = self._blended(u, mean, var, early_weight)
+        plain = None if blended is mean else (mean[:, :N_NODES], var[:, :N_NODES])
+        return (*self._answer(blended, blended_var, added), plain)

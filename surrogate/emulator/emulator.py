@@ -238,13 +238,13 @@ class PairEmulator:
 
     def curve_nodes(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
                     ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None,
-                               np.ndarray | None]:
+                               tuple[np.ndarray, np.ndarray] | None]:
         """Node outputs and variances of the design at unit coordinates ``u``
         (``CurveGPs.predict``), the means conditioned on the early-ended database curves
         too as far as the design is emulated to end early (``early_ended_nodes``), that
         emulated end (deg, with its sd; None without a range model), and the pressure
-        nodes' means without that blend (the force model's angle; None where nothing was
-        blended)."""
+        nodes' means and variances without that blend (the force model's angle and its
+        band; None where nothing was blended)."""
         end = None if self.range_model is None else self.emulated_end_deg(u)
         weight = 0.0 if end is None else float(early_weight(end[0]))
         mean, var, plain = self.curves.predict_with_plain(u, variance_of, weight)
@@ -252,7 +252,7 @@ class PairEmulator:
 
     def curve_nodes_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
                          ) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float] | None],
-                                    np.ndarray | None]:
+                                    tuple[np.ndarray, np.ndarray] | None]:
         """``curve_nodes`` at every row of ``u``, in one batch."""
         ends: list[tuple[float, float] | None] = (
             [None] * len(u) if self.range_model is None else self.emulated_ends_deg(u))
@@ -524,8 +524,12 @@ class Emulator:
         reference = None
         if pe.force is not None and plain is not None:
             # the force model's F / theta was fitted to the complete-curve GPs' angle
-            # (build.force_angle_rows): the same angle multiplies it here
-            reference = tuple(_monotone(c) for c in node_curves(plain, sd, z))
+            # (build.force_angle_rows): the same angle, and its band, multiply it here
+            p_mean, p_var = plain
+            if pe.curves.per_output:
+                p_var = self.spread_variance(np.concatenate((p_var, var[N_NODES:])))
+            p_sd = np.sqrt(p_var[:N_NODES]) * scales[:N_NODES]
+            reference = tuple(_monotone(c) for c in node_curves(p_mean, p_sd, z))
         return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean,
                              u, nearest, reference)
 
@@ -807,9 +811,16 @@ class Emulator:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
                 if plain is not None:
-                    # the force model's angle: the complete-curve GPs' (as curve_band)
+                    # the force model's angle and band: the complete-curve GPs' (as
+                    # curve_band)
+                    p_mean, p_var = plain
+                    if pe.curves.per_output:
+                        p_var = np.array([self.spread_variance(np.concatenate((r, v)))
+                                          for r, v in zip(p_var, var[:, N_NODES:],
+                                                          strict=True)])
+                    p_sd = np.sqrt(p_var[:, :N_NODES]) * scales[:, :N_NODES]
                     force_curves = [np.maximum.accumulate(c, axis=1)
-                                    for c in node_curves(plain, sd, z)]
+                                    for c in node_curves(p_mean, p_sd, z)]
             volumes = emulated_volume_ul(mean[:, N_NODES:])
             for row, i in enumerate(idx):
                 pt = points[i]
