@@ -95,8 +95,9 @@ def test_the_shipped_fit_covers_every_group_and_widens_ecoflex_bending_towards_i
     towards = cal["group_factors"]["ecoflex_00_30/ecoflex_00_30-"]
     # its own factors widen both axes (by volume 5-8x until 2026-12-05; since, the
     # variance carries the early-ended curves' spread for its many designs that end
-    # early, and the factor left is 1.5-1.7)
-    assert min(towards["pressure"]["far"]) > 2 and min(towards["volume"]["far"]) > 1.2
+    # early, and the factor left is 1.5-1.7; by pressure > 2 until the balance model took
+    # the designs that end at the volume stop out of the curve GPs' answers, 1.1-2.1 since)
+    assert min(towards["pressure"]["far"]) > 1.05 and min(towards["volume"]["far"]) > 1.2
     # a soft body on Ecoflex bends towards the membrane: not flagged, a wide band
     d = Design(body_material="ecoflex_00_30*0.5", membrane_material="ecoflex_00_30*2",
                L_mm=12.0).validated()
@@ -107,4 +108,6 @@ def test_the_shipped_fit_covers_every_group_and_widens_ecoflex_bending_towards_i
     assert FLAG not in emulator.predict_volume(d, [2.0, 5.0]).validity["flags"]
     standard = emulator.predict(Design(), p)
     relative = [(x.upper_deg - x.lower_deg) / np.abs(x.angle_deg) for x in (r, standard)]
-    assert np.nanmin(relative[0][2:]) > 2 * np.nanmax(relative[1][2:])
+    # (> 2x until 2026-12-05, when the designs of this group that end at the volume stop,
+    # its worst answered, went to the balance model and out of this calibration: 1.7x)
+    assert np.nanmin(relative[0][2:]) > 1.5 * np.nanmax(relative[1][2:])

@@ -33,6 +33,7 @@ from solver.design_space import GROUPS, locate
 from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
+from surrogate.emulator.balance import BalanceModel, fit_balance_model
 from surrogate.emulator.curve_gps import CurveGPs, anchor_index, rise_outputs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows, short_of_the_end
 from surrogate.emulator.emulator import (
@@ -75,6 +76,7 @@ class _Rows:
     signs: list
     failed_signs: list
     failed_y: list        # node outputs of the early-ended curves (NaN past their end)
+    by_volume: list       # (u, (v_red, p_red, signed angle)) of every curve (balance.py)
 
 
 def default_free_settings() -> SolverSettings:
@@ -102,10 +104,12 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
             continue
         c = rec.curve
         if rec.settings == free_settings:
-            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], [], []))
+            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], [], [], []))
             f = curve_features(c.pressure_pa / point.pressure_scale,
                                c.volume_ul / point.length_scale**3, c.angle_deg)
             u = point.coordinates()
+            rows.by_volume.append((u, (c.volume_ul / point.length_scale**3,
+                                       c.pressure_pa / point.pressure_scale, c.angle_deg)))
             if f.end_angle_deg < LIMIT_ANGLE_DEG or not np.isfinite(f.log_p).all():
                 rows.failed.append((u.tolist(), min(f.end_angle_deg, LIMIT_ANGLE_DEG),
                                     c.reason))
@@ -473,7 +477,8 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
     free, force = _collect(records)
     models: dict[str, PairEmulator] = {}
     sign_models: dict[str, object] = {}
-    report: dict[str, object] = {"level": level, "pairs": {}}
+    balance_models: dict[str, BalanceModel] = {}
+    report: dict[str, object] = {"level": level, "pairs": {}, "balance": {}}
     for group in sorted(set(GROUPS.values())):
         rows = free.get(group)
         if rows is None or len(rows.u) < MIN_DESIGNS:
@@ -486,6 +491,12 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
         both = (all_signs > 0).any() and (all_signs < 0).any()
         if both:
             sign_models[group] = fit_vector_gp(all_u, all_signs[:, None], seed=seed)
+            # where the sign model cannot tell the direction: the signed angle by volume
+            balance, report["balance"][group] = fit_balance_model(  # type: ignore[index]
+                np.array([r[0] for r in rows.by_volume]), [r[1] for r in rows.by_volume],
+                seed=seed)
+            if balance is not None:
+                balance_models[group] = balance
         range_model = None
         if rows.failed:
             # where each curve of the group ends, over the box (emulator.RANGE_Z)
@@ -509,4 +520,5 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
                          f">= {MIN_DESIGNS} complete free-tip curves per pair")
     nodes, report["variance_nodes"] = choose_variance_nodes(models.values())
     return Emulator(name=name, pairs=models, provenance=dict(provenance or {}), report=report,
-                    sign_models=sign_models, variance_nodes=nodes)  # type: ignore[arg-type]
+                    sign_models=sign_models, variance_nodes=nodes,  # type: ignore[arg-type]
+                    balance_models=balance_models)

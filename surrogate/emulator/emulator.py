@@ -31,10 +31,13 @@ import numpy as np
 from solver.design import Design
 from solver.design_space import PAIRS, BoxPoint, locate
 from solver.errors import InputError
+from solver.settings import SolverSettings
 from surrogate.band_level import z_value
+from surrogate.emulator.balance import VOLUME_NODES_UL, BalanceModel
 from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.early_ended_nodes import early_weight
 from surrogate.emulator.features import (
+    ANGLE_BAND_FLOOR_DEG,
     ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
     FORCE_PRESSURE_NODES_PA,
@@ -68,6 +71,23 @@ FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE cu
 # stopped at 58 deg (500 ul) was answered to 88 deg, 30 deg off.
 RANGE_Z = 1.0
 SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness balance
+# The balance model (surrogate.emulator.balance) also answers where it says the FE curve
+# ends at the volume stop: its angle at the last volume node plus BALANCE_TOP_Z of its sd
+# below BALANCE_TOP_DEG. On the 121 Ecoflex/Ecoflex FE curves of random designs (band
+# calibration and held-out sets) with a direction, the 33 so chosen were within the
+# per-curve target on 23 by volume and 23 by pressure, against 8 and 21 answered by the
+# per-direction curve GPs (benchmarks/RESULTS.md, twenty-fifth session; 70-90 deg chose
+# the same curves, the largest 77.9).
+BALANCE_TOP_DEG = 80.0
+BALANCE_TOP_Z = 2.0
+# ... unless the direction's range model emulates the FE curve to reach this (a database
+# curve that reached 90 deg at 115 ul was answered 35 deg off by the balance model, which
+# only knows curves that end at the volume stop; of the 460 designs of the database and
+# the random-design sets it chose, that was the one emulated to end at 89 deg or later)
+BALANCE_COMPLETE_DEG = 89.0
+# The balance model answers up to this share of the FE's volume stop (its curves end past
+# it, at the first step beyond) or its last node, whichever is smaller.
+BALANCE_VOLUME_MARGIN = 0.96
 # A design whose group and side (near or far from early-ended curves) had its band cover
 # less than this share of the points of FE curves of random designs, after the band's
 # second calibration, on at least UNDERCOVER_MIN_POINTS of them, is flagged
@@ -367,14 +387,6 @@ class CurveBand:
         return float(np.interp(self.limit_angle_deg, FINE_ANGLES_DEG, self.pressure_pa))
 
 
-# The band is never narrower than this either side of the answer. A band that is a
-# multiple of the GP's sd in log(p / theta) is relative; at the first steps of curves
-# near the Ecoflex/Ecoflex stiffness balance the FE angle is a few thousandths of a
-# degree (some of the other sign), and covering those relatively took a multiplier of
-# 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope,
-# that made the group's bands run from 0 to twice the angle at 60 deg. Half the 0.1 deg a
-# camera reading resolves; the calibration (build.node_band_scales) counts with it.
-ANGLE_BAND_FLOOR_DEG = 0.05
 
 
 def floored_band(angle: np.ndarray, lower: np.ndarray, upper: np.ndarray
@@ -438,6 +450,9 @@ class Emulator:
     # the pressure nodes a query computes the exact variance at, chosen by the fit
     # (surrogate.emulator.variance_nodes; files before format 8: FORMAT_7_NODES)
     variance_nodes: np.ndarray = field(default_factory=FORMAT_7_NODES.copy)
+    # where a group's sign model cannot tell the direction: the signed angle by injected
+    # volume (surrogate.emulator.balance; files before format 12: none, refused)
+    balance_models: dict[str, BalanceModel] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_variance_spline", spline(self.variance_nodes))
@@ -464,6 +479,33 @@ class Emulator:
                              "a stiffness contrast further from 1 (a stiffer body or a softer "
                              "membrane), or an FE solve of this design (POST /v1/solve)")
         return sign
+
+    def balance_model_for(self, point: BoxPoint) -> BalanceModel | None:
+        """The group's balance model where it answers for ``point``: the sign model cannot
+        tell the direction (within SIGN_MARGIN of the balance), or the design's FE curve
+        ends at the volume stop, the balance model's angle at its last node and
+        BALANCE_TOP_Z of its sd short of BALANCE_TOP_DEG and the direction's range model
+        short of BALANCE_COMPLETE_DEG (a curve that reaches 90 deg first is the
+        per-direction curve GPs'). None elsewhere, and for groups without one."""
+        model = self.balance_models.get(point.group)
+        if model is None:
+            return None
+        u = point.coordinates()
+        m = self.sign_models[point.group].predict(u, variance_of=MEANS_ONLY)[0][:1]
+        sign = _direction(m)[0]
+        if sign == 0.0:
+            return model
+        angle, sd, _ = model.nodes(u)
+        top = abs(angle[-1]) + BALANCE_TOP_Z * model.band_scale_volume * sd[-1]
+        if top >= BALANCE_TOP_DEG:
+            return None
+        # the balance model knows no curve that reaches 90 deg before the volume stop: where
+        # the direction's range model says the FE curve is complete, it is the curve GPs'
+        pe = self.pairs.get(point.group + ("+" if sign > 0 else "-"))
+        if pe is not None and pe.range_model is not None:
+            if pe.emulated_end_deg(u)[0] >= BALANCE_COMPLETE_DEG:
+                return None
+        return model
 
     def _one_sign(self, group: str) -> float:
         """The sign of a group that bends one way only (no sign model)."""
@@ -544,6 +586,8 @@ class Emulator:
             raise InputError("pressures_pa", f"negative pressure {p.min():g} Pa",
                              "pressures >= 0 Pa")
         point = locate(design, reduced=True)
+        if self.balance_model_for(point) is not None:
+            return self._balance_answer(design, point, "pressure", p, level)
         pe, cb = self.curve_band(point, z, volume_band=False)
         p_red = p / point.pressure_scale
         p_lim = cb.limit_pressure_pa
@@ -561,9 +605,17 @@ class Emulator:
             angle, lower, upper = -angle, -upper, -lower
         force = self._force(pe, cb, point, p_red, z)
         validity = self._validity(pe, cb, point, p, past, force)
-        return Prediction(design=design, pressure_pa=p, angle_deg=angle, lower_deg=lower,
-                          upper_deg=upper, level=level, validity=validity, model=self.name,
-                          form="emulator", provenance=dict(self.provenance),
+        return self._prediction(design, point, p, (angle, lower, upper), level, validity,
+                                force, volume)
+
+    def _prediction(self, design: Design, point: BoxPoint, pressure_pa: np.ndarray,
+                    band: tuple[np.ndarray, np.ndarray, np.ndarray], level: float,
+                    validity: dict, force: tuple | None, volume_ul: np.ndarray) -> Prediction:
+        """The answer by pressure: ``band`` is (angle, lower, upper) in deg."""
+        angle, lower, upper = band
+        return Prediction(design=design, pressure_pa=pressure_pa, angle_deg=angle,
+                          lower_deg=lower, upper_deg=upper, level=level, validity=validity,
+                          model=self.name, form="emulator", provenance=dict(self.provenance),
                           parameters={"pair": "/".join(point.pair),
                                       "stiffness_ratio": point.stiffness_ratio,
                                       "pressure_scale": point.pressure_scale,
@@ -571,7 +623,7 @@ class Emulator:
                           force_mn=None if force is None else force[0],
                           force_lower_mn=None if force is None else force[1],
                           force_upper_mn=None if force is None else force[2],
-                          volume_ul=volume)
+                          volume_ul=volume_ul)
 
     def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95
                        ) -> Prediction:
@@ -586,6 +638,8 @@ class Emulator:
         if (v < 0).any():
             raise InputError("volumes_ul", f"negative volume {v.min():g} ul", "volumes >= 0 ul")
         point = locate(design, reduced=True)
+        if self.balance_model_for(point) is not None:
+            return self._balance_answer(design, point, "volume", v, level)
         pe, cb = self.curve_band(point, z)      # one GP evaluation serves both axes
         vm, vl, vh = self._volume_curves(cb, z)
         ls3 = point.length_scale**3
@@ -631,6 +685,66 @@ class Emulator:
                           force_lower_mn=None if force is None else force[1],
                           force_upper_mn=None if force is None else force[2],
                           volume_ul=v)
+
+    def _balance_answer(self, design: Design, point: BoxPoint, axis: str, x: np.ndarray,
+                        level: float) -> Prediction:
+        """The answer at the stiffness balance (``balance``): the signed angle with its band
+        at each pressure (``axis`` "pressure", Pa) or injected volume ("volume", ul), up to
+        the volume stop of the FE curves there; the blocked-tip force of the per-direction
+        force model where the design has a direction, none at the balance itself."""
+        model = self.balance_models[point.group]
+        z = z_value(level)
+        u = point.coordinates()
+        ls3 = point.length_scale**3
+        v_limit = min(float(VOLUME_NODES_UL[-1]),
+                      BALANCE_VOLUME_MARGIN * SolverSettings().max_volume_ul / ls3)
+        if axis == "pressure":
+            angle, lower, upper, v_red = model.by_pressure(u, x / point.pressure_scale, z)
+            pressure, volume = x.copy(), v_red * ls3
+        else:
+            v_red = x / ls3
+            angle, lower, upper, p_red = model.by_volume(u, v_red, z)
+            pressure, volume = p_red * point.pressure_scale, x.copy()
+        lower, upper = floored_band(angle, lower, upper)
+        past = v_red > v_limit * (1 + 1e-12)
+        for a in (angle, lower, upper, pressure if axis == "volume" else volume):
+            a[past] = np.nan
+        force = None
+        try:        # a design with a direction keeps the blocked-tip force it had
+            pe, cb = self.curve_band(point, z, volume_band=False)
+            force = self._force(pe, cb, point, pressure / point.pressure_scale, z)
+            for f in force or ():
+                f[past] = np.nan
+        except InputError:
+            pass    # at the balance itself: no direction, no force model
+        limit_pa = model.limit_pressure_pa(u, v_limit) * point.pressure_scale
+        limit_angle = float(model.by_volume(u, np.array([v_limit]), z)[0][0])
+        stop = (f"the FE's volume stop ({SolverSettings().max_volume_ul:g} ul, "
+                "SolverSettings.max_volume_ul), where the FE curves near the balance end")
+        flags = ["near_stiffness_balance"]
+        messages = [f"this design sits near the balance of the two layers' stiffness, "
+                    "where both balloon alike and the FE curve ends at the volume stop "
+                    "short of 90 deg (either way round): answered by the signed angle at "
+                    "fixed injected volumes, interpolated across the balance from "
+                    f"{model.designs} FE curves that end there (docs/surrogate.md); "
+                    + ("no force is emulated where the direction is undecided; "
+                       if force is None else "the blocked-tip force is the force model's "
+                       "for the direction the design bends; ")
+                    + "an FE solve (POST /v1/solve) gives this design's own curve"]
+        if past.any():
+            flags.insert(0, "past_fe_range")
+            what = (f"pressure(s) above {limit_pa:.0f} Pa" if axis == "pressure" else
+                    f"volume(s) above {v_limit * ls3:.1f} ul")
+            messages.insert(0, f"{int(past.sum())} {what} are past the FE's range for this "
+                               f"design ({stop}): no angle is given there")
+        validity: dict[str, object] = {
+            "in_domain": not past.any(), "flags": flags, "messages": messages,
+            "fe_limit_pa": limit_pa, "fe_limit_angle_deg": limit_angle,
+            "fe_stop_reason": stop}
+        if axis == "volume":
+            validity["fe_limit_volume_ul"] = v_limit * ls3
+        return self._prediction(design, point, pressure, (angle, lower, upper), level,
+                                validity, force, volume)
 
     @staticmethod
     def _volume_curves(cb: CurveBand, z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

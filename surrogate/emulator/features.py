@@ -36,6 +36,16 @@ ANGLE_NODES_DEG = np.array([0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 5
                             45.0, 50.0, 55.0, 60.0,
                             65.0, 70.0, 75.0, 80.0, 85.0, 90.0])
 N_NODES = len(ANGLE_NODES_DEG)   # a curve's nodes: N_NODES pressure, then N_NODES volume outputs
+
+# The band is never narrower than this either side of the answer. A band that is a
+# multiple of the GP's sd in log(p / theta) is relative; at the first steps of curves
+# near the Ecoflex/Ecoflex stiffness balance the FE angle is a few thousandths of a
+# degree (some of the other sign), and covering those relatively took a multiplier of
+# 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope,
+# that made the group's bands run from 0 to twice the angle at 60 deg. Half the 0.1 deg a
+# camera reading resolves; the calibration (build.node_band_scales) counts with it.
+ANGLE_BAND_FLOOR_DEG = 0.05
+
 FORCE_PRESSURE_NODES_PA = np.array([25.0, 50.0, 100.0, 200.0, 300.0, 400.0, 500.0, 750.0,
                                     1000.0, 1250.0, 1500.0, 1750.0, 2000.0, 2500.0])
 FINE_ANGLES_DEG = np.concatenate((np.linspace(0.01, 0.5, 50),

@@ -33,6 +33,7 @@ from threadpoolctl import ThreadpoolController
 
 from solver.atomic_file import write_text_atomic
 from solver.design_space import SAMPLED
+from surrogate.emulator.balance import BalanceModel, balance_model_from_dict
 from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
@@ -44,7 +45,9 @@ from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 11  # 11: early_ended_nodes, the early-ended database curves' GP
+FORMAT_VERSION = 12  # 12: balance_models, the signed angle by volume at a group's
+                     # stiffness balance (balance.py; 11 read: none, refused there);
+                     # 11: early_ended_nodes, the early-ended database curves' GP
                      # outputs (early_ended_nodes; 10 read: none);
                      # 10: volume_rise_anchor, the volume nodes above it as their rise
                      # (curve_gps; 9 read: none, plain log V / theta);
@@ -81,11 +84,12 @@ def emulator_to_dict(e: Emulator) -> dict:
         "force_pressure_nodes_pa": FORCE_PRESSURE_NODES_PA.tolist(),
         "provenance": e.provenance, "report": e.report, "pairs": pairs,
         "sign_models": {g: m.as_dict() for g, m in e.sign_models.items()},
+        "balance_models": {g: m.as_dict() for g, m in e.balance_models.items()},
         "variance_nodes": np.asarray(e.variance_nodes).tolist()}))
 
 
 def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
-    check_header(d, FORMAT_NAME, FORMAT_VERSION, "an emulator", origin)
+    version = check_header(d, FORMAT_NAME, FORMAT_VERSION, "an emulator", origin)
     assert isinstance(d, dict)  # check_header refused anything else
     if (d.get("angle_nodes_deg") != ANGLE_NODES_DEG.tolist()
             or d.get("force_pressure_nodes_pa") != FORCE_PRESSURE_NODES_PA.tolist()):
@@ -95,6 +99,9 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
     try:
         for p in d["pairs"]:   # the cheap checks first: a damaged file costs no factorisation
             _precheck_pair(p)
+        balance_models = (_balance_models(d.get("balance_models"),
+                                          set(d.get("sign_models") or {}))
+                          if version >= 12 else {})
         pairs = {}
         for p in d["pairs"]:
             pair = str(p["pair"])
@@ -131,7 +138,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
         _check_group_coverage(report)
         return Emulator(name=str(d["name"]), pairs=pairs, provenance=dict(d["provenance"]),
                         report=report, sign_models=sign_models,
-                        variance_nodes=_variance_nodes(d.get("variance_nodes")))
+                        variance_nodes=_variance_nodes(d.get("variance_nodes")),
+                        balance_models=balance_models)
     except (KeyError, TypeError, ValueError, IndexError, AttributeError, ArithmeticError,
             np.linalg.LinAlgError) as exc:
         raise SurrogateFileError(origin, f"damaged emulator file ({type(exc).__name__}: "
@@ -234,6 +242,23 @@ def _early_ended_rows(value: object) -> EarlyEndedRows | None:
         raise ValueError(f"early_ended_nodes u must be unit-cube coordinates (m, "
                          f"{len(SAMPLED)})")
     return EarlyEndedRows(u, np.array(value["y"], float))
+
+
+def _balance_models(value: object, sign_groups: set) -> dict[str, BalanceModel]:
+    """The file's balance models by group (none before format 12); ValueError when one is
+    damaged or belongs to a group without a sign model (it would never be asked)."""
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ValueError("balance_models must be an object by material group")
+    out = {}
+    for group, d in value.items():
+        if group not in sign_groups:
+            raise ValueError(f"balance_models {group}: no sign model for this group")
+        model = balance_model_from_dict(d)
+        _check_gp(model.gp, f"balance model {group}")
+        out[str(group)] = model
+    return out
 
 
 def _band_scales(value: object) -> np.ndarray:

@@ -85,7 +85,8 @@ def _needed(x_fe: np.ndarray, theta: np.ndarray, mean: np.ndarray, low: np.ndarr
 def point_factors(emulator: Emulator, records: Iterable, level: float = 0.95
                   ) -> PointFactors:
     """The factors of every answered FE point of the free-tip default-FE ``records``
-    (designs the emulator refuses are skipped), by pressure and by injected volume."""
+    (designs the emulator refuses or answers by its balance model are skipped), by
+    pressure and by injected volume."""
     z = z_value(level)
     default = SolverSettings()
     cols: dict[str, list] = {k: [] for k in ("angle", "factor", "near", "axis", "pair",
@@ -95,6 +96,8 @@ def point_factors(emulator: Emulator, records: Iterable, level: float = 0.95
             continue
         try:
             point = locate(rec.design, reduced=True)
+            if emulator.balance_model_for(point) is not None:
+                continue            # answered by the balance model, its own band
             pe, cb = emulator.curve_band(point, z)
         except InputError:
             continue

@@ -1,0 +1,212 @@
+"""The emulator at a soft pair's stiffness balance: the signed angle by injected volume.
+
+    model = fit_balance_model(curves)               # the group's FE curves, reduced
+    angle, lower, upper, p_red = model.by_volume(u, v_red, z)
+    angle, lower, upper, v_red = model.by_pressure(u, p_red, z)
+
+Physics. Where the body and the membrane are alike in stiffness (Ecoflex on Ecoflex, the
+contrast s_body / s_membrane near the balance), both balloon and the actuator bends little,
+either way: the FE curve runs to its volume stop (500 ul, ``SolverSettings.max_volume_ul``)
+at a few degrees or a few tens of degrees, not to 90 deg. The per-direction curve GPs
+(log pressure at fixed |angle|, ``curve_gps``) need the direction first and have no node
+for a curve that turns at 3 deg; the group's sign model cannot tell the direction within
+``emulator.SIGN_MARGIN`` of the balance, and those designs were refused (13 of the 492
+random box designs of the band calibration and held-out sets, 2026-12-05).
+
+The signed angle at a fixed injected volume passes through zero continuously as the
+contrast crosses the balance, so it is interpolated across it: outputs are the signed
+angle (deg) at VOLUME_NODES_UL (reduced design, W = 3 mm; one kernel) and the log of the
+chamber pressure (Pa, reduced) at the same volumes (one GP each), fitted on every database
+curve of the group that reaches the last node before 90 deg: the curves that end at the
+volume stop. By pressure, p(V) (made non-decreasing) is inverted first. The bands are the
+GPs' sd times a multiplier per axis, from the leave-one-out predictions of the fitted
+curves read at their own FE points (the 95 % quantile of |error| / sd over 1.96; a
+point within the answer's 0.05 deg floor is inside at any multiplier).
+
+Range: up to the last node (480 ul, short of the volume stop) or the FE's volume stop for
+the design's size, whichever is smaller; no force is emulated here (no blocked-tip model
+near the balance). Answers are flagged ``near_stiffness_balance`` (``Emulator``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from surrogate.band_level import z_value
+from surrogate.emulator.features import ANGLE_BAND_FLOOR_DEG
+from surrogate.emulator.vector_gp import VectorGP, fit_output_gps, vector_gp_from_dict
+
+VOLUME_NODES_UL = np.geomspace(2.0, 480.0, 24)   # reduced design (W = 3 mm), ul
+N_VOLUME_NODES = len(VOLUME_NODES_UL)
+MIN_CURVES = 30             # fewer curves at the volume stop: no balance model
+CALIBRATION_LEVEL = 0.95    # the multipliers are fitted at this level
+
+
+def on_nodes(v_red: np.ndarray, p_red: np.ndarray, angle_deg: np.ndarray
+             ) -> np.ndarray | None:
+    """(signed angle at VOLUME_NODES_UL, log p there) of one FE curve (reduced injected
+    volume in ul, reduced pressure in Pa, signed angle in deg), read on its rising-volume
+    part; None when the curve does not reach the last node."""
+    v, p, a = (np.asarray(x, float) for x in (v_red, p_red, angle_deg))
+    falls = np.flatnonzero(np.diff(v) <= 0)
+    if falls.size:
+        k = falls[0] + 1
+        v, p, a = v[:k], p[:k], a[:k]
+    if len(v) < 3 or v[-1] < VOLUME_NODES_UL[-1] or (p[1:] <= 0).any():
+        return None
+    log_p = np.interp(VOLUME_NODES_UL, v[1:], np.log(p[1:]))
+    return np.concatenate((np.interp(VOLUME_NODES_UL, v, a), log_p))
+
+
+def _angle_at(v_red: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """Values given at VOLUME_NODES_UL read at ``v_red``: linear in log V between nodes,
+    linear from (0, 0) below the first."""
+    v = np.asarray(v_red, float)
+    inside = np.interp(np.log(np.maximum(v, VOLUME_NODES_UL[0])), np.log(VOLUME_NODES_UL),
+                       nodes)
+    return np.where(v < VOLUME_NODES_UL[0], nodes[0] * v / VOLUME_NODES_UL[0], inside)
+
+
+def _volume_at(p_red: np.ndarray, p_nodes: np.ndarray) -> np.ndarray:
+    """The reduced volume at reduced pressures ``p_red`` off p(V) at the nodes (strictly
+    increasing): linear in log-log between nodes, linear from (0, 0) below the first,
+    infinite above the last (past the range)."""
+    p = np.asarray(p_red, float)
+    log_v = np.interp(np.log(np.maximum(p, p_nodes[0])), np.log(p_nodes),
+                      np.log(VOLUME_NODES_UL), right=np.inf)
+    return np.where(p < p_nodes[0], VOLUME_NODES_UL[0] * p / p_nodes[0], np.exp(log_v))
+
+
+def _pressure_at(v_red: np.ndarray, p_nodes: np.ndarray) -> np.ndarray:
+    """The inverse of ``_volume_at``: the reduced pressure at reduced volumes."""
+    v = np.asarray(v_red, float)
+    log_p = np.interp(np.log(np.maximum(v, VOLUME_NODES_UL[0])), np.log(VOLUME_NODES_UL),
+                      np.log(p_nodes))
+    return np.where(v < VOLUME_NODES_UL[0], p_nodes[0] * v / VOLUME_NODES_UL[0],
+                    np.exp(log_p))
+
+
+def _increasing(p: np.ndarray) -> np.ndarray:
+    """``p`` made strictly increasing (a flat stretch rises by 1e-9 relative a node)."""
+    p = np.maximum.accumulate(p)
+    return p * (1.0 + 1e-9 * np.arange(len(p)))
+
+
+@dataclass(frozen=True)
+class BalanceModel:
+    """The signed angle and log pressure at VOLUME_NODES_UL over the group's unit cube.
+
+    gp                   outputs: signed angle (deg) at the nodes, then log p (Pa)
+    band_scale_volume    sd multiplier of the angle read by injected volume
+    band_scale_pressure  sd multiplier of the angle read by pressure
+    """
+
+    gp: VectorGP
+    band_scale_volume: float
+    band_scale_pressure: float
+
+    @property
+    def designs(self) -> int:
+        return len(self.gp.gps[0].y)
+
+    def nodes(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(signed angle, its sd, strictly increasing reduced pressure) at the nodes."""
+        mean, var = self.gp.predict(u, variance_of=slice(0, N_VOLUME_NODES))
+        angle = mean[:N_VOLUME_NODES]
+        sd = np.sqrt(np.maximum(var[:N_VOLUME_NODES], 0.0))
+        return angle, sd, _increasing(np.exp(mean[N_VOLUME_NODES:]))
+
+    def by_volume(self, u: np.ndarray, v_red: np.ndarray, z: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(angle, lower, upper in deg; reduced pressure in Pa) at reduced volumes."""
+        angle, sd, p_nodes = self.nodes(u)
+        return (*self._band(v_red, angle, sd, z, self.band_scale_volume),
+                _pressure_at(v_red, p_nodes))
+
+    def by_pressure(self, u: np.ndarray, p_red: np.ndarray, z: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(angle, lower, upper in deg; reduced volume in ul) at reduced pressures."""
+        angle, sd, p_nodes = self.nodes(u)
+        v_red = _volume_at(p_red, p_nodes)
+        return (*self._band(v_red, angle, sd, z, self.band_scale_pressure), v_red)
+
+    def limit_pressure_pa(self, u: np.ndarray, v_limit_red: float) -> float:
+        """The reduced pressure at the reduced volume ``v_limit_red``."""
+        return float(_pressure_at(np.array(v_limit_red), self.nodes(u)[2]))
+
+    @staticmethod
+    def _band(v_red: np.ndarray, angle: np.ndarray, sd: np.ndarray, z: float, scale: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        mean = _angle_at(v_red, angle)
+        half = z * scale * _angle_at(v_red, sd)
+        return mean, mean - half, mean + half
+
+    def as_dict(self) -> dict[str, object]:
+        return {"volume_nodes_ul": VOLUME_NODES_UL.tolist(), "gp": self.gp.as_dict(),
+                "band_scale_volume": self.band_scale_volume,
+                "band_scale_pressure": self.band_scale_pressure}
+
+
+def balance_model_from_dict(d: object) -> BalanceModel:
+    """The stored model; ValueError (naming the field) when it is damaged or was made with
+    other volume nodes."""
+    if not isinstance(d, dict):
+        raise ValueError("balance_models: each must be an object")
+    if d.get("volume_nodes_ul") != VOLUME_NODES_UL.tolist():
+        raise ValueError("balance_models volume_nodes_ul: made with other volume nodes "
+                         "than this code uses")
+    gp = vector_gp_from_dict(d["gp"])
+    if len(gp.gps) != 2 * N_VOLUME_NODES:
+        raise ValueError(f"balance_models gp must have {2 * N_VOLUME_NODES} outputs")
+    scales = [float(d["band_scale_volume"]), float(d["band_scale_pressure"])]
+    if not all(np.isfinite(s) and s >= 1.0 for s in scales):
+        raise ValueError("balance_models band scales must be finite and >= 1")
+    return BalanceModel(gp, *scales)
+
+
+def fit_balance_model(u: np.ndarray, curves: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+                      seed: int = 0) -> tuple[BalanceModel | None, dict[str, object]]:
+    """The model from a group's database curves: unit coordinates ``u`` (n, d) and each
+    curve's (reduced volume ul, reduced pressure Pa, signed angle deg); those that reach
+    the last volume node are used. None (and why, in the report) with fewer than
+    MIN_CURVES of them."""
+    rows = [(x, y) for x, c in zip(u, curves, strict=True)
+            if (y := on_nodes(*c)) is not None]
+    report: dict[str, object] = {"curves": len(rows)}
+    if len(rows) < MIN_CURVES:
+        report["fitted"] = False
+        return None, report
+    x = np.array([r[0] for r in rows])
+    y = np.array([r[1] for r in rows])
+    gp = fit_output_gps(x, y, seed=seed, shared=slice(0, N_VOLUME_NODES))
+    used = [c for c in curves if on_nodes(*c) is not None]
+    scales, coverage = _loo_band_scales(gp, used)
+    report.update({"fitted": True, "band_scale_volume": scales[0],
+                   "band_scale_pressure": scales[1], "loo_coverage": coverage})
+    return BalanceModel(gp, *scales), report
+
+
+def _loo_band_scales(gp: VectorGP, curves: list) -> tuple[tuple[float, float], dict]:
+    """The sd multipliers per axis (>= 1) that make the leave-one-out bands of the fitted
+    curves cover 95 % of their own FE points up to the last node, and that coverage."""
+    mean, var = gp.loo()
+    ratios: dict[str, list[np.ndarray]] = {"volume": [], "pressure": []}
+    for m, s2, (v, p, a) in zip(mean, var, curves, strict=True):
+        angle, sd = m[:N_VOLUME_NODES], np.sqrt(np.maximum(s2[:N_VOLUME_NODES], 0.0))
+        p_nodes = _increasing(np.exp(m[N_VOLUME_NODES:]))
+        keep = (v > 0) & (v <= VOLUME_NODES_UL[-1])
+        for axis, v_read in (("volume", v[keep]), ("pressure", _volume_at(p[keep], p_nodes))):
+            err = np.abs(_angle_at(v_read, angle) - a[keep])
+            # inside the answer's floor (emulator.floored_band) at any multiplier
+            ratios[axis].append(np.where(err <= ANGLE_BAND_FLOOR_DEG, 0.0,
+                                         err / np.maximum(_angle_at(v_read, sd), 1e-12)))
+    z = z_value(CALIBRATION_LEVEL)
+    scales = []
+    for axis in ("volume", "pressure"):
+        r = np.concatenate(ratios[axis])
+        scales.append(max(1.0, float(np.quantile(r, CALIBRATION_LEVEL)) / z))
+    coverage = {axis: float(np.mean(np.concatenate(ratios[axis]) <= z * s))
+                for axis, s in zip(("volume", "pressure"), scales, strict=True)}
+    return (scales[0], scales[1]), coverage

@@ -1,0 +1,190 @@
+"""The emulator at the Ecoflex/Ecoflex stiffness balance: the signed angle by injected volume
+(surrogate/emulator/balance.py), checked on FE curves of random box designs it never saw."""
+
+import json
+
+import numpy as np
+import pytest
+
+from solver.design_space import locate
+from solver.errors import InputError
+from solver.settings import SolverSettings
+from solver.store import CurveStore
+from surrogate.emulator import load_emulator
+from surrogate.emulator.balance import VOLUME_NODES_UL, on_nodes
+from surrogate.errors import SurrogateFileError
+from surrogate.file_seal import KEY, seal
+
+EMULATOR = "service/data/emulator.json"
+# FE curves of 384 random box designs (benchmarks/heldout_designs.py, seed 2027), none in
+# the database; the band calibration widened the per-direction bands only
+RANDOM_DESIGNS = "service/data/band-calibration.h5"
+FLAG = "near_stiffness_balance"
+
+
+@pytest.fixture(scope="module")
+def emulator():
+    return load_emulator(EMULATOR)
+
+
+@pytest.fixture(scope="module")
+def balance_curves(emulator):
+    """The default-FE free-tip curves of the random designs the emulator answers by its
+    balance model (before 2026-12-05 each was refused: 13 of the 384)."""
+    out = []
+    with CurveStore(RANDOM_DESIGNS) as db:
+        for rec in db.records():
+            c = rec.curve
+            if rec.settings != SolverSettings() or c is None or len(c.pressure_pa) < 3:
+                continue
+            if FLAG in emulator.predict(rec.design, c.pressure_pa[1:2]).validity["flags"]:
+                out.append((rec.design, c))
+    return out
+
+
+def _undecided(emulator, design) -> bool:
+    """At the balance itself: the sign model gives no direction."""
+    try:
+        emulator._sign(locate(design, reduced=True))
+    except InputError:
+        return True
+    return False
+
+
+def test_a_curve_on_the_volume_nodes():
+    """Read on its rising-volume part; a curve that stops short of the last node has none."""
+    v = np.array([0.0, 1.0, 10.0, 100.0, 490.0, 485.0, 600.0])
+    p = np.array([0.0, 100.0, 400.0, 900.0, 1500.0, 1400.0, 1800.0])
+    a = np.array([0.0, -0.1, -0.5, -2.0, -6.0, -5.0, -9.0])
+    y = on_nodes(v, p, a)
+    n = len(VOLUME_NODES_UL)
+    assert y.shape == (2 * n,)
+    assert y[n - 1] == pytest.approx(np.interp(480.0, v[:5], a[:5]))
+    assert y[2 * n - 1] == pytest.approx(np.interp(480.0, v[1:5], np.log(p[1:5])))
+    assert on_nodes(v[:4], p[:4], a[:4]) is None
+
+
+def test_designs_at_the_balance_are_answered_within_the_target_and_their_band(
+        emulator, balance_curves):
+    """Every random design the sign model cannot give a direction to (13, refused until
+    2026-12-05) and those whose FE curve the balance model says ends at the volume stop
+    are answered by it, both ways round, by pressure and by injected volume. Measured on
+    the refit of 2026-12-05: 35 of the 384 designs (13 undecided), 23 within RMSE <= 1 and
+    max <= 3 deg by pressure and 22 by volume, the band covering 0.971 / 0.965 of their
+    points. The checks leave room for a refit, not for a model that misses most curves or
+    states a band it does not keep."""
+    assert len(balance_curves) >= 25
+    assert sum(_undecided(emulator, d) for d, _ in balance_curves) >= 10
+    ends = [c.angle_deg[-1] for _, c in balance_curves]
+    assert min(ends) < -10 and max(ends) > 10          # both directions
+    for axis in ("pressure", "volume"):
+        hits = inside = points = 0
+        for design, c in balance_curves:
+            x = c.pressure_pa if axis == "pressure" else c.volume_ul
+            keep = x > 0
+            ask = emulator.predict if axis == "pressure" else emulator.predict_volume
+            r = ask(design, x[keep])
+            assert FLAG in r.validity["flags"]
+            # no force model at the balance itself; elsewhere the direction's force model
+            assert (r.force_mn is None) == _undecided(emulator, design)
+            ok = np.isfinite(r.angle_deg)
+            assert ok.mean() > 0.9
+            fe = c.angle_deg[keep][ok]
+            err = r.angle_deg[ok] - fe
+            hits += bool(np.sqrt(np.mean(err**2)) <= 1.0 and np.abs(err).max() <= 3.0)
+            assert (r.lower_deg[ok] <= r.angle_deg[ok] - 0.05 + 1e-9).all()
+            assert (r.angle_deg[ok] + 0.05 <= r.upper_deg[ok] + 1e-9).all()
+            inside += int(((r.lower_deg[ok] <= fe) & (fe <= r.upper_deg[ok])).sum())
+            points += int(ok.sum())
+        assert hits >= len(balance_curves) // 2, axis
+        assert 0.85 <= inside / points <= 0.99, axis
+
+
+def test_the_answer_stops_at_the_volume_stop_and_says_so(emulator, balance_curves):
+    """Past the last volume node (480 ul, short of the FE's 500 ul stop) no angle; the
+    pressure axis stops at the pressure there."""
+    design, _ = balance_curves[0]
+    r = emulator.predict_volume(design, [100.0, 470.0, 495.0, 700.0])
+    assert np.isfinite(r.angle_deg[:2]).all() and np.isnan(r.angle_deg[2:]).all()
+    assert np.isnan(r.pressure_pa[2:]).all()
+    assert r.validity["flags"][:2] == ["past_fe_range", FLAG]
+    assert r.validity["fe_limit_volume_ul"] == pytest.approx(VOLUME_NODES_UL[-1])
+    limit_pa = r.validity["fe_limit_pa"]
+    rp = emulator.predict(design, [0.5 * limit_pa, 0.99 * limit_pa, 1.01 * limit_pa])
+    assert np.isfinite(rp.angle_deg[:2]).all() and np.isnan(rp.angle_deg[2])
+    assert "past_fe_range" in rp.validity["flags"]
+    # the two axes agree: the angle at a pressure is the angle at the volume it gives
+    back = emulator.predict_volume(design, rp.volume_ul[:2])
+    np.testing.assert_allclose(back.angle_deg, rp.angle_deg[:2], atol=1e-6)
+    np.testing.assert_allclose(back.pressure_pa, rp.pressure_pa[:2], rtol=1e-6)
+
+
+def test_a_scaled_copy_gives_the_same_angles_at_the_scaled_volumes(emulator, balance_curves):
+    """The invariances: every length x k scales the volumes by k^3, both layers' mu x s
+    the pressures by s; the angles stay (the FE's volume stop, 500 ul, does not scale)."""
+    from dataclasses import replace
+
+    from solver.design_space import scaled_material
+
+    design, _ = balance_curves[1]
+    r = emulator.predict_volume(design, [20.0, 100.0])
+    k = 1.5
+    s_b = design.body_material.mu_kpa[0] / scaled_material("ecoflex_00_30", 1.0).mu_kpa[0]
+    s_m = design.membrane_material.mu_kpa[0] / scaled_material("ecoflex_00_30", 1.0).mu_kpa[0]
+    f = 1.2 if max(s_b, s_m) <= 2.0 / 1.2 else 0.85       # both scales stay in 0.5-2
+    big = replace(design, L_mm=k * design.L_mm, t_mm=k * design.t_mm, T_mm=k * design.T_mm,
+                  b_mm=k * design.b_mm, h_mm=k * design.h_mm, W_mm=k * design.W_mm,
+                  body_length_mm=None, chamber_offset_mm=None,
+                  body_material=scaled_material("ecoflex_00_30", f * s_b),
+                  membrane_material=scaled_material("ecoflex_00_30", f * s_m))
+    rb = emulator.predict_volume(big, [20.0 * k**3, 100.0 * k**3])  # below its 480 ul
+    assert FLAG in rb.validity["flags"]
+    np.testing.assert_allclose(rb.angle_deg, r.angle_deg, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(rb.pressure_pa, f * r.pressure_pa, rtol=1e-6)
+
+
+def test_over_http_the_answer_is_a_200_with_its_flag_and_no_force_at_the_balance(
+        shipped_client, emulator, balance_curves):
+    design = next(d for d, _ in balance_curves if _undecided(emulator, d))
+    body = {"design": design.as_dict(), "pressures_pa": [200.0, 600.0]}
+    r = shipped_client.post("/v1/predict", json=body)
+    assert r.status_code == 200, r.text
+    out = r.json()
+    assert FLAG in out["validity"]["flags"]
+    assert all(a is not None for a in out["angle_deg"])
+    assert out["force_mn"] is None
+
+
+def _written(tmp_path, d: dict) -> str:
+    d.pop(KEY, None)
+    path = tmp_path / "e.json"
+    path.write_text(json.dumps(seal(d)))
+    return str(path)
+
+
+def test_the_file_keeps_the_model_reads_format_11_and_refuses_damage(tmp_path, emulator,
+                                                                     balance_curves):
+    from surrogate.emulator.file import emulator_to_dict, save_emulator
+
+    design = next(d for d, _ in balance_curves if _undecided(emulator, d))
+    back = load_emulator(save_emulator(emulator, tmp_path / "round.json"))
+    np.testing.assert_array_equal(back.predict_volume(design, [50.0]).angle_deg,
+                                  emulator.predict_volume(design, [50.0]).angle_deg)
+    d = emulator_to_dict(emulator)
+    models = d["balance_models"]
+    group = next(iter(models))
+    for field, bad in (("volume_nodes_ul", [1.0, 2.0]), ("band_scale_volume", 0.5),
+                       ("band_scale_pressure", "wide"), ("gp", {"center": [0.0]})):
+        good = models[group][field]
+        models[group][field] = bad
+        with pytest.raises(SurrogateFileError, match="balance|damaged"):
+            load_emulator(_written(tmp_path, d))
+        models[group][field] = good
+    models["pdms/ecoflex_00_30"] = models[group]
+    with pytest.raises(SurrogateFileError, match="no sign model"):
+        load_emulator(_written(tmp_path, d))
+    d["format_version"] = 11
+    d.pop("balance_models")
+    old = load_emulator(_written(tmp_path, d))
+    with pytest.raises(InputError, match="balance"):        # refused, as before
+        old.predict(design, [100.0])
