@@ -118,6 +118,13 @@ class BalanceModel:
         sd = np.sqrt(np.maximum(var[:N_VOLUME_NODES], 0.0))
         return angle, sd, _increasing(np.exp(mean[N_VOLUME_NODES:]))
 
+    def top_deg(self, u: np.ndarray, z: float) -> float:
+        """|angle| at the last volume node plus ``z`` of its sd (band multiplier by
+        volume included), deg: below 90 the design's FE curve ends at the volume stop."""
+        last = N_VOLUME_NODES - 1
+        mean, var = self.gp.predict(u, variance_of=np.array([last]))
+        return float(abs(mean[last]) + z * self.band_scale_volume * np.sqrt(max(var[last], 0.0)))
+
     def by_volume(self, u: np.ndarray, v_red: np.ndarray, z: float
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(angle, lower, upper in deg; reduced pressure in Pa) at reduced volumes."""

@@ -495,8 +495,7 @@ class Emulator:
         sign = _direction(m)[0]
         if sign == 0.0:
             return model
-        angle, sd, _ = model.nodes(u)
-        top = abs(angle[-1]) + BALANCE_TOP_Z * model.band_scale_volume * sd[-1]
+        top = model.top_deg(u, BALANCE_TOP_Z)
         if top >= BALANCE_TOP_DEG:
             return None
         # the balance model knows no curve that reaches 90 deg before the volume stop: where
@@ -709,10 +708,10 @@ class Emulator:
         past = v_red > v_limit * (1 + 1e-12)
         for a in (angle, lower, upper, pressure if axis == "volume" else volume):
             a[past] = np.nan
-        force = None
+        force = pair = None
         try:        # a design with a direction keeps the blocked-tip force it had
-            pe, cb = self.curve_band(point, z, volume_band=False)
-            force = self._force(pe, cb, point, pressure / point.pressure_scale, z)
+            pair = self.curve_band(point, z, volume_band=False)
+            force = self._force(*pair[:2], point, pressure / point.pressure_scale, z)
             for f in force or ():
                 f[past] = np.nan
         except InputError:
@@ -731,6 +730,9 @@ class Emulator:
                        if force is None else "the blocked-tip force is the force model's "
                        "for the direction the design bends; ")
                     + "an FE solve (POST /v1/solve) gives this design's own curve"]
+        if force is not None and pair is not None:
+            self._force_flags(*pair, point, np.where(past, np.nan, pressure), force, flags,
+                              messages)
         if past.any():
             flags.insert(0, "past_fe_range")
             what = (f"pressure(s) above {limit_pa:.0f} Pa" if axis == "pressure" else
@@ -834,25 +836,32 @@ class Emulator:
             flags.append(under[0])
             messages.append(under[1])
         if force is not None:
-            f_lim = pe.force_end_pa(cb.limit_pressure_pa) * point.pressure_scale
-            unbacked = np.isnan(force[0]) & (p <= f_lim)
-            if unbacked.any():
-                flags.append("force_band_too_wide")
-                messages.append(f"no force at {int(unbacked.sum())} pressure(s): its band "
-                                f"is wider than {FORCE_BAND_LIMIT:g} x the force there (too "
-                                "few blocked-tip FE curves near this design; an FE solve "
-                                "with tip = blocked gives it)")
-            if (p > f_lim * (1 + 1e-12)).any():
-                flags.append("force_past_fe_range")
-                why = ("the end of the blocked-tip FE curves"
-                       if f_lim >= pe.force_limit_pa * point.pressure_scale * (1 - 1e-12)
-                       else "the end of this design's free-tip range (the force is "
-                            "emulated as its ratio to the free tip's angle at the same "
-                            "pressure)")
-                messages.append(f"force is given up to {f_lim:.0f} Pa, {why}")
+            self._force_flags(pe, cb, point, p, force, flags, messages)
         return {"in_domain": not past.any(), "flags": flags, "messages": messages,
                 "fe_limit_pa": fe_limit_pa, "fe_limit_angle_deg": cb.limit_angle_deg,
                 "fe_stop_reason": cb.stop_reason}
+
+    @staticmethod
+    def _force_flags(pe: PairEmulator, cb: CurveBand, point: BoxPoint, p: np.ndarray,
+                     force: tuple, flags: list[str], messages: list[str]) -> None:
+        """Append why the force is withheld at some of the chamber pressures ``p`` (Pa;
+        NaN where the angle itself is past the range)."""
+        f_lim = pe.force_end_pa(cb.limit_pressure_pa) * point.pressure_scale
+        unbacked = np.isnan(force[0]) & (p <= f_lim)
+        if unbacked.any():
+            flags.append("force_band_too_wide")
+            messages.append(f"no force at {int(unbacked.sum())} pressure(s): its band "
+                            f"is wider than {FORCE_BAND_LIMIT:g} x the force there (too "
+                            "few blocked-tip FE curves near this design; an FE solve "
+                            "with tip = blocked gives it)")
+        if (p > f_lim * (1 + 1e-12)).any():
+            flags.append("force_past_fe_range")
+            why = ("the end of the blocked-tip FE curves"
+                   if f_lim >= pe.force_limit_pa * point.pressure_scale * (1 - 1e-12)
+                   else "the end of this design's free-tip range (the force is "
+                        "emulated as its ratio to the free tip's angle at the same "
+                        "pressure)")
+            messages.append(f"force is given up to {f_lim:.0f} Pa, {why}")
 
     def inverse(self, design: Design, angle_deg: object, level: float = 0.95
                 ) -> InversePrediction:
