@@ -1,8 +1,9 @@
 """The emulator at a soft pair's stiffness balance: the signed angle by injected volume.
 
-    model = fit_balance_model(curves)               # the group's FE curves, reduced
-    angle, lower, upper, p_red = model.by_volume(u, v_red, z)
-    angle, lower, upper, v_red = model.by_pressure(u, p_red, z)
+    model, report = fit_balance_model(u, curves)    # the group's FE curves, reduced
+    nodes = model.nodes(u)                          # one GP evaluation
+    angle, lower, upper, p_red = model.by_volume(nodes, v_red, z)
+    angle, lower, upper, v_red = model.by_pressure(nodes, p_red, z)
 
 Physics. Where the body and the membrane are alike in stiffness (Ecoflex on Ecoflex, the
 contrast s_body / s_membrane near the balance), both balloon and the actuator bends little,
@@ -125,23 +126,22 @@ class BalanceModel:
         mean, var = self.gp.predict(u, variance_of=np.array([last]))
         return float(abs(mean[last]) + z * self.band_scale_volume * np.sqrt(max(var[last], 0.0)))
 
-    def by_volume(self, u: np.ndarray, v_red: np.ndarray, z: float
+    def by_volume(self, nodes: tuple, v_red: np.ndarray, z: float
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(angle, lower, upper in deg; reduced pressure in Pa) at reduced volumes."""
-        angle, sd, p_nodes = self.nodes(u)
+        """(angle, lower, upper in deg; reduced pressure in Pa) at reduced volumes, from
+        ``nodes`` (``self.nodes(u)``: one GP evaluation serves every reading)."""
+        angle, sd, p_nodes = nodes
         return (*self._band(v_red, angle, sd, z, self.band_scale_volume),
                 _pressure_at(v_red, p_nodes))
 
-    def by_pressure(self, u: np.ndarray, p_red: np.ndarray, z: float
+    def by_pressure(self, nodes: tuple, p_red: np.ndarray, z: float
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(angle, lower, upper in deg; reduced volume in ul) at reduced pressures."""
-        angle, sd, p_nodes = self.nodes(u)
+        """(angle, lower, upper in deg; reduced volume in ul) at reduced pressures, from
+        ``nodes`` (``self.nodes(u)``)."""
+        angle, sd, p_nodes = nodes
         v_red = _volume_at(p_red, p_nodes)
         return (*self._band(v_red, angle, sd, z, self.band_scale_pressure), v_red)
 
-    def limit_pressure_pa(self, u: np.ndarray, v_limit_red: float) -> float:
-        """The reduced pressure at the reduced volume ``v_limit_red``."""
-        return float(_pressure_at(np.array(v_limit_red), self.nodes(u)[2]))
 
     @staticmethod
     def _band(v_red: np.ndarray, angle: np.ndarray, sd: np.ndarray, z: float, scale: float

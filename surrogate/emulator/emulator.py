@@ -697,12 +697,13 @@ class Emulator:
         ls3 = point.length_scale**3
         v_limit = min(float(VOLUME_NODES_UL[-1]),
                       BALANCE_VOLUME_MARGIN * SolverSettings().max_volume_ul / ls3)
+        nodes = model.nodes(u)
         if axis == "pressure":
-            angle, lower, upper, v_red = model.by_pressure(u, x / point.pressure_scale, z)
+            angle, lower, upper, v_red = model.by_pressure(nodes, x / point.pressure_scale, z)
             pressure, volume = x.copy(), v_red * ls3
         else:
             v_red = x / ls3
-            angle, lower, upper, p_red = model.by_volume(u, v_red, z)
+            angle, lower, upper, p_red = model.by_volume(nodes, v_red, z)
             pressure, volume = p_red * point.pressure_scale, x.copy()
         lower, upper = floored_band(angle, lower, upper)
         past = v_red > v_limit * (1 + 1e-12)
@@ -716,8 +717,8 @@ class Emulator:
                 f[past] = np.nan
         except InputError:
             pass    # at the balance itself: no direction, no force model
-        limit_pa = model.limit_pressure_pa(u, v_limit) * point.pressure_scale
-        limit_angle = float(model.by_volume(u, np.array([v_limit]), z)[0][0])
+        at_limit = model.by_volume(nodes, np.array([v_limit]), z)
+        limit_pa, limit_angle = float(at_limit[3][0]) * point.pressure_scale, float(at_limit[0][0])
         stop = (f"the FE's volume stop ({SolverSettings().max_volume_ul:g} ul, "
                 "SolverSettings.max_volume_ul), where the FE curves near the balance end")
         flags = ["near_stiffness_balance"]
