@@ -60,6 +60,7 @@ from surrogate.emulator.features import (
 )
 from surrogate.emulator.variance_nodes import choose as choose_variance_nodes
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP, fit_output_gps, fit_vector_gp
+from surrogate.emulator.volume_gps import fit_volume_gps
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
 MIN_DESIGNS = 10
@@ -164,8 +165,10 @@ def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
         reached = np.isfinite(z[:, 0])
         if reached.any():
             early = EarlyEndedRows(np.asarray(early_u, float)[reached], z[reached])
-    return CurveGPs(fit_output_gps(u, rise_outputs(y, anchor), seed=seed,
-                                   shared=slice(0, N_NODES)), anchor, early)
+    z = rise_outputs(y, anchor)
+    gp = fit_output_gps(u, z, seed=seed, shared=slice(0, N_NODES))
+    volume = fit_volume_gps(u, z[:, N_NODES:], gp, seed=seed)
+    return CurveGPs(gp, anchor, early, volume)
 
 
 def fit_force_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> VectorGP:

@@ -34,6 +34,7 @@ import numpy as np
 from surrogate.emulator.early_ended_nodes import ConditionedMeans, EarlyEndedRows
 from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES
 from surrogate.emulator.vector_gp import VectorGP
+from surrogate.emulator.volume_gps import VolumeGPs
 
 VOLUME_RISE_ANCHOR_DEG = 30.0
 # the smallest rise in log V a training curve is given (V grows with theta on the rising
@@ -90,41 +91,57 @@ class CurveGPs:
     """A pair's curve GPs (``gp``, on ``rise_outputs``) read as node outputs; with
     ``early_ended`` (its early-ended database curves' outputs, ``early_ended_nodes``) a
     query's ``early_weight`` > 0 blends in the means conditioned on them too and adds the
-    two means' spread to the variance (``_blended``)."""
+    two means' spread to the variance (``_blended``). With ``volume`` (``volume_gps``) the
+    volume outputs are its GPs', read with the pressure nodes' means (``gp``'s, before
+    any blend); the blend's shift of them is still ``gp``'s conditioned minus its own."""
     gp: VectorGP
     volume_rise_anchor: int | None = None
     early_ended: EarlyEndedRows | None = None
+    volume: VolumeGPs | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_conditioned", None if self.early_ended is None
                            else ConditionedMeans(self.gp, self.early_ended))
+        # with volume GPs a query needs ``gp``'s pressure outputs alone (its volume
+        # outputs' means only for a blend's shift): the same GPs, the pressure nodes' kernel
+        object.__setattr__(self, "_pressure_gp", None if self.volume is None else VectorGP(
+            self.gp.center[:N_NODES], self.gp.scale[:N_NODES], np.eye(N_NODES),
+            self.gp.gps[:N_NODES], self.gp.residual_var[:N_NODES]))
 
-    def _blended(self, u: np.ndarray, mean: np.ndarray, var: np.ndarray,
-                 weight: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
-        """The GP means ``mean`` (rows of ``u``) with the conditioned means blended in at
-        ``weight`` (0: unchanged), and the variances ``var`` with the blend's spread
-        added: w (m_conditioned - m_complete)^2 (the two means disagree where the
-        early-ended curves pull; the answer is not surer than that)."""
-        w = np.asarray(weight, float)
+    def _blend(self, u: np.ndarray, mean: np.ndarray, weight: np.ndarray | float | None
+               ) -> tuple[np.ndarray, np.ndarray] | None:
+        """What blending the conditioned means in at ``weight`` adds to ``gp``'s means
+        ``mean`` (rows of ``u``) and to their variances: w (m_conditioned - m_complete) and
+        the blend's spread w (m_conditioned - m_complete)^2 (the two means disagree where
+        the early-ended curves pull; the answer is not surer than that). None where
+        nothing is blended (no conditioned means, every weight 0)."""
         cond: ConditionedMeans | None = self._conditioned  # type: ignore[attr-defined]
-        if cond is None or not (w > 0).any():
-            return mean, var
+        if cond is None or weight is None:
+            return None
+        w = np.asarray(weight, float)
+        if not (w > 0).any():
+            return None
         if mean.ndim == 1:
             d = cond.predict(u) - mean
-            return mean + w * d, var + w * d * d
-        out, out_var = mean.copy(), var.copy()
+            return w * d, w * d * d
+        shift, spread = np.zeros_like(mean), np.zeros_like(mean)
         on = np.flatnonzero(w > 0)
         d = cond.predict_many(u[on]) - mean[on]
-        out[on] = mean[on] + w[on, None] * d
-        out_var[on] = var[on] + w[on, None] * d * d
-        return out, out_var
+        shift[on] = w[on, None] * d
+        spread[on] = w[on, None] * d * d
+        return shift, spread
 
     @property
     def per_output(self) -> bool:
         return self.gp.per_output
 
     def kernels(self, sel: slice | np.ndarray) -> int:
-        return self.gp.kernels(sel)
+        """How many distinct kernels the node outputs ``sel`` have (``VectorGP.kernels``)."""
+        if self.volume is None:
+            return self.gp.kernels(sel)
+        idx = np.arange(2 * N_NODES)[sel]
+        return (self.gp.kernels(idx[idx < N_NODES])
+                + self.volume.gp.kernels(idx[idx >= N_NODES] - N_NODES))
 
     def _asked(self, variance_of: slice | np.ndarray | None
                ) -> tuple[slice | np.ndarray | None, bool]:
@@ -159,11 +176,37 @@ class CurveGPs:
         """``predict``, and the pressure nodes' means and variances of the complete-curve
         GPs alone where the blend changed them (what the force model's angle reads:
         ``build.force_angle_rows``; None where nothing was blended)."""
+        return self._nodes(np.asarray(u, float).ravel(), variance_of, early_weight)
+
+    def _nodes(self, u: np.ndarray, variance_of: slice | np.ndarray | None,
+               early_weight: np.ndarray | float | None
+               ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
+        """``predict_with_plain`` at one row ``u`` (d,) or at rows (N, d)."""
         asked, added = self._asked(variance_of)
-        mean, var = self.gp.predict(u, variance_of=asked)
-        blended, blended_var = self._blended(u, mean, var, early_weight)
-        plain = None if blended is mean else (mean[:N_NODES], var[:N_NODES])
-        return (*self._answer(blended, blended_var, added), plain)
+        many = u.ndim == 2
+        if self.volume is None:
+            mean, var = (self.gp.predict_many if many else self.gp.predict)(u, asked)
+            out, out_var = mean, var
+        else:
+            on_p, on_v = _split(asked)
+            pressure_gp: VectorGP = self._pressure_gp  # type: ignore[attr-defined]
+            p_mean, p_var = (pressure_gp.predict_many if many else pressure_gp.predict)(
+                u, on_p)
+            v_mean, v_var = (self.volume.predict_many if many else self.volume.predict)(
+                u, p_mean, on_v)
+            out = np.concatenate((p_mean, v_mean), axis=-1)
+            out_var = np.concatenate((p_var, v_var), axis=-1)
+            mean, var = out, out_var
+            if early_weight is not None and (np.asarray(early_weight) > 0).any():
+                # the blend's shift of the volume outputs is gp's (conditioned minus own)
+                mean = (self.gp.predict_many if many else self.gp.predict)(
+                    u, np.array([], dtype=int))[0]
+        blend = self._blend(u, mean, early_weight)
+        plain = None
+        if blend is not None:
+            plain = (out[..., :N_NODES], out_var[..., :N_NODES])
+            out, out_var = out + blend[0], out_var + blend[1]
+        return (*self._answer(out, out_var, added), plain)
 
     def predict_many(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
                      early_weight: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -179,11 +222,13 @@ class CurveGPs:
         """``predict_many``, and the rows' pressure-node means and variances of the
         complete-curve GPs alone where the blend changed any row (``predict_with_plain``;
         None otherwise)."""
-        asked, added = self._asked(variance_of)
-        u = np.atleast_2d(np.asarray(u, float))
-        mean, var = self.gp.predict_many(u, variance_of=asked)
-        blended, blended_var = mean, var
-        if early_weight is not None:
-            blended, blended_var = self._blended(u, mean, var, early_weight)
-        plain = None if blended is mean else (mean[:, :N_NODES], var[:, :N_NODES])
-        return (*self._answer(blended, blended_var, added), plain)
+        return self._nodes(np.atleast_2d(np.asarray(u, float)), variance_of, early_weight)
+
+
+def _split(asked: slice | np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """The outputs whose variance is asked (None: all) as the pressure GPs' (indices) and
+    the volume GPs' (indices from 0, None: all)."""
+    if asked is None:
+        return np.arange(N_NODES), None
+    idx = np.arange(2 * N_NODES)[asked]
+    return idx[idx < N_NODES], idx[idx >= N_NODES] - N_NODES

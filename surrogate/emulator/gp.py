@@ -79,6 +79,12 @@ class GaussianProcess:
     def loo(self) -> tuple[np.ndarray, np.ndarray]:
         """Leave-one-out residuals y_i - mean_{-i}(x_i) and predictive variances (the
         nugget included), exact for fixed hyperparameters (restricted form)."""
+        p, d = self.loo_projector()
+        return (p @ self.y) / d, self.signal_var / d
+
+    def loo_projector(self) -> tuple[np.ndarray, np.ndarray]:
+        """P = K^-1 - K^-1 H (H^T K^-1 H)^-1 H^T K^-1 and its diagonal d: the leave-one-out
+        residuals of any outputs y on this kernel are (P y) / d (``loo``)."""
         n = len(self.y)
         h = basis(self.x, self.varying)
         kinv = cho_solve((self.chol, True), np.eye(n))
@@ -88,9 +94,7 @@ class GaussianProcess:
         # scales K is near singular and H^T K^-1 H loses its last digits
         hk = hk + 1e-12 * np.trace(hk) / len(hk) * np.eye(len(hk))
         p = kinv - kh @ np.linalg.lstsq(hk, kh.T, rcond=None)[0]
-        d = np.diag(p)
-        resid = (p @ self.y) / d
-        return resid, self.signal_var / d
+        return p, np.diag(p)
 
     def as_dict(self) -> dict[str, object]:
         return {"x": self.x.tolist(), "y": self.y.tolist(), "lengths": self.lengths.tolist(),

@@ -80,6 +80,7 @@ class VectorGP:
             "kinv_h": np.array([_kinv_h(self.gps[i]) for i in rep]),            # (K, n, p)
             "a_inv": np.array([_a_inv(self.gps[i]) for i in rep]),              # (K, p, p)
             "kernel": kernel, "rep": rep,                                       # (m,), (K,)
+            "outputs_of": [np.flatnonzero(kernel == q) for q in range(len(rep))],
             "beta": np.array([gp.beta for gp in self.gps]),                     # (m, p)
             "s2": np.array([gp.signal_var for gp in self.gps]),
             "nugget": np.array([gp.nugget for gp in self.gps]),
@@ -107,9 +108,9 @@ class VectorGP:
         st = self._stack  # type: ignore[attr-defined]
         u = np.asarray(u, float).ravel()
         d2 = (st["x"] - u) ** 2                                   # (n, d)
-        k = _matern52_in_place(st["inv_l2"] @ d2.T)              # (m, n)
+        k = _matern52_in_place(st["inv_l2"][st["rep"]] @ d2.T)   # (K, n): one per kernel
         h = np.concatenate(([1.0], u[st["varying"]]))            # (p,)
-        means = st["beta"] @ h + np.einsum("mn,mn->m", k, st["alpha"])
+        means = st["beta"] @ h + _kernel_dot(k, st)
         mean = self.center + self.scale * (means @ self.components)
         sel = slice(None) if variance_of is None else variance_of
         if variance_of is not None and len(np.arange(len(mean))[sel]) == 0:
@@ -118,7 +119,7 @@ class VectorGP:
             raise ValueError("variance_of needs one GP per output (identity components)")
         rows, kernels, inverse, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
         outs = st["rep"][kernels]       # one product per distinct kernel, not per output
-        ks = k[outs]
+        ks = k[kernels]
         if ks.shape[1] <= SMALL_N:      # one batched product beats a BLAS call per output
             v = np.matmul(ks[:, None, :], st["linv_t"][kernels])[:, 0, :]
             left = 1.0 - (v * v).sum(1)
@@ -173,10 +174,12 @@ class VectorGP:
                     np.concatenate([v for _, v in parts]))
         n_rows, (n, d) = len(u), st["x"].shape
         d2 = (u.T[:, :, None] - st["x"].T[:, None, :]) ** 2             # (d, N, n)
-        r2 = (st["inv_l2"] @ d2.reshape(d, -1)).reshape(-1, n_rows, n)   # one GEMM
-        k = _matern52_in_place(r2)                                       # (m, N, n)
+        r2 = (st["inv_l2"][st["rep"]] @ d2.reshape(d, -1)).reshape(-1, n_rows, n)
+        k = _matern52_in_place(r2)                             # (K, N, n): one per kernel
         h = np.column_stack((np.ones(len(u)), u[:, st["varying"]]))     # (N, p)
-        means = h @ st["beta"].T + np.einsum("mNn,mn->Nm", k, st["alpha"])
+        means = h @ st["beta"].T
+        for q, cols in enumerate(st["outputs_of"]):
+            means[:, cols] += k[q] @ st["alpha"][cols].T
         mean = self.center + self.scale * (means @ self.components)
         rows = np.arange(len(st["s2"]))[slice(None) if variance_of is None else variance_of]
         if variance_of is not None and len(rows) and not self.per_output:
@@ -186,7 +189,7 @@ class VectorGP:
         for i, j in enumerate(rows):      # one GEMM per kernel: no copy of L^-1
             q = int(st["kernel"][j])
             if q not in shared:
-                kq = k[st["rep"][q]]
+                kq = k[q]
                 v = kq @ st["linv_t"][q]                                 # (L^-1 k)^T
                 rr = h - kq @ st["kinv_h"][q]
                 quad = np.einsum("Np,pq,Nq->N", rr, st["a_inv"][q], rr)
@@ -232,6 +235,15 @@ def _matern52_in_place(r2: np.ndarray) -> np.ndarray:
     np.exp(t, out=t)
     poly *= t
     return poly
+
+
+def _kernel_dot(k: np.ndarray, st: dict) -> np.ndarray:
+    """k_q(output) . alpha_output for every output (m,), from the correlations ``k``
+    (K, n) of the distinct kernels: one product per kernel."""
+    out = np.empty(len(st["kernel"]))
+    for q, cols in enumerate(st["outputs_of"]):
+        out[cols] = st["alpha"][cols] @ k[q]
+    return out
 
 
 def _shifted_variance(ks: np.ndarray, x: np.ndarray, inv_l2: np.ndarray,
