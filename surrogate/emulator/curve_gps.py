@@ -33,7 +33,7 @@ import numpy as np
 
 from surrogate.emulator.early_ended_nodes import ConditionedMeans, EarlyEndedRows
 from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES
-from surrogate.emulator.vector_gp import VectorGP
+from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
 from surrogate.emulator.volume_gps import VolumeGPs
 
 VOLUME_RISE_ANCHOR_DEG = 30.0
@@ -197,10 +197,15 @@ class CurveGPs:
             out = np.concatenate((p_mean, v_mean), axis=-1)
             out_var = np.concatenate((p_var, v_var), axis=-1)
             mean, var = out, out_var
-            if early_weight is not None and (np.asarray(early_weight) > 0).any():
-                # the blend's shift of the volume outputs is gp's (conditioned minus own)
-                mean = (self.gp.predict_many if many else self.gp.predict)(
-                    u, np.array([], dtype=int))[0]
+            on = np.asarray(0.0 if early_weight is None else early_weight) > 0
+            if on.any():
+                # the blend's shift of the volume outputs is gp's (conditioned minus own):
+                # its own means where a row is blended (``_blend`` reads no other row)
+                mean = out.copy()
+                if many:
+                    mean[on] = self.gp.predict_many(u[on], MEANS_ONLY)[0]
+                else:
+                    mean = self.gp.predict(u, MEANS_ONLY)[0]
         blend = self._blend(u, mean, early_weight)
         plain = None
         if blend is not None:

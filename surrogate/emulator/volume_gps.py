@@ -42,7 +42,12 @@ from scipy.linalg import cho_solve
 
 from surrogate.emulator.features import ANGLE_NODES_DEG
 from surrogate.emulator.gp import matern52
-from surrogate.emulator.vector_gp import VectorGP, fit_output_gps, vector_gp_from_dict
+from surrogate.emulator.vector_gp import (
+    CHUNK_ROWS,
+    VectorGP,
+    fit_output_gps,
+    vector_gp_from_dict,
+)
 
 SHAPE_NODES_DEG = (10.0, 30.0, 60.0, 90.0)
 _SHAPE_NODES = np.array([int(np.flatnonzero(np.isclose(ANGLE_NODES_DEG, a))[0])
@@ -96,7 +101,9 @@ class VolumeGPs:
         u = np.atleast_2d(np.asarray(u, float))
         s = (pressure_shape(np.atleast_2d(log_p)) - self.shape_low) / self.shape_span
         x = self.gp.gps[0].x[:, :u.shape[1]]
-        s -= matern52(u, x, self.pressure_lengths) @ self.shape_alpha
+        for i in range(0, len(u), CHUNK_ROWS):      # bounded temporaries: (rows, n, d)
+            s[i:i + CHUNK_ROWS] -= (matern52(u[i:i + CHUNK_ROWS], x, self.pressure_lengths)
+                                    @ self.shape_alpha)
         return np.concatenate((u, s), axis=-1)
 
     def predict(self, u: np.ndarray, log_p: np.ndarray,
