@@ -8,7 +8,7 @@ url = os.environ.get("BALLOON_URL", "http://127.0.0.1:8000")
 design = {"L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
           "membrane_material": "ecoflex_00_30"}
 
-with httpx.Client(base_url=url, timeout=10) as client:
+with httpx.Client(base_url=url, timeout=60) as client:  # a design search takes seconds
     r = client.post("/v1/predict", json={"design": design, "pressures_pa": [500, 1000, 1500]})
     r.raise_for_status()
     pred = r.json()
