@@ -91,7 +91,7 @@ class CurveGPs:
     """A pair's curve GPs (``gp``, on ``rise_outputs``) read as node outputs; with
     ``early_ended`` (its early-ended database curves' outputs, ``early_ended_nodes``) a
     query's ``early_weight`` > 0 blends in the means conditioned on them too and adds the
-    two means' spread to the variance (``_blended``). With ``volume`` (``volume_gps``) the
+    two means' spread to the variance (``_blend``). With ``volume`` (``volume_gps``) the
     volume outputs are its GPs', read with the pressure nodes' means (``gp``'s, before
     any blend); the blend's shift of them is still ``gp``'s conditioned minus its own."""
     gp: VectorGP

@@ -165,7 +165,7 @@ def _precheck_pair(p: dict) -> None:
     if volume is not None:
         if not isinstance(volume, dict) or not isinstance(volume.get("gp"), dict):
             raise ValueError(f"pair {p['pair']}: volume_gps must be an object with gp, "
-                             "shape_low and shape_span")
+                             "shape_low, shape_span, pressure_lengths and shape_alpha")
         shape_scaling(volume)
     scales = _band_scales(p["band_scale"])
     if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
