@@ -58,9 +58,14 @@ from surrogate.emulator.features import (
     force_angle_feature,
     force_features,
 )
+from surrogate.emulator.shape_gps import (
+    TOP_PRESSURE_FROM,
+    TOP_SHAPE_NODES_DEG,
+    VOLUME_SHAPE_NODES_DEG,
+    fit_shape_gps,
+)
 from surrogate.emulator.variance_nodes import choose as choose_variance_nodes
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP, fit_output_gps, fit_vector_gp
-from surrogate.emulator.volume_gps import fit_volume_gps
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
 MIN_DESIGNS = 10
@@ -152,9 +157,12 @@ def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
     """The curve GPs of a group from node outputs ``y`` (n, 64) of its complete curves:
     the 32 pressure nodes share one kernel (a query's band is one product over the
     database, not one per node), each volume node has its own, the volume nodes above 30
-    deg as the log of their rise in log V (``curve_gps``). On the FE curves of 252 random
-    designs (benchmarks/RESULTS.md, nineteenth session) one kernel for the pressure nodes
-    put 190 curves within the per-curve target where one per node put 188. With the
+    deg as the log of their rise in log V (``curve_gps``); the volume nodes and the
+    pressure nodes from 45 deg up are read with the pressure curve's shape too
+    (``shape_gps``: the top pressure nodes' GPs share one kernel, the volume nodes' not).
+    On the FE curves of 252 random designs (benchmarks/RESULTS.md, nineteenth session)
+    one kernel for the pressure nodes put 190 curves within the per-curve target where
+    one per node put 188. With the
     early-ended curves' coordinates ``early_u`` and node outputs ``early_y`` (NaN past
     their end), their means for designs emulated to end early (``early_ended_nodes``; each
     curve short of its last reached node)."""
@@ -167,8 +175,11 @@ def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
             early = EarlyEndedRows(np.asarray(early_u, float)[reached], z[reached])
     z = rise_outputs(y, anchor)
     gp = fit_output_gps(u, z, seed=seed, shared=slice(0, N_NODES))
-    volume = fit_volume_gps(u, z[:, N_NODES:], gp, seed=seed)
-    return CurveGPs(gp, anchor, early, volume)
+    volume = fit_shape_gps(u, z[:, N_NODES:], gp, VOLUME_SHAPE_NODES_DEG, shared=False,
+                           seed=seed)
+    top = fit_shape_gps(u, z[:, TOP_PRESSURE_FROM:N_NODES], gp, TOP_SHAPE_NODES_DEG,
+                        shared=True, seed=seed)
+    return CurveGPs(gp, anchor, early, volume, top)
 
 
 def fit_force_gps(u: np.ndarray, y: np.ndarray, seed: int = 0) -> VectorGP:

@@ -53,8 +53,9 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95,
                      f"{100 * nodes['check_largest_rel_sd_error']:.1f} % (median "
                      f"{100 * nodes['check_median_rel_sd_error']:.1f} %) of the exact sd")
     elif nodes.get("shared_kernel"):
-        lines.append("the pressure nodes share one kernel per group: their variance is exact "
-                     "at every node, one product per query")
+        lines.append("the pressure nodes share one kernel per group (or one below 45 deg, "
+                     "the top pressure GPs' one above): their variance is exact at every "
+                     "node, one product per kernel per query")
     cal = emulator.report.get("random_design_calibration")
     if cal:
         lines.append(random_calibration_lines(cal))

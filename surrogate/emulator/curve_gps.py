@@ -33,8 +33,8 @@ import numpy as np
 
 from surrogate.emulator.early_ended_nodes import ConditionedMeans, EarlyEndedRows
 from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES
+from surrogate.emulator.shape_gps import TOP_PRESSURE_FROM, ShapeGPs
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
-from surrogate.emulator.volume_gps import VolumeGPs
 
 VOLUME_RISE_ANCHOR_DEG = 30.0
 # the smallest rise in log V a training curve is given (V grows with theta on the rising
@@ -91,13 +91,16 @@ class CurveGPs:
     """A pair's curve GPs (``gp``, on ``rise_outputs``) read as node outputs; with
     ``early_ended`` (its early-ended database curves' outputs, ``early_ended_nodes``) a
     query's ``early_weight`` > 0 blends in the means conditioned on them too and adds the
-    two means' spread to the variance (``_blend``). With ``volume`` (``volume_gps``) the
-    volume outputs are its GPs', read with the pressure nodes' means (``gp``'s, before
-    any blend); the blend's shift of them is still ``gp``'s conditioned minus its own."""
+    two means' spread to the variance (``_blend``). With ``volume`` and ``top_pressure``
+    (``shape_gps``) the volume outputs and the pressure outputs from
+    ``TOP_PRESSURE_FROM_DEG`` up are theirs, read with the shape of ``gp``'s pressure means
+    (before any blend); the blend's shift of them is still ``gp``'s conditioned minus its
+    own."""
     gp: VectorGP
     volume_rise_anchor: int | None = None
     early_ended: EarlyEndedRows | None = None
-    volume: VolumeGPs | None = None
+    volume: ShapeGPs | None = None
+    top_pressure: ShapeGPs | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_conditioned", None if self.early_ended is None
@@ -139,9 +142,10 @@ class CurveGPs:
         """How many distinct kernels the node outputs ``sel`` have (``VectorGP.kernels``)."""
         if self.volume is None:
             return self.gp.kernels(sel)
-        idx = np.arange(2 * N_NODES)[sel]
-        return (self.gp.kernels(idx[idx < N_NODES])
-                + self.volume.gp.kernels(idx[idx >= N_NODES] - N_NODES))
+        on_p, on_top, on_v = _split(np.arange(2 * N_NODES)[sel],
+                                    self.top_pressure is not None)
+        return (self.gp.kernels(on_p) + self.volume.gp.kernels(on_v)
+                + (0 if on_top is None else self.top_pressure.gp.kernels(on_top)))
 
     def _asked(self, variance_of: slice | np.ndarray | None
                ) -> tuple[slice | np.ndarray | None, bool]:
@@ -188,12 +192,17 @@ class CurveGPs:
             mean, var = (self.gp.predict_many if many else self.gp.predict)(u, asked)
             out, out_var = mean, var
         else:
-            on_p, on_v = _split(asked)
+            on_p, on_top, on_v = _split(asked, self.top_pressure is not None)
             pressure_gp: VectorGP = self._pressure_gp  # type: ignore[attr-defined]
             p_mean, p_var = (pressure_gp.predict_many if many else pressure_gp.predict)(
                 u, on_p)
             v_mean, v_var = (self.volume.predict_many if many else self.volume.predict)(
                 u, p_mean, on_v)
+            if self.top_pressure is not None:
+                t_mean, t_var = (self.top_pressure.predict_many if many
+                                 else self.top_pressure.predict)(u, p_mean, on_top)
+                p_mean = np.concatenate((p_mean[..., :TOP_PRESSURE_FROM], t_mean), axis=-1)
+                p_var = np.concatenate((p_var[..., :TOP_PRESSURE_FROM], t_var), axis=-1)
             out = np.concatenate((p_mean, v_mean), axis=-1)
             out_var = np.concatenate((p_var, v_var), axis=-1)
             mean, var = out, out_var
@@ -230,10 +239,17 @@ class CurveGPs:
         return self._nodes(np.atleast_2d(np.asarray(u, float)), variance_of, early_weight)
 
 
-def _split(asked: slice | np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
-    """The outputs whose variance is asked (None: all) as the pressure GPs' (indices) and
-    the volume GPs' (indices from 0, None: all)."""
+def _split(asked: slice | np.ndarray | None, top: bool
+           ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """The node outputs whose variance is asked (None: all) as the pressure GPs' (indices;
+    with ``top`` those below ``TOP_PRESSURE_FROM`` only), the top pressure GPs' and the
+    volume GPs' (indices from 0 each, None: all; the top's None without ``top``)."""
     if asked is None:
-        return np.arange(N_NODES), None
+        return np.arange(TOP_PRESSURE_FROM if top else N_NODES), None, None
     idx = np.arange(2 * N_NODES)[asked]
-    return idx[idx < N_NODES], idx[idx >= N_NODES] - N_NODES
+    on_p = idx[idx < N_NODES]
+    on_v = idx[idx >= N_NODES] - N_NODES
+    if not top:
+        return on_p, None, on_v
+    return (on_p[on_p < TOP_PRESSURE_FROM], on_p[on_p >= TOP_PRESSURE_FROM] - TOP_PRESSURE_FROM,
+            on_v)

@@ -38,16 +38,25 @@ from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
+from surrogate.emulator.shape_gps import (
+    TOP_PRESSURE_FROM,
+    TOP_SHAPE_NODES_DEG,
+    VOLUME_SHAPE_NODES_DEG,
+    ShapeGPs,
+    shape_gps_from_dict,
+    shape_scaling,
+)
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES
 from surrogate.emulator.vector_gp import vector_gp_from_dict
-from surrogate.emulator.volume_gps import VolumeGPs, shape_scaling, volume_gps_from_dict
 from surrogate.errors import SurrogateFileError
 from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 13  # 13: volume_gps, the volume nodes read with the pressure curve's
-                     # shape (volume_gps.py; 12 read: none, the curve GPs' own);
+FORMAT_VERSION = 14  # 14: top_pressure_gps, the pressure nodes from 45 deg read with the
+                     # shape below (shape_gps.py; 13 read: none, the curve GPs' own);
+                     # 13: volume_gps, the volume nodes read with the pressure curve's
+                     # shape (shape_gps.py; 12 read: none, the curve GPs' own);
                      # 12: balance_models, the signed angle by volume at a group's
                      # stiffness balance (balance.py; 11 read: none, refused there);
                      # 11: early_ended_nodes, the early-ended database curves' GP
@@ -76,6 +85,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "early_ended_nodes": None if pe.curves.early_ended is None else {
                 "u": pe.curves.early_ended.u, "y": pe.curves.early_ended.y},
             "volume_gps": None if pe.curves.volume is None else pe.curves.volume.as_dict(),
+            "top_pressure_gps": None if pe.curves.top_pressure is None
+            else pe.curves.top_pressure.as_dict(),
             "force": None if pe.force is None else pe.force.as_dict(),
             "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
             "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul,
@@ -114,7 +125,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
                 curves=CurveGPs(vector_gp_from_dict(p["curves"]),
                                 _rise_anchor(p.get("volume_rise_anchor")),
                                 _early_ended_rows(p.get("early_ended_nodes")),
-                                _volume_gps(p.get("volume_gps"))),
+                                *_shape_gps(p)),
                 band_scale=_band_scales(p["band_scale"]),
                 fe_limit_angle_deg=float(p["fe_limit_angle_deg"]),
                 fe_stop_reason=str(p["fe_stop_reason"]),
@@ -161,12 +172,17 @@ def _precheck_pair(p: dict) -> None:
     if early is not None and early.y.shape[1] != 2 * N_NODES:
         raise ValueError(f"pair {p['pair']}: early_ended_nodes y must have {2 * N_NODES} "
                          "outputs per curve")
-    volume = p.get("volume_gps")
-    if volume is not None:
-        if not isinstance(volume, dict) or not isinstance(volume.get("gp"), dict):
-            raise ValueError(f"pair {p['pair']}: volume_gps must be an object with gp, "
-                             "shape_low, shape_span, pressure_lengths and shape_alpha")
-        shape_scaling(volume)
+    for name, nodes in _SHAPE_FIELDS:
+        shape = p.get(name)
+        if shape is not None:
+            if not isinstance(shape, dict) or not isinstance(shape.get("gp"), dict):
+                raise ValueError(f"pair {p['pair']}: {name} must be an object with gp, "
+                                 "shape_nodes_deg, shape_low, shape_span, pressure_lengths "
+                                 "and shape_alpha")
+            shape_scaling(shape, name, nodes)
+    if p.get("top_pressure_gps") is not None and p.get("volume_gps") is None:
+        raise ValueError(f"pair {p['pair']}: top_pressure_gps needs volume_gps (both read "
+                         "the pressure GPs alone)")
     scales = _band_scales(p["band_scale"])
     if scales.shape != (2 * N_NODES,) or not np.isfinite(scales).all() or (scales <= 0).any():
         raise ValueError(f"pair {p['pair']}: band scales must be {2 * N_NODES} positive "
@@ -255,18 +271,31 @@ def _early_ended_rows(value: object) -> EarlyEndedRows | None:
     return EarlyEndedRows(u, np.array(value["y"], float))
 
 
-def _volume_gps(value: object) -> VolumeGPs | None:
-    """The file's volume GPs (None before format 13; ValueError, TypeError or KeyError
-    when damaged): inputs the unit coordinates and the 3 shape numbers, one output per
-    volume node."""
-    if value is None:
-        return None
-    volume = volume_gps_from_dict(value)      # its form checked by _precheck_pair
-    if (volume.gp.gps[0].x.shape[1] != len(SAMPLED) + len(volume.shape_low)
-            or len(volume.gp.center) != N_NODES):
-        raise ValueError(f"volume_gps: inputs must be {len(SAMPLED)} unit coordinates and "
-                         f"{len(volume.shape_low)} shape numbers, outputs {N_NODES}")
-    return volume
+# the file's fields of GPs read with the pressure curve's shape, with the shape nodes a
+# file that stored none meant (format 13's volume GPs) and the node outputs they give
+_SHAPE_FIELDS = (("volume_gps", VOLUME_SHAPE_NODES_DEG),
+                 ("top_pressure_gps", TOP_SHAPE_NODES_DEG))
+_SHAPE_OUTPUTS = {"volume_gps": N_NODES, "top_pressure_gps": N_NODES - TOP_PRESSURE_FROM}
+
+
+def _shape_gps(p: dict) -> tuple[ShapeGPs | None, ShapeGPs | None]:
+    """A pair's volume GPs and top pressure GPs (None each before formats 13 and 14;
+    ValueError, TypeError or KeyError when damaged): inputs the unit coordinates and the
+    shape numbers, one output per node they give."""
+    out = []
+    for name, nodes in _SHAPE_FIELDS:
+        value = p.get(name)
+        if value is None:
+            out.append(None)
+            continue
+        shape = shape_gps_from_dict(value, name, nodes)   # its form checked by _precheck_pair
+        if (shape.gp.gps[0].x.shape[1] != len(SAMPLED) + len(shape.shape_low)
+                or len(shape.gp.center) != _SHAPE_OUTPUTS[name]):
+            raise ValueError(f"{name}: inputs must be {len(SAMPLED)} unit coordinates and "
+                             f"{len(shape.shape_low)} shape numbers, outputs "
+                             f"{_SHAPE_OUTPUTS[name]}")
+        out.append(shape)
+    return out[0], out[1]
 
 
 def _balance_models(value: object, sign_groups: set) -> dict[str, BalanceModel]:
@@ -298,8 +327,10 @@ def _check_pair(pe: PairEmulator) -> None:
     otherwise); every stored number that needs no GP was checked before building
     (``_precheck_pair``)."""
     _check_gp(pe.curves.gp, f"pair {pe.pair}")   # finite GP outputs: finite node outputs
-    if pe.curves.volume is not None:
-        _check_gp(pe.curves.volume.gp, f"pair {pe.pair} volume_gps")
+    for name, shape in (("volume_gps", pe.curves.volume),
+                        ("top_pressure_gps", pe.curves.top_pressure)):
+        if shape is not None:
+            _check_gp(shape.gp, f"pair {pe.pair} {name}")
     if pe.curves.early_ended is not None:
         mean = pe.curves.predict(pe.curves.early_ended.u[0], early_weight=1.0)[0]
         if not np.isfinite(mean).all():

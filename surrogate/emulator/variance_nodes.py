@@ -14,7 +14,8 @@ the box per group, with the two seeds of SEEDS. The band's calibration (band_sca
 itself some 10 % uncertain.
 
 Since 2026-12-04 the fit gives the pressure nodes one kernel per group
-(``build.fit_curve_gps``): their variances are then one product for all, and ``choose``
+(``build.fit_curve_gps``), since 2026-12-05 one below 45 deg and one for the top pressure
+GPs above (``shape_gps``): their variances are then one product per kernel, and ``choose``
 returns every node (nothing is read off the spline). The choice stays for files whose
 pressure nodes have a kernel each.
 """
@@ -31,6 +32,9 @@ from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES, spline_matrix
 # 100 designs not used to choose them, 17 within 1.5 % and 0.7 %, while the band's
 # calibration is itself some 10 % uncertain (benchmarks/RESULTS.md, eighteenth session)
 COUNT = 12
+# at most this many kernels among a pair's pressure nodes: every node's variance is exact
+# (one kernel below 45 deg, the top pressure GPs' one above: ``shape_gps``)
+SHARED_KERNELS = 2
 PER_GROUP = 25
 SEEDS = (7, 99)
 VARIANCE_FLOOR = 1e-14     # (log units)^2: a node's variance at a database design
@@ -93,9 +97,10 @@ def choose(pairs, count: int = COUNT) -> tuple[np.ndarray, dict]:
     if not pairs:
         return FORMAT_7_NODES.copy(), {"nodes": FORMAT_7_NODES.tolist(),
                                        "chosen": False}
-    if all(pe.curves.kernels(slice(0, N_NODES)) == 1 for pe in pairs):
-        # the pressure nodes share one kernel (build.fit_curve_gps): their variances are
-        # one product for all, so every node's is exact and none is read off the spline
+    if all(pe.curves.kernels(slice(0, N_NODES)) <= SHARED_KERNELS for pe in pairs):
+        # the pressure nodes share one kernel, or one below 45 deg and the top pressure
+        # GPs' one above (build.fit_curve_gps): their variances are one product per kernel,
+        # so every node's is exact and none is read off the spline
         nodes = np.arange(N_NODES)
         return nodes, {"nodes": nodes.tolist(), "chosen": False, "shared_kernel": True}
     fit = np.vstack([exact_variances(pairs, s) for s in SEEDS])
