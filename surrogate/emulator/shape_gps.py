@@ -112,12 +112,17 @@ class ShapeGPs:
     pressure_lengths: np.ndarray
     shape_alpha: np.ndarray
 
+    def __post_init__(self) -> None:
+        # the shape nodes' indices once, not per query (a query is a few ms)
+        object.__setattr__(self, "_shape_nodes", shape_node_indices(self.shape_nodes_deg))
+
     def inputs(self, u: np.ndarray, log_p: np.ndarray) -> np.ndarray:
         """The GP inputs at designs ``u`` (N, d) with pressure nodes ``log_p`` (N, 32):
         ``u`` and the scaled shape, corrected by the fitted designs' leave-one-out error."""
         u = np.atleast_2d(np.asarray(u, float))
-        s = ((pressure_shape(np.atleast_2d(log_p), self.shape_nodes_deg) - self.shape_low)
-             / self.shape_span)
+        nodes = self._shape_nodes  # type: ignore[attr-defined]
+        s = (np.diff(np.atleast_2d(np.asarray(log_p, float))[:, nodes], axis=-1)
+             - self.shape_low) / self.shape_span
         x = self.gp.gps[0].x[:, :u.shape[1]]
         for i in range(0, len(u), CHUNK_ROWS):      # bounded temporaries: (rows, n, d)
             s[i:i + CHUNK_ROWS] -= (matern52(u[i:i + CHUNK_ROWS], x, self.pressure_lengths)
