@@ -166,6 +166,9 @@ def test_the_emulator_file_keeps_the_shape_gps_and_refuses_them_damaged(tmp_path
     assert FORMAT_VERSION >= 14
     assert all(pe.curves.volume is not None and pe.curves.top_pressure is not None
                for pe in e.pairs.values())
+    # two kernels among the pressure nodes: every node's variance still exact
+    assert e.report["variance_nodes"]["shared_kernel"]
+    np.testing.assert_array_equal(e.variance_nodes, np.arange(N))
     pe = next(iter(e.pairs.values()))
     # the stored form gives back the same answers (the whole file's round trip:
     # test_emulator_balance.py; this one builds one pair's shape GPs, not every GP)
@@ -233,3 +236,34 @@ def test_the_emulator_file_keeps_the_shape_gps_and_refuses_them_damaged(tmp_path
     with pytest.raises(SurrogateFileError, match="top_pressure_gps needs volume_gps"):
         load_emulator(write(d))
     d["pairs"][0]["volume_gps"] = kept
+
+
+def test_the_early_ended_blend_at_weight_1_gives_the_conditioned_pressure_nodes():
+    """The blend's shift of the pressure nodes is the conditioned means minus the answer's
+    own (the top pressure GPs' from 45 deg), so a design blended at weight 1 answers the
+    conditioned pressure nodes (an early-ended database curve is reproduced); the volume
+    nodes keep the curve GPs' shift (conditioned minus their own volume means)."""
+    from surrogate.emulator.early_ended_nodes import EarlyEndedRows
+
+    u, y = _rows(40, seed=8)
+    cg = _curve_gps(u, y)
+    ue, ye = _rows(6, seed=9)
+    ze = rise_outputs(ye, cg.volume_rise_anchor)
+    ze[:, 25:N] = np.nan                 # ended short of 60 deg: pressure and volume
+    ze[:, N + 25:] = np.nan
+    blended = CurveGPs(cg.gp, cg.volume_rise_anchor, EarlyEndedRows(ue, ze), cg.volume,
+                       cg.top_pressure)
+    q = np.random.default_rng(10).random((4, 3))
+    cond = blended._conditioned.predict_many(q)
+    own = cg.gp.predict_many(q, variance_of=MEANS_ONLY)[0]
+    base = cg.predict_many(q, variance_of=MEANS_ONLY)[0]
+    w = np.array([1.0, 0.5, 0.0, 1.0])
+    mean = blended.predict_many(q, variance_of=MEANS_ONLY, early_weight=w)[0]
+    np.testing.assert_allclose(mean[w == 1, :N], cond[w == 1, :N], atol=1e-10)
+    np.testing.assert_allclose(mean[1, :N], 0.5 * (base[1, :N] + cond[1, :N]), atol=1e-10)
+    np.testing.assert_array_equal(mean[2], base[2])
+    # the top pressure GPs' own means differ from the curve GPs' there: the case is live
+    assert np.abs(base[:, TOP_PRESSURE_FROM:N] - own[:, TOP_PRESSURE_FROM:N]).max() > 1e-4
+    # one query and a batch agree on the blend
+    single = blended.predict(q[0], variance_of=MEANS_ONLY, early_weight=1.0)[0]
+    np.testing.assert_allclose(single, mean[0], atol=1e-10)

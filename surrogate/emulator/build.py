@@ -60,6 +60,7 @@ from surrogate.emulator.features import (
 )
 from surrogate.emulator.shape_gps import (
     TOP_PRESSURE_FROM,
+    TOP_PRESSURE_MIN_DESIGNS,
     TOP_SHAPE_NODES_DEG,
     VOLUME_SHAPE_NODES_DEG,
     fit_shape_gps,
@@ -159,7 +160,8 @@ def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
     database, not one per node), each volume node has its own, the volume nodes above 30
     deg as the log of their rise in log V (``curve_gps``); the volume nodes and the
     pressure nodes from 45 deg up are read with the pressure curve's shape too
-    (``shape_gps``: the top pressure nodes' GPs share one kernel, the volume nodes' not).
+    (``shape_gps``: the top pressure nodes' GPs share one kernel, the volume nodes' not;
+    the top ones only from TOP_PRESSURE_MIN_DESIGNS designs).
     On the FE curves of 252 random designs (benchmarks/RESULTS.md, nineteenth session)
     one kernel for the pressure nodes put 190 curves within the per-curve target where
     one per node put 188. With the
@@ -177,8 +179,10 @@ def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
     gp = fit_output_gps(u, z, seed=seed, shared=slice(0, N_NODES))
     volume = fit_shape_gps(u, z[:, N_NODES:], gp, VOLUME_SHAPE_NODES_DEG, shared=False,
                            seed=seed)
-    top = fit_shape_gps(u, z[:, TOP_PRESSURE_FROM:N_NODES], gp, TOP_SHAPE_NODES_DEG,
-                        shared=True, seed=seed)
+    top = None
+    if len(u) >= TOP_PRESSURE_MIN_DESIGNS:
+        top = fit_shape_gps(u, z[:, TOP_PRESSURE_FROM:N_NODES], gp, TOP_SHAPE_NODES_DEG,
+                            shared=True, seed=seed)
     return CurveGPs(gp, anchor, early, volume, top)
 
 

@@ -94,8 +94,8 @@ class CurveGPs:
     two means' spread to the variance (``_blend``). With ``volume`` and ``top_pressure``
     (``shape_gps``) the volume outputs and the pressure outputs from
     ``TOP_PRESSURE_FROM_DEG`` up are theirs, read with the shape of ``gp``'s pressure means
-    (before any blend); the blend's shift of them is still ``gp``'s conditioned minus its
-    own."""
+    (before any blend); the blend's shift of the volume outputs is still ``gp``'s
+    conditioned minus its own, of the pressure outputs conditioned minus the answer's."""
     gp: VectorGP
     volume_rise_anchor: int | None = None
     early_ended: EarlyEndedRows | None = None
@@ -209,12 +209,15 @@ class CurveGPs:
             on = np.asarray(0.0 if early_weight is None else early_weight) > 0
             if on.any():
                 # the blend's shift of the volume outputs is gp's (conditioned minus own):
-                # its own means where a row is blended (``_blend`` reads no other row)
+                # its own volume means where a row is blended (``_blend`` reads no other
+                # row); of the pressure outputs, conditioned minus the answer's own (the
+                # top pressure GPs' above 45 deg), so that at weight 1 the pressure nodes
+                # are the conditioned means (an early-ended database curve reproduced)
                 mean = out.copy()
                 if many:
-                    mean[on] = self.gp.predict_many(u[on], MEANS_ONLY)[0]
+                    mean[on, N_NODES:] = self.gp.predict_many(u[on], MEANS_ONLY)[0][:, N_NODES:]
                 else:
-                    mean = self.gp.predict(u, MEANS_ONLY)[0]
+                    mean[N_NODES:] = self.gp.predict(u, MEANS_ONLY)[0][N_NODES:]
         blend = self._blend(u, mean, early_weight)
         plain = None
         if blend is not None:
