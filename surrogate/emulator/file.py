@@ -172,7 +172,7 @@ def _precheck_pair(p: dict) -> None:
     if early is not None and early.y.shape[1] != 2 * N_NODES:
         raise ValueError(f"pair {p['pair']}: early_ended_nodes y must have {2 * N_NODES} "
                          "outputs per curve")
-    for name, nodes in _SHAPE_FIELDS:
+    for name, nodes, _ in _SHAPE_FIELDS:
         shape = p.get(name)
         if shape is not None:
             if not isinstance(shape, dict) or not isinstance(shape.get("gp"), dict):
@@ -273,9 +273,8 @@ def _early_ended_rows(value: object) -> EarlyEndedRows | None:
 
 # the file's fields of GPs read with the pressure curve's shape, with the shape nodes a
 # file that stored none meant (format 13's volume GPs) and the node outputs they give
-_SHAPE_FIELDS = (("volume_gps", VOLUME_SHAPE_NODES_DEG),
-                 ("top_pressure_gps", TOP_SHAPE_NODES_DEG))
-_SHAPE_OUTPUTS = {"volume_gps": N_NODES, "top_pressure_gps": N_NODES - TOP_PRESSURE_FROM}
+_SHAPE_FIELDS = (("volume_gps", VOLUME_SHAPE_NODES_DEG, N_NODES),
+                 ("top_pressure_gps", TOP_SHAPE_NODES_DEG, N_NODES - TOP_PRESSURE_FROM))
 
 
 def _shape_gps(p: dict) -> tuple[ShapeGPs | None, ShapeGPs | None]:
@@ -283,17 +282,17 @@ def _shape_gps(p: dict) -> tuple[ShapeGPs | None, ShapeGPs | None]:
     ValueError, TypeError or KeyError when damaged): inputs the unit coordinates and the
     shape numbers, one output per node they give."""
     out = []
-    for name, nodes in _SHAPE_FIELDS:
+    for name, nodes, outputs in _SHAPE_FIELDS:
         value = p.get(name)
         if value is None:
             out.append(None)
             continue
         shape = shape_gps_from_dict(value, name, nodes)   # its form checked by _precheck_pair
         if (shape.gp.gps[0].x.shape[1] != len(SAMPLED) + len(shape.shape_low)
-                or len(shape.gp.center) != _SHAPE_OUTPUTS[name]):
+                or len(shape.gp.center) != outputs):
             raise ValueError(f"{name}: inputs must be {len(SAMPLED)} unit coordinates and "
                              f"{len(shape.shape_low)} shape numbers, outputs "
-                             f"{_SHAPE_OUTPUTS[name]}")
+                             f"{outputs}")
         out.append(shape)
     return out[0], out[1]
 

@@ -83,8 +83,12 @@ def pressure_shape(log_p: np.ndarray,
     ``log_p`` (..., 32: log(p_k / theta_k)): the differences of log(p / theta) between the
     nodes at ``nodes_deg`` (how much stiffer or softer per degree the curve grows between
     them)."""
-    y = np.asarray(log_p, float)[..., shape_node_indices(nodes_deg)]
-    return np.diff(y, axis=-1)
+    return _shape(log_p, shape_node_indices(nodes_deg))
+
+
+def _shape(log_p: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """``pressure_shape`` at the angle-node indices ``nodes``."""
+    return np.diff(np.asarray(log_p, float)[..., nodes], axis=-1)
 
 
 def loo_pressure_means(gp: VectorGP, n_outputs: int) -> np.ndarray:
@@ -129,8 +133,7 @@ class ShapeGPs:
         """The GP inputs at designs ``u`` (N, d) with pressure nodes ``log_p`` (N, 32):
         ``u`` and the scaled shape, corrected by the fitted designs' leave-one-out error."""
         u = np.atleast_2d(np.asarray(u, float))
-        nodes = self._shape_nodes  # type: ignore[attr-defined]
-        s = (np.diff(np.atleast_2d(np.asarray(log_p, float))[:, nodes], axis=-1)
+        s = (_shape(np.atleast_2d(log_p), self._shape_nodes)  # type: ignore[attr-defined]
              - self.shape_low) / self.shape_span
         x = self.gp.gps[0].x[:, :u.shape[1]]
         for i in range(0, len(u), CHUNK_ROWS):      # bounded temporaries: (rows, n, d)
