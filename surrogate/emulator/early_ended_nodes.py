@@ -46,8 +46,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import solve_triangular
 
-from surrogate.emulator.gp import GaussianProcess, basis, from_hyperparameters, matern52
-from surrogate.emulator.vector_gp import CHUNK_ROWS, VectorGP, _matern52_in_place
+from surrogate.emulator.gp import (
+    GaussianProcess,
+    basis,
+    from_hyperparameters,
+    matern52,
+    matern52_in_place,
+)
+from surrogate.emulator.vector_gp import CHUNK_ROWS, VectorGP
 
 BLEND_DEG = (60.0, 80.0)   # emulated end (deg): conditioned mean below, complete-curve above
 
@@ -163,7 +169,7 @@ class ConditionedMeans:
         """The conditioned means (c,), output units, at one input row ``u``."""
         u = np.asarray(u, float).ravel()
         d2 = (self._x - u) ** 2  # type: ignore[attr-defined]                 # (n, d)
-        k = _matern52_in_place(self._inv_l2 @ d2.T)  # type: ignore[attr-defined]
+        k = matern52_in_place(self._inv_l2 @ d2.T)  # type: ignore[attr-defined]
         h = np.concatenate(([1.0], u[self._varying]))  # type: ignore[attr-defined]
         z = self._beta @ h + np.einsum(  # type: ignore[attr-defined]
             "cn,cn->c", k[self._kernel_of], self._alpha)  # type: ignore[attr-defined]
@@ -180,7 +186,7 @@ class ConditionedMeans:
         d2 = (u.T[:, :, None] - x.T[:, None, :]) ** 2                          # (d, N, n)
         r2 = (self._inv_l2 @ d2.reshape(len(x.T), -1)).reshape(  # type: ignore[attr-defined]
             -1, len(u), len(x))
-        k = _matern52_in_place(r2)                                           # (kernels, N, n)
+        k = matern52_in_place(r2)                                           # (kernels, N, n)
         h = basis(u, self._varying)  # type: ignore[attr-defined]
         z = h @ self._beta.T  # type: ignore[attr-defined]
         for kq, cols in zip(k, self._outputs, strict=True):  # type: ignore[attr-defined]

