@@ -6,6 +6,10 @@ parses -- is refused on load, never turned into a different number.
 canonical JSON (sorted keys; Python's float repr round-trips exactly, so reading and
 re-serialising gives the same bytes). ``check_seal(doc, origin)`` verifies it; a file
 of older code has none and is checked only by its structure and a trial prediction.
+``canonical_text(doc)`` is that canonical JSON: a file written as it (the emulator's) is
+verified from its bytes (``check_seal(..., raw=...)``: the checksum's member cut out and
+the rest hashed, no re-serialisation of a 30 MB document; any other text falls back to
+the canonical form of what was parsed).
 ``check_header`` checks the format name and version every model file starts with.
 """
 
@@ -19,10 +23,27 @@ from surrogate.errors import SurrogateFileError
 KEY = "content_sha256"
 
 
+def canonical_text(doc: dict) -> str:
+    """``doc`` as canonical JSON: sorted keys, no spaces, no NaN."""
+    return json.dumps(doc, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
 def _digest(doc: dict) -> str:
     body = {k: v for k, v in doc.items() if k != KEY}
-    text = json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode()).hexdigest()
+    return hashlib.sha256(canonical_text(body).encode()).hexdigest()
+
+
+def _raw_matches(raw: bytes, stored: str) -> bool:
+    """Whether ``raw`` is a canonical text whose body (the checksum's member cut out)
+    hashes to ``stored``: then, sha256 being collision resistant, the body is the very
+    canonical JSON that was sealed, and what was parsed from ``raw`` is what was written."""
+    member = f'"{KEY}":"{stored}"'.encode()
+    for cut in (b"," + member, member + b","):
+        at = raw.find(cut)
+        if at >= 0:
+            body = raw[:at] + raw[at + len(cut):]
+            return hashlib.sha256(body).hexdigest() == stored
+    return False
 
 
 def seal(doc: dict) -> dict:
@@ -30,10 +51,13 @@ def seal(doc: dict) -> dict:
     return {**doc, KEY: _digest(doc)}
 
 
-def check_seal(doc: dict, origin: str) -> None:
-    """SurrogateFileError when ``doc`` carries a checksum that does not match it."""
+def check_seal(doc: dict, origin: str, raw: bytes | None = None) -> None:
+    """SurrogateFileError when ``doc`` carries a checksum that does not match it; ``raw``,
+    the bytes ``doc`` was parsed from, when at hand (a canonical file is checked on them)."""
     stored = doc.get(KEY)
     if stored is None:
+        return
+    if raw is not None and isinstance(stored, str) and _raw_matches(raw, stored):
         return
     try:
         found = _digest(doc)

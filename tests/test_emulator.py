@@ -731,6 +731,12 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
     assert pe.force is not None and pe.force_form == "angle_ratio"
     assert pe.range_model is not None and len(pe.failed) == len(early)
     path = save_emulator(e, tmp_path / "e.json")
+    # written as canonical JSON: the checksum is checked on the file's bytes
+    import json
+
+    from surrogate.file_seal import KEY, _raw_matches
+    raw = path.read_bytes()
+    assert _raw_matches(raw, json.loads(raw)[KEY])
     again = load(path)
     # the pressure nodes share one kernel (build.fit_curve_gps; 16 designs are too few
     # for the top pressure GPs: TOP_PRESSURE_MIN_DESIGNS): the variance is exact at every

@@ -122,6 +122,29 @@ def test_any_change_to_a_sealed_emulator_file_is_refused(emulator_doc):
         emulator_from_dict(doc, "emulator.json")
 
 
+def test_a_canonical_file_is_checked_on_its_bytes_and_any_edit_is_refused():
+    """The emulator is written as canonical JSON, so its checksum is checked on the bytes
+    (no re-serialisation of 30 MB); an edit that keeps the checksum's member is refused,
+    and a file in any other layout is checked on the canonical form of what it parses to."""
+    from surrogate.file_seal import _raw_matches, canonical_text, check_seal, seal
+
+    doc = seal({"format": "x", "pairs": [{"lengths": [0.5, 1.25]}], "z": "last"})
+    raw = canonical_text(doc).encode()
+    assert _raw_matches(raw, doc[KEY])
+    check_seal(json.loads(raw), "emulator.json", raw)
+    edited = raw.replace(b"1.25", b"1.35")
+    assert not _raw_matches(edited, doc[KEY])
+    with pytest.raises(SurrogateFileError, match="content changed since it was written"):
+        check_seal(json.loads(edited), "emulator.json", edited)
+    # another layout of the same document: not canonical bytes, accepted as parsed
+    indented = json.dumps(doc, indent=2).encode()
+    assert not _raw_matches(indented, doc[KEY])
+    check_seal(json.loads(indented), "emulator.json", indented)
+    # bytes that are canonical but not what was parsed cannot pass for it
+    with pytest.raises(SurrogateFileError, match="content changed since it was written"):
+        check_seal({**json.loads(raw), "z": "other"}, "emulator.json", edited)
+
+
 def test_damaged_model_files_are_503_naming_the_model_and_degraded_health(
         tmp_path, surrogate_doc, emulator_doc):
     sur, emu = tmp_path / "surrogate.json", tmp_path / "emulator.json"

@@ -49,7 +49,7 @@ from surrogate.emulator.shape_gps import (
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES
 from surrogate.emulator.vector_gp import vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
-from surrogate.file_seal import check_header, check_seal, seal
+from surrogate.file_seal import canonical_text, check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
@@ -103,14 +103,17 @@ def emulator_to_dict(e: Emulator) -> dict:
         "variance_nodes": np.asarray(e.variance_nodes).tolist()}))
 
 
-def emulator_from_dict(d: object, origin: str = "<dict>") -> Emulator:
+def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = None
+                       ) -> Emulator:
+    """The emulator in the parsed file ``d`` (``raw``: the bytes it was parsed from, for a
+    fast checksum check), validated; SurrogateFileError naming ``origin`` otherwise."""
     version = check_header(d, FORMAT_NAME, FORMAT_VERSION, "an emulator", origin)
     assert isinstance(d, dict)  # check_header refused anything else
     if (d.get("angle_nodes_deg") != ANGLE_NODES_DEG.tolist()
             or d.get("force_pressure_nodes_pa") != FORCE_PRESSURE_NODES_PA.tolist()):
         raise SurrogateFileError(origin, "made with other curve nodes than this code uses; "
                                  "refit it with `balloon fit`")
-    check_seal(d, origin)
+    check_seal(d, origin, raw)
     try:
         for p in d["pairs"]:   # the cheap checks first: a damaged file costs no factorisation
             _precheck_pair(p)
@@ -355,7 +358,9 @@ def _variance_nodes(nodes: object) -> np.ndarray:
 
 
 def save_emulator(e: Emulator, path: str | os.PathLike) -> Path:
-    return write_text_atomic(path, json.dumps(emulator_to_dict(e), separators=(",", ":")))
+    """Write ``e`` as canonical JSON (``file_seal.canonical_text``: its checksum is then
+    verified on the bytes when loaded)."""
+    return write_text_atomic(path, canonical_text(emulator_to_dict(e)))
 
 
 LOAD_CACHE_SIZE = 2
@@ -385,7 +390,7 @@ def load_emulator(path: str | os.PathLike) -> Emulator:
         raise SurrogateFileError(path.name, f"cannot be read ({type(exc).__name__})"
                                  ) from None
     with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
-        emulator = emulator_from_dict(data, path.name)
+        emulator = emulator_from_dict(data, path.name, raw)
     with _loaded_lock:
         _loaded[key] = emulator
         while len(_loaded) > LOAD_CACHE_SIZE:
