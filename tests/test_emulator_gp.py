@@ -71,6 +71,32 @@ def test_a_single_query_and_the_batch_agree_on_both_variance_paths():
             assert np.isnan(v0).all()
 
 
+def test_a_kernels_inverse_is_made_on_its_first_variance_and_matches_the_solve():
+    """L^-1 of a kernel is made when a variance first needs it (``VectorGP._linv_t``), not
+    when the GPs are built or loaded, and only for the kernels asked; the variance it
+    gives is the GP's own by triangular solves (``GaussianProcess.predict``)."""
+    from surrogate.emulator.vector_gp import MEANS_ONLY, SMALL_N
+
+    rng = np.random.default_rng(5)
+    for n in (SMALL_N // 3, SMALL_N + 40):
+        u = rng.uniform(size=(n, 3))
+        vgp = vector_gp_from_dict(fit_output_gps(u, curves(u)).as_dict())
+        made = vgp._stack["linv_t"]
+        assert made == {}
+        q = rng.uniform(size=3)
+        vgp.predict(q, variance_of=MEANS_ONLY)
+        vgp.predict_many(q[None, :], variance_of=MEANS_ONLY)
+        assert made == {}
+        some = np.array([2, 5])
+        _, var = vgp.predict(q, variance_of=some)
+        assert sorted(made) == sorted(int(vgp._stack["kernel"][j]) for j in some)
+        for j in some:
+            _, v_gp = vgp.gps[j].predict(q[None, :])
+            expected = vgp.scale[j] ** 2 * v_gp[0] + vgp.residual_var[j]
+            atol = 1e-14 if n <= SMALL_N else 1e-7 * prior_variance(vgp)[j]
+            np.testing.assert_allclose(var[j], expected, rtol=1e-7, atol=atol)
+
+
 def prior_variance(vgp) -> np.ndarray:
     """Each output's prior variance (output units): what a band is read against."""
     return np.array([gp.signal_var for gp in vgp.gps]) * vgp.scale**2

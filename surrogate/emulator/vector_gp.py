@@ -66,7 +66,7 @@ class VectorGP:
         # predict_many; a single query reads the outputs it needs packed in single
         # precision (``_variance_stack``, ``_shifted_variance``). Both are made on a
         # kernel's first variance, not at loading: the shipped emulator's means-only
-        # kernels never need them (loading 1.4 s faster, 0.3 GB less).
+        # kernels never need them (loading 1.4 s faster; 0.2-0.3 GB never made).
         x = self.gps[0].x
         # outputs that share a kernel (fit_shared_gps) share K and what is made of it,
         # kept once per kernel: "kernel" is each output's kernel, "rep" each kernel's
@@ -120,15 +120,15 @@ class VectorGP:
             return mean, np.full(len(mean), np.nan)              # the means only
         if variance_of is not None and not self.per_output:
             raise ValueError("variance_of needs one GP per output (identity components)")
-        rows, kernels, inverse, packed, kinv_h, a_inv, s2 = self._variance_stack(sel)
+        rows, kernels, inverse, linv, kinv_h, a_inv, s2 = self._variance_stack(sel)
         outs = st["rep"][kernels]       # one product per distinct kernel, not per output
         ks = k[kernels]
         if ks.shape[1] <= SMALL_N:      # one batched product beats a BLAS call per output
-            v = np.matmul(ks[:, None, :], packed)[:, 0, :]
+            v = np.matmul(ks[:, None, :], linv)[:, 0, :]        # linv: (K, n, n)
             left = 1.0 - (v * v).sum(1)
         else:
             left = _shifted_variance(ks, st["x"], st["inv_l2"][outs], st["nugget"][outs],
-                                     packed)
+                                     linv)                     # linv: packed, float32
         rr = h[None, :] - np.matmul(ks[:, None, :], kinv_h)[:, 0, :]
         shared = np.maximum(left + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
         variances = s2 * shared[inverse]
@@ -165,11 +165,11 @@ class VectorGP:
         if hit is None:
             lower = np.tril_indices(len(st["x"]))
             kernels, inverse = np.unique(st["kernel"][rows], return_inverse=True)
-            packed = (np.array([self._linv_t(q) for q in kernels])
-                      if len(st["x"]) <= SMALL_N else
-                      tuple(np.ascontiguousarray(self._linv_t(q).T)[lower]
-                            .astype(np.float32) for q in kernels))
-            hit = (rows, kernels, inverse.ravel(), packed,
+            linv = (np.array([self._linv_t(q) for q in kernels])
+                    if len(st["x"]) <= SMALL_N else
+                    tuple(np.ascontiguousarray(self._linv_t(q).T)[lower]
+                          .astype(np.float32) for q in kernels))
+            hit = (rows, kernels, inverse.ravel(), linv,
                    np.ascontiguousarray(st["kinv_h"][kernels]),
                    np.ascontiguousarray(st["a_inv"][kernels]), st["s2"][rows].copy())
             if len(cache) < 8:
