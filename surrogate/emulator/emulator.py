@@ -35,6 +35,7 @@ from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.balance import VOLUME_NODES_UL, BalanceModel
 from surrogate.emulator.curve_gps import CurveGPs
+from surrogate.emulator.design_memo import DesignMemo
 from surrogate.emulator.early_ended_nodes import early_weight
 from surrogate.emulator.features import (
     ANGLE_BAND_FLOOR_DEG,
@@ -456,6 +457,9 @@ class Emulator:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_variance_spline", spline(self.variance_nodes))
+        # the last designs' curves and balance decisions (design_memo.py); a new object
+        # (dataclasses.replace: refitted bands) starts empty
+        object.__setattr__(self, "_memo", DesignMemo())
 
     def spread_variance(self, var: np.ndarray) -> np.ndarray:
         """``var`` with every pressure node's variance read off those at variance_nodes."""
@@ -491,20 +495,28 @@ class Emulator:
         if model is None:
             return None
         u = point.coordinates()
-        m = self.sign_models[point.group].predict(u, variance_of=MEANS_ONLY)[0][:1]
+        answers = self._memo.get_or_make(  # type: ignore[attr-defined]
+            ("balance", point.group, u.tobytes()),
+            lambda: self._balance_answers(point.group, model, u))
+        return model if answers else None
+
+    def _balance_answers(self, group: str, model: BalanceModel, u: np.ndarray) -> bool:
+        """Whether ``model`` answers for the design at unit coordinates ``u`` of ``group``
+        (``balance_model_for``)."""
+        m = self.sign_models[group].predict(u, variance_of=MEANS_ONLY)[0][:1]
         sign = _direction(m)[0]
         if sign == 0.0:
-            return model
+            return True
         top = model.top_deg(u, BALANCE_TOP_Z)
         if top >= BALANCE_TOP_DEG:
-            return None
+            return False
         # the balance model knows no curve that reaches 90 deg before the volume stop: where
         # the direction's range model says the FE curve is complete, it is the curve GPs'
-        pe = self.pairs.get(point.group + ("+" if sign > 0 else "-"))
+        pe = self.pairs.get(group + ("+" if sign > 0 else "-"))
         if pe is not None and pe.range_model is not None:
             if pe.emulated_end_deg(u)[0] >= BALANCE_COMPLETE_DEG:
-                return None
-        return model
+                return False
+        return True
 
     def _one_sign(self, group: str) -> float:
         """The sign of a group that bends one way only (no sign model)."""
@@ -529,21 +541,35 @@ class Emulator:
         return out
 
     def _pair(self, point: BoxPoint, u: np.ndarray | None = None) -> PairEmulator:
+        return self.pairs[self._pair_key(point, u)]
+
+    def _pair_key(self, point: BoxPoint, u: np.ndarray | None = None) -> str:
+        """The key of the pair emulator that answers for ``point`` (group and direction)."""
         key = point.group + ("+" if self._sign(point, u) > 0 else "-")
-        try:
-            return self.pairs[key]
-        except KeyError:
+        if key not in self.pairs:
             raise InputError("body_material", f"the emulator '{self.name}' has too few FE "
                              f"curves for {point.pair[0]}/{point.pair[1]} here",
-                             ", ".join(sorted(self.pairs))) from None
+                             ", ".join(sorted(self.pairs)))
+        return key
 
     def curve_band(self, point: BoxPoint, z: float, volume_band: bool = True
                    ) -> tuple[PairEmulator, CurveBand]:
         """The design's p(theta) with its band and V(theta); the band of V(theta)
         (``volume_log_sd``) only with ``volume_band`` (NaN otherwise: half the cost of a
-        query with one GP per node)."""
+        query with one GP per node). Kept for the design's next question (design_memo.py;
+        its arrays read-only)."""
         u = point.coordinates()     # once: the sign, curves, range and force models
-        pe = self._pair(point, u)
+        key = ("curve", point.group, u.tobytes(), float(point.length_scale), float(z),
+               bool(volume_band))
+        pair_key, band = self._memo.get_or_make(  # type: ignore[attr-defined]
+            key, lambda: self._curve_band(point, u, z, volume_band))
+        return self.pairs[pair_key], band
+
+    def _curve_band(self, point: BoxPoint, u: np.ndarray, z: float, volume_band: bool
+                    ) -> tuple[str, CurveBand]:
+        """``curve_band`` computed: the pair emulator's key and the design's curve."""
+        pair_key = self._pair_key(point, u)
+        pe = self.pairs[pair_key]
         if pe.curves.per_output:
             nodes = self.variance_nodes
             which = (np.concatenate((nodes, np.arange(N_NODES, 2 * N_NODES)))
@@ -571,8 +597,8 @@ class Emulator:
                 p_var = self.spread_variance(np.concatenate((p_var, var[N_NODES:])))
             p_sd = np.sqrt(p_var[:N_NODES]) * scales[:N_NODES]
             reference = tuple(_monotone(c) for c in node_curves(p_mean, p_sd, z))
-        return pe, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean,
-                             u, nearest, reference)
+        return pair_key, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw,
+                                   mean, u, nearest, reference)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -761,7 +787,9 @@ class Emulator:
         nodes, linear between them), F scaling with s_membrane x length_scale^2."""
         if pe.force is None:
             return None
-        mean, var = pe.force.predict(cb.coordinates)
+        mean, var = self._memo.get_or_make(  # type: ignore[attr-defined]
+            ("force", pe.pair, cb.coordinates.tobytes()),
+            lambda: pe.force.predict(cb.coordinates))
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
         past = p_red > pe.force_end_pa(cb.limit_pressure_pa) * (1 + 1e-12)
