@@ -136,7 +136,7 @@ class ShapeGPs:
         s = (_shape(np.atleast_2d(log_p), self._shape_nodes)  # type: ignore[attr-defined]
              - self.shape_low) / self.shape_span
         x = self.gp.gps[0].x[:, :u.shape[1]]
-        for i in range(0, len(u), CHUNK_ROWS):      # bounded temporaries: (rows, n, d)
+        for i in range(0, len(u), CHUNK_ROWS):      # bounded temporaries: (rows, n)
             s[i:i + CHUNK_ROWS] -= (matern52(u[i:i + CHUNK_ROWS], x, self.pressure_lengths)
                                     @ self.shape_alpha)
         return np.concatenate((u, s), axis=-1)
