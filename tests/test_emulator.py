@@ -738,6 +738,12 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
     raw = path.read_bytes()
     assert _raw_matches(raw, json.loads(raw)[KEY])
     again = load(path)
+    # loading makes no kernel's L^-1 or K (a query's first variance does); warm_up makes
+    # every one the queries below need, and remembers no answer
+    assert _kernels_made(again) == 0
+    again.warm_up()
+    warm = _kernels_made(again)
+    assert warm > 0 and len(again._memo) == 0
     # the pressure nodes share one kernel (build.fit_curve_gps; 16 designs are too few
     # for the top pressure GPs: TOP_PRESSURE_MIN_DESIGNS): the variance is exact at every
     # node (variance_nodes.py), one product per query, and the file keeps the nodes
@@ -772,6 +778,20 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
     assert np.all((full.force_lower_mn <= fe + 1e-9) & (fe <= full.force_upper_mn + 1e-9))
     answered = np.isfinite(a.force_mn)
     np.testing.assert_array_equal(a.force_mn[answered], full.force_mn[answered])
+    for r in free[:3] + early[:2]:
+        again.predict(r.design, [300.0, 900.0])
+        again.predict_volume(r.design, [2.0, 8.0])
+    assert _kernels_made(again) == warm
+
+
+def _kernels_made(emulator) -> int:
+    """How many kernels of the emulator's GPs hold their L^-1 (``VectorGP._linv_t``)."""
+    gps = list(emulator.sign_models.values()) + [m.gp for m in emulator.balance_models.values()]
+    for pe in emulator.pairs.values():
+        c = pe.curves
+        gps += [c.gp, c._pressure_gp, pe.force, pe.range_model]
+        gps += [g.gp for g in (c.volume, c.top_pressure) if g is not None]
+    return sum(len(g._stack["linv_t"]) for g in gps if g is not None)
 
 
 def test_an_emulator_file_with_an_unknown_force_form_is_refused_and_a_format_3_file_reads(

@@ -86,10 +86,11 @@ def test_a_kernels_inverse_is_made_on_its_first_variance_and_matches_the_solve()
         q = rng.uniform(size=3)
         vgp.predict(q, variance_of=MEANS_ONLY)
         vgp.predict_many(q[None, :], variance_of=MEANS_ONLY)
-        assert made == {}
+        assert made == {} and vgp._stack["gram"] == {}      # nor K, which a variance reads
         some = np.array([2, 5])
         _, var = vgp.predict(q, variance_of=some)
         assert sorted(made) == sorted(int(vgp._stack["kernel"][j]) for j in some)
+        assert sorted(vgp._stack["gram"]) == ([] if n <= SMALL_N else sorted(made))
         for j in some:
             _, v_gp = vgp.gps[j].predict(q[None, :])
             expected = vgp.scale[j] ** 2 * v_gp[0] + vgp.residual_var[j]

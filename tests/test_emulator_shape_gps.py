@@ -269,3 +269,29 @@ def test_the_early_ended_blend_at_weight_1_gives_the_conditioned_pressure_nodes(
     # one query and a batch agree on the blend
     single = blended.predict(q[0], variance_of=MEANS_ONLY, early_weight=1.0)[0]
     np.testing.assert_allclose(single, mean[0], atol=1e-10)
+
+
+def test_a_query_reads_the_shape_correction_off_the_pressure_kernel_row_only_when_shared():
+    """One query's shape correction is the pressure GPs' kernel row times the shape GPs'
+    weights (no kernel of its own) when the shape GPs were fitted on the same designs
+    with the pressure nodes' kernel; with other length scales or other designs the shape
+    GPs compute their own row, and either way the inputs are the same."""
+    from dataclasses import replace
+
+    u, y = _rows(40, seed=4)
+    cg = _curve_gps(u, y)
+    assert cg._shares_row
+    q = np.random.default_rng(8).random(3)
+    pressure = cg._pressure_gp
+    log_p = pressure.predict(q, MEANS_ONLY)[0]
+    rows = pressure.kernel_rows(q)
+    for shape in (cg.volume, cg.top_pressure):
+        np.testing.assert_allclose(shape.inputs(q, log_p, rows), shape.inputs(q, log_p),
+                                   rtol=1e-10, atol=1e-12)
+    other_lengths = replace(cg.volume, pressure_lengths=cg.volume.pressure_lengths * 1.1)
+    assert not CurveGPs(cg.gp, cg.volume_rise_anchor, None, other_lengths,
+                        cg.top_pressure)._shares_row
+    u2, y2 = _rows(40, seed=6)
+    other_designs = _curve_gps(u2, y2)
+    assert not CurveGPs(cg.gp, cg.volume_rise_anchor, None, cg.volume,
+                        other_designs.top_pressure)._shares_row

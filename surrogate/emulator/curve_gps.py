@@ -110,6 +110,12 @@ class CurveGPs:
         object.__setattr__(self, "_pressure_gp", None if self.volume is None else VectorGP(
             self.gp.center[:N_NODES], self.gp.scale[:N_NODES], np.eye(N_NODES),
             self.gp.gps[:N_NODES], self.gp.residual_var[:N_NODES]))
+        # a one-row query's shape correction is the pressure GPs' kernel row times the
+        # shape GPs' weights when both were fitted on the same designs with that kernel
+        # (every shipped group): one kernel row for the three, not three
+        object.__setattr__(self, "_shares_row", self.volume is not None and all(
+            _same_kernel(self.gp, g) for g in (self.volume, self.top_pressure)
+            if g is not None))
 
     def _blend(self, u: np.ndarray, mean: np.ndarray, weight: np.ndarray | float | None
                ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -194,13 +200,17 @@ class CurveGPs:
         else:
             on_p, on_top, on_v = _split(asked, self.top_pressure is not None)
             pressure_gp: VectorGP = self._pressure_gp  # type: ignore[attr-defined]
-            p_mean, p_var = (pressure_gp.predict_many if many else pressure_gp.predict)(
-                u, on_p)
-            v_mean, v_var = (self.volume.predict_many if many else self.volume.predict)(
-                u, p_mean, on_v)
+            if many:
+                p_mean, p_var = pressure_gp.predict_many(u, on_p)
+                v_mean, v_var = self.volume.predict_many(u, p_mean, on_v)
+            else:
+                rows = pressure_gp.kernel_rows(u)
+                shared = rows if self._shares_row else None  # type: ignore[attr-defined]
+                p_mean, p_var = pressure_gp.predict(u, on_p, rows)
+                v_mean, v_var = self.volume.predict(u, p_mean, on_v, shared)
             if self.top_pressure is not None:
-                t_mean, t_var = (self.top_pressure.predict_many if many
-                                 else self.top_pressure.predict)(u, p_mean, on_top)
+                t_mean, t_var = (self.top_pressure.predict_many(u, p_mean, on_top) if many
+                                 else self.top_pressure.predict(u, p_mean, on_top, shared))
                 p_mean = np.concatenate((p_mean[..., :TOP_PRESSURE_FROM], t_mean), axis=-1)
                 p_var = np.concatenate((p_var[..., :TOP_PRESSURE_FROM], t_var), axis=-1)
             out = np.concatenate((p_mean, v_mean), axis=-1)
@@ -240,6 +250,15 @@ class CurveGPs:
         complete-curve GPs alone where the blend changed any row (``predict_with_plain``;
         None otherwise)."""
         return self._nodes(np.atleast_2d(np.asarray(u, float)), variance_of, early_weight)
+
+
+def _same_kernel(gp: VectorGP, shape: ShapeGPs) -> bool:
+    """Whether ``shape``'s correction kernel is ``gp``'s pressure nodes' one kernel on the
+    same designs (so that its kernel row at a query is theirs)."""
+    first = gp.gps[0]
+    return (gp.kernels(slice(0, N_NODES)) == 1
+            and np.array_equal(first.lengths, shape.pressure_lengths)
+            and np.array_equal(first.x, shape.design_inputs))
 
 
 def _split(asked: slice | np.ndarray | None, top: bool

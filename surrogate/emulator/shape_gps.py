@@ -129,23 +129,37 @@ class ShapeGPs:
         # the shape nodes' indices once, not per query (a query is a few ms)
         object.__setattr__(self, "_shape_nodes", shape_node_indices(self.shape_nodes_deg))
 
-    def inputs(self, u: np.ndarray, log_p: np.ndarray) -> np.ndarray:
+    def inputs(self, u: np.ndarray, log_p: np.ndarray,
+               pressure_rows: np.ndarray | None = None) -> np.ndarray:
         """The GP inputs at designs ``u`` (N, d) with pressure nodes ``log_p`` (N, 32):
-        ``u`` and the scaled shape, corrected by the fitted designs' leave-one-out error."""
+        ``u`` and the scaled shape, corrected by the fitted designs' leave-one-out error.
+        ``pressure_rows`` (N, n): the pressure GPs' kernel rows at ``u`` when the caller
+        has them (``CurveGPs``, where those GPs were fitted on these designs with
+        ``pressure_lengths``; a query's correction then costs no kernel of its own)."""
         u = np.atleast_2d(np.asarray(u, float))
         s = (_shape(np.atleast_2d(log_p), self._shape_nodes)  # type: ignore[attr-defined]
              - self.shape_low) / self.shape_span
-        x = self.gp.gps[0].x[:, :u.shape[1]]
+        if pressure_rows is not None:
+            s -= np.atleast_2d(pressure_rows) @ self.shape_alpha
+            return np.concatenate((u, s), axis=-1)
+        x = self.design_inputs
         for i in range(0, len(u), CHUNK_ROWS):      # bounded temporaries: (rows, n)
             s[i:i + CHUNK_ROWS] -= (matern52(u[i:i + CHUNK_ROWS], x, self.pressure_lengths)
                                     @ self.shape_alpha)
         return np.concatenate((u, s), axis=-1)
 
+    @property
+    def design_inputs(self) -> np.ndarray:
+        """The fitted designs' unit coordinates (n, d): the GPs' inputs before the shape."""
+        return self.gp.gps[0].x[:, :len(self.pressure_lengths)]
+
     def predict(self, u: np.ndarray, log_p: np.ndarray,
-                variance_of: slice | np.ndarray | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """Means and variances of the outputs at one design (``VectorGP.predict``)."""
-        return self.gp.predict(self.inputs(np.ravel(u), np.ravel(log_p))[0], variance_of)
+                variance_of: slice | np.ndarray | None = None,
+                pressure_rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Means and variances of the outputs at one design (``VectorGP.predict``;
+        ``pressure_rows`` as in ``inputs``)."""
+        return self.gp.predict(self.inputs(np.ravel(u), np.ravel(log_p), pressure_rows)[0],
+                               variance_of)
 
     def predict_many(self, u: np.ndarray, log_p: np.ndarray,
                      variance_of: slice | np.ndarray | None = None

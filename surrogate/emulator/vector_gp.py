@@ -37,6 +37,7 @@ from surrogate.emulator.gp import (
     fit_gp,
     fit_shared_gps,
     from_hyperparameters,
+    matern52,
     matern52_in_place,
 )
 
@@ -80,6 +81,7 @@ class VectorGP:
             "inv_l2": np.array([1.0 / gp.lengths**2 for gp in self.gps]),      # (m, d)
             "alpha": np.array([gp.alpha for gp in self.gps]),                   # (m, n)
             "linv_t": {},                                  # kernel -> (n, n), on first use
+            "gram": {},                        # kernel -> K (n, n) above SMALL_N, likewise
             "kinv_h": np.array([_kinv_h(self.gps[i]) for i in rep]),            # (K, n, p)
             "a_inv": np.array([_a_inv(self.gps[i]) for i in rep]),              # (K, p, p)
             "kernel": kernel, "rep": rep,                                       # (m,), (K,)
@@ -102,16 +104,23 @@ class VectorGP:
         """One GP per output (``fit_output_gps``): the components are the identity."""
         return bool(self._stack["identity"])  # type: ignore[attr-defined]
 
-    def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
+    def kernel_rows(self, u: np.ndarray) -> np.ndarray:
+        """The correlations (K, n) of one input row ``u`` with the training inputs, one
+        row per distinct kernel (unit signal variance, no nugget)."""
+        st = self._stack  # type: ignore[attr-defined]
+        d2 = (st["x"] - np.asarray(u, float).ravel()) ** 2       # (n, d)
+        return matern52_in_place(st["inv_l2"][st["rep"]] @ d2.T)
+
+    def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
+                rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Mean and variance of every output at one input row ``u``. With one GP per
         output (identity components), ``variance_of`` (a slice or an index array) limits
         the variance, the costly part of a query, to those outputs (NaN for the others); an
-        empty index array asks for the means only (any GP)."""
+        empty index array asks for the means only (any GP). ``rows``: ``kernel_rows(u)``
+        when the caller has them already."""
         st = self._stack  # type: ignore[attr-defined]
         u = np.asarray(u, float).ravel()
-        d2 = (st["x"] - u) ** 2                                   # (n, d)
-        k = matern52_in_place(st["inv_l2"][st["rep"]] @ d2.T)   # (K, n): one per kernel
+        k = self.kernel_rows(u) if rows is None else rows        # (K, n): one per kernel
         h = np.concatenate(([1.0], u[st["varying"]]))            # (p,)
         means = st["beta"] @ h + _kernel_dot(k, st)
         mean = self.center + self.scale * (means @ self.components)
@@ -127,8 +136,7 @@ class VectorGP:
             v = np.matmul(ks[:, None, :], linv)[:, 0, :]        # linv: (K, n, n)
             left = 1.0 - (v * v).sum(1)
         else:
-            left = _shifted_variance(ks, st["x"], st["inv_l2"][outs], st["nugget"][outs],
-                                     linv)                     # linv: packed, float32
+            left = _shifted_variance(ks, st["nugget"][outs], *linv)   # packed, float32
         rr = h[None, :] - np.matmul(ks[:, None, :], kinv_h)[:, 0, :]
         shared = np.maximum(left + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
         variances = s2 * shared[inverse]
@@ -149,14 +157,27 @@ class VectorGP:
             st["linv_t"][int(q)] = found
         return found
 
+    def _gram(self, q: int) -> np.ndarray:
+        """Kernel ``q``'s matrix K = C + g I over the training inputs (n, n), made on first
+        use and kept (``_shifted_variance`` reads its row K e_i: 40 us of a query on a
+        551-design group otherwise; 2.4 MB)."""
+        st = self._stack  # type: ignore[attr-defined]
+        found = st["gram"].get(int(q))
+        if found is None:
+            gp = self.gps[int(st["rep"][q])]
+            found = matern52(gp.x, gp.x, gp.lengths)
+            found[np.diag_indices_from(found)] += gp.nugget
+            st["gram"][int(q)] = found
+        return found
+
     def _variance_stack(self, sel: slice | np.ndarray) -> tuple:
         """The arrays a variance over outputs ``sel`` reads: their indices, the distinct
         kernels among them and each output's place among those, per kernel L^-1 packed in
         single precision (its lower triangle row by row, n (n + 1) / 2 numbers: BLAS stpmv
-        reads exactly that; ``_shifted_variance``; up to SMALL_N designs instead the
-        (K, n, n) stack of (L^-1)^T in double precision, for one batched product), K^-1 H
-        and A^-1, and the outputs' signal variances; gathered once per distinct ``sel``
-        (a query asks for the same few)."""
+        reads exactly that) and K (``_shifted_variance`` reads both; up to SMALL_N designs
+        instead the (K, n, n) stack of (L^-1)^T in double precision, for one batched
+        product), K^-1 H and A^-1, and the outputs' signal variances; gathered once per
+        distinct ``sel`` (a query asks for the same few)."""
         st = self._stack  # type: ignore[attr-defined]
         rows = np.arange(len(st["s2"]))[sel]
         key = rows.tobytes()
@@ -167,8 +188,9 @@ class VectorGP:
             kernels, inverse = np.unique(st["kernel"][rows], return_inverse=True)
             linv = (np.array([self._linv_t(q) for q in kernels])
                     if len(st["x"]) <= SMALL_N else
-                    tuple(np.ascontiguousarray(self._linv_t(q).T)[lower]
-                          .astype(np.float32) for q in kernels))
+                    (tuple(self._gram(q) for q in kernels),
+                     tuple(np.ascontiguousarray(self._linv_t(q).T)[lower]
+                           .astype(np.float32) for q in kernels)))
             hit = (rows, kernels, inverse.ravel(), linv,
                    np.ascontiguousarray(st["kinv_h"][kernels]),
                    np.ascontiguousarray(st["a_inv"][kernels]), st["s2"][rows].copy())
@@ -249,10 +271,10 @@ def _kernel_dot(k: np.ndarray, st: dict) -> np.ndarray:
     return out
 
 
-def _shifted_variance(ks: np.ndarray, x: np.ndarray, inv_l2: np.ndarray,
-                      nugget: np.ndarray, packed_linv: tuple[np.ndarray, ...]) -> np.ndarray:
-    """1 - k^T K^-1 k for each output's correlations ``ks`` (m, n) with the training
-    inputs ``x`` (n, d), K = L L^T = C + g I (unit signal variance, nugget g), from L^-1
+def _shifted_variance(ks: np.ndarray, nugget: np.ndarray, grams: tuple[np.ndarray, ...],
+                      packed_linv: tuple[np.ndarray, ...]) -> np.ndarray:
+    """1 - k^T K^-1 k for each kernel's correlations ``ks`` (m, n) with the training
+    inputs, K = L L^T = C + g I (unit signal variance, nugget g; ``grams``), from L^-1
     packed in single precision (``packed_linv``).
 
     For any training row i, K^-1 k = e_i + K^-1 delta with delta = k - K e_i, so
@@ -267,10 +289,9 @@ def _shifted_variance(ks: np.ndarray, x: np.ndarray, inv_l2: np.ndarray,
     within 5 % of the double-precision one (median 0.1 %), at 0.6 of the time
     (benchmarks/RESULTS.md, fifteenth session)."""
     n = ks.shape[1]
-    i = int(np.argmax(ks.sum(0)))               # one row for all outputs: one GEMM
-    k_col = matern52_in_place(inv_l2 @ ((x - x[i]) ** 2).T)          # C e_i, (m, n)
-    k_col[:, i] += nugget                                              # K e_i
-    delta = (ks - k_col).astype(np.float32)
+    i = int(np.argmax(ks[0] if len(ks) == 1 else ks.sum(0)))     # one row for all kernels
+    delta = np.array([k - gram[i] for k, gram in zip(ks, grams, strict=True)],
+                     dtype=np.float32)                                 # k - K e_i
     v = np.array([stpmv(n, ap, dj, lower=0, trans=1)                   # L^-1 delta
                   for ap, dj in zip(packed_linv, delta, strict=True)], dtype=float)
     return 2.0 * (1.0 - ks[:, i]) + nugget - (v * v).sum(1)
