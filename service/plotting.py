@@ -13,14 +13,18 @@ import numpy as np
 def nearby_records(db_path: Path, design: Any, count: int) -> list[Any]:
     """Up to ``count`` converged FE records of the design's family, nearest in (L, t)
     first; empty when there is no database."""
-    from service.store_access import open_store
+    from service.store_access import file_version, open_store, summary_rows
 
     if count == 0 or not Path(db_path).is_file():
         return []
     family = design.family
+    try:
+        version = file_version(Path(db_path))
+    except OSError:         # gone since: no nearby curves, as without a database
+        return []
     with open_store(db_path) as db:
         rows = []
-        for row in db.summaries():
+        for row in summary_rows(version, db):
             d = row["design"]
             same = (d["body_material"], d["membrane_material"], round(d["T_mm"], 6),
                     round(d["b_mm"], 6), round(d["h_mm"], 6)) == family

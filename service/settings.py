@@ -43,6 +43,12 @@ class ServiceSettings(BaseSettings):
     queue_size: int = Field(8, ge=0, le=10_000, description="solve jobs waiting for a worker")
     job_time_limit_s: float = Field(900.0, gt=0, le=86_400,
                                     description="wall-time limit of one solve job, s")
+    max_solve_dofs: int = Field(
+        500_000, ge=1_000, le=100_000_000,
+        description="largest FE model a solve job may build, in degrees of freedom "
+        "(estimated from the design's mesh before queueing; mesh level 2 of the box's "
+        "longest chamber is 472k, the standard design's 275k). A solve's memory grows "
+        "faster than its size: one with 2.0M took 17.8 GB before its first step")
     retry_after_s: int = Field(30, ge=1, le=3600,
                                description="Retry-After sent when the job queue is full, s")
     job_history: int = Field(1000, ge=1, le=1_000_000,

@@ -99,6 +99,10 @@ class Design:
             raise InputError("b_mm", f"chamber width {self.b_mm} mm does not fit in the "
                              f"actuator width {self.W_mm} mm", f"b_mm < W_mm = {self.W_mm}")
         body = self.resolved_body_length_mm
+        if body < self.L_mm + 0.2 - 1e-9:     # no chamber offset could fit it
+            raise InputError("body_length_mm", f"a body of {body:g} mm cannot hold a "
+                             f"chamber of L_mm = {self.L_mm:g} mm and its end walls",
+                             f"body_length_mm >= L_mm + 0.2 = {self.L_mm + 0.2:g}")
         offset = self.resolved_chamber_offset_mm
         if offset + self.L_mm > body - 0.1 or offset < 0.1:
             raise InputError("chamber_offset_mm", f"chamber from x = {offset:g} to "

@@ -244,14 +244,26 @@ def locate(design: Design, reduced: bool = False) -> BoxPoint:
                                 "the emulator's box",
                                 f"{lo:g} <= {n} <= {hi:g} mm at W = 3 mm (or the same "
                                 "ratios to W)", nearest())
-    scales = ((("body_material", s_body / s_membrane),) if reduced else
-              (("body_material", s_body), ("membrane_material", s_membrane)))
-    for field, s in scales:
-        lo_s, hi_s = REDUCED_RATIO_RANGE if reduced else STIFFNESS_SCALE_RANGE
-        if not lo_s * (1 - SCALE_TOLERANCE) <= s <= hi_s * (1 + SCALE_TOLERANCE):
-            raise OutOfBoxError(field, f"stiffness scale {s:.4g} is outside the box",
-                                f"{lo_s:g} <= s <= {hi_s:g} (mu_kpa = s x the preset's)",
-                                nearest())
+    if reduced:
+        ratio = s_body / s_membrane
+        lo_s, hi_s = REDUCED_RATIO_RANGE
+        if not lo_s * (1 - SCALE_TOLERANCE) <= ratio <= hi_s * (1 + SCALE_TOLERANCE):
+            # the layer whose own scale strays from the box's is the one to change
+            lo_layer, hi_layer = STIFFNESS_SCALE_RANGE
+            field = ("membrane_material" if lo_layer <= s_body <= hi_layer
+                     and not lo_layer <= s_membrane <= hi_layer else "body_material")
+            raise OutOfBoxError(field, f"the layers' stiffness ratio s_body / s_membrane = "
+                                f"{ratio:.4g} (body x{s_body:.4g}, membrane x{s_membrane:.4g} of "
+                                "their presets' mu_kpa) is outside the box; only the ratio "
+                                "matters, scaling both scales the pressure axis",
+                                f"{lo_s:g} <= s_body / s_membrane <= {hi_s:g}", nearest())
+    else:
+        for field, s in (("body_material", s_body), ("membrane_material", s_membrane)):
+            lo_s, hi_s = STIFFNESS_SCALE_RANGE
+            if not lo_s * (1 - SCALE_TOLERANCE) <= s <= hi_s * (1 + SCALE_TOLERANCE):
+                raise OutOfBoxError(field, f"stiffness scale {s:.4g} is outside the box",
+                                    f"{lo_s:g} <= s <= {hi_s:g} (mu_kpa = s x the "
+                                    "preset's)", nearest())
     rule = replace(Design(W_mm=BOX_WIDTH_MM, **geometry), body_length_mm=None,
                    chamber_offset_mm=None).validated()
     for name in ("body_length_mm", "chamber_offset_mm"):

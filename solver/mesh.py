@@ -18,6 +18,7 @@ import numpy as np
 from skfem import MeshHex
 
 from solver.design import Design
+from solver.settings import SolverSettings
 
 
 @dataclass(frozen=True)
@@ -130,14 +131,12 @@ def _join(*segments: np.ndarray) -> np.ndarray:
     return np.unique(np.concatenate(segments))
 
 
-def build_mesh(design: Design, level: int,
-               divisions: MeshDivisions = DEFAULT_DIVISIONS,
-               full_width: bool = False) -> ActuatorMesh:
-    """Mesh the half actuator of a validated design at refinement ``level`` (>= 0):
-    every division of ``divisions`` times level + 1. ``full_width``: the whole width
-    instead, -W/2 <= y <= W/2 (the half mesh and its mirror image), for checking what
-    the symmetry plane hides (benchmarks/full_width_check.py); the solver uses the half."""
-    d = design.validated()
+
+def grid_lines(design: Design, level: int, divisions: MeshDivisions = DEFAULT_DIVISIONS
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The half mesh's grid lines x, y, z (mm) of a validated design at ``level``
+    (``build_mesh``'s tensor grid, before the chamber's elements are removed)."""
+    d = design
     assert d.chamber_offset_mm is not None and d.body_length_mm is not None  # validated
     x0 = float(d.chamber_offset_mm)
     x1 = x0 + d.L_mm
@@ -159,14 +158,45 @@ def build_mesh(design: Design, level: int,
     yb, yw = 0.5 * d.b_mm, 0.5 * d.W_mm
     y = _join(np.linspace(0.0, yb, r * divisions.y_chamber + 1),
               _segment(yb, yw, r * divisions.y_side, "a"))
-    if full_width:
-        y = _join(-y, y)
 
     z_m, z_c = d.t_mm, d.t_mm + d.h_mm
     z_top = z_c + d.T_mm
     z = _join(np.linspace(0.0, z_m, r * divisions.membrane + 1),
               np.linspace(z_m, z_c, r * divisions.chamber + 1),
               _segment(z_c, z_top, r * divisions.body, "a"))
+    return x, y, z
+
+
+def estimated_dofs(design: Design, settings: SolverSettings) -> int:
+    """Degrees of freedom of the half model of ``design`` solved with ``settings`` (its
+    mesh level, divisions and element), from the grid alone (no mesh built): three per
+    node of the tensor grid, a triquadratic element ("hex2") adding the edge, face and
+    centre nodes. An upper bound (the chamber's nodes and the clamp's fixed ones are
+    counted; 11.7k at the standard design, whose solve has 10.0k): what a solve's memory
+    grows with."""
+    x, y, z = grid_lines(design.validated(), settings.mesh_level,
+                         NAMED_DIVISIONS[settings.mesh_divisions])
+    q = 2 if settings.element == "hex2" else 1
+    return 3 * (q * (len(x) - 1) + 1) * (q * (len(y) - 1) + 1) * (q * (len(z) - 1) + 1)
+
+
+def build_mesh(design: Design, level: int,
+               divisions: MeshDivisions = DEFAULT_DIVISIONS,
+               full_width: bool = False) -> ActuatorMesh:
+    """Mesh the half actuator of a validated design at refinement ``level`` (>= 0):
+    every division of ``divisions`` times level + 1. ``full_width``: the whole width
+    instead, -W/2 <= y <= W/2 (the half mesh and its mirror image), for checking what
+    the symmetry plane hides (benchmarks/full_width_check.py); the solver uses the half."""
+    d = design.validated()
+    x, y, z = grid_lines(d, level, divisions)
+    if full_width:
+        y = _join(-y, y)
+    assert d.chamber_offset_mm is not None and d.body_length_mm is not None  # validated
+    x0 = float(d.chamber_offset_mm)
+    x1 = x0 + d.L_mm
+    xb = float(d.body_length_mm)
+    yb = 0.5 * d.b_mm
+    z_m, z_c = d.t_mm, d.t_mm + d.h_mm
 
     mesh = MeshHex.init_tensor(x, y, z)
     centroids = mesh.p[:, mesh.t].mean(axis=1)

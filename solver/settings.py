@@ -86,8 +86,11 @@ class SolverSettings:
         if self.tip == "spring" and self.spring_k_n_per_m <= 0:
             raise InputError("spring_k_n_per_m", "a spring tip needs a positive stiffness",
                              "spring_k_n_per_m > 0")
-        if self.tip == "blocked" and self.control == "pressure":
-            pass  # allowed: force against prescribed pressure
+        if self.tip != "spring" and self.spring_k_n_per_m != 0:
+            # refused, not ignored: the stiffness would key a second record of one solve
+            raise InputError("spring_k_n_per_m", f"a {self.tip} tip has no spring (got "
+                             f"{self.spring_k_n_per_m!r})",
+                             "spring_k_n_per_m = 0 unless tip = spring")
         return self
 
     def as_dict(self) -> dict[str, object]:

@@ -127,6 +127,31 @@ def test_plot_overlays_nearby_fe_curves(client):
     assert r.status_code == 200 and r.content[:4] == b"\x89PNG"
 
 
+def test_the_summary_rows_are_read_once_per_file_version(client, db_path, monkeypatch):
+    """/v1/curves and the plot's nearby FE curves read the records' summary rows once per
+    version of the file (17 s for the shipped database on a slow core: every plot took
+    that long), and again after a write."""
+    from service.plotting import nearby_curves
+    from solver.store.hdf5 import CurveStore as Store
+
+    reads = []
+    summaries = Store.summaries
+    monkeypatch.setattr(Store, "summaries",
+                        lambda self, **f: reads.append(1) or summaries(self, **f))
+    path = client.app.state.settings.db_path
+    for _ in range(3):
+        nearby_curves(path, Design(L_mm=8.0), 2, 2000.0)
+        assert client.get("/v1/curves").json()["total"] == 5
+    assert len(reads) == 1      # (this app skips start-up, which reads them too)
+    with CurveStore(db_path, mode="a") as db:
+        db.put(make_record(design(9.1, 0.5, "pdms_1_10", "ecoflex_00_30"), SETTINGS,
+                           make_curve(6)))
+    labels = [label for label, _, _ in nearby_curves(path, Design(L_mm=8.0), 2, 2000.0)]
+    assert labels == ["FE L=7.1 mm, t=0.5 mm", "FE L=9.1 mm, t=0.5 mm"]
+    assert client.get("/v1/curves").json()["total"] == 6
+    assert len(reads) == 2
+
+
 def test_solve_of_a_stored_design_is_a_conflict(client):
     body = {"design": {"L_mm": 7.1, "t_mm": 0.5},
             "settings": {"mesh_level": 0, "element": "hex1"}}

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import pathlib
 import re
 import threading
 from collections import OrderedDict
@@ -15,7 +13,7 @@ from fastapi import APIRouter, Path, Query
 from service.convert import jsonable
 from service.deps import SettingsDep
 from service.schemas import CurveDetail, CurvePage, CurvesQuery, CurveSummary
-from service.store_access import open_store
+from service.store_access import file_version, open_store, summary_rows
 from solver.errors import NotFoundError
 
 router = APIRouter(prefix="/v1", tags=["curves"])
@@ -60,30 +58,24 @@ def summary(record: Any) -> CurveSummary:
                         max_pressure_pa=_peak(c.pressure_pa), max_angle_deg=_peak(c.angle_deg))
 
 
-# Summary rows and page items of one version of the database file, read once: the store
-# publishes a new file on every write, so (path, inode, mtime, size) names a version.
-# Reading the 2155 shipped records' summary rows takes 3-4 s; a request then reads only
-# the page items not seen before, through the one store it opened.
-_INDEX: dict[tuple, tuple[dict[str, Any], ...]] = {}
+# Summary rows (``store_access.summary_rows``) in page order, and page items, of one
+# version of the database file: a request reads only the page items not seen before,
+# through the one store it opened.
+_ORDERED: dict[tuple, tuple[dict[str, Any], ...]] = {}
 _ITEMS: OrderedDict[tuple, CurveSummary] = OrderedDict()
 _ITEMS_KEPT = 4096
 _LOCK = threading.Lock()
 
 
-def _version(path: pathlib.Path) -> tuple[str, int, int, int]:
-    st = os.stat(path)
-    return str(path), st.st_ino, st.st_mtime_ns, st.st_size
-
-
 def _index(version: tuple, db: Any) -> tuple[dict[str, Any], ...]:
     """Every record's summary row (no curves), in page order."""
     with _LOCK:
-        rows = _INDEX.get(version)
+        rows = _ORDERED.get(version)
     if rows is None:
-        rows = tuple(sorted(db.summaries(), key=_order))
+        rows = tuple(sorted(summary_rows(version, db), key=_order))
         with _LOCK:
-            _INDEX.clear()          # one version kept: the current file
-            _INDEX[version] = rows
+            _ORDERED.clear()          # one version kept: the current file
+            _ORDERED[version] = rows
     return rows
 
 
@@ -106,11 +98,11 @@ def list_curves(query: Annotated[CurvesQuery, Query()], settings: SettingsDep) -
     # the version before opening: a write in between caches newer rows under the older
     # version, which no later request asks for (the reverse would serve stale rows)
     try:
-        version = _version(settings.db_path)
+        version = file_version(settings.db_path)
     except OSError:
         version = None
     with open_store(settings.db_path) as db:    # 503 when missing or unreadable
-        version = version or _version(settings.db_path)
+        version = version or file_version(settings.db_path)
         rows = [r for r in _index(version, db) if _matches(r, query)]
         page = [_item(version, str(r["key"]), db)
                 for r in rows[query.offset:query.offset + query.limit]]

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from dataclasses import replace
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Path
 from fastapi.responses import JSONResponse
 
 from service.convert import to_design, to_settings
 from service.deps import ApiKeyDep, JobsDep, SettingsDep
-from service.errors import ConflictError
+from service.errors import ConflictError, FieldError
 from service.jobs import JobState
 from service.schemas import Job, SolveRequest
 from service.schemas.jobs import Progress
@@ -39,6 +40,7 @@ def solve(request: SolveRequest, jobs: JobsDep, settings: SettingsDep) -> JSONRe
 
     design = to_design(request.design)
     solver_settings = to_settings(request.settings)
+    _check_size(design, solver_settings, settings.max_solve_dofs)
     key = record_key(design, solver_settings)
     if stored_key(settings.db_path, key):
         raise ConflictError(f"this design and settings are already in the database as "
@@ -46,6 +48,30 @@ def solve(request: SolveRequest, jobs: JobsDep, settings: SettingsDep) -> JSONRe
     job = jobs.submit(design, solver_settings, key)
     return JSONResponse(job_view(job).model_dump(), status_code=202,
                         headers={"Location": f"/v1/jobs/{job.id}"})
+
+
+def _check_size(design: Any, solver_settings: Any, max_dofs: int) -> None:
+    """422 naming ``settings.mesh_level`` (or the design, when even the coarsest mesh is
+    too big) when the solve would build more than ``max_dofs`` degrees of freedom
+    (``solver.mesh.estimated_dofs``): one such request took 17.8 GB before its first
+    step, and a job's memory is not otherwise bounded."""
+    from solver.mesh import estimated_dofs
+
+    dofs = estimated_dofs(design, solver_settings)
+    if dofs <= max_dofs:
+        return
+    fits = [level for level in range(solver_settings.mesh_level)
+            if estimated_dofs(design, replace(solver_settings, mesh_level=level)) <= max_dofs]
+    what = (f"this design at mesh level {solver_settings.mesh_level} "
+            f"({solver_settings.element}, {solver_settings.mesh_divisions}) has about "
+            f"{dofs:,} degrees of freedom, more than this server solves ({max_dofs:,}, "
+            "BALLOON_MAX_SOLVE_DOFS)")
+    if fits:
+        raise FieldError(("body", "settings", "mesh_level"), what,
+                         f"0 <= mesh_level <= {fits[-1]} for this design")
+    raise FieldError(("body", "design"), what, "a smaller design (L_mm, body_length_mm, "
+                     "b_mm, W_mm) or element hex1, or `balloon solve` on a machine with "
+                     "the memory")
 
 
 @router.get("/jobs/{job_id}", response_model=Job, summary="A job's status and progress")
