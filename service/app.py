@@ -8,7 +8,6 @@ resource, live in ``service.routes``; every error is answered by
 
 from __future__ import annotations
 
-import threading
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from typing import Any
@@ -25,7 +24,7 @@ from service.openapi import install_contract
 from service.routes import calibration, curves, health, inverse, jobs, materials, predict
 from service.routes.pages import install_pages
 from service.settings import ServiceSettings, get_settings
-from service.store_access import ResultWriter, read_summaries
+from service.store_access import ResultWriter
 
 DESCRIPTION = """\
 Design questions about bending balloon actuators (two bonded silicone layers).
@@ -51,10 +50,6 @@ def create_app(settings: ServiceSettings | None = None, *,
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         if load_surrogate:
             app.state.models.load_fitted()
-            # the database's summary rows (/v1/curves, the plot's nearby FE curves) read
-            # now, not in the first request that needs them (17 s on a slow core)
-            threading.Thread(target=read_summaries, args=(settings.db_path,), daemon=True,
-                             name="curve-index").start()
         app.state.jobs.start()
         try:
             yield

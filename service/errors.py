@@ -169,6 +169,12 @@ FIELD_RANGES: dict[str, str] = {}
 def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
     out = []
     for err in exc.errors():
+        if err.get("type") == "json_invalid":
+            # pydantic locates it at ("body", character offset): the body is the field
+            out.append(_unparsed_body(f"cannot be parsed as JSON ("
+                                      f"{(err.get('ctx') or {}).get('error', 'invalid')} at "
+                                      f"character {err.get('loc', ('', '?'))[-1]})"))
+            continue
         loc = [p for p in err.get("loc", ()) if isinstance(p, str | int)]
         names = [p for p in loc[1:] if isinstance(p, str)]
         item: dict[str, Any] = {"loc": loc,
@@ -179,6 +185,12 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
             item["allowed"] = allowed
         out.append(item)
     return out
+
+
+def _unparsed_body(message: str) -> dict[str, Any]:
+    """The error entry of a body that is not the JSON document asked for."""
+    return {"loc": ["body"], "field": "body", "message": message,
+            "allowed": "a UTF-8 JSON document of the documented shape"}
 
 
 def _allowed_methods(request: Request) -> list[str]:
@@ -208,11 +220,10 @@ def install_error_handlers(app: FastAPI) -> None:
             # FastAPI's 400 for a body json.loads cannot take (nested deeper than the
             # parser's recursion limit, not UTF-8): an input error like any other JSON one
             return Problem(422, "Invalid input", "body: cannot be parsed as JSON",
-                           "invalid-input", errors=[{
-                               "loc": ["body"], "field": "body",
-                               "message": "cannot be parsed as JSON",
-                               "allowed": "a UTF-8 JSON document of the documented shape"}]
+                           "invalid-input", errors=[_unparsed_body("cannot be parsed as JSON")]
                            ).response(request)
+        if exc.status_code == 413:  # the body limit, met while a chunked body streamed in
+            return problem_for(PayloadTooLargeError(str(exc.detail))).response(request)
         titles = {404: "Not found", 405: "Method not allowed", 406: "Not acceptable"}
         headers = dict(exc.headers or {})
         if exc.status_code == 405:  # every method of the path (Starlette names one route's)

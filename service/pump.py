@@ -176,6 +176,11 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
     drop = inlet_drop(inlet, flow_ul_s)
     result = surrogate.inverse(design, angles_deg, level=level)
     volume = getattr(result, "volume_ul", None)
+    if flow_ul_s is not None and volume is None:    # asked for, never silently dropped
+        raise InputError("flow_ul_s", f"model {model!r} gives no injected volume for this "
+                         "design, so no time at a flow rate",
+                         'omit flow_ul_s, or model "emulator" (or an exponential model '
+                         "fitted from FE curves with volumes)")
     body: dict[str, Any] = {
         "model": model, "level": level, "design": design.as_dict(),
         "angle_deg": [float(a) for a in angles_deg],

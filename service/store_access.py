@@ -78,8 +78,9 @@ def _state(path: str, inode: int, mtime_ns: int, size: int) -> tuple[int | None,
 # Every record's summary row (no curves) of one version of the database file, read once:
 # the store publishes a new file on every write, so (path, inode, mtime, size) names a
 # version. Reading the 2403 shipped records' rows takes 17 s on a slow VM core (they are
-# HDF5 attributes); /v1/curves, the plot's nearby FE curves and the service's start-up
-# read them from here.
+# HDF5 attributes); /v1/curves and the plot's nearby FE curves read them from here. Not
+# read at start-up in a thread: h5py objects freed by the collector in one thread while
+# another reads hung a test client for 10 minutes (h5py's object lock).
 _SUMMARIES: dict[tuple, tuple[dict[str, Any], ...]] = {}
 _SUMMARIES_LOCK = threading.Lock()
 
@@ -103,17 +104,6 @@ def summary_rows(version: tuple, db: Any) -> tuple[dict[str, Any], ...]:
             _SUMMARIES.clear()
             _SUMMARIES[version] = rows
     return rows
-
-
-def read_summaries(path: Path) -> None:
-    """Read the database's summary rows now (the service's start-up, in the background),
-    so that no request waits for them; nothing when there is no readable database."""
-    try:
-        version = file_version(path)
-        with open_store(path) as db:
-            summary_rows(version, db)
-    except (OSError, BalloonError):
-        pass        # a request reports it
 
 
 def stored_key(path: Path, key: str) -> bool:

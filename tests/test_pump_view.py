@@ -147,6 +147,10 @@ def test_the_pump_gauge_reads_r_q_above_the_chamber(shipped_client):
                                                     "inlet": {}}).json()
     assert inv["pump_pressure_pa"][0] - inv["pressure_pa"][0] == pytest.approx(
         R_PAPER_CHANNEL * 2.5, rel=1e-4)
+    # a model with no injected volume does not drop the flow rate asked for
+    r = shipped_client.post("/v1/inverse/pressure", json={"angles_deg": [45], "flow_ul_s": 2.5,
+                                                          "model": "paper"})
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "flow_ul_s"
 
 
 @pytest.mark.parametrize(("body", "field", "allowed"), [

@@ -101,7 +101,10 @@ def test_predict_refuses_nan_and_malformed_json(client):
     headers = {"content-type": "application/json"}
     r = client.post("/v1/predict", content=b'{"pressures_pa": [NaN]}', headers=headers)
     assert_problem(r, 422, "pressures_pa.0")
-    assert_problem(client.post("/v1/predict", content=b"{not json", headers=headers), 422)
+    for broken in (b"{not json", b'{"design": {"L_mm": 7.1,}, ', b'{"pressures_pa": [1]} x'):
+        problem = assert_problem(client.post("/v1/predict", content=broken, headers=headers),
+                                 422, "body")     # the body, not a character offset
+        assert problem["errors"][0]["allowed"].startswith("a UTF-8 JSON document")
 
 
 @pytest.mark.parametrize("design, field", [
@@ -258,7 +261,7 @@ def test_body_limit(client):
         yield b'"}'
     r = client.post("/v1/predict", content=chunks(),
                     headers={"content-type": "application/json"})
-    assert_problem(r, 413)
+    assert assert_problem(r, 413)["type"].endswith(":payload-too-large")   # as announced
 
 
 def test_cors_is_off_by_default_and_configurable(client, tmp_path):
@@ -326,8 +329,9 @@ def test_calibrate_save_name_errors_name_the_save_field(client):
                            json={"rows": EXAMPLE_ROWS, "model": "paper", "save": save})
 
     assert_problem(calibrate("../lab"), 422, "save")  # a name, never a path
-    assert "not 'fitted' or 'paper'" in assert_problem(calibrate("paper"), 422, "save")[
-        "errors"][0]["allowed"]
+    for builtin in ("paper", "emulator", "exponential", "fitted"):   # never choosable
+        assert "not 'emulator', 'exponential', 'fitted', 'paper'" in assert_problem(
+            calibrate(builtin), 422, "save")["errors"][0]["allowed"]
     assert calibrate("lab1").json()["saved_model"] == "lab1"
     body = assert_problem(calibrate("lab1"), 409)  # never overwrites a model
     assert body["model"] == "lab1" and "'lab1' already exists" in body["detail"]

@@ -142,7 +142,7 @@ def test_the_summary_rows_are_read_once_per_file_version(client, db_path, monkey
     for _ in range(3):
         nearby_curves(path, Design(L_mm=8.0), 2, 2000.0)
         assert client.get("/v1/curves").json()["total"] == 5
-    assert len(reads) == 1      # (this app skips start-up, which reads them too)
+    assert len(reads) == 1
     with CurveStore(db_path, mode="a") as db:
         db.put(make_record(design(9.1, 0.5, "pdms_1_10", "ecoflex_00_30"), SETTINGS,
                            make_curve(6)))

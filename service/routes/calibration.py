@@ -67,7 +67,8 @@ class CalibrateRequest(Schema):
     save: str | None = Field(None, min_length=1, max_length=64,
                              pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$",
                              description="save the augmented model under this name "
-                                         "(needs X-API-Key; a new name, not fitted or paper)")
+                                         "(needs X-API-Key; a new name, not a built-in "
+                                         "model's: emulator, exponential, fitted, paper)")
     folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve "
                        "(reduced to the number of curves when there are fewer)")
     strict: bool = Field(False, description="refuse data that otherwise only get a warning "

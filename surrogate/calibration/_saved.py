@@ -34,7 +34,8 @@ from surrogate.exponential.equations import TAU_FORM
 
 FORMAT = "balloon.calibrated-model/1"
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
-RESERVED = ("fitted", "paper")
+# the built-in models' names (service/models.py): a saved model of one could never be chosen
+RESERVED = ("emulator", "exponential", "fitted", "paper")
 
 
 class ModelExistsError(ExistsError, InputError):
@@ -178,7 +179,7 @@ def _check_name(name: str) -> str:
     if not isinstance(name, str) or not NAME_PATTERN.match(name) or name in RESERVED:
         raise InputError("name", f"invalid model name {name!r}",
                          "1-64 letters, digits, '_', '.', '-', starting with a letter or "
-                         "digit; not 'fitted' or 'paper'")
+                         "digit; not " + ", ".join(repr(n) for n in RESERVED))
     return name
 
 
@@ -311,7 +312,7 @@ def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
     if not path.is_file():
         known = sorted(p.stem for p in models_dir.glob("*.json")) if models_dir.is_dir() else []
         raise ModelNotFoundError(f"no model {name!r} in {models_dir}; known: "
-                                 + ", ".join(["fitted", "paper"] + known))
+                                 + ", ".join(list(RESERVED) + known))
     try:  # ValueError: JSONDecodeError, UnicodeDecodeError, an integer of > 4300 digits
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (ValueError, RecursionError) as exc:
