@@ -104,7 +104,8 @@ class SearchBounds:
             if tuple(pair) not in PAIRS:
                 raise InputError("material_pairs", f"pair {pair[0]}/{pair[1]} is not in the "
                                  "box", ", ".join(f"{b}/{m}" for b, m in PAIRS))
-        return tuple(tuple(p) for p in self.pairs)  # type: ignore[misc]
+        # each pair once, in the order given: a repeated pair would be searched again
+        return tuple(dict.fromkeys(tuple(p) for p in self.pairs))  # type: ignore[misc]
 
 
 VARIABLES = (*GEOMETRY, "body_stiffness_scale", "membrane_stiffness_scale")

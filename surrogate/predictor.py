@@ -48,6 +48,23 @@ def number_array(values: object, field_name: str, unit: str) -> np.ndarray:
     return a
 
 
+def band_within_fe(lower: np.ndarray, upper: np.ndarray, limit_deg: float,
+                   validity: dict) -> tuple[np.ndarray, np.ndarray]:
+    """A band (deg; NaN stays NaN) cut at the FE range's largest angle magnitude
+    ``limit_deg``, and said in ``validity`` (flag ``band_capped_at_fe_range``) where it
+    was: an answer inside the range whose band reaches past it (105.6 deg against an FE
+    limit of 97.3) would state angles the FE never gave. Every model's answer by pressure
+    goes through it."""
+    lo, hi = np.asarray(lower, float), np.asarray(upper, float)
+    cut = (np.abs(lo) > limit_deg * (1 + 1e-9)) | (np.abs(hi) > limit_deg * (1 + 1e-9))
+    if cut.any():
+        validity["flags"].append("band_capped_at_fe_range")
+        validity["messages"].append(
+            f"{int(cut.sum())} band(s) cut at {limit_deg:.1f} deg, the largest angle of the "
+            "FE's range here: the FE gives no angle beyond it")
+    return np.clip(lo, -limit_deg, limit_deg), np.clip(hi, -limit_deg, limit_deg)
+
+
 @dataclass(frozen=True)
 class Prediction:
     """Angles (deg) at ``pressure_pa`` (Pa) with a band at ``level`` (lower_deg, upper_deg);

@@ -168,3 +168,14 @@ def test_every_variable_pinned_answers_the_one_design_when_it_meets_the_target(e
     miss = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0,
                                                  angle_deg=0.5 * angle), bounds)
     assert not miss.feasible and "every variable is pinned" in miss.explanation
+
+
+def test_a_pair_given_twice_is_searched_once():
+    """The allowed pairs are each searched once, in the order given: twenty copies of one
+    pair cost twenty searches (25 s over HTTP) and found nothing more."""
+    from surrogate.design_search import SearchBounds
+
+    pair = ("pdms_1_10", "ecoflex_00_30")
+    other = ("ecoflex_00_30", "pdms_1_15")
+    bounds = SearchBounds(pairs=(pair,) * 20 + (other, pair))
+    assert bounds.allowed_pairs() == (pair, other)

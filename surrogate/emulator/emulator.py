@@ -53,7 +53,7 @@ from surrogate.emulator.features import (
 )
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES, spline, spread_variance
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
-from surrogate.predictor import InversePrediction, Prediction, number_array
+from surrogate.predictor import InversePrediction, Prediction, band_within_fe, number_array
 from surrogate.volume_control import by_volume
 
 # Unit-cube distance within which a database curve that ended early (volume stop, Newton
@@ -649,6 +649,7 @@ class Emulator:
             angle, lower, upper = -angle, -upper, -lower
         force = self._force(pe, cb, point, p_red, z)
         validity = self._validity(pe, cb, point, p, past, force)
+        lower, upper = band_within_fe(lower, upper, cb.limit_angle_deg, validity)
         return self._prediction(design, point, p, (angle, lower, upper), level, validity,
                                 force, volume)
 

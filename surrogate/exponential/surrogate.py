@@ -25,7 +25,7 @@ from surrogate.exponential.paper_tables import SOURCE as PAPER_SOURCE
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.validity import check, past_fe
 from surrogate.exponential.volume_relation import VolumeRelation, check_volumes
-from surrogate.predictor import InversePrediction, Prediction, number_array
+from surrogate.predictor import InversePrediction, Prediction, band_within_fe, number_array
 from surrogate.volume_control import by_volume
 
 _PROVENANCE_SUMMARY = ("format_version", "created_utc", "package_version", "git_commit",
@@ -139,6 +139,7 @@ class Surrogate:
         validity = check(fam.domain, design, p, m)
         past = past_fe(fam.domain, p, m)   # no number past the FE's range
         m, lo, hi = (np.where(past, np.nan, x) for x in (m, lo, hi))
+        lo, hi = band_within_fe(lo, hi, fam.domain.angle_max_deg, validity)
         force = tuple(None if f is None else np.where(past, np.nan, f) for f in force)
         volume = None
         if fam.volume is not None:   # the injected volume at the predicted angle
