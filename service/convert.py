@@ -12,11 +12,16 @@ import numpy as np
 
 from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
-from solver.design import Design, design_from_dict
+from solver.design import LIMITS_MM, Design, design_from_dict
 from solver.design_space import named_material
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.settings import SolverSettings, settings_from_dict
+
+# a design's own field names (a model's refusal: outside the box, out of family) -> their
+# place in a request body that holds the design under "design"
+DESIGN_LOCS: dict[str, tuple[str | int, ...]] = {
+    name: ("design", name) for name in (*LIMITS_MM, "body_material", "membrane_material")}
 
 
 def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body", "design")

@@ -112,7 +112,8 @@ def test_outside_the_box_is_refused_with_the_nearest_design(shipped_client):
     assert r.status_code == 422, r.text
     body = r.json()
     assert r.headers["content-type"] == "application/problem+json"
-    assert any(e["field"].endswith("L_mm") for e in body["errors"])
+    assert [e["loc"] for e in body["errors"]] == [["body", "design", "L_mm"]]
+    assert body["errors"][0]["field"] == "design.L_mm"   # where the request holds it
     text = r.text
     assert "4 <= L_mm <= 18" in text
     assert "nearest" in text and "/v1/solve" in text

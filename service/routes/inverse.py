@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from service.convert import jsonable, to_design
+from service.convert import DESIGN_LOCS, jsonable, to_design
 from service.deps import ModelsDep
 from service.errors import located
 from service.models import require
@@ -24,9 +24,7 @@ DESIGN_FIELDS: dict[str, tuple[str | int, ...]] = {
     "membrane_stiffness_scale": ("membrane_stiffness_scale_bounds",),
     "material_pairs": ("material_pairs",),
 }
-PRESSURE_FIELDS: dict[str, tuple[str | int, ...]] = {
-    "angle_deg": ("angles_deg",), "t_mm": ("design", "t_mm"),
-}
+PRESSURE_FIELDS: dict[str, tuple[str | int, ...]] = {**DESIGN_LOCS, "angle_deg": ("angles_deg",)}
 
 
 def _pair(values: list[float] | None) -> tuple[float, float] | None:

@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import Response
 from pydantic_core import to_json
 
-from service.convert import to_design
+from service.convert import DESIGN_LOCS, to_design
 from service.deps import ModelsDep, SettingsDep
 from service.errors import FieldError, located
 from service.pump import FLOW_RANGE
@@ -48,8 +48,8 @@ async def predict(request: PredictRequest, models: ModelsDep) -> Response:
                                 request.flow_ul_s, inlet_of(request.inlet),
                                 request.pressures_at)
         body = predict_answer(surrogate, design, question, request.model, request.level)
-    except InputError as exc:  # e.g. OutOfFamilyError / OutOfBoxError (field "design")
-        raise located(exc, ("body",)) from None
+    except InputError as exc:  # e.g. OutOfFamilyError / OutOfBoxError (a design field)
+        raise located(exc, ("body",), DESIGN_LOCS) from None
     # plain JSON of plain data: the schema is PredictResponse (response_model, for the docs)
     return Response(to_json(body), media_type="application/json")
 
