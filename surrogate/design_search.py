@@ -102,8 +102,11 @@ class SearchBounds:
             return PAIRS
         for pair in self.pairs:
             if tuple(pair) not in PAIRS:
+                scaled = (" (a layer's stiffness scale is searched within its bounds: "
+                          "body_stiffness_scale_bounds, membrane_stiffness_scale_bounds)"
+                          if "*" in pair[0] + pair[1] else "")
                 raise InputError("material_pairs", f"pair {pair[0]}/{pair[1]} is not in the "
-                                 "box", ", ".join(f"{b}/{m}" for b, m in PAIRS))
+                                 f"box{scaled}", ", ".join(f"{b}/{m}" for b, m in PAIRS))
         # each pair once, in the order given: a repeated pair would be searched again
         return tuple(dict.fromkeys(tuple(p) for p in self.pairs))  # type: ignore[misc]
 

@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.schemas.common import MATERIAL_ID, Schema, mm
+from service.schemas.common import INLINE_MATERIAL_ID, Schema, mm
 
 
 class CurvesQuery(Schema):
@@ -19,8 +19,8 @@ class CurvesQuery(Schema):
     T_mm: float | None = mm("T_mm", "body thickness")
     b_mm: float | None = mm("b_mm", "chamber width")
     h_mm: float | None = mm("h_mm", "chamber height")
-    body_material: str | None = Field(None, pattern=MATERIAL_ID)
-    membrane_material: str | None = Field(None, pattern=MATERIAL_ID)
+    body_material: str | None = Field(None, pattern=INLINE_MATERIAL_ID)
+    membrane_material: str | None = Field(None, pattern=INLINE_MATERIAL_ID)
     status: Literal["complete", "stopped", "failed"] | None = None
     offset: int = Field(0, ge=0, le=1_000_000, description="records to skip")
     limit: int = Field(50, ge=1, le=500, description="records per page")

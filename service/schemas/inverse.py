@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from service.pump import MAX_ANGLE_DEG, MAX_FLOW_UL_S, MIN_FLOW_UL_S
-from service.schemas.common import MATERIAL_ID, DesignIn, Schema
+from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
 from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
@@ -29,8 +29,8 @@ class TargetIn(Schema):
 
 
 class MaterialPair(Schema):
-    body_material: str = Field(pattern=MATERIAL_ID)
-    membrane_material: str = Field(pattern=MATERIAL_ID)
+    body_material: str = Field(pattern=INLINE_MATERIAL_ID)
+    membrane_material: str = Field(pattern=INLINE_MATERIAL_ID)
 
 
 class InverseRequest(Schema):

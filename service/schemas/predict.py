@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from service.pump import AXES, MAX_FLOW_UL_S, MIN_FLOW_UL_S
-from service.schemas.common import MATERIAL_ID, DesignIn, Schema
+from service.schemas.common import INLINE_MATERIAL_ID, MATERIAL_ID, DesignIn, Schema
 from surrogate import hydraulics
 
 MAX_PRESSURE_PA = AXES["pressures_pa"][1]
@@ -155,8 +155,8 @@ class PlotQuery(Schema):
     T_mm: float = Field(1.0, ge=0.1, le=10.0, description="body thickness, mm")
     b_mm: float = Field(1.8, ge=0.1, le=20.0, description="chamber width, mm")
     h_mm: float = Field(0.15, ge=0.02, le=5.0, description="chamber height, mm")
-    body_material: str = Field("pdms_1_10", pattern=MATERIAL_ID)
-    membrane_material: str = Field("ecoflex_00_30", pattern=MATERIAL_ID)
+    body_material: str = Field("pdms_1_10", pattern=INLINE_MATERIAL_ID)
+    membrane_material: str = Field("ecoflex_00_30", pattern=INLINE_MATERIAL_ID)
     model: str = MODEL
     level: float = LEVEL
     p_max_pa: float = Field(2000.0, gt=0.0, le=MAX_PRESSURE_PA,
