@@ -180,7 +180,10 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
         item: dict[str, Any] = {"loc": loc,
                                 "field": ".".join(str(p) for p in loc[1:]) or str(loc[0]),
                                 "message": str(err.get("msg", "invalid value"))}
-        allowed = FIELD_RANGES.get(names[-1]) if names else None
+        # a measured row's column (/v1/calibrate's rows) is not the request field of that
+        # name elsewhere (its pressure_pa is not a target's): what any cell may hold
+        allowed = (FIELD_RANGES.get("rows.*") if "rows" in loc[1:2]
+                   else FIELD_RANGES.get(names[-1]) if names else None)
         if allowed:
             item["allowed"] = allowed
         out.append(item)

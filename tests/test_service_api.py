@@ -6,6 +6,7 @@ Eq. 5-6 constants) or from the paper's Table 1 (materials).
 
 from __future__ import annotations
 
+import json
 import math
 
 import pytest
@@ -353,3 +354,28 @@ def test_a_force_target_is_met_across_the_box_by_the_shipped_emulator(shipped_cl
         f, lo, hi = back["force_mn"][0], back["force_lower_mn"][0], back["force_upper_mn"][0]
         assert f is not None and lo <= f <= hi
         assert f == pytest.approx(0.2, rel=0.05)
+
+
+@pytest.mark.parametrize(("extra", "field", "allowed"), [
+    ({"folds": 1}, "folds", "2 <= folds <= 50"),
+    ({"strict": "yes"}, "strict", "true or false"),
+    ({"model": "m" * 65}, "model", "at most 64 characters"),
+])
+def test_calibrate_validation_errors_state_the_allowed_range(client, extra, field, allowed):
+    from service.routes.calibration import EXAMPLE_ROWS
+
+    r = client.post("/v1/calibrate", json={"rows": EXAMPLE_ROWS, "model": "paper", **extra})
+    assert assert_problem(r, 422, field)["errors"][0]["allowed"] == allowed
+
+
+def test_a_measured_cell_is_not_read_as_the_request_field_of_its_name(client):
+    """A NaN pressure in a measured row: the cell's rule, not an inverse target's range
+    (it said "0 < pressure_pa <= 20000", while rows take -1e5..1e6 Pa)."""
+    from service.routes.calibration import EXAMPLE_ROWS
+
+    text = json.dumps({"rows": EXAMPLE_ROWS, "model": "paper"}).replace(
+        '"pressure_pa": 400', '"pressure_pa": NaN', 1)
+    r = client.post("/v1/calibrate", content=text.encode(),
+                    headers={"content-type": "application/json"})
+    error = assert_problem(r, 422, "rows.1.pressure_pa")["errors"][0]
+    assert error["allowed"].startswith("a finite number") and "20000" not in error["allowed"]

@@ -13,8 +13,9 @@ from fastapi import APIRouter, Security
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
 from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
-from service.errors import ConflictError, FieldError, located
+from service.errors import FIELD_RANGES, ConflictError, FieldError, located
 from service.schemas import Schema
+from service.schemas._ranges import field_ranges
 from solver.errors import ExistsError, InputError
 
 router = APIRouter(prefix="/v1", tags=["calibration"])
@@ -73,6 +74,14 @@ class CalibrateRequest(Schema):
                        "(reduced to the number of curves when there are fewer)")
     strict: bool = Field(False, description="refuse data that otherwise only get a warning "
                          "(pressures that look like kPa, duplicated rows)")
+
+
+
+
+# its limits stated in every validation error, as the other requests' are
+FIELD_RANGES.update(field_ranges([CalibrateRequest]))
+FIELD_RANGES["rows.*"] = ("a finite number (|value| <= 1e15), text (at most 200 characters) "
+                          "or null; each column's range: docs/measured-data.md")
 
 
 class Candidate(BaseModel):

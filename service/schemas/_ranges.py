@@ -58,8 +58,12 @@ def field_ranges(models: Iterable[type[BaseModel]]) -> dict[str, str]:
                 parts.append(f"{lo or ''}{name}{hi or ''}")
             if ilo or ihi:
                 parts.append(f"each {ilo or ''}{name}{ihi or ''}")
+            kinds = set(typing.get_args(info.annotation)) | {info.annotation}
             if max_len is not None:
-                parts.append(f"at most {max_len} values")
+                parts.append(f"at most {max_len} "
+                             + ("characters" if str in kinds else "values"))
+            if bool in kinds:
+                parts.append("true or false")
             if not parts:
                 continue
             text = "; ".join(parts)
