@@ -315,6 +315,17 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
                          f"{1000 * p_max:g} Pa); convert pressure_pa to Pa", None))
     else:
         warnings += _mixed_units(kept)
+    # one curve is one flow rate: a curve timed at flow 0 injected nothing, yet bent
+    still = [c for c, recs in by_curve.items()
+             if all(r.get("time_s") is not None and r.get("flow_ul_s") is not None
+                    and float(r["flow_ul_s"]) == 0.0 for r in recs)  # type: ignore[arg-type]
+             and max(abs(float(r["angle_deg"])) for r in recs)  # type: ignore[arg-type]
+             > KPA_MIN_ANGLE_DEG]
+    if still:
+        warnings.append(("flow_ul_s", f"flow_ul_s is 0 on every row of curve_id "
+                         f"{', '.join(map(repr, still[:3]))}{' ...' if len(still) > 3 else ''}"
+                         ", which bends: the data say no fluid was injected there, so its "
+                         "injected volume is 0 throughout; give the pump's rate", None))
     if strict and warnings:
         column, message, row = warnings[0]
         raise DataError(column, message + " (refused: strict)", row,
