@@ -151,6 +151,10 @@ def test_the_pump_gauge_reads_r_q_above_the_chamber(shipped_client):
     r = shipped_client.post("/v1/inverse/pressure", json={"angles_deg": [45], "flow_ul_s": 2.5,
                                                           "model": "paper"})
     assert r.status_code == 422 and r.json()["errors"][0]["field"] == "flow_ul_s"
+    # nor does its plot in time: the query's flow_ul_s is named, not a times_s it never had
+    r = shipped_client.get("/v1/predict/plot", params={"model": "paper", "flow_ul_s": 2.5,
+                                                       "nearby": 0})
+    assert r.status_code == 422 and r.json()["errors"][0]["loc"] == ["query", "flow_ul_s"]
 
 
 @pytest.mark.parametrize(("body", "field", "allowed"), [

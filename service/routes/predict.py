@@ -87,7 +87,10 @@ def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
     try:
         prediction = predict_answer(surrogate, design, question, query.model, query.level)
     except InputError as exc:
-        raise located(exc, ("query",)) from None
+        # the plot asks its own pressures or times: a refusal of those names the query's
+        # parameter that chose them (p_max_pa; flow_ul_s for the time axis)
+        raise located(exc, ("query",), {"pressures_pa": ("p_max_pa",),
+                                        "times_s": ("flow_ul_s",)}) from None
     if query.flow_ul_s is None:
         fe = nearby_curves(settings.db_path, design, query.nearby, query.p_max_pa)
         png = plot_prediction(prediction, fe, query.measured_pressure_pa,
