@@ -134,7 +134,10 @@ def material_from_input(value: str | OgdenMaterial | dict, field_name: str) -> O
     if isinstance(value, str):
         from solver.design_space import named_material
 
-        found = named_material(value)
+        try:
+            found = named_material(value)
+        except InputError as exc:       # a scale the material's limits refuse (x1e308)
+            raise InputError(field_name, f"{value!r}: {exc.detail}", exc.allowed) from None
         if found is None:
             raise InputError(field_name, f"unknown material {value!r}",
                              ", ".join(sorted(MATERIALS)) + ", or <preset>*<scale> (every "

@@ -29,3 +29,11 @@ def test_inverse_design_refuses_a_scaled_pair_saying_where_scales_go(shipped_cli
     problem = r.json()
     assert problem["errors"][0]["field"] == "material_pairs"
     assert "body_stiffness_scale_bounds" in problem["detail"]
+
+
+def test_a_scale_the_material_limits_refuse_names_the_layer(shipped_client):
+    r = shipped_client.post("/v1/predict", json={
+        "design": {"membrane_material": "ecoflex_00_30*1e308"}, "pressures_pa": [500]})
+    assert r.status_code == 422
+    error = r.json()["errors"][0]
+    assert error["field"] == "design.membrane_material" and "1e6 kPa" in error["allowed"]
