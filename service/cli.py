@@ -85,6 +85,12 @@ def main(argv: list[str] | None = None) -> int:
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:
+        # a write the system refused after the checks (a full disk): one line, no trace
+        what = (f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror
+                else exc.strerror or type(exc).__name__)
+        print(f"balloon: error: {what}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ LIMITS_MM: dict[str, tuple[float, float]] = {
     "b_mm": (0.1, 20.0),
     "h_mm": (0.02, 5.0),
     "W_mm": (0.2, 30.0),
-    "body_length_mm": (1.0, 100.0),
+    "body_length_mm": (0.5, 200.0),   # the default body at W 0.2 mm (0.8) and at 30 (120)
     "chamber_offset_mm": (0.1, 100.0),
 }
 

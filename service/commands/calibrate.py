@@ -58,6 +58,7 @@ def _deg(value: float | None, missing: str = "n/a") -> str:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    from service.commands.outputs import PLOT_SUFFIXES, check_output
     from solver.errors import InputError
     from surrogate.calibration import (
         jsonable,
@@ -69,6 +70,14 @@ def run(args: argparse.Namespace) -> int:
 
     if not 2 <= args.folds <= 50:
         raise InputError("--folds", f"got {args.folds}", "2 <= folds <= 50")
+    try:        # the report's directory is made if need be; both outputs checked now
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError("--report", f"directory {args.report.parent} cannot be made "
+                         f"({exc.strerror or type(exc).__name__})",
+                         "a path in a writable directory") from None
+    check_output(args.report, "--report")
+    check_output(args.plot, "--plot", PLOT_SUFFIXES)
     obs = load_observations(args.data, strict=args.strict)  # validates before any work
     if args.save is not None:  # a bad or taken name ("" too) is refused before the work
         from surrogate.calibration._saved import ModelExistsError, _check_name
@@ -78,6 +87,9 @@ def run(args: argparse.Namespace) -> int:
             from service.settings import get_settings
 
             args.models_dir = get_settings().models_dir
+        if args.models_dir.exists() and not args.models_dir.is_dir():
+            raise InputError("--models-dir", f"{args.models_dir} is not a directory",
+                             "a directory for saved models (made if missing)")
         if (args.models_dir / f"{args.save}.json").exists():
             raise ModelExistsError(args.save)
     model = _starting_model(args.model)

@@ -200,8 +200,10 @@ def curve_rows(record: Any) -> list[list[object]]:
 
 
 def run_export(args: argparse.Namespace) -> int:
+    from service.commands.outputs import check_output
     from solver.store import CurveStore
 
+    check_output(args.output, "--output")
     with CurveStore(args.db) as db:
         records = selected(db, args)
     out = sys.stdout if args.output == "-" else open(args.output, "w", newline="",

@@ -40,6 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _check_arguments(args: argparse.Namespace) -> None:
     """Refuse a band level and output paths that cannot work before reading the database
     and fitting (minutes on a full one), as ``balloon solve`` does."""
+    from service.commands.outputs import check_output, check_output_dir
     from solver.errors import InputError
     from surrogate.band_level import z_value
 
@@ -48,13 +49,7 @@ def _check_arguments(args: argparse.Namespace) -> None:
     except InputError as exc:
         raise InputError("--level", exc.detail, exc.allowed) from None
     for flag, name in (("--output", args.output), ("--emulator-output", args.emulator_output)):
-        if name is None:
-            continue
-        if Path(name).is_dir():
-            raise InputError(flag, f"{name} is a directory", "a file path")
-        if not Path(name).parent.is_dir():
-            raise InputError(flag, f"directory {Path(name).parent} does not exist",
-                             "a path in an existing directory")
+        check_output(name, flag)
     if args.band_calibration_db is not None:
         if args.emulator_output is None:
             raise InputError("--band-calibration-db", "given without --emulator-output",
@@ -63,9 +58,7 @@ def _check_arguments(args: argparse.Namespace) -> None:
             raise InputError("--band-calibration-db", f"no file {args.band_calibration_db}",
                              "an existing curve database (HDF5)")
         _check_calibration_db(args.band_calibration_db, args.db)
-    if args.report_dir is not None and Path(args.report_dir).exists() and not Path(
-            args.report_dir).is_dir():
-        raise InputError("--report-dir", f"{args.report_dir} is a file", "a directory path")
+    check_output_dir(args.report_dir, "--report-dir")
 
 
 def _check_calibration_db(path: str, fit_db: str) -> None:

@@ -155,6 +155,10 @@ def run(args: argparse.Namespace) -> int:
     if not db_path.parent.is_dir():
         raise InputError("--db", f"directory {str(db_path.parent)!r} does not exist",
                          "a path in an existing directory")
+    if args.adaptive is not None:   # before the grid, the database and any fit
+        from surrogate.emulator.adaptive import check_count
+
+        check_count(args.adaptive)
     grid = load_grid(args.grid)
     if args.adaptive is not None and args.designs_from:
         raise InputError("--designs-from", "given with --adaptive",

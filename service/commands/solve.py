@@ -5,10 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from solver.design import LIMITS_MM, design_from_dict
-from solver.errors import InputError
 from solver.io import CSV_COLUMNS
 from solver.materials import MATERIALS
 from solver.settings import CONTROLS, ELEMENTS, MAX_MESH_LEVEL, MESH_DIVISIONS, TIPS, SolverSettings
@@ -100,16 +98,11 @@ def _design(args: argparse.Namespace):
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse output paths that cannot be written before spending minutes on a solve."""
-    for option in ("json", "csv", "plot", "vtk"):
-        path = getattr(args, option)
-        if path is None:
-            continue
-        target = Path(path)
-        if target.is_dir():
-            raise InputError(f"--{option}", f"{path} is a directory", "a file path")
-        if not target.parent.is_dir():
-            raise InputError(f"--{option}", f"directory {target.parent} does not exist",
-                             "a path in an existing directory")
+    from service.commands.outputs import PLOT_SUFFIXES, VTK_SUFFIXES, check_output
+
+    for option, suffixes in (("json", None), ("csv", None), ("plot", PLOT_SUFFIXES),
+                             ("vtk", VTK_SUFFIXES)):
+        check_output(getattr(args, option), f"--{option}", suffixes)
 
 
 def run(args: argparse.Namespace) -> int:

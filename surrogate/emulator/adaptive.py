@@ -111,11 +111,20 @@ def _ends_early(pe: PairEmulator, u: np.ndarray) -> bool:
     return pe.emulated_end_deg(u)[0] < ADAPTIVE_END_DEG
 
 
+MAX_ADAPTIVE = 10_000
+
+
+def check_count(n: int) -> None:
+    """InputError naming --adaptive unless 1 <= n <= MAX_ADAPTIVE (checked before an
+    emulator is fitted for it: minutes)."""
+    if not 1 <= n <= MAX_ADAPTIVE:
+        raise InputError("--adaptive", f"got {n}", f"1 <= N <= {MAX_ADAPTIVE}")
+
+
 def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = None
                  ) -> list[GridPoint]:
     """The ``n`` most uncertain designs, as precompute grid points."""
-    if not 1 <= n <= 10_000:
-        raise InputError("--adaptive", f"got {n}", "1 <= N <= 10000")
+    check_count(n)
     settings = settings or SolverSettings()
     nodes = ANGLE_NODES_DEG >= SCORE_FROM_DEG
     scored: list[tuple[float, str, np.ndarray, Design]] = []
