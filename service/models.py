@@ -127,8 +127,9 @@ def load_calibrated(name: str, models_dir: Path) -> Any:
     try:
         return load_model(name, models_dir)
     except (NotFoundError, FileNotFoundError, IsADirectoryError):
-        raise NotFoundError(f"no saved model {name!r}; known models are \"fitted\", "
-                            f"\"paper\" and the saved ones") from None
+        raise NotFoundError(f"no saved model {name!r}; known models are \"emulator\", "
+                            "\"exponential\" (or \"fitted\"), \"paper\" and the saved "
+                            "ones, by name") from None
     except BalloonError as exc:  # SavedModelError: a damaged file on the server
         raise UnavailableError(str(exc)) from None
     except Exception as exc:  # noqa: BLE001 - unreadable file (permissions, I/O)
