@@ -270,9 +270,9 @@ async function update() {
     app.request = body;
     app.refused = (await offersSolve(err, body)) ? err : null;
     if (controller.signal.aborted) return;
-    // a refusal of the design as a whole is shown once, in the FE solve box
-    showProblem(err, { ...DESIGN_SLOTS(), ...(app.refused ? { design: null } : {}) },
-                app.refused ? null : $("err-design"));
+    // a refusal of the design as a whole is shown once, in the FE solve box (not again
+    // beside the field it names)
+    showProblem(err, app.refused ? {} : DESIGN_SLOTS(), app.refused ? null : $("err-design"));
     $("status").textContent = app.refused ? "No prediction: the model refuses this design (below)."
       : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
@@ -311,7 +311,8 @@ async function schemaLimits() {
 async function offersSolve(err, body) {
   if (!(err instanceof ApiError) || err.status !== 422 || !body) return false;
   const errs = err.fieldErrors;
-  // the emulator's out-of-box refusal names the design field bare (["body", "L_mm"])
+  // the emulator's out-of-box refusal names the design field (["body", "design", "L_mm"];
+  // servers before 2026-12-05 named it bare, ["body", "L_mm"])
   const inDesign = errs.length > 0 && errs.every((e) => {
     const loc = Array.isArray(e.loc) ? e.loc.slice(1).join(".") : String(e.field || "");
     return loc === "design" || loc.startsWith("design.") || Object.hasOwn(body.design, loc);
