@@ -53,10 +53,10 @@ def band_within_fe(lower: np.ndarray, upper: np.ndarray, limit_deg: float,
     """A band (deg; NaN stays NaN) cut at the FE range's largest angle magnitude
     ``limit_deg``, and said in ``validity`` (flag ``band_capped_at_fe_range``) where it
     was: an answer inside the range whose band reaches past it (105.6 deg against an FE
-    limit of 97.3) would state angles the FE never gave. The exponential model's and the
-    emulator's curve-GP answers by pressure go through it; not yet the emulator's
-    balance-model answer near the soft pairs' stiffness balance, nor a saved calibrated
-    model's band (its angle +- z RMSE)."""
+    limit of 97.3) would state angles the FE never gave. Every model's answer goes
+    through it: the exponential model's, the emulator's by pressure and by volume (89.0
+    deg against 84.8 by volume before), its balance-model answer (at the FE's angle stop)
+    and a saved calibrated model's angle +- z RMSE."""
     lo, hi = np.asarray(lower, float), np.asarray(upper, float)
     cut = (np.abs(lo) > limit_deg * (1 + 1e-9)) | (np.abs(hi) > limit_deg * (1 + 1e-9))
     if cut.any():

@@ -82,6 +82,35 @@ def test_a_band_reaching_past_the_fe_range_is_cut_there(client, model):
     assert_within_fe(r.json(), pressures)
 
 
+def test_the_emulators_band_by_volume_is_cut_at_the_fe_range_too(client):
+    """By injected volume the same design's band reached 89.0 deg against its 84.8 deg FE
+    limit, and a short thick-body design's 70.9 deg against 25.7 deg (the volume path did
+    not go through the cut)."""
+    for design in ({"L_mm": 9.0, "t_mm": 0.6, "body_material": "pdms_1_15"},
+                   {"L_mm": 4.2, "t_mm": 0.57, "T_mm": 1.76}):
+        volumes = [float(v) for v in range(1, 401)]
+        r = client.post("/v1/predict", json={"design": design, "volumes_ul": volumes})
+        assert r.status_code == 200, r.text
+        body = r.json()
+        lim = body["validity"]["fe_limit_angle_deg"]
+        bands = [v for v in body["lower_deg"] + body["upper_deg"] if v is not None]
+        assert bands and max(abs(v) for v in bands) <= lim * (1 + 1e-9), (lim, design)
+        assert "band_capped_at_fe_range" in body["validity"]["flags"]
+
+
+def test_a_calibrated_models_band_is_cut_at_its_fe_range(client):
+    """Angle +- z RMSE reached past the FE range's largest angle (the baseline's 76.7 deg
+    at 2100 Pa for the longest measured design, L 11.1 mm) just below it."""
+    pressures = [1000.0] + [float(p) for p in range(1700, 1731)]   # 75.6 deg at 1700 Pa
+    r = client.post("/v1/predict", json={"design": {"L_mm": 11.1, "t_mm": 0.5},
+                                         "pressures_pa": pressures, "model": "lab1"})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    lim = body["validity"]["fe_limit_angle_deg"]
+    assert max(v for v in body["upper_deg"] if v is not None) <= lim * (1 + 1e-9)
+    assert "band_capped_at_fe_range" in body["validity"]["flags"]
+
+
 @pytest.mark.parametrize("model", ["exponential", "paper"])
 def test_inverse_past_the_fe_range_is_null_over_http(client, model):
     r = client.post("/v1/inverse/pressure", json={"design": {"L_mm": 7.1, "t_mm": 0.5},

@@ -31,6 +31,7 @@ from solver.errors import BalloonError, ExistsError, InputError
 from surrogate.calibration._errors import ModelNotFoundError
 from surrogate.calibration._forward import chamber_pressure_pa, static_angle_deg
 from surrogate.exponential.equations import TAU_FORM
+from surrogate.predictor import band_within_fe
 
 FORMAT = "balloon.calibrated-model/1"
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
@@ -127,8 +128,11 @@ class CalibratedModel:
         validity = {"in_domain": not flags, "flags": flags, "messages": messages,
                     "fe_limit_pa": lim_p,
                     "fe_limit_angle_deg": lim_a if math.isfinite(lim_a) else None}
-        return CalibratedPrediction(p, angle, angle - half, angle + half, validity,
-                                    self.name, dict(self.provenance))
+        lower, upper = angle - half, angle + half
+        if math.isfinite(lim_a):
+            lower, upper = band_within_fe(lower, upper, lim_a, validity)
+        return CalibratedPrediction(p, angle, lower, upper, validity, self.name,
+                                    dict(self.provenance))
 
     def _fe_limits(self) -> tuple[float, float, str]:
         """(pressure Pa, angle magnitude deg, what they are) beyond which no number."""

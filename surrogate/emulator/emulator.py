@@ -711,6 +711,7 @@ class Emulator:
                 f"{int(past.sum())} volume(s) above {v_lim * ls3:.1f} ul are past the FE's "
                 f"range for this design ({cb.stop_reason}): no angle is given")
         validity["fe_limit_volume_ul"] = v_lim * ls3
+        lower, upper = band_within_fe(lower, upper, cb.limit_angle_deg, validity)
         beyond = answer.past_maximum & ~past
         if beyond.any():
             p_max = answer.maximum_pressure_pa * point.pressure_scale
@@ -792,6 +793,8 @@ class Emulator:
             "fe_stop_reason": stop}
         if axis == "volume":
             validity["fe_limit_volume_ul"] = v_limit * ls3
+        # the curves here end at the volume stop, short of the FE's angle stop: no band past it
+        lower, upper = band_within_fe(lower, upper, SolverSettings().max_angle_deg, validity)
         return self._prediction(design, point, pressure, (angle, lower, upper), level,
                                 validity, force, volume)
 
