@@ -97,6 +97,18 @@ class SearchBounds:
                              f"within {box[0]:g}..{box[1]:g} {unit}".rstrip())
         return max(lo, box[0]), min(hi, box[1])
 
+    def clipped(self, ranges: dict[str, tuple[float, float]]) -> list[str]:
+        """What ``ranges`` (``ranges()``) searched where the bounds given reach past the
+        box: "L_mm 4-18 (of 2-30 given)" -- said with the answer, so that "no design meets
+        the target" is not read as covering what was never searched."""
+        out = []
+        for name, (lo, hi) in ranges.items():
+            given = getattr(self, name)
+            if given is not None and (float(given[0]), float(given[1])) != (lo, hi):
+                out.append(f"{name} {lo:g}-{hi:g} (of {float(given[0]):g}-"
+                           f"{float(given[1]):g} given)")
+        return out
+
     def allowed_pairs(self) -> tuple[tuple[str, str], ...]:
         if self.pairs is None:
             return PAIRS
@@ -376,6 +388,9 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                            + (f"; the largest reachable is {reach:.3g}" if reach else "")
                            + ": widen the bounds (longer chamber, thinner membrane, softer "
                            "membrane) or raise the pressure")
+    clipped = bounds.clipped(ranges)
+    if clipped:
+        explanation += ("; searched within the emulator's box: " + ", ".join(clipped))
     return InverseDesignResult(target=target, objective=objective,
                                feasible=bool(candidates), candidates=tuple(candidates),
                                explanation=explanation, best_reachable=best_reach,

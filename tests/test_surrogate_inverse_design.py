@@ -179,3 +179,20 @@ def test_a_pair_given_twice_is_searched_once():
     other = ("ecoflex_00_30", "pdms_1_15")
     bounds = SearchBounds(pairs=(pair,) * 20 + (other, pair))
     assert bounds.allowed_pairs() == (pair, other)
+
+
+def test_bounds_past_the_box_are_said_with_the_answer(emulator):
+    """L 2-30 mm was searched as 4-18 without a word: "no design meets the target" then
+    reads as covering 2-30 mm. The answer says what was searched."""
+    from surrogate.design_search import SearchBounds, search_designs
+
+    bounds = SearchBounds(L_mm=(2.0, 30.0), t_mm=(0.5, 0.6), T_mm=(1.0, 1.0),
+                          b_mm=(1.8, 1.8), h_mm=(0.15, 0.15),
+                          pairs=(("pdms_1_10", "ecoflex_00_30"),))
+    assert bounds.clipped(bounds.ranges()) == ["L_mm 4-18 (of 2-30 given)"]
+    res = search_designs(emulator, DesignTarget("angle_at_pressure", 200.0, angle_deg=89.0),
+                         bounds)
+    assert not res.feasible
+    assert "searched within the emulator's box: L_mm 4-18 (of 2-30 given)" in res.explanation
+    inside = SearchBounds(L_mm=(5.0, 9.0), pairs=(("pdms_1_10", "ecoflex_00_30"),))
+    assert inside.clipped(inside.ranges()) == []
