@@ -102,6 +102,20 @@ def test_latin1_file_is_one_line_naming_file_line_and_encoding(tmp_path):
     assert str(tmp_path) not in msg and "\n" not in msg
 
 
+@pytest.mark.parametrize("sep, what", [(";", "';'"), ("\t", "tabs")])
+def test_a_semicolon_or_tab_separated_file_is_named_as_such(tmp_path, sep, what):
+    """A spreadsheet's export with a decimal comma (';' between fields): it had read as
+    one column and answered "curve_id: required column is missing" -- the header has
+    curve_id."""
+    text = csv_text(rows()).replace(",", sep)
+    if sep == ";":
+        text = text.replace(".", ",")
+    with pytest.raises(DataError) as err:
+        load_observations(_write(tmp_path / "lab.csv", text.encode("utf-8")))
+    assert err.value.column == "header" and f"separated by {what}" in str(err.value)
+    assert "comma-separated" in err.value.allowed
+
+
 def test_utf16_without_bom_is_named(tmp_path):
     path = _write(tmp_path / "x.csv", csv_text(rows()).encode("utf-16-le"))
     with pytest.raises(DataError, match="UTF-16 without a byte-order mark"):

@@ -440,6 +440,13 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     if fieldnames is None:
         raise DataError("header", "the file is empty", None)
     names = [n.strip() for n in fieldnames]
+    for sep, what in ((";", "';'"), ("\t", "tabs")):
+        if len(names) == 1 and sep in names[0]:
+            # a spreadsheet's export where the decimal mark is a comma
+            raise DataError("header", f"the header is one column separated by {what}: the "
+                            "file is not comma-separated", 0,
+                            "comma-separated values with '.' as the decimal mark (save as "
+                            "CSV UTF-8, comma-delimited)")
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0)
     for name in REQUIRED:
