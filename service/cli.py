@@ -9,6 +9,7 @@ on stderr and exit 2; nothing prints a traceback for them.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
@@ -42,7 +43,20 @@ class Parser(argparse.ArgumentParser):
     Subcommand parsers are of the same class (argparse's default)."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+        self.exit(2, f"{self.prog}: error: {self._with_range(message)} "
+                     f"(see `{self.prog} --help`)\n")
+
+    def _with_range(self, message: str) -> str:
+        """argparse's "argument --L-mm: invalid float value: 'abc'" with the option's
+        allowed range, when the option carries one (service.commands.numbers)."""
+        match = re.fullmatch(r"argument (\S+): invalid (?:float|int) value: (.*)", message)
+        if match is None:
+            return message
+        for action in self._actions:
+            allowed = getattr(action, "allowed", None)
+            if allowed and "/".join(action.option_strings) == match[1]:
+                return f"argument {match[1]}: {match[2]} is not a number (allowed: {allowed})"
+        return message
 
 
 def build_parser() -> argparse.ArgumentParser:

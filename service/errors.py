@@ -164,11 +164,64 @@ BODY_NOT_PARSED = "There was an error parsing the body"  # FastAPI's words for i
 
 # Field name -> allowed range in words, filled by service.schemas from the Field limits.
 FIELD_RANGES: dict[str, str] = {}
+# Text field name -> the form its pattern allows, in words (service.schemas fills it): a
+# value not of that form is told this, not the regular expression.
+FIELD_FORMS: dict[str, str] = {}
+
+
+# A material is a preset id (text) or an inline object (service.schemas.common.MaterialRef):
+# pydantic tries both and reports each branch's error under its tag; the request has
+# no field of that name. The tags -> whether the branch is the text one.
+MATERIAL_BRANCHES = {"constrained-str": True, "MaterialIn": False}
+
+
+def _branch(err: dict[str, Any]) -> tuple[int, bool] | None:
+    """(index of the union tag in ``loc``, True for the text branch), or None."""
+    for i, part in enumerate(err.get("loc", ())):
+        if part in MATERIAL_BRANCHES:
+            return i, MATERIAL_BRANCHES[part]
+    return None
+
+
+def _sent_kinds(errors: list[dict[str, Any]]) -> dict[tuple[Any, ...], str]:
+    """Each failed material's location -> what was sent: "text", "object" or "other"
+    (read off the text branch's error, whose input is the value as sent)."""
+    kinds = {}
+    for err in errors:
+        found = _branch(err)
+        if found and found[1]:
+            value = err.get("input")
+            kinds[tuple(err["loc"][:found[0]])] = (
+                "text" if isinstance(value, str) else "object" if isinstance(value, dict)
+                else "other")
+    return kinds
+
+
+def _one_branch(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """A material's errors from the branch of what was sent, located at the field without
+    the tag: text -> the id's error; an object -> its fields' errors; anything else (a
+    number, null, a list) -> one error saying what a material is."""
+    kinds = _sent_kinds(errors)
+    out = []
+    for err in errors:
+        found = _branch(err)
+        if found is None:
+            out.append(err)
+            continue
+        i, text_branch = found
+        field_loc = tuple(err["loc"][:i])
+        kind = kinds.get(field_loc, "object")
+        if kind == "other" and text_branch:
+            out.append({**err, "loc": field_loc, "msg": "Input should be a material id "
+                        "(text) or an inline material {id, mu_kpa, alpha}"})
+        elif kind != "other" and text_branch == (kind == "text"):
+            out.append({**err, "loc": field_loc + tuple(err["loc"][i + 1:])})
+    return out
 
 
 def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
     out = []
-    for err in exc.errors():
+    for err in _one_branch(list(exc.errors())):
         if err.get("type") == "json_invalid":
             # pydantic locates it at ("body", character offset): the body is the field
             out.append(_unparsed_body(f"cannot be parsed as JSON ("
@@ -184,16 +237,40 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
         # name elsewhere (its pressure_pa is not a target's): what any cell may hold
         allowed = (FIELD_RANGES.get("rows.*") if "rows" in loc[1:2]
                    else FIELD_RANGES.get(names[-1]) if names else None)
+        if err.get("type") == "string_pattern_mismatch" and names and names[-1] in FIELD_FORMS:
+            allowed = FIELD_FORMS[names[-1]]       # the form in words, not the pattern
+            item["message"] = f"{_short(err.get('input'))} is not of this form"
+        elif not allowed and names:
+            allowed = FIELD_FORMS.get(names[-1])   # a material that is a number, null, ...
         if allowed:
             item["allowed"] = allowed
         out.append(item)
     return out
 
 
+def _short(value: Any, limit: int = 40) -> str:
+    """``repr(value)`` cut to ``limit`` characters: a message never echoes a long input."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def _unparsed_body(message: str) -> dict[str, Any]:
     """The error entry of a body that is not the JSON document asked for."""
     return {"loc": ["body"], "field": "body", "message": message,
             "allowed": "a UTF-8 JSON document of the documented shape"}
+
+
+def _not_json_body(request: Request, errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """A body sent as another media type (curl -d sends a form; a text/plain fetch) is
+    not read as JSON, and pydantic says only "Input should be a valid dictionary": the
+    error names the Content-Type that was sent instead."""
+    media_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media_type == "application/json" or media_type.endswith("+json"):
+        return errors
+    sent = f"Content-Type {_short(media_type, 60)}" if media_type else "no Content-Type"
+    return [{**e, "message": f"the body is not read as JSON: it came with {sent}",
+             "allowed": "Content-Type: application/json"}
+            if e.get("loc") == ["body"] else e for e in errors]
 
 
 def _allowed_methods(request: Request) -> list[str]:
@@ -211,7 +288,7 @@ def install_error_handlers(app: FastAPI) -> None:
     """Route every error through ``problem_for`` (validation errors get one entry per field)."""
 
     async def on_validation(request: Request, exc: RequestValidationError) -> JSONResponse:
-        errors = _validation_errors(exc)
+        errors = _not_json_body(request, _validation_errors(exc))
         detail = "; ".join(
             f"{e['field'] or e['loc'][0]}: {e['message']}"
             + (f" (allowed: {e['allowed']})" if "allowed" in e else "") for e in errors)

@@ -58,3 +58,56 @@ class BodyLimitMiddleware:
                                 (b"content-length", str(len(body)).encode()),
                                 (b"connection", b"close")]})
         await send({"type": "http.response.body", "body": body})
+
+
+class ProblemOnlyMiddleware:
+    """Every error answer a problem document: the few that Starlette writes itself in
+    text/plain (a file's Range header it cannot serve: 400, 416 with Content-Range) are
+    rewritten as ``application/problem+json`` with their status and words."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        held: dict[str, Message] = {}
+        chunks: list[bytes] = []
+
+        async def send_problem(message: Message) -> None:
+            if message["type"] == "http.response.start" and _plain_error(message):
+                held["start"] = message
+                return
+            if "start" not in held:
+                await send(message)
+                return
+            chunks.append(message.get("body", b""))
+            if not message.get("more_body", False):
+                await _send_problem(send, held["start"], b"".join(chunks), scope)
+
+        await self.app(scope, receive, send_problem)
+
+
+def _plain_error(start: Message) -> bool:
+    """An error status whose body is not a problem document."""
+    headers = dict(start.get("headers") or [])
+    content_type = headers.get(b"content-type", b"").decode("latin-1")
+    return start["status"] >= 400 and not content_type.startswith(PROBLEM_JSON)
+
+
+async def _send_problem(send: Send, start: Message, text: bytes, scope: Scope) -> None:
+    from http import HTTPStatus
+
+    status = start["status"]
+    phrase = HTTPStatus(status).phrase if status in HTTPStatus._value2member_map_ else "Error"
+    detail = text.decode("utf-8", "replace").strip()[:200] or phrase
+    body = json.dumps({"type": f"urn:balloon:problem:http-{status}", "title": phrase,
+                       "status": status, "detail": detail,
+                       "instance": scope.get("path", "")}).encode()
+    kept = [(k, v) for k, v in start.get("headers") or []
+            if k.lower() not in (b"content-type", b"content-length")]
+    await send({"type": "http.response.start", "status": status,
+                "headers": [*kept, (b"content-type", PROBLEM_JSON.encode()),
+                            (b"content-length", str(len(body)).encode())]})
+    await send({"type": "http.response.body", "body": body})

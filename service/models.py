@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from service.errors import FieldError, UnavailableError
-from solver.errors import BalloonError, NotFoundError
+from solver.errors import BalloonError, ExistsError, InputError, NotFoundError
 
 
 @dataclass
@@ -135,6 +135,47 @@ def load_calibrated(name: str, models_dir: Path) -> Any:
     except Exception as exc:  # noqa: BLE001 - unreadable file (permissions, I/O)
         raise UnavailableError(f"the saved model {name!r} cannot be read "
                                f"({type(exc).__name__})") from None
+
+
+class CaseClashError(ExistsError, InputError):
+    """A new saved model's name differs only in case from a saved model's: on a
+    case-insensitive file system (macOS, Windows) both are one file, so the first would be
+    answered for the second, or replaced by it (409 over HTTP, the CLI's one line)."""
+
+    def __init__(self, name: str, existing: str) -> None:
+        InputError.__init__(self, "name", f"a model named {existing!r} already exists and "
+                            f"{name!r} differs from it only in case", "a new name")
+        self.name = existing
+
+
+def name_rule() -> str:
+    """A new saved model's name, in words (the rule of surrogate.calibration's
+    NAME_PATTERN and RESERVED, and this module's case rule)."""
+    from surrogate.calibration._saved import RESERVED
+
+    return ("1-64 letters, digits, '_', '.', '-', starting with a letter or digit; not "
+            + ", ".join(RESERVED) + " in any case")
+
+
+def check_new_model_name(name: str, models_dir: Path) -> None:
+    """Refuse a name for a new saved model that does not have NAME_PATTERN's form (a
+    final newline: "lab1\n" had made a file "lab1\n.json"), that is a built-in model's in
+    another case ("Emulator", "PAPER": a user could not tell which one answers) or that
+    differs only in case from a model saved in ``models_dir`` (CaseClashError). The rest
+    of the rule (the exact built-in names, an existing file) is ``save_model``'s."""
+    from surrogate.calibration._saved import NAME_PATTERN, RESERVED
+
+    if not NAME_PATTERN.fullmatch(name):
+        raise InputError("name", f"invalid model name {name!r}", name_rule())
+    folded = name.casefold()
+    if folded in RESERVED and name not in RESERVED:
+        raise InputError("name", f"invalid model name {name!r}: the built-in model "
+                         f"{folded!r} in another case", name_rule())
+    if not models_dir.is_dir():
+        return
+    for path in models_dir.glob("*.json"):
+        if path.stem != name and path.stem.casefold() == folded:
+            raise CaseClashError(name, path.stem)
 
 
 def require(model: Any, name: str, capability: str) -> Any:

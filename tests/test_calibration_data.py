@@ -276,3 +276,17 @@ def test_a_pump_switch_between_readings_moves_every_later_volume_by_hand():
     shift = after[c1] @ [s, s] + at[c1] @ [min(s, 0), min(s, 0)]
     np.testing.assert_allclose(obs.volume_ul[c1] + shift, [3, 6, 7.8, 7.8, 6.6, 3.6, 0.6,
                                                            -2.4])
+
+
+def test_blank_lines_before_the_header_and_a_bom_in_a_key_load(tmp_path):
+    """A blank line between a leading comment and the header made an empty header
+    ("curve_id: required column is missing"); so did a JSON row whose first key kept a
+    CSV's byte-order mark."""
+    text = csv_text(rows())
+    ref = load_observations(_write(tmp_path / "plain.csv", text.encode("utf-8")))
+    spaced = "# lab notes\n\n  \n" + text.replace("\n", "\n\n", 3)
+    assert load_observations(_write(tmp_path / "spaced.csv", spaced.encode())).sha256 \
+        == ref.sha256
+    bommed = [{("\ufeff" + k if j == 0 else k): v for j, (k, v) in enumerate(r.items())}
+              for r in rows()]
+    assert observations_from_rows(bommed).sha256 == ref.sha256

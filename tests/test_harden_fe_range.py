@@ -18,6 +18,7 @@ from test_service_saved_models import measured_rows
 
 from service.app import create_app
 from service.cli import main
+from solver.errors import InputError, NotFoundError
 from surrogate.calibration import run_calibration, save_model
 
 DATA = Path(__file__).resolve().parents[1] / "service" / "data"
@@ -141,3 +142,15 @@ def test_balloon_predict_gives_no_number_past_the_fe_range(tmp_path, calibration
     out = capsys.readouterr().out
     assert code == 0, out
     assert_within_fe(json.loads(out), PRESSURES_PA)
+
+
+def test_a_model_name_with_a_final_newline_is_refused(calibration, tmp_path):
+    """NAME_PATTERN's ``$`` let 'lab1\\n' through: a file 'lab1\\n.json' beside lab1.json."""
+    from surrogate.calibration import load_model
+
+    with pytest.raises(InputError):
+        save_model(calibration, "lab1\n", tmp_path)
+    assert not list(tmp_path.iterdir())
+    save_model(calibration, "lab1", tmp_path)
+    with pytest.raises(NotFoundError):      # not read as lab1.json's neighbour
+        load_model("lab1\n", tmp_path)

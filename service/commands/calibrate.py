@@ -80,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.plot, "--plot", PLOT_SUFFIXES)
     obs = load_observations(args.data, strict=args.strict)  # validates before any work
     if args.save is not None:  # a bad or taken name ("" too) is refused before the work
+        from service.models import check_new_model_name
         from surrogate.calibration._saved import ModelExistsError, _check_name
 
         _check_name(args.save)
@@ -92,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
                              "a directory for saved models (made if missing)")
         if (args.models_dir / f"{args.save}.json").exists():
             raise ModelExistsError(args.save)
+        check_new_model_name(args.save, args.models_dir)  # "PAPER", or "lab1" beside "Lab1"
     model = _starting_model(args.model)
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
@@ -105,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         plot_calibration(cal, args.plot)
     if args.save is not None:
+        check_new_model_name(args.save, args.models_dir)  # one saved meanwhile
         path = save_model(cal, args.save, args.models_dir)
         print(f"saved model {args.save!r} to {path}", file=sys.stderr)
     def deg(x: float | None) -> str:

@@ -18,6 +18,7 @@ import json
 import math
 from dataclasses import replace
 
+from service.commands.numbers import number_action, range_text
 from service.commands.predict import (
     add_design_arguments,
     add_model_arguments,
@@ -29,20 +30,50 @@ from service.commands.predict import (
     print_validity,
     surrogate_from_args,
 )
+from solver.errors import InputError
 
-# The search's bounds (surrogate.design_search.SearchBounds field -> flag, help); a pinned
-# range (LO = HI) fixes that variable (one mould: --L-range 10 10).
+# The search's bounds (surrogate.design_search.SearchBounds field -> flag, what it bounds);
+# a pinned range (LO = HI) fixes that variable (one mould: --L-range 10 10). Each range
+# lies within the emulator's box (search_box); the stiffness scales default to 1 1.
 RANGE_FLAGS = {
-    "L_mm": ("--L-range", "chamber length bounds, mm (default: the box, 4-18)"),
-    "t_mm": ("--t-range", "membrane thickness bounds, mm (default: the box, 0.5-1.2)"),
-    "T_mm": ("--T-range", "body thickness bounds, mm (default: the box, 0.6-2.0)"),
-    "b_mm": ("--b-range", "chamber width bounds, mm (default: the box, 1.0-2.4)"),
-    "h_mm": ("--h-range", "chamber height bounds, mm (default: the box, 0.10-0.30)"),
-    "body_stiffness_scale": ("--body-stiffness-range",
-                             "body mu / preset mu bounds (default 1 1: as sold)"),
-    "membrane_stiffness_scale": ("--membrane-stiffness-range",
-                                 "membrane mu / preset mu bounds (default 1 1)"),
+    "L_mm": ("--L-range", "chamber length bounds"),
+    "t_mm": ("--t-range", "membrane thickness bounds"),
+    "T_mm": ("--T-range", "body thickness bounds"),
+    "b_mm": ("--b-range", "chamber width bounds"),
+    "h_mm": ("--h-range", "chamber height bounds"),
+    "body_stiffness_scale": ("--body-stiffness-range", "body mu / preset mu bounds"),
+    "membrane_stiffness_scale": ("--membrane-stiffness-range", "membrane mu / preset mu bounds"),
 }
+
+
+def search_box(name: str) -> tuple[float, float, str]:
+    """(low, high, unit) of a searched variable in the emulator's box: a length in mm
+    (solver.design_space.BOX_MM) or a layer's stiffness scale (STIFFNESS_SCALE_RANGE)."""
+    from solver.design_space import BOX_MM, STIFFNESS_SCALE_RANGE
+
+    if name in BOX_MM:
+        return (*BOX_MM[name], "mm")
+    return (*STIFFNESS_SCALE_RANGE, "")
+
+
+def _range_help(name: str, what: str) -> str:
+    lo, hi, unit = search_box(name)
+    default = "the box" if unit else "1 1: as sold"
+    return f"{what}, within {range_text(lo, hi, unit)} (the emulator's box; default {default})"
+
+
+def check_in_box(flag: str, name: str, bounds: list[float] | None) -> None:
+    """Refuse bounds that reach past the emulator's box: the search would be clipped to it
+    without saying so, and a user asking for 2..30 mm would read an answer for 4..18 as
+    one for 2..30. InputError naming ``flag`` and the box's range."""
+    if bounds is None:
+        return
+    lo, hi, unit = search_box(name)
+    low, high = bounds
+    if not lo <= low <= high <= hi:  # NaN fails every comparison: refused too
+        raise InputError(flag, f"got {low:g} {high:g}",
+                         f"LO <= HI within {lo:g}..{hi:g} {unit}".rstrip()
+                         + ", the emulator's box; LO = HI pins it")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -60,8 +91,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--angle-deg", type=float, help="target angle magnitude, deg")
     parser.add_argument("--force-mn", type=float, help="target force, mN")
     parser.add_argument("--pressure-pa", type=float, help="target pressure or budget, Pa")
-    for flag, what in RANGE_FLAGS.values():
-        parser.add_argument(flag, type=float, nargs=2, metavar=("LO", "HI"), help=what)
+    for name, (flag, what) in RANGE_FLAGS.items():
+        lo, hi, unit = search_box(name)
+        number_action(parser.add_argument(flag, type=float, nargs=2, metavar=("LO", "HI"),
+                                          help=_range_help(name, what)), lo, hi, unit)
     parser.add_argument("--pair", action="append", metavar="BODY/MEMBRANE",
                         help="allowed material pair (repeatable; default: every family)")
     parser.add_argument("--objective", choices=("pressure", "margin", "compact", "certainty"),
@@ -73,7 +106,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from solver.errors import InputError
 
     s = surrogate_from_args(args)
     if not hasattr(s, "inverse"):
@@ -88,7 +120,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _one_design(s: object, args: argparse.Namespace) -> int:
     from service.pump import inverse_answer
-    from solver.errors import InputError
 
     design = design_from_args(args)
     try:
@@ -116,7 +147,6 @@ def _one_design(s: object, args: argparse.Namespace) -> int:
 
 def _design_search(s: object, args: argparse.Namespace) -> int:
     """Designs for a target over the box: the same search as POST /v1/inverse."""
-    from solver.errors import InputError
     from surrogate import DesignTarget
     from surrogate.design_search import SearchBounds, search_designs
 
@@ -152,6 +182,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                           force_mn=args.force_mn)
     ranges = {name: (tuple(v) if (v := getattr(args, flag[2:].replace("-", "_"))) else None)
               for name, (flag, _) in RANGE_FLAGS.items()}
+    for name, (flag, _) in RANGE_FLAGS.items():
+        check_in_box(flag, name, ranges[name])  # type: ignore[arg-type]
     try:
         res = search_designs(s, target, SearchBounds(**ranges, pairs=pairs),
                              objective=args.objective, n_results=args.n_results,

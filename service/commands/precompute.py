@@ -137,6 +137,8 @@ def _designs_from_grid(grid: object, args: argparse.Namespace) -> tuple[object, 
 
 
 def _interrupt(signum: int, frame: object) -> None:
+    """SIGTERM (``kill PID``) raised as Ctrl-C's KeyboardInterrupt: the job stops the
+    same way (workers stopped, finished records kept)."""
     raise KeyboardInterrupt
 
 
@@ -178,7 +180,13 @@ def run(args: argparse.Namespace) -> int:
               f"done, {summary.skipped_failed} failed (skipped); would solve {len(todo)}")
         return 0
     # `kill PID` (SIGTERM) stops the job like Ctrl-C: workers stopped, finished records kept
-    previous = signal.signal(signal.SIGTERM, _interrupt)
+    terminated: list[int] = []   # SIGTERM's number once it came: exit 143, Ctrl-C's 130
+
+    def on_sigterm(signum: int, frame: object) -> None:
+        terminated.append(signum)
+        _interrupt(signum, frame)
+
+    previous = signal.signal(signal.SIGTERM, on_sigterm)
     try:
         summary = precompute(grid, args.db, workers=args.workers, scheduler=args.scheduler,
                              retry_failed=args.retry_failed, progress=not args.no_progress,
@@ -191,5 +199,5 @@ def run(args: argparse.Namespace) -> int:
     if summary.write_error:  # disk full, read-only: the lines above say where and why
         return 1
     if summary.interrupted:
-        return 130
+        return 128 + (terminated[0] if terminated else signal.SIGINT)  # the shell's way
     return 1 if summary.errors else 0

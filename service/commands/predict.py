@@ -16,6 +16,8 @@ import json
 import math
 from pathlib import Path
 
+from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges
+
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
 
@@ -75,6 +77,7 @@ def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True)
                         help="body mu = S x the preset's (0.5..2 in the emulator's box)")
     parser.add_argument("--membrane-stiffness-scale", type=float, default=None, metavar="S",
                         help="membrane mu = S x the preset's (0.5..2 in the emulator's box)")
+    attach_design_ranges(parser)   # a word that is not a number is told the range
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
@@ -110,7 +113,8 @@ PUMP_FLAGS = {"pressures_pa": "--pressures", "volumes_ul": "--volumes", "times_s
               "flow_ul_s": "--flow-ul-s", "pressures_at": "--pressures-at",
               "inlet.channel_width_mm": "--channel-mm", "inlet.channel_length_mm": "--channel-mm",
               "inlet.channel_height_mm": "--channel-mm", "inlet.tubing_length_mm": "--tubing-mm",
-              "inlet.tubing_bore_mm": "--tubing-mm", "inlet.viscosity_pa_s": "--viscosity-pa-s"}
+              "inlet.tubing_bore_mm": "--tubing-mm", "inlet.viscosity_pa_s": "--viscosity-pa-s",
+              "level": "--level"}
 
 
 def as_flag(exc: Exception) -> Exception:
@@ -161,7 +165,7 @@ def design_from_args(args: argparse.Namespace) -> object:
         if scale is None:
             data[f"{layer}_material"] = preset
             continue
-        lo, hi = 0.01, 100.0
+        lo, hi = STIFFNESS_SCALE_LIMITS
         if not lo <= scale <= hi:
             raise InputError(f"--{layer}-stiffness-scale", f"got {scale:g}",
                              f"{lo:g} <= S <= {hi:g} (the emulator's box: "
@@ -180,7 +184,7 @@ def saved_model_name(spec: str | None) -> str | None:
     from surrogate.calibration._saved import NAME_PATTERN
 
     if (spec is None or spec == "paper" or spec.endswith(".json") or Path(spec).exists()
-            or not NAME_PATTERN.match(spec)):
+            or not NAME_PATTERN.fullmatch(spec)):
         return None
     return spec
 

@@ -7,6 +7,8 @@ fitted surrogate is loaded once at start-up.
 from __future__ import annotations
 
 import argparse
+import errno
+import socket
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -23,15 +25,41 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    import uvicorn
+def check_address(host: str, port: int) -> None:
+    """Bind ``host``:``port`` once, as uvicorn will, before the models load (~10 s):
+    a host that does not resolve or is not this machine's is an InputError naming
+    --host, a port in use or not ours to take one naming --port; one line, no log."""
+    from solver.errors import InputError
 
-    from service.app import create_app
-    from service.settings import get_settings
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET  # uvicorn's own choice
+    try:
+        with socket.socket(family, socket.SOCK_STREAM) as sock:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            sock.bind((host, port))
+    except (socket.gaierror, UnicodeError):
+        raise InputError("--host", f"{host!r} does not resolve to an address",
+                         "an address or name of this machine, e.g. 127.0.0.1 or 0.0.0.0"
+                         ) from None
+    except OSError as exc:
+        if exc.errno in (errno.EADDRINUSE, errno.EACCES):
+            raise InputError("--port", f"cannot listen on {host}:{port} "
+                             f"({exc.strerror})", "a free port, 1-65535; below 1024 "
+                             "needs privileges") from None
+        raise InputError("--host", f"cannot listen on {host}:{port} ({exc.strerror})",
+                         "an address of this machine, e.g. 127.0.0.1 or 0.0.0.0") from None
+
+
+def run(args: argparse.Namespace) -> int:
     from solver.errors import InputError
 
     if not 0 < args.port < 65536:
         raise InputError("--port", f"got {args.port}", "1 <= port <= 65535")
+    check_address(args.host, args.port)   # before the imports and the models' loading
+    import uvicorn
+
+    from service.app import create_app
+    from service.settings import get_settings
+
     app = create_app(get_settings())
     uvicorn.run(app, host=args.host, port=args.port, log_level=args.log_level,
                 proxy_headers=True)

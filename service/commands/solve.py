@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from service.commands.numbers import attach_design_ranges
 from solver.design import LIMITS_MM, design_from_dict
 from solver.io import CSV_COLUMNS
 from solver.materials import MATERIALS
@@ -43,6 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help=f"body (layer A) material: {materials} (default %(default)s)")
     g.add_argument("--membrane-material", default="ecoflex_00_30",
                    help=f"membrane (layer B) material: {materials} (default %(default)s)")
+    attach_design_ranges(p)   # a word that is not a number is told the range
     s = p.add_argument_group("solver")
     d = SolverSettings()
     s.add_argument("--control", choices=CONTROLS, default=d.control,

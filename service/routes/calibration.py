@@ -7,13 +7,15 @@ augmented model (``save``) changes server state, so it needs the API key.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Security
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
 from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
-from service.errors import FIELD_RANGES, ConflictError, FieldError, located
+from service.errors import FIELD_FORMS, FIELD_RANGES, ConflictError, FieldError, located
+from service.models import check_new_model_name, name_rule
 from service.schemas import Schema
 from service.schemas._ranges import field_ranges
 from solver.errors import ExistsError, InputError
@@ -80,6 +82,7 @@ class CalibrateRequest(Schema):
 
 # its limits stated in every validation error, as the other requests' are
 FIELD_RANGES.update(field_ranges([CalibrateRequest]))
+FIELD_FORMS["save"] = "a new name of " + name_rule()
 FIELD_RANGES["rows.*"] = ("a finite number (|value| <= 1e15), text (at most 200 characters) "
                           "or null; each column's range: docs/measured-data.md")
 
@@ -140,6 +143,7 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
 
     if request.save is not None:
         require_api_key(settings, key)
+        _check_save_name(request.save, settings.models_dir)  # before the work
     try:  # the data's errors: the loader's, then the loop's (e.g. fewer than 2 curves)
         obs = observations_from_rows(request.rows, strict=request.strict)
         start = "paper" if request.model == "paper" else models.get(request.model)
@@ -155,11 +159,35 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
         try:  # a reserved or already used name (atomic create: one of two saves wins),
               # or a calibration the saved format cannot hold
             saveable(cal)
+            check_new_model_name(request.save, settings.models_dir)
             save_model(cal, request.save, settings.models_dir)
-        except ExistsError:
-            raise ConflictError(f"save: a model named {request.save!r} already exists; "
-                                "choose a new name", model=request.save) from None
+        except ExistsError as exc:  # the name, or one differing from it only in case
+            raise _conflict(exc, request.save) from None
         except InputError as exc:
             raise located(exc, ("body",), {"name": ("save",)}) from None
         report["saved_model"] = request.save
     return CalibrationReport(**report)
+
+
+def _conflict(exc: ExistsError, name: str) -> ConflictError:
+    """409 for a taken name (or one differing from the new name only in case)."""
+    return ConflictError(f"save: {getattr(exc, 'detail', exc)}; choose a new name",
+                         model=name)
+
+
+def _check_save_name(name: str, models_dir: Path) -> None:
+    """The name ``save`` asks for, checked before the calibration's work: not a built-in
+    model's in any case (422 at ``save``), not taken, not a saved model's in another case
+    (409). The save itself is an atomic create: of two concurrent saves one wins."""
+    from surrogate.calibration._saved import _check_name
+
+    try:
+        _check_name(name)
+        check_new_model_name(name, models_dir)
+    except ExistsError as exc:
+        raise _conflict(exc, name) from None
+    except InputError as exc:
+        raise located(exc, ("body",), {"name": ("save",)}) from None
+    if (models_dir / f"{name}.json").exists():
+        raise ConflictError(f"save: a model named {name!r} already exists; choose a new "
+                            "name", model=name)

@@ -6,9 +6,15 @@ and are registered in ``service.errors.FIELD_RANGES`` so that every validation
 error states the allowed range.
 """
 
-from service.errors import FIELD_RANGES
+from service.errors import FIELD_FORMS, FIELD_RANGES
 from service.schemas._ranges import field_ranges
-from service.schemas.common import DesignIn, MaterialIn, Schema, SolveSettingsIn
+from service.schemas.common import (
+    DesignIn,
+    MaterialIn,
+    Schema,
+    SolveSettingsIn,
+    text_forms,
+)
 from service.schemas.curves import CurveDetail, CurvePage, CurvesQuery, CurveSummary
 from service.schemas.health import Health
 from service.schemas.inverse import (
@@ -27,6 +33,7 @@ REQUEST_MODELS = (DesignIn, MaterialIn, SolveSettingsIn, CurvesQuery, InverseReq
                   MaterialPair, PressureRequest, SolveRequest, PlotQuery, PredictRequest,
                   InletIn)
 FIELD_RANGES.update(field_ranges(REQUEST_MODELS))
+FIELD_FORMS.update(text_forms())
 
 __all__ = [
     "REQUEST_MODELS", "CurveDetail", "CurvePage", "CurveSummary", "CurvesQuery", "DesignIn",

@@ -14,6 +14,23 @@ MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
 # name it (``ecoflex_00_30*1.5``: solver.design_space.scaled_material), so that a design
 # /v1/inverse answers is taken back by /v1/predict.
 INLINE_MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}(\*[0-9][0-9.eE+\-]{0,15})?$"
+# The patterns in words (a validation error states these instead of the pattern).
+NAME_WORDS = "1-64 letters, digits, '_', '.', '-', not starting with '.' or '-'"
+
+
+def text_forms() -> dict[str, str]:
+    """Text field name -> the form its pattern allows, in words: a layer's material is a
+    preset id (solver.materials.MATERIALS) or one scaled (an inline material is an
+    object); an inline material's id is a name; a model is a built-in's or a saved one's
+    name (surrogate.calibration's RESERVED)."""
+    from solver.materials import MATERIALS
+    from surrogate.calibration._saved import RESERVED
+
+    layer = (", ".join(sorted(MATERIALS)) + ", or a preset scaled as <preset>*<scale> "
+             "(pdms_1_10*1.2)")
+    return {"body_material": layer, "membrane_material": layer,
+            "id": f"a name of {NAME_WORDS}, optionally *<scale>",
+            "model": ", ".join(RESERVED) + f", or a saved model's name ({NAME_WORDS})"}
 
 
 class Schema(BaseModel):

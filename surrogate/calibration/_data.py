@@ -220,6 +220,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
                         f"{MIN_POINTS_PER_CURVE} points")
     if len(rows) > MAX_ROWS:
         raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
+    rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
     known = set(REQUIRED) | set(OPTIONAL)
     for name in REQUIRED:
@@ -428,10 +429,23 @@ def _hash(parsed: list[dict[str, object]]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+def _plain_keys(row: dict, i: int) -> dict:
+    """``row`` with its column names stripped of spaces and of a byte-order mark (a CSV
+    converted to JSON by a tool that kept the BOM: '\ufeffcurve_id' answered "curve_id:
+    required column is missing"); two names that become one are a DataError."""
+    out = {(k.lstrip("\ufeff").strip() if isinstance(k, str) else k): v
+           for k, v in row.items()}
+    if len(out) != len(row):
+        raise DataError("rows", "a column is named twice (up to spaces)", i)
+    return out
+
+
 def read_csv_rows(text: str) -> list[dict[str, object]]:
-    """Rows of a CSV text (header line first; '#' comment lines are skipped). A field
-    beyond the csv module's size limit is a DataError naming its row and column."""
-    lines = [ln for ln in io.StringIO(text) if not ln.lstrip().startswith("#")]
+    """Rows of a CSV text (header line first; '#' comment lines and blank lines are
+    skipped: a blank line between a comment and the header had made an empty header). A
+    field beyond the csv module's size limit is a DataError naming its row and column."""
+    lines = [ln for ln in io.StringIO(text)
+             if ln.strip() and not ln.lstrip().startswith("#")]
     reader = csv.DictReader(lines)
     try:
         fieldnames = reader.fieldnames

@@ -34,7 +34,9 @@ from surrogate.exponential.equations import TAU_FORM
 from surrogate.predictor import band_within_fe
 
 FORMAT = "balloon.calibrated-model/1"
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+# read with fullmatch: ``$`` alone lets a final newline through ('lab1\n' saved a file
+# 'lab1\n.json' beside 'lab1.json')
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 # the built-in models' names (service/models.py): a saved model of one could never be chosen
 RESERVED = ("emulator", "exponential", "fitted", "paper")
 
@@ -180,7 +182,7 @@ def fe_range(cal) -> dict[str, float]:
 
 
 def _check_name(name: str) -> str:
-    if not isinstance(name, str) or not NAME_PATTERN.match(name) or name in RESERVED:
+    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or name in RESERVED:
         raise InputError("name", f"invalid model name {name!r}",
                          "1-64 letters, digits, '_', '.', '-', starting with a letter or "
                          "digit; not " + ", ".join(repr(n) for n in RESERVED))
@@ -310,7 +312,7 @@ def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
     """A saved calibrated model by name: ModelNotFoundError when there is none,
     SavedModelError when its file is damaged or malformed."""
     models_dir = Path(models_dir)
-    if not isinstance(name, str) or not NAME_PATTERN.match(name):
+    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name):
         raise ModelNotFoundError(f"no model {name!r}")
     path = models_dir / f"{name}.json"
     if not path.is_file():

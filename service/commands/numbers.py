@@ -1,0 +1,44 @@
+"""Numeric command-line options whose text is not a number: argparse's own message
+("argument --L-mm: invalid float value: 'abc'") names the option but no range, so a
+design option carries its allowed range (``number_action``), and the parser's error states
+it too:
+
+    balloon predict: error: argument --L-mm: 'abc' is not a number (allowed: 0.5 to 60 mm)
+
+The ranges come from the tables that check the values afterwards
+(``solver.design.LIMITS_MM``, ``solver.design_space.BOX_MM``, the stiffness scales'):
+this module only parses, the range checks stay where they are.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from solver.design import LIMITS_MM
+
+# A layer's stiffness scale S (mu = S x the preset's): what a single design may take; the
+# emulator's box is solver.design_space.STIFFNESS_SCALE_RANGE (0.5..2) within it.
+STIFFNESS_SCALE_LIMITS = (0.01, 100.0)
+
+
+def range_text(lo: float, hi: float, unit: str = "") -> str:
+    """``"0.5 to 60 mm"``: an option's allowed range in words."""
+    return f"{lo:g} to {hi:g} {unit}".rstrip()
+
+
+def number_action(action: argparse.Action, lo: float, hi: float,
+                  unit: str = "") -> argparse.Action:
+    """``action`` (a float option) with its allowed range ``lo``..``hi`` attached: text
+    that is not a number is then told the range too (``service.cli.Parser.error``)."""
+    action.allowed = range_text(lo, hi, unit)  # type: ignore[attr-defined]
+    return action
+
+
+def attach_design_ranges(parser: argparse.ArgumentParser) -> None:
+    """Attach its allowed range to each design option of ``parser``: the lengths
+    (LIMITS_MM, by the option's dest) and the layers' stiffness scales."""
+    for action in parser._actions:  # noqa: SLF001 - argparse keeps its options there
+        if action.dest in LIMITS_MM:
+            number_action(action, *LIMITS_MM[action.dest], "mm")
+        elif action.dest.endswith("_stiffness_scale"):
+            number_action(action, *STIFFNESS_SCALE_LIMITS)
