@@ -59,6 +59,9 @@ GROUPS: dict[tuple[str, str], str] = {
     ("ecoflex_00_30", "ecoflex_00_30"): "ecoflex_00_30/ecoflex_00_30",
 }
 STIFFNESS_SCALE_RANGE = (0.5, 2.0)
+# A layer's stiffness scale S (mu = S x the preset's) that a single design or a search
+# bound may state (the CLI's options, POST /v1/inverse's bounds); the box above lies within.
+STIFFNESS_SCALE_LIMITS = (0.01, 100.0)
 REDUCED_RATIO_RANGE = (STIFFNESS_SCALE_RANGE[0] / STIFFNESS_SCALE_RANGE[1],
                        STIFFNESS_SCALE_RANGE[1] / STIFFNESS_SCALE_RANGE[0])
 # A material is "preset p scaled by s" when its alpha equal p's and every mu_kpa is s x

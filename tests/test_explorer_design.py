@@ -97,6 +97,20 @@ def test_an_unreachable_target_is_explained_and_a_bad_bound_shown_beside_its_fie
     assert page.get_attribute("#inv-L-lo", "aria-invalid") == "true"
 
 
+def test_a_semicolon_separated_file_is_named_as_such_before_sending(watched, server, tmp_path):
+    """A spreadsheet's export with decimal commas read as one column; the server then
+    answered "curve_id: required column is missing" though the header has it."""
+    text = EXAMPLE_CSV.read_text().replace(",", ";").replace(".", ",")
+    path = tmp_path / "lab_semicolon.csv"
+    path.write_text(text)
+    page = open_explorer(watched, server.url)
+    page.set_input_files("#cal-file", str(path))
+    page.click("#cal-run")
+    page.wait_for_selector("#err-cal-rows:not([hidden])")
+    message = page.locator("#err-cal-rows").inner_text()
+    assert "lab_semicolon.csv" in message and "separated by ';'" in message
+
+
 def test_uploading_the_example_csv_shows_the_report_and_saving_asks_for_the_key(watched, server):
     page = open_explorer(watched, server.url)
     page.set_input_files("#cal-file", str(EXAMPLE_CSV))

@@ -15,10 +15,7 @@ from __future__ import annotations
 import argparse
 
 from solver.design import LIMITS_MM
-
-# A layer's stiffness scale S (mu = S x the preset's): what a single design may take; the
-# emulator's box is solver.design_space.STIFFNESS_SCALE_RANGE (0.5..2) within it.
-STIFFNESS_SCALE_LIMITS = (0.01, 100.0)
+from solver.design_space import STIFFNESS_SCALE_LIMITS
 
 
 def range_text(lo: float, hi: float, unit: str = "") -> str:

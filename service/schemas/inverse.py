@@ -10,6 +10,8 @@ from pydantic import BaseModel, ConfigDict, Field
 from service.pump import MAX_ANGLE_DEG, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
 from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
+from solver.design import LIMITS_MM
+from solver.design_space import BOX_MM, STIFFNESS_SCALE_LIMITS, STIFFNESS_SCALE_RANGE
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
 OptFloats = list[float | None] | None
@@ -33,33 +35,45 @@ class MaterialPair(Schema):
     membrane_material: str = Field(pattern=INLINE_MATERIAL_ID)
 
 
+def _bound_list(lo: float, hi: float) -> Any:
+    """[low, high] within (lo, hi), or None: a search bound's type."""
+    return list[Annotated[float, Field(ge=lo, le=hi)]] | None
+
+
+# a search bound may state any design the solver takes (LIMITS_MM); the search covers
+# its part inside the emulator's box (BOX_MM) and says so (design_search.SearchBounds)
+L_BOUNDS = _bound_list(*LIMITS_MM["L_mm"])
+T_BOUNDS = _bound_list(*LIMITS_MM["T_mm"])
+THIN_BOUNDS = _bound_list(*LIMITS_MM["t_mm"])
+B_BOUNDS = _bound_list(*LIMITS_MM["b_mm"])
+H_BOUNDS = _bound_list(*LIMITS_MM["h_mm"])
+SCALE_BOUNDS = _bound_list(*STIFFNESS_SCALE_LIMITS)
+
+
+def _box_field(name: str, what: str) -> Any:
+    lo, hi = BOX_MM[name]
+    return Field(None, min_length=2, max_length=2, description=f"[low, high] {what}, mm "
+                 f"(default: the emulator's box, {lo:g}..{hi:g})")
+
+
 class InverseRequest(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"target": {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 45},
          "L_bounds_mm": [4.1, 15.1], "t_bounds_mm": [0.5, 1.0], "n_results": 3}]})
 
     target: TargetIn
-    L_bounds_mm: list[Annotated[float, Field(ge=0.5, le=60.0)]] | None = Field(
-        None, min_length=2, max_length=2, description="[low, high] chamber length, mm "
-        "(default: the emulator's box, 4..18)")
-    t_bounds_mm: list[Annotated[float, Field(ge=0.05, le=5.0)]] | None = Field(
-        None, min_length=2, max_length=2, description="[low, high] membrane thickness, mm "
-        "(default: the box, 0.5..1.2)")
-    T_bounds_mm: list[Annotated[float, Field(ge=0.1, le=10.0)]] | None = Field(
-        None, min_length=2, max_length=2, description="[low, high] body thickness above "
-        "the chamber, mm (default: the box, 0.6..2)")
-    b_bounds_mm: list[Annotated[float, Field(ge=0.1, le=20.0)]] | None = Field(
-        None, min_length=2, max_length=2, description="[low, high] chamber width, mm "
-        "(default: the box, 1..2.4)")
-    h_bounds_mm: list[Annotated[float, Field(ge=0.02, le=5.0)]] | None = Field(
-        None, min_length=2, max_length=2, description="[low, high] chamber height, mm "
-        "(default: the box, 0.1..0.3)")
-    body_stiffness_scale_bounds: list[Annotated[float, Field(ge=0.01, le=100.0)]] | None = (
-        Field(None, min_length=2, max_length=2, description="[low, high] body mu / preset "
-              "mu (default [1, 1]: the preset; the box allows 0.5..2)"))
-    membrane_stiffness_scale_bounds: list[Annotated[float, Field(ge=0.01, le=100.0)]] | None = (
-        Field(None, min_length=2, max_length=2, description="[low, high] membrane mu / "
-              "preset mu (default [1, 1])"))
+    L_bounds_mm: L_BOUNDS = _box_field("L_mm", "chamber length")
+    t_bounds_mm: THIN_BOUNDS = _box_field("t_mm", "membrane thickness")
+    T_bounds_mm: T_BOUNDS = _box_field("T_mm", "body thickness above the chamber")
+    b_bounds_mm: B_BOUNDS = _box_field("b_mm", "chamber width")
+    h_bounds_mm: H_BOUNDS = _box_field("h_mm", "chamber height")
+    body_stiffness_scale_bounds: SCALE_BOUNDS = Field(
+        None, min_length=2, max_length=2, description="[low, high] body mu / preset mu "
+        "(default [1, 1]: the preset; the box allows "
+        f"{STIFFNESS_SCALE_RANGE[0]:g}..{STIFFNESS_SCALE_RANGE[1]:g})")
+    membrane_stiffness_scale_bounds: SCALE_BOUNDS = Field(
+        None, min_length=2, max_length=2, description="[low, high] membrane mu / "
+        "preset mu (default [1, 1])")
     material_pairs: list[MaterialPair] | None = Field(
         None, min_length=1, max_length=20, description="allowed pairs (default: all fitted)")
     objective: Literal["pressure", "margin", "compact", "certainty"] | None = Field(

@@ -25,7 +25,13 @@ function splitLine(line) {
 export function parseCsv(text) {
   const lines = text.split(/\r?\n/).filter((l) => l.trim() !== "" && !l.trimStart().startsWith("#"));
   if (!lines.length) throw new Error("the file is empty");
-  const header = splitLine(lines[0]);
+  const header = splitLine(lines[0].replace(/^\uFEFF/, ""));
+  if (header.length === 1 && /[;\t]/.test(header[0])) {
+    // a spreadsheet's export where the decimal mark is a comma: not comma-separated
+    const sep = header[0].includes(";") ? "';'" : "tabs";
+    throw new Error(`the header is one column separated by ${sep}: save the file as ` +
+      "comma-separated values with '.' as the decimal mark (CSV UTF-8, comma-delimited)");
+  }
   return lines.slice(1).map((line) => {
     const cells = splitLine(line);
     const row = {};
