@@ -97,13 +97,20 @@ def test_a_built_in_models_name_in_another_case_cannot_be_saved(client, name):
     assert not list(client.app.state.settings.models_dir.glob("*.json"))
 
 
-def test_a_name_differing_only_in_case_from_a_saved_model_is_409_before_the_work(
-        client, monkeypatch):
+def saved_and_no_work(client, monkeypatch, name: str):
+    """The models directory with a saved (empty) model ``name``; a calibration that fails
+    the test if it runs: the name must be refused before the work."""
     models = client.app.state.settings.models_dir
     models.mkdir(parents=True, exist_ok=True)
-    (models / "Lab1.json").write_text("{}")
+    (models / f"{name}.json").write_text("{}")
     monkeypatch.setattr("surrogate.calibration.run_calibration",
                         lambda *a, **k: pytest.fail("calibrated before checking the name"))
+    return models
+
+
+def test_a_name_differing_only_in_case_from_a_saved_model_is_409_before_the_work(
+        client, monkeypatch):
+    models = saved_and_no_work(client, monkeypatch, "Lab1")
     r = client.post("/v1/calibrate", headers=KEY, json={"rows": ROWS, "save": "lab1"})
     body = assert_problem(r, 409)
     assert "'Lab1' already exists" in body["detail"] and "only in case" in body["detail"]
@@ -112,11 +119,7 @@ def test_a_name_differing_only_in_case_from_a_saved_model_is_409_before_the_work
 
 
 def test_a_taken_name_is_409_before_the_work(client, monkeypatch):
-    models = client.app.state.settings.models_dir
-    models.mkdir(parents=True, exist_ok=True)
-    (models / "lab1.json").write_text("{}")
-    monkeypatch.setattr("surrogate.calibration.run_calibration",
-                        lambda *a, **k: pytest.fail("calibrated before checking the name"))
+    saved_and_no_work(client, monkeypatch, "lab1")
     r = client.post("/v1/calibrate", headers=KEY, json={"rows": ROWS, "save": "lab1"})
     body = assert_problem(r, 409)
     assert "'lab1' already exists" in body["detail"] and body["model"] == "lab1"
