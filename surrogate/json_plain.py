@@ -13,8 +13,12 @@ def plain_json(obj: Any) -> Any:
     if isinstance(obj, dict):
         return {str(k): plain_json(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
+        if obj and set(map(type, obj)) == {float} and all(map(math.isfinite, obj)):
+            return list(obj)          # a row of finite floats, the bulk of a model file
         return [plain_json(v) for v in obj]
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "iub" or (obj.dtype.kind == "f" and np.isfinite(obj).all()):
+            return obj.tolist()       # Python ints, floats and bools already
         return plain_json(obj.tolist())
     if isinstance(obj, (np.floating, float)):
         return float(obj) if math.isfinite(obj) else None

@@ -55,3 +55,17 @@ def shipped_client(tmp_path_factory):
                                   surrogate_path=DATA_DIR / "surrogate.json"))
     with TestClient(app) as c:
         yield c
+
+
+@pytest.fixture(scope="session")
+def shipped_emulator_saved_and_loaded(tmp_path_factory):
+    """``(shipped, back)``: the shipped emulator, and the same saved with ``save_emulator``
+    and loaded again from that file. One round trip per test process: each costs ~13 s
+    (a 30 MB write, and a load that factorises every GP again)."""
+    from service.settings import DATA_DIR
+    from surrogate.emulator import load_emulator
+    from surrogate.emulator.file import save_emulator
+
+    shipped = load_emulator(DATA_DIR / "emulator.json")
+    path = save_emulator(shipped, tmp_path_factory.mktemp("round_trip") / "e.json")
+    return shipped, load_emulator(path)

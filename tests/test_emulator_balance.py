@@ -1,7 +1,6 @@
 """The emulator at the Ecoflex/Ecoflex stiffness balance: the signed angle by injected volume
 (surrogate/emulator/balance.py), checked on FE curves of random box designs it never saw."""
 
-import json
 
 import numpy as np
 import pytest
@@ -12,8 +11,9 @@ from solver.settings import SolverSettings
 from solver.store import CurveStore
 from surrogate.emulator import load_emulator
 from surrogate.emulator.balance import VOLUME_NODES_UL, on_nodes
+from surrogate.emulator.file import emulator_from_dict
 from surrogate.errors import SurrogateFileError
-from surrogate.file_seal import KEY, seal
+from surrogate.file_seal import KEY
 
 EMULATOR = "service/data/emulator.json"
 # FE curves of 384 random box designs (benchmarks/heldout_designs.py, seed 2027), none in
@@ -155,19 +155,20 @@ def test_over_http_the_answer_is_a_200_with_its_flag_and_no_force_at_the_balance
     assert out["force_mn"] is None
 
 
-def _written(tmp_path, d: dict) -> str:
+def _loaded(d: dict):
+    """The file loader's validation of ``d``, in memory (writing and reading 30 MB per
+    variant cost ~10 s each), without its checksum."""
     d.pop(KEY, None)
-    path = tmp_path / "e.json"
-    path.write_text(json.dumps(seal(d)))
-    return str(path)
+    return emulator_from_dict(d, "e.json")
 
 
-def test_the_file_keeps_the_model_reads_format_11_and_refuses_damage(tmp_path, emulator,
-                                                                     balance_curves):
-    from surrogate.emulator.file import emulator_to_dict, save_emulator
+def test_the_file_keeps_the_model_reads_format_11_and_refuses_damage(
+        shipped_emulator_saved_and_loaded, emulator, balance_curves):
+    from surrogate.emulator.file import emulator_to_dict
 
     design = next(d for d, _ in balance_curves if _undecided(emulator, d))
-    back = load_emulator(save_emulator(emulator, tmp_path / "round.json"))
+    shipped, back = shipped_emulator_saved_and_loaded
+    assert shipped is emulator
     np.testing.assert_array_equal(back.predict_volume(design, [50.0]).angle_deg,
                                   emulator.predict_volume(design, [50.0]).angle_deg)
     d = emulator_to_dict(emulator)
@@ -178,13 +179,13 @@ def test_the_file_keeps_the_model_reads_format_11_and_refuses_damage(tmp_path, e
         good = models[group][field]
         models[group][field] = bad
         with pytest.raises(SurrogateFileError, match="balance|damaged"):
-            load_emulator(_written(tmp_path, d))
+            _loaded(d)
         models[group][field] = good
     models["pdms/ecoflex_00_30"] = models[group]
     with pytest.raises(SurrogateFileError, match="no sign model"):
-        load_emulator(_written(tmp_path, d))
+        _loaded(d)
     d["format_version"] = 11
     d.pop("balance_models")
-    old = load_emulator(_written(tmp_path, d))
+    old = _loaded(d)
     with pytest.raises(InputError, match="balance"):        # refused, as before
         old.predict(design, [100.0])

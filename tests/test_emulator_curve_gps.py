@@ -1,6 +1,5 @@
 """The curve GPs' volume nodes above the anchor, read as the log of their rise in log V."""
 
-import json
 
 import numpy as np
 import pytest
@@ -75,25 +74,22 @@ def test_curve_gps_reproduce_their_training_curves_and_ask_the_anchors_variance(
     assert np.isnan(cg.predict_many(u[:2], variance_of=MEANS_ONLY)[1]).all()
 
 
-def test_an_emulator_file_keeps_the_anchor_and_refuses_a_damaged_one(tmp_path):
-    from surrogate.emulator import load_emulator
-    from surrogate.emulator.file import emulator_to_dict, save_emulator
+def test_an_emulator_file_keeps_the_anchor_and_refuses_a_damaged_one(
+        shipped_emulator_saved_and_loaded):
+    from surrogate.emulator.file import emulator_from_dict, emulator_to_dict
     from surrogate.errors import SurrogateFileError
-    from surrogate.file_seal import KEY, seal
+    from surrogate.file_seal import KEY
 
-    e = load_emulator("service/data/emulator.json")
+    e, loaded = shipped_emulator_saved_and_loaded
     pe = next(iter(e.pairs.values()))
     assert pe.curves.volume_rise_anchor == anchor_index()
-    path = save_emulator(e, tmp_path / "e.json")
-    assert load_emulator(path).pairs[pe.pair].curves.volume_rise_anchor == anchor_index()
+    assert loaded.pairs[pe.pair].curves.volume_rise_anchor == anchor_index()
+    d = emulator_to_dict(e)    # each damaged copy checked in memory, as the file's loader does
+    d.pop(KEY)
     for bad in (N - 1, -1, 3.0, "19", True):
-        d = emulator_to_dict(e)
         d["pairs"][0]["volume_rise_anchor"] = bad
-        d.pop(KEY, None)
-        damaged = tmp_path / "damaged.json"
-        damaged.write_text(json.dumps(seal(d)))
         with pytest.raises(SurrogateFileError, match="volume_rise_anchor"):
-            load_emulator(damaged)
+            emulator_from_dict(d, "damaged.json")
 
 
 def test_a_gp_far_from_its_designs_gives_a_bounded_rise_and_band():
