@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -126,16 +127,18 @@ def by_physics(designs: list[Design]) -> list[Design]:
                     membrane_material=named(d.membrane_material)) for d in designs]
 
 
-def curves_from_store(path: str | os.PathLike) -> tuple[list[CurveData], dict]:
-    """Read every record of a CurveStore as CurveData; returns (curves, store metadata).
-    Failed records keep their converged points (the rising branch up to the failure).
-    Materials are named by physics (``by_physics``)."""
+def curves_from_store(path: str | os.PathLike, keys: Iterable[str] | None = None
+                      ) -> tuple[list[CurveData], dict]:
+    """Read every record of a CurveStore (or those with ``keys``) as CurveData; returns
+    (curves, store metadata). Failed records keep their converged points (the rising
+    branch up to the failure). Materials are named by physics (``by_physics``)."""
     from solver.store import CurveStore
 
     curves: list[CurveData] = []
     with CurveStore(path, mode="r") as db:
         metadata = dict(db.metadata)
-        records = list(db.records())
+        records = (list(db.records()) if keys is None
+                   else [db.get(k) for k in sorted(set(keys))])
         designs = by_physics([rec.design for rec in records])
         for rec, design in zip(records, designs, strict=True):
             c = rec.curve

@@ -69,3 +69,15 @@ def shipped_emulator_saved_and_loaded(tmp_path_factory):
     shipped = load_emulator(DATA_DIR / "emulator.json")
     path = save_emulator(shipped, tmp_path_factory.mktemp("round_trip") / "e.json")
     return shipped, load_emulator(path)
+
+
+@pytest.fixture(scope="session")
+def shipped_records():
+    """Every record of the shipped database (service/data/curves.h5), in key order, read
+    once per test process: reading all 2403 takes ~30 s (~12 ms a record, most of it
+    HDF5 attributes), which seven tests paid each before."""
+    from service.settings import DATA_DIR
+    from solver.store import CurveStore
+
+    with CurveStore(DATA_DIR / "curves.h5") as db:
+        return tuple(db.records())

@@ -34,7 +34,7 @@ def test_the_emulator_is_a_predictor(emulator):
     assert isinstance(emulator, Predictor)
 
 
-def test_database_designs_are_reproduced_within_0_2_deg(emulator):
+def test_database_designs_are_reproduced_within_0_2_deg(emulator, shipped_records):
     """Every database curve the emulator interpolates, at its own FE pressures (up to
     89 deg). Measured on the 1115-record database: 654 of 657 within 0.2 deg; the other
     three 0.23-0.92 deg, between angle nodes where the FE curve bends over (0.92 deg at
@@ -44,14 +44,14 @@ def test_database_designs_are_reproduced_within_0_2_deg(emulator):
     keys = sorted({k for pe in emulator.pairs.values() for k in pe.keys})
     worst = []
     answered = total = 0
-    with CurveStore(DB) as db:
-        for key in keys:
-            c = db.get(key).curve
-            inside = (np.abs(c.angle_deg) <= 89.0) & (c.pressure_pa > 0)
-            pred = emulator.predict(db.get(key).design, c.pressure_pa[inside])
-            ok = np.isfinite(pred.angle_deg)   # a nearby early-ended curve may cap the range
-            answered, total = answered + int(ok.sum()), total + int(ok.size)
-            worst.append(float(np.max(np.abs(pred.angle_deg[ok] - c.angle_deg[inside][ok]))))
+    by_key = {r.key: r for r in shipped_records}
+    for key in keys:
+        c = by_key[key].curve
+        inside = (np.abs(c.angle_deg) <= 89.0) & (c.pressure_pa > 0)
+        pred = emulator.predict(by_key[key].design, c.pressure_pa[inside])
+        ok = np.isfinite(pred.angle_deg)   # a nearby early-ended curve may cap the range
+        answered, total = answered + int(ok.sum()), total + int(ok.size)
+        worst.append(float(np.max(np.abs(pred.angle_deg[ok] - c.angle_deg[inside][ok]))))
     worst = np.array(worst)
     assert answered >= 0.99 * total, (answered, total)
     assert len(worst) >= 400
@@ -424,8 +424,8 @@ def test_fit_report_sets_the_emulator_beside_the_exponential_on_the_same_curves(
         assert f"{fam['lodo']['exponential']['rmse']:.2f}" in line
 
 
-def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(emulator,
-                                                                           monkeypatch):
+def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(
+        emulator, monkeypatch, shipped_records):
     """Every material group has a force model fitted from the database's blocked-tip FE
     curves, as the ratio of the force to the free tip's emulated angle at the same
     pressure: at the designs it is fitted to (those whose curve reaches the group's force
@@ -439,8 +439,7 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(emu
     assert all(pe.force is not None and pe.force_form == "angle_ratio"
                for pe in emulator.pairs.values())
     checked, answered, inside_total = 0, 0, 0
-    with CurveStore(DB) as db:
-        records = [r for r in db.records() if is_force_record(r.settings)]
+    records = [r for r in shipped_records if is_force_record(r.settings)]
     for rec in records:
         try:
             point = locate(rec.design, reduced=True)
@@ -570,7 +569,7 @@ def test_no_force_number_where_its_band_is_wider_than_twice_the_force(emulator):
     assert np.isfinite(pred.force_mn).all(), pred.validity["messages"]
 
 
-def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
+def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves(shipped_records):
     """One band multiplier for the whole curve was set by the low-angle FE points (half of
     them lie below 10 deg) and covered every held-out point above 10 deg with +-30 deg bands.
     Per angle bin, the cross-validated bands of 50 of the reversed pair's database curves (5
@@ -589,8 +588,7 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
         node_band_scales,
     )
 
-    with CurveStore(DB) as store:
-        free, _ = _collect(store.records())
+    free, _ = _collect(shipped_records)
     rows = free["ecoflex_00_30/pdms_1_15"]
     keep = np.array(rows.signs) < 0
     # the first 50 of the pair's curves (151 in the shipped database): the calibration is
@@ -615,21 +613,21 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves():
     assert scales.max() < 10
 
 
-def _shifted_records(scale: float, count: int = 12):
-    """Complete default-FE curves of the shipped database, PDMS group, their pressures
-    times ``scale``: FE-shaped curves the emulator misses by a known stiffness error."""
+def _shifted_records(records, scale: float, count: int = 12):
+    """Complete default-FE curves of the shipped database (``records``), PDMS group, their
+    pressures times ``scale``: FE-shaped curves the emulator misses by a known stiffness
+    error."""
     from dataclasses import replace
 
     from solver.settings import SolverSettings
 
-    with CurveStore(DB) as db:
-        recs = [r for r in db.records() if r.settings == SolverSettings()
-                and "pdms" in r.design.body_material.id and r.curve.angle_deg[-1] >= 89.0]
+    recs = [r for r in records if r.settings == SolverSettings()
+            and "pdms" in r.design.body_material.id and r.curve.angle_deg[-1] >= 89.0]
     return [replace(r, curve=replace(r.curve, pressure_pa=r.curve.pressure_pa * scale))
             for r in recs[:count]]
 
 
-def test_bands_are_calibrated_on_random_designs_fe_curves(emulator):
+def test_bands_are_calibrated_on_random_designs_fe_curves(emulator, shipped_records):
     """The second calibration: where the calibration curves lie outside the bands (here FE
     curves whose pressures read 25 % high: the emulator misses them by a known stiffness
     error), the bands widen per angle bin until ``level`` of their points are inside;
@@ -641,7 +639,7 @@ def test_bands_are_calibrated_on_random_designs_fe_curves(emulator):
         point_factors,
     )
 
-    shifted = _shifted_records(1.25)
+    shifted = _shifted_records(shipped_records, 1.25)
     before = coverage(point_factors(emulator, shifted))
     assert before["pressure"]["all"] < 0.5
     cal = calibrate_on_random_designs(emulator, shifted, source={"database_name": "x.h5"})
@@ -660,7 +658,7 @@ def test_bands_are_calibrated_on_random_designs_fe_curves(emulator):
     narrow = emulator.predict(Design(), [1500.0])
     assert (wide.upper_deg - wide.lower_deg)[0] > 1.4 * (narrow.upper_deg
                                                           - narrow.lower_deg)[0]
-    same = calibrate_on_random_designs(emulator, _shifted_records(1.0))
+    same = calibrate_on_random_designs(emulator, _shifted_records(shipped_records, 1.0))
     for key, pe in same.pairs.items():
         np.testing.assert_allclose(pe.band_scale, emulator.pairs[key].band_scale)
     # the mask of the fit's report is the query's flag: within NEAR_FAILED_RADIUS
@@ -704,8 +702,8 @@ def test_the_widened_band_applies_only_near_early_ended_curves(emulator):
         wide.distance_to_failed(near_u))
 
 
-def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tmp_path,
-                                                                               monkeypatch):
+def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(
+        tmp_path, monkeypatch, shipped_records):
     """The fit end to end on a slice of the shipped database (the PDMS group's first 16
     complete free-tip curves and its blocked-tip curves): the force model is the angle-ratio
     form, reproduces its blocked-tip designs, and a saved file answers identically."""
@@ -721,8 +719,7 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(tm
                            c.volume_ul / pt.length_scale**3, c.angle_deg)
         return f.end_angle_deg >= LIMIT_ANGLE_DEG and bool(np.isfinite(f.log_p).all())
 
-    with CurveStore(DB) as db:
-        recs = [r for r in db.records() if "pdms" in r.design.body_material.id]
+    recs = [r for r in shipped_records if "pdms" in r.design.body_material.id]
     free = [r for r in recs if not is_force_record(r.settings) and interpolated(r)][:16]
     early = [r for r in recs if not is_force_record(r.settings)
              and 5.0 < r.curve.angle_deg[-1] < 80.0][:4]
@@ -798,21 +795,22 @@ def _kernels_made(emulator) -> int:
 def test_an_emulator_file_with_an_unknown_force_form_is_refused_and_a_format_3_file_reads(
         emulator):
     """file.py: force_form is one of FORCE_FORMS (a file that says otherwise is refused,
-    naming the field); a format-3 file, which has no force_form, holds plain F/p."""
+    naming the field); a format-3 file, which has no force_form, holds plain F/p. The
+    documents are unsealed (read without a checksum): sealing 30 MB costs ~2 s each."""
     from surrogate.emulator.file import emulator_from_dict, emulator_to_dict
     from surrogate.errors import SurrogateFileError
-    from surrogate.file_seal import KEY, seal
+    from surrogate.file_seal import KEY
 
     doc = emulator_to_dict(emulator)
     bad = {k: v for k, v in doc.items() if k != KEY}
     bad["variance_nodes"] = [0, 5, 3, 31]
     with pytest.raises(SurrogateFileError, match="variance_nodes"):
-        emulator_from_dict(seal(bad))
+        emulator_from_dict(bad)
     doc.pop("variance_nodes", None)     # the format-3 file below has none
     body = {k: v for k, v in doc.items() if k != KEY}
     body["pairs"][0]["force_form"] = "newtons"
     with pytest.raises(SurrogateFileError, match="force_form"):
-        emulator_from_dict(seal(body))
+        emulator_from_dict(body)
     old = {k: v for k, v in doc.items() if k != KEY}
     old["format_version"] = 3
     # the smallest group alone (each group reads alike; the file's factorisations dominate)
@@ -820,7 +818,7 @@ def test_an_emulator_file_with_an_unknown_force_form_is_refused_and_a_format_3_f
     old["sign_models"] = {}
     for p in old["pairs"]:             # (shared with body's: the bad value goes too)
         del p["force_form"]
-    e3 = emulator_from_dict(seal(old))
+    e3 = emulator_from_dict(old)
     assert all(pe.force_form == "per_kpa" for pe in e3.pairs.values())
     # before format 8 the variance nodes were the code's: the 2155-record fit's choice
     from surrogate.emulator.variance_nodes import FORMAT_7_NODES
@@ -940,7 +938,8 @@ def test_where_nearby_fe_curves_end_early_the_answer_stops_too(emulator):
     assert np.isnan(past.angle_deg).all() and "past_fe_range" in past.validity["flags"]
 
 
-def test_force_bands_calibrated_by_cross_validation_cover_designs_left_out(emulator):
+def test_force_bands_calibrated_by_cross_validation_cover_designs_left_out(emulator,
+                                                                        shipped_records):
     """build.force_band_scale on two thirds of each group's blocked-tip database designs;
     the bands of the GP fitted to them, read at the other third: pooled over the four
     groups and two splits they cover >= 0.9 of the force variable's values. The closed-form
@@ -949,9 +948,7 @@ def test_force_bands_calibrated_by_cross_validation_cover_designs_left_out(emula
     from surrogate.band_level import z_value
     from surrogate.emulator import build
 
-    with CurveStore(DB) as db:
-        _, force = build._collect(r for r in db.records()
-                                  if build.is_force_record(r.settings))
+    _, force = build._collect(r for r in shipped_records if build.is_force_record(r.settings))
     inside = []
     for key, pe in emulator.pairs.items():
         fu, per_kpa = (np.array(a) for a in force[key[:-1]])

@@ -40,9 +40,9 @@ def shipped():
 
 @pytest.fixture(scope="module")
 def records(shipped):
-    keys = set(shipped.provenance["record_keys"])
+    keys = sorted(set(shipped.provenance["record_keys"]))
     with CurveStore(DB) as db:
-        return [r for r in db.records() if r.key in keys and r.settings.tip == "free"]
+        return [r for r in map(db.get, keys) if r.settings.tip == "free"]
 
 
 def test_by_volume_reproduces_the_fe_records_own_volume_column(shipped, records):
@@ -136,7 +136,7 @@ def test_a_version_2_file_loads_and_answers_by_pressure_only(shipped, tmp_path):
     with pytest.raises(InputError, match="predates format version 3"):
         old.predict_volume(design, [5.0])
     # and the relation added from its own records gives the shipped file's answers
-    curves, _ = curves_from_store(DB)
+    curves, _ = curves_from_store(DB, keys=old.provenance["record_keys"])  # those it reads
     again = attach_volume_relations(old, curves)
     np.testing.assert_allclose(again.predict_volume(design, [5.0, 20.0]).angle_deg,
                                shipped.predict_volume(design, [5.0, 20.0]).angle_deg)

@@ -85,18 +85,23 @@ def read_calibration_db(path: str | Path, fitted_keys: set[str]
 
     try:
         with CurveStore(path) as db:
+            # the keys first (the index alone): a fitted database given by mistake is
+            # refused before its curves are read (2403 records: ~30 s)
+            shared = sum(1 for k in db.statuses() if k in fitted_keys)
+            if shared:
+                raise InputError("--band-calibration-db", f"{shared} of its curves are in "
+                                 "the fitted database", "FE curves of designs the database "
+                                 "does not hold")
             records = list(db.records())
             commands = [r.get("command", "") for r in db.metadata.get("runs", [])]
     except InputError as exc:   # not a curve database, or damaged
+        if exc.field == "--band-calibration-db":
+            raise
         raise InputError("--band-calibration-db", exc.detail, exc.allowed) from None
     if not any(r.settings == SolverSettings() for r in records):
         raise InputError("--band-calibration-db", f"{Path(path).name} holds no free-tip "
                          "curve of the default FE", "FE curves of random designs of the box "
                          "(benchmarks/heldout_designs.py)")
-    shared = sum(1 for r in records if r.key in fitted_keys)
-    if shared:
-        raise InputError("--band-calibration-db", f"{shared} of its curves are in the "
-                         "fitted database", "FE curves of designs the database does not hold")
     return records, commands
 
 
