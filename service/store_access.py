@@ -77,9 +77,10 @@ def _state(path: str, inode: int, mtime_ns: int, size: int) -> tuple[int | None,
 
 # Every record's summary row (no curves) of one version of the database file, read once:
 # the store publishes a new file on every write, so (path, inode, mtime, size) names a
-# version. Reading the 2403 shipped records' rows takes 17 s on a slow VM core (they are
-# HDF5 attributes); /v1/curves and the plot's nearby FE curves read them from here. Not
-# read at start-up in a thread: h5py objects freed by the collector in one thread while
+# version. /v1/curves and the plot's nearby FE curves read them from here. A sealed file
+# of this code gives them from its summary index (0.06 s for the shipped 2403 records);
+# a file of older code from every record's attributes (16 s: docs/database.md). Not read
+# at start-up in a thread: h5py objects freed by the collector in one thread while
 # another reads hung a test client for 10 minutes (h5py's object lock).
 _SUMMARIES: dict[tuple, tuple[dict[str, Any], ...]] = {}
 _SUMMARIES_LOCK = threading.Lock()

@@ -13,6 +13,7 @@ the root group's attributes (found by seeded flips).
 from __future__ import annotations
 
 import errno
+import io
 import random
 import re
 import subprocess
@@ -20,12 +21,13 @@ import sys
 import time
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 from test_store import SETTINGS, record_for
 
 from service.cli import main
-from solver.store import CurveStore, DamagedStoreError, StoreWriteError, integrity
+from solver.store import CurveStore, DamagedStoreError, StoreWriteError, integrity, schema
 
 LOOP = Path(__file__).parent / "data" / "hdf5_attribute_loop.h5"
 
@@ -145,10 +147,21 @@ def test_a_flipped_byte_in_a_curve_is_detected_by_the_checksum(original, tmp_pat
     assert exc.value.record == record.key
 
 
+def object_headers(data: bytes) -> list[int]:
+    """Offsets in ``data`` of its HDF5 object headers in file order (the root group, the
+    records group, the records' groups and their members), the summary index's left out."""
+    index_at = None
+    with h5py.File(io.BytesIO(data), "r") as f:
+        if schema.SUMMARY_INDEX in f:
+            index_at = h5py.h5o.get_info(f[schema.SUMMARY_INDEX].id).addr + f.userblock_size
+    return [m.start() for m in re.finditer(b"OHDR", data) if m.start() != index_at]
+
+
 def flip_object_header(data: bytes, index: int) -> bytes:
     """Flip 4 bytes inside the ``index``-th HDF5 object header (0: the root group, 1: the
-    records group, 2 onwards: the records' groups): its checksum no longer matches."""
-    at = [m.start() for m in re.finditer(b"OHDR", data)][index]
+    records group, 2 onwards: the records' groups; the summary index's is not counted):
+    its checksum no longer matches."""
+    at = object_headers(data)[index]
     b = bytearray(data)
     for i in range(at + 6, at + 10):
         b[i] ^= 0xFF

@@ -58,8 +58,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           "in the header, checked by every reader)",
                           description="Check the file (a guarded full read when it has no "
                                       "seal) and publish it again with the seal that "
-                                      "readers check before HDF5 parses it (files written "
-                                      "by this version are sealed already).")
+                                      "readers check before HDF5 parses it, and the "
+                                      "summary index that lists its records at once "
+                                      "(files written by this version have both).")
     seal.add_argument("db", help="curve database (HDF5)")
     seal.set_defaults(func=run_seal)
 

@@ -105,6 +105,7 @@ class CurveStore:
         self.lock_timeout_s = lock_timeout_s
         self._h5: h5py.File | None = None
         self._stamp: tuple[int, ...] | None = None
+        self._sealed = False      # the open version carries a seal that matched
         self._mutex = threading.RLock()
         self._lock: WriterLock | None = None
         self._closed = False
@@ -188,7 +189,7 @@ class CurveStore:
                 self._h5.close()
                 self._h5 = None
             try:
-                checked, _ = integrity.check(self.path)
+                checked, sealed = integrity.check(self.path)
                 f = h5py.File(self.path, "r")
             except FileNotFoundError:
                 continue
@@ -206,7 +207,7 @@ class CurveStore:
             except BaseException:
                 f.close()
                 raise
-            self._h5, self._stamp = f, checked
+            self._h5, self._stamp, self._sealed = f, checked, sealed
             return f
         raise StoreWriteError(self.path, OSError("the file changes faster than it can be read"))
 
@@ -259,10 +260,17 @@ class CurveStore:
                 raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
         with self._mutex, self._reading():
             group = self._records_group()
-            rows = []
-            for k in sorted(group):
-                with self._reading(k):
-                    rows.append(schema.read_summary(group[k]))
+            keys = sorted(group)
+            # the index of a sealed file only: the seal proves it is the one published with
+            # these records (another tool may have edited an unsealed file's records)
+            index = schema.read_summary_index(self._file()) if self._sealed else None
+            if index is not None and sorted(index) == keys:
+                rows = [index[k] for k in keys]
+            else:                      # no index, or one that names other records
+                rows = []
+                for k in keys:
+                    with self._reading(k):
+                        rows.append(schema.read_summary(group[k]))
         return [row for row in rows
                 if all(_matches({**row["settings"], **row["design"], "status": row["status"]}
                                 .get(k), v) for k, v in filters.items())]
@@ -304,7 +312,7 @@ class CurveStore:
             with self._locked():
                 existing = self._records_group()  # the latest version, read under the lock
                 replaced = {r.key for r in batch if r.key in existing}
-                self._publish(add, drop=replaced)
+                self._publish(add, drop=replaced, changed={r.key for r in batch})
 
     def set_metadata(self, **items: object) -> None:
         """Add or overwrite file attributes (str, numbers, or JSON-able lists and dicts)."""
@@ -344,11 +352,13 @@ class CurveStore:
                 raise StoreWriteError(self.path, exc) from None
 
     def _publish(self, change: Any, create: bool = False,
-                 drop: frozenset[str] | set[str] = frozenset(), repack: bool = False) -> None:
+                 drop: frozenset[str] | set[str] = frozenset(), repack: bool = False,
+                 changed: frozenset[str] | set[str] = frozenset()) -> None:
         """Copy the file (rewritten record by record when records are dropped or when it
-        is not sealed), apply ``change(h5file)`` to the copy (and rewrite the result when
-        ``repack``: no freed bytes survive), fsync, rename over. Called with the writer
-        lock held.
+        is not sealed), apply ``change(h5file)`` to the copy and bring its summary index
+        up to date (``changed``: the records ``change`` wrote; schema.py), rewrite the
+        result when ``repack`` (no freed bytes survive), fsync, rename over. Called with
+        the writer lock held.
 
         The copy is built in memory and written to disk with plain file I/O: a failed
         write (disk full, read-only) is then one clean OSError, where HDF5 writing to a
@@ -356,13 +366,15 @@ class CurveStore:
         process at exit)."""
         self._remove_orphans()
         image = io.BytesIO()
+        sealed = True     # the source is what this code published: its index is current
         if create:
             with h5py.File(image, "w", libver=LIBVER, userblock_size=USERBLOCK) as f:
                 schema.init_file(f, utc_now())
         else:
             with self._reading():
                 published = self.path.read_bytes()
-            if drop or not integrity.is_sealed_image(published):
+            sealed = integrity.is_sealed_image(published)
+            if drop or not sealed:
                 self._repack(image, drop)  # an unsealed file: read through the check
             else:
                 image.write(published)
@@ -370,6 +382,9 @@ class CurveStore:
         try:
             with h5py.File(image, "r+", libver=LIBVER) as f:
                 change(f)
+                # an unsealed source's records may have been edited by another tool:
+                # its index is not trusted, every row read again
+                schema.update_summary_index(f, changed, keep=sealed)
                 f.attrs["updated_utc"] = utc_now()
                 f.attrs["n_records"] = len(f[schema.RECORDS])
             if repack:
@@ -405,3 +420,5 @@ def _copy_file(src: h5py.File, dst_image: Any, drop: frozenset[str] | set[str]) 
         for key in src[schema.RECORDS]:
             if key not in drop:
                 src.copy(src[schema.RECORDS][key], group, name=key)
+        if schema.SUMMARY_INDEX in src:    # rows of dropped records: pruned by the publish
+            src.copy(src[schema.SUMMARY_INDEX], dst, name=schema.SUMMARY_INDEX)

@@ -262,3 +262,57 @@ def read_summary(group: h5py.Group) -> dict[str, Any]:
             "settings": read_attrs(group["settings"]),
             "n_steps": int(group["curve/pressure_pa"].shape[0]),
             "provenance": read_attrs(group["provenance"])}
+
+
+# -- the summary index ----------------------------------------------------------------------
+# Every record's ``read_summary`` row, kept at the root as one JSON document (UTF-8 bytes
+# in a chunked uint8 dataset with a fletcher32 checksum per chunk), rewritten by every
+# publish (``update_summary_index``). HDF5 reads an attribute in ~0.15 ms here (HDF5 2.0):
+# the 2403 shipped records' rows took 16 s from their attributes, ~0.1 s from the index.
+# Derived data only: a reader uses it when it names exactly the records the file holds
+# (``read_summary_index``), and reads the attributes otherwise (a file of older code, or
+# one older code added records to).
+SUMMARY_INDEX = "summary_index"
+INDEX_CHUNK_BYTES = 1 << 16     # resized and overwritten by the next publish
+
+
+def read_summary_index(f: h5py.File) -> dict[str, dict[str, Any]] | None:
+    """The file's summary rows by record key, or None when it has no index, or one that
+    cannot be read (a chunk's checksum, its JSON) or is not rows keyed by their key."""
+    if SUMMARY_INDEX not in f:
+        return None
+    try:
+        data = f[SUMMARY_INDEX][()]
+        rows = json.loads(np.asarray(data, dtype=np.uint8).tobytes().decode("utf-8"))
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+    if not isinstance(rows, dict) or not all(
+            isinstance(row, dict) and row.get("key") == key for key, row in rows.items()):
+        return None
+    return rows
+
+
+def write_summary_index(f: h5py.File, rows: dict[str, dict[str, Any]]) -> None:
+    """Store ``rows`` (key -> summary row) as the file's summary index, overwriting the
+    present one in place."""
+    data = np.frombuffer(json.dumps(rows, sort_keys=True, separators=(",", ":"),
+                                    ).encode("utf-8"), dtype=np.uint8)
+    if SUMMARY_INDEX not in f:
+        f.create_dataset(SUMMARY_INDEX, shape=(0,), maxshape=(None,), dtype=np.uint8,
+                         chunks=(INDEX_CHUNK_BYTES,), fletcher32=True)
+    index = f[SUMMARY_INDEX]
+    index.resize((data.size,))
+    index[:] = data
+
+
+def update_summary_index(f: h5py.File, changed: set[str] | frozenset[str],
+                         keep: bool = True) -> None:
+    """Make the index of ``f`` name exactly its records: the present rows kept (with
+    ``keep``), except those of the records in ``changed`` (just written) and of records
+    it lacks, read from their attributes (all of them for a file without an index, or
+    without ``keep``)."""
+    group = f[RECORDS]
+    old = (read_summary_index(f) if keep else None) or {}
+    rows = {key: old[key] if key in old and key not in changed else read_summary(group[key])
+            for key in sorted(group)}
+    write_summary_index(f, rows)
