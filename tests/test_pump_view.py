@@ -327,3 +327,44 @@ def test_past_the_fe_range_by_time_no_angle_and_the_time_it_ends(shipped_client)
     v_lim = ans["validity"]["fe_limit_volume_ul"]
     assert 10 < v_lim < 2500   # 1000 s at 2.5 ul/s is past it, 4 s is not
     assert f"ends after {v_lim / 2.5:.1f} s" in " ".join(ans["validity"]["messages"])
+
+
+def test_an_answer_by_volume_without_its_band_is_the_same_answer(emulator):
+    """``predict_volume(..., band=False)`` (the calibration's tables read no band) gives
+    the same angle, chamber pressure and force, bit for bit, and NaN for the band it did
+    not compute; with the band again afterwards (the curve without its volume band kept
+    in the design memo), the band is there."""
+    from solver.design_space import sample_designs
+
+    volumes = np.linspace(0.0, 300.0, 40)
+    for design in sample_designs(6, ("pdms_1_10", "ecoflex_00_30"), seed=5):
+        emulator._memo.clear()
+        full = emulator.predict_volume(design, volumes)
+        emulator._memo.clear()
+        means = emulator.predict_volume(design, volumes, band=False)
+        for name in ("angle_deg", "pressure_pa", "force_mn", "force_lower_mn"):
+            np.testing.assert_array_equal(getattr(means, name), getattr(full, name))
+        assert np.isnan(means.lower_deg).all() and np.isnan(means.upper_deg).all()
+        again = emulator.predict_volume(design, volumes)
+        np.testing.assert_array_equal(again.lower_deg, full.lower_deg)
+        np.testing.assert_array_equal(again.upper_deg, full.upper_deg)
+
+
+def test_a_query_by_pressure_reads_the_curve_a_query_by_volume_made(emulator):
+    """The curve with its volume band (a query by volume) answers a query by pressure
+    too: nothing new is computed, and the answer is that of a first query."""
+    from solver.design_space import sample_designs
+
+    pressures = np.linspace(0.0, 3000.0, 50)
+    for design in sample_designs(4, ("ecoflex_00_30", "pdms_1_15"), seed=7):
+        emulator._memo.clear()
+        cold = emulator.predict(design, pressures)
+        emulator._memo.clear()
+        emulator.predict_volume(design, [10.0])
+        kept = len(emulator._memo)
+        warm = emulator.predict(design, pressures)
+        assert len(emulator._memo) == kept
+        for name in ("angle_deg", "lower_deg", "upper_deg", "volume_ul", "force_mn",
+                     "force_upper_mn"):
+            np.testing.assert_array_equal(getattr(warm, name), getattr(cold, name))
+        assert warm.validity == cold.validity

@@ -132,7 +132,8 @@ class Responses:
         self.calls += 1
         nan = np.full(self.v_grid.size, np.nan)
         try:
-            out = self.predictor.predict_volume(design, self.v_grid, level=BAND_LEVEL)
+            out = self.predictor.predict_volume(design, self.v_grid, level=BAND_LEVEL,
+                                                band=False)     # its band is not read
         except InputError:
             return nan, nan
         p = getattr(out, "pressure_pa", None)
@@ -195,10 +196,11 @@ class Responses:
                     d = self.designs[k]
                     for e, n, j in zip(effects, nodes, idx, strict=True):
                         d = e.design(d, float(n[j]))
-                    values[(di,) + idx] = self._predict(d)
+                    # by volume first: the emulator's curve for it serves the pressures too
                     if self.v_grid is not None:
                         by_v["angle_v"][(di,) + idx], by_v["pressure_v"][(di,) + idx] = \
                             self._by_volume(d)
+                    values[(di,) + idx] = self._predict(d)
             self._tables[key] = (nodes, values)
             self._volumes[key] = by_v
         return self._tables[key]

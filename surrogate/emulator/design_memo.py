@@ -45,6 +45,14 @@ class DesignMemo:
         with self._lock:
             self._items.clear()
 
+    def get(self, key: Hashable) -> object | None:
+        """The value kept for ``key`` (marked as just used), or None."""
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
+        return None
+
     def get_or_make(self, key: Hashable, make: Callable[[], T]) -> T:
         """The value kept for ``key``, else ``make()``, kept (read-only) and returned; an
         exception from ``make`` keeps nothing."""

@@ -578,10 +578,15 @@ class Emulator:
         query with one GP per node). Kept for the design's next question (design_memo.py;
         its arrays read-only)."""
         u = point.coordinates()     # once: the sign, curves, range and force models
-        key = ("curve", point.group, u.tobytes(), float(point.length_scale), float(z),
-               bool(volume_band))
-        pair_key, band = self._memo.get_or_make(  # type: ignore[attr-defined]
-            key, lambda: self._curve_band(point, u, z, volume_band))
+        key = ("curve", point.group, u.tobytes(), float(point.length_scale), float(z))
+        memo = self._memo  # type: ignore[attr-defined]
+        # the curve with its volume band answers a question that does not need that band
+        # too (the same curve: the band of V(theta) is the only difference)
+        kept = memo.get(key + (True,))
+        if kept is None:
+            kept = memo.get_or_make(key + (bool(volume_band),),
+                                    lambda: self._curve_band(point, u, z, volume_band))
+        pair_key, band = kept
         return self.pairs[pair_key], band
 
     def _curve_band(self, point: BoxPoint, u: np.ndarray, z: float, volume_band: bool
@@ -670,14 +675,18 @@ class Emulator:
                           force_upper_mn=None if force is None else force[2],
                           volume_ul=volume_ul)
 
-    def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95
-                       ) -> Prediction:
+    def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95,
+                       band: bool = True) -> Prediction:
         """The syringe-pump view: angle (deg) with its band, chamber pressure (Pa) and the
         blocked-tip force at that pressure (mN) at each injected volume (ul, whole
         actuator), read off the emulated V(theta) and p(theta) of the same design; NaN
         past the FE's range (flagged). Under volume control the answer stays defined
         where p(theta) has a maximum: the pressure is the emulated one, falling past it
-        (flag ``past_pressure_maximum``; ``surrogate.volume_control``)."""
+        (flag ``past_pressure_maximum``; ``surrogate.volume_control``). ``band=False``
+        for a caller that reads no angle band (the calibration's tables): lower_deg and
+        upper_deg are then NaN, and the band of V(theta) -- a GP variance per volume node,
+        about half of a first query's cost -- is not computed (an answer of the balance
+        model, whose band costs nothing more, keeps it)."""
         z = z_value(level)
         v = number_array(volumes_ul, "volumes_ul", "ul")
         if (v < 0).any():
@@ -685,7 +694,7 @@ class Emulator:
         point = locate(design, reduced=True)
         if self.balance_model_for(point) is not None:
             return self._balance_answer(design, point, "volume", v, level)
-        pe, cb = self.curve_band(point, z)      # one GP evaluation serves both axes
+        pe, cb = self.curve_band(point, z, volume_band=band)   # serves both axes
         vm, vl, vh = self._volume_curves(cb, z)
         ls3 = point.length_scale**3
         v_red = v / ls3
@@ -694,9 +703,12 @@ class Emulator:
         answer = by_volume(v_red, vm, _with_origin(cb.pressure_raw_pa), ANGLES0,
                            rel_drop=EMULATED_PRESSURE_DROP)
         angle = answer.angle_deg
-        upper = np.interp(v_red, vl, ANGLES0)
-        lower = np.interp(v_red, vh, ANGLES0)
-        lower, upper = floored_band(angle, lower, upper)
+        if band:
+            upper = np.interp(v_red, vl, ANGLES0)
+            lower = np.interp(v_red, vh, ANGLES0)
+            lower, upper = floored_band(angle, lower, upper)
+        else:
+            lower, upper = np.full_like(angle, np.nan), np.full_like(angle, np.nan)
         p_red = answer.pressure_pa
         pressure = p_red * point.pressure_scale
         for a in (angle, upper, lower, pressure, p_red):

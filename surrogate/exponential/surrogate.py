@@ -149,7 +149,7 @@ class Surrogate:
         return self._prediction(design, par, p, (m, lo, hi), force, volume, level, validity)
 
     def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95,
-                       form: str | None = None) -> Prediction:
+                       form: str | None = None, band: bool = True) -> Prediction:
         """The syringe-pump view: angle (deg) with its band at each injected volume (ul,
         whole actuator), read off the family's FE-interpolated V(theta) (its band from
         that relation's held-out error, ``volume_relation``); the chamber pressure (Pa)
@@ -157,7 +157,9 @@ class Surrogate:
         that pressure. NaN past the relation's largest angle or the family's FE range
         (flag ``past_fe_range``); ``past_pressure_maximum`` as for every model, though the
         exponential form's pressure never falls. InputError naming ``volumes_ul`` when the
-        family has no relation (the paper preset; files of format version < 3)."""
+        family has no relation (the paper preset; files of format version < 3). The band
+        costs nothing here: given whatever ``band`` says (the emulator's signature)."""
+        del band
         fam = self.family_for(design)
         if fam.volume is None:
             raise InputError("volumes_ul", _no_volume_message(self, fam),
