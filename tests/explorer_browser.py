@@ -55,8 +55,12 @@ class LiveServer:
         self.app = create_app(settings, solve_fn=solve_fn)
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
+        # the module's browser may still hold keep-alive connections when the server is
+        # torn down (fixtures end in reverse order): without a limit uvicorn waits for
+        # them, and the join below timed out after 30 s in every browser module
         self.server = uvicorn.Server(uvicorn.Config(self.app, host="127.0.0.1", port=self.port,
-                                                    log_level="warning"))
+                                                    log_level="warning",
+                                                    timeout_graceful_shutdown=2))
         self.thread = threading.Thread(target=self.server.run, daemon=True)
 
     def __enter__(self) -> LiveServer:
