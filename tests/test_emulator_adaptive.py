@@ -20,10 +20,18 @@ def emulator():
     return load_emulator(DATA_DIR / "emulator.json")
 
 
-def test_next_designs_keep_away_from_known_and_from_early_ended_curves(emulator):
-    points = next_designs(emulator, 12)
-    assert len(points) == 12
-    assert len({p.key for p in points}) == 12
+@pytest.fixture(scope="module")
+def round_of_24(emulator):
+    """One adaptive round of 24 designs (~20 s: every candidate's curve with its band),
+    shared by the tests that check what a round proposes."""
+    return next_designs(emulator, 24)
+
+
+def test_next_designs_keep_away_from_known_and_from_early_ended_curves(emulator,
+                                                                      round_of_24):
+    points = round_of_24
+    assert len(points) == 24
+    assert len({p.key for p in points}) == 24
     by_group: dict[str, list[np.ndarray]] = {}
     for p in points:
         bp = locate(p.design, reduced=True)
@@ -43,14 +51,13 @@ def test_a_count_outside_its_range_is_refused_with_the_option_named(emulator):
         next_designs(emulator, 0)
 
 
-def test_no_design_whose_emulated_volume_reaches_the_fe_volume_stop(emulator):
+def test_no_design_whose_emulated_volume_reaches_the_fe_volume_stop(emulator, round_of_24):
     """A candidate whose FE curve would stop at the volume limit before 90 deg adds no
     curve to interpolate: none is proposed (reduced designs, length scale 1)."""
     from surrogate.emulator.emulator import N_NODES
     from surrogate.emulator.features import ANGLE_NODES_DEG
 
-    points = next_designs(emulator, 24)
-    for p in points:
+    for p in round_of_24:
         bp = locate(p.design, reduced=True)
         try:
             pe = emulator._pair(bp, bp.coordinates())
@@ -61,12 +68,11 @@ def test_no_design_whose_emulated_volume_reaches_the_fe_volume_stop(emulator):
         assert volume_at_90_ul < pe.fe_max_volume_ul
 
 
-def test_no_design_whose_fe_curve_is_emulated_to_end_early(emulator):
+def test_no_design_whose_fe_curve_is_emulated_to_end_early(emulator, round_of_24):
     """The group's range model (where its database curves ended) keeps the candidates
     whose FE curve would end before 85 deg out of an adaptive round."""
-    points = next_designs(emulator, 24)
-    assert points
-    for p in points:
+    assert round_of_24
+    for p in round_of_24:
         bp = locate(p.design, reduced=True)
         models = [pe for key, pe in emulator.pairs.items() if key[:-1] == bp.group]
         for pe in models:

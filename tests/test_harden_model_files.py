@@ -40,9 +40,13 @@ def emulator_doc():
 
 
 def put(doc, path, value):
-    out = copy.deepcopy(doc)
+    """``doc`` with ``value`` at ``path`` (or the item deleted), ``doc`` unchanged: only
+    the containers along the path are copied (a deep copy of the 30 MB emulator
+    document took ~1.5 s a case)."""
+    out = copy.copy(doc)
     target = out
     for k in path[:-1]:
+        target[k] = copy.copy(target[k])
         target = target[k]
     if value is DELETE:
         del target[path[-1]]

@@ -115,6 +115,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
                                  "refit it with `balloon fit`")
     check_seal(d, origin, raw)
     try:
+        report = dict(d.get("report") or {})
+        _check_group_coverage(report)
         for p in d["pairs"]:   # the cheap checks first: a damaged file costs no factorisation
             _precheck_pair(p)
         balance_models = (_balance_models(d.get("balance_models"),
@@ -153,8 +155,6 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
             _check_pair(pe)
         for group, m in sign_models.items():
             _check_gp(m, f"sign model {group}")
-        report = dict(d.get("report") or {})
-        _check_group_coverage(report)
         return Emulator(name=str(d["name"]), pairs=pairs, provenance=dict(d["provenance"]),
                         report=report, sign_models=sign_models,
                         variance_nodes=_variance_nodes(d.get("variance_nodes")),
