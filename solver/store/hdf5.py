@@ -259,11 +259,12 @@ class CurveStore:
             if name not in QUERY_FIELDS:
                 raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
         with self._mutex, self._reading():
-            group = self._records_group()
+            f = self._file()       # once: the records and the index of the same version
+            group = f[schema.RECORDS]
             keys = sorted(group)
             # the index of a sealed file only: the seal proves it is the one published with
             # these records (another tool may have edited an unsealed file's records)
-            index = schema.read_summary_index(self._file()) if self._sealed else None
+            index = schema.read_summary_index(f) if self._sealed else None
             if index is not None and sorted(index) == keys:
                 rows = [index[k] for k in keys]
             else:                      # no index, or one that names other records
