@@ -85,8 +85,8 @@ def read_calibration_db(path: str | Path, fitted_keys: set[str]
 
     try:
         with CurveStore(path) as db:
-            # the keys first (the index alone): a fitted database given by mistake is
-            # refused before its curves are read (2403 records: ~30 s)
+            # the keys first (a status attribute a record, 0.6 s for 2403): a fitted
+            # database given by mistake is refused before its curves are read (~30 s)
             shared = sum(1 for k in db.statuses() if k in fitted_keys)
             if shared:
                 raise InputError("--band-calibration-db", f"{shared} of its curves are in "
