@@ -18,7 +18,7 @@ from fastapi.middleware.cors import CORSMiddleware
 from service._worker import default_solve
 from service.errors import install_error_handlers
 from service.jobs import JobManager
-from service.middleware import BodyLimitMiddleware, ProblemOnlyMiddleware
+from service.middleware import BodyLimitMiddleware, HeadAsGetMiddleware, ProblemOnlyMiddleware
 from service.models import ModelRegistry
 from service.openapi import install_contract
 from service.routes import calibration, curves, health, inverse, jobs, materials, predict
@@ -82,5 +82,6 @@ def create_app(settings: ServiceSettings | None = None, *,
                            allow_methods=["GET", "POST", "DELETE"],
                            allow_headers=["Content-Type", "X-API-Key"],
                            expose_headers=["Location", "Retry-After"])
-    app.add_middleware(ProblemOnlyMiddleware)  # outermost: Starlette's own text/plain errors
+    app.add_middleware(ProblemOnlyMiddleware)  # Starlette's own text/plain errors
+    app.add_middleware(HeadAsGetMiddleware)    # outermost: HEAD is GET without the body
     return app

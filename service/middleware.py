@@ -1,4 +1,5 @@
-"""ASGI middleware: the request body size limit (413 as a problem document)."""
+"""ASGI middleware: the request body size limit (413 as a problem document), every error
+a problem document, HEAD answered as GET without its body."""
 
 from __future__ import annotations
 
@@ -111,3 +112,24 @@ async def _send_problem(send: Send, start: Message, text: bytes, scope: Scope) -
                 "headers": [*kept, (b"content-type", PROBLEM_JSON.encode()),
                             (b"content-length", str(len(body)).encode())]})
     await send({"type": "http.response.body", "body": body})
+
+
+class HeadAsGetMiddleware:
+    """``HEAD`` answered as ``GET`` without its body (RFC 9110 9.3.2: the same status and
+    headers, Content-Length included): FastAPI's GET routes do not take HEAD, and a
+    monitor probing ``HEAD /v1/health`` got 405. A path without GET still answers 405."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope["method"] != "HEAD":
+            await self.app(scope, receive, send)
+            return
+
+        async def without_body(message: Message) -> None:
+            if message["type"] == "http.response.body":
+                message = {**message, "body": b""}
+            await send(message)
+
+        await self.app({**scope, "method": "GET"}, receive, without_body)
