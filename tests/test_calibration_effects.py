@@ -17,6 +17,7 @@ from surrogate.calibration.effects.hydraulic_resistance import (
     R_CHANNEL,
     rectangular_channel_resistance_pa_per_ul_s,
 )
+from surrogate.calibration.effects.line_compliance import ATMOSPHERE_KPA, chamber_volume_ul
 from surrogate.calibration.effects.viscoelastic_creep import prony_lag
 
 TRAITS = DataTraits(has_time=True, has_flow=True, n_flow_rates=1, has_unloading=False,
@@ -54,6 +55,12 @@ def test_the_null_value_switches_a_transform_off(effect):
     if effect.stage == "pressure":
         out = effect.chamber_pressure(p, np.full(3, 2.5), np.ones(3), values)
         np.testing.assert_allclose(out, p)
+    elif effect.stage == "volume":
+        v_grid = np.linspace(0.0, 20.0, 5)
+        pump = np.array([0.0, 7.5, 19.0])
+        out = effect.chamber_volume(pump, v_grid, 100.0 * v_grid[None], np.zeros(3, int),
+                                    values)
+        np.testing.assert_allclose(out, pump)
     elif effect.stage == "angle":
         np.testing.assert_allclose(effect.observed(a, values), a)
     else:
@@ -111,6 +118,44 @@ def test_creep_needs_holds_unloading_or_two_flow_rates():
         assert e.not_identifiable(DataTraits(**{**TRAITS.__dict__, **change})) is None
     no_time = DataTraits(**{**TRAITS.__dict__, "has_time": False, "has_holds": True})
     assert "time" in e.not_identifiable(no_time)[0]
+
+
+def test_line_compliance_inverts_the_pump_volume_by_hand():
+    # chamber p = k V (Pa per ul): V_pump = V + C k V, so V = V_pump / (1 + C k) exactly
+    # (the relation is linear between the grid's nodes too)
+    k_pa_per_ul, c_ul_per_kpa = 80.0, 2.0
+    v_grid = np.linspace(0.0, 40.0, 41)
+    p_grid = np.vstack([k_pa_per_ul * v_grid, 2 * k_pa_per_ul * v_grid])
+    pump = np.array([0.0, 3.3, 10.0, 25.0, 3.3, 10.0])
+    design = np.array([0, 0, 0, 0, 1, 1])
+    out = EFFECTS["line_compliance"].chamber_volume(pump, v_grid, p_grid, design,
+                                                    {"C_ul_per_kpa": c_ul_per_kpa})
+    c = c_ul_per_kpa * 1e-3
+    np.testing.assert_allclose(out, pump / (1.0 + c * k_pa_per_ul * (1 + design)), rtol=1e-12)
+    # an air bubble of V ul reads as V / P_atm: 101.3 ul of air is 1 ul per kPa
+    sentence = EFFECTS["line_compliance"].interpret(
+        {"C_ul_per_kpa": {"value": 1.0, "sd": 0.1, "unit": "ul per kPa"}}, {})
+    assert f"{ATMOSPHERE_KPA:.0f} ul of air" in sentence
+
+
+def test_line_compliance_gives_no_volume_past_the_baselines_range():
+    v_grid = np.linspace(0.0, 10.0, 11)
+    p = np.where(v_grid <= 6.0, 100.0 * v_grid, np.nan)[None]        # ends at 6 ul
+    # a pressure maximum: p falls after 4 ul; the pump's volume is kept non-decreasing
+    p_max = np.minimum(100.0 * v_grid, 800.0 - 100.0 * v_grid)[None]
+    pump = np.array([5.0, 6.0 + 0.001 * 600.0 + 0.1, np.nan])
+    out = chamber_volume_ul(pump, v_grid, p, np.zeros(3, int), 1e-3)
+    assert np.isfinite(out[0]) and np.isnan(out[1]) and np.isnan(out[2])
+    after = chamber_volume_ul(np.linspace(0.0, 10.0, 50), v_grid, p_max, np.zeros(50, int),
+                              1e-3)
+    assert np.all(np.diff(after) >= 0.0) and np.all(np.isfinite(after))
+
+
+def test_line_compliance_needs_the_volume_channel():
+    e = EFFECTS["line_compliance"]
+    reason, measure = e.not_identifiable(TRAITS)
+    assert "injected volume" in reason and "time_s" in measure
+    assert e.not_identifiable(DataTraits(**{**TRAITS.__dict__, "by_volume": True})) is None
 
 
 def test_gains_are_not_fitted_against_a_baseline_that_leaves_them_open():

@@ -21,9 +21,10 @@ lab writes them (0.1 deg, 1 Pa). Truths act as the physics does:
 * gauge and camera effects transform the readings; the inlet's drop R q d adds to the
   gauge while the pump runs; creep is a one-term Prony retardation of the FE's angle on a
   fine time grid;
-* outside the catalogue: compliance (an air bubble: the chamber gets the pump's volume
-  less C x pressure), a leak during the hold (volume lost at a rate proportional to the
-  pressure), a rate-independent friction loop on unloading, a contact saturation.
+* compliance (an air bubble: the chamber gets the pump's volume less C x pressure), in
+  the catalogue since 2026-12-06 (line_compliance);
+* outside the catalogue: a leak during the hold (volume lost at a rate proportional to
+  the pressure), a rate-independent friction loop on unloading, a contact saturation.
 
 ``CASES`` pairs each data set with what a right answer is; ``judge`` says whether the
 report gives it. ``benchmarks/calibration_cases.py --unseen`` prints the table and the
@@ -351,7 +352,9 @@ def _first_specimen(rows: list[dict]) -> list[dict]:
 # suite over its 10 minutes; the inlet resistance at two flow rates and a loop outside the
 # catalogue stay in tests/test_calibration_loop.py's default cases)
 CHEAP = {"clean-one-design-2-flows", "clean-past-fe-range", "radian-angles",
-         "unit-in-header", "membrane-0.61-L15.8", "offset-no-time"}
+         "unit-in-header", "membrane-0.61-L15.8", "offset-no-time",
+         # air in the line, the catalogue's line_compliance (7 s, 2026-12-06)
+         "compliance-bubble"}
 LOOP = Protocol(hold_s=4.0)
 LOOP2 = Protocol(hold_s=4.0, flows_ul_s=(1.5, 3.0))
 LOADING = Protocol(unload=False)
@@ -456,10 +459,11 @@ def _cases() -> list[Case]:
     add("membrane-0.61-L15.8", lambda: lab_rows(scaled_body(1.63645, 15.79),
                                                 Truth(membrane_from_record=True), LOOP2),
         Expect("select", "membrane_stiffness", {"membrane_mu_scale": 1 / 1.63645}))
-    # outside the catalogue
+    # air in the line: since 2026-12-06 in the catalogue (line_compliance)
     add("compliance-bubble", lambda: lab_rows(designs_std10(),
                                               Truth(compliance_ul_per_pa=0.004), LOOP),
-        flag)
+        Expect("select", "line_compliance", {"C_ul_per_kpa": 4.0}))
+    # outside the catalogue
     add("leak-during-hold", lambda: lab_rows(designs_std15(), Truth(leak_per_s=0.08),
                                              replace(LOOP, hold_s=6.0)), flag)
     add("friction-loop", lambda: lab_rows(designs_std10(), Truth(friction_deg=4.0), LOOP),

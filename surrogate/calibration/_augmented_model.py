@@ -8,6 +8,7 @@
 or, where the injected volume V of every reading is known (time_s and flow_ul_s) and the
 baseline gives V(p) (``pressure_weight`` > 0: the two observables of a syringe pump):
 
+    V         = volume effects (V_pump, the changed design's p(V))  what the chamber got
     static    = baseline angle(design + physical effects, V)        its answer by volume
     p_chamber = baseline p_chamber(design + physical effects, V)
     angle     = time effects;  observed = angle effects            as above
@@ -84,6 +85,7 @@ class AugmentedModel:
         self.effects = effects
         self.physical = tuple(e for e in effects if e.stage == "design")
         self.pressure = tuple(e for e in effects if e.stage == "pressure")
+        self.volume = tuple(e for e in effects if e.stage == "volume")
         self.time = tuple(e for e in effects if e.stage == "time")
         self.angle = tuple(e for e in effects if e.stage == "angle")
         self.families = sorted(set(obs.family.tolist()))
@@ -158,10 +160,15 @@ class AugmentedModel:
 
     def _by_volume(self, what, values, design_index, v_ul):
         """The baseline's angle ("angle_v") or chamber pressure ("pressure_v") at injected
-        volume ``v_ul`` of the changed design (its table by volume, interpolated)."""
-        table = self.responses.curves(self.physical,
-                                      [values[e.parameters[0].name] for e in self.physical],
-                                      what=what)
+        volume ``v_ul`` (the pump's) of the changed design (its table by volume,
+        interpolated), at the volume the chamber got from it (the volume effects')."""
+        thetas = [values[e.parameters[0].name] for e in self.physical]
+        if self.volume:
+            p_table = self.responses.curves(self.physical, thetas, what="pressure_v")
+            for e in self.volume:
+                v_ul = e.chamber_volume(v_ul, self.responses.v_grid, p_table, design_index,
+                                        values)
+        table = self.responses.curves(self.physical, thetas, what=what)
         return self.responses.lookup_volume(table, design_index, v_ul)
 
     def _chamber_at_volume(self, values, design_index, v_ul):

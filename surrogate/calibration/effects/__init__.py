@@ -14,6 +14,7 @@ from surrogate.calibration.effects import (
     camera_gain,
     chamber_length,
     hydraulic_resistance,
+    line_compliance,
     membrane_stiffness,
     membrane_thickness,
     pressure_gain,
@@ -30,7 +31,8 @@ from surrogate.calibration.effects.hydraulic_resistance import (
 CATALOGUE: tuple[Effect, ...] = (
     membrane_stiffness.EFFECT, body_stiffness.EFFECT, membrane_thickness.EFFECT,
     chamber_length.EFFECT, pressure_offset.EFFECT, pressure_gain.EFFECT,
-    hydraulic_resistance.EFFECT, angle_offset.EFFECT, camera_gain.EFFECT,
+    hydraulic_resistance.EFFECT, line_compliance.EFFECT, angle_offset.EFFECT,
+    camera_gain.EFFECT,
     viscoelastic_creep.EFFECT,
 )
 EFFECTS = {e.id: e for e in CATALOGUE}

@@ -9,6 +9,10 @@ The augmented model, in the order it is evaluated (docs/calibration.md):
     angle     = time stage (static along each curve's time)   time effects
     observed  = angle stage (angle)                           measurement effects
 
+and by injected volume (the pump's two observables), before the baseline is read:
+
+    V_chamber = volume stage (V_pump, the baseline's p(V))    line effects
+
 Adding an effect is one file in this package (a subclass with its transform, its
 interpretation and how a lab measures it on its own) plus its test;
 ``effects/__init__.py`` lists the instances.
@@ -21,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-STAGES = ("pressure", "design", "time", "angle")
+STAGES = ("pressure", "volume", "design", "time", "angle")
 
 
 @dataclass(frozen=True)
@@ -60,12 +64,14 @@ class DataTraits:
     n_thicknesses_max: int  # most membrane thicknesses in one family
     n_lengths_max: int
     open_parameters: tuple[str, ...]  # what the baseline leaves open ("amplitude", ...)
+    #: read as the pump's two observables (bend and gauge against the injected volume)
+    by_volume: bool = False
 
 
 class Effect:
     """Base class. Subclasses set the class attributes and implement their stage's
-    transform (one of ``chamber_pressure`` with its inverse ``gauge_pressure``, ``design``,
-    ``lag``, ``observed``)."""
+    transform (one of ``chamber_pressure`` with its inverse ``gauge_pressure``,
+    ``chamber_volume``, ``design``, ``lag``, ``observed``)."""
 
     id: str = ""
     title: str = ""
@@ -100,6 +106,14 @@ class Effect:
         (the pressure-by-volume channel predicts the gauge's reading at the injected
         volume, _volume.py). A pressure effect implements both."""
         return p_pa
+
+    def chamber_volume(self, pump_ul: np.ndarray, v_grid_ul: np.ndarray,
+                       p_grid_pa: np.ndarray, design_index: np.ndarray,
+                       values: dict[str, float]) -> np.ndarray:
+        """The chamber's volume (ul) at each row's pump volume, given the baseline's
+        chamber pressure ``p_grid_pa`` (n_designs, volumes; Pa) at chamber volumes
+        ``v_grid_ul`` and each row's design (by injected volume only)."""
+        return pump_ul
 
     def design(self, design, value: float):
         return design
