@@ -182,3 +182,29 @@ def test_prony_lag_matches_a_fine_euler_integration():
     ref = (1 - g) * sf + g * y
     np.testing.assert_allclose(out, ref[::10000], atol=2e-3)
     assert out[4] < static[4] and 19.5 < out[-1] < 20.0  # creeps on towards 20 deg
+
+
+def test_pressure_relaxation_overshoots_while_pumping_and_relaxes_in_a_hold():
+    # a standard linear solid, by hand: the relaxed pressure rises 300 Pa/s for 4 s and is
+    # held; the gauge reads (1 + g) p - g y with y the relaxed pressure delayed by tau
+    e = EFFECTS["pressure_relaxation"]
+    assert e.lags == "gauge" and e.stage == "time"
+    t = np.linspace(0.0, 12.0, 13)
+    static = np.minimum(t, 4.0) * 300.0
+    g, tau = 0.25, 1.5
+    out = e.lag(static[None], t[None], np.ones((1, 13), bool),
+                {"g_relaxing": g, "tau_relaxation_s": tau})[0]
+    # the ramp's exact solution: y = p - 300 tau (1 - exp(-t / tau)) while loading
+    lag_at_4 = 300.0 * tau * (1.0 - math.exp(-4.0 / tau))
+    assert out[4] == pytest.approx(1200.0 + g * lag_at_4, rel=1e-9)
+    assert out[-1] == pytest.approx(1200.0 + g * lag_at_4 * math.exp(-8.0 / tau), rel=1e-9)
+    assert np.all(np.diff(out[4:]) < 0)          # relaxes during the hold, to the static
+
+
+def test_pressure_relaxation_needs_the_volume_channel_and_a_change_of_the_pump():
+    e = EFFECTS["pressure_relaxation"]
+    assert "injected volume" in e.not_identifiable(TRAITS)[0]
+    by_volume = DataTraits(**{**TRAITS.__dict__, "by_volume": True})
+    assert "one flow rate" in e.not_identifiable(by_volume)[0]
+    for change in ({"n_flow_rates": 2}, {"has_unloading": True}, {"has_holds": True}):
+        assert e.not_identifiable(DataTraits(**{**by_volume.__dict__, **change})) is None

@@ -117,7 +117,9 @@ class Truth:
     k_angle: float = 1.0
     g_retarded: float = 0.0
     tau_s: float = 3.0
-    compliance_ul_per_pa: float = 0.0    # outside the catalogue: air in the line
+    compliance_ul_per_pa: float = 0.0    # air in the line (line_compliance)
+    relax_g: float = 0.0                 # the pressure relaxing at a held volume: a
+    relax_tau_s: float = 3.0             # standard linear solid (pressure_relaxation)
     leak_per_s: float = 0.0              # outside: volume lost per s per (p / p_peak) x V
     friction_deg: float = 0.0            # outside: unloading reads higher by this (bump)
     contact_deg: float = 0.0             # outside: theta_c tanh(theta / theta_c)
@@ -220,6 +222,13 @@ def lab_rows(designs: list[tuple[Record, dict]], truth: Truth = Truth(),
                     g = v_c + truth.compliance_ul_per_pa * kp * p_c
                     v_ch = np.interp(v_ch, g, v_c)
                 p_ch = kp * _extrap(v_ch, v_c, p_c)
+                if truth.relax_g:    # relaxed p_ch; at once (1 + g) stiffer, Euler on t
+                    y = np.empty_like(p_ch)
+                    y[0] = p_ch[0]
+                    for i in range(1, t.size):
+                        dt = t[i] - t[i - 1]
+                        y[i] = y[i - 1] + dt * (p_ch[i - 1] - y[i - 1]) / truth.relax_tau_s
+                    p_ch = (1 + truth.relax_g) * p_ch - truth.relax_g * y
                 static = ka * _extrap(v_ch, v_c, a_c)
                 if truth.contact_deg:
                     static = truth.contact_deg * np.tanh(static / truth.contact_deg)
@@ -356,7 +365,9 @@ CHEAP = {"clean-one-design-2-flows", "clean-past-fe-range", "radian-angles",
          # air in the line, the catalogue's line_compliance (7 s, 2026-12-06); clean data
          # on which a pair with it fitted the gauge's misfit of bodies 1-2 % off the
          # preset until a pair had to beat its members in each channel (4 s)
-         "compliance-bubble", "clean-reversed-odd-loop"}
+         "compliance-bubble", "clean-reversed-odd-loop",
+         # the pressure relaxing at a held volume, pressure_relaxation (9 s, 2026-12-06)
+         "relaxation-0.3-rev-one-flow"}
 LOOP = Protocol(hold_s=4.0)
 LOOP2 = Protocol(hold_s=4.0, flows_ul_s=(1.5, 3.0))
 LOADING = Protocol(unload=False)
@@ -461,6 +472,15 @@ def _cases() -> list[Case]:
     add("membrane-0.61-L15.8", lambda: lab_rows(scaled_body(1.63645, 15.79),
                                                 Truth(membrane_from_record=True), LOOP2),
         Expect("select", "membrane_stiffness", {"membrane_mu_scale": 1 / 1.63645}))
+    # the pressure relaxing at a held volume (pressure_relaxation, 2026-12-06)
+    add("relaxation-0.2-hold", lambda: lab_rows(designs_std15(),
+                                                Truth(relax_g=0.2, relax_tau_s=3.0), LOOP2),
+        Expect("select", "pressure_relaxation", {"g_relaxing": 0.2,
+                                                 "tau_relaxation_s": 3.0}))
+    add("relaxation-0.3-rev-one-flow", lambda: lab_rows(
+        designs_rev(), Truth(relax_g=0.3, relax_tau_s=2.0), LOOP),
+        Expect("select", "pressure_relaxation", {"g_relaxing": 0.3,
+                                                 "tau_relaxation_s": 2.0}))
     # air in the line: since 2026-12-06 in the catalogue (line_compliance)
     add("compliance-bubble", lambda: lab_rows(designs_std10(),
                                               Truth(compliance_ul_per_pa=0.004), LOOP),

@@ -2,7 +2,8 @@
 
     p_chamber = pressure effects (p_gauge, flow, direction)
     static    = k_A,f x baseline(design + physical effects, p_chamber / k_p,f)
-    angle     = time effects (static along each curve's time; 4 substeps per interval)
+    angle     = time effects that lag the bend (static along each curve's time; 4
+                substeps per interval)
     observed  = angle effects (angle)
 
 or, where the injected volume V of every reading is known (time_s and flow_ul_s) and the
@@ -12,7 +13,8 @@ baseline gives V(p) (``pressure_weight`` > 0: the two observables of a syringe p
     static    = baseline angle(design + physical effects, V)        its answer by volume
     p_chamber = baseline p_chamber(design + physical effects, V)
     angle     = time effects;  observed = angle effects            as above
-    gauge     = pressure effects' inverses (p_chamber)             ``gauge_pressures``
+    gauge     = pressure effects' inverses (p_chamber delayed by the time effects that
+                lag the gauge, along each curve's time)            ``gauge_pressures``
 
 A gauge effect moves only the gauge against volume; a camera effect only the angle
 against volume; a physical change both, the FE's coupled way (docs/calibration.md).
@@ -148,11 +150,28 @@ class AugmentedModel:
 
     def gauge_pressures(self, x: np.ndarray) -> np.ndarray:
         """Predicted gauge reading (Pa) at every row's injected volume: the baseline's
-        chamber pressure at that volume for the changed design, through the pressure
+        chamber pressure at that volume for the changed design, delayed along each
+        curve's time by the time effects that lag the gauge, through the pressure
         effects' inverses (last applied first)."""
         values = self.values(x)
         o = self.obs
-        p = self._chamber_at_volume(values, self.design_index, self.volumes(x))
+        lags = tuple(e for e in self.time if e.lags == "gauge")
+        if lags:
+            s = self._sub
+            static = self._chamber_at_volume(values, self.design_index[s["rows"]],
+                                             self._substep_volumes(x))
+            grid = np.full(s["shape"], np.nan)
+            grid[s["valid"]] = static
+            known = np.isfinite(grid[s["sample_pos"]])
+            tgrid = np.zeros(s["shape"])
+            tgrid[s["valid"]] = s["t"]
+            grid = np.nan_to_num(grid)
+            for e in lags:
+                grid = e.lag(grid, tgrid, s["valid"], values)
+            p = np.full(o.n, np.nan)
+            p[s["sample_rows"]] = np.where(known, grid[s["sample_pos"]], np.nan)
+        else:
+            p = self._chamber_at_volume(values, self.design_index, self.volumes(x))
         q = np.nan_to_num(o.flow_ul_s)
         for e in reversed(self.pressure):
             p = e.gauge_pressure(p, q, o.direction, values)
@@ -217,29 +236,37 @@ class AugmentedModel:
         k_a, k_p = self._scales(x)
         k_a, k_p = k_a * amp, k_p * pscale
         o = self.obs
-        if not self.time:
+        if not any(e.lags == "angle" for e in self.time):
             out = self._static(values, self.design_index, o.pressure_pa, o.flow_ul_s,
                                o.direction, k_a, k_p, self.volumes(x))
         else:
             s = self._sub
-            v = s["v"]
-            if self.switch_cols.size:   # linear between the shifted readings' volumes
-                shift = np.concatenate([self.volume_shift(x), [0.0]])  # [-1]: at rest
-                v = np.maximum(v + (1.0 - s["w"]) * shift[s["prev"]]
-                               + s["w"] * shift[s["rows"]], 0.0)
             static = self._static(values, self.design_index[s["rows"]], s["p"], s["q"],
-                                  s["d"], k_a[s["rows"]], k_p[s["rows"]], v)
+                                  s["d"], k_a[s["rows"]], k_p[s["rows"]],
+                                  self._substep_volumes(x))
             grid = np.full(s["shape"], np.nan)
             grid[s["valid"]] = static
             tgrid = np.zeros(s["shape"])
             tgrid[s["valid"]] = s["t"]
             for e in self.time:
-                grid = e.lag(np.nan_to_num(grid), tgrid, s["valid"], values)
+                if e.lags == "angle":
+                    grid = e.lag(np.nan_to_num(grid), tgrid, s["valid"], values)
             out = np.empty(o.n)
             out[s["sample_rows"]] = grid[s["sample_pos"]]
         for e in self.angle:
             out = e.observed(out, values)
         return out
+
+    def _substep_volumes(self, x: np.ndarray) -> np.ndarray:
+        """The pump's injected volume (ul) at every substep, linear between the readings'
+        volumes with the pump switches' shifts applied."""
+        s = self._sub
+        v = s["v"]
+        if self.switch_cols.size:
+            shift = np.concatenate([self.volume_shift(x), [0.0]])  # [-1]: at rest
+            v = np.maximum(v + (1.0 - s["w"]) * shift[s["prev"]]
+                           + s["w"] * shift[s["rows"]], 0.0)
+        return v
 
     def pressure_scale_direction(self, x: np.ndarray) -> np.ndarray:
         """d residual / d e at every residual row for a pressure scale (1 + e) of the

@@ -19,6 +19,7 @@ from surrogate.calibration.effects import (
     membrane_thickness,
     pressure_gain,
     pressure_offset,
+    pressure_relaxation,
     viscoelastic_creep,
 )
 from surrogate.calibration.effects._base import STAGES, DataTraits, Effect, EffectParameter
@@ -33,7 +34,7 @@ CATALOGUE: tuple[Effect, ...] = (
     chamber_length.EFFECT, pressure_offset.EFFECT, pressure_gain.EFFECT,
     hydraulic_resistance.EFFECT, line_compliance.EFFECT, angle_offset.EFFECT,
     camera_gain.EFFECT,
-    viscoelastic_creep.EFFECT,
+    viscoelastic_creep.EFFECT, pressure_relaxation.EFFECT,
 )
 EFFECTS = {e.id: e for e in CATALOGUE}
 EFFECT_IDS = tuple(EFFECTS)

@@ -67,6 +67,12 @@ class DataTraits:
     #: read as the pump's two observables (bend and gauge against the injected volume)
     by_volume: bool = False
 
+    @property
+    def pump_varies(self) -> bool:
+        """A hold, the unloading or a second flow rate: what tells a rate or a delay from
+        a fixed shift along the curve."""
+        return self.has_holds or self.has_unloading or self.n_flow_rates >= 2
+
 
 class Effect:
     """Base class. Subclasses set the class attributes and implement their stage's
@@ -84,6 +90,9 @@ class Effect:
     measure_directly: str = ""
     #: open baseline parameters this effect is exactly (then it is not fitted)
     same_as_open: tuple[str, ...] = ()
+    #: a time effect's ``lag`` acts on the bend ("angle") or, by injected volume, on the
+    #: chamber pressure the gauge reads ("gauge")
+    lags: str = "angle"
 
     # ---- identifiability -------------------------------------------------------------
     def not_identifiable(self, data: DataTraits) -> tuple[str, str] | None:
@@ -120,6 +129,8 @@ class Effect:
 
     def lag(self, static_deg: np.ndarray, time_s: np.ndarray, valid: np.ndarray,
             values: dict[str, float]) -> np.ndarray:
+        """The quasi-static bend (deg; or chamber pressure, Pa, where ``lags`` is "gauge")
+        along each curve's time (n_curves, substeps), as the material delays it."""
         return static_deg
 
     def observed(self, angle_deg: np.ndarray, values: dict[str, float]) -> np.ndarray:

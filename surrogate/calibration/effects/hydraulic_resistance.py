@@ -44,7 +44,7 @@ class HydraulicResistance(Effect):
     def not_identifiable(self, data):
         if not data.has_flow:
             return ("needs the flow rate of each curve", "record flow_ul_s")
-        if data.n_flow_rates < 2 and not data.has_unloading and not data.has_holds:
+        if not data.pump_varies:
             return ("one flow rate, loading only: exactly a pressure offset p0 = R Q",
                     "measure at a second flow rate, or record a hold or the unloading")
         return None

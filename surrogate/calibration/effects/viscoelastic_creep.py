@@ -10,10 +10,11 @@ from surrogate.calibration.effects._base import Effect, EffectParameter
 
 def prony_lag(static_deg: np.ndarray, time_s: np.ndarray, valid: np.ndarray,
               g: float, tau_s: float) -> np.ndarray:
-    """angle = (1 - g) static + g y,  dy/dt = (static - y) / tau, y(0) = static(0) (the
+    """out = (1 - g) static + g y,  dy/dt = (static - y) / tau, y(0) = static(0) (the
     curve starts at rest); arrays (n_curves, m) along each curve's time, ``valid`` marks
-    real entries (padding after the last). Exact for a static angle linear between the
-    given instants."""
+    real entries (padding after the last). Exact for a static value linear between the
+    given instants. The bend's creep (0 < g < 1, in deg) and, with -g, the pressure's
+    relaxation at a held volume (pressure_relaxation.py, in Pa)."""
     dt = np.where(valid[:, 1:], np.diff(time_s, axis=1), 1.0)
     dt = np.maximum(dt, 1e-9)
     decay = np.exp(-dt / tau_s)
@@ -50,7 +51,7 @@ class ViscoelasticCreep(Effect):
     def not_identifiable(self, data):
         if not data.has_time:
             return ("needs the time of each reading", "record time_s")
-        if not (data.has_holds or data.has_unloading or data.n_flow_rates >= 2):
+        if not data.pump_varies:
             return ("loading at one flow rate only: a lag is indistinguishable from a "
                     "pressure shift or a shape misfit of the baseline along the curve",
                     "hold the pressure for 5-10 s, record the unloading, or repeat at a "
