@@ -13,6 +13,7 @@ import pytest
 from solver.design import Design
 from solver.design_space import recognise
 from surrogate.calibration.effects import CATALOGUE, EFFECTS, STAGES, DataTraits
+from surrogate.calibration.effects.chamber_leak import leaked_volume_ul
 from surrogate.calibration.effects.hydraulic_resistance import (
     R_CHANNEL,
     rectangular_channel_resistance_pa_per_ul_s,
@@ -63,6 +64,10 @@ def test_the_null_value_switches_a_transform_off(effect):
         np.testing.assert_allclose(out, pump)
     elif effect.stage == "angle":
         np.testing.assert_allclose(effect.observed(a, values), a)
+    elif effect.lags == "volume":
+        out = effect.delivered_volume(a, t, np.ones_like(a, bool), lambda v: 100.0 * v,
+                                      values)
+        np.testing.assert_allclose(out, a)
     else:
         np.testing.assert_allclose(effect.lag(a, t, np.ones_like(a, bool), values), a)
 
@@ -199,6 +204,30 @@ def test_pressure_relaxation_overshoots_while_pumping_and_relaxes_in_a_hold():
     assert out[4] == pytest.approx(1200.0 + g * lag_at_4, rel=1e-9)
     assert out[-1] == pytest.approx(1200.0 + g * lag_at_4 * math.exp(-8.0 / tau), rel=1e-9)
     assert np.all(np.diff(out[4:]) < 0)          # relaxes during the hold, to the static
+
+
+def test_a_leak_drains_a_held_chamber_exponentially_by_hand():
+    # p = k V held at V0 from t = 0: dV/dt = -G k V, V = V0 exp(-G k t); Heun's method on
+    # 0.25 s steps is within 3e-4 of it (G k = 0.1 /s: second order, (0.025)^2 / 6 a step)
+    k_pa_per_ul, g_ul_s_per_pa = 100.0, 1e-3
+    t = np.linspace(0.0, 10.0, 41)[None]
+    pump = np.full_like(t, 20.0)
+    out = leaked_volume_ul(pump, t, np.ones(t.shape, bool), lambda v: k_pa_per_ul * v,
+                           g_ul_s_per_pa)[0]
+    np.testing.assert_allclose(out, 20.0 * np.exp(-g_ul_s_per_pa * k_pa_per_ul * t[0]),
+                               rtol=3e-4)
+    # past the baseline's range (NaN pressure) nothing leaks; the padding changes nothing
+    valid = np.ones(t.shape, bool)
+    valid[0, 30:] = False
+    past = leaked_volume_ul(pump, t, valid, lambda v: np.full_like(v, np.nan),
+                            g_ul_s_per_pa)
+    np.testing.assert_allclose(past, pump)
+    e = EFFECTS["chamber_leak"]
+    assert e.stage == "time" and e.lags == "volume"
+    assert "injected volume" in e.not_identifiable(TRAITS)[0]
+    by_volume = DataTraits(**{**TRAITS.__dict__, "by_volume": True})
+    assert "one flow rate" in e.not_identifiable(by_volume)[0]
+    assert e.not_identifiable(DataTraits(**{**by_volume.__dict__, "has_holds": True})) is None
 
 
 def test_pressure_relaxation_needs_the_volume_channel_and_a_change_of_the_pump():

@@ -121,6 +121,8 @@ class Truth:
     relax_g: float = 0.0                 # the pressure relaxing at a held volume: a
     relax_tau_s: float = 3.0             # standard linear solid (pressure_relaxation)
     leak_per_s: float = 0.0              # outside: volume lost per s per (p / p_peak) x V
+                                         # during holds only
+    leak_ul_s_per_kpa: float = 0.0       # a leak all along: G p_chamber (chamber_leak)
     friction_deg: float = 0.0            # outside: unloading reads higher by this (bump)
     contact_deg: float = 0.0             # outside: theta_c tanh(theta / theta_c)
 
@@ -217,6 +219,14 @@ def lab_rows(designs: list[tuple[Record, dict]], truth: Truth = Truth(),
                         p_here = float(np.interp(here, v_c, p_c))
                         lost[i] = lost[i - 1] + (d[i] == 0) * truth.leak_per_s * (
                             t[i] - t[i - 1]) * here * p_here / p_top
+                    v_ch = np.maximum(v - lost, 0.0)
+                if truth.leak_ul_s_per_kpa:  # dV_lost/dt = G p(V - V_lost), Euler on t
+                    lost = np.zeros_like(v)
+                    for i in range(1, t.size):
+                        here = max(v[i - 1] - lost[i - 1], 0.0)
+                        p_here = kp * float(_extrap(np.array([here]), v_c, p_c)[0])
+                        lost[i] = lost[i - 1] + (t[i] - t[i - 1]) * (
+                            truth.leak_ul_s_per_kpa * 1e-3 * max(p_here, 0.0))
                     v_ch = np.maximum(v - lost, 0.0)
                 if truth.compliance_ul_per_pa:  # V_pump = V_ch + C p(V_ch)
                     g = v_c + truth.compliance_ul_per_pa * kp * p_c
@@ -481,6 +491,13 @@ def _cases() -> list[Case]:
         designs_rev(), Truth(relax_g=0.3, relax_tau_s=2.0), LOOP),
         Expect("select", "pressure_relaxation", {"g_relaxing": 0.3,
                                                  "tau_relaxation_s": 2.0}))
+    # a leak all along (chamber_leak, 2026-12-06)
+    add("leak-0.2-hold", lambda: lab_rows(designs_std15(), Truth(leak_ul_s_per_kpa=0.2),
+                                          replace(LOOP, hold_s=6.0)),
+        Expect("select", "chamber_leak", {"G_ul_s_per_kpa": 0.2}))
+    add("leak-0.3-odd-eco-2flows", lambda: lab_rows(designs_odd_eco(),
+                                                    Truth(leak_ul_s_per_kpa=0.3), LOOP2),
+        Expect("select", "chamber_leak", {"G_ul_s_per_kpa": 0.3}))
     # air in the line: since 2026-12-06 in the catalogue (line_compliance)
     add("compliance-bubble", lambda: lab_rows(designs_std10(),
                                               Truth(compliance_ul_per_pa=0.004), LOOP),

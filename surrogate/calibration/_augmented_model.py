@@ -88,6 +88,9 @@ class AugmentedModel:
         self.physical = tuple(e for e in effects if e.stage == "design")
         self.pressure = tuple(e for e in effects if e.stage == "pressure")
         self.volume = tuple(e for e in effects if e.stage == "volume")
+        # time effects that act on the volume the pump put in (a leak): by volume only
+        self._leaks = tuple(e for e in effects if e.stage == "time" and e.lags == "volume"
+                            and self.by_volume)
         self.time = tuple(e for e in effects if e.stage == "time")
         self.angle = tuple(e for e in effects if e.stage == "angle")
         self.families = sorted(set(obs.family.tolist()))
@@ -129,6 +132,9 @@ class AugmentedModel:
         self.family_pos = np.array([fam_pos[f] for f in obs.family])
         if self.time:
             self._prepare_substeps()
+        # each curve's design (its rows share it): what a leak's pressure is read on
+        self._curve_design = np.array([self.design_index[self.obs.curve == c][0]
+                                       for c in range(obs.n_curves)], dtype=int)
 
     def switch_shifts(self, x: np.ndarray) -> np.ndarray:
         """The pump switches' fitted shifts (reading intervals) in ``x``."""
@@ -156,7 +162,7 @@ class AugmentedModel:
         values = self.values(x)
         o = self.obs
         lags = tuple(e for e in self.time if e.lags == "gauge")
-        if lags:
+        if lags or self._leaks:
             s = self._sub
             static = self._chamber_at_volume(values, self.design_index[s["rows"]],
                                              self._substep_volumes(x))
@@ -179,16 +185,42 @@ class AugmentedModel:
 
     def _by_volume(self, what, values, design_index, v_ul):
         """The baseline's angle ("angle_v") or chamber pressure ("pressure_v") at injected
-        volume ``v_ul`` (the pump's) of the changed design (its table by volume,
-        interpolated), at the volume the chamber got from it (the volume effects')."""
+        volume ``v_ul`` (the pump's, less any leak) of the changed design (its table by
+        volume, interpolated), at the volume the chamber got from it (the volume
+        effects')."""
         thetas = [values[e.parameters[0].name] for e in self.physical]
         if self.volume:
             p_table = self.responses.curves(self.physical, thetas, what="pressure_v")
-            for e in self.volume:
-                v_ul = e.chamber_volume(v_ul, self.responses.v_grid, p_table, design_index,
-                                        values)
+            v_ul = self._in_chamber(values, p_table, design_index, v_ul)
         table = self.responses.curves(self.physical, thetas, what=what)
         return self.responses.lookup_volume(table, design_index, v_ul)
+
+    def _in_chamber(self, values, p_table, design_index, v_ul):
+        """The chamber's volume (ul) at line volumes ``v_ul`` through the volume effects,
+        ``p_table`` the changed designs' chamber pressure by volume."""
+        for e in self.volume:
+            v_ul = e.chamber_volume(v_ul, self.responses.v_grid, p_table, design_index,
+                                    values)
+        return v_ul
+
+    def _pressure_at(self, values, design: np.ndarray):
+        """line volume ul (one per curve) -> chamber pressure (Pa) of each curve's
+        changed design ``design`` (n_curves,), its tables interpolated once: what a leak
+        integrates along the readings, so the lookup is lean (NaN past the table)."""
+        thetas = [values[e.parameters[0].name] for e in self.physical]
+        p_table = self.responses.curves(self.physical, thetas, what="pressure_v")
+        rows = p_table[design]
+        n, dv, curve = rows.shape[1], self.responses.dv, np.arange(design.size)
+
+        def at(v_ul: np.ndarray) -> np.ndarray:
+            if self.volume:
+                v_ul = self._in_chamber(values, p_table, design, v_ul)
+            f = np.maximum(v_ul, 0.0) / dv
+            i0 = np.minimum(f.astype(int), n - 2)
+            a = rows[curve, i0]
+            out = a + (f - i0) * (rows[curve, i0 + 1] - a)
+            return np.where(f <= n - 1, out, np.nan)
+        return at
 
     def _chamber_at_volume(self, values, design_index, v_ul):
         return self._by_volume("pressure_v", values, design_index, v_ul)
@@ -236,7 +268,7 @@ class AugmentedModel:
         k_a, k_p = self._scales(x)
         k_a, k_p = k_a * amp, k_p * pscale
         o = self.obs
-        if not any(e.lags == "angle" for e in self.time):
+        if not (self._leaks or any(e.lags == "angle" for e in self.time)):
             out = self._static(values, self.design_index, o.pressure_pa, o.flow_ul_s,
                                o.direction, k_a, k_p, self.volumes(x))
         else:
@@ -258,15 +290,42 @@ class AugmentedModel:
         return out
 
     def _substep_volumes(self, x: np.ndarray) -> np.ndarray:
-        """The pump's injected volume (ul) at every substep, linear between the readings'
-        volumes with the pump switches' shifts applied."""
+        """The volume (ul) in the line at every substep: the pump's, linear between the
+        readings' volumes with the pump switches' shifts applied, less what leaked out
+        along the curve's time (the time effects that act on the volume)."""
         s = self._sub
         v = s["v"]
         if self.switch_cols.size:
             shift = np.concatenate([self.volume_shift(x), [0.0]])  # [-1]: at rest
             v = np.maximum(v + (1.0 - s["w"]) * shift[s["prev"]]
                            + s["w"] * shift[s["rows"]], 0.0)
+        if self._leaks:
+            v = v - self._leaked(x, v)
         return v
+
+    def _leaked(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """What the leaks took (ul) by every substep from the line volumes ``v`` there:
+        integrated by the effects along the readings (and rest, the substeps' first
+        column), linear in time between them (a leak changes over many readings; a
+        quarter of the cost of every substep)."""
+        s = self._sub
+        values = self.values(x)
+        grid = np.zeros(s["shape"])
+        grid[s["valid"]] = v
+        tgrid = np.zeros(s["shape"])
+        tgrid[s["valid"]] = s["t"]
+        at = slice(0, None, SUBSTEPS)                    # rest, then every reading
+        pressure_at = self._pressure_at(values, self._curve_design)
+        kept = grid[:, at]
+        for e in self._leaks:
+            kept = e.delivered_volume(kept, tgrid[:, at], s["valid"][:, at], pressure_at,
+                                      values)
+        lost = grid[:, at] - kept
+        k = np.arange(s["shape"][1])
+        w = (k % SUBSTEPS) / SUBSTEPS
+        left = k // SUBSTEPS
+        right = np.minimum(left + 1, lost.shape[1] - 1)
+        return ((1.0 - w) * lost[:, left] + w * lost[:, right])[s["valid"]]
 
     def pressure_scale_direction(self, x: np.ndarray) -> np.ndarray:
         """d residual / d e at every residual row for a pressure scale (1 + e) of the

@@ -12,6 +12,7 @@ from surrogate.calibration.effects import (
     angle_offset,
     body_stiffness,
     camera_gain,
+    chamber_leak,
     chamber_length,
     hydraulic_resistance,
     line_compliance,
@@ -34,7 +35,7 @@ CATALOGUE: tuple[Effect, ...] = (
     chamber_length.EFFECT, pressure_offset.EFFECT, pressure_gain.EFFECT,
     hydraulic_resistance.EFFECT, line_compliance.EFFECT, angle_offset.EFFECT,
     camera_gain.EFFECT,
-    viscoelastic_creep.EFFECT, pressure_relaxation.EFFECT,
+    viscoelastic_creep.EFFECT, pressure_relaxation.EFFECT, chamber_leak.EFFECT,
 )
 EFFECTS = {e.id: e for e in CATALOGUE}
 EFFECT_IDS = tuple(EFFECTS)

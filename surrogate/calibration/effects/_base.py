@@ -11,7 +11,8 @@ The augmented model, in the order it is evaluated (docs/calibration.md):
 
 and by injected volume (the pump's two observables), before the baseline is read:
 
-    V_chamber = volume stage (V_pump, the baseline's p(V))    line effects
+    V_line    = time stage (V_pump along each curve's time)   a leak
+    V_chamber = volume stage (V_line, the baseline's p(V))    line effects
 
 Adding an effect is one file in this package (a subclass with its transform, its
 interpretation and how a lab measures it on its own) plus its test;
@@ -91,7 +92,8 @@ class Effect:
     #: open baseline parameters this effect is exactly (then it is not fitted)
     same_as_open: tuple[str, ...] = ()
     #: a time effect's ``lag`` acts on the bend ("angle") or, by injected volume, on the
-    #: chamber pressure the gauge reads ("gauge")
+    #: chamber pressure the gauge reads ("gauge"); or its ``delivered_volume`` on the
+    #: volume the pump put in ("volume": a leak)
     lags: str = "angle"
 
     # ---- identifiability -------------------------------------------------------------
@@ -133,6 +135,13 @@ class Effect:
         along each curve's time (n_curves, substeps), as the material delays it."""
         return static_deg
 
+    def delivered_volume(self, pump_ul: np.ndarray, time_s: np.ndarray, valid: np.ndarray,
+                         pressure_at, values: dict[str, float]) -> np.ndarray:
+        """The volume (ul) still in the line and chamber along each curve's time
+        (n_curves, instants), given the pump's and ``pressure_at(volume_ul)``, the
+        chamber's pressure (Pa) of each curve's design at one volume per curve."""
+        return pump_ul
+
     def observed(self, angle_deg: np.ndarray, values: dict[str, float]) -> np.ndarray:
         return angle_deg
 
@@ -149,6 +158,18 @@ class Effect:
                 "parameters": [p.as_dict() for p in self.parameters]}
 
     needs: tuple[str, ...] = ()  # optional data columns it needs
+
+
+def needs_volume_channel(data: DataTraits, what: str = "the bend and the gauge"
+                         ) -> tuple[str, str] | None:
+    """The reason and the measurement an effect that only the injected volume tells (the
+    pump's two observables) is not identifiable, or None when the data are read so."""
+    if data.by_volume:
+        return None
+    return (f"needs {what} read against the injected volume (time_s and flow_ul_s, "
+            "replicate curves, a baseline that gives the volume)",
+            "record time_s and flow_ul_s of every reading, with replicates, and calibrate "
+            "against the emulator")
 
 
 def physical_nodes(p: EffectParameter, n: int,

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate.calibration.effects._base import Effect, EffectParameter
+from surrogate.calibration.effects._base import Effect, EffectParameter, needs_volume_channel
 
 ATMOSPHERE_KPA = 101.325
 # Tubing is not described in the paper: silicone tubing of 1 mm bore, 0.5 mm wall, 1 m
@@ -48,13 +48,7 @@ class LineCompliance(Effect):
                    "Read by injected volume only.")
 
     def not_identifiable(self, data):
-        if not data.by_volume:
-            return ("needs the bend and the gauge read against the injected volume (time_s "
-                    "and flow_ul_s, replicate curves, a baseline that gives the volume): "
-                    "against the gauge pressure the line changes nothing",
-                    "record time_s and flow_ul_s of every reading, with replicates, and "
-                    "calibrate against the emulator")
-        return None
+        return needs_volume_channel(data)     # against the gauge it changes nothing
 
     def chamber_volume(self, pump_ul, v_grid_ul, p_grid_pa, design_index, values):
         c_ul_per_pa = values["C_ul_per_kpa"] * 1e-3

@@ -19,7 +19,7 @@ volume)."""
 
 from __future__ import annotations
 
-from surrogate.calibration.effects._base import Effect, EffectParameter
+from surrogate.calibration.effects._base import Effect, EffectParameter, needs_volume_channel
 from surrogate.calibration.effects.viscoelastic_creep import prony_lag
 
 
@@ -48,10 +48,7 @@ class PressureRelaxation(Effect):
 
     def not_identifiable(self, data):
         if not data.by_volume:
-            return ("needs the gauge read against the injected volume (time_s and "
-                    "flow_ul_s, replicate curves, a baseline that gives the volume)",
-                    "record time_s and flow_ul_s of every reading, with replicates, and "
-                    "calibrate against the emulator")
+            return needs_volume_channel(data, "the gauge")
         if not data.pump_varies:
             return ("loading at one flow rate only: the overshoot is indistinguishable from "
                     "the inlet's R Q or a pressure offset",
