@@ -42,6 +42,37 @@ def test_shifts_at_the_bound_are_named_a_misfit_not_a_timing():
     assert "changed state between readings" not in text and "Program the pump" not in text
 
 
+def test_shifts_beside_a_leak_are_not_read_as_a_pump_timing():
+    # the leak-0.2-hold set's shifts: a leaking chamber empties before the pump stops
+    # withdrawing, so the data put the end of unloading early
+    shifts = pump((0.07, 0.034), (0.0, 0.04), (0.33, 0.034), (0.68, 0.11))
+    text = _pump_sentence(shifts, ["chamber_leak"])
+    assert "not read as a pump timing" in text and "Program the pump" not in text
+    assert "Program the pump" in _pump_sentence(shifts)
+
+
+def test_a_shift_that_moves_no_residual_has_no_sd():
+    # the readings around a switch at rest: its Jacobian column is 0, and the
+    # covariance's pseudo-inverse gave it an sd of 1e-16 (read as "moved", 2026-12-06)
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from surrogate.calibration._loop import _switch_table
+
+    layout = SimpleNamespace(n_open=0, names=("pump_switch_shift[a#0]",
+                                              "pump_switch_shift[a#1]"))
+    model = SimpleNamespace(layout=layout, switch_cols=np.arange(2))
+    fit = SimpleNamespace(model=model, x=np.array([0.3, 0.66]),
+                          jac=np.array([[1.0, 0.0], [0.5, 0.0]]),
+                          sd=lambda: {"pump_switch_shift[a#0]": 0.05,
+                                      "pump_switch_shift[a#1]": 1e-16})
+    table = _switch_table(fit)
+    assert [t["sd"] for t in table] == [0.05, None]
+    assert "no sign that the pump changed state" not in _pump_sentence(pump(
+        *[(t["shift_reading_intervals"], t["sd"]) for t in table]))
+
+
 def test_a_gauge_left_above_its_floor_is_said():
     channel = {"pressure_floor_pa": 38.7}
     gauge = _gauge_left(53.5, channel, 1.12)

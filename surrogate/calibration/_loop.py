@@ -819,7 +819,7 @@ def _pump_switches_open(obs: Observations, responses: Responses, baseline: Basel
     return out, runs[False]
 
 
-def _pump_sentence(pump: dict) -> str:
+def _pump_sentence(pump: dict, leaking: list[str] | None = None) -> str:
     """What the fitted switch times say (``report["pump_switches"]`` with ``open``): the
     pump changed state between readings only where a shift differs from 0 by more than 2
     sd and stays off the fit's bound (+-SWITCH_BOUND); a shift at the bound is a misfit
@@ -827,13 +827,22 @@ def _pump_sentence(pump: dict) -> str:
     up the same misfit: +0.08 and +0.14 beside two at the bound, an air bubble). Before,
     every freed set of shifts was reported as a pump timing to reprogram, shifts of 0.00
     +- 0.05 included (8 of 10 independent lab sets, 2026-12-05), next to a joint
-    angle-and-gauge error read as the angle's."""
+    angle-and-gauge error read as the angle's. With a selected effect that drains the
+    chamber along its time (``leaking``: chamber_leak) no timing is read either: the
+    chamber empties before the pump stops withdrawing and its gauge falls in a hold, so
+    the history read from the readings is off by what the shifts take up."""
     shifts = pump["shifts"]
     listed = ", ".join(f"{x['shift_reading_intervals']:+.2f}" for x in shifts)
     at_bound = [x for x in shifts
                 if abs(x["shift_reading_intervals"]) >= 0.98 * SWITCH_BOUND]
     moved = [x for x in shifts if x not in at_bound and x["sd"] is not None
              and abs(x["shift_reading_intervals"]) > 2.0 * x["sd"]]
+    if leaking and (at_bound or moved):
+        return (f"The pump's switch times were fitted (shifts {listed} reading intervals); "
+                f"with {' and '.join(leaking)} selected they are not read as a pump timing: "
+                "a leaking chamber empties before the pump stops withdrawing and its gauge "
+                "falls during a hold, so when the pump changed state is read off the "
+                "readings less surely, and the shifts take that up.")
     if at_bound:
         return (f"The pump's switch times were fitted (shifts {listed} reading intervals); "
                 f"{len(at_bound)} sit at the fit's bound (+-{SWITCH_BOUND:g} of an "
@@ -859,9 +868,18 @@ def _switch_table(f: FitResult) -> list[dict]:
     it at, in reading intervals (negative: before it), with its sd."""
     m = f.model
     n, sd = m.layout.n_open, f.sd()
+    # a shift that moves no residual (the readings around it at rest) is undetermined:
+    # no sd (the covariance's pseudo-inverse gave it ~1e-16)
+    norms = np.linalg.norm(f.jac, axis=0) if f.jac is not None else None
+    top = float(norms.max()) if norms is not None and norms.size else 0.0
+
+    def known(j: int) -> bool:
+        return norms is None or norms[j] > 1e-9 * top
+
     return [{"switch": m.layout.names[n + i][len("pump_switch_shift["):-1],
              "shift_reading_intervals": float(f.x[n + i]),
-             "sd": _num(sd[m.layout.names[n + i]])} for i in range(m.switch_cols.size)]
+             "sd": _num(sd[m.layout.names[n + i]]) if known(n + i) else None}
+            for i in range(m.switch_cols.size)]
 
 
 def _open_table(obs: Observations, base: FitResult, after: FitResult) -> list[dict]:
@@ -922,7 +940,9 @@ def interpret(report: dict, left: dict) -> str:
          f"{report['rmse_model_deg']:.2f} deg RMS; {opened} it predicts unseen curves to "
          f"{report['rmse_before_deg']:.2f} deg (cross-validated by curve), {floor}."]
     if report["pump_switches"]["open"]:
-        s.append(_pump_sentence(report["pump_switches"]))
+        leaking = [e for e in report["selected_effects"] if EFFECTS[e].lags == "volume"
+                   and EFFECTS[e].stage == "time"]
+        s.append(_pump_sentence(report["pump_switches"], leaking))
     fitted = report["fitted"]["effects"]
     for eid in report["selected_effects"]:
         p = {k: v for k, v in fitted.items() if v["effect"] == eid}
