@@ -290,3 +290,25 @@ def test_blank_lines_before_the_header_and_a_bom_in_a_key_load(tmp_path):
     bommed = [{("\ufeff" + k if j == 0 else k): v for j, (k, v) in enumerate(r.items())}
               for r in rows()]
     assert observations_from_rows(bommed).sha256 == ref.sha256
+
+
+def test_the_pumps_own_log_is_the_history_and_a_bad_state_names_the_column():
+    # pressure rising, then falling for a leaking hold: the readings alone say unloading,
+    # the log says hold; the injected volume then stays at the hold
+    data = rows(n_curves=2, n=6)
+    pressure = (300, 600, 900, 850, 800, 400)
+    states = ("load", "load", "LOAD ", "hold", "hold", "unload")
+    for i, r in enumerate(data):
+        r.update(pressure_pa=pressure[i % 6], angle_deg=(5, 10, 15, 14, 13, 6)[i % 6],
+                 time_s=i % 6 + 1, flow_ul_s=2.0)
+    inferred = observations_from_rows(data)
+    logged = observations_from_rows([{**r, "pump": states[i % 6]}
+                                     for i, r in enumerate(data)])
+    assert inferred.direction[3] == -1.0 and logged.direction[3] == 0.0
+    np.testing.assert_array_equal(logged.direction[:6], [1, 1, 1, 0, 0, -1])
+    np.testing.assert_allclose(logged.volume_ul[:6], [2, 4, 6, 6, 6, 4])
+    for bad in ("stop", "", None, 1):
+        with pytest.raises(DataError) as err:
+            observations_from_rows([{**r, "pump": "load" if i else bad}
+                                    for i, r in enumerate(data)])
+        assert err.value.field == "pump" and "load or hold or unload" in str(err.value)

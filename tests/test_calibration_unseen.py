@@ -141,6 +141,8 @@ class Protocol:
     seed: int = 7
     past_range: float = 1.0                  # > 1: load past the FE's last volume
     switch_between: bool = False             # the pump stops between two readings
+    log_pump: bool = False                   # the "pump" column: its state before each
+                                             # reading, as the pump's software logs it
 
 
 def _extrap(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
@@ -267,7 +269,9 @@ def lab_rows(designs: list[tuple[Record, dict]], truth: Truth = Truth(),
                                                    * rng.standard_normal())),
                         "angle_deg": round(float(read[i] + proto.noise_deg
                                                  * rng.standard_normal()), 1),
-                        "time_s": round(float(reads[k]), 2), "flow_ul_s": q})
+                        "time_s": round(float(reads[k]), 2), "flow_ul_s": q,
+                        **({"pump": ("unload", "hold", "load")[int(d[i]) + 1]}
+                           if proto.log_pump else {})})
     return rows
 
 
@@ -498,6 +502,11 @@ def _cases() -> list[Case]:
     add("leak-0.3-odd-eco-2flows", lambda: lab_rows(designs_odd_eco(),
                                                     Truth(leak_ul_s_per_kpa=0.3), LOOP2),
         Expect("select", "chamber_leak", {"G_ul_s_per_kpa": 0.3}))
+    # a leak so fast that its holds read as unloading, unless the pump's log is given
+    add("leak-0.5-hold-pump-log", lambda: lab_rows(
+        designs_std15(), Truth(leak_ul_s_per_kpa=0.5), replace(LOOP, hold_s=6.0,
+                                                               log_pump=True)),
+        Expect("select", "chamber_leak", {"G_ul_s_per_kpa": 0.5}))
     # air in the line: since 2026-12-06 in the catalogue (line_compliance)
     add("compliance-bubble", lambda: lab_rows(designs_std10(),
                                               Truth(compliance_ul_per_pa=0.004), LOOP),

@@ -2,8 +2,9 @@
 
 The contract is in docs/measured-data.md. Required columns: curve_id, L_mm, t_mm,
 body_material, membrane_material, pressure_pa, angle_deg. Optional: T_mm, b_mm (standard
-design's defaults, 1 and 1.8 mm), h_mm (0.15 mm), time_s, flow_ul_s, angle_sd_deg, force_mn.
-Every row is checked before anything is built, so a bad file is never half-loaded.
+design's defaults, 1 and 1.8 mm), h_mm (0.15 mm), time_s, flow_ul_s, angle_sd_deg, force_mn,
+and the pump's own log (``pump``: load, hold or unload). Every row is checked before
+anything is built, so a bad file is never half-loaded.
 """
 
 from __future__ import annotations
@@ -25,6 +26,12 @@ from surrogate.calibration._history import directions, injected_volume_ul, pump_
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
             "pressure_pa", "angle_deg")
 OPTIONAL = ("T_mm", "b_mm", "h_mm", "time_s", "flow_ul_s", "angle_sd_deg", "force_mn")
+#: the pump's own log, optional: what it did in the interval ending at each reading (since
+#: the previous one; the first reading: since the start). Given, it is the history
+#: (``Observations.direction``) instead of what the readings suggest (_history.py): a
+#: leaking chamber's gauge and bend fall during a hold as if it were unloading.
+PUMP_COLUMN = "pump"
+PUMP_STATES = {"load": 1.0, "hold": 0.0, "unload": -1.0}
 DEFAULTS = {"T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15}
 MIN_POINTS_PER_CURVE = 4
 MAX_ROWS = 200_000
@@ -222,7 +229,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
     rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
-    known = set(REQUIRED) | set(OPTIONAL)
+    known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN}
     for name in REQUIRED:
         if name not in columns:
             raise _missing(name, columns)
@@ -233,7 +240,8 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             raise DataError("rows", "a row must be an object of column -> value", i)
         extra = sorted(set(raw) - known)
         if extra:
-            raise DataError(str(extra[0]), "unknown column", i, ", ".join(REQUIRED + OPTIONAL))
+            raise DataError(str(extra[0]), "unknown column", i,
+                            ", ".join(REQUIRED + OPTIONAL + (PUMP_COLUMN,)))
         rec: dict[str, object] = {}
         cid = raw.get("curve_id")
         if cid is None or str(cid).strip() == "":
@@ -261,9 +269,23 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             else:
                 _check_range(x, name, i)
             rec[name] = x
+        if PUMP_COLUMN in columns:
+            rec[PUMP_COLUMN] = _pump_state(raw.get(PUMP_COLUMN), i)
         parsed.append(rec)
     parsed, warnings = _suspicious(parsed, present, strict)
+    if PUMP_COLUMN in columns:
+        present = present + [PUMP_COLUMN]
     return _build(parsed, present, tuple(warnings))
+
+
+def _pump_state(value: object, row: int) -> float:
+    """+1 / 0 / -1 from the pump column's load / hold / unload (any case, spaces)."""
+    text = str(value).strip().lower() if isinstance(value, str) else None
+    if text not in PUMP_STATES:
+        raise DataError(PUMP_COLUMN, "not a pump state: " + _short(value), row,
+                        " or ".join(PUMP_STATES) + " (what the pump did since the previous "
+                        "reading)")
+    return PUMP_STATES[text]
 
 
 KPA_MAX_PA = 30.0   # no actuator of this kind bends visibly below 30 Pa
@@ -418,7 +440,7 @@ def _build(parsed: list[dict[str, object]], present: list[str],
         np.array([f for _, f, _, _ in rows_sorted]), np.array([g for _, _, g, _ in rows_sorted]),
         col("L_mm"), col("t_mm"), col("pressure_pa"), col("angle_deg"), col("time_s"),
         col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed),
-        warnings=warnings)
+        direction=col(PUMP_COLUMN) if PUMP_COLUMN in present else None, warnings=warnings)
 
 
 def _hash(parsed: list[dict[str, object]]) -> str:
