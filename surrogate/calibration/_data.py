@@ -80,6 +80,8 @@ class Observations:
     switch_after: np.ndarray = None  # type: ignore[assignment]
     switch_at: np.ndarray = None  # type: ignore[assignment]
     switch_names: tuple[str, ...] = ()
+    #: the history is the pump's own log (the ``pump`` column), not read off the readings
+    pump_logged: bool = False
 
     def __post_init__(self) -> None:
         if self.direction is None:
@@ -164,7 +166,8 @@ class Observations:
             self.pressure_pa[keep], self.angle_deg[keep], self.time_s[keep],
             self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
             self.direction[keep], self.warnings, self.volume_ul[keep],
-            self.switch_after[keep], self.switch_at[keep], self.switch_names)
+            self.switch_after[keep], self.switch_at[keep], self.switch_names,
+            self.pump_logged)
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
@@ -440,7 +443,8 @@ def _build(parsed: list[dict[str, object]], present: list[str],
         np.array([f for _, f, _, _ in rows_sorted]), np.array([g for _, _, g, _ in rows_sorted]),
         col("L_mm"), col("t_mm"), col("pressure_pa"), col("angle_deg"), col("time_s"),
         col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed),
-        direction=col(PUMP_COLUMN) if PUMP_COLUMN in present else None, warnings=warnings)
+        direction=col(PUMP_COLUMN) if PUMP_COLUMN in present else None, warnings=warnings,
+        pump_logged=PUMP_COLUMN in present)
 
 
 def _hash(parsed: list[dict[str, object]]) -> str:
