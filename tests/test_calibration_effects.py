@@ -230,6 +230,19 @@ def test_a_leak_drains_a_held_chamber_exponentially_by_hand():
     assert e.not_identifiable(DataTraits(**{**by_volume.__dict__, "has_holds": True})) is None
 
 
+def test_gauge_drift_grows_with_the_runs_time_and_needs_a_hold_or_the_unloading():
+    e = EFFECTS["gauge_drift"]
+    assert e.lags == "gauge" and e.stage == "time"
+    t = np.array([[0.0, 2.0, 5.0, 10.0]])
+    static = np.array([[0.0, 400.0, 900.0, 900.0]])
+    out = e.lag(static, t, np.ones(t.shape, bool), {"drift_pa_per_s": 3.0})
+    np.testing.assert_allclose(out, static + 3.0 * t)     # 30 Pa above after 10 s
+    by_volume = DataTraits(**{**TRAITS.__dict__, "by_volume": True})
+    assert "one flow rate" in e.not_identifiable(by_volume)[0]
+    assert e.not_identifiable(DataTraits(**{**by_volume.__dict__, "has_holds": True})) is None
+    assert "injected volume" in e.not_identifiable(TRAITS)[0]
+
+
 def test_pressure_relaxation_needs_the_volume_channel_and_a_change_of_the_pump():
     e = EFFECTS["pressure_relaxation"]
     assert "injected volume" in e.not_identifiable(TRAITS)[0]

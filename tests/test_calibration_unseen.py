@@ -120,6 +120,7 @@ class Truth:
     compliance_ul_per_pa: float = 0.0    # air in the line (line_compliance)
     relax_g: float = 0.0                 # the pressure relaxing at a held volume: a
     relax_tau_s: float = 3.0             # standard linear solid (pressure_relaxation)
+    drift_pa_per_s: float = 0.0          # the gauge's zero running away (gauge_drift)
     leak_per_s: float = 0.0              # outside: volume lost per s per (p / p_peak) x V
                                          # during holds only
     leak_ul_s_per_kpa: float = 0.0       # a leak all along: G p_chamber (chamber_leak)
@@ -255,7 +256,8 @@ def lab_rows(designs: list[tuple[Record, dict]], truth: Truth = Truth(),
                 if truth.friction_deg:
                     x = np.clip(np.abs(static) / max(np.max(np.abs(static)), 1e-9), 0, 1)
                     angle = angle + sign * (d < 0) * truth.friction_deg * 4 * x * (1 - x)
-                gauge = truth.k_pressure * (p_ch + truth.R_pa_per_ul_s * q * d) + truth.p0_pa
+                gauge = (truth.k_pressure * (p_ch + truth.R_pa_per_ul_s * q * d) + truth.p0_pa
+                         + truth.drift_pa_per_s * t)
                 read = truth.k_angle * angle + truth.offset_deg
                 idx = np.clip(np.searchsorted(t, reads - 1e-9), 0, t.size - 1)
                 cid = (f"{nominal['body_material'][:4]}-L{nominal['L_mm']:g}"
@@ -507,6 +509,12 @@ def _cases() -> list[Case]:
         designs_std15(), Truth(leak_ul_s_per_kpa=0.5), replace(LOOP, hold_s=6.0,
                                                                log_pump=True)),
         Expect("select", "chamber_leak", {"G_ul_s_per_kpa": 0.5}))
+    # the gauge's zero drifting during each run (gauge_drift, 2026-12-06)
+    add("gauge-drift-4", lambda: lab_rows(designs_std10(), Truth(drift_pa_per_s=4.0), LOOP),
+        Expect("select", "gauge_drift", {"drift_pa_per_s": 4.0}))
+    add("gauge-drift-minus3-rev-2flows", lambda: lab_rows(
+        designs_rev(), Truth(drift_pa_per_s=-3.0), LOOP2),
+        Expect("select", "gauge_drift", {"drift_pa_per_s": -3.0}))
     # air in the line: since 2026-12-06 in the catalogue (line_compliance)
     add("compliance-bubble", lambda: lab_rows(designs_std10(),
                                               Truth(compliance_ul_per_pa=0.004), LOOP),

@@ -14,6 +14,7 @@ from surrogate.calibration.effects import (
     camera_gain,
     chamber_leak,
     chamber_length,
+    gauge_drift,
     hydraulic_resistance,
     line_compliance,
     membrane_stiffness,
@@ -36,6 +37,7 @@ CATALOGUE: tuple[Effect, ...] = (
     hydraulic_resistance.EFFECT, line_compliance.EFFECT, angle_offset.EFFECT,
     camera_gain.EFFECT,
     viscoelastic_creep.EFFECT, pressure_relaxation.EFFECT, chamber_leak.EFFECT,
+    gauge_drift.EFFECT,
 )
 EFFECTS = {e.id: e for e in CATALOGUE}
 EFFECT_IDS = tuple(EFFECTS)
