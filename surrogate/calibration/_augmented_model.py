@@ -169,8 +169,7 @@ class AugmentedModel:
             grid = np.full(s["shape"], np.nan)
             grid[s["valid"]] = static
             known = np.isfinite(grid[s["sample_pos"]])
-            tgrid = np.zeros(s["shape"])
-            tgrid[s["valid"]] = s["t"]
+            tgrid = s["tgrid"]
             grid = np.nan_to_num(grid)
             for e in lags:
                 grid = e.lag(grid, tgrid, s["valid"], values)
@@ -278,8 +277,7 @@ class AugmentedModel:
                                   self._substep_volumes(x))
             grid = np.full(s["shape"], np.nan)
             grid[s["valid"]] = static
-            tgrid = np.zeros(s["shape"])
-            tgrid[s["valid"]] = s["t"]
+            tgrid = s["tgrid"]
             for e in self.time:
                 if e.lags == "angle":
                     grid = e.lag(np.nan_to_num(grid), tgrid, s["valid"], values)
@@ -312,8 +310,7 @@ class AugmentedModel:
         values = self.values(x)
         grid = np.zeros(s["shape"])
         grid[s["valid"]] = v
-        tgrid = np.zeros(s["shape"])
-        tgrid[s["valid"]] = s["t"]
+        tgrid = s["tgrid"]
         at = slice(0, None, SUBSTEPS)                    # rest, then every reading
         pressure_at = self._pressure_at(values, self._curve_design)
         kept = grid[:, at]
@@ -404,3 +401,9 @@ class AugmentedModel:
                      "prev": np.array(prev_rows, int), "w": np.array(weights, float),
                      "shape": (n_curves, width), "sample_rows": np.array(sample_rows),
                      "sample_pos": tuple(np.array(sample_pos).T)}
+        # each curve's substep times as a grid (0 in the padding): what every time effect
+        # integrates along, the same at every evaluation
+        tgrid = np.zeros((n_curves, width))
+        tgrid[valid] = self._sub["t"]
+        tgrid.flags.writeable = False
+        self._sub["tgrid"] = tgrid
