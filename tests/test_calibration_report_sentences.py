@@ -85,3 +85,15 @@ def test_a_gauge_left_above_its_floor_is_said():
     assert _gauge_left(None, channel, 1.1) is None
     assert _gauge_left(50.0, {"pressure_floor_pa": None}, 1.1) is None
     assert _gauge_sentence(None) is None
+
+
+def test_switch_times_are_not_freed_where_they_predict_the_angle_worse():
+    # the independent check's relaxing gauge: joint 1.21 -> 1.21, angle 0.78 -> 0.86 deg
+    # (the shifts take up the gauge's misfit); the clean pump-stop set: 3.6 -> 1.0 both;
+    # the stiffer-body set: joint 1.15 -> 1.14, angle 0.78 -> 0.79 (within the slack)
+    from surrogate.calibration._loop import switches_help
+
+    assert not switches_help(1.2149, 0.78, 1.2101, 0.86)
+    assert switches_help(3.57, 3.57, 0.97, 0.97)
+    assert switches_help(1.15, 0.78, 1.14, 0.79)
+    assert not switches_help(1.15, 0.78, 1.16, 0.70)      # the joint error must fall

@@ -780,6 +780,15 @@ def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baselin
 SWITCH_ANGLE_SLACK = 1.05
 
 
+def switches_help(joint_without: float, angle_without: float, joint_with: float,
+                  angle_with: float) -> bool:
+    """Whether the pump's switch times are freed, from the cross-validated errors (deg)
+    without and with them: the joint angle-and-gauge error falls and the angle's rises by
+    at most SWITCH_ANGLE_SLACK."""
+    return bool(joint_with < joint_without
+                and angle_with <= SWITCH_ANGLE_SLACK * angle_without)
+
+
 def _pump_switches_open(obs: Observations, responses: Responses, baseline: Baseline,
                         channel: dict, k: int
                         ) -> tuple[dict, tuple[FitResult, CrossValidation] | None]:
@@ -818,7 +827,7 @@ def _pump_switches_open(obs: Observations, responses: Responses, baseline: Basel
     out["rmse_cv_without_deg"], out["rmse_cv_with_deg"] = cv[False][0], cv[True][0]
     out["rmse_cv_angle_without_deg"], out["rmse_cv_angle_with_deg"] = cv[False][1], cv[True][1]
     lowers = bool(cv[True][0] < cv[False][0])
-    out["open"] = lowers and bool(cv[True][1] <= SWITCH_ANGLE_SLACK * cv[False][1])
+    out["open"] = switches_help(*cv[False], *cv[True])
     out["why"] = (
         "fitting when the pump changed state lowers the cross-validated error (angle and "
         f"gauge) from {cv[False][0]:.2f} to {cv[True][0]:.2f} deg"
