@@ -23,6 +23,14 @@ Ranking (lower score first):
     certainty   the band's width relative to the value at the target pressure
 
 Candidates closer than MIN_SPACING (unit-cube distance) to a better one are dropped.
+
+The target's sign is the bending direction asked for: a positive angle (or force) bends
+away from the membrane (PDMS bodies), a negative one towards it (the reversed pair, and
+Ecoflex / Ecoflex designs on either side of their stiffness balance). Designs that bend
+the other way are not candidates; when none bends the way asked, the explanation says
+what the other direction reaches. The same SOLVED_PER_PAIR candidates are solved whatever
+``n_results`` is, so the first k of n results are the k best (a search for 3 had solved
+fewer and missed the best of a search for 5).
 """
 
 from __future__ import annotations
@@ -50,6 +58,10 @@ from surrogate.exponential.inverse_design import (
 )
 
 CANDIDATES_PER_PAIR = 512
+#: designs returned at most (the HTTP schema and the CLI read it)
+N_RESULTS_MAX = 20
+#: candidates per pair, nearest the target, solved exactly to it (at least 6 per result)
+SOLVED_PER_PAIR = 30
 MIN_SPACING = 0.08
 CURVE_POINTS = 41
 # Bisection steps in L: the bracket shrinks to (L_hi / L_lo)^(2^-16), 2.3e-5 of L over the
@@ -171,12 +183,23 @@ class _Eval:
     value_hi: float = np.nan
 
 
+_WAY = {1.0: "away from the membrane (positive angles)",
+        -1.0: "towards the membrane (negative angles)"}
+
+
+def _direction(target: DesignTarget) -> float:
+    """+1: the target bends away from the membrane; -1: towards it."""
+    raw = target.force_mn if target.kind == "force_at_pressure" else target.angle_deg
+    return -1.0 if float(raw) < 0 else 1.0  # type: ignore[arg-type]
+
+
 def _screen(model: object, designs: list[Design], target: DesignTarget, level: float
             ) -> dict[str, np.ndarray]:
-    """|value| at the target pressure with its band, and the pressure needed for the
-    target angle with its band, for every design (NaN where the model has no answer).
-    Uses the model's batch ``evaluate_designs`` when it has one (the emulator), else its
-    ``predict`` and ``inverse`` per design."""
+    """|value| at the target pressure with its band, the pressure needed for the
+    target angle with its band, and the design's bending direction (``sign``, +1 / -1,
+    0 unknown), for every design (NaN where the model has no answer). Uses the model's
+    batch ``evaluate_designs`` when it has one (the emulator), else its ``predict`` and
+    ``inverse`` per design."""
     angle = None if target.kind == "force_at_pressure" else target.value
     batch = getattr(model, "evaluate_designs", None)
     if batch is not None:
@@ -188,8 +211,8 @@ def _screen(model: object, designs: list[Design], target: DesignTarget, level: f
         hi = np.fmax(out["angle_lo"], out["angle_hi"])
         return {"value": np.abs(out["angle"]), "value_lo": lo, "value_hi": hi,
                 "needed": out["needed"], "needed_lo": out["needed_lo"],
-                "needed_hi": out["needed_hi"]}
-    keys = ("value", "value_lo", "value_hi", "needed", "needed_lo", "needed_hi")
+                "needed_hi": out["needed_hi"], "sign": out["sign"]}
+    keys = ("value", "value_lo", "value_hi", "needed", "needed_lo", "needed_hi", "sign")
     res = {k: np.full(len(designs), np.nan) for k in keys}
     for i, design in enumerate(designs):
         try:
@@ -200,9 +223,11 @@ def _screen(model: object, designs: list[Design], target: DesignTarget, level: f
             if pred.force_mn is None:
                 continue
             vals = np.abs([pred.force_mn[0], pred.force_lower_mn[0], pred.force_upper_mn[0]])
+            res["sign"][i] = np.sign(pred.force_mn[0]) if np.isfinite(pred.force_mn[0]) else 0
         else:
             vals = np.abs([pred.angle_deg[0], pred.lower_deg[0], pred.upper_deg[0]])
-            sign = np.sign(pred.angle_deg[0]) if np.isfinite(pred.angle_deg[0]) else 1.0
+            sign = _bending_sign(model, design, pred, target.pressure_pa, level)
+            res["sign"][i] = sign
             try:
                 inv = model.inverse(design, [(sign or 1.0) * target.value],  # type: ignore
                                     level=level)
@@ -214,6 +239,29 @@ def _screen(model: object, designs: list[Design], target: DesignTarget, level: f
         res["value"][i], res["value_lo"][i], res["value_hi"][i] = (
             vals[0], *((finite.min(), finite.max()) if finite.size else (np.nan, np.nan)))
     return res
+
+
+def _bending_sign(model: object, design: Design, pred: object, pressure_pa: float,
+                  level: float) -> float:
+    """+1 / -1: which way ``design`` bends (``pred``: its prediction at ``pressure_pa``;
+    where that is past the FE's range, the first answered of a few lower pressures), 0
+    when no pressure is answered."""
+    angle = float(pred.angle_deg[0])  # type: ignore[attr-defined]
+    if np.isfinite(angle) and angle != 0:
+        return float(np.sign(angle))
+    low = model.predict(design, pressure_pa * np.array([0.5, 0.25, 0.125]),  # type: ignore
+                        level=level).angle_deg
+    found = [a for a in low if np.isfinite(a) and a != 0]
+    return float(np.sign(found[0])) if found else 0.0
+
+
+def _keep_direction(r: dict[str, np.ndarray], direction: float) -> np.ndarray:
+    """In place: no answer (NaN) for the designs of ``r`` (``_screen``) that bend against
+    ``direction``; returns which those were."""
+    wrong = r["sign"] == -direction
+    for k in ("value", "value_lo", "value_hi", "needed", "needed_lo", "needed_hi"):
+        r[k] = np.where(wrong, np.nan, r[k])
+    return wrong
 
 
 # The variables an exact target is solved along, in order of preference: the first whose
@@ -242,6 +290,7 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
     def f(x: np.ndarray) -> tuple[np.ndarray, list[Design], dict]:
         designs = [_design(e.pair, {**e.values, name: float(v)}) for e, v in zip(evals, x)]
         r = _screen(model, designs, target, level)
+        _keep_direction(r, _direction(target))     # the other way: no hit there
         v = np.where(np.isfinite(r["value"]), r["value"] - target.value, np.inf)
         return v, designs, r
 
@@ -293,9 +342,13 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     objective = resolve_objective(target, objective)
     ranges = bounds.ranges()
     slices_fn = getattr(model, "covered_slices", None)
+    if not 1 <= n_results <= N_RESULTS_MAX:
+        raise InputError("n_results", f"got {n_results}", f"1 <= n_results <= {N_RESULTS_MAX}")
+    direction = _direction(target)
     n_evaluated = 0
     feasible: list[_Eval] = []
     best_reach: dict[str, object] = {}
+    other_way = 0.0          # the largest |value| of designs bending against the target
     for pair in bounds.allowed_pairs():
         slices = slices_fn(pair) if slices_fn is not None else None
         if slices is not None and not slices:
@@ -313,6 +366,10 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             continue
         r = _screen(model, designs, target, level)
         n_evaluated += len(designs)
+        against = r["value"][r["sign"] == -direction]
+        if np.any(np.isfinite(against)):
+            other_way = max(other_way, float(np.nanmax(against)))
+        _keep_direction(r, direction)
         evals = [_Eval(pair, v, d, *(float(r[k][i]) for k in (
                      "needed", "needed_lo", "needed_hi", "value", "value_lo", "value_hi")))
                  for i, (v, d) in enumerate(zip(kept, designs)) if np.isfinite(r["value"][i])
@@ -322,8 +379,10 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         reachable = [e for e in evals if np.isfinite(e.value)]
         if reachable:
             top = max(reachable, key=lambda e: e.value)
-            if not best_reach or top.value > best_reach["largest_value"]:  # type: ignore
-                best_reach = {"largest_value": top.value, "design": top.design.as_dict(),
+            if not best_reach or top.value > abs(best_reach["largest_value"]):  # type: ignore
+                # signed: the way the target asks (the search matched magnitudes)
+                best_reach = {"largest_value": direction * top.value,
+                              "design": top.design.as_dict(),
                               "pair": "/".join(pair), "at_pressure_pa": target.pressure_pa}
         if target.kind == "pressure_budget":
             feasible += [e for e in evals if np.isfinite(e.needed)
@@ -336,8 +395,9 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             feasible += [e for e in near[:1] if abs(e.value - target.value)
                          <= 0.01 * target.value]
             continue
-        hits = _solve_along(model, near[: 6 * n_results], target, level, knob, ranges[knob])
-        n_evaluated += (BISECTION_STEPS + 3) * len(near[: 6 * n_results])
+        solved = near[: max(SOLVED_PER_PAIR, 6 * n_results)]
+        hits = _solve_along(model, solved, target, level, knob, ranges[knob])
+        n_evaluated += (BISECTION_STEPS + 3) * len(solved)
         feasible += hits
     feasible = [e for e in feasible if np.isfinite(_score(e, objective, target))]
     feasible.sort(key=lambda e: _score(e, objective, target))
@@ -354,40 +414,52 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         p_max = max(target.pressure_pa, e.needed if np.isfinite(e.needed) else 0.0)
         curve = model.predict(e.design, np.linspace(0.0, p_max, CURVE_POINTS),  # type: ignore
                               level=level)
-        # report the value with its sign (the reversed pair bends towards the membrane):
-        # the search matched magnitudes
-        at = model.predict(e.design, [target.pressure_pa], level=level)  # type: ignore
-        signed = (at.force_mn if target.kind == "force_at_pressure" else at.angle_deg)
-        sign = -1.0 if signed is not None and np.isfinite(signed[0]) and signed[0] < 0 else 1.0
-        lo, hi = (e.value_lo, e.value_hi) if sign > 0 else (-e.value_hi, -e.value_lo)
+        value, value_lo, value_hi = e.value, e.value_lo, e.value_hi
+        if target.kind == "pressure_budget":
+            # the angle where the design meets the target, at the pressure needed (at the
+            # budget itself it may lie past the design's FE range: no answer there)
+            at = model.predict(e.design, [e.needed], level=level)  # type: ignore
+            value, value_lo, value_hi = (abs(float(at.angle_deg[0])),
+                                         *sorted(abs(float(v[0])) for v in
+                                                 (at.lower_deg, at.upper_deg)))
+        # the search matched magnitudes of the direction asked: the sign put back
+        lo, hi = (value_lo, value_hi) if direction > 0 else (-value_hi, -value_lo)
         candidates.append(DesignCandidate(
             rank=rank, design=e.design, family="/".join(e.pair),
             score=float(_score(e, objective, target)), pressure_needed_pa=e.needed,
             pressure_lower_pa=e.needed_lo, pressure_upper_pa=e.needed_hi,
-            value_at_pressure=sign * e.value, value_lower=lo, value_upper=hi,
+            value_at_pressure=direction * value, value_lower=lo, value_upper=hi,
             curve=curve))
     if candidates:
         explanation = (f"{len(feasible)} of {n_evaluated} evaluated designs meet the target; "
                        f"the {len(candidates)} best by {objective} are listed")
     else:
         what = "force" if target.kind == "force_at_pressure" else "angle"
-        reach = best_reach.get("largest_value")
+        unit = "mN" if target.kind == "force_at_pressure" else "deg"
+        reach = (abs(best_reach["largest_value"])  # type: ignore[arg-type]
+                 if best_reach else None)
         if (target.kind != "pressure_budget" and reach is not None
                 and reach >= abs(target.value)):
             knob = solve_variable(ranges)
             explanation = (
                 f"no design inside the bounds was solved to the target {what} "
-                f"{target.value:g} at {target.pressure_pa:g} Pa within 1 %, although designs "
-                f"there reach {reach:.3g}: "
+                f"{direction * target.value:g} {unit} at {target.pressure_pa:g} Pa within 1 %, "
+                f"although designs there reach {direction * reach:.3g} {unit}: "
                 + (f"the value does not cross the target along {knob} within its bounds"
                    if knob else "every variable is pinned")
                 + "; widen the bounds of the chamber length or the membrane thickness")
         else:
-            explanation = (f"the target {what} {target.value:g} at {target.pressure_pa:g} Pa "
-                           "is not reachable by any design inside the bounds"
-                           + (f"; the largest reachable is {reach:.3g}" if reach else "")
+            explanation = (f"the target {what} {direction * target.value:g} {unit} at "
+                           f"{target.pressure_pa:g} Pa is not reachable by any design "
+                           f"bending {_WAY[direction]} inside the bounds"
+                           + (f"; the largest reachable is {direction * reach:.3g} {unit}"
+                              if reach else "")
                            + ": widen the bounds (longer chamber, thinner membrane, softer "
                            "membrane) or raise the pressure")
+        if other_way > 0:
+            explanation += (f"; designs bending {_WAY[-direction]} reach "
+                            f"{-direction * other_way:.3g} {unit} there: ask for "
+                            f"{-direction * target.value:g} {unit} to search them")
     clipped = bounds.clipped(ranges)
     if clipped:
         explanation += ("; searched within the emulator's box: " + ", ".join(clipped))

@@ -188,8 +188,16 @@ def test_inverse_round_trip(emulator):
     inv = emulator.inverse(d, [10.0, 45.0, 80.0])
     fwd = emulator.predict(d, inv.pressure_pa)
     np.testing.assert_allclose(fwd.angle_deg, [10.0, 45.0, 80.0], atol=0.05)
-    with pytest.raises(InputError):
-        emulator.inverse(d, [120.0])     # past the FE's 90 deg
+    # past the FE's 90 deg: no number, flagged, the angles within answered as before (as a
+    # prediction by pressure; a whole list was refused for one such angle until 2026-12-06)
+    past = emulator.inverse(d, [10.0, 120.0])
+    assert np.isnan(past.pressure_pa[1]) and np.isnan(past.volume_ul[1])
+    assert np.isnan(past.lower_pa[1]) and np.isnan(past.upper_pa[1])
+    assert past.pressure_pa[0] == pytest.approx(inv.pressure_pa[0])
+    assert "past_fe_range" in past.validity["flags"]
+    assert "past_fe_range" not in inv.validity["flags"]
+    with pytest.raises(InputError, match="bends the other way"):
+        emulator.inverse(d, [-10.0])
 
 
 def test_by_volume_the_fe_records_own_volume_column_is_reproduced(emulator):

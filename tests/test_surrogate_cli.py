@@ -125,7 +125,7 @@ def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys) -> None:
     assert err.count("\n") == 1 and "balloon precompute" in err
     assert cli.main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1",
                      "--model", str(tmp_path / "none.json")]) == 2
-    assert cli.main(["inverse", "--angle-deg", "500", "--pressure-pa", "900",
+    assert cli.main(["inverse", "--angle-deg", "300", "--pressure-pa", "900",
                      "--model", "paper"]) == 1  # infeasible: explained, not an error
     assert "not reachable" in capsys.readouterr().out
 

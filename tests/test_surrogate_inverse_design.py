@@ -196,3 +196,62 @@ def test_bounds_past_the_box_are_said_with_the_answer(emulator):
     assert "searched within the emulator's box: L_mm 4-18 (of 2-30 given)" in res.explanation
     inside = SearchBounds(L_mm=(5.0, 9.0), pairs=(("pdms_1_10", "ecoflex_00_30"),))
     assert inside.clipped(inside.ranges()) == []
+
+
+def test_the_target_angles_sign_is_the_way_the_design_bends(emulator):
+    """A +30 deg target listed reversed-pair designs at -30 deg beside the +30 ones, and a
+    -30 deg target only +30 designs (the search matched magnitudes; an audit of
+    2026-12-06). The sign is the bending direction asked for."""
+    from surrogate.design_search import SearchBounds, search_designs
+
+    pairs = (("pdms_1_15", "ecoflex_00_30"), ("ecoflex_00_30", "pdms_1_15"))
+    bounds = SearchBounds(L_mm=(10.0, 10.0), pairs=pairs)
+    for angle in (30.0, -30.0):
+        res = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0,
+                                                    angle_deg=angle), bounds, n_results=4)
+        assert res.feasible
+        for c in res.candidates:
+            assert np.sign(c.value_at_pressure) == np.sign(angle)
+            assert c.value_at_pressure == pytest.approx(angle, rel=0.011)
+            assert c.value_lower <= c.value_at_pressure <= c.value_upper
+            assert np.sign(emulator.predict(c.design, [1500.0]).angle_deg[0]) == np.sign(angle)
+        body = {c.design.body_material.id.partition("*")[0] for c in res.candidates}
+        assert body == ({"pdms_1_15"} if angle > 0 else {"ecoflex_00_30"})
+    # only the reversed pair, asked to bend away from the membrane: none does, and the
+    # answer says what the other way reaches
+    only = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0, angle_deg=30.0),
+                          SearchBounds(L_mm=(10.0, 10.0), pairs=pairs[1:]), n_results=3)
+    assert not only.feasible
+    assert "towards the membrane (negative angles) reach -" in only.explanation
+    assert "ask for -30 deg" in only.explanation
+
+
+def test_the_first_k_of_n_results_are_the_k_best(emulator):
+    """With 3 results the search solved fewer candidates than with 5 and missed the best
+    design of the 5-result search (an audit of 2026-12-06): the same candidates are
+    solved whatever n_results is."""
+    from surrogate.design_search import SearchBounds, search_designs
+
+    target = DesignTarget("angle_at_pressure", 1500.0, angle_deg=30.0)
+    bounds = SearchBounds(L_mm=(10.0, 10.0), pairs=(("pdms_1_10", "ecoflex_00_30"),
+                                                     ("pdms_1_15", "ecoflex_00_30")))
+    three = search_designs(emulator, target, bounds, n_results=3)
+    five = search_designs(emulator, target, bounds, n_results=5)
+    assert [c.design for c in three.candidates] == [c.design for c in five.candidates[:3]]
+    with pytest.raises(InputError, match="n_results"):
+        search_designs(emulator, target, bounds, n_results=21)
+
+
+def test_a_pressure_budget_candidate_reports_its_angle_where_it_meets_the_target(emulator):
+    """A budget candidate's angle was read at the budget pressure, often past its FE range:
+    null, with the CLI's "--" (an audit of 2026-12-06). It is read at the pressure
+    needed: the target angle, with its band."""
+    from surrogate.design_search import SearchBounds, search_designs
+
+    res = search_designs(emulator, DesignTarget("pressure_budget", 1500.0, angle_deg=60.0),
+                         SearchBounds(pairs=(("pdms_1_10", "ecoflex_00_30"),)), n_results=3)
+    assert res.feasible
+    for c in res.candidates:
+        assert c.pressure_needed_pa <= 1500.0
+        assert c.value_at_pressure == pytest.approx(60.0, abs=0.05)
+        assert c.value_lower < 60.0 < c.value_upper

@@ -2,10 +2,11 @@
 
     balloon inverse --L-mm 7.1 --t-mm 0.5 --angles-deg 10 45       # one design: pressures
     balloon inverse --L-mm 7.1 --t-mm 0.5 --angles-deg 45 --flow-ul-s 2.5   # + volume, time
-    balloon inverse --angle-deg 45 --pressure-pa 1500               # designs within a budget
+    balloon inverse --angle-deg 45 --pressure-pa 1500               # designs: 45 deg there
+    balloon inverse --kind pressure_budget --angle-deg 45 --pressure-pa 1500   # within a budget
     balloon inverse --kind angle_at_pressure --angle-deg 30 --pressure-pa 1200 \\
         --L-range 4 12 --t-range 0.5 1 --pair pdms_1_10/ecoflex_00_30 --objective compact
-    balloon inverse --kind force_at_pressure --force-mn 2 --pressure-pa 1500
+    balloon inverse --kind force_at_pressure --force-mn 0.5 --pressure-pa 1500
 
 Targets, objectives and defaults: docs/surrogate.md (``surrogate.design_search``: the
 same search as POST /v1/inverse).
@@ -31,6 +32,8 @@ from service.commands.predict import (
     surrogate_from_args,
 )
 from solver.errors import InputError
+from surrogate.design_search import N_RESULTS_MAX
+from surrogate.exponential.inverse_design import DEFAULT_KIND
 
 # The search's bounds (surrogate.design_search.SearchBounds field -> flag, what it bounds);
 # a pinned range (LO = HI) fixes that variable (one mould: --L-range 10 10). Each range
@@ -86,10 +89,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "one design (--L-mm, --t-mm): the pressures for these angles")
     parser.add_argument("--kind", choices=("pressure_budget", "angle_at_pressure",
                                            "force_at_pressure"), default=None,
-                        help="design target (default pressure_budget, or force_at_pressure "
+                        help=f"design target (default {DEFAULT_KIND}, or force_at_pressure "
                              "with --force-mn)")
-    parser.add_argument("--angle-deg", type=float, help="target angle magnitude, deg")
-    parser.add_argument("--force-mn", type=float, help="target force, mN")
+    parser.add_argument("--angle-deg", type=float, help="target angle, deg: positive bends "
+                        "away from the membrane, negative towards it (the reversed pair)")
+    parser.add_argument("--force-mn", type=float, help="target blocked-tip force, mN (signed "
+                        "as the angle)")
     parser.add_argument("--pressure-pa", type=float, help="target pressure or budget, Pa")
     for name, (flag, what) in RANGE_FLAGS.items():
         lo, hi, unit = search_box(name)
@@ -164,7 +169,7 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
             raise InputError("--" + dest.replace("_", "-"), "sets one design (with "
                              "--angles-deg); a design search does not read it", allowed)
     kind = args.kind or ("force_at_pressure" if args.force_mn is not None
-                         else "pressure_budget")
+                         else DEFAULT_KIND)
     if args.pressure_pa is None:
         raise InputError("--pressure-pa", "a design target needs a pressure (or budget), Pa")
     pairs: tuple[tuple[str, str], ...] | None = None
@@ -176,8 +181,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                 raise InputError("--pair", f"got {text!r}", "BODY/MEMBRANE material ids")
             found.append((body, membrane))
         pairs = tuple(found)
-    if not 1 <= args.n_results <= 50:
-        raise InputError("-n", f"got {args.n_results}", "1 <= n <= 50 designs")
+    if not 1 <= args.n_results <= N_RESULTS_MAX:
+        raise InputError("-n", f"got {args.n_results}", f"1 <= n <= {N_RESULTS_MAX} designs")
     target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
                           force_mn=args.force_mn)
     ranges = {name: (tuple(v) if (v := getattr(args, flag[2:].replace("-", "_"))) else None)

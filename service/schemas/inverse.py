@@ -12,6 +12,8 @@ from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
 from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
 from solver.design import LIMITS_MM
 from solver.design_space import BOX_MM, STIFFNESS_SCALE_LIMITS, STIFFNESS_SCALE_RANGE
+from surrogate.design_search import N_RESULTS_MAX
+from surrogate.exponential.inverse_design import DEFAULT_KIND, MAX_TARGET
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
 OptFloats = list[float | None] | None
@@ -22,12 +24,15 @@ class TargetIn(Schema):
     ``pressure_budget`` (reach angle_deg at no more than pressure_pa) or
     ``force_at_pressure`` (force_mn at pressure_pa; needs force curves)."""
 
-    kind: Literal["angle_at_pressure", "pressure_budget", "force_at_pressure"] = (
-        "angle_at_pressure")
+    kind: Literal["angle_at_pressure", "pressure_budget", "force_at_pressure"] = DEFAULT_KIND
     pressure_pa: float = Field(gt=0.0, le=MAX_PRESSURE_PA, description="pressure, Pa")
-    angle_deg: float | None = Field(None, ge=-360.0, le=360.0,
-                                    description="target angle, degrees (matched in size)")
-    force_mn: float | None = Field(None, ge=-1e4, le=1e4, description="target force, mN")
+    angle_deg: float | None = Field(
+        None, ge=-MAX_TARGET["angle_deg"], le=MAX_TARGET["angle_deg"],
+        description="target angle, degrees; its sign is the way the design bends: positive "
+                    "away from the membrane, negative towards it (the reversed pair)")
+    force_mn: float | None = Field(None, ge=-MAX_TARGET["force_mn"], le=MAX_TARGET["force_mn"],
+                                   description="target blocked-tip force, mN (signed as the "
+                                               "angle)")
 
 
 class MaterialPair(Schema):
@@ -78,7 +83,7 @@ class InverseRequest(Schema):
         None, min_length=1, max_length=20, description="allowed pairs (default: all fitted)")
     objective: Literal["pressure", "margin", "compact", "certainty"] | None = Field(
         None, description="ranking (default: certainty; pressure for pressure_budget)")
-    n_results: int = Field(5, ge=1, le=20, description="designs returned at most")
+    n_results: int = Field(5, ge=1, le=N_RESULTS_MAX, description="designs returned at most")
     model: str = MODEL
     level: float = LEVEL
 

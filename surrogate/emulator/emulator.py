@@ -941,11 +941,8 @@ class Emulator:
             direction = "positive" if pe.sign > 0 else "negative"
             raise InputError("angle_deg", f"{bad:g} deg: this design bends the other way",
                              f"{direction} angles (sign of the pair's bending)")
-        if (signed > cb.limit_angle_deg + 1e-9).any():
-            bad = float(ang[signed > cb.limit_angle_deg + 1e-9][0])
-            raise InputError("angle_deg", f"{bad:g} deg is past the FE's range "
-                             f"({cb.stop_reason})",
-                             f"|angle| <= {cb.limit_angle_deg:g} deg")
+        # past the FE's range: no number (null, flagged), as a prediction by pressure
+        past = signed > cb.limit_angle_deg + 1e-9
         s = point.pressure_scale
         p = np.interp(signed, ANGLES0, _with_origin(cb.pressure_pa)) * s
         lo = np.interp(signed, ANGLES0, _with_origin(cb.pressure_lower_pa)) * s
@@ -956,32 +953,44 @@ class Emulator:
                     "fe_limit_pa": cb.limit_pressure_pa * s,
                     "fe_limit_angle_deg": cb.limit_angle_deg,
                     "fe_stop_reason": cb.stop_reason}
-        return InversePrediction(design=design, angle_deg=ang, pressure_pa=p, lower_pa=lo,
-                                 upper_pa=hi, level=level, validity=validity,
-                                 model=self.name, form="emulator",
+        if past.any():
+            validity["flags"].append("past_fe_range")
+            validity["messages"].append(
+                f"no pressure for {int(past.sum())} angle(s) past the FE's range (|angle| "
+                f"<= {cb.limit_angle_deg:.1f} deg for this design; {cb.stop_reason})")
+
+        def answered(x: np.ndarray) -> np.ndarray:
+            return np.where(past, np.nan, x)
+
+        return InversePrediction(design=design, angle_deg=ang, pressure_pa=answered(p),
+                                 lower_pa=answered(lo), upper_pa=answered(hi), level=level,
+                                 validity=validity, model=self.name, form="emulator",
                                  provenance=dict(self.provenance),
-                                 volume_ul=np.interp(signed, ANGLES0, vm) * ls3,
-                                 volume_lower_ul=np.interp(signed, ANGLES0, vl) * ls3,
-                                 volume_upper_ul=np.interp(signed, ANGLES0, vh) * ls3)
+                                 volume_ul=answered(np.interp(signed, ANGLES0, vm) * ls3),
+                                 volume_lower_ul=answered(np.interp(signed, ANGLES0, vl) * ls3),
+                                 volume_upper_ul=answered(np.interp(signed, ANGLES0, vh) * ls3))
 
     def evaluate_designs(self, designs: list[Design], pressure_pa: float,
                          angle_deg: float | None, level: float = 0.95) -> dict[str, np.ndarray]:
         """Many designs at once (inverse design): |angle| (deg) with its band at
         ``pressure_pa``, and the pressure needed for |``angle_deg``| with its band (NaN
-        past the FE's range); arrays in the order of ``designs``. Raises InputError for a
-        design outside the box."""
+        past the FE's range), and which way each bends (``sign``: +1 away from the
+        membrane, -1 towards it, 0 near a balance, where no answer is given); arrays in
+        the order of ``designs``. Raises InputError for a design outside the box."""
         z = z_value(level)
         points = [locate(d, reduced=True) for d in designs]
         coords = np.array([pt.coordinates() for pt in points])
         out = {k: np.full(len(designs), np.nan) for k in (
             "angle", "angle_lo", "angle_hi", "needed", "needed_lo", "needed_hi", "force",
             "force_lo", "force_hi")}
+        out["sign"] = np.zeros(len(designs))
         by_pair: dict[str, list[int]] = {}
         for key, idx in self._signed_groups(points, coords).items():
             if key in self.pairs:
                 by_pair[key] = idx
         for key, idx in by_pair.items():
             pe = self.pairs[key]
+            out["sign"][idx] = 1.0 if key.endswith("+") else -1.0
             u = coords[idx]
             # the variance as a single query reads it: exact at variance_nodes, spread
             mean, var, ends, plain = (

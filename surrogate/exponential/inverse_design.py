@@ -41,6 +41,10 @@ from surrogate.exponential.surrogate import Surrogate
 from surrogate.predictor import Prediction
 
 KINDS = ("angle_at_pressure", "pressure_budget", "force_at_pressure")
+#: the target a search answers when none is named (HTTP and CLI alike)
+DEFAULT_KIND = "angle_at_pressure"
+#: the largest target magnitudes taken: |angle| in deg, |force| in mN
+MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4}
 OBJECTIVES = ("pressure", "margin", "compact", "certainty")
 DEFAULT_OBJECTIVE = {"angle_at_pressure": "certainty", "pressure_budget": "pressure",
                      "force_at_pressure": "certainty"}
@@ -78,9 +82,12 @@ class DesignTarget:
                              "0 < pressure_pa <= 1e6 Pa")
         name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
         value = getattr(self, name)
-        if value is None or not _finite(value) or value == 0 or abs(value) > 1e4:
-            raise InputError(name, f"the {self.kind} target needs a non-zero {name}, got "
-                             f"{value!r}", f"0 < |{name}| <= 1e4")
+        if value is None or not _finite(value) or value == 0 or abs(value) > MAX_TARGET[name]:
+            unit = "mN" if name == "force_mn" else "deg"
+            raise InputError(name, f"the {self.kind} target needs a non-zero {name} of "
+                             f"at most {MAX_TARGET[name]:g} {unit}, got {value!r}",
+                             f"0 < |{name}| <= {MAX_TARGET[name]:g} {unit}; "
+                             "positive bends away from the membrane, negative towards it")
         return self
 
     @property
