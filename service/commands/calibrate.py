@@ -20,9 +20,10 @@ from pathlib import Path
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "calibrate", help="find what the model misses in measured data, and fix it",
-        description="Calibrate the exponential model against measured curves (CSV or JSON "
-                    "rows; columns in docs/measured-data.md), test the catalogue of "
-                    "physical effects, and report the error before and after.")
+        description="Calibrate a model (default: the design-space emulator) against "
+                    "measured curves (CSV or JSON rows; columns in docs/measured-data.md), "
+                    "test the catalogue of physical effects, and report the error before "
+                    "and after.")
     parser.add_argument("data", type=Path, help="measured data, CSV (or .json rows)")
     parser.add_argument("--report", type=Path, required=True, help="report JSON to write")
     parser.add_argument("--plot", type=Path, help="PNG: data, model before/after, residuals")
@@ -95,30 +96,43 @@ def run(args: argparse.Namespace) -> int:
             raise ModelExistsError(args.save)
         check_new_model_name(args.save, args.models_dir)  # "PAPER", or "lab1" beside "Lab1"
     model = _starting_model(args.model)
+    if args.save is not None:   # a baseline the saved format cannot hold: before the work
+        from surrogate.calibration import saveable_baseline
+
+        try:
+            saveable_baseline(model)
+        except InputError as exc:
+            raise InputError("--save", exc.detail, "--model exponential or paper to save, "
+                             "or leave --save out") from None
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
     report = jsonable(cal.report)
-    if args.save is not None:
-        from surrogate.calibration import saveable
-
-        saveable(cal)
     args.report.parent.mkdir(parents=True, exist_ok=True)
     args.report.write_text(json.dumps(report, indent=1) + "\n")
     if args.plot:
         plot_calibration(cal, args.plot)
-    if args.save is not None:
-        check_new_model_name(args.save, args.models_dir)  # one saved meanwhile
-        path = save_model(cal, args.save, args.models_dir)
-        print(f"saved model {args.save!r} to {path}", file=sys.stderr)
+
     def deg(x: float | None) -> str:
         return "n/a" if x is None else f"{x:.2f}"
 
     for w in report["warnings"]:
         print(f"warning: {w}", file=sys.stderr)
-    print(f"rmse model {deg(report['rmse_model_deg'])} deg, before "
-          f"{deg(report['rmse_before_deg'])}, after {deg(report['rmse_after_deg'])} (noise "
-          f"floor {deg(report['noise_floor_deg'])}); selected: "
+    print(f"angle error: the model as is {deg(report['rmse_model_deg'])} deg RMS; "
+          f"cross-validated by curve, the recalibrated baseline {deg(report['rmse_before_deg'])}"
+          f" deg and with the selected effects {deg(report['rmse_after_deg'])} deg (noise "
+          f"floor {deg(report['noise_floor_deg'])} deg); selected: "
           f"{', '.join(report['selected_effects']) or 'none'}"
           f"{'; RESIDUAL STRUCTURE REMAINS' if report['residual_structured_after'] else ''}")
     print(report["interpretation"])
+    if args.save is not None:   # the report, plot and summary come whatever the save does
+        from surrogate.calibration import saveable
+
+        try:
+            saveable(cal)
+        except InputError as exc:
+            raise InputError("--save", f"{exc.detail}; the report is written to "
+                             f"{args.report.name}", exc.allowed) from None
+        check_new_model_name(args.save, args.models_dir)  # one saved meanwhile
+        path = save_model(cal, args.save, args.models_dir)
+        print(f"saved model {args.save!r} to {path}", file=sys.stderr)
     return 0
