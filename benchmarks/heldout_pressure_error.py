@@ -35,7 +35,7 @@ def curve_errors(e, rec) -> tuple[float, float, float, float, float] | None:
         return None
     ok = np.isfinite(pred.angle_deg)
     err = pred.angle_deg[ok] - a_fe[ok]
-    limit = pred.validity.get("fe_limit_angle_deg", 90.0)
+    limit = abs(pred.validity.get("fe_limit_angle_deg", 90.0))  # signed like the curve
     sel = (np.abs(a_fe[ok]) >= LOWEST_ANGLE_DEG) & (np.abs(a_fe[ok]) <= min(89.0, limit - 1e-6))
     rel = e.inverse(rec.design, a_fe[ok][sel]).pressure_pa / p_fe[ok][sel] - 1.0
     steep = np.gradient(np.abs(a_fe), p_fe) * p_fe

@@ -104,7 +104,11 @@ def prediction_body(prediction: Any, model: str, level: float | None = None,
                     design: Design | None = None) -> dict[str, Any]:
     """The one plain-data form of a ``surrogate.predictor.Prediction``, for HTTP and the CLI:
     angles (deg) with the band, force (mN, blocked tip) and injected volume (ul) when the
-    model has them, validity and provenance. NaN (past the FE's range) becomes null."""
+    model has them, validity and provenance. NaN (past the FE's range) becomes null.
+    ``in_domain`` says whether the design is in the model's domain, for every model
+    alike: flags about asked points never make it false (``design_in_domain``)."""
+    from surrogate.predictor import design_in_domain
+
     validity = dict(prediction.validity or {})
 
     def opt(values: Any) -> list[float | None] | None:
@@ -121,7 +125,7 @@ def prediction_body(prediction: Any, model: str, level: float | None = None,
             "force_upper_mn": opt(getattr(prediction, "force_upper_mn", None)),
             "volume_ul": opt(getattr(prediction, "volume_ul", None)),
             "validity": jsonable({
-                "in_domain": bool(validity.get("in_domain", False)),
+                "in_domain": design_in_domain(validity),
                 "flags": [str(f) for f in validity.get("flags", [])],
                 "messages": [str(m) for m in validity.get("messages", [])],
                 **{k: validity[k] for k in VALIDITY_FIELDS if k in validity}}),

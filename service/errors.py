@@ -76,13 +76,16 @@ class QueueFullError(UnavailableError):
 
 class FieldError(InputError):
     """An InputError located in the request: ``loc`` is the full path, e.g.
-    ``("body", "design", "t_mm")``."""
+    ``("body", "design", "t_mm")``; ``others`` are further fields of the same refusal
+    (a design outside the box in several lengths), each a FieldError."""
 
     def __init__(self, loc: tuple[str | int, ...], message: str,
-                 allowed: str | None = None, kind: str = "invalid-input") -> None:
+                 allowed: str | None = None, kind: str = "invalid-input",
+                 others: tuple[FieldError, ...] = ()) -> None:
         super().__init__(".".join(str(p) for p in loc[1:]) or str(loc[0]), message, allowed)
         self.loc = loc
         self.kind = kind
+        self.others = others
 
 
 def located(exc: InputError, prefix: tuple[str | int, ...],
@@ -95,7 +98,8 @@ def located(exc: InputError, prefix: tuple[str | int, ...],
     if rename and exc.field in rename:
         parts = rename[exc.field]
     kind = "invalid-input" if type(exc) is InputError else _kebab(type(exc).__name__)
-    return FieldError(prefix + parts, exc.detail, exc.allowed, kind)
+    others = tuple(located(o, prefix, rename) for o in getattr(exc, "others", ()))
+    return FieldError(prefix + parts, exc.detail, exc.allowed, kind, others)
 
 
 @dataclass
@@ -137,13 +141,10 @@ def problem_for(exc: BaseException) -> Problem:
     if isinstance(exc, PayloadTooLargeError):
         return Problem(413, "Request body too large", str(exc), "payload-too-large")
     if isinstance(exc, InputError):
-        loc: list[str | int] = list(exc.loc) if isinstance(exc, FieldError) else [exc.field]
-        error = {"loc": loc, "field": exc.field, "message": exc.detail}
-        if exc.allowed:
-            error["allowed"] = exc.allowed
         kind = getattr(exc, "kind", None) or (
             "invalid-input" if type(exc) is InputError else _kebab(type(exc).__name__))
-        return Problem(422, "Invalid input", str(exc), kind, errors=[error])
+        errors = [_error_entry(e) for e in (exc, *getattr(exc, "others", ()))]
+        return Problem(422, "Invalid input", str(exc), kind, errors=errors)
     if isinstance(exc, NotFoundError):
         return Problem(404, "Not found", str(exc), "not-found")
     if isinstance(exc, SolverError):
@@ -153,6 +154,15 @@ def problem_for(exc: BaseException) -> Problem:
                        _kebab(type(exc).__name__))
     return Problem(500, "Internal server error",
                    "an unexpected error occurred; it has been logged", "internal")
+
+
+def _error_entry(exc: InputError) -> dict[str, Any]:
+    """One entry of a problem's ``errors``: where, which field, what, the allowed range."""
+    loc: list[str | int] = list(exc.loc) if isinstance(exc, FieldError) else [exc.field]
+    error: dict[str, Any] = {"loc": loc, "field": exc.field, "message": exc.detail}
+    if exc.allowed:
+        error["allowed"] = exc.allowed
+    return error
 
 
 def _kebab(name: str) -> str:

@@ -21,6 +21,11 @@ from typing import Any
 from service.errors import FieldError, UnavailableError
 from solver.errors import BalloonError, ExistsError, InputError, NotFoundError
 
+# the built-in models by their current names, as errors list them ("fitted", the older
+# name of "exponential", is still answered but never offered)
+BUILT_IN_MODELS = ("emulator", "exponential", "paper")
+BUILT_IN_WORDS = ", ".join(f'"{n}"' for n in BUILT_IN_MODELS)
+
 
 @dataclass
 class ModelRegistry:
@@ -127,9 +132,8 @@ def load_calibrated(name: str, models_dir: Path) -> Any:
     try:
         return load_model(name, models_dir)
     except (NotFoundError, FileNotFoundError, IsADirectoryError):
-        raise NotFoundError(f"no saved model {name!r}; known models are \"emulator\", "
-                            "\"exponential\" (or \"fitted\"), \"paper\" and the saved "
-                            "ones, by name") from None
+        raise NotFoundError(f"no saved model {name!r}; known models are {BUILT_IN_WORDS} "
+                            "and the saved ones, by name") from None
     except BalloonError as exc:  # SavedModelError: a damaged file on the server
         raise UnavailableError(str(exc)) from None
     except Exception as exc:  # noqa: BLE001 - unreadable file (permissions, I/O)
@@ -182,6 +186,7 @@ def require(model: Any, name: str, capability: str) -> Any:
     """``model`` if it has ``capability`` (a method or attribute), else a 422 naming the
     ``model`` field: calibrated models predict but do not (yet) invert."""
     if not hasattr(model, capability):
-        raise FieldError(("body", "model"), f"model {name!r} does not support this request",
-                         '"fitted", "paper" or another fitted surrogate')
+        raise FieldError(("body", "model"), f"model {name!r} does not support this request "
+                         "(a saved calibrated model predicts but does not invert)",
+                         BUILT_IN_WORDS)
     return model

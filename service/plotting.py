@@ -9,15 +9,45 @@ from typing import Any
 
 import numpy as np
 
+# Solver settings that change a stored curve, and how a label names a value other than
+# the default's (SolverSettings()): a coarse or truncated run is not read as "the FE".
+SETTING_WORDS = {"element": "{}", "mesh_level": "mesh level {}",
+                 "mesh_divisions": "{} mesh", "control": "{} control",
+                 "max_angle_deg": "stopped at {:g} deg", "max_pressure_pa": "stopped at {:g} Pa",
+                 "max_volume_ul": "stopped at {:g} ul", "tip": "{} tip"}
+
+
+def settings_note(settings: dict[str, Any]) -> str:
+    """The settings of a stored FE record that differ from the default solve, in words
+    (``"hex1, stopped at 10 deg"``); empty for a default run."""
+    from solver.settings import SolverSettings
+
+    default = SolverSettings()
+    return ", ".join(words.format(settings[name]) for name, words in SETTING_WORDS.items()
+                     if name in settings and settings[name] != getattr(default, name))
+
+
+def _family_at_3mm(d: dict[str, Any]) -> tuple[Any, ...]:
+    """A design's family (materials, T, b, h) with its lengths scaled to W = 3 mm: angle
+    against pressure is the same for every scaled copy (docs/physics.md)."""
+    k = d["W_mm"] / 3.0
+    return (d["body_material"], d["membrane_material"],
+            *(round(d[n] / k, 6) for n in ("T_mm", "b_mm", "h_mm")))
+
 
 def nearby_records(db_path: Path, design: Any, count: int) -> list[Any]:
-    """Up to ``count`` converged FE records of the design's family, nearest in (L, t)
-    first; empty when there is no database."""
+    """Up to ``count`` converged free-tip FE records of the design's family (its scaled
+    copies too: lengths compared at W = 3 mm), nearest in (L, t) first; empty when there
+    is no database. A blocked or sprung tip's angle is not the free tip's: left out."""
     from service.store_access import file_version, open_store, summary_rows
 
     if count == 0 or not Path(db_path).is_file():
         return []
-    family = design.family
+    mine = {"body_material": design.body_material.id,
+            "membrane_material": design.membrane_material.id,
+            **{n: getattr(design, n) for n in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm",
+                                               "W_mm")}}
+    family, k = _family_at_3mm(mine), design.W_mm / 3.0
     try:
         version = file_version(Path(db_path))
     except OSError:         # gone since: no nearby curves, as without a database
@@ -26,11 +56,11 @@ def nearby_records(db_path: Path, design: Any, count: int) -> list[Any]:
         rows = []
         for row in summary_rows(version, db):
             d = row["design"]
-            same = (d["body_material"], d["membrane_material"], round(d["T_mm"], 6),
-                    round(d["b_mm"], 6), round(d["h_mm"], 6)) == family
-            if same and row["status"] != "failed":
-                distance = np.hypot((d["L_mm"] - design.L_mm) / 10.0,
-                                    (d["t_mm"] - design.t_mm) / 0.5)
+            if (_family_at_3mm(d) == family and row["status"] != "failed"
+                    and row["settings"].get("tip", "free") == "free"):
+                kd = d["W_mm"] / 3.0
+                distance = np.hypot((d["L_mm"] / kd - design.L_mm / k) / 10.0,
+                                    (d["t_mm"] / kd - design.t_mm / k) / 0.5)
                 rows.append((distance, str(row["key"])))
         rows.sort()
         return [db.get(key) for _, key in rows[:count]]
@@ -40,15 +70,22 @@ def nearby_curves(db_path: Path, design: Any, count: int, x_max: float,
                   flow_ul_s: float | None = None) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """The ``nearby_records`` as (label, x, angle_deg) up to 1.05 ``x_max``: x the
     pressure (Pa), or at ``flow_ul_s`` the time (s), each record's own injected volume
-    over the flow rate."""
+    (scaled to the design's width, x k^3) over the flow rate. The label names the
+    record's lengths, its width when not the design's, and its solver settings where they
+    are not the default solve's (``settings_note``)."""
     out = []
     for record in nearby_records(db_path, design, count):
-        c = record.curve
+        c, rd = record.curve, record.design
+        k3 = (design.W_mm / rd.W_mm) ** 3
         x = (np.asarray(c.pressure_pa) if flow_ul_s is None
-             else np.asarray(c.volume_ul) / flow_ul_s)
+             else k3 * np.asarray(c.volume_ul) / flow_ul_s)
         keep = x <= x_max * 1.05
-        out.append((f"FE L={record.design.L_mm:g} mm, t={record.design.t_mm:g} mm",
-                    x[keep], np.asarray(c.angle_deg)[keep]))
+        label = f"FE L={rd.L_mm:g} mm, t={rd.t_mm:g} mm"
+        if rd.W_mm != design.W_mm:
+            label += f", W={rd.W_mm:g} mm"
+        note = settings_note(record.settings.as_dict())
+        out.append((label + (f" ({note})" if note else ""), x[keep],
+                    np.asarray(c.angle_deg)[keep]))
     return out
 
 
@@ -74,13 +111,20 @@ def _values(prediction: dict[str, Any], key: str) -> np.ndarray:
 
 
 def _title(ax: Any, prediction: dict[str, Any], extra: str = "") -> None:
+    """The design in full (every length, the width, the pair) over the plot; a third line
+    when the design is outside the model's domain (``validity.in_domain``), in the title
+    so that it never covers the legend or a curve."""
     d = prediction["design"]
-    ax.set_title(f"L = {d['L_mm']:g} mm, t = {d['t_mm']:g} mm, "
-                 f"{d['body_material']['id']} / {d['membrane_material']['id']}{extra}",
-                 fontsize=10)
-    if not prediction["validity"]["in_domain"]:
-        ax.text(0.02, 0.95, "outside the fitted domain", transform=ax.transAxes,
-                color="C3", va="top", fontsize=9)
+    lines = [", ".join(f"{n} = {d[f'{n}_mm']:g}" for n in ("L", "t", "T", "b", "h", "W"))
+             + " mm",
+             f"{d['body_material']['id']} / {d['membrane_material']['id']}{extra}"]
+    validity = prediction["validity"]
+    if not validity["in_domain"]:
+        from surrogate.predictor import POINT_FLAGS
+
+        lines.append("outside the model's fitted domain: "
+                     + ", ".join(f for f in validity["flags"] if f not in POINT_FLAGS))
+    ax.set_title("\n".join(lines), fontsize=9)
 
 
 def _draw_angles(ax: Any, prediction: dict[str, Any], x_key: str,
@@ -119,7 +163,9 @@ def plot_in_time(prediction: dict[str, Any],
     _title(ax, prediction, f", {prediction['flow_ul_s']:g} ul/s")
     lines = ax.get_legend_handles_labels()
     more = right.get_legend_handles_labels()
-    ax.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="upper left")
+    # below the axes: "best" sees only the angle axis, and covered the pressure curves
+    ax.legend(lines[0] + more[0], lines[1] + more[1], fontsize=7, ncol=2,
+              loc="upper center", bbox_to_anchor=(0.5, -0.17))
     return _png(fig)
 
 
@@ -137,5 +183,5 @@ def plot_prediction(prediction: dict[str, Any],
     ax.set_xlabel("pressure (Pa)")
     ax.set_ylabel("bending angle (deg)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=7, loc="best")   # where it covers the fewest points
     return _png(fig)

@@ -5,8 +5,11 @@ Geometry at W = 3 mm (the paper's width), lengths in mm:
     L 4-18, t 0.5-1.2, T 0.6-2.0, b 1.0-2.4, h 0.10-0.30
 
 body length and chamber position by the solver's rules (``Design``), the paper's four
-material pairs (body, membrane), each layer's Ogden mu optionally scaled by
-s in [0.5, 2] (an inline material with mu_kpa = s x the preset's and the preset's alpha).
+material pairs (body, membrane), each layer's Ogden mu optionally scaled by s (an inline
+material with mu_kpa = s x the preset's and the preset's alpha). What the emulator enforces
+(``locate(design, reduced=True)``, every query) is the ratio s_body / s_membrane in [1/4, 4]
+(``REDUCED_RATIO_RANGE``), any common factor scaling only the pressure axis; each layer's
+own s in [0.5, 2] (``STIFFNESS_SCALE_RANGE``) is what the design search ranges over.
 
 Two invariances of the quasi-static hyperelastic problem are exact and used:
 
@@ -188,19 +191,34 @@ def from_unit(u: np.ndarray) -> tuple[dict[str, float], float]:
 
 
 class OutOfBoxError(InputError):
-    """A design outside the box; ``nearest`` is the closest design inside it."""
+    """A design outside the box; ``nearest`` is the closest design inside it. ``others``
+    are the further fields outside the box (InputErrors, each with its own range): one
+    refusal names every field to change, not one per request."""
 
-    def __init__(self, field: str, detail: str, allowed: str, nearest: Design | None):
+    def __init__(self, field: str, detail: str, allowed: str, nearest: Design | None,
+                 others: tuple[InputError, ...] = (), nearest_note: str = ""):
+        self.own_detail, self.nearest_note = detail, nearest_note
+        self.others = tuple(others)
         offer = "or solve this design with the FE (POST /v1/solve, `balloon solve`)"
+        text = detail + "".join(f"; also {o.field}: {o.detail} (allowed: {o.allowed})"
+                                for o in self.others)
         if nearest is not None:
             names = GEOMETRY + (("W_mm",) if nearest.W_mm != BOX_WIDTH_MM else ())
             lengths = ", ".join(f"{n}={getattr(nearest, n):g}" for n in names)
-            detail = (f"{detail}; the nearest design inside the box: {lengths} mm, "
-                      f"{nearest.body_material.id}/{nearest.membrane_material.id}; {offer}")
+            text = (f"{text}; the nearest design inside the box{nearest_note}: {lengths} mm, "
+                    f"{nearest.body_material.id}/{nearest.membrane_material.id}; {offer}")
         else:
-            detail = f"{detail}; {offer}"
-        super().__init__(field, detail, allowed)
+            text = f"{text}{nearest_note}; {offer}"
+        super().__init__(field, text, allowed)
         self.nearest = nearest
+
+    def renamed(self, names: dict[str, str]) -> OutOfBoxError:
+        """The same refusal with its fields named as ``names`` maps them (a CLI's
+        options: ``t_mm`` -> ``--t-mm``); names not in it stay."""
+        others = tuple(InputError(names.get(o.field, o.field), o.detail, o.allowed)
+                       for o in self.others)
+        return OutOfBoxError(names.get(self.field, self.field), self.own_detail,
+                             self.allowed or "", self.nearest, others, self.nearest_note)
 
 
 def _preset_and_scale(material: OgdenMaterial, field: str) -> tuple[str, float]:
@@ -211,6 +229,31 @@ def _preset_and_scale(material: OgdenMaterial, field: str) -> tuple[str, float]:
                             + " or one with every mu_kpa scaled by one factor s "
                             f"(alpha unchanged, tolerance {SCALE_TOLERANCE:g})", None)
     return found
+
+
+def pair_bending_alike(body: str, membrane: str, stiffness_ratio: float = 1.0
+                       ) -> tuple[tuple[str, str] | None, str]:
+    """The pair of the box that bends the same way as (``body``, ``membrane``) with the
+    layers' scales in the ratio ``stiffness_ratio`` (s_body / s_membrane), and a note
+    saying so for the refusal's nearest design.
+
+    The direction follows the layers' stiffness contrast mu0_body / mu0_membrane: a
+    stiffer body bends the actuator away from the membrane (positive angles), a stiffer
+    membrane towards it (negative), equal layers either way by the geometry. Of the box's
+    pairs on the same side of 1, the nearest contrast (log scale); (None, why) when no
+    pair of the box is on that side."""
+    def side(c: float) -> int:
+        return 0 if abs(math.log(c)) < 1e-9 else (1 if c > 1 else -1)
+
+    c = stiffness_ratio * MATERIALS[body].mu0_kpa / MATERIALS[membrane].mu0_kpa
+    alike = [p for p in PAIRS if side(contrast(p, 1.0)) == side(c)]
+    words = {1: "bends the same way (away from the membrane: a stiffer body)",
+             -1: "bends the same way (towards the membrane: a stiffer membrane)",
+             0: "has layers of equal stiffness, as this pair"}[side(c)]
+    if not alike:
+        return None, "; no pair in the box " + words.replace("bends", "bend", 1)
+    best = min(alike, key=lambda p: abs(math.log(contrast(p, 1.0) / c)))
+    return best, f" that {words}"
 
 
 def locate(design: Design, reduced: bool = False) -> BoxPoint:
@@ -237,16 +280,23 @@ def locate(design: Design, reduced: bool = False) -> BoxPoint:
 
     if (body, membrane) not in PAIRS:
         allowed = ", ".join(f"{b}/{m}" for b, m in PAIRS)
+        same_way, note = pair_bending_alike(body, membrane, s_body / s_membrane)
         raise OutOfBoxError("body_material", f"pair {body}/{membrane} is not in the box",
-                            allowed, nearest(PAIRS[0]))
+                            allowed, None if same_way is None else nearest(same_way),
+                            nearest_note=note)
+    outside = []
     for n, v in geometry.items():
         lo, hi = BOX_MM[n]
         if not lo * (1 - 1e-9) <= v <= hi * (1 + 1e-9):
             scaled = "" if k == 1 else f" (scaled to W = 3 mm: {v:.4g} mm)"
-            raise OutOfBoxError(n, f"{n} = {getattr(design, n):g} mm{scaled} is outside "
-                                "the emulator's box",
-                                f"{lo:g} <= {n} <= {hi:g} mm at W = 3 mm (or the same "
-                                "ratios to W)", nearest())
+            outside.append(InputError(n, f"{n} = {getattr(design, n):g} mm{scaled} is "
+                                      "outside the emulator's box",
+                                      f"{lo:g} <= {n} <= {hi:g} mm at W = 3 mm (or the same "
+                                      "ratios to W)"))
+    if outside:
+        first = outside[0]
+        raise OutOfBoxError(first.field, first.detail, first.allowed or "", nearest(),
+                            tuple(outside[1:]))
     if reduced:
         ratio = s_body / s_membrane
         lo_s, hi_s = REDUCED_RATIO_RANGE

@@ -67,6 +67,38 @@ def band_within_fe(lower: np.ndarray, upper: np.ndarray, limit_deg: float,
     return np.clip(lo, -limit_deg, limit_deg), np.clip(hi, -limit_deg, limit_deg)
 
 
+# Flags about some of the asked points, not about the design: they never make
+# ``validity["in_domain"]`` false, which says whether the design itself is inside the
+# model's domain (the emulator's box, the exponential model's fitted family ranges).
+POINT_FLAGS = frozenset({
+    "past_fe_range", "pressure_beyond_fe", "angle_beyond_fe", "band_capped_at_fe_range",
+    "force_band_too_wide", "force_past_fe_range", "past_pressure_maximum",
+    "pressure_outside_calibration"})
+
+
+def design_in_domain(validity: dict) -> bool:
+    """Whether the design is inside the model's domain: the model says so, or its only
+    flags are about asked points (POINT_FLAGS: past the FE's range, a band cut there, a
+    force withheld, ...), which keep their own flags."""
+    flags = set(validity.get("flags", ()))
+    return bool(validity.get("in_domain", False)) or not flags - POINT_FLAGS
+
+
+def one_signed(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, sign: float
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An answer (angle in deg, or force in mN) and its band for a design whose direction
+    the physics fixes (``sign`` +1: it bends away from the membrane, -1: towards it; the
+    angle and the blocked tip's force cannot change sign along its curve): nothing past
+    zero on the other side -- the lower end floored at 0 for +1, the upper capped at 0
+    for -1 -- and no -0.0. NaN stays NaN."""
+    values, lower, upper = (np.asarray(a, float) for a in (values, lower, upper))
+    if sign > 0:
+        values, lower, upper = (np.maximum(a, 0.0) for a in (values, lower, upper))
+    else:
+        values, lower, upper = (np.minimum(a, 0.0) for a in (values, lower, upper))
+    return values + 0.0, lower + 0.0, upper + 0.0      # -0.0 + 0.0 is 0.0
+
+
 @dataclass(frozen=True)
 class Prediction:
     """Angles (deg) at ``pressure_pa`` (Pa) with a band at ``level`` (lower_deg, upper_deg);

@@ -120,8 +120,9 @@ def test_plot_overlays_nearby_fe_curves(client):
 
     found = nearby_curves(client.app.state.settings.db_path, Design(L_mm=8.0), 2, 2000.0)
     # nearest two complete curves of the standard family: L = 7.1 then 11.1 (failed skipped)
-    assert [label for label, _, _ in found] == ["FE L=7.1 mm, t=0.5 mm",
-                                                "FE L=11.1 mm, t=0.5 mm"]
+    # the records are hex1 solves: each label says so (not the default solve)
+    assert [label for label, _, _ in found] == ["FE L=7.1 mm, t=0.5 mm (hex1)",
+                                                "FE L=11.1 mm, t=0.5 mm (hex1)"]
     assert max(found[0][1]) <= 2100.0
     r = client.get("/v1/predict/plot", params={"L_mm": 8.0, "nearby": 2})
     assert r.status_code == 200 and r.content[:4] == b"\x89PNG"
@@ -147,7 +148,7 @@ def test_the_summary_rows_are_read_once_per_file_version(client, db_path, monkey
         db.put(make_record(design(9.1, 0.5, "pdms_1_10", "ecoflex_00_30"), SETTINGS,
                            make_curve(6)))
     labels = [label for label, _, _ in nearby_curves(path, Design(L_mm=8.0), 2, 2000.0)]
-    assert labels == ["FE L=7.1 mm, t=0.5 mm", "FE L=9.1 mm, t=0.5 mm"]
+    assert labels == ["FE L=7.1 mm, t=0.5 mm (hex1)", "FE L=9.1 mm, t=0.5 mm (hex1)"]
     assert client.get("/v1/curves").json()["total"] == 6
     assert len(reads) == 2
 

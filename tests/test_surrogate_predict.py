@@ -27,6 +27,7 @@ from surrogate import (
 )
 from surrogate.exponential.synthetic_curves import synthetic_curves
 from surrogate.exponential.validity import past_fe
+from surrogate.predictor import one_signed
 
 
 @pytest.fixture(scope="module")
@@ -214,8 +215,12 @@ def test_format_version_1_file_loads_with_the_same_answers(tmp_path) -> None:
                    h_mm=fam.h_mm)
         pred = old.predict(d, c["pressure_pa"], form=c["form"])
         inv = old.inverse(d, c["inverse_angle_deg"], form=c["form"])
-        # that code gave numbers past the family's FE range too; this one gives NaN there
+        # that code gave numbers past the family's FE range too; this one gives NaN there,
+        # and no band across zero for a family that bends one way (one_signed)
         past = past_fe(fam.domain, c["pressure_pa"], c["angle_deg"])
+        sign = 1.0 if np.nansum(c["angle_deg"]) >= 0 else -1.0
+        c["angle_deg"], c["lower_deg"], c["upper_deg"] = (x.tolist() for x in one_signed(
+            c["angle_deg"], c["lower_deg"], c["upper_deg"], sign))
         past_inv = past_fe(fam.domain, c["inverse_pressure_pa"], c["inverse_angle_deg"])
         for got, key, where in (
                 (pred.angle_deg, "angle_deg", past), (pred.lower_deg, "lower_deg", past),

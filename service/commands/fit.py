@@ -76,14 +76,23 @@ def _check_calibration_db(path: str, fit_db: str) -> None:
     read_calibration_db(path, keys)
 
 
+# the fit's own field names -> the options that set them (an error names what was typed)
+FIT_FLAGS = {"db": "--db", "level": "--level", "name": "--name"}
+
+
 def run(args: argparse.Namespace) -> int:
+    from solver.errors import InputError
     from surrogate import fit_surrogate, save_surrogate
     from surrogate.dataset import curves_from_store
 
     _check_arguments(args)
-    curves, _ = curves_from_store(args.db)
-    s = fit_surrogate(args.db, name=args.name, level=args.level,
-                      progress=not args.no_progress and sys.stderr.isatty())
+    try:
+        curves, _ = curves_from_store(args.db)
+        s = fit_surrogate(args.db, name=args.name, level=args.level,
+                          progress=not args.no_progress and sys.stderr.isatty())
+    except InputError as exc:
+        raise InputError(FIT_FLAGS.get(exc.field, exc.field), exc.detail, exc.allowed
+                         ) from None
     path = save_surrogate(s, args.output)
     print(summary_table(s))
     print(f"\nwrote {path}")

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 from pathlib import Path
 
 from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges
@@ -73,10 +74,15 @@ def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True)
     parser.add_argument("--membrane-material", "--membrane", default=None,
                         dest="membrane_material",
                         help="membrane material id (default ecoflex_00_30)")
+    from solver.design_space import REDUCED_RATIO_RANGE
+
+    ratio = ("the emulator answers any S whose ratio body S / membrane S is "
+             f"{REDUCED_RATIO_RANGE[0]:g}..{REDUCED_RATIO_RANGE[1]:g}")
     parser.add_argument("--body-stiffness-scale", type=float, default=None, metavar="S",
-                        help="body mu = S x the preset's (0.5..2 in the emulator's box)")
+                        help=f"body mu = S x the preset's ({ratio}: only the ratio shapes "
+                             "the curve, a common S scales the pressure axis)")
     parser.add_argument("--membrane-stiffness-scale", type=float, default=None, metavar="S",
-                        help="membrane mu = S x the preset's (0.5..2 in the emulator's box)")
+                        help=f"membrane mu = S x the preset's ({ratio})")
     attach_design_ranges(parser)   # a word that is not a number is told the range
 
 
@@ -114,15 +120,25 @@ PUMP_FLAGS = {"pressures_pa": "--pressures", "volumes_ul": "--volumes", "times_s
               "inlet.channel_width_mm": "--channel-mm", "inlet.channel_length_mm": "--channel-mm",
               "inlet.channel_height_mm": "--channel-mm", "inlet.tubing_length_mm": "--tubing-mm",
               "inlet.tubing_bore_mm": "--tubing-mm", "inlet.viscosity_pa_s": "--viscosity-pa-s",
-              "level": "--level"}
+              "level": "--level", "angle_deg": "--angles-deg"}
+# a design's fields -> the options that set them (those of `balloon solve` too)
+DESIGN_FLAGS = {name: "--" + name.replace("_", "-") for name in (
+    "L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm", "chamber_offset_mm",
+    "body_material", "membrane_material")}
 
 
 def as_flag(exc: Exception) -> Exception:
-    """An InputError naming a request field, renamed to the CLI flag that sets it."""
+    """An InputError naming a request or design field, renamed to the CLI option that
+    sets it (``t_mm`` -> ``--t-mm``; a refusal outside the box renames every field it
+    names)."""
+    from solver.design_space import OutOfBoxError
     from solver.errors import InputError
 
-    if isinstance(exc, InputError) and exc.field in PUMP_FLAGS:
-        return InputError(PUMP_FLAGS[exc.field], exc.detail, exc.allowed)
+    names = {**PUMP_FLAGS, **DESIGN_FLAGS}
+    if isinstance(exc, OutOfBoxError):
+        return exc.renamed(names)
+    if isinstance(exc, InputError) and exc.field in names:
+        return InputError(names[exc.field], exc.detail, exc.allowed)
     return exc
 
 
@@ -153,7 +169,7 @@ def inlet_from_args(args: argparse.Namespace) -> object:
 
 def design_from_args(args: argparse.Namespace) -> object:
     from solver.design import design_from_dict
-    from solver.design_space import STIFFNESS_SCALE_RANGE, scaled_material
+    from solver.design_space import REDUCED_RATIO_RANGE, scaled_material
     from solver.errors import InputError
 
     data: dict[str, object] = {k: getattr(args, k) for k in (
@@ -168,12 +184,13 @@ def design_from_args(args: argparse.Namespace) -> object:
         lo, hi = STIFFNESS_SCALE_LIMITS
         if not lo <= scale <= hi:
             raise InputError(f"--{layer}-stiffness-scale", f"got {scale:g}",
-                             f"{lo:g} <= S <= {hi:g} (the emulator's box: "
-                             f"{STIFFNESS_SCALE_RANGE[0]:g}..{STIFFNESS_SCALE_RANGE[1]:g})")
+                             f"{lo:g} <= S <= {hi:g} (the emulator's box: body S / "
+                             f"membrane S {REDUCED_RATIO_RANGE[0]:g}.."
+                             f"{REDUCED_RATIO_RANGE[1]:g})")
         try:
             data[f"{layer}_material"] = scaled_material(preset, scale)
         except KeyError:
-            raise InputError(f"--{layer}", f"unknown material {preset!r}",
+            raise InputError(f"--{layer}-material", f"unknown material {preset!r}",
                              "pdms_1_10, pdms_1_15, ecoflex_00_30") from None
     return design_from_dict(data)
 
@@ -191,19 +208,27 @@ def saved_model_name(spec: str | None) -> str | None:
 
 def surrogate_from_args(args: argparse.Namespace) -> object:
     """The model named by --model: the service's own names first, then a file path."""
-    from service.models import ModelRegistry
+    from service.models import BUILT_IN_MODELS, ModelRegistry
     from service.settings import get_settings
+    from solver.errors import InputError, NotFoundError
     from surrogate import open_surrogate
 
     spec = args.model or "emulator"
-    if Path(spec).suffix == ".json" and Path(spec).is_file():
+    allowed = (", ".join(BUILT_IN_MODELS) + ", a saved calibrated model's name, or an "
+               "existing model file (.json)")
+    if Path(spec).suffix == ".json" or "/" in spec or os.sep in spec:   # a file's path
+        if not Path(spec).is_file():
+            raise InputError("--model", f"{spec}: file not found", allowed)
         return open_model_file(Path(spec), getattr(args, "form", None))
     settings = get_settings()
     models_dir = getattr(args, "models_dir", None) or settings.models_dir
     registry = ModelRegistry(settings.surrogate_path, models_dir, settings.emulator_path)
     if spec in ("emulator", "fitted", "exponential"):
         registry.load_fitted()
-    model = registry.get(spec) if spec != "paper" else open_surrogate("paper")
+    try:
+        model = registry.get(spec) if spec != "paper" else open_surrogate("paper")
+    except NotFoundError as exc:
+        raise InputError("--model", str(exc), allowed) from None
     form = getattr(args, "form", None)
     if form is not None and hasattr(model, "with_form"):
         model = model.with_form(form)
@@ -245,7 +270,10 @@ def run(args: argparse.Namespace) -> int:
     from service.pump import AXES, PumpQuestion, predict_answer
     from solver.errors import InputError
 
-    design = design_from_args(args)
+    try:
+        design = design_from_args(args)
+    except InputError as exc:
+        raise as_flag(exc) from None
     inlet = inlet_from_args(args)
     s = surrogate_from_args(args)
     pressures = args.pressures

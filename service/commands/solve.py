@@ -7,10 +7,18 @@ import json
 import sys
 
 from service.commands.numbers import attach_design_ranges
+from solver.curve import Curve
 from solver.design import LIMITS_MM, design_from_dict
 from solver.io import CSV_COLUMNS
 from solver.materials import MATERIALS
 from solver.settings import CONTROLS, ELEMENTS, MAX_MESH_LEVEL, MESH_DIVISIONS, TIPS, SolverSettings
+
+# the settings' fields -> the options that set them (an error names what the user typed)
+SETTING_FLAGS = {"mesh_level": "--mesh", "mesh_divisions": "--mesh-divisions",
+                 "element": "--element", "control": "--control",
+                 "max_angle_deg": "--max-angle-deg", "max_pressure_pa": "--max-pressure-pa",
+                 "flow_ul_s": "--flow-ul-s", "bulk_ratio": "--bulk-ratio", "tip": "--tip",
+                 "spring_k_n_per_m": "--spring-k-n-per-m"}
 
 
 def _mm(name: str, what: str) -> str:
@@ -107,39 +115,63 @@ def _check_outputs(args: argparse.Namespace) -> None:
         check_output(getattr(args, option), f"--{option}", suffixes)
 
 
-def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from solver.io import curve_to_csv, plot_curve
-    from solver.stepping import inflate
-
-    _check_outputs(args)
-    design = _design(args)
-    settings = SolverSettings(
+def _settings(args: argparse.Namespace) -> SolverSettings:
+    return SolverSettings(
         mesh_level=args.mesh, mesh_divisions=args.mesh_divisions, element=args.element,
         control=args.control,
         max_angle_deg=args.max_angle_deg, max_pressure_pa=args.max_pressure_pa,
         flow_ul_s=args.flow_ul_s, bulk_ratio=args.bulk_ratio, tip=args.tip,
         spring_k_n_per_m=args.spring_k_n_per_m).validated()
-    bar = tqdm(total=round(settings.max_angle_deg), unit="deg", disable=args.quiet,
-               file=sys.stderr, desc="bending")
+
+
+def progress_bar(settings: SolverSettings, quiet: bool) -> tuple[object, object]:
+    """(tqdm bar, on_step) for a solve: a free tip's bending in degrees up to the stop
+    angle; a held tip (spring, blocked), which bends little or not at all, as the share
+    of the way to the first of the stops it does reach (pressure, injected volume, the
+    angle too), in per cent."""
+    from tqdm import tqdm
+
+    if settings.tip == "free":
+        bar = tqdm(total=round(settings.max_angle_deg), unit="deg", disable=quiet,
+                   file=sys.stderr, desc="bending")
+    else:
+        bar = tqdm(total=100, unit="%", disable=quiet, file=sys.stderr,
+                   desc=f"{settings.tip} tip")
 
     def on_step(info: dict) -> None:
-        bar.n = min(round(abs(info["angle_deg"])), bar.total)
+        if settings.tip == "free":
+            done = abs(info["angle_deg"])
+        else:
+            done = 100 * max(info["pressure_pa"] / settings.max_pressure_pa,
+                             info["volume_ul"] / settings.max_volume_ul,
+                             abs(info["angle_deg"]) / settings.max_angle_deg)
+        bar.n = min(round(done), bar.total)
         bar.set_postfix(p_pa=f"{info['pressure_pa']:.0f}", step=info["step"])
         bar.refresh()
 
+    return bar, on_step
+
+
+def run(args: argparse.Namespace) -> int:
+    from service.commands.predict import DESIGN_FLAGS
+    from solver.errors import InputError
+    from solver.io import curve_to_csv, plot_curve
+    from solver.stepping import inflate
+
+    _check_outputs(args)
+    try:
+        design, settings = _design(args), _settings(args)
+    except InputError as exc:     # name the option the user typed, not the field
+        names = {**DESIGN_FLAGS, **SETTING_FLAGS}
+        raise InputError(names.get(exc.field, exc.field), exc.detail, exc.allowed) from None
+    bar, on_step = progress_bar(settings, args.quiet)
     curve, model, u = inflate(design, settings, on_step=on_step)
-    bar.close()
+    bar.close()  # type: ignore[attr-defined]
     print(f"{curve.status}: {curve.reason}; {len(curve)} points, {curve.n_dofs} dofs, "
           f"{curve.wall_time_s:.1f} s")
     for note in curve.stability_notes():
         print(f"stability: {note}")
-    print(f"{'pressure_pa':>12} {'volume_ul':>10} {'time_s':>8} {'angle_deg':>10} "
-          f"{'stretch':>8}")
-    for i in range(len(curve)):
-        print(f"{curve.pressure_pa[i]:12.1f} {curve.volume_ul[i]:10.3f} {curve.time_s[i]:8.2f} "
-              f"{curve.angle_deg[i]:10.2f} {curve.max_membrane_stretch[i]:8.3f}")
+    print(table(curve, with_force=settings.tip != "free"))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump({"design": design.as_dict(), "settings": settings.as_dict(),
@@ -153,3 +185,16 @@ def run(args: argparse.Namespace) -> int:
 
         write_vtu(args.vtk, model, u)
     return 0 if curve.status != "failed" else 1
+
+
+def table(c: Curve, with_force: bool) -> str:
+    """The curve as the printed table: pressure (Pa), injected volume (ul), time (s),
+    angle (deg), the membrane's largest stretch and, for a held tip (``with_force``), the
+    tip's reaction force (mN), the quantity a blocked run exists for."""
+    rows = [f"{'pressure_pa':>12} {'volume_ul':>10} {'time_s':>8} {'angle_deg':>10} "
+            f"{'stretch':>8}" + (f" {'force_mn':>10}" if with_force else "")]
+    for i in range(len(c)):
+        rows.append(f"{c.pressure_pa[i]:12.1f} {c.volume_ul[i]:10.3f} {c.time_s[i]:8.2f} "
+                    f"{c.angle_deg[i]:10.2f} {c.max_membrane_stretch[i]:8.3f}"
+                    + (f" {c.force_mn[i]:10.4f}" if with_force else ""))
+    return "\n".join(rows)

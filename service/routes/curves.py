@@ -44,9 +44,12 @@ def _order(row: dict[str, Any]) -> tuple[Any, ...]:
 
 
 def _peak(values: Any) -> float | None:
+    """The value of largest magnitude, with its sign (a reversed pair's curve runs to
+    -94 deg: its extreme is -94, not the -0.0 of its first step); None when none is
+    finite."""
     a = np.asarray(values, float)
     a = a[np.isfinite(a)]
-    return float(a.max()) if a.size else None
+    return float(a[np.argmax(np.abs(a))]) + 0.0 if a.size else None
 
 
 def summary(record: Any) -> CurveSummary:

@@ -75,7 +75,8 @@ def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
         raise FieldError(("query", "flow_ul_s"), "the inlet's pressure drop R Q needs the "
                          "flow rate", f"{FLOW_RANGE} with inlet")
     design = to_design(query.model_dump(include={"L_mm", "t_mm", "T_mm", "b_mm", "h_mm",
-                                                 "body_material", "membrane_material"}),
+                                                 "W_mm", "body_material",
+                                                 "membrane_material"}),
                        loc=("query",))
     surrogate = models.get(query.model)
     if query.flow_ul_s is None:

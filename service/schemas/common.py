@@ -21,16 +21,16 @@ NAME_WORDS = "1-64 letters, digits, '_', '.', '-', not starting with '.' or '-'"
 def text_forms() -> dict[str, str]:
     """Text field name -> the form its pattern allows, in words: a layer's material is a
     preset id (solver.materials.MATERIALS) or one scaled (an inline material is an
-    object); an inline material's id is a name; a model is a built-in's or a saved one's
-    name (surrogate.calibration's RESERVED)."""
+    object); an inline material's id is a name; a model is a built-in's, by its current
+    name (service.models.BUILT_IN_MODELS), or a saved one's name."""
+    from service.models import BUILT_IN_MODELS
     from solver.materials import MATERIALS
-    from surrogate.calibration._saved import RESERVED
 
     layer = (", ".join(sorted(MATERIALS)) + ", or a preset scaled as <preset>*<scale> "
              "(pdms_1_10*1.2)")
     return {"body_material": layer, "membrane_material": layer,
             "id": f"a name of {NAME_WORDS}, optionally *<scale>",
-            "model": ", ".join(RESERVED) + f", or a saved model's name ({NAME_WORDS})"}
+            "model": ", ".join(BUILT_IN_MODELS) + f", or a saved model's name ({NAME_WORDS})"}
 
 
 class Schema(BaseModel):

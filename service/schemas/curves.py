@@ -40,7 +40,9 @@ class CurveSummary(BaseModel):
     status: str = Field(description="complete, stopped or failed")
     n_points: int = Field(description="converged steps, including the undeformed state")
     max_pressure_pa: float | None = Field(description="largest pressure reached, Pa")
-    max_angle_deg: float | None = Field(description="largest bending angle reached, degrees")
+    max_angle_deg: float | None = Field(description="the bending angle of largest magnitude "
+                                        "reached, degrees, signed (negative for a pair "
+                                        "that bends towards the membrane)")
 
 
 class CurvePage(BaseModel):

@@ -14,8 +14,7 @@ JobStatus = Literal["queued", "running", "finished", "parked", "failed", "cancel
 
 class SolveRequest(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
-        {"design": {"L_mm": 9.1, "t_mm": 0.6},
-         "settings": {"mesh_level": 0, "element": "hex1", "max_angle_deg": 30}}]})
+        {"design": {"L_mm": 9.1, "t_mm": 0.6}, "settings": {"mesh_level": 0}}]})
 
     design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
     settings: SolveSettingsIn = Field(default_factory=lambda: SolveSettingsIn.model_validate({}))

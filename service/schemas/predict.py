@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from service.pump import AXES, MAX_FLOW_UL_S, MIN_FLOW_UL_S
-from service.schemas.common import INLINE_MATERIAL_ID, MATERIAL_ID, DesignIn, Schema
+from service.schemas.common import INLINE_MATERIAL_ID, MATERIAL_ID, DesignIn, Schema, mm
 from surrogate import hydraulics
 
 MAX_PRESSURE_PA = AXES["pressures_pa"][1]
@@ -94,15 +94,20 @@ class PredictRequest(Schema):
 
 
 class Validity(BaseModel):
-    in_domain: bool = Field(description="no flag raised: every answer is inside the FE data")
+    in_domain: bool = Field(description="the design is inside the model's domain (the "
+                            "emulator's box; the exponential model's fitted ranges); asked "
+                            "points past the FE's range do not change it: they are flagged "
+                            "past_fe_range")
     flags: list[str] = Field([], description="machine-readable flags, e.g. past_fe_range")
     messages: list[str] = Field([], description="the flags in words")
     fe_limit_pa: float | None = Field(None, description="end of the FE's converged, stable "
                                       "range for this design, Pa (emulator)")
-    fe_limit_angle_deg: float | None = Field(None, description="angle there, degrees")
+    fe_limit_angle_deg: float | None = Field(None, description="angle there, degrees "
+                                             "(signed as the design's angles: negative for "
+                                             "a design bending towards the membrane)")
     fe_stop_reason: str | None = Field(None, description="why the FE curves end there")
     fe_limit_volume_ul: float | None = Field(None, description="injected volume there, ul "
-                                             "(asked by volume or time)")
+                                             "(wherever the answer gives volume_ul)")
     pressure_maximum_pa: float | None = Field(None, description="the pressure maximum of a "
                                               "limit point (flag past_pressure_maximum), Pa")
     pressure_maximum_volume_ul: float | None = Field(None, description="the injected volume "
@@ -150,11 +155,13 @@ class PlotQuery(Schema):
 
     model_config = ConfigDict(strict=False)  # query values arrive as text
 
-    L_mm: float = Field(7.1, ge=0.5, le=60.0, description="chamber length, mm")
-    t_mm: float = Field(0.5, ge=0.05, le=5.0, description="membrane thickness, mm")
-    T_mm: float = Field(1.0, ge=0.1, le=10.0, description="body thickness, mm")
-    b_mm: float = Field(1.8, ge=0.1, le=20.0, description="chamber width, mm")
-    h_mm: float = Field(0.15, ge=0.02, le=5.0, description="chamber height, mm")
+    L_mm: float = mm("L_mm", "chamber length", 7.1)  # type: ignore[assignment]
+    t_mm: float = mm("t_mm", "membrane thickness", 0.5)  # type: ignore[assignment]
+    T_mm: float = mm("T_mm", "body thickness", 1.0)  # type: ignore[assignment]
+    b_mm: float = mm("b_mm", "chamber width", 1.8)  # type: ignore[assignment]
+    h_mm: float = mm("h_mm", "chamber height", 0.15)  # type: ignore[assignment]
+    W_mm: float = mm("W_mm", "actuator width (the body length scales with it, as in "
+                     "/v1/predict)", 3.0)  # type: ignore[assignment]
     body_material: str = Field("pdms_1_10", pattern=INLINE_MATERIAL_ID)
     membrane_material: str = Field("ecoflex_00_30", pattern=INLINE_MATERIAL_ID)
     model: str = MODEL

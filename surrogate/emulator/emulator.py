@@ -53,7 +53,13 @@ from surrogate.emulator.features import (
 )
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES, spline, spread_variance
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
-from surrogate.predictor import InversePrediction, Prediction, band_within_fe, number_array
+from surrogate.predictor import (
+    InversePrediction,
+    Prediction,
+    band_within_fe,
+    number_array,
+    one_signed,
+)
 from surrogate.volume_control import by_volume
 
 # Unit-cube distance within which a database curve that ended early (volume stop, Newton
@@ -301,8 +307,9 @@ class PairEmulator:
                 limit = end
                 reason = ("the FE curves of nearby database designs end early (the volume "
                           "stop, where the balloon grows more than the actuator bends, or a "
-                          f"Newton failure): this design's is emulated to end at "
-                          f"{min(mean_deg, 90.0):.0f} +- {sd_deg:.0f} deg")
+                          "Newton failure): this design's is emulated to end early too, and "
+                          f"its range is taken to end {RANGE_Z:g} sd short of that emulated "
+                          "end")
         if self.fe_max_volume_ul is not None:
             v_stop = self.fe_max_volume_ul / length_scale**3
             over = np.flatnonzero(np.asarray(volume_red_ul) >= v_stop)
@@ -310,8 +317,8 @@ class PairEmulator:
                 limit = float(FINE_ANGLES_DEG[over[0]])
                 reason = (f"the default FE stops at {self.fe_max_volume_ul:g} ul injected "
                           "(SolverSettings.max_volume_ul), which this design's emulated "
-                          f"volume reaches at {limit:.1f} deg: the balloon grows more than "
-                          "the actuator bends")
+                          "volume reaches there: the balloon grows more than the actuator "
+                          "bends")
         if self.failed:
             near = (self.failed_distances(u) if failed_distances is None
                     else failed_distances) < FAILED_RADIUS
@@ -319,8 +326,7 @@ class PairEmulator:
                 _, angle, why = self.failed[i]
                 if angle < limit:
                     limit = float(angle)
-                    reason = (f"the FE curve of a nearby database design ended at "
-                              f"{angle:.0f} deg: {why}")
+                    reason = f"the FE curve of a nearby database design ended there: {why}"
         return limit, reason
 
     def force_reduced(self, mean: np.ndarray, sd: np.ndarray, node_mean: np.ndarray,
@@ -652,8 +658,12 @@ class Emulator:
             a[past] = np.nan
         if pe.sign < 0:
             angle, lower, upper = -angle, -upper, -lower
+        angle, lower, upper = one_signed(angle, lower, upper, pe.sign)
         force = self._force(pe, cb, point, p_red, z)
         validity = self._validity(pe, cb, point, p, past, force)
+        validity["fe_limit_volume_ul"] = float(
+            np.interp(cb.limit_angle_deg, ANGLES0, _with_origin(cb.volume_ul))
+            * point.length_scale**3)
         lower, upper = band_within_fe(lower, upper, cb.limit_angle_deg, validity)
         return self._prediction(design, point, p, (angle, lower, upper), level, validity,
                                 force, volume)
@@ -715,13 +725,15 @@ class Emulator:
             a[past] = np.nan
         if pe.sign < 0:
             angle, lower, upper = -angle, -upper, -lower
+        angle, lower, upper = one_signed(angle, lower, upper, pe.sign)
         force = self._force(pe, cb, point, p_red, z)
-        validity = self._validity(pe, cb, point, np.nan_to_num(pressure), past, force,
-                                  "volume")
+        # pressure is NaN at the volumes past the range: no force is asked there
+        validity = self._validity(pe, cb, point, pressure, past, force, "volume")
         if past.any():
             validity["messages"][0] = (
                 f"{int(past.sum())} volume(s) above {v_lim * ls3:.1f} ul are past the FE's "
-                f"range for this design ({cb.stop_reason}): no angle is given")
+                f"range for this design, which ends at {pe.sign * cb.limit_angle_deg:.1f} "
+                f"deg ({cb.stop_reason}): no angle is given there")
         validity["fe_limit_volume_ul"] = v_lim * ls3
         lower, upper = band_within_fe(lower, upper, cb.limit_angle_deg, validity)
         beyond = answer.past_maximum & ~past
@@ -792,19 +804,20 @@ class Emulator:
                     + "an FE solve (POST /v1/solve) gives this design's own curve"]
         if force is not None and pair is not None:
             self._force_flags(*pair, point, np.where(past, np.nan, pressure), force, flags,
-                              messages)
+                              messages, f"{axis}(s)")
         if past.any():
             flags.insert(0, "past_fe_range")
             what = (f"pressure(s) above {limit_pa:.0f} Pa" if axis == "pressure" else
                     f"volume(s) above {v_limit * ls3:.1f} ul")
             messages.insert(0, f"{int(past.sum())} {what} are past the FE's range for this "
-                               f"design ({stop}): no angle is given there")
+                               f"design, which ends at {limit_angle:.1f} deg ({stop}): no "
+                               "angle is given there")
+        # in_domain: the design is in the box (a design outside is refused); the points
+        # past the range have their own flag
         validity: dict[str, object] = {
-            "in_domain": not past.any(), "flags": flags, "messages": messages,
+            "in_domain": True, "flags": flags, "messages": messages,
             "fe_limit_pa": limit_pa, "fe_limit_angle_deg": limit_angle,
-            "fe_stop_reason": stop}
-        if axis == "volume":
-            validity["fe_limit_volume_ul"] = v_limit * ls3
+            "fe_stop_reason": stop, "fe_limit_volume_ul": v_limit * ls3}
         # the curves here end at the volume stop, short of the FE's angle stop: no band past it
         lower, upper = band_within_fe(lower, upper, SolverSettings().max_angle_deg, validity)
         return self._prediction(design, point, pressure, (angle, lower, upper), level,
@@ -837,6 +850,7 @@ class Emulator:
                                                     angle_lo, angle_hi, z)]
         for f in out:
             f[past] = np.nan
+        out = list(one_signed(*out, pe.sign))   # the blocked tip pushes the way it bends
         lo, hi = out[1], out[2]
         # no force where its band is wider than FORCE_BAND_LIMIT x the force itself:
         # the group's few blocked-tip designs do not back a number there
@@ -876,12 +890,13 @@ class Emulator:
         flags: list[str] = []
         messages: list[str] = []
         fe_limit_pa = cb.limit_pressure_pa * point.pressure_scale
+        limit_deg = pe.sign * cb.limit_angle_deg        # signed, as the design's angles
         if past.any():
             flags.append("past_fe_range")
             messages.append(
                 f"{int(past.sum())} pressure(s) above {fe_limit_pa:.0f} Pa are past the FE's "
-                f"range for this design ({cb.stop_reason}; "
-                f"{cb.limit_angle_deg:g} deg): no angle is given there; an FE solve "
+                f"range for this design, which ends at {limit_deg:.1f} deg "
+                f"({cb.stop_reason}): no angle is given there; an FE solve "
                 "(POST /v1/solve) with a larger max_angle_deg or max_volume_ul can go "
                 "further")
         near = cb.failed_distance
@@ -900,25 +915,31 @@ class Emulator:
             flags.append(under[0])
             messages.append(under[1])
         if force is not None:
-            self._force_flags(pe, cb, point, p, force, flags, messages)
-        return {"in_domain": not past.any(), "flags": flags, "messages": messages,
-                "fe_limit_pa": fe_limit_pa, "fe_limit_angle_deg": cb.limit_angle_deg,
+            self._force_flags(pe, cb, point, p, force, flags, messages, f"{axis}(s)")
+        # in_domain: the design is in the box (a design outside is refused before this);
+        # the points past the FE's range have their own flag, past_fe_range
+        return {"in_domain": True, "flags": flags, "messages": messages,
+                "fe_limit_pa": fe_limit_pa, "fe_limit_angle_deg": limit_deg,
                 "fe_stop_reason": cb.stop_reason}
 
     @staticmethod
     def _force_flags(pe: PairEmulator, cb: CurveBand, point: BoxPoint, p: np.ndarray,
-                     force: tuple, flags: list[str], messages: list[str]) -> None:
+                     force: tuple, flags: list[str], messages: list[str],
+                     points: str = "pressure(s)") -> None:
         """Append why the force is withheld at some of the chamber pressures ``p`` (Pa;
-        NaN where the angle itself is past the range)."""
+        NaN where the angle itself is past the range): its band too wide within the
+        force's range, or past that range (``force_past_fe_range``). ``points`` names the
+        points as the question asked them ("pressure(s)", "volume(s)")."""
         f_lim = pe.force_end_pa(cb.limit_pressure_pa) * point.pressure_scale
-        unbacked = np.isnan(force[0]) & (p <= f_lim)
+        within = p <= f_lim * (1 + 1e-12)        # False at NaN: past the angle's range
+        unbacked = np.isnan(force[0]) & within
         if unbacked.any():
             flags.append("force_band_too_wide")
-            messages.append(f"no force at {int(unbacked.sum())} pressure(s): its band "
+            messages.append(f"no force at {int(unbacked.sum())} {points}: its band "
                             f"is wider than {FORCE_BAND_LIMIT:g} x the force there (too "
                             "few blocked-tip FE curves near this design; an FE solve "
                             "with tip = blocked gives it)")
-        if (p > f_lim * (1 + 1e-12)).any():
+        if not within.all():
             flags.append("force_past_fe_range")
             why = ("the end of the blocked-tip FE curves"
                    if f_lim >= pe.force_limit_pa * point.pressure_scale * (1 - 1e-12)
@@ -949,15 +970,17 @@ class Emulator:
         hi = np.interp(signed, ANGLES0, _with_origin(cb.pressure_upper_pa)) * s
         vm, vl, vh = self._volume_curves(cb, z)
         ls3 = point.length_scale**3
+        limit_deg = pe.sign * cb.limit_angle_deg        # signed, as the design's angles
         validity = {"in_domain": True, "flags": [], "messages": [],
                     "fe_limit_pa": cb.limit_pressure_pa * s,
-                    "fe_limit_angle_deg": cb.limit_angle_deg,
-                    "fe_stop_reason": cb.stop_reason}
+                    "fe_limit_angle_deg": limit_deg, "fe_stop_reason": cb.stop_reason,
+                    "fe_limit_volume_ul": float(np.interp(cb.limit_angle_deg, ANGLES0, vm)
+                                                * ls3)}
         if past.any():
             validity["flags"].append("past_fe_range")
             validity["messages"].append(
-                f"no pressure for {int(past.sum())} angle(s) past the FE's range (|angle| "
-                f"<= {cb.limit_angle_deg:.1f} deg for this design; {cb.stop_reason})")
+                f"no pressure for {int(past.sum())} angle(s) past the FE's range, which ends "
+                f"at {limit_deg:.1f} deg for this design ({cb.stop_reason})")
 
         def answered(x: np.ndarray) -> np.ndarray:
             return np.where(past, np.nan, x)
@@ -1039,8 +1062,8 @@ class Emulator:
                     qa = np.array([q])
                     fm, fl, fu = (_with_origin(c[row]) for c in force_curves)
                     a, a_lo, a_hi = (np.interp(qa, c, ANGLES0) for c in (fm, fu, fl))
-                    vals = [scale * float(v[0]) for v in pe.force_reduced(
-                        fmean[row], fsd[row], mean[row], qa, a, a_lo, a_hi, z)]
+                    vals = [scale * float(v[0]) for v in one_signed(*pe.force_reduced(
+                        fmean[row], fsd[row], mean[row], qa, a, a_lo, a_hi, z), pe.sign)]
                     lo_f, hi_f = vals[1], vals[2]
                     if force_backed(vals[0], lo_f, hi_f):
                         out["force"][i] = vals[0]

@@ -25,7 +25,13 @@ from surrogate.exponential.paper_tables import SOURCE as PAPER_SOURCE
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.validity import check, past_fe
 from surrogate.exponential.volume_relation import VolumeRelation, check_volumes
-from surrogate.predictor import InversePrediction, Prediction, band_within_fe, number_array
+from surrogate.predictor import (
+    InversePrediction,
+    Prediction,
+    band_within_fe,
+    number_array,
+    one_signed,
+)
 from surrogate.volume_control import by_volume
 
 _PROVENANCE_SUMMARY = ("format_version", "created_utc", "package_version", "git_commit",
@@ -139,13 +145,18 @@ class Surrogate:
         validity = check(fam.domain, design, p, m)
         past = past_fe(fam.domain, p, m)   # no number past the FE's range
         m, lo, hi = (np.where(past, np.nan, x) for x in (m, lo, hi))
+        # the family bends one way (the sign of A): no band across zero
+        sign = 1.0 if float(equations.amplitude_deg(par.theta, design.L_mm)) > 0 else -1.0
+        m, lo, hi = one_signed(m, lo, hi, sign)
         lo, hi = band_within_fe(lo, hi, fam.domain.angle_max_deg, validity)
-        force = tuple(None if f is None else np.where(past, np.nan, f) for f in force)
+        if fam.force is not None:
+            force = one_signed(*(np.where(past, np.nan, f) for f in force), sign)
         volume = None
         if fam.volume is not None:   # the injected volume at the predicted angle
             nodes, vm, _, _ = _volume_table(fam.volume, design, level)
             a = np.abs(m)
             volume = np.where(a <= nodes[-1] * (1 + 1e-12), np.interp(a, nodes, vm), np.nan)
+            validity["fe_limit_volume_ul"] = float(vm[-1])
         return self._prediction(design, par, p, (m, lo, hi), force, volume, level, validity)
 
     def predict_volume(self, design: Design, volumes_ul: object, level: float = 0.95,
@@ -176,21 +187,20 @@ class Surrogate:
         ang = sign * answer.angle_deg
         p = equations.pressure_pa(par.theta, design.L_mm, design.t_mm, ang)
         hi_a, lo_a = (sign * np.interp(v, vv, nodes) for vv in (vlo, vhi))
-        lower, upper = np.fmin(lo_a, hi_a), np.fmax(lo_a, hi_a)
+        ang, lower, upper = one_signed(ang, np.fmin(lo_a, hi_a), np.fmax(lo_a, hi_a), sign)
         validity = check(fam.domain, design, np.nan_to_num(p), np.nan_to_num(ang))
         flags, messages = _lists(validity)
         past = answer.past_end | past_fe(fam.domain, p, ang)
         ang, lower, upper, p = (np.where(past, np.nan, x) for x in (ang, lower, upper, p))
         force: tuple[np.ndarray | None, ...] = (None, None, None)
         if fam.force is not None:
-            force = tuple(np.where(past, np.nan, f) for f in bands.angle_band(
-                fam.force, design.L_mm, design.t_mm, np.nan_to_num(p), level))
+            force = one_signed(*(np.where(past, np.nan, f) for f in bands.angle_band(
+                fam.force, design.L_mm, design.t_mm, np.nan_to_num(p), level)), sign)
         v_lim = float(vm[-1])
         validity["fe_limit_volume_ul"] = v_lim
         if answer.past_end.any():
             if "past_fe_range" not in flags:
                 flags.append("past_fe_range")
-            validity["in_domain"] = False
             messages.append(
                 f"{int(answer.past_end.sum())} volume(s) above {v_lim:.1f} ul are past the "
                 f"family's FE volumes for this design ({nodes[-1]:.1f} deg, the smallest "

@@ -11,7 +11,8 @@ Flags (each with a message):
     past_fe_range            either of the two: the model gives no number there (NaN,
                              null over HTTP; ``past_fe``), as every Predictor does
 
-``in_domain`` is True only when no flag is raised.
+``in_domain`` is about the design: True unless a flag about it is raised (the first four);
+the flags about asked points (``surrogate.predictor.POINT_FLAGS``) keep their own flags.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 from solver.design import Design
 from surrogate.exponential.family import Domain
 from surrogate.exponential.paper_tables import TWO_BALLOON_BELOW_t_MM
+from surrogate.predictor import POINT_FLAGS
 
 _TOL = 1e-9
 
@@ -71,7 +73,8 @@ def check(domain: Domain, design: Design, pressure_pa: np.ndarray,
     if past_fe(domain, p, angle_deg).any():
         flags.append("past_fe_range")  # the two above, under the name every model uses
         messages.append("no number is given past the FE's range (null there)")
-    return {"in_domain": not flags, "flags": flags, "messages": messages,
+    return {"in_domain": not [f for f in flags if f not in POINT_FLAGS],
+            "flags": flags, "messages": messages,
             "L_range_mm": list(domain.L_mm), "t_range_mm": list(domain.t_mm),
             "pressure_max_pa": domain.pressure_max_pa, "angle_max_deg": domain.angle_max_deg,
             "fe_limit_pa": domain.pressure_max_pa, "fe_limit_angle_deg": domain.angle_max_deg}
