@@ -211,7 +211,8 @@ def test_a_refused_design_offers_the_fe_solve_and_plots_the_stored_curve(watched
     page.wait_for_selector('#plot g[data-series="fe-solve"]')
     assert page.locator('#plot g[data-series="fe-progress"] circle').count() >= 1  # progress
     drawn = json.loads(page.locator('#plot g[data-series="fe-solve"]').get_attribute("data-y"))
-    curve_id = page.locator("#job").inner_text().split("curve ")[1].split(" ")[0]
+    curve_id = page.get_attribute("#job", "data-curve-id")
+    assert curve_id in page.locator("#job").inner_text()
     stored = httpx.get(f"{server.url}/v1/curves/{curve_id}").json()
     assert stored["design"]["L_mm"] == 3
     assert drawn == pytest.approx(stored["curve"]["angle_deg"])

@@ -195,17 +195,22 @@ def test_the_address_holds_the_view_and_a_link_reopens_it(watched, server):
             "window.explorer.request")
     finally:
         again.close()
-    # hostile: unknown keys, non-numbers, an out-of-list pair and axis, a path as model
-    page.goto(server.url + "/#L_mm=%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E&pair=9&foo=1"
-              "&ask=bogus&model=..%2F..%2Fetc&t_mm=-1&W_mm=Infinity")
-    page.reload()
-    page.wait_for_selector("body[data-ready=true]")
-    wait_prediction(page, L_mm=7.1, W_mm=3)
-    note = page.locator("#link-note").inner_text()
-    for key in ("L_mm", "pair", "foo", "ask", "model", "t_mm", "W_mm"):
-        assert key in note, (key, note)
-    assert page.locator("img").count() == 0
-    assert page.input_value("#pair") == "0" and page.input_value("#t_mm") == "0.5"
+    # hostile: unknown keys, non-numbers, an out-of-list pair and axis, a path as model;
+    # opened in a new page, and pasted into the open one (applied at once: hashchange)
+    hostile = (server.url + "/#L_mm=%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E&pair=9&foo=1"
+               "&ask=bogus&model=..%2F..%2Fetc&t_mm=-1&W_mm=Infinity")
+    fresh = watched.page.context.new_page()
+    for tab in (fresh, page):
+        tab.goto(hostile)
+        tab.wait_for_selector("body[data-ready=true]")
+        tab.wait_for_function("document.getElementById('link-note').textContent.includes('foo')")
+        wait_prediction(tab, L_mm=7.1, W_mm=3)
+        note = tab.locator("#link-note").inner_text()
+        for key in ("L_mm", "pair", "foo", "ask", "model", "t_mm", "W_mm"):
+            assert key in note, (key, note)
+        assert tab.locator("img").count() == 0
+        assert tab.input_value("#pair") == "0" and tab.input_value("#t_mm") == "0.5"
+    fresh.close()
     assert watched.errors == []
 
 
@@ -340,7 +345,8 @@ def test_validity_flags_and_messages_are_shown_in_words(watched, server):
     shown = page.locator("#validity li").all_inner_texts()
     for message in api["validity"]["messages"]:
         assert message in shown
-    assert "Outside" in page.locator("#validity").inner_text()
+    # flagged: said as a caution (the server's in_domain may be true or false here)
+    assert page.locator("#validity p.warn").count() >= 1
     assert page.locator("#validity .chip").count() == len(api["validity"]["flags"])
 
 

@@ -15,14 +15,28 @@ export class ApiError extends Error {
   }
 }
 
+// No answer at all (the server stopped, the network down): fetch's TypeError, said plainly.
+export class OfflineError extends Error {
+  constructor() {
+    super("the service is not answering (is it running?)");
+    this.name = "OfflineError";
+  }
+}
+
 export async function api(path, { method = "GET", body, key, signal } = {}) {
   const headers = { Accept: "application/json, application/problem+json" };
   if (body !== undefined) headers["Content-Type"] = "application/json";
   if (key) headers["X-API-Key"] = key;
-  const response = await fetch(path, {
-    method, headers, signal,
-    body: body === undefined ? undefined : JSON.stringify(body),
-  });
+  let response;
+  try {
+    response = await fetch(path, {
+      method, headers, signal,
+      body: body === undefined ? undefined : JSON.stringify(body),
+    });
+  } catch (err) {
+    if (isAbort(err)) throw err;
+    throw new OfflineError();
+  }
   const text = await response.text();
   let data = null;
   try { data = text ? JSON.parse(text) : null; } catch { data = { detail: text.slice(0, 300) }; }
@@ -44,11 +58,27 @@ export function fieldPath(error) {
   return String(error.field || "");
 }
 
+// The page's name of the field an error slot stands beside: its input's label
+// ("Largest pressure (Pa)"), or the slot's data-label.
+function slotLabel(el) {
+  if (el.dataset.label) return el.dataset.label;
+  const input = el.dataset.for && document.getElementById(el.dataset.for);
+  const label = input && input.labels && input.labels[0];
+  return label ? label.textContent.trim() : "";
+}
+
 // Show a problem beside the fields it names. `slots` maps a field path to the element
 // that shows its message; an error goes to the longest matching path, else to `fallback`.
-export function showProblem(err, slots, fallback) {
+// The same message for several items of one list (each grid point over a limit) is said
+// once, named by the page's field. `options.rest(rest, error)`: the words for the part of
+// the path below the slot ("rows" + "1.angle_deg" -> "angle_deg"), by default none.
+export function showProblem(err, slots, fallback, options = {}) {
   const messages = new Map();
-  const put = (el, text) => { messages.set(el, [...(messages.get(el) || []), text]); };
+  const put = (el, text) => {
+    const list = messages.get(el) || [];
+    if (!list.includes(text)) list.push(text);
+    messages.set(el, list);
+  };
   const errors = err instanceof ApiError ? err.fieldErrors : [];
   for (const e of errors) {
     const path = fieldPath(e);
@@ -56,23 +86,47 @@ export function showProblem(err, slots, fallback) {
     for (const name of Object.keys(slots)) {
       if ((path === name || path.startsWith(name + ".")) && (!best || name.length > best.length)) best = name;
     }
-    const text = e.allowed ? `${e.message} (allowed: ${e.allowed})` : e.message;
+    let text = e.allowed ? `${e.message} (allowed: ${e.allowed})` : e.message;
+    if (best && path !== best && options.rest) {
+      const words = options.rest(path.slice(best.length + 1), e);
+      if (words) text = `${words}: ${text}`;
+    }
     put(best ? slots[best] : fallback, best ? text : `${path}: ${text}`);
   }
   if (!errors.length) put(fallback, err.message || String(err));
   for (const [el, texts] of messages) {
     if (!el) continue;
-    el.textContent = texts.join(" ");
-    el.hidden = false;
-    const input = el.dataset.for && document.getElementById(el.dataset.for);
-    if (input) input.setAttribute("aria-invalid", "true");
+    showMessage(el, texts.join(" "));
+  }
+}
+
+// One message in an error slot, named by its field when the slot has one, announced
+// (role alert) and tied to its input (aria-invalid, aria-describedby).
+export function showMessage(el, text) {
+  const label = el.classList.contains("field-error") ? slotLabel(el) : "";
+  el.textContent = label && !text.startsWith(label) ? `${label}: ${text}` : text;
+  el.hidden = false;
+  el.setAttribute("role", "alert");
+  const input = el.dataset.for && document.getElementById(el.dataset.for);
+  if (input) {
+    input.setAttribute("aria-invalid", "true");
+    const ids = (input.getAttribute("aria-describedby") || "").split(/\s+/).filter(Boolean);
+    if (!ids.includes(el.id)) input.setAttribute("aria-describedby", [...ids, el.id].join(" "));
+  }
+}
+
+export function clearMessage(el) {
+  el.textContent = "";
+  el.hidden = true;
+  const input = el.dataset.for && document.getElementById(el.dataset.for);
+  if (input) {
+    input.removeAttribute("aria-invalid");
+    const ids = (input.getAttribute("aria-describedby") || "").split(/\s+/).filter((id) => id && id !== el.id);
+    if (ids.length) input.setAttribute("aria-describedby", ids.join(" ")); else input.removeAttribute("aria-describedby");
   }
 }
 
 export function clearProblems(root) {
-  for (const el of root.querySelectorAll(".field-error, .form-error")) {
-    el.textContent = "";
-    el.hidden = true;
-  }
+  for (const el of root.querySelectorAll(".field-error, .form-error")) clearMessage(el);
   for (const el of root.querySelectorAll("[aria-invalid]")) el.removeAttribute("aria-invalid");
 }

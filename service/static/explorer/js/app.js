@@ -5,13 +5,15 @@
 // the FE solve of a refused design (POST /v1/solve, GET /v1/jobs/{id}); exports.
 // The inverse form and the measured-data report live in inverse.js and calibration.js.
 
-import { api, ApiError, clearProblems, isAbort, showProblem } from "./api.js";
+import { api, ApiError, clearMessage, clearProblems, isAbort, OfflineError, showMessage, showProblem } from "./api.js";
 import { setupCalibration } from "./calibration.js";
 import {
   FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
-  materialLabel, pairLabel, scaledLengths,
+  materialLabel, pairLabel, scaledLengths, shown,
 } from "./design.js";
+import { checkNumber } from "./fields.js";
 import { setupInverse } from "./inverse.js";
+import { curveEnd, jobText, nearestStep } from "./job.js";
 import { readLink, writeLink } from "./link.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
 import { renderSketch } from "./sketch.js";
@@ -27,6 +29,11 @@ const ASK = {
   volume_ul: { field: "volumes_ul", input: "v_max", unit: "ul", digits: 2, label: "injected volume", fallback: 50 },
   time_s: { field: "times_s", input: "t_max", unit: "s", digits: 1, label: "time", fallback: 20 },
 };
+// The plot's axes as people read them (the x axis's pressure is the chamber's).
+const X_LABELS = { pressure_pa: "chamber pressure (Pa)", volume_ul: "injected volume (ul)", time_s: "time (s)",
+  pump_pressure_pa: "pump-gauge pressure (Pa)" };
+const X_NAMES = { pressure_pa: "pressure", volume_ul: "volume", time_s: "time", pump_pressure_pa: "pump-gauge pressure" };
+const RETRY_MS = 5000;  // a service that stopped answering is asked again this often
 const FLAG_WORDS = {
   past_fe_range: "past the FE range",
   past_pressure_maximum: "past the pressure maximum (volume control)",
@@ -38,7 +45,11 @@ const FLAG_WORDS = {
   outside_box: "outside the design box",
   near_early_ended_fe_curves: "near FE curves that ended early",
   band_undercovers_random_designs: "band too narrow here (random designs)",
+  force_past_fe_range: "force past the FE range",
+  force_band_too_wide: "force band too wide",
+  band_capped_at_fe_range: "band capped at the FE range",
 };
+export const flagWords = (f) => FLAG_WORDS[f] || String(f).replaceAll("_", " ");
 
 const app = {
   presets: {},
@@ -51,7 +62,15 @@ const app = {
   feDetails: new Map(), // curve id -> record (GET /v1/curves/{id})
   nearest: [],          // records shown
   solved: new Map(),    // design key -> FE record from a finished solve
-  job: null,            // {id, key, trace: [{pressure_pa, angle_deg, volume_ul}]}
+  stored: null,         // {key, record}: the stored FE record of the design shown (any status)
+  job: null,            // {id, key, trace: [{pressure_pa, angle_deg, volume_ul, at_ms}]}
+  inputErrors: new Map(),// error slot id -> the page's own message (an empty design field)
+  opFraction: 0.5,      // the readout's place on the grid (kept when the grid's end changes)
+  wantAxes: null,       // {x, y} of a link, applied once a prediction offers them
+  linkHash: "",         // the fragment the page last wrote
+  offline: false,       // the service stopped answering: retried on a timer, on focus, on a change
+  retryMs: RETRY_MS,
+  retryTimer: null,
   controller: null,
   timer: null,
   inputMark: null,
@@ -79,10 +98,21 @@ function addField(box, f, onValue) {
   const range = div.querySelector(`#${f.name}-range`);
   const num = div.querySelector(`#${f.name}`);
   range.tabIndex = 0;
-  range.addEventListener("input", () => { num.value = range.value; onValue(Number(range.value)); });
+  range.addEventListener("input", () => { num.value = range.value; app.inputErrors.delete(`err-${f.name}`); onValue(Number(range.value)); });
   num.addEventListener("input", () => {
-    const v = Number(num.value);
-    if (num.value.trim() === "" || !Number.isFinite(v)) return;
+    // an empty field is named beside it, never silently kept at its former value; a
+    // number the server does not take (L 70, t -1) is sent, and its answer names the range
+    const text = num.value.trim();
+    const v = Number(text);
+    if (text === "" || !Number.isFinite(v) || (f === W_FIELD && !(v > 0))) {
+      const r = fieldRange(f, app.state.W_mm);
+      const unit = f.unit === "x" ? " x preset moduli" : ` ${f.unit}`;
+      app.inputErrors.set(`err-${f.name}`, `${text === "" ? "empty" : `${text} is not a usable value`} (allowed: ${r.min} to ${r.max}${unit})`);
+      app.inputMark = performance.now();
+      schedule(DEBOUNCE_MS);
+      return;
+    }
+    app.inputErrors.delete(`err-${f.name}`);
     range.value = String(v);
     onValue(v);
   });
@@ -104,7 +134,8 @@ function showRanges() {
 // The state's values on the inputs of ``fields`` (all of them and the pair by default).
 function showValues(fields = [W_FIELD, ...FIELDS]) {
   for (const f of fields) {
-    $(f.name).value = String(app.state[f.name]);
+    // shown to 0.1 um; the state keeps full precision (a scaled copy stays in the box)
+    $(f.name).value = shown(app.state[f.name]);
     $(`${f.name}-range`).value = String(app.state[f.name]);
   }
   $("pair").value = String(app.state.pair);
@@ -117,13 +148,21 @@ function buildFields() {
   const pair = $("pair");
   PAIRS.forEach(([b, m], k) => pair.add(new Option(pairLabel(b, m), String(k))));
   pair.addEventListener("change", () => onInput("pair", Number(pair.value)));
-  for (const id of ["p_max", "v_max", "t_max", "flow", "inlet", "model", "nearby"]) $(id).addEventListener("change", () => schedule(0));
+  for (const id of ["p_max", "v_max", "t_max", "flow", "inlet", "model", "nearby"]) {
+    $(id).addEventListener("change", () => { $("view-note").textContent = ""; schedule(0); });
+  }
   $("ask_axis").addEventListener("change", onAskAxis);
-  for (const id of ["x_axis", "y_axis"]) $(id).addEventListener("change", redraw);
-  $("p_op").addEventListener("input", () => { showOperatingPoint(); redraw(); });
+  for (const id of ["x_axis", "y_axis"]) $(id).addEventListener("change", () => { redraw(); rewriteLink(); });
+  $("p_op").addEventListener("input", () => {
+    const max = Number($("p_op").max);
+    if (max > 0) app.opFraction = Number($("p_op").value) / max;
+    showOperatingPoint();
+    redraw();
+  });
 }
 
 function onInput(name, value) {
+  $("view-note").textContent = "";
   app.state[name] = value;
   app.inputMark = performance.now();
   schedule(DEBOUNCE_MS);
@@ -132,7 +171,6 @@ function onInput(name, value) {
 // A new width scales every length with it (a scaled copy bends alike at the same pressure)
 // and the lengths' ranges with them; the user then changes any length within its range.
 function onWidth(W) {
-  if (!(W > 0)) return;
   Object.assign(app.state, scaledLengths(app.state, W));
   showRanges();
   showValues(FIELDS);  // not W's own input, which the user is typing in
@@ -141,13 +179,39 @@ function onWidth(W) {
 }
 
 // ``values``: any of the state's keys; a design without a width is at W = 3 mm (the
-// design search's box, the stored records).
-export function loadDesign(values) {
+// design search's box, the stored records). ``pressurePa``: the readout's pressure (an
+// inverse design's target): the curve's range grows to show it, with the readout on it.
+export function loadDesign(values, { pressurePa } = {}) {
   Object.assign(app.state, { W_mm: W_MM }, values);
+  for (const f of [W_FIELD, ...FIELDS]) app.inputErrors.delete(`err-${f.name}`);
   showRanges();
   showValues();
+  if (Number.isFinite(pressurePa) && pressurePa > 0 && askAxis() === "pressure_pa") showPressure(pressurePa);
   app.inputMark = performance.now();
   schedule(0);
+}
+
+// The pressure grid (0 .. Largest pressure, N_POINTS points) made to hold ``p`` on one of
+// its points: kept when it does, else the largest pressure is raised (to 1.25 p at least,
+// within the input's limit) to one that does; the readout is put on it.
+function showPressure(p) {
+  const input = $("p_max");
+  const limit = Number(input.max) || Infinity;
+  const n = N_POINTS - 1;
+  const check = checkNumber(input);
+  let max = check.value ?? ASK.pressure_pa.fallback;
+  const onGrid = (m) => p <= m && Math.abs((p * n) / m - Math.round((p * n) / m)) < 1e-9;
+  if (!onGrid(max)) {
+    const want = Math.min(limit, Math.max(max, 1.25 * p));
+    let i = Math.max(1, Math.floor((p * n) / want));
+    if ((p * n) / i > limit) i = Math.min(n, Math.ceil((p * n) / limit));
+    const before = max;
+    max = (p * n) / i;
+    input.value = shown(max);
+    clearMessage($("err-pressures_pa"));
+    if (max > before) $("view-note").textContent = `Largest pressure raised from ${fmt(before, 0)} to ${fmt(max, 0)} Pa to show the loaded design at ${fmt(p, 0)} Pa.`;
+  }
+  app.opFraction = p / max;
 }
 
 function schedule(delay) {
@@ -159,16 +223,30 @@ function askAxis() {
   return $("ask_axis").value;
 }
 
-// The largest value of the asked axis (the grid runs from 0 to it).
+// The largest value of the asked axis (the grid runs from 0 to it); while its field holds
+// no usable value (named beside it, see pageErrors) the last good one.
 function gridMax() {
   const a = ASK[askAxis()];
-  const v = Number($(a.input).value);
-  return Number.isFinite(v) && v > 0 ? v : a.fallback;
+  const v = checkNumber($(a.input)).value;
+  if (v !== undefined && v !== null) { a.last = v; return v; }
+  return a.last ?? a.fallback;
 }
 
 function flowRate() {
   const text = $("flow").value.trim();
   return text === "" ? null : Number(text);
+}
+
+// The page's own checks of the request's numbers: [[error slot, message]]; a field in
+// error is named beside it with its range and no prediction is asked.
+function pageErrors() {
+  const out = [...app.inputErrors.entries()].map(([id, text]) => [$(id), text]);
+  const a = ASK[askAxis()];
+  const max = checkNumber($(a.input), { unit: a.unit });
+  if (max.error) out.push([$(`err-${a.field}`), max.error]);
+  const flow = checkNumber($("flow"), { optional: true, unit: "ul/s" });
+  if (flow.error) out.push([$("err-flow_ul_s"), flow.error]);
+  return out;
 }
 
 // The request without its design: the asked axis, the flow rate, the inlet, the model.
@@ -186,7 +264,7 @@ function predictBody(state, grid) {
 
 function onAskAxis() {
   showAskAxis();
-  $("p_op").value = String(gridMax() / 2);
+  app.opFraction = 0.5;
   schedule(0);
 }
 
@@ -200,19 +278,36 @@ function showAskAxis() {
   const a = ASK[axis];
   $("p_op-h").textContent = `At one ${a.label}`;
   $("p_op-label").textContent = `${a.label[0].toUpperCase()}${a.label.slice(1)} (${a.unit})`;
-  $("curve-h").textContent = `${a.label[0].toUpperCase()}${a.label.slice(1)} - angle curve`;
 }
 
 // ---------------------------------------------------------------- the view's link
 // The address's fragment holds the design and the curve request (link.js): each answer
 // rewrites it, a page opened with one starts from it.
 function view() {
+  const near = checkNumber($("nearby"), { integer: true });
   return { ask: askAxis(), max: gridMax(), flow: flowRate() ?? undefined, inlet: $("inlet").checked,
-           model: $("model").value.trim() || "emulator" };
+           model: $("model").value.trim() || "emulator",
+           x: app.wantAxes?.x ?? $("x_axis").value, y: app.wantAxes?.y ?? $("y_axis").value,
+           near: near.value ?? undefined };
 }
 
-function applyLink(hash) {
+function rewriteLink() {
+  app.linkHash = writeLink(app.state, view());
+  history.replaceState(null, "", app.linkHash);
+}
+
+// ``reset``: a link pasted into the open page starts from the defaults, as a new page would.
+function applyLink(hash, reset = false) {
   const link = readLink(hash);
+  if (reset) {
+    app.state = defaultState();
+    app.inputErrors.clear();
+    for (const el of $("design-form").querySelectorAll("input, select")) {
+      if (el.type === "checkbox") el.checked = el.defaultChecked;
+      else if (el.tagName === "SELECT") el.value = ([...el.options].find((o) => o.defaultSelected) || el.options[0]).value;
+      else if (el.type !== "range") el.value = el.defaultValue;
+    }
+  }
   Object.assign(app.state, link.design);
   showRanges();
   showValues();
@@ -222,8 +317,10 @@ function applyLink(hash) {
   if (v.flow) $("flow").value = String(v.flow);
   if (v.inlet !== undefined) $("inlet").checked = v.inlet;
   if (v.model) $("model").value = v.model;
+  if (v.near !== undefined) $("nearby").value = String(v.near);
   showAskAxis();
-  $("p_op").value = String(gridMax() / 2);
+  app.wantAxes = v.x || v.y ? { x: v.x, y: v.y } : null;
+  app.opFraction = 0.5;
   const note = $("link-note");
   note.hidden = link.ignored.length === 0;
   note.textContent = link.ignored.length ? `The link's ${link.ignored.join(", ")} ignored (unknown or not a valid value).` : "";
@@ -248,11 +345,23 @@ async function update() {
   if (app.controller) app.controller.abort();  // a stale request is cancelled
   const controller = new AbortController();
   app.controller = controller;
+  const mark = app.inputMark;
+  const mine = pageErrors();
+  if (mine.length) {  // said beside each field; nothing is asked with another value
+    clearProblems($("design-form"));
+    for (const [el, text] of mine) showMessage(el, text);
+    app.prediction = null;
+    app.refused = null;
+    app.nearest = [];
+    $("status").textContent = `No prediction: correct ${mine.map(([el]) => fieldName(el)).join(", ")} (beside the field).`;
+    afterAnswer(null, mark);
+    return;
+  }
   const grid = axisGrid(gridMax(), N_POINTS);  // 0 .. the largest value, on any axis
   const p = $("p_op");
   p.max = String(gridMax());
   p.step = String(gridMax() / (N_POINTS - 1));
-  const mark = app.inputMark;
+  p.value = String(app.opFraction * gridMax());  // the same place on the new grid
   let body = null;
   try {
     body = predictBody(app.state, grid);  // throws while a scaled layer's preset is unknown
@@ -262,22 +371,36 @@ async function update() {
     app.prediction = prediction;
     app.request = body;
     app.refused = null;
+    if (app.offline) backOnline();
     $("status").textContent = `${prediction.model} model${prediction.form ? ", " + prediction.form + " form" : ""}`;
   } catch (err) {
     if (isAbort(err) || controller.signal.aborted) return;
     clearProblems($("design-form"));
     app.prediction = null;
     app.request = body;
+    if (err instanceof OfflineError) {
+      goOffline();
+      afterAnswer(null, mark);
+      return;
+    }
     app.refused = (await offersSolve(err, body)) ? err : null;
     if (controller.signal.aborted) return;
     // a refusal of the design as a whole is shown once, in the FE solve box (not again
-    // beside the field it names)
-    showProblem(err, app.refused ? {} : DESIGN_SLOTS(), app.refused ? null : $("err-design"));
+    // beside the field it names); a model the server does not know, beside the Model field
+    const unknownModel = err instanceof ApiError && err.status === 404;
+    showProblem(err, app.refused ? {} : DESIGN_SLOTS(), app.refused ? null : $(unknownModel ? "err-model" : "err-design"));
     $("status").textContent = app.refused ? "No prediction: the model refuses this design (below)."
       : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
-  history.replaceState(null, "", writeLink(app.state, view()));
+  rewriteLink();
   refreshPinned(grid);
+  afterAnswer(controller, mark);
+}
+
+// What every answer (or page-side refusal) redraws; the nearest FE curves come after.
+function afterAnswer(controller, mark) {
+  $("pin").disabled = app.pinned.length >= MAX_PINNED || !app.prediction;
+  $("pin").title = app.prediction ? "" : "nothing to pin: there is no prediction for this design";
   showRefused();
   showValidity();
   showOperatingPoint();
@@ -288,7 +411,53 @@ async function update() {
     app.inputMark = null;
   }
   if (app.firstRenderMs === null) app.firstRenderMs = performance.now();
-  loadNearest(controller);
+  if (controller) loadNearest(controller);
+}
+
+// The page's name of an error slot's field ("Largest pressure (Pa)").
+function fieldName(el) {
+  const input = el.dataset.for && $(el.dataset.for);
+  return (input && input.labels && input.labels[0] ? input.labels[0].textContent.trim() : el.id.replace(/^err-/, ""));
+}
+
+// ---------------------------------------------------------------- a service that stopped
+function showHealth() {
+  return api("/v1/health").then((h) => {
+    $("health").textContent = `service ${h.version}; ${h.database.records ?? 0} FE records; surrogate ${h.surrogate.loaded ? h.surrogate.name : "not loaded"}`;
+  }).catch((err) => {
+    $("health").textContent = err instanceof OfflineError ? "service not answering" : "service health unknown";
+    throw err;
+  });
+}
+
+function goOffline() {
+  app.offline = true;
+  app.refused = null;
+  app.nearest = [];
+  app.stored = null;
+  $("status").textContent = `No prediction: the service is not answering (is it running?). The page asks again every ${Math.round(app.retryMs / 1000)} s, when you return to this tab and at your next change.`;
+  $("health").textContent = "service not answering";
+  clearTimeout(app.retryTimer);
+  app.retryTimer = setTimeout(retry, app.retryMs);
+}
+
+async function retry() {
+  if (!app.offline) return;
+  clearTimeout(app.retryTimer);
+  try {
+    await showHealth();
+  } catch {
+    app.retryTimer = setTimeout(retry, app.retryMs);
+    return;
+  }
+  backOnline();
+  schedule(0);
+}
+
+function backOnline() {
+  app.offline = false;
+  clearTimeout(app.retryTimer);
+  showHealth().catch(() => {});
 }
 
 // A design the predictor refuses can still be solved by FE: a 422 whose errors all name
@@ -296,16 +465,44 @@ async function update() {
 // (DesignIn's limits in /openapi.json, which POST /v1/solve checks too). A value outside
 // those limits is not offered a solve that would be refused the same way.
 let designLimits = null;
+let apiSpec = null;
+
+async function openapi() {
+  if (!apiSpec) apiSpec = api("/openapi.json").catch((err) => { apiSpec = null; throw err; });
+  return apiSpec;
+}
 
 async function schemaLimits() {
   if (!designLimits) {
     try {
-      const spec = await api("/openapi.json");
+      const spec = await openapi();
       const props = spec.components.schemas.DesignIn.properties;
       designLimits = Object.fromEntries(Object.entries(props).map(([k, v]) => [k, [v.minimum ?? -Infinity, v.maximum ?? Infinity]]));
-    } catch { designLimits = {}; }
+    } catch { return {}; }
   }
   return designLimits;
+}
+
+// The inputs' limits where the server's schema gives them: the solve's mesh level
+// (SolveSettingsIn), each grid value and the flow rate (PredictRequest); a schema
+// without them leaves the page's own.
+async function applySchemaLimits() {
+  let spec;
+  try { spec = await openapi(); } catch { return; }
+  const schemas = spec.components?.schemas || {};
+  const set = (id, prop, { min = true } = {}) => {
+    if (!prop) return;
+    if (typeof prop.maximum === "number") $(id).max = String(prop.maximum);
+    if (min && typeof prop.minimum === "number") $(id).min = String(prop.minimum);
+  };
+  set("mesh_level", schemas.SolveSettingsIn?.properties?.mesh_level);
+  const predict = schemas.PredictRequest?.properties || {};
+  // a list's items, also inside "anyOf" (a list or null)
+  const items = (p) => p && (p.items || (p.anyOf || []).map((a) => a.items).find(Boolean));
+  // the grid's ends: at most the largest value each point may take
+  set("p_max", items(predict.pressures_pa), { min: false });
+  set("v_max", items(predict.volumes_ul), { min: false });
+  set("t_max", items(predict.times_s), { min: false });
 }
 
 async function offersSolve(err, body) {
@@ -352,32 +549,75 @@ async function familySummaries(q, signal) {
     items.push(...page.items);
     offset = page.next_offset;
   }
-  const same = items.filter((r) => Math.abs(r.h_mm - q.h_mm) < 1e-6 && r.status !== "failed");
+  // every status: a failed record is no neighbour, but it is this design's own curve
+  const same = items.filter((r) => Math.abs(r.h_mm - q.h_mm) < 1e-6);
   app.feFamilies.set(key, same);
   return same;
 }
 
+async function record(id, signal) {
+  if (!app.feDetails.has(id)) app.feDetails.set(id, await api(`/v1/curves/${id}`, { signal }));
+  return app.feDetails.get(id);
+}
+
 async function loadNearest(controller) {
-  const count = Math.max(0, Math.min(6, Number($("nearby").value) || 0));
+  const near = checkNumber($("nearby"), { integer: true });
+  const count = near.value ?? 0;
   const state = { ...app.state };
+  const key = designKey(state);
+  const note = $("fe-note");
+  const notes = [];
+  clearMessage($("err-nearby"));
+  if (near.error) showMessage($("err-nearby"), near.error);  // no curves rather than another count
   try {
-    const rows = count ? await familySummaries(familyQuery(state), controller.signal) : [];
+    const q = familyQuery(state);
+    const rows = await familySummaries(q, controller.signal);
+    const L = reduced(state, "L_mm"), t = reduced(state, "t_mm");
+    // this design's own stored record, of any status: a curve that ended early is drawn
+    // up to where it stops (after a reload, or a solve by someone else)
+    const own = rows.filter((r) => Math.abs(r.L_mm - L) < 1e-6 && Math.abs(r.t_mm - t) < 1e-6 && r.n_points > 1)
+      .sort((a, b) => b.n_points - a.n_points)[0];
+    const stored = own ? { key, record: await record(own.id, controller.signal) } : null;
+    const neighbours = rows.filter((r) => r.status !== "failed");
     // nearest in (L, t), the same scales as the server's plot (10 mm, 0.5 mm)
-    const ranked = rows.map((r) => [Math.hypot((r.L_mm - reduced(state, "L_mm")) / 10, (r.t_mm - reduced(state, "t_mm")) / 0.5), r])
+    const ranked = neighbours.map((r) => [Math.hypot((r.L_mm - L) / 10, (r.t_mm - t) / 0.5), r])
       .sort((a, b) => a[0] - b[0]).slice(0, count).map(([, r]) => r);
     const records = [];
-    for (const r of ranked) {
-      if (!app.feDetails.has(r.id)) app.feDetails.set(r.id, await api(`/v1/curves/${r.id}`, { signal: controller.signal }));
-      records.push(app.feDetails.get(r.id));
-    }
+    for (const r of ranked) records.push(await record(r.id, controller.signal));
     if (controller !== app.controller) return;
     app.nearest = records;
+    app.stored = stored;
+    if (count > 0 && !neighbours.length) {
+      notes.push(`No stored FE curves for this family (${materialLabel(q.body_material)} / ${materialLabel(q.membrane_material)}, ` +
+        `T ${fmtSig(q.T_mm)} b ${fmtSig(q.b_mm)} h ${fmtSig(q.h_mm)} mm at W = 3 mm): none is drawn.`);
+    }
+    const shownRecord = app.solved.get(key) || stored?.record;
+    if (shownRecord && shownRecord.curve.status && shownRecord.curve.status !== "complete") notes.push(endText(shownRecord, "The stored FE curve of this design"));
   } catch (err) {
     if (isAbort(err)) return;
     app.nearest = [];
-    $("status").textContent += ` (FE curves unavailable: ${err.message})`;
+    if (err instanceof OfflineError) { if (!app.offline) goOffline(); } else notes.push(`FE curves unavailable: ${err.message}`);
   }
+  note.textContent = notes.join(" ");
+  note.hidden = notes.length === 0;
+  showOperatingPoint();
   redraw();
+}
+
+// "The stored FE curve of this design stops at 30.0 deg (3000 Pa): <why>."
+function endText(rec, what) {
+  const end = curveEnd(rec.curve);
+  const why = rec.curve.reason ? `: ${rec.curve.reason}` : "";
+  return end ? `${what} (curve ${rec.id.slice(0, 8)}) stops at ${fmt(end.angle_deg, 1)} deg (${fmt(end.pressure_pa, 0)} Pa)${why}.` : "";
+}
+
+// The FE record drawn for the design shown: its finished solve's, else its stored one
+// when the model gives no curve or the record ended early (a complete one is already
+// drawn first among the nearest FE curves).
+function ownRecord() {
+  const key = designKey(app.state);
+  const stored = app.stored && app.stored.key === key ? app.stored.record : null;
+  return app.solved.get(key) || (stored && (!app.prediction || stored.curve.status !== "complete") ? stored : null);
 }
 
 // ---------------------------------------------------------------- drawing
@@ -391,7 +631,24 @@ function axisKeys() {
 
 function xOf(data) {
   const { x } = axisKeys();
-  return data[x] && data[x].some((v) => v !== null) ? data[x] : null;
+  return data[x] && data[x].some((v) => v !== null && v !== undefined) ? data[x] : null;
+}
+
+// An FE record's curve on the page's axes, scaled to the design's width (kw = W / 3 mm:
+// volume x kw^3, force x kw^2), its clock its own injected volume over the page's flow
+// rate (none without one: the record's own 2.5 ul/s is not the user's pump).
+function feData(rec, cutAt) {
+  const kw = widthScale(app.state);
+  const c = rec.curve;
+  const volume = c.volume_ul ? c.volume_ul.map((v) => (v === null ? v : v * kw ** 3)) : null;
+  const force = c.force_mn ? c.force_mn.map((f) => (f === null ? f : f * kw ** 2)) : c.force_mn;
+  const q = flowRate();
+  const time = q > 0 && volume ? volume.map((v) => (v === null ? v : v / q)) : null;
+  const along = { pressure_pa: c.pressure_pa, volume_ul: volume, time_s: time }[askAxis()];
+  if (!along) return null;
+  const keep = along.map((x) => !cutAt || x <= gridMax() * 1.05);
+  const cut = (a) => (a ? a.filter((_, i) => keep[i]) : a);
+  return { pressure_pa: cut(c.pressure_pa), volume_ul: cut(volume), time_s: cut(time), angle_deg: cut(c.angle_deg), force_mn: cut(force) };
 }
 
 function curveSeries() {
@@ -403,21 +660,11 @@ function curveSeries() {
     if (!x || !data[keys[0]]) return;
     out.push({ id, label, color, x, y: data[keys[0]], lower: data[keys[1]], upper: data[keys[2]], ...extra });
   };
-  // the records scaled to the design's width (kw = W / 3 mm): volume x kw^3, force x kw^2
   const kw = widthScale(app.state);
   app.nearest.forEach((rec, k) => {
     const d = rec.design;
-    const c = rec.curve;
-    const volume = c.volume_ul ? c.volume_ul.map((v) => v * kw ** 3) : c.volume_ul;
-    const force = c.force_mn ? c.force_mn.map((f) => (f === null ? f : f * kw ** 2)) : c.force_mn;
-    // an FE record's clock at the page's flow rate: its own injected volume over the flow
-    const q = flowRate();
-    const time = q > 0 && volume ? volume.map((v) => v / q) : (c.time_s && c.time_s.map((t) => t * kw ** 3));
-    const along = { pressure_pa: c.pressure_pa, volume_ul: volume, time_s: time }[askAxis()] || c.pressure_pa;
-    const keep = along.map((x) => x <= gridMax() * 1.05);
-    const cut = (a) => (a ? a.filter((_, i) => keep[i]) : a);
-    const data = { pressure_pa: cut(c.pressure_pa), volume_ul: cut(volume), time_s: cut(time),
-      angle_deg: cut(c.angle_deg), force_mn: cut(force) };
+    const data = feData(rec, true);
+    if (!data) return;  // by time without a flow rate: no clock for the records
     // labelled with its materials: the pooled PDMS group holds PDMS 1:10 and 1:15 records
     const pair = `${materialLabel(d.body_material, app.presets)} / ${materialLabel(d.membrane_material, app.presets)}`;
     const size = kw === 1 ? `L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm` : `L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm at W = 3 mm, scaled x${fmtSig(kw)}`;
@@ -426,8 +673,13 @@ function curveSeries() {
   // pinned curves without their bands (the table gives the band at the chosen pressure)
   app.pinned.forEach((pin) => { if (pin.prediction) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pin.prediction, pin.color, { width: 1.6, lower: null, upper: null }); });
   const key = designKey(app.state);
-  const solved = app.solved.get(key);
-  if (solved) add("fe-solve", `FE solve ${solved.id.slice(0, 8)}`, solved.curve, "#111827", { width: 2, markers: true });
+  const own = ownRecord();
+  const ownData = own && feData(own, false);
+  if (ownData) {
+    const end = curveEnd(own.curve);
+    const early = own.curve.status && own.curve.status !== "complete" && end ? `, stops at ${fmt(end.angle_deg, 1)} deg` : "";
+    add("fe-solve", `FE curve of this design ${own.id.slice(0, 8)}${early}`, ownData, "#111827", { width: 2, markers: true });
+  }
   if (app.job && app.job.key === key && app.job.trace.length) {
     const t = app.job.trace;
     add("fe-progress", "FE solve, converged steps", { pressure_pa: t.map((s) => s.pressure_pa), volume_ul: t.map((s) => s.volume_ul),
@@ -439,17 +691,25 @@ function curveSeries() {
 
 export function redraw() {
   const { x, y } = axisKeys();
-  const xLabel = { pressure_pa: "pressure (Pa)", volume_ul: "injected volume (ul)", time_s: "time (s)" }[x];
+  const xLabel = X_LABELS[x];
   const yLabel = y === "force" ? "tip force (mN)" : "bending angle (deg)";
   const series = curveSeries();
   let cursor = null;
   const i = opIndex();
   if (app.prediction && i !== null) cursor = (xOf(app.prediction) || [])[i];
-  renderPlot($("plot"), series, {
+  const plot = $("plot");
+  renderPlot(plot, series, {
     xLabel, yLabel, cursorX: cursor,
     xRange: x === askAxis() ? [0, gridMax()] : undefined, legend: "below",
-    note: app.prediction ? "" : (app.refused ? "the model refuses this design" : ""),
+    note: app.prediction ? "" : (app.offline ? "the service is not answering" : app.refused ? "the model refuses this design"
+      : pageErrors().length ? "correct the marked field" : ""),
   });
+  // the heading and the plot's name say what it shows
+  const what = `${y === "force" ? "tip force" : "bending angle"} against ${xLabel.replace(/ \(.*\)$/, "")}`;
+  plot.setAttribute("aria-label", `${app.prediction ? "Predicted " : "No prediction: "}${what}${app.prediction && y === "angle" ? " with its 95 % band" : ""}` +
+    `${series.some((s) => s.id.startsWith("fe-")) ? ", and FE curves" : ""}`);
+  const name = X_NAMES[x];
+  $("curve-h").textContent = `${name[0].toUpperCase()}${name.slice(1)} - ${y === "force" ? "force" : "angle"} curve`;
   drawSketch();
 }
 
@@ -465,7 +725,22 @@ function showOperatingPoint() {
   const axis = askAxis();
   const ask = ASK[axis];
   const p = (gridMax() * i) / (N_POINTS - 1);
-  if (!pred) { out.textContent = `${fmt(p, ask.digits)} ${ask.unit}: no prediction`; return; }
+  $("compare-p-h").textContent = `angle at ${fmt(p, ask.digits)} ${ask.unit}`;
+  if (!pred) {
+    // the design's own FE curve, when one is drawn: its step nearest the readout's point
+    const own = ownRecord();
+    const data = own && feData(own, false);
+    const step = data && nearestStep(data, axis, p);
+    let text = `${fmt(p, ask.digits)} ${ask.unit}: no model prediction`;
+    if (step) {
+      text += step.beyondEnd
+        ? `; the FE curve stops at ${fmt(step.angle_deg, 1)} deg (${fmt(step.pressure_pa, 0)} Pa), below this ${ask.label}`
+        : `; FE curve: angle ${fmt(step.angle_deg, 1)} deg at its step of ${fmt(step.at, ask.digits)} ${ask.unit}`;
+    }
+    out.textContent = text;
+    renderCompare();
+    return;
+  }
   const a = pred.angle_deg[i];
   const at = axis === "pressure_pa" ? pred.pressure_pa[i] : (pred[axis] || [])[i];
   let text = `${fmt(at, ask.digits)} ${ask.unit}: angle ${a === null ? "not predicted (past the FE range)" : fmt(a, 1) + " deg"}`;
@@ -480,7 +755,6 @@ function showOperatingPoint() {
   if (axis !== "volume_ul" && has("volume_ul")) text += `; volume ${fmt(pred.volume_ul[i], 2)} ul`;
   if (axis !== "time_s" && has("time_s")) text += `; time ${fmt(pred.time_s[i], 1)} s`;
   out.textContent = text;
-  $("compare-p-h").textContent = `angle at ${fmt(p, ask.digits)} ${ask.unit}`;
   renderCompare();
 }
 
@@ -488,8 +762,16 @@ function drawSketch() {
   const pred = app.prediction;
   const i = opIndex();
   const design = pred ? pred.design : { ...app.state };
-  const angle = pred ? pred.angle_deg[i] : null;
-  renderSketch($("sketch"), design, angle === null ? NaN : angle, angle === null ? 0 : i / (N_POINTS - 1));
+  let angle = pred ? pred.angle_deg[i] : null;
+  let source = "predicted";
+  if (!pred) {  // the design's own FE curve, at its step nearest the readout's point
+    const own = ownRecord();
+    const data = own && feData(own, false);
+    const step = data && nearestStep(data, askAxis(), (gridMax() * i) / (N_POINTS - 1));
+    if (step && !step.beyondEnd) { angle = step.angle_deg; source = "FE"; }
+  }
+  renderSketch($("sketch"), design, angle === null || angle === undefined ? NaN : angle,
+    angle === null ? 0 : i / (N_POINTS - 1), { at: ASK[askAxis()].label, source });
 }
 
 function showValidity() {
@@ -499,15 +781,17 @@ function showValidity() {
   if (!pred) return;
   const v = pred.validity || {};
   const head = document.createElement("p");
-  head.className = v.in_domain ? "ok" : "warn";
-  head.textContent = v.in_domain ? "Inside the model's fitted domain." : "Outside the model's fitted domain:";
+  const cautions = (v.flags || []).length > 0;
+  head.className = v.in_domain && !cautions ? "ok" : "warn";
+  head.textContent = !v.in_domain ? "Outside the model's fitted domain:"
+    : (cautions ? "Inside the model's fitted domain, with these cautions:" : "Inside the model's fitted domain.");
   box.appendChild(head);
   const flags = document.createElement("p");
   for (const f of v.flags || []) {
     const chip = document.createElement("span");
     chip.className = "chip";
     chip.dataset.flag = f;
-    chip.textContent = FLAG_WORDS[f] || f.replaceAll("_", " ");
+    chip.textContent = flagWords(f);
     flags.appendChild(chip);
   }
   if (flags.childNodes.length) box.appendChild(flags);
@@ -524,8 +808,15 @@ function showValidity() {
   if (messages.length) box.appendChild(ul);
   const hasForce = Array.isArray(pred.force_mn) && pred.force_mn.some((f) => f !== null);
   $("y_axis").querySelector('option[value="force"]').disabled = !hasForce;
-  for (const k of ["volume_ul", "time_s"]) {
+  for (const k of ["volume_ul", "time_s", "pump_pressure_pa"]) {
     $("x_axis").querySelector(`option[value="${k}"]`).disabled = !(Array.isArray(pred[k]) && pred[k].some((x) => x !== null));
+  }
+  // a link's axes, once the answer offers them
+  const want = app.wantAxes;
+  app.wantAxes = null;
+  for (const [id, v] of [["x_axis", want?.x], ["y_axis", want?.y]]) {
+    const option = v && $(id).querySelector(`option[value="${v}"]`);
+    if (option && !option.disabled) $(id).value = v;
   }
   if ($("x_axis").selectedOptions[0]?.disabled) $("x_axis").value = "pressure_pa";
   if ($("y_axis").selectedOptions[0]?.disabled) $("y_axis").value = "angle";
@@ -561,7 +852,7 @@ function renderCompare() {
   tbody.innerHTML = "";
   table.hidden = app.pinned.length === 0;
   $("compare-empty").hidden = app.pinned.length > 0;
-  $("pin").disabled = app.pinned.length >= MAX_PINNED;
+  $("pin").disabled = app.pinned.length >= MAX_PINNED || !app.prediction;
   const i = opIndex();
   for (const pin of app.pinned) {
     const tr = document.createElement("tr");
@@ -574,10 +865,12 @@ function renderCompare() {
       a === null || a === undefined ? "-" : `${fmt(a, 1)} deg`,
       pr && a !== null ? `${fmt(pr.lower_deg[i], 1)} - ${fmt(pr.upper_deg[i], 1)}` : "-",
       force === null || force === undefined ? "-" : `${fmt(force, 2)} mN`,
-      pr ? (pr.validity.in_domain ? "in domain" : (pr.validity.flags || []).map((f) => FLAG_WORDS[f] || f).join(", ")) : "no prediction",
+      pr ? ((pr.validity.flags || []).length ? pr.validity.flags.map(flagWords).join(", ")
+        : (pr.validity.in_domain ? "in domain" : "outside the fitted domain")) : "no prediction",
     ];
     tr.innerHTML = cells.map((c) => `<td>${c}</td>`).join("") +
-      `<td><button type="button" data-load="${pin.n}">Load</button> <button type="button" data-unpin="${pin.n}">Remove</button></td>`;
+      `<td><button type="button" data-load="${pin.n}" aria-label="Load pinned design #${pin.n}">Load</button> ` +
+      `<button type="button" data-unpin="${pin.n}" aria-label="Remove pinned design #${pin.n}">Remove</button></td>`;
     tbody.appendChild(tr);
   }
 }
@@ -594,16 +887,19 @@ async function solve() {
   const key = $("api_key").value.trim();
   if (!key) { showProblem(new Error("the server's API key is needed to queue a solve"), {}, $("err-api_key")); return; }
   sessionStorage.setItem("balloon-api-key", key);
+  const level = checkNumber($("mesh_level"), { integer: true });
+  if (level.error) { showMessage($("err-settings"), level.error); return; }  // the server's limit, from its schema
   const design = designBody(app.state, app.presets);
   const designKey = JSON.stringify(design);
-  const body = { design, settings: { mesh_level: Number($("mesh_level").value) || 0 } };
+  const body = { design, settings: { mesh_level: level.value } };
   let job;
   try {
     job = await api("/v1/solve", { method: "POST", body, key });
   } catch (err) {
     if (err instanceof ApiError && err.status === 409 && err.problem.curve_id) {
       $("job").textContent = "Already in the database: loading the stored FE curve.";
-      await showStoredCurve(designKey, err.problem.curve_id);
+      const rec = await showStoredCurve(designKey, err.problem.curve_id);
+      if (rec) $("job").textContent = `Already in the database: the stored FE curve is drawn. ${endText(rec, "It") || ""}`.trim();
       return;
     }
     const slots = { ...DESIGN_SLOTS(), settings: $("err-settings"), design: $("err-solve") };
@@ -620,24 +916,31 @@ async function poll(job) {
   const mine = app.job;
   if (!mine || mine.id !== job.id) return;
   const pr = job.progress || {};
-  if (pr.step && !mine.trace.some((s) => s.step === pr.step) && pr.angle_deg !== null) mine.trace.push({ ...pr });
-  $("job").textContent = `FE solve ${job.status}` + (pr.step ? `: step ${pr.step}, ${fmt(pr.pressure_pa, 0)} Pa, ${fmt(pr.volume_ul, 3)} ul, ${fmt(pr.angle_deg, 1)} deg` +
-    (pr.newton_iterations ? ` (${pr.newton_iterations} Newton iterations)` : "") : "");
-  $("job").dataset.status = job.status;
+  if (pr.step && !mine.trace.some((s) => s.step === pr.step) && pr.angle_deg !== null) mine.trace.push({ ...pr, at_ms: Date.now() });
+  $("job").textContent = jobText(job, mine.trace, null);
+  // "finished" once its curve is loaded and said
+  if (job.status !== "finished") $("job").dataset.status = job.status;
   redraw();
   if (job.status === "queued" || job.status === "running") {
-    setTimeout(async () => {
-      try { poll(await api(`/v1/jobs/${job.id}`)); } catch (err) { $("job").textContent = `Lost the job: ${err.message}`; }
-    }, 1000);
+    const again = async () => {
+      try { poll(await api(`/v1/jobs/${job.id}`)); } catch (err) {
+        // a service that stopped answering may come back: the job is asked again
+        if (err instanceof OfflineError) { $("job").textContent = `FE solve: ${err.message}; asking again.`; setTimeout(again, app.retryMs); }
+        else $("job").textContent = `Lost the job: ${err.message}`;
+      }
+    };
+    setTimeout(again, 1000);
     return;
   }
   $("cancel-solve").hidden = true;
   if (job.status === "finished" && job.curve_id) {
-    await showStoredCurve(mine.key, job.curve_id);
-    $("job").textContent = `FE solve finished: curve ${job.curve_id} (${job.curve_status}${job.curve_reason ? ": " + job.curve_reason : ""}), stored in the database.`;
+    const rec = await showStoredCurve(mine.key, job.curve_id);
+    $("job").textContent = jobText(job, mine.trace, rec ? curveEnd(rec.curve) : null);
     $("job").dataset.status = "finished";
+    $("job").dataset.curveId = job.curve_id;
+    showHealth().catch(() => {});  // the record count has grown
   } else {
-    $("job").textContent = `FE solve ${job.status}${job.error ? ": " + job.error : ""}`;
+    $("job").textContent = jobText(job, mine.trace, null);
   }
 }
 
@@ -646,9 +949,13 @@ async function showStoredCurve(designKey, curveId) {
     const record = await api(`/v1/curves/${curveId}`);
     app.solved.set(designKey, record);
     app.feFamilies.clear();  // the database has a new record
+    app.feDetails.set(curveId, record);
+    showOperatingPoint();
     redraw();
+    return record;
   } catch (err) {
     $("job").textContent = `Could not load curve ${curveId}: ${err.message}`;
+    return null;
   }
 }
 
@@ -710,12 +1017,24 @@ async function start() {
     $("err-design").textContent = `Materials unavailable: ${err.message}`;
     $("err-design").hidden = false;
   });
-  api("/v1/health").then((h) => {
-    $("health").textContent = `service ${h.version}; ${h.database.records ?? 0} FE records; surrogate ${h.surrogate.loaded ? h.surrogate.name : "not loaded"}`;
-  }).catch(() => { $("health").textContent = "service health unknown"; });
+  showHealth().catch(() => {});
+  applySchemaLimits();
   setupInverse({ loadDesign, presets: app.presets });
   setupCalibration({ presets: app.presets });
   applyLink(location.hash);
+  // a link pasted into this open page (the browser does not reload for a new fragment)
+  window.addEventListener("hashchange", () => {
+    if (location.hash === app.linkHash) return;
+    applyLink(location.hash, true);
+    schedule(0);
+  });
+  // a service that stopped answering is asked again when the tab is back in front
+  window.addEventListener("focus", retry);
+  window.addEventListener("online", retry);
+  document.addEventListener("visibilitychange", () => { if (!document.hidden) retry(); });
+  // the plot and the sketch are drawn at the width they are shown at (legible text)
+  let resizeTimer = null;
+  window.addEventListener("resize", () => { clearTimeout(resizeTimer); resizeTimer = setTimeout(redraw, 100); });
   // a stiffness scale != 1 needs the presets to send its inline material
   if (app.state.body_scale !== 1 || app.state.membrane_scale !== 1) await materials;
   await Promise.all([update(), materials]);

@@ -6,7 +6,7 @@
 // The report format may grow (docs/calibration.md): every field is read defensively and
 // a missing one is left out, never invented.
 
-import { api, clearProblems, showProblem } from "./api.js";
+import { ApiError, api, clearProblems, showProblem } from "./api.js";
 import { parseMeasured } from "./csv.js";
 import { COLORS, renderPlot } from "./plot.js";
 import { $, download, fmt, fmtSig } from "./util.js";
@@ -104,9 +104,49 @@ export function alternativeLines(report) {
   return out;
 }
 
+// "rows" + "1.angle_deg" -> "angle_deg" (the column first, as docs/measured-data.md's
+// messages read; the message names the row); "angle_deg" -> "angle_deg".
+export function rowWords(rest, error) {
+  const parts = rest.split(".");
+  const column = parts.filter((p) => !/^\d+$/.test(p)).join(".");
+  const index = parts.find((p) => /^\d+$/.test(p));
+  const row = index !== undefined && !/\brow \d+/.test(String(error.message || "")) ? `row ${Number(index) + 1}` : "";
+  return [column && `column ${column}`, row].filter(Boolean).join(", ");
+}
+
+// Starting models whose calibrations the server cannot save: learned from a report (the
+// saved format holds per-family constants: a report without fitted.families cannot be
+// saved) or from a refused save, with the server's words; kept for the session.
+const UNSAVEABLE_KEY = "balloon-unsaveable-models";
+function unsaveable() {
+  try { return JSON.parse(sessionStorage.getItem(UNSAVEABLE_KEY) || "{}"); } catch { return {}; }
+}
+function noteUnsaveable(model, why) {
+  const known = unsaveable();
+  known[model] = why;
+  sessionStorage.setItem(UNSAVEABLE_KEY, JSON.stringify(known));
+}
+
 export function setupCalibration() {
   const form = $("cal-form");
   let rows = null, report = null, lastBody = null;
+
+  // before calibrating: a starting model known not to give a saveable calibration is said
+  const showSaveability = () => {
+    const model = $("cal-model").value.trim() || "emulator";
+    const why = unsaveable()[model];
+    const note = $("cal-save-note");
+    note.hidden = !why;
+    note.textContent = why ? `A calibration against "${model}" cannot be saved as a model (the server says: ${why}). ` +
+      "Its report is still shown; to save the augmented model, choose another starting model." : "";
+    // the report shown: its Save is greyed out, saying why, when it cannot be saved
+    const shownWhy = lastBody ? unsaveable()[lastBody.model] : null;
+    $("save-run").disabled = !!shownWhy;
+    $("save-note").hidden = !shownWhy;
+    $("save-note").textContent = shownWhy ? `This calibration against "${lastBody.model}" cannot be saved: ${shownWhy}.` : "";
+  };
+  $("cal-model").addEventListener("input", showSaveability);
+  showSaveability();
 
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
@@ -119,8 +159,13 @@ export function setupCalibration() {
       showProblem(new Error(`${file.name}: ${err.message}`), {}, $("err-cal-rows"));
       return;
     }
-    lastBody = { rows, model: $("cal-model").value.trim() || "emulator", folds: Number($("cal-folds").value) || 5 };
-    await run(lastBody, form, { rows: $("err-cal-rows"), model: $("err-cal-model"), folds: $("err-cal-folds") }, $("err-calibrate"));
+    // the report of an earlier file is not left on screen as if it were this one's
+    $("cal-report").hidden = true;
+    report = null;
+    lastBody = null;
+    const body = { rows, model: $("cal-model").value.trim() || "emulator", folds: Number($("cal-folds").value) || 5 };
+    if (await run(body, form, { rows: $("err-cal-rows"), model: $("err-cal-model"), folds: $("err-cal-folds") }, $("err-calibrate"))) lastBody = body;
+    showSaveability();
   });
 
   $("save-form").addEventListener("submit", async (ev) => {
@@ -129,7 +174,10 @@ export function setupCalibration() {
     clearProblems(sf);
     if (!lastBody) return;
     const key = $("save-key").value.trim();
-    if (!key) { showProblem(new Error("saving a model needs the server's API key"), {}, $("err-save-key")); return; }
+    const missing = [];
+    if (!$("save-name").value.trim()) missing.push([$("err-save"), "give the new model a name"]);
+    if (!key) missing.push([$("err-save-key"), "saving a model needs the server's API key"]);
+    if (missing.length) { for (const [el, text] of missing) showProblem(new Error(text), {}, el); return; }
     sessionStorage.setItem("balloon-api-key", key);
     await run({ ...lastBody, save: $("save-name").value.trim() }, sf, { save: $("err-save"), rows: $("err-save-form") },
       $("err-save-form"), key);
@@ -139,6 +187,7 @@ export function setupCalibration() {
     if (report) download("calibration-report.json", JSON.stringify(report, null, 1), "application/json");
   });
 
+  // true when the server answered with a report
   async function run(body, root, slots, fallback, key) {
     $("cal-status").textContent = `Calibrating ${body.rows.length} rows...`;
     $("cal-run").disabled = true;
@@ -146,11 +195,23 @@ export function setupCalibration() {
       report = await api("/v1/calibrate", { method: "POST", body, key });
       $("cal-status").textContent = report.saved_model ? `Saved the augmented model as "${report.saved_model}": use it as the model in the design panel.` : "";
       if (report.saved_model) $("model-list").appendChild(new Option(report.saved_model, report.saved_model));
+      // a report whose fit holds no per-family constants cannot be saved: said now, not
+      // after the user asks to save it
+      const fitted = report.fitted;
+      if (fitted && typeof fitted === "object" && !("families" in fitted)) {
+        noteUnsaveable(body.model, "saved models hold per-family exponential constants, which this calibration does not fit");
+      }
+      showSaveability();
       await render(report, body);
+      return true;
     } catch (err) {
       $("cal-status").textContent = "";
-      const target = err.status === 401 || err.status === 403 ? ($("err-save-key")) : fallback;
-      showProblem(err, slots, target);
+      const target = err.status === 401 || err.status === 403 ? ($("err-save-key"))
+        : (err instanceof ApiError && err.status === 404 ? $("err-cal-model") : fallback);  // an unknown starting model
+      showProblem(err, slots, target, { rest: rowWords });
+      const refusal = err instanceof ApiError && err.fieldErrors.find((e) => e.field === "save" && /cannot be saved/.test(e.message || ""));
+      if (refusal) { noteUnsaveable(body.model, refusal.message); showSaveability(); }
+      return false;
     } finally {
       $("cal-run").disabled = false;
     }
@@ -239,9 +300,10 @@ export function setupCalibration() {
     }
     renderPlot($("cal-plot"), data, { xLabel: "pressure (Pa)", yLabel: "bending angle (deg)", height: 360, legend: "below" });
     renderPlot($("cal-resid"), resid, { xLabel: "pressure (Pa)", yLabel: "measured - model (deg)", height: 260, legend: "below" });
+    const cannotSave = unsaveable()[body.model];
     const msg = after
       ? `The augmented curves come from /v1/predict with model "${after}": quasi-static, at the calibration's median flow rate, so they differ from the report's own fit (${fmt(rep.rmse_after_deg, 2)} deg, each curve at its own flow rate and time) where flow rates or creep matter.`
-      : (points ? "" : "The augmented model's curves are drawn once it is saved (below).");
+      : (points || cannotSave ? "" : "The augmented model's curves are drawn once it is saved (below).");
     $("cal-status").textContent = [$("cal-status").textContent, msg, ...notes].filter(Boolean).join(" ");
   }
 }

@@ -31,12 +31,19 @@ export function fieldRange(f, W) {
   return { min: r(f.min), max: r(f.max) };
 }
 
-// The design's lengths scaled by W_new / W_old (a scaled copy: the same angle-pressure curve).
+// The design's lengths scaled by W_new / W_old (a scaled copy: the same angle-pressure
+// curve), at full precision: a length rounded here (0.5 x 3.2 / 3 -> 0.5333) is no longer
+// the scaled copy and can leave the box once scaled back. Only the inputs show them rounded.
 export function scaledLengths(state, W) {
   const k = W / (state.W_mm || W_MM);
   const out = { W_mm: W };
-  for (const f of FIELDS) if (f.name.endsWith("_mm")) out[f.name] = Math.round(state[f.name] * k * 1e4) / 1e4;
+  for (const f of FIELDS) if (f.name.endsWith("_mm")) out[f.name] = state[f.name] * k;
   return out;
+}
+
+// A value as the inputs and labels show it: to 0.1 um (or 1e-4 of a stiffness scale).
+export function shown(v) {
+  return typeof v === "number" && Number.isFinite(v) ? String(Math.round(v * 1e4) / 1e4) : String(v);
 }
 export const PAIRS = [
   ["pdms_1_10", "ecoflex_00_30"],
@@ -107,7 +114,7 @@ export function designLabel(state) {
   const [body, membrane] = PAIRS[state.pair];
   const sc = (s) => (Math.abs(s - 1) < 1e-9 ? "" : ` x${scaleText(s)}`);
   const W = state.W_mm ?? W_MM;
-  return `L ${state.L_mm} t ${state.t_mm} T ${state.T_mm} b ${state.b_mm} h ${state.h_mm}${W === W_MM ? "" : ` W ${W}`} mm, ` +
+  return `L ${shown(state.L_mm)} t ${shown(state.t_mm)} T ${shown(state.T_mm)} b ${shown(state.b_mm)} h ${shown(state.h_mm)}${W === W_MM ? "" : ` W ${shown(W)}`} mm, ` +
     `${MATERIAL_NAMES[body] || body}${sc(state.body_scale)} / ${MATERIAL_NAMES[membrane] || membrane}${sc(state.membrane_scale)}`;
 }
 

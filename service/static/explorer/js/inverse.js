@@ -2,9 +2,17 @@
 // a pressure), bounds on L and t and the allowed material pairs -> POST /v1/inverse ->
 // ranked designs; "Load" puts one in the design panel.
 
-import { api, clearProblems, showProblem } from "./api.js";
-import { PAIRS, pairLabel } from "./design.js";
+import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
+import { FIELDS, PAIRS, pairLabel } from "./design.js";
 import { $, fmt, fmtSig, numberOrNull } from "./util.js";
+
+// The rankings each target kind takes (the server refuses the others, saying which it
+// allows: a refusal's "allowed" list replaces this one for that kind).
+const OBJECTIVES = {
+  angle_at_pressure: ["certainty", "compact"],
+  force_at_pressure: ["certainty", "compact"],
+  pressure_budget: ["certainty", "pressure", "margin", "compact"],
+};
 
 // "pdms_1_15/ecoflex_00_30 T=1 b=1.8 h=0.15" -> {T_mm: 1, b_mm: 1.8, h_mm: 0.15}
 export function familyGeometry(candidate) {
@@ -17,10 +25,13 @@ export function familyGeometry(candidate) {
   return out;
 }
 
-function bounds(lo, hi) {
+// [lo, hi] of a range's two boxes; an empty one is the design box's edge (as its
+// placeholder "box" says): the box at W = 3 mm, where the search runs.
+function bounds(lo, hi, name) {
   const a = numberOrNull($(lo)), b = numberOrNull($(hi));
   if (a === null && b === null) return undefined;
-  return [a, b];
+  const f = FIELDS.find((x) => x.name === name);
+  return [a ?? f.min, b ?? f.max];
 }
 
 export function setupInverse({ loadDesign }) {
@@ -39,10 +50,17 @@ export function setupInverse({ loadDesign }) {
     $("inv-angle-field").hidden = force;
     $("inv-force-field").hidden = !force;
     $("inv-value-h").textContent = force ? "force at the pressure (mN)" : "angle at the pressure (deg)";
+    // only the rankings the server takes for this target are offered
+    const allowed = OBJECTIVES[kind.value];
+    const select = $("inv-objective");
+    for (const option of select.options) option.hidden = option.disabled = !!option.value && !!allowed && !allowed.includes(option.value);
+    if (select.selectedOptions[0]?.disabled) select.value = "";
   };
   kind.addEventListener("change", showKind);
   showKind();
   let candidates = [];
+  let searched = null;  // the target of the candidates shown
+  $("inv-pairs").addEventListener("change", () => { $("err-inv-pairs").hidden = true; });
 
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
@@ -51,10 +69,14 @@ export function setupInverse({ loadDesign }) {
     if (kind.value === "force_at_pressure") target.force_mn = numberOrNull($("inv-force"));
     else target.angle_deg = numberOrNull($("inv-angle"));
     const body = { target, n_results: numberOrNull($("inv-n")) ?? 5 };
-    const L = bounds("inv-L-lo", "inv-L-hi"), t = bounds("inv-t-lo", "inv-t-hi");
+    const L = bounds("inv-L-lo", "inv-L-hi", "L_mm"), t = bounds("inv-t-lo", "inv-t-hi", "t_mm");
     if (L) body.L_bounds_mm = L;
     if (t) body.t_bounds_mm = t;
     const chosen = [...pairs.querySelectorAll("input:checked")].map((i) => PAIRS[Number(i.value)]);
+    if (!chosen.length) {
+      showMessage($("err-inv-pairs"), "Material pairs: tick at least one pair to search.");
+      return;
+    }
     if (chosen.length < PAIRS.length) body.material_pairs = chosen.map(([b, m]) => ({ body_material: b, membrane_material: m }));
     if ($("inv-objective").value) body.objective = $("inv-objective").value;
     const slots = {
@@ -68,11 +90,18 @@ export function setupInverse({ loadDesign }) {
     try {
       const res = await api("/v1/inverse", { method: "POST", body });
       candidates = res.candidates || [];
+      searched = { kind: target.kind, pressure_pa: target.pressure_pa };
       render(res);
     } catch (err) {
       $("inv-explanation").textContent = "";
       $("inv-table").hidden = true;
       showProblem(err, slots, $("err-inverse"));
+      // a ranking refused for this target: the server's list is offered from now on
+      const objective = err instanceof ApiError && err.fieldErrors.find((e) => String(e.field || "").startsWith("objective") && e.allowed);
+      if (objective) {
+        OBJECTIVES[target.kind] = objective.allowed.split("|").map((s) => s.trim()).filter(Boolean);
+        showKind();
+      }
     } finally {
       $("inv-run").disabled = false;
     }
@@ -84,7 +113,8 @@ export function setupInverse({ loadDesign }) {
     if (!res.feasible && typeof best.value === "number") {
       text += ` Best reachable: ${fmtSig(best.value)} at L = ${fmtSig(best.L_mm)} mm, t = ${fmtSig(best.t_mm)} mm (${best.family || ""}).`;
     }
-    if (typeof res.n_evaluated === "number") text += ` (${res.n_evaluated} designs evaluated)`;
+    // the count, unless the explanation already gives it
+    if (typeof res.n_evaluated === "number" && !text.includes(String(res.n_evaluated))) text += ` (${res.n_evaluated} designs evaluated)`;
     $("inv-explanation").textContent = text;
     const tbody = $("inv-table").querySelector("tbody");
     tbody.innerHTML = "";
@@ -102,7 +132,8 @@ export function setupInverse({ loadDesign }) {
         fmt(c.L_mm, 2), fmt(c.t_mm, 3),
         ...["T_mm", "b_mm", "h_mm"].map((k) => (typeof geometry[k] === "number" ? fmt(geometry[k], 3) : "")),
         `${fmt(c.value_at_pressure, 1)}${band}`, `${fmt(c.pressure_needed_pa, 0)}${pband}`, notes || (c.validity?.in_domain === false ? "outside the fitted domain" : "")];
-      tr.innerHTML = cells.map((v) => `<td></td>`).join("") + `<td><button type="button" data-candidate="${k}">Load</button></td>`;
+      tr.innerHTML = cells.map(() => "<td></td>").join("") + `<td><button type="button" data-candidate="${k}">Load</button></td>`;
+      tr.querySelector("button").setAttribute("aria-label", `Load rank ${c.rank}: L ${fmt(c.L_mm, 2)} mm, t ${fmt(c.t_mm, 3)} mm, ${pairLabel(c.body_material, c.membrane_material)}`);
       cells.forEach((v, i) => { tr.children[i].textContent = String(v); });
       tbody.appendChild(tr);
     });
@@ -124,11 +155,11 @@ export function setupInverse({ loadDesign }) {
       $("ask_axis").value = "pressure_pa";
       $("ask_axis").dispatchEvent(new Event("change"));
     }
-    loadDesign(values);
-    if (c.target_pressure_pa || c.pressure_needed_pa) {
-      const p = $("p_op");
-      p.value = String(c.pressure_needed_pa ?? c.target_pressure_pa);
-    }
+    // the readout at the target's pressure (a budget's: the pressure needed), the curve's
+    // range grown to show it
+    const target = searched && searched.kind !== "pressure_budget" ? searched.pressure_pa : null;
+    const at = target ?? c.pressure_needed_pa ?? c.target_pressure_pa;
+    loadDesign(values, { pressurePa: typeof at === "number" ? at : undefined });
     $("explore").scrollIntoView({ behavior: "instant", block: "start" });
   });
 }

@@ -7,6 +7,9 @@
 import { FIELDS, PAIRS, W_FIELD } from "./design.js";
 
 export const ASK_AXES = ["pressure_pa", "volume_ul", "time_s"];
+export const X_AXES = [...ASK_AXES, "pump_pressure_pa"];
+export const Y_AXES = ["angle", "force"];
+const MAX_NEAR = 6;  // the "Nearest FE curves" field's largest count
 const NUMBER_KEYS = [W_FIELD.name, ...FIELDS.map((f) => f.name)];
 const MODEL = /^[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}$/;
 
@@ -15,7 +18,8 @@ function positive(text) {
   return text.trim() !== "" && Number.isFinite(v) && v > 0 ? v : null;
 }
 
-// {design: {...state keys}, view: {ask, max, flow, inlet, model}, ignored: ["key", ...]}
+// {design: {...state keys}, view: {ask, max, flow, inlet, model, x, y, near},
+//  ignored: ["key", ...]}
 export function readLink(hash) {
   const out = { design: {}, view: {}, ignored: [] };
   const text = String(hash || "").replace(/^#/, "");
@@ -39,6 +43,11 @@ export function readLink(hash) {
       if (value === "1" || value === "0") out.view.inlet = value === "1"; else ok = false;
     } else if (key === "model") {
       if (MODEL.test(value)) out.view.model = value; else ok = false;
+    } else if (key === "x" || key === "y") {
+      if ((key === "x" ? X_AXES : Y_AXES).includes(value)) out.view[key] = value; else ok = false;
+    } else if (key === "near") {
+      const k = Number(value);
+      if (value.trim() !== "" && Number.isInteger(k) && k >= 0 && k <= MAX_NEAR) out.view.near = k; else ok = false;
     } else {
       ok = false;
     }
@@ -47,7 +56,7 @@ export function readLink(hash) {
   return out;
 }
 
-// The fragment of a state (design keys) and view ({ask, max, flow, inlet, model}).
+// The fragment of a state (design keys) and view ({ask, max, flow, inlet, model, x, y, near}).
 export function writeLink(state, view) {
   const params = new URLSearchParams();
   for (const key of NUMBER_KEYS) if (Number.isFinite(state[key])) params.set(key, String(state[key]));
@@ -57,5 +66,8 @@ export function writeLink(state, view) {
   if (Number.isFinite(view.flow)) params.set("flow", String(view.flow));
   if (view.inlet) params.set("inlet", "1");
   if (view.model) params.set("model", view.model);
+  if (view.x && view.x !== view.ask) params.set("x", view.x);
+  if (view.y && view.y !== "angle") params.set("y", view.y);
+  if (Number.isInteger(view.near)) params.set("near", String(view.near));
   return `#${params}`;
 }

@@ -32,6 +32,21 @@ function fmtTick(v, step) {
   return v.toFixed(Math.min(digits, 6));
 }
 
+// A label in lines of at most ``n`` characters, broken after a space (each line but the
+// last keeps its space, so that the text's content is the label).
+function wrap(label, n) {
+  const out = [];
+  let rest = label;
+  while (rest.length > n) {
+    const cut = rest.lastIndexOf(" ", n);
+    if (cut <= 0) break;
+    out.push(rest.slice(0, cut + 1));
+    rest = rest.slice(cut + 1);
+  }
+  out.push(rest);
+  return out;
+}
+
 // Runs of consecutive points where x and y are finite.
 function segments(x, y) {
   const out = [];
@@ -44,8 +59,17 @@ function segments(x, y) {
   return out;
 }
 
+// The drawing's width in user units: the width the SVG is shown at (1 unit = 1 CSS px,
+// so its 12 px text stays 12 px on a narrow screen), 720 while it is not laid out.
+export function shownWidth(svg, fallback = 720) {
+  const w = svg.clientWidth || (svg.getBoundingClientRect ? svg.getBoundingClientRect().width : 0);
+  return w > 0 ? Math.round(Math.max(280, Math.min(1200, w))) : fallback;
+}
+
 export function renderPlot(svg, series, opts = {}) {
-  const W = opts.width || 720, H = opts.height || 420;
+  const W = opts.width || shownWidth(svg);
+  // the height follows the width below 720 units, up to the asked (or 420) units
+  const H = Math.round(Math.min(opts.height || 420, Math.max(240, W * 0.62)));
   const m = { l: 62, r: 16, t: 14, b: 48 };
   while (svg.firstChild) svg.removeChild(svg.firstChild);
   svg.setAttribute("xmlns", NS);
@@ -66,7 +90,8 @@ export function renderPlot(svg, series, opts = {}) {
   // a curve starting at 0 with round-off below it (-0.005 deg) keeps its axis at 0
   if (yLo < 0 && yLo > -0.01 * (yHi - yLo)) yLo = 0;
   if (opts.yClip) { yLo = Math.max(yLo, opts.yClip[0]); yHi = Math.min(yHi, opts.yClip[1]); }
-  const xt = niceTicks(xr[0], xr[1]), yt = niceTicks(yLo, yHi);
+  // fewer ticks on a narrow plot, so that their labels do not run into each other
+  const xt = niceTicks(xr[0], xr[1], W < 560 ? 4 : 6), yt = niceTicks(yLo, yHi, H < 320 ? 4 : 6);
   const px = (v) => m.l + ((v - xt.lo) / (xt.hi - xt.lo)) * (W - m.l - m.r);
   const py = (v) => H - m.b - ((v - yt.lo) / (yt.hi - yt.lo)) * (H - m.t - m.b);
   const clipId = `clip-${svg.id || "plot"}`;
@@ -123,24 +148,36 @@ export function renderPlot(svg, series, opts = {}) {
   if (shown.length) {
     const lineH = 16;
     const below = opts.legend === "below";
+    const left = below && W < 560 ? 4 : m.l;  // a narrow plot's legend uses its whole width
     const longest = Math.max(...shown.map((s) => s.label.length));
-    const cols = below && 40 + 6.2 * longest < (W - m.l - m.r) / 2 ? 2 : 1;
-    const colW = below ? (W - m.l - m.r) / cols : Math.min(360, 12 + 7 * Math.max(...shown.map((s) => s.label.length)));
-    const rows = Math.ceil(shown.length / cols);
+    const cols = below && 40 + 6.2 * longest < (W - left - m.r) / 2 ? 2 : 1;
+    const colW = below ? (W - left - m.r) / cols : Math.min(360, 12 + 7 * Math.max(...shown.map((s) => s.label.length)));
+    // a label longer than its column is wrapped at a space (about 6 units a character)
+    const perLine = Math.max(12, Math.floor((colW - 34) / 6));
+    const lines = shown.map((s) => wrap(s.label, below ? perLine : Infinity));
+    const rowsOf = [];  // the first line of each entry, row by row of the columns
+    let rows = 0;
+    for (let k = 0; k < shown.length; k += cols) {
+      const tall = Math.max(...lines.slice(k, k + cols).map((l) => l.length));
+      for (let j = k; j < Math.min(k + cols, shown.length); j++) rowsOf[j] = rows;
+      rows += tall;
+    }
     let lg;
     if (below) {
       svg.setAttribute("viewBox", `0 0 ${W} ${H + rows * lineH + 8}`);
       svg.querySelector("rect").setAttribute("height", H + rows * lineH + 8);
-      lg = el("g", { transform: `translate(${m.l},${H})` }, svg);
+      lg = el("g", { transform: `translate(${left},${H})` }, svg);
     } else {
       lg = el("g", { transform: `translate(${m.l + 8},${m.t + 8})` }, svg);
       el("rect", { x: 0, y: 0, width: colW, height: rows * lineH + 6, fill: "#ffffff", "fill-opacity": 0.85, stroke: "#d1d5db" }, lg);
     }
     shown.forEach((s, k) => {
-      const x0 = (k % cols) * colW, y = 12 + Math.floor(k / cols) * lineH;
+      const x0 = (k % cols) * colW, y = 12 + rowsOf[k] * lineH;
       if (s.markersOnly) el("circle", { cx: x0 + 14, cy: y - 4, r: 3, fill: s.color }, lg);
       else el("line", { x1: x0 + 6, x2: x0 + 24, y1: y - 4, y2: y - 4, stroke: s.color, "stroke-width": s.width || 2, "stroke-dasharray": s.dash || null }, lg);
-      el("text", { x: x0 + 30, y, fill: "#111827", "font-size": 11 }, lg).textContent = s.label;
+      const text = el("text", { x: x0 + 30, y, fill: "#111827", "font-size": 11 }, lg);
+      if (lines[k].length === 1) text.textContent = s.label;
+      else lines[k].forEach((line, j) => { el("tspan", { x: x0 + 30, dy: j ? lineH : 0 }, text).textContent = line; });
     });
   }
   if (opts.note) {

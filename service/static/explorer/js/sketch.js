@@ -33,9 +33,14 @@ function frame(s, L, c0, kappa) {
   return { x, y, nx: -Math.sin(phi), ny: Math.cos(phi) };
 }
 
-export function renderSketch(svg, design, angleDeg, pressureFraction = 0) {
+// ``at``: what the readout steps on ("pressure", "injected volume", "time"); ``source``:
+// where the angle comes from ("predicted", or "FE" for the design's own FE curve).
+export function renderSketch(svg, design, angleDeg, pressureFraction = 0, { at: stepsOn = "pressure", source = "predicted" } = {}) {
   while (svg.firstChild) svg.removeChild(svg.firstChild);
-  const W = 720, Hpx = 250;
+  // drawn at the width it is shown at (1 unit = 1 CSS px: legible text on a narrow screen)
+  const shownW = svg.clientWidth || 0;
+  const W = shownW > 0 ? Math.round(Math.max(280, Math.min(1200, shownW))) : 720;
+  const Hpx = W < 560 ? 200 : 250;
   svg.setAttribute("viewBox", `0 0 ${W} ${Hpx}`);
   svg.setAttribute("font-family", "system-ui, sans-serif");
   el("rect", { x: 0, y: 0, width: W, height: Hpx, fill: "#ffffff" }, svg);
@@ -89,8 +94,16 @@ export function renderSketch(svg, design, angleDeg, pressureFraction = 0) {
   el("line", { x1: bx, x2: bx + barMm * scale, y1: by, y2: by, stroke: "#111827", "stroke-width": 2 }, svg);
   el("text", { x: bx + barMm * scale / 2, y: by - 5, "text-anchor": "middle", "font-size": 11, fill: "#111827" }, svg).textContent = `${barMm} mm`;
   const caption = Number.isFinite(angleDeg)
-    ? `sketch: ${angle.toFixed(1)} deg bend as a circular arc over the chamber (balloon height schematic)`
-    : "sketch: no predicted angle at this pressure";
-  el("text", { x: pad, y: 16, "font-size": 12, fill: "#374151" }, svg).textContent = caption;
+    ? `sketch: ${angle.toFixed(1)} deg bend${source === "FE" ? " (FE curve)" : ""} as a circular arc over the chamber (balloon height schematic)`
+    : `sketch: no ${source === "FE" ? "FE" : "predicted"} angle at this ${stepsOn}`;
+  // in lines that fit the width (about 6.6 units a character at 12 px)
+  const x0 = W < 560 ? 8 : pad;
+  const perLine = Math.max(20, Math.floor((W - 2 * x0) / 6.6));
+  const lines = [];
+  for (const word of caption.split(" ")) {
+    if (lines.length && (lines.at(-1) + " " + word).length <= perLine) lines[lines.length - 1] += " " + word;
+    else lines.push(word);
+  }
+  lines.forEach((line, k) => { el("text", { x: x0, y: 16 + 15 * k, "font-size": 12, fill: "#374151" }, svg).textContent = line; });
   svg.dataset.angle = String(angle);
 }
