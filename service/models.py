@@ -105,7 +105,7 @@ class ModelRegistry:
                                            ) from None
                 self._paper = paper_surrogate()
             return self._paper
-        return load_calibrated(name, self.models_dir)
+        return load_calibrated(name, self.models_dir, lambda: self.get("emulator"))
 
 
 def _plain_error(exc: BaseException) -> str:
@@ -123,14 +123,15 @@ def _warm_up(emulator: Any) -> None:
         pass
 
 
-def load_calibrated(name: str, models_dir: Path) -> Any:
+def load_calibrated(name: str, models_dir: Path, design_space: Any = None) -> Any:
     """A saved calibrated model by name: NotFoundError when there is none, 503 when its
-    file is damaged. The answers name the model only: never the models directory, never
-    the other saved models (another user's)."""
+    file is damaged. ``design_space`` gives the emulator a calibration against it answers
+    through. The answers name the model only: never the models directory, never the other
+    saved models (another user's)."""
     from surrogate.calibration import load_model
 
     try:
-        return load_model(name, models_dir)
+        return load_model(name, models_dir, design_space)
     except (NotFoundError, FileNotFoundError, IsADirectoryError):
         raise NotFoundError(f"no saved model {name!r}; known models are {BUILT_IN_WORDS} "
                             "and the saved ones, by name") from None
@@ -184,9 +185,16 @@ def check_new_model_name(name: str, models_dir: Path) -> None:
 
 def require(model: Any, name: str, capability: str) -> Any:
     """``model`` if it has ``capability`` (a method or attribute), else a 422 naming the
-    ``model`` field: calibrated models predict but do not (yet) invert."""
+    ``model`` field: a saved calibration against an exponential model predicts but does
+    not invert; none searches designs."""
     if not hasattr(model, capability):
-        raise FieldError(("body", "model"), f"model {name!r} does not support this request "
-                         "(a saved calibrated model predicts but does not invert)",
+        what = CAPABILITY_WORDS.get(capability, "this request")
+        raise FieldError(("body", "model"), f"model {name!r} does not answer {what} (a saved "
+                         "calibrated model answers one design at a time; one calibrated "
+                         "against an exponential model predicts but does not invert)",
                          BUILT_IN_WORDS)
     return model
+
+
+CAPABILITY_WORDS = {"inverse": "the pressure for an angle",
+                    "covered_slices": "a design search"}

@@ -149,36 +149,3 @@ def test_calibrate_endpoint_names_row_and_column(client):
     assert body["errors"][0]["field"] == "rows.5.t_mm"
     assert "row 6" in body["detail"]
 
-
-class _DesignSpaceModel:
-    """A Predictor without per-family constants, as the emulator: a calibration against
-    it leaves nothing open; it must not be run when its save is refused anyway."""
-
-    name = "emulator"
-
-    def predict(self, *args, **kwargs):
-        raise AssertionError("the calibration ran although its save was refused")
-
-
-def test_a_save_no_saved_model_can_hold_is_refused_before_the_work(client, tmp_path, capsys,
-                                                                    monkeypatch):
-    """``--save`` against the emulator (the default baseline) calibrated for ~10 s, then
-    failed without writing the report (an audit of 2026-12-06): refused at once, naming
-    the field and what can be saved."""
-    from service.commands import calibrate as calibrate_command
-
-    client.app.state.models.emulator = _DesignSpaceModel()
-    r = client.post("/v1/calibrate", json={"rows": measured_rows(), "model": "emulator",
-                                           "save": "lab3"}, headers={"X-API-Key": "test-key"})
-    body = assert_problem(r, 422)
-    assert body["errors"][0]["field"] == "save"
-    assert "model exponential or paper" in body["detail"]
-    monkeypatch.setattr(calibrate_command, "_starting_model", lambda name: _DesignSpaceModel())
-    data = tmp_path / "lab.csv"
-    data.write_text(",".join(measured_rows()[0]) + "\n" + "\n".join(
-        ",".join(str(v) for v in row.values()) for row in measured_rows()) + "\n")
-    code = main(["calibrate", str(data), "--report", str(tmp_path / "r.json"),
-                 "--save", "lab4", "--models-dir", str(tmp_path / "models")])
-    err = capsys.readouterr().err
-    assert code == 2 and err.count("\n") == 1 and "--save" in err and "--model exponential" in err
-    assert not (tmp_path / "r.json").exists()

@@ -96,14 +96,6 @@ def run(args: argparse.Namespace) -> int:
             raise ModelExistsError(args.save)
         check_new_model_name(args.save, args.models_dir)  # "PAPER", or "lab1" beside "Lab1"
     model = _starting_model(args.model)
-    if args.save is not None:   # a baseline the saved format cannot hold: before the work
-        from surrogate.calibration import saveable_baseline
-
-        try:
-            saveable_baseline(model)
-        except InputError as exc:
-            raise InputError("--save", exc.detail, "--model exponential or paper to save, "
-                             "or leave --save out") from None
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
     report = jsonable(cal.report)

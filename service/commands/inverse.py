@@ -115,7 +115,9 @@ def run(args: argparse.Namespace) -> int:
     s = surrogate_from_args(args)
     if not hasattr(s, "inverse"):
         raise InputError("--model", f"the saved calibrated model {args.model!r} predicts but "
-                         "does not invert", "paper, a surrogate file, or leave --model out")
+                         "does not invert (a calibration against an exponential model)",
+                         "paper, a surrogate file, a calibration against the emulator, or "
+                         "leave --model out")
     if args.angles_deg is not None:
         if args.L_mm is None or args.t_mm is None:
             raise InputError("--angles-deg", "needs the design's --L-mm and --t-mm")

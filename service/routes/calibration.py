@@ -139,7 +139,6 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
         run_calibration,
         save_model,
         saveable,
-        saveable_baseline,
     )
 
     if request.save is not None:
@@ -148,11 +147,6 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
     try:  # the data's errors: the loader's, then the loop's (e.g. fewer than 2 curves)
         obs = observations_from_rows(request.rows, strict=request.strict)
         start = "paper" if request.model == "paper" else models.get(request.model)
-        if request.save is not None:   # a baseline the saved format cannot hold: now, not
-            try:                       # after the work
-                saveable_baseline(start)
-            except InputError as exc:
-                raise located(exc, ("body",), {"name": ("save",)}) from None
         cal = run_calibration(obs, start, folds=request.folds)
     except DataError as exc:
         loc: tuple[str | int, ...] = ("body", "rows")

@@ -10,12 +10,7 @@ Errors: DataError (an InputError naming row and column), ModelNotFoundError (a
 NotFoundError).
 """
 
-from surrogate.calibration._api import (
-    jsonable,
-    run_calibration,
-    saveable,
-    saveable_baseline,
-)
+from surrogate.calibration._api import jsonable, run_calibration, saveable
 from surrogate.calibration._baseline import PAPER_PARAMETERS, FamilyParameters
 from surrogate.calibration._data import (
     OPTIONAL,
@@ -56,5 +51,4 @@ __all__ = [
     "jsonable", "load_model", "load_observations", "observations_from_rows",
     "plot_calibration", "read_csv_rows", "rectangular_channel_resistance_pa_per_ul_s",
     "round_tube_resistance_pa_per_ul_s", "run_calibration", "save_model", "saveable",
-    "saveable_baseline",
 ]

@@ -36,30 +36,15 @@ SAVEABLE_EFFECTS = ("pressure_offset", "hydraulic_resistance", "angle_offset",
                     "membrane_thickness", "viscoelastic_creep")
 
 
-def saveable_baseline(model: Any) -> None:
-    """Raise InputError (field ``save``) before any work when a calibration against
-    ``model`` could not be saved whatever it selects: the saved format holds per-family
-    exponential constants, which a design-space baseline (the emulator) has none of."""
-    from solver.errors import InputError
-
-    baseline = baseline_for(model)
-    if not baseline.open_parameters:
-        raise InputError("save", f"a calibration against {baseline.name!r} cannot be saved "
-                         "yet (saved models hold per-family exponential constants; the "
-                         "report is given without saving)",
-                         "model exponential or paper to save, or no save")
-
-
 def saveable(cal: Calibration) -> None:
     """Raise InputError (field ``save``) when the saved-model format cannot hold this
-    calibration: it stores per-family exponential constants, so a design-space baseline
-    or an effect outside SAVEABLE_EFFECTS would be saved wrongly."""
+    calibration: against a per-family baseline it stores the exponential constants and
+    the SAVEABLE_EFFECTS; against a design-space baseline (the emulator) any selection
+    (``_saved_design.py``: the physical effects applied, the others recorded)."""
     from solver.errors import InputError
 
     if "families" not in cal.report["fitted"]:
-        raise InputError("save", f"a calibration against {cal.baseline.name!r} cannot be "
-                         "saved yet (saved models hold per-family exponential constants)",
-                         "model exponential or paper to save, or no save")
+        return      # a design-space baseline: every effect is saved (_saved_design.py)
     other = [e for e in cal.report["selected_effects"] if e not in SAVEABLE_EFFECTS]
     if other:
         raise InputError("save", f"effect {other[0]} cannot be saved in a calibrated model "

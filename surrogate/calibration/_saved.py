@@ -1,5 +1,9 @@
 """Saved augmented models: ``save_model`` / ``load_model`` and ``CalibratedModel``.
 
+A calibration against a design-space baseline (the emulator) is saved and answered by
+``_saved_design.py`` (``DesignSpaceCalibratedModel``); this module's format is that of a
+calibration against a per-family model (the exponential and paper models):
+
 A saved model is one JSON file ``<models_dir>/<name>.json`` holding the fitted family
 parameters, the selected effects' values and the provenance (data sha256, starting model,
 report summary). ``CalibratedModel.predict(design, pressures_pa, level)`` answers like the
@@ -18,6 +22,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -30,6 +35,12 @@ from solver.atomic_file import write_text_atomic, write_text_exclusive
 from solver.errors import BalloonError, ExistsError, InputError
 from surrogate.calibration._errors import ModelNotFoundError
 from surrogate.calibration._forward import chamber_pressure_pa, static_angle_deg
+from surrogate.calibration._saved_design import (
+    DESIGN_FORMAT,
+    DesignSpaceCalibratedModel,
+    checked_design_document,
+    design_document,
+)
 from surrogate.exponential.equations import TAU_FORM
 from surrogate.predictor import band_within_fe
 
@@ -197,6 +208,8 @@ def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) 
     path = models_dir / f"{name}.json"
     if path.exists() and not overwrite:  # early answer; the create below decides
         raise ModelExistsError(name)
+    if "families" not in cal.report["fitted"]:   # a design-space baseline (_saved_design)
+        return _write(path, design_document(cal, name), name, overwrite)
     r, obs = cal.report, cal.obs
     effects = dict(cal.after.values)
     flows = r["data"]["flow_rates_ul_s"]
@@ -224,6 +237,12 @@ def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) 
                        "residual_structured_after": r["residual_structured_after"],
                        "created_utc": datetime.now(UTC).isoformat(timespec="seconds")},
     }
+    return _write(path, doc, name, overwrite)
+
+
+def _write(path: Path, doc: dict, name: str, overwrite: bool) -> Path:
+    """Write ``doc`` as JSON at ``path``: atomically replacing (``overwrite``), or created
+    atomically so that of two concurrent saves of one name exactly one wins."""
     text = json.dumps(doc, indent=1, allow_nan=False)
     if overwrite:
         write_text_atomic(path, text)
@@ -256,7 +275,8 @@ def _finite(value: object) -> bool:
             and math.isfinite(value))
 
 
-def _checked(doc: object, name: str) -> CalibratedModel:
+def _checked(doc: object, name: str, design_space: Callable[[], Any] | None = None
+             ) -> CalibratedModel | DesignSpaceCalibratedModel:
     """The model of a parsed file, every key and type checked (SavedModelError on the
     first problem), so that a damaged file fails here and never inside a prediction."""
     def bad(what: str) -> SavedModelError:
@@ -265,6 +285,8 @@ def _checked(doc: object, name: str) -> CalibratedModel:
     if not isinstance(doc, dict):
         raise bad("the file is not a JSON object")
     fmt = doc.get("format")
+    if fmt == DESIGN_FORMAT:
+        return checked_design_document(doc, name, bad, design_space)
     if fmt != FORMAT:
         if isinstance(fmt, str) and fmt.startswith(FORMAT.rsplit("/", 1)[0] + "/"):
             raise bad(f"format {fmt!r} is not {FORMAT!r} (a newer version of "
@@ -308,9 +330,12 @@ def _checked(doc: object, name: str) -> CalibratedModel:
                            doc["domain"], doc["provenance"])
 
 
-def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
+def load_model(name: str, models_dir: str | Path,
+               design_space: Callable[[], Any] | None = None
+               ) -> CalibratedModel | DesignSpaceCalibratedModel:
     """A saved calibrated model by name: ModelNotFoundError when there is none,
-    SavedModelError when its file is damaged or malformed."""
+    SavedModelError when its file is damaged or malformed. ``design_space`` gives the
+    design-space baseline (the emulator) a calibration against it answers through."""
     models_dir = Path(models_dir)
     if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name):
         raise ModelNotFoundError(f"no model {name!r}")
@@ -323,4 +348,4 @@ def load_model(name: str, models_dir: str | Path) -> CalibratedModel:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (ValueError, RecursionError) as exc:
         raise SavedModelError(name, f"not valid JSON ({type(exc).__name__})") from None
-    return _checked(doc, name)
+    return _checked(doc, name, design_space)

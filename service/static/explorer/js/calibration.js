@@ -114,9 +114,8 @@ export function rowWords(rest, error) {
   return [column && `column ${column}`, row].filter(Boolean).join(", ");
 }
 
-// Starting models whose calibrations the server cannot save: learned from a report (the
-// saved format holds per-family constants: a report without fitted.families cannot be
-// saved) or from a refused save, with the server's words; kept for the session.
+// Starting models whose calibrations the server cannot save: learned from a refused save,
+// with the server's words; kept for the session.
 const UNSAVEABLE_KEY = "balloon-unsaveable-models";
 function unsaveable() {
   try { return JSON.parse(sessionStorage.getItem(UNSAVEABLE_KEY) || "{}"); } catch { return {}; }
@@ -195,12 +194,6 @@ export function setupCalibration() {
       report = await api("/v1/calibrate", { method: "POST", body, key });
       $("cal-status").textContent = report.saved_model ? `Saved the augmented model as "${report.saved_model}": use it as the model in the design panel.` : "";
       if (report.saved_model) $("model-list").appendChild(new Option(report.saved_model, report.saved_model));
-      // a report whose fit holds no per-family constants cannot be saved: said now, not
-      // after the user asks to save it
-      const fitted = report.fitted;
-      if (fitted && typeof fitted === "object" && !("families" in fitted)) {
-        noteUnsaveable(body.model, "saved models hold per-family exponential constants, which this calibration does not fit");
-      }
       showSaveability();
       await render(report, body);
       return true;

@@ -1,0 +1,238 @@
+"""A saved calibration against a design-space baseline (the emulator): the lab's actuators,
+as the baseline at the design changed by the physical effects the calibration selected.
+
+    model = load_model("lab1", models_dir, design_space=lambda: emulator)
+    model.predict(design, pressures_pa)        # chamber pressure, Pa -> angle, deg
+    model.predict_volume(design, volumes_ul)   # injected volume, ul -> angle, deg
+    model.inverse(design, angles_deg)          # angle, deg -> chamber pressure, Pa
+
+What is applied: the design stage's effects (membrane thickness, the layers' stiffness,
+the chamber length): they are what the lab's process makes, so they hold for any design of
+the calibrated material pairs. What is recorded and named in every answer, not applied:
+gauge and camera effects (the lab's instruments), time effects (creep, relaxation, a leak,
+a drifting gauge: the protocol) and line effects (air in the line: the rig). Answers are
+the actuator's, at chamber pressure, as every Predictor's are.
+
+Band: the baseline's at the changed design, each side widened in quadrature by every
+applied parameter's own uncertainty (its sd from the calibration), propagated by a finite
+difference (the answer at value + sd, or value - sd where that leaves the box).
+
+File (``<models_dir>/<name>.json``): ``{"format": DESIGN_FORMAT, "name", "baseline",
+"pairs": [[body, membrane], ...], "applied": {effect id: {parameter: {value, sd, unit}}},
+"recorded": {effect id: {parameter: {value, sd, unit}}}, "rmse_deg", "domain": {L_mm,
+t_mm, pressure_pa}, "provenance"}``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from typing import Any
+
+import numpy as np
+
+from solver.errors import InputError
+from surrogate.calibration.effects import EFFECTS
+
+DESIGN_FORMAT = "balloon.calibrated-design-model/1"
+
+# the answer's main array and its band, per call
+FIELDS = {"predict": ("angle_deg", "lower_deg", "upper_deg"),
+          "predict_volume": ("angle_deg", "lower_deg", "upper_deg"),
+          "inverse": ("pressure_pa", "lower_pa", "upper_pa")}
+
+
+def design_document(cal: Any, name: str) -> dict[str, Any]:
+    """The file's content for a calibration ``cal`` against a design-space baseline."""
+    r, obs = cal.report, cal.obs
+    params = r["fitted"]["effects"]
+    applied: dict[str, dict] = {}
+    recorded: dict[str, dict] = {}
+    for effect_id in r["selected_effects"]:
+        effect = EFFECTS[effect_id]
+        table = applied if effect.stage == "design" else recorded
+        table[effect_id] = {p.name: {k: params[p.name][k] for k in ("value", "sd", "unit")}
+                            for p in effect.parameters}
+    pairs = sorted({(obs.design(c).body_material.id, obs.design(c).membrane_material.id)
+                    for c in range(obs.n_curves)})
+    return {
+        "format": DESIGN_FORMAT, "name": name, "baseline": cal.baseline.name,
+        "pairs": [list(p) for p in pairs], "applied": applied, "recorded": recorded,
+        "rmse_deg": r["rmse_after_deg"],
+        "domain": {"L_mm": [float(obs.L_mm.min()), float(obs.L_mm.max())],
+                   "t_mm": [float(obs.t_mm.min()), float(obs.t_mm.max())],
+                   "pressure_pa": [float(obs.pressure_pa.min()),
+                                   float(obs.pressure_pa.max())]},
+        "provenance": {"data_sha256": obs.sha256, "base_model": r["model"].get("name"),
+                       "baseline_provenance": _plain(getattr(cal.baseline.predictor,
+                                                             "provenance", {})),
+                       "selected_effects": r["selected_effects"],
+                       "rmse_model_deg": r["rmse_model_deg"],
+                       "rmse_before_deg": r["rmse_before_deg"],
+                       "rmse_after_deg": r["rmse_after_deg"],
+                       "noise_floor_deg": r["noise_floor_deg"],
+                       "residual_structured_after": r["residual_structured_after"],
+                       "created_utc": datetime.now(UTC).isoformat(timespec="seconds")}}
+
+
+def _plain(provenance: dict) -> dict:
+    """The baseline's provenance, its text and numbers only (no local paths)."""
+    keep = ("created_utc", "package_version", "git_commit", "n_records", "format_version")
+    return {k: provenance[k] for k in keep if isinstance(provenance.get(k), str | int | float)}
+
+
+@dataclass(frozen=True)
+class DesignSpaceCalibratedModel:
+    """A saved calibration against a design-space baseline (module docstring). The
+    baseline is resolved on first use (``design_space``): the service's loaded emulator."""
+
+    name: str
+    baseline_name: str
+    pairs: tuple[tuple[str, str], ...]
+    applied: dict[str, dict]
+    recorded: dict[str, dict]
+    rmse_deg: float
+    domain: dict
+    provenance: dict
+    design_space: Callable[[], Any]
+
+    # ---- the three answers -------------------------------------------------------------
+    def predict(self, design, pressures_pa, level: float = 0.95):
+        return self._answer("predict", design, pressures_pa, level)
+
+    def predict_volume(self, design, volumes_ul, level: float = 0.95, band: bool = True):
+        return self._answer("predict_volume", design, volumes_ul, level)
+
+    def inverse(self, design, angles_deg, level: float = 0.95):
+        return self._answer("inverse", design, angles_deg, level)
+
+    # ---- how ------------------------------------------------------------------------------
+    def changed(self, design, shifted: str | None = None, sign: float = 1.0):
+        """``design`` as the lab makes it: every applied effect's ``design`` transform at
+        its value (``shifted``: that parameter at value + sign x sd)."""
+        pair = (design.body_material.id.partition("*")[0],
+                design.membrane_material.id.partition("*")[0])
+        if pair not in self.pairs:
+            raise InputError("body_material", f"the calibrated model {self.name!r} knows the "
+                             f"lab's {'/'.join(pair)} actuators only as calibrated on other "
+                             "materials", "the calibrated pairs: "
+                             + ", ".join("/".join(p) for p in self.pairs))
+        out = design
+        for effect_id, params in self.applied.items():
+            (pname, p), = params.items()
+            value = p["value"] + (sign * p["sd"] if pname == shifted else 0.0)
+            out = EFFECTS[effect_id].design(out, value)
+        return out
+
+    def _answer(self, call: str, design, xs, level: float):
+        baseline = self.design_space()
+        try:
+            base = getattr(baseline, call)(self.changed(design), xs, level=level)
+        except InputError as exc:
+            raise InputError(exc.field, f"the design as the lab makes it ({self._changes()}): "
+                             f"{exc.detail}", exc.allowed) from None
+        main, lo_name, hi_name = FIELDS[call]
+        m = np.asarray(getattr(base, main), float)
+        lo = m - np.asarray(getattr(base, lo_name), float)
+        hi = np.asarray(getattr(base, hi_name), float) - m
+        spread = np.zeros_like(m)
+        left_out = []
+        for params in self.applied.values():
+            (pname, p), = params.items()
+            if not p["sd"] or not math.isfinite(p["sd"]):
+                continue
+            moved = None
+            for sign in (1.0, -1.0):
+                try:
+                    moved = getattr(baseline, call)(self.changed(design, pname, sign), xs,
+                                                    level=level)
+                    break
+                except InputError:
+                    continue
+            if moved is None:
+                left_out.append(pname)
+                continue
+            d = np.asarray(getattr(moved, main), float) - m
+            spread += np.where(np.isfinite(d), d, 0.0) ** 2
+        lower, upper = m - np.sqrt(lo**2 + spread), m + np.sqrt(hi**2 + spread)
+        validity = self._validity(base.validity, design, left_out)
+        return replace(base, design=design, validity=validity, model=self.name,
+                       **{lo_name: lower, hi_name: upper})
+
+    def _changes(self) -> str:
+        words = [f"{pname} {p['value']:+.4g} {p['unit']}".replace("+-", "-")
+                 if p["unit"] != "-" else f"{pname} x {p['value']:.4g}"
+                 for params in self.applied.values() for pname, p in params.items()]
+        return ", ".join(words) or "nothing applied"
+
+    def _validity(self, base: dict, design, left_out: list[str]) -> dict:
+        flags = list(base.get("flags", []))
+        messages = list(base.get("messages", []))
+        messages.append(f"calibrated model {self.name!r} (against {self.baseline_name!r}): "
+                        f"the design as the lab makes it, {self._changes()}; the band "
+                        "includes these sizes' own uncertainty"
+                        + (f" except {', '.join(left_out)}'s (its design +- sd leaves the "
+                           "box)" if left_out else ""))
+        if self.recorded:
+            messages.append("not applied, the lab's instruments and protocol (fix or "
+                            "correct them there): " + "; ".join(
+                                f"{eid} " + ", ".join(f"{n} = {p['value']:.4g} {p['unit']}"
+                                                      for n, p in params.items())
+                                for eid, params in self.recorded.items()))
+        for name, value in (("L_mm", design.L_mm), ("t_mm", design.t_mm)):
+            lo, hi = self.domain[name]
+            if not lo - 1e-9 <= value <= hi + 1e-9:
+                flags.append(f"{name}_outside_calibration")
+                messages.append(f"{name} = {value:g} mm is outside the calibrated "
+                                f"{lo:g}..{hi:g} mm: the effects are carried over")
+        return {**base, "flags": flags, "messages": messages}
+
+
+def checked_design_document(doc: dict, name: str, bad: Callable[[str], Exception],
+                            design_space: Callable[[], Any] | None
+                            ) -> DesignSpaceCalibratedModel:
+    """The model of a parsed DESIGN_FORMAT file, every key and type checked (``bad`` makes
+    the error), so that a damaged file fails here and never inside a prediction."""
+    def finite(v: object) -> bool:
+        return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+    for key, kind in (("name", str), ("baseline", str), ("pairs", list), ("applied", dict),
+                      ("recorded", dict), ("domain", dict), ("provenance", dict)):
+        if not isinstance(doc.get(key), kind):
+            raise bad(f"{key!r} is missing or not a {kind.__name__}")
+    pairs = doc["pairs"]
+    if not pairs or not all(isinstance(p, list) and len(p) == 2
+                            and all(isinstance(x, str) for x in p) for p in pairs):
+        raise bad("'pairs' is not a list of [body, membrane]")
+    for table in ("applied", "recorded"):
+        for effect_id, params in doc[table].items():
+            effect = EFFECTS.get(effect_id)
+            if effect is None or (table == "applied") != (effect.stage == "design"):
+                raise bad(f"{table}.{effect_id} is not a catalogued effect of this kind")
+            names = {p.name for p in effect.parameters}
+            if not isinstance(params, dict) or set(params) != names:
+                raise bad(f"{table}.{effect_id} does not hold {sorted(names)}")
+            for pname, p in params.items():
+                if not (isinstance(p, dict) and finite(p.get("value"))
+                        and (p.get("sd") is None or finite(p.get("sd")))
+                        and isinstance(p.get("unit"), str)):
+                    raise bad(f"{table}.{effect_id}.{pname} is not {{value, sd, unit}}")
+    for key in ("L_mm", "t_mm", "pressure_pa"):
+        pair = doc["domain"].get(key)
+        if not (isinstance(pair, list) and len(pair) == 2 and all(map(finite, pair))):
+            raise bad(f"domain.{key} is missing or not [low, high]")
+    rmse = doc.get("rmse_deg")
+    if rmse is not None and not finite(rmse):
+        raise bad("'rmse_deg' is not a finite number (or null)")
+    if design_space is None:
+        raise bad(f"it was calibrated against {doc['baseline']!r}, which is not loaded here")
+    applied = {eid: {n: {"value": float(p["value"]),
+                         "sd": float(p["sd"]) if p.get("sd") is not None else 0.0,
+                         "unit": p["unit"]} for n, p in params.items()}
+               for eid, params in doc["applied"].items()}
+    return DesignSpaceCalibratedModel(
+        doc["name"], doc["baseline"], tuple(tuple(p) for p in pairs), applied,
+        doc["recorded"], float(rmse) if rmse is not None else math.nan, doc["domain"],
+        doc["provenance"], design_space)
