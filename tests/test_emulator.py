@@ -1057,3 +1057,24 @@ def test_a_group_with_enough_calibration_points_takes_its_own_band_factors():
     assert bad["volume"]["far"] == pytest.approx([5.0] * 6)
     assert few["volume"]["far"] == pooled["volume"]["far"]
     assert max(pooled["volume"]["far"]) > 1.0
+
+
+def test_a_process_that_loads_an_emulator_keeps_openblas_on_one_thread():
+    """A design search took 48 s with OpenBLAS's default threads against 7 s on one, on a
+    loaded 2-core machine (2026-12-06): the emulator's small products gain nothing from
+    threads. Checked in a fresh process without OMP_NUM_THREADS."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("from threadpoolctl import ThreadpoolController as C\n"
+            "from service.settings import DATA_DIR\n"
+            "from surrogate.emulator import load_emulator\n"
+            "load_emulator(DATA_DIR / 'emulator.json')\n"
+            "print([i['num_threads'] for i in C().select(internal_api='openblas').info()])")
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, timeout=300, check=True).stdout
+    threads = [int(n) for n in out.strip().strip("[]").split(",")]   # numpy's, scipy's
+    assert threads and set(threads) == {1}, out
