@@ -229,6 +229,15 @@ def _one_branch(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
+# fields a design does not take but a user may send, and how the request says them (the
+# CLI spells the stiffness scales as options of their own)
+EXTRA_HINTS = {
+    "body_stiffness_scale": 'a stiffness scale is part of the material id: "body_material": '
+                            '"pdms_1_10*1.2" (every mu of the preset x 1.2)',
+    "membrane_stiffness_scale": 'a stiffness scale is part of the material id: '
+                                '"membrane_material": "ecoflex_00_30*0.8" (every mu x 0.8)'}
+
+
 def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
     out = []
     for err in _one_branch(list(exc.errors())):
@@ -247,7 +256,12 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
         # name elsewhere (its pressure_pa is not a target's): what any cell may hold
         allowed = (FIELD_RANGES.get("rows.*") if "rows" in loc[1:2]
                    else FIELD_RANGES.get(names[-1]) if names else None)
-        if err.get("type") == "string_pattern_mismatch" and names and names[-1] in FIELD_FORMS:
+        if err.get("type") == "extra_forbidden":
+            # a field this object does not take: no range of it (it is refused whatever its
+            # value), the way to say it where there is one
+            allowed = EXTRA_HINTS.get(names[-1] if names else "", "leave it out: this "
+                                      "object does not take it (the schema at /docs)")
+        elif err.get("type") == "string_pattern_mismatch" and names and names[-1] in FIELD_FORMS:
             allowed = FIELD_FORMS[names[-1]]       # the form in words, not the pattern
             item["message"] = f"{_short(err.get('input'))} is not of this form"
         elif not allowed and names:

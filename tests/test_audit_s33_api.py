@@ -334,3 +334,19 @@ def test_the_fe_limit_volume_is_given_by_pressure_and_by_the_inverse(shipped_cli
         "design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [45]}))
     assert inverse["volume_ul"] and inverse["validity"]["fe_limit_volume_ul"] > 0
     assert json.dumps(inverse)   # plain JSON
+
+
+def test_a_field_a_design_does_not_take_is_refused_with_how_to_say_it(shipped_client):
+    """``body_stiffness_scale`` (the CLI's option) in an HTTP design was "Extra inputs are
+    not permitted" and no hint; a refused field quoted a range of its own (an audit of
+    2026-12-06)."""
+    client = shipped_client
+    r = client.post("/v1/predict", json={"design": {"L_mm": 7.1, "body_stiffness_scale": 1.2},
+                                         "pressures_pa": [500]})
+    assert r.status_code == 422
+    err = r.json()["errors"][0]
+    assert err["field"] == "design.body_stiffness_scale"
+    assert '"pdms_1_10*1.2"' in err["allowed"]
+    r = client.post("/v1/predict", json={"design": {"L_mm": 7.1, "colour": "red"},
+                                         "pressures_pa": [500]})
+    assert "leave it out" in r.json()["errors"][0]["allowed"]

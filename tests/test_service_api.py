@@ -304,7 +304,8 @@ def test_saved_models_hook(client, monkeypatch):
         predict = FakeSurrogate.predict
         _params = FakeSurrogate._params
 
-    monkeypatch.setattr(service.models, "load_calibrated", lambda name, d: PredictOnly())
+    monkeypatch.setattr(service.models, "load_calibrated", lambda name, d, design_space=None:
+                        PredictOnly())
     r = client.post("/v1/predict", json={"pressures_pa": [0], "model": "lab1"})
     assert r.status_code == 200 and r.json()["model"] == "lab1"
     r = client.post("/v1/inverse/pressure", json={"angles_deg": [10], "model": "lab1"})
