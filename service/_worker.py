@@ -8,7 +8,8 @@ from typing import Any
 from solver.errors import BalloonError
 
 SolveFn = Any
-PROGRESS_KEYS = ("step", "pressure_pa", "volume_ul", "angle_deg", "newton_iterations")
+PROGRESS_KEYS = ("step", "pressure_pa", "volume_ul", "angle_deg", "newton_iterations",
+                 "cutbacks")
 
 
 def child_main(solve_fn: SolveFn, design: Any, settings: Any, conn: Any) -> None:

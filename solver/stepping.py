@@ -417,10 +417,18 @@ def inflate_model(model, settings: SolverSettings,
         rows["res"].append(res)
         rows["neg"].append(neg)
         rows["f"].append(model.tip_force_mn(ev))
-        if on_step is not None and len(rows["p"]) > 1:
-            on_step({"step": len(rows["p"]) - 1, "pressure_pa": p_,
-                     "volume_ul": rows["v"][-1], "angle_deg": angle, "newton_iterations": it})
+        report_step()
         return angle
+
+    def report_step() -> None:
+        """The last converged step to ``on_step``, with the cut-backs so far: after every
+        converged step and after every cut-back (a job's page then says why the curve
+        stands still: 70 s at one pressure had looked like a hang)."""
+        if on_step is not None and len(rows["p"]) > 1:
+            on_step({"step": len(rows["p"]) - 1, "pressure_pa": rows["p"][-1],
+                     "volume_ul": rows["v"][-1], "angle_deg": rows["a"][-1],
+                     "newton_iterations": rows["it"][-1],
+                     "cutbacks": int(model.timings.get("cutbacks", 0))})
 
     switch_settings = replace(settings, max_newton_iter=SWITCH_NEWTON_ITER)
 
@@ -503,6 +511,7 @@ def inflate_model(model, settings: SolverSettings,
                                              start=start)
         except (StepFailed, FloatingPointError) as exc:
             model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
+            report_step()
             if debug:
                 print(f"cut-back at p = {p:.1f}, step {step:.4g}: {exc}")
             failures_here += 1

@@ -65,7 +65,8 @@ def test_a_job_is_submitted_polled_and_finished(tmp_path):
         done = wait_for(client, job["id"])
     assert done["status"] == "finished", done
     assert done["progress"] == {"step": 3, "pressure_pa": 300.0, "volume_ul": 0.75,
-                                "angle_deg": 3.0, "newton_iterations": 4}
+                                "angle_deg": 3.0, "newton_iterations": 4,
+                                "cutbacks": None}    # the fake solve reports none
     assert done["curve_id"] == "c" * 32 and done["curve_status"] == "complete"
     assert done["started_utc"] and done["finished_utc"]
     (design, settings, curve), = written  # exactly one write, through the writer

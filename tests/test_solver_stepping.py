@@ -51,3 +51,27 @@ def test_speed_ups_leave_the_converged_curve_unchanged(monkeypatch):
     assert np.allclose(fast.pressure_pa[j], plain.pressure_pa[i], rtol=1e-6, atol=1e-6)
     assert np.allclose(fast.angle_deg[j], plain.angle_deg[i], rtol=1e-5, atol=1e-6)
     assert fast.timings_s["factorisations"] < 0.85 * plain.timings_s["factorisations"]
+
+
+def test_a_cut_back_is_reported_with_the_last_converged_step(monkeypatch):
+    """A job's page had shown 70 s at one pressure with nothing said (an audit of
+    2026-12-06): every cut-back now reports the last converged step again with the count
+    of cut-backs so far (the job's progress ``cutbacks``)."""
+    calls = {"n": 0}
+    original = stepping.mixed_newton_step
+
+    def failing_once(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise stepping.StepFailed("made to fail once")
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(stepping, "mixed_newton_step", failing_once)
+    infos: list[dict] = []
+    curve = solve(Design(L_mm=4.1), SMALL, on_step=infos.append)
+    assert curve.status in ("complete", "stopped")
+    counts = [i["cutbacks"] for i in infos]
+    assert counts == sorted(counts) and counts[-1] >= 1 and counts[0] == 0
+    at = counts.index(1)
+    assert infos[at]["step"] == infos[at - 1]["step"]          # the same converged step
+    assert infos[at]["pressure_pa"] == infos[at - 1]["pressure_pa"]

@@ -146,7 +146,8 @@ def progress_bar(settings: SolverSettings, quiet: bool) -> tuple[object, object]
                              info["volume_ul"] / settings.max_volume_ul,
                              abs(info["angle_deg"]) / settings.max_angle_deg)
         bar.n = min(round(done), bar.total)
-        bar.set_postfix(p_pa=f"{info['pressure_pa']:.0f}", step=info["step"])
+        bar.set_postfix(p_pa=f"{info['pressure_pa']:.0f}", step=info["step"],
+                        **({"cutbacks": info["cutbacks"]} if info.get("cutbacks") else {}))
         bar.refresh()
 
     return bar, on_step

@@ -26,6 +26,10 @@ class Progress(BaseModel):
     volume_ul: float | None = Field(None, description="injected volume at the last step, ul")
     angle_deg: float | None = Field(None, description="bending angle at the last step, deg")
     newton_iterations: int | None = Field(None, description="Newton iterations of that step")
+    cutbacks: int | None = Field(None, description="load steps cut back so far (a step that "
+                                 "did not converge is retried at half its size): a curve "
+                                 "standing still at one pressure while this rises is the "
+                                 "solver working near a limit point, not a hang")
 
 
 class Job(BaseModel):
