@@ -158,8 +158,8 @@ def name_rule() -> str:
     NAME_PATTERN and RESERVED, and this module's case rule)."""
     from surrogate.calibration._saved import RESERVED
 
-    return ("1-64 letters, digits, '_', '.', '-', starting with a letter or digit; not "
-            + ", ".join(RESERVED) + " in any case")
+    return ("1-64 letters, digits, '_', '.', '-', starting with a letter or digit, without "
+            ".json (the file's ending is added); not " + ", ".join(RESERVED) + " in any case")
 
 
 def check_new_model_name(name: str, models_dir: Path) -> None:
@@ -170,7 +170,7 @@ def check_new_model_name(name: str, models_dir: Path) -> None:
     of the rule (the exact built-in names, an existing file) is ``save_model``'s."""
     from surrogate.calibration._saved import NAME_PATTERN, RESERVED
 
-    if not NAME_PATTERN.fullmatch(name):
+    if not NAME_PATTERN.fullmatch(name) or name.lower().endswith(".json"):
         raise InputError("name", f"invalid model name {name!r}", name_rule())
     folded = name.casefold()
     if folded in RESERVED and name not in RESERVED:

@@ -10,6 +10,7 @@ physics.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -167,3 +168,26 @@ def test_a_per_family_baseline_states_what_it_leaves_open():
     assert "amplitude" in gains["camera_gain"]["reason"]
     assert "pressure scale" in gains["pressure_gain"]["reason"]
     assert "does not respond" in gains["membrane_stiffness"]["reason"]
+
+
+def test_a_gauge_only_member_of_a_pair_is_not_rejected_for_round_off():
+    """Four curves of the example file (made from FE curves with an inlet resistance of
+    60 Pa per ul/s and an angle offset of 1.5 deg; one flow rate, holds and unloading)
+    against the emulator: by volume the resistance moves only the gauge, so the pair's
+    angle error equals the offset's alone -- 0.6199533956888573 against ...381 deg, and
+    the pair was rejected ("a member does not earn its place"), the gauge left at 4.4x its
+    floor (an audit of 2026-12-06)."""
+    from test_calibration_unseen import _emulator
+
+    from surrogate.calibration import load_observations, run_calibration
+
+    obs = load_observations(Path(__file__).resolve().parents[1] / "surrogate" /
+                            "calibration" / "data" / "example_lab.csv")
+    keep = {"L7.1-t0.75-q1.25-s1", "L7.1-t0.75-q1.25-s2", "L11.1-t0.5-q1.25-s1",
+            "L11.1-t0.5-q1.25-s2"}
+    obs = obs.rows(np.isin(np.array(obs.curve_ids)[obs.curve], list(keep)))
+    assert obs.n_curves == 4
+    report = run_calibration(obs, _emulator()).report
+    assert report["selected_effects"] == ["hydraulic_resistance", "angle_offset"]
+    r = report["fitted"]["effects"]["R_pa_per_ul_s"]
+    assert abs(r["value"] - 60.0) < 3 * r["sd"] + 1.0

@@ -84,7 +84,10 @@ def run(args: argparse.Namespace) -> int:
         from service.models import check_new_model_name
         from surrogate.calibration._saved import ModelExistsError, _check_name
 
-        _check_name(args.save)
+        try:
+            _check_name(args.save)
+        except InputError as exc:          # the option the user typed, not "name"
+            raise InputError("--save", exc.detail, exc.allowed) from None
         if args.models_dir is None:
             from service.settings import get_settings
 

@@ -122,6 +122,12 @@ def run(args: argparse.Namespace) -> int:
         if args.L_mm is None or args.t_mm is None:
             raise InputError("--angles-deg", "needs the design's --L-mm and --t-mm")
         return _one_design(s, args)
+    if not (hasattr(s, "evaluate_designs") or hasattr(s, "covered_slices")):
+        # as POST /v1/inverse: a saved calibrated model answers one design at a time
+        raise InputError("--model", f"model {args.model!r} does not answer a design search "
+                         "(a saved calibrated model answers one design at a time: give "
+                         "--L-mm, --t-mm and --angles-deg for the pressure of an angle)",
+                         "emulator, exponential, paper, or a model file")
     return _design_search(s, args)
 
 
@@ -211,17 +217,18 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     unit = "mN" if kind == "force_at_pressure" else "deg"
     print(f"{'rank':>4s} {'L_mm':>7s} {'t_mm':>6s} {'T_mm':>6s} {'b_mm':>6s} {'h_mm':>6s} "
           f"{'body/membrane':36s} {'score':>9s} "
-          f"{'p_need_pa':>10s} {'p_band_pa':>15s} {'at_p_' + unit:>8s} {'band':>15s} flags")
+          f"{'p_need_pa':>10s} {'p_band_pa':>16s} {'at_p_' + unit:>8s} {'band':>16s} flags")
     for c in res.candidates:
         flags = ",".join(c.curve.validity["flags"]) or "-"
         d = c.design
         materials = f"{d.body_material.id}/{d.membrane_material.id}"
         print(f"{c.rank:4d} {d.L_mm:7.3f} {d.t_mm:6.3f} {d.T_mm:6.3f} {d.b_mm:6.3f} "
               f"{d.h_mm:6.3f} {materials:36s} {c.score:9.3g} "
-              + (f"{c.pressure_needed_pa:10.1f} {c.pressure_lower_pa:7.0f}-"
+              + (f"{c.pressure_needed_pa:10.1f} {c.pressure_lower_pa:7.0f}.."
                  f"{c.pressure_upper_pa:<7.0f} " if math.isfinite(c.pressure_needed_pa)
-                 else f"{'--':>10s} {'--':>15s} ")
-              + (f"{c.value_at_pressure:8.2f} {c.value_lower:7.2f}-{c.value_upper:<7.2f} "
-                 if math.isfinite(c.value_at_pressure) else f"{'--':>8s} {'--':>15s} ")
+                 else f"{'--':>10s} {'--':>16s} ")
+              + (f"{c.value_at_pressure:8.2f} {c.value_lower:7.2f}.."
+                 f"{c.value_upper:<7.2f} " if math.isfinite(c.value_at_pressure)
+                 else f"{'--':>8s} {'--':>16s} ")
               + flags)
     return 0

@@ -43,7 +43,25 @@ def saveable(cal: Calibration) -> None:
     (``_saved_design.py``: the physical effects applied, the others recorded)."""
     from solver.errors import InputError
 
-    if "families" not in cal.report["fitted"]:
+    r = cal.report
+    after = r["rmse_after_deg"]
+    if after is None or not math.isfinite(after):
+        raise InputError("save", "the calibration has no cross-validated error (held-out "
+                         "curves reach past the end of the baseline's range): nothing to "
+                         "save", "a calibration with a finite cross-validated error (against "
+                         "the emulator, the default)")
+    left = [what for what, bad in (
+        ("the angle", r["residual_structured_after"]),
+        ("the gauge pressure", (r.get("gauge_left_after") or {}).get("left", False))) if bad]
+    if left:
+        # saved, its answers would carry bands that miss the lab's actuators (20 deg at
+        # 2000 Pa: an unexplained gauge misfit of 24x its floor, 2026-12-06)
+        raise InputError("save", f"the calibration leaves structure in {' and '.join(left)} "
+                         "that its selected effects do not explain: a saved model would not "
+                         "stand for your actuators (the report and its interpretation say "
+                         "what is left and what to measure)",
+                         "a calibration that leaves only replicate scatter")
+    if "families" not in r["fitted"]:
         return      # a design-space baseline: every effect is saved (_saved_design.py)
     other = [e for e in cal.report["selected_effects"] if e not in SAVEABLE_EFFECTS]
     if other:

@@ -647,7 +647,11 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
         # pair that bends its members to the gauge's misfit and predicts the bend worse
         # than one of them alone is not taken (a 0.7 mm shorter chamber with a compliant
         # line on clean data of designs whose bodies were 1-2 % off the preset)
-        if cv_joint >= min(j for _, j, _ in alone) or cv > min(a for _, _, a in alone):
+        # (not above: equal to round-off where a member moves only the gauge, as an
+        # inlet's R Q does by volume -- 0.6199533956888573 against ...381 had rejected
+        # the inlet resistance an example file was made with, 2026-12-06)
+        if (cv_joint >= min(j for _, j, _ in alone)
+                or cv > min(a for _, _, a in alone) * (1 + 1e-9)):
             reasons.append("a member does not earn its place: cross-validated error not "
                            "below a member's alone")
     return {"effect": "+".join(effects), "effects": list(effects),
@@ -964,11 +968,22 @@ def interpret(report: dict, left: dict) -> str:
               if b["open_parameters"] else "with nothing refitted (a design-space model "
               "leaves nothing open)")
     by_volume = report["pressure_channel"]["used"]
+    before = report["rmse_before_deg"]
+    if before is None or not math.isfinite(before):
+        # held-out curves past the end of the refitted baseline's range: no error at all
+        return (f"The baseline {b['name']!r} as is misses the data by "
+                f"{report['rmse_model_deg']:.2f} deg RMS; {opened} it gives no angle at "
+                "some readings of held-out curves (past the end of its range for those "
+                "designs: its FE curves stop below the measured pressures), so the "
+                "cross-validation by curve has no error to report and nothing can be "
+                "selected or saved. Calibrate against the emulator (the default, whose "
+                "range is each design's own), or leave out the readings past the model's "
+                "range.")
     s = [f"The baseline {b['name']!r} as is misses the data by "
          f"{report['rmse_model_deg']:.2f} deg RMS"
          + (" (the angle read at the gauge's pressure)" if by_volume else "")
          + f"; {opened} it predicts unseen curves to "
-         f"{report['rmse_before_deg']:.2f} deg (cross-validated by curve"
+         f"{before:.2f} deg (cross-validated by curve"
          + (", the angle read at the injected volume" if by_volume else "")
          + f"), {floor}."]
     if report["pump_switches"]["open"]:

@@ -193,17 +193,22 @@ def fe_range(cal) -> dict[str, float]:
 
 
 def _check_name(name: str) -> str:
-    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or name in RESERVED:
+    if (not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or name in RESERVED
+            or name.lower().endswith(".json")):     # saved as "lab1.json.json" before
         raise InputError("name", f"invalid model name {name!r}",
                          "1-64 letters, digits, '_', '.', '-', starting with a letter or "
-                         "digit; not " + ", ".join(repr(n) for n in RESERVED))
+                         "digit, without .json (the file's ending is added); not "
+                         + ", ".join(repr(n) for n in RESERVED))
     return name
 
 
 def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) -> Path:
     """Write the calibrated model (atomically). Refuses to replace an existing model
     unless ``overwrite``."""
+    from surrogate.calibration._api import saveable
+
     _check_name(name)
+    saveable(cal)       # what the saved formats can stand for (InputError naming save)
     models_dir = Path(models_dir)
     path = models_dir / f"{name}.json"
     if path.exists() and not overwrite:  # early answer; the create below decides

@@ -37,11 +37,15 @@ from solver.errors import InputError
 from surrogate.calibration.effects import EFFECTS
 
 DESIGN_FORMAT = "balloon.calibrated-design-model/1"
+CALIBRATED_W_MM = 3.0     # measured data carry no width: the paper's, the loader's default
 
-# the answer's main array and its band, per call
-FIELDS = {"predict": ("angle_deg", "lower_deg", "upper_deg"),
-          "predict_volume": ("angle_deg", "lower_deg", "upper_deg"),
-          "inverse": ("pressure_pa", "lower_pa", "upper_pa")}
+# the answer's arrays with a band (value, lower, upper), per call: each is widened
+BANDS = {"predict": (("angle_deg", "lower_deg", "upper_deg"),
+                     ("force_mn", "force_lower_mn", "force_upper_mn")),
+         "predict_volume": (("angle_deg", "lower_deg", "upper_deg"),
+                            ("force_mn", "force_lower_mn", "force_upper_mn")),
+         "inverse": (("pressure_pa", "lower_pa", "upper_pa"),
+                     ("volume_ul", "volume_lower_ul", "volume_upper_ul"))}
 
 
 def design_document(cal: Any, name: str) -> dict[str, Any]:
@@ -55,14 +59,19 @@ def design_document(cal: Any, name: str) -> dict[str, Any]:
         table = applied if effect.stage == "design" else recorded
         table[effect_id] = {p.name: {k: params[p.name][k] for k in ("value", "sd", "unit")}
                             for p in effect.parameters}
-    pairs = sorted({(obs.design(c).body_material.id, obs.design(c).membrane_material.id)
-                    for c in range(obs.n_curves)})
+    designs = [obs.curve_design(c) for c in range(obs.n_curves)]
+    pairs = sorted({(d["body_material"], d["membrane_material"]) for d in designs})
+
+    def span(name: str) -> list[float]:
+        values = [float(d[name]) for d in designs]
+        return [min(values), max(values)]
+
     return {
         "format": DESIGN_FORMAT, "name": name, "baseline": cal.baseline.name,
         "pairs": [list(p) for p in pairs], "applied": applied, "recorded": recorded,
         "rmse_deg": r["rmse_after_deg"],
-        "domain": {"L_mm": [float(obs.L_mm.min()), float(obs.L_mm.max())],
-                   "t_mm": [float(obs.t_mm.min()), float(obs.t_mm.max())],
+        "domain": {**{n: span(n) for n in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")},
+                   "W_mm": [CALIBRATED_W_MM, CALIBRATED_W_MM],
                    "pressure_pa": [float(obs.pressure_pa.min()),
                                    float(obs.pressure_pa.max())]},
         "provenance": {"data_sha256": obs.sha256, "base_model": r["model"].get("name"),
@@ -133,11 +142,9 @@ class DesignSpaceCalibratedModel:
         except InputError as exc:
             raise InputError(exc.field, f"the design as the lab makes it ({self._changes()}): "
                              f"{exc.detail}", exc.allowed) from None
-        main, lo_name, hi_name = FIELDS[call]
-        m = np.asarray(getattr(base, main), float)
-        lo = m - np.asarray(getattr(base, lo_name), float)
-        hi = np.asarray(getattr(base, hi_name), float) - m
-        spread = np.zeros_like(m)
+        bands = [b for b in BANDS[call] if getattr(base, b[0], None) is not None
+                 and getattr(base, b[1], None) is not None]
+        spread = {b[0]: np.zeros(np.shape(getattr(base, b[0]))) for b in bands}
         left_out = []
         for params in self.applied.values():
             (pname, p), = params.items()
@@ -154,36 +161,56 @@ class DesignSpaceCalibratedModel:
             if moved is None:
                 left_out.append(pname)
                 continue
-            d = np.asarray(getattr(moved, main), float) - m
-            spread += np.where(np.isfinite(d), d, 0.0) ** 2
-        lower, upper = m - np.sqrt(lo**2 + spread), m + np.sqrt(hi**2 + spread)
+            for main, _, _ in bands:
+                if getattr(moved, main, None) is None:
+                    continue
+                d = np.asarray(getattr(moved, main), float) - np.asarray(getattr(base, main),
+                                                                          float)
+                spread[main] += np.where(np.isfinite(d), d, 0.0) ** 2
+        widened = {}
+        for main, lo_name, hi_name in bands:
+            m = np.asarray(getattr(base, main), float)
+            lo = m - np.asarray(getattr(base, lo_name), float)
+            hi = np.asarray(getattr(base, hi_name), float) - m
+            lower, upper = m - np.sqrt(lo**2 + spread[main]), m + np.sqrt(hi**2 + spread[main])
+            finite = m[np.isfinite(m)]
+            if finite.size and np.all(finite >= 0):     # an answer of one sign keeps it
+                lower = np.maximum(lower, 0.0)          # (the angle and force of a design
+            elif finite.size and np.all(finite <= 0):   # that bends one way, a pressure,
+                upper = np.minimum(upper, 0.0)          # a volume)
+            widened[lo_name], widened[hi_name] = lower + 0.0, upper + 0.0
         validity = self._validity(base.validity, design, left_out)
-        return replace(base, design=design, validity=validity, model=self.name,
-                       **{lo_name: lower, hi_name: upper})
+        return replace(base, design=design, validity=validity, model=self.name, **widened)
 
     def _changes(self) -> str:
-        words = [f"{pname} {p['value']:+.4g} {p['unit']}".replace("+-", "-")
-                 if p["unit"] != "-" else f"{pname} x {p['value']:.4g}"
+        words = [f"{pname} {p['value']:+.4g} +/- {p['sd']:.2g} {p['unit']}"
+                 if p["unit"] != "-" else f"{pname} x {p['value']:.4g} +/- {p['sd']:.2g}"
                  for params in self.applied.values() for pname, p in params.items()]
-        return ", ".join(words) or "nothing applied"
+        return ", ".join(words) or "the nominal design: no physical effect selected"
 
     def _validity(self, base: dict, design, left_out: list[str]) -> dict:
         flags = list(base.get("flags", []))
         messages = list(base.get("messages", []))
         messages.append(f"calibrated model {self.name!r} (against {self.baseline_name!r}): "
-                        f"the design as the lab makes it, {self._changes()}; the band "
-                        "includes these sizes' own uncertainty"
+                        f"the design as the lab makes it, {self._changes()}"
+                        + ("; the band includes these sizes' own uncertainty" if self.applied
+                           else "")
                         + (f" except {', '.join(left_out)}'s (its design +- sd leaves the "
                            "box)" if left_out else ""))
         if self.recorded:
             messages.append("not applied, the lab's instruments and protocol (fix or "
                             "correct them there): " + "; ".join(
-                                f"{eid} " + ", ".join(f"{n} = {p['value']:.4g} {p['unit']}"
-                                                      for n, p in params.items())
+                                f"{eid} " + ", ".join(
+                                    f"{n} = {p['value']:.4g}"
+                                    + (f" {p['unit']}" if p["unit"] != "-" else "")
+                                    for n, p in params.items())
                                 for eid, params in self.recorded.items()))
-        for name, value in (("L_mm", design.L_mm), ("t_mm", design.t_mm)):
+        for name in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm"):
+            if name not in self.domain:       # T, b, h, W: files of the first version
+                continue
             lo, hi = self.domain[name]
-            if not lo - 1e-9 <= value <= hi + 1e-9:
+            value = getattr(design, name)
+            if not lo * (1 - 1e-9) - 1e-12 <= value <= hi * (1 + 1e-9) + 1e-12:
                 flags.append(f"{name}_outside_calibration")
                 messages.append(f"{name} = {value:g} mm is outside the calibrated "
                                 f"{lo:g}..{hi:g} mm: the effects are carried over")
@@ -219,8 +246,14 @@ def checked_design_document(doc: dict, name: str, bad: Callable[[str], Exception
                         and (p.get("sd") is None or finite(p.get("sd")))
                         and isinstance(p.get("unit"), str)):
                     raise bad(f"{table}.{effect_id}.{pname} is not {{value, sd, unit}}")
-    for key in ("L_mm", "t_mm", "pressure_pa"):
+                lo, hi = next(q.fit_bounds for q in effect.parameters if q.name == pname)
+                if not lo <= p["value"] <= hi or (p.get("sd") or 0.0) < 0:
+                    raise bad(f"{table}.{effect_id}.{pname} = {p['value']!r} is outside what "
+                              f"a calibration fits ({lo:g}..{hi:g})")
+    for key in ("L_mm", "t_mm", "pressure_pa", "T_mm", "b_mm", "h_mm", "W_mm"):
         pair = doc["domain"].get(key)
+        if pair is None and key in ("T_mm", "b_mm", "h_mm", "W_mm"):
+            continue
         if not (isinstance(pair, list) and len(pair) == 2 and all(map(finite, pair))):
             raise bad(f"domain.{key} is missing or not [low, high]")
     rmse = doc.get("rmse_deg")

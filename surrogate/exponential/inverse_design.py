@@ -85,7 +85,8 @@ class DesignTarget:
         if value is None or not _finite(value) or value == 0 or abs(value) > MAX_TARGET[name]:
             unit = "mN" if name == "force_mn" else "deg"
             raise InputError(name, f"the {self.kind} target needs a non-zero {name} of "
-                             f"at most {MAX_TARGET[name]:g} {unit}, got {value!r}",
+                             f"at most {MAX_TARGET[name]:g} {unit}, got "
+                             + ("none" if value is None else repr(value)),
                              f"0 < |{name}| <= {MAX_TARGET[name]:g} {unit}; "
                              "positive bends away from the membrane, negative towards it")
         return self
