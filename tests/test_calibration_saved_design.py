@@ -190,6 +190,12 @@ def test_a_saved_model_flags_every_design_input_it_was_not_calibrated_at_and_no_
     flags = model.predict(replace(d, T_mm=2.0), [300.0]).validity["flags"]
     assert "T_mm_outside_calibration" in flags and "L_mm_outside_calibration" not in flags
     assert model.predict(d, [300.0]).validity["flags"] == []
+    # a membrane scaled in the request: the lab's scale multiplies it, and it is said
+    from solver.design_space import scaled_material
+
+    scaled = replace(d, membrane_material=scaled_material(d.membrane_material.id, 1.2))
+    said = model.predict(scaled, [300.0]).validity["messages"]
+    assert any("scaled already" in m and "multiplies it" in m for m in said)
     monkeypatch.setattr(inverse_command, "surrogate_from_args", lambda args: model)
     assert cli.main(["inverse", "--angle-deg", "30", "--pressure-pa", "1500",
                      "--model", "lab5"]) == 2

@@ -205,6 +205,15 @@ class DesignSpaceCalibratedModel:
                                     + (f" {p['unit']}" if p["unit"] != "-" else "")
                                     for n, p in params.items())
                                 for eid, params in self.recorded.items()))
+        for effect_id, layer in (("body_stiffness", "body_material"),
+                                 ("membrane_stiffness", "membrane_material")):
+            asked = getattr(design, layer).id
+            if effect_id in self.applied and "*" in asked:
+                (pname, p), = self.applied[effect_id].items()
+                messages.append(f"{layer} {asked!r} is scaled already: the lab's {pname} "
+                                f"x {p['value']:.4g} multiplies it (x "
+                                f"{float(asked.partition('*')[2]) * p['value']:.4g} of the "
+                                "preset in all)")
         for name in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm"):
             if name not in self.domain:       # T, b, h, W: files of the first version
                 continue
