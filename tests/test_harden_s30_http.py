@@ -114,6 +114,7 @@ def test_a_name_differing_only_in_case_from_a_saved_model_is_409_before_the_work
     r = client.post("/v1/calibrate", headers=KEY, json={"rows": ROWS, "save": "lab1"})
     body = assert_problem(r, 409)
     assert "'Lab1' already exists" in body["detail"] and "only in case" in body["detail"]
+    assert body["model"] == "Lab1"         # the saved one, as docs/service.md says
     assert str(models) not in r.text
     assert (models / "Lab1.json").read_text() == "{}" and not (models / "lab1.json").exists()
 

@@ -170,9 +170,11 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
 
 
 def _conflict(exc: ExistsError, name: str) -> ConflictError:
-    """409 for a taken name (or one differing from the new name only in case)."""
+    """409 for a taken name (or one differing from the new name only in case): its
+    ``model`` member is the saved model's name (``Lab1`` asked beside a saved ``lab1``:
+    lab1)."""
     return ConflictError(f"save: {getattr(exc, 'detail', exc)}; choose a new name",
-                         model=name)
+                         model=getattr(exc, "name", None) or name)
 
 
 def _check_save_name(name: str, models_dir: Path) -> None:
