@@ -115,6 +115,12 @@ export function setupInverse({ loadDesign }) {
     }
     // the count, unless the explanation already gives it
     if (typeof res.n_evaluated === "number" && !text.includes(String(res.n_evaluated))) text += ` (${res.n_evaluated} designs evaluated)`;
+    // a message every candidate carries is said once, under the explanation, not in each row
+    const messagesOf = (c) => (c.validity && c.validity.messages) ? c.validity.messages : [];
+    const common = candidates.length > 1
+      ? messagesOf(candidates[0]).filter((m) => candidates.every((c) => messagesOf(c).includes(m)))
+      : [];
+    if (common.length) text += ` Every design listed: ${common.join(" ")}`;
     $("inv-explanation").textContent = text;
     const tbody = $("inv-table").querySelector("tbody");
     tbody.innerHTML = "";
@@ -124,7 +130,7 @@ export function setupInverse({ loadDesign }) {
       const band = c.value_lower !== null && c.value_upper !== null ? ` [${fmt(c.value_lower, 1)}, ${fmt(c.value_upper, 1)}]` : "";
       const pband = c.pressure_lower_pa !== null && c.pressure_upper_pa !== null && c.pressure_lower_pa !== c.pressure_upper_pa
         ? ` [${fmt(c.pressure_lower_pa, 0)}, ${fmt(c.pressure_upper_pa, 0)}]` : "";
-      const notes = (c.validity && c.validity.messages) ? c.validity.messages.join(" ") : "";
+      const notes = messagesOf(c).filter((m) => !common.includes(m)).join(" ");
       const geometry = familyGeometry(c);
       const scale = (s) => (typeof s === "number" ? `x${fmtSig(s)}` : "x1");
       const cells = [c.rank, pairLabel(c.body_material, c.membrane_material),
