@@ -17,9 +17,10 @@ def _num(value: Any) -> str:
     return str(int(x)) if x.is_integer() and abs(x) < 1e15 else f"{x:g}"
 
 
-def _bounds(metadata: Iterable[Any]) -> tuple[str | None, str | None, int | None]:
+def _bounds(metadata: Iterable[Any]) -> tuple[str | None, str | None, int | None, int]:
     lo = hi = None
     max_len = None
+    min_len = 0
     for m in metadata:
         if isinstance(m, at.Ge):
             lo = f"{_num(m.ge)} <= "
@@ -31,7 +32,9 @@ def _bounds(metadata: Iterable[Any]) -> tuple[str | None, str | None, int | None
             hi = f" < {_num(m.lt)}"
         elif isinstance(m, at.MaxLen):
             max_len = m.max_length
-    return lo, hi, max_len
+        elif isinstance(m, at.MinLen):
+            min_len = m.min_length
+    return lo, hi, max_len, min_len
 
 
 def _item_metadata(annotation: Any) -> list[Any]:
@@ -51,16 +54,16 @@ def field_ranges(models: Iterable[type[BaseModel]]) -> dict[str, str]:
     ranges: dict[str, str] = {}
     for model in models:
         for name, info in model.model_fields.items():
-            lo, hi, max_len = _bounds(info.metadata)
-            ilo, ihi, _ = _bounds(_item_metadata(info.annotation))
+            lo, hi, max_len, min_len = _bounds(info.metadata)
+            ilo, ihi, _, _ = _bounds(_item_metadata(info.annotation))
             parts = []
             if lo or hi:
                 parts.append(f"{lo or ''}{name}{hi or ''}")
             if ilo or ihi:
                 parts.append(f"each {ilo or ''}{name}{ihi or ''}")
             kinds = set(typing.get_args(info.annotation)) | {info.annotation}
-            if max_len is not None:
-                parts.append(f"at most {max_len} "
+            if max_len is not None:     # "" for a name was told "at most 64 characters"
+                parts.append((f"{min_len}-{max_len} " if min_len else f"at most {max_len} ")
                              + ("characters" if str in kinds else "values"))
             if bool in kinds:
                 parts.append("true or false")
