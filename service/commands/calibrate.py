@@ -120,14 +120,13 @@ def run(args: argparse.Namespace) -> int:
           f"{'; RESIDUAL STRUCTURE REMAINS' if report['residual_structured_after'] else ''}")
     print(report["interpretation"])
     if args.save is not None:   # the report, plot and summary come whatever the save does
-        from surrogate.calibration import saveable
-
-        try:
-            saveable(cal)
+        check_new_model_name(args.save, args.models_dir)  # one saved meanwhile
+        try:        # save_model refuses what the saved formats cannot stand for (saveable)
+            path = save_model(cal, args.save, args.models_dir)
         except InputError as exc:
+            if exc.field != "save":
+                raise
             raise InputError("--save", f"{exc.detail}; the report is written to "
                              f"{args.report.name}", exc.allowed) from None
-        check_new_model_name(args.save, args.models_dir)  # one saved meanwhile
-        path = save_model(cal, args.save, args.models_dir)
         print(f"saved model {args.save!r} to {path}", file=sys.stderr)
     return 0

@@ -138,7 +138,6 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
         observations_from_rows,
         run_calibration,
         save_model,
-        saveable,
     )
 
     if request.save is not None:
@@ -157,8 +156,7 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
     report["model"]["name"] = request.model
     if request.save is not None:
         try:  # a reserved or already used name (atomic create: one of two saves wins),
-              # or a calibration the saved format cannot hold
-            saveable(cal)
+              # or a calibration the saved formats cannot hold (save_model: saveable)
             check_new_model_name(request.save, settings.models_dir)
             save_model(cal, request.save, settings.models_dir)
         except ExistsError as exc:  # the name, or one differing from it only in case

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from solver.design_space import recognise
 from solver.errors import InputError
 from surrogate.calibration.effects import EFFECTS
 
@@ -121,8 +122,7 @@ class DesignSpaceCalibratedModel:
     def changed(self, design, shifted: str | None = None, sign: float = 1.0):
         """``design`` as the lab makes it: every applied effect's ``design`` transform at
         its value (``shifted``: that parameter at value + sign x sd)."""
-        pair = (design.body_material.id.partition("*")[0],
-                design.membrane_material.id.partition("*")[0])
+        pair = (_preset(design.body_material)[0], _preset(design.membrane_material)[0])
         if pair not in self.pairs:
             raise InputError("body_material", f"the calibrated model {self.name!r} knows the "
                              f"lab's {'/'.join(pair)} actuators only as calibrated on other "
@@ -207,13 +207,13 @@ class DesignSpaceCalibratedModel:
                                 for eid, params in self.recorded.items()))
         for effect_id, layer in (("body_stiffness", "body_material"),
                                  ("membrane_stiffness", "membrane_material")):
-            asked = getattr(design, layer).id
-            if effect_id in self.applied and "*" in asked:
+            asked = getattr(design, layer)
+            scale = _preset(asked)[1]
+            if effect_id in self.applied and scale != 1.0:
                 (pname, p), = self.applied[effect_id].items()
-                messages.append(f"{layer} {asked!r} is scaled already: the lab's {pname} "
+                messages.append(f"{layer} {asked.id!r} is scaled already: the lab's {pname} "
                                 f"x {p['value']:.4g} multiplies it (x "
-                                f"{float(asked.partition('*')[2]) * p['value']:.4g} of the "
-                                "preset in all)")
+                                f"{scale * p['value']:.4g} of the preset in all)")
         for name in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm"):
             if name not in self.domain:       # T, b, h, W: files of the first version
                 continue
@@ -224,6 +224,12 @@ class DesignSpaceCalibratedModel:
                 messages.append(f"{name} = {value:g} mm is outside the calibrated "
                                 f"{lo:g}..{hi:g} mm: the effects are carried over")
         return {**base, "flags": flags, "messages": messages}
+
+
+def _preset(material) -> tuple[str, float]:
+    """(preset id, stiffness scale) of a layer's material (``recognise``); an inline
+    material that is no scaled preset keeps its own id (no calibrated pair has it)."""
+    return recognise(material) or (material.id, 1.0)
 
 
 def checked_design_document(doc: dict, name: str, bad: Callable[[str], Exception],

@@ -20,6 +20,7 @@ a load 21 s instead of a few on a shared machine (benchmarks/RESULTS.md, ninth s
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -370,21 +371,21 @@ def save_emulator(e: Emulator, path: str | os.PathLike) -> Path:
 
 
 LOAD_CACHE_SIZE = 2
-_one_thread: list = []      # the process's one BLAS limit, once set (kept: it lasts)
 
 
-def one_blas_thread() -> None:
-    """Keep this process's OpenBLAS on one thread from now on (once per process). An
-    emulator query is a few products of (n, n) matrices with n ~ 450: threads buy nothing
-    there, and on a loaded 2-core machine they cost -- the same design search took 48 s
-    with OpenBLAS's default threads against 7 s on one (`balloon inverse --angle-deg 30
-    --pressure-pa 1500 --L-range 10 10 -n 3`, load ~5, 2026-12-06). A process that
-    loads an emulator queries it (the service, predict, inverse, calibrate); the FE
-    solves run in processes of their own (the service's job workers, `balloon solve`),
-    and PARDISO's threads are MKL's, not OpenBLAS's."""
-    if not _one_thread:
-        _one_thread.append(ThreadpoolController().select(internal_api="openblas")
-                           .limit(limits=1))
+@functools.cache
+def one_blas_thread() -> object:
+    """Keep this process's OpenBLAS on one thread from now on (once per process: the
+    limit object is kept). An emulator query is a few products of (n, n) matrices with
+    n ~ 450: threads buy nothing there, and on a loaded 2-core machine they cost -- the
+    same design search took 48 s with OpenBLAS's default threads against 7 s on one
+    (`balloon inverse --angle-deg 30 --pressure-pa 1500 --L-range 10 10 -n 3`, load ~5,
+    2026-12-06). A process that loads an emulator queries it (the service, predict,
+    inverse, calibrate); the FE solves run in processes of their own (the service's job
+    workers, `balloon solve`), and PARDISO's threads are MKL's, not OpenBLAS's."""
+    return ThreadpoolController().select(internal_api="openblas").limit(limits=1)
+
+
 _loaded: OrderedDict[tuple[str, bytes], Emulator] = OrderedDict()
 _loaded_lock = threading.Lock()
 
