@@ -36,6 +36,7 @@ import numpy as np
 from solver.design_space import recognise
 from solver.errors import InputError
 from surrogate.calibration.effects import EFFECTS
+from surrogate.predictor import one_signed
 
 DESIGN_FORMAT = "balloon.calibrated-design-model/1"
 CALIBRATED_W_MM = 3.0     # measured data carry no width: the paper's, the loader's default
@@ -173,12 +174,13 @@ class DesignSpaceCalibratedModel:
             lo = m - np.asarray(getattr(base, lo_name), float)
             hi = np.asarray(getattr(base, hi_name), float) - m
             lower, upper = m - np.sqrt(lo**2 + spread[main]), m + np.sqrt(hi**2 + spread[main])
+            # an answer of one sign keeps it (the angle and force of a design that bends
+            # one way, a pressure, a volume): its band too
             finite = m[np.isfinite(m)]
-            if finite.size and np.all(finite >= 0):     # an answer of one sign keeps it
-                lower = np.maximum(lower, 0.0)          # (the angle and force of a design
-            elif finite.size and np.all(finite <= 0):   # that bends one way, a pressure,
-                upper = np.minimum(upper, 0.0)          # a volume)
-            widened[lo_name], widened[hi_name] = lower + 0.0, upper + 0.0
+            if finite.size and (np.all(finite >= 0) or np.all(finite <= 0)):
+                _, lower, upper = one_signed(m, lower, upper,
+                                             1.0 if np.all(finite >= 0) else -1.0)
+            widened[lo_name], widened[hi_name] = lower, upper
         validity = self._validity(base.validity, design, left_out)
         return replace(base, design=design, validity=validity, model=self.name, **widened)
 
