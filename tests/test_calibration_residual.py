@@ -14,6 +14,7 @@ from surrogate.calibration._residual import (
     Z_SYSTEMATIC,
     cv_rel_se,
     excess_limit,
+    scatter_shift,
     systematic_residual,
 )
 
@@ -88,3 +89,45 @@ def test_a_residual_the_specimens_share_is_still_found():
     assert math.isclose(s["s2_deg2"], np.mean(shared**2), rel_tol=0.3)
     # one curve per group: no replicates, no estimate
     assert systematic_residual(_replicates(6, 1, 16), shared[:96]) is None
+
+
+def test_the_specimens_mean_angle_lies_above_a_convex_curve_by_their_scatter():
+    # A curve that turns steep, read at gauge pressures, by specimens whose pressure scale
+    # scatters by tau: the three-point rule against a large Monte Carlo mean.
+    p = np.linspace(200.0, 2000.0, 10)
+
+    def angles(pscale: float) -> np.ndarray:
+        return 3.0 * (np.exp(p / pscale / 600.0) - 1.0)
+
+    tau = 0.03
+    e = np.random.default_rng(3).normal(0.0, tau, 400_000)
+    mc = np.array([np.mean(3.0 * (np.exp(pi / (1.0 + e) / 600.0) - 1.0)) for pi in p])
+    shift = scatter_shift(angles, tau)
+    assert np.all(shift > 0.0)
+    assert np.allclose(shift, mc - angles(1.0), rtol=0.05, atol=0.01)
+    assert np.all(scatter_shift(angles, 0.0) == 0.0)
+    # past the baseline's range (NaN) no shift is claimed
+    nan_top = scatter_shift(lambda s: np.where(p > 1500.0, np.nan, angles(s)), tau)
+    assert np.all(nan_top[p > 1500.0] == 0.0) and np.all(nan_top[p <= 1500.0] > 0.0)
+
+
+def test_runs_along_the_curves_count_where_the_angle_is_read_against_the_gauge():
+    from surrogate.calibration._residual import residual_summary
+
+    rng = np.random.default_rng(4)
+    obs = _replicates(3, 3, 16)
+    obs.pressure_pa = np.tile(np.linspace(100.0, 2000.0, 16), obs.n_curves)
+    obs.direction = np.ones(obs.curve.size)
+    resid = _specimen_residuals(rng, obs, 16)
+    floor = NoiseFloor(float(np.sqrt(np.mean(resid**2))), 100, "replicates", 3, rel_se=0.1)
+    runs = {"structured": True, "z_lag1": 9.0, "z_runs": -8.0}
+    rmse = float(np.sqrt(np.mean(resid**2)))
+    off = residual_summary(obs, resid, rmse, floor, runs)
+    on = residual_summary(obs, resid, rmse, floor, runs, along_counts=True)
+    assert not off["structured"]
+    assert on["structured"] and "run along the curves" in on["sentence"]
+    # beside the replicate tests only at |z| > 5 (a clean no-time set gave lag-1 z 3.1)
+    weak = residual_summary(obs, resid, rmse, floor,
+                            {"structured": True, "z_lag1": 3.1, "z_runs": -0.6},
+                            along_counts=True)
+    assert not weak["structured"]

@@ -500,3 +500,26 @@ def test_4_a_refused_save_is_remembered_before_the_next_calibration(watched, ser
     page.click("#cal-run")
     page.wait_for_selector("#cal-save-note:not([hidden])")
     assert "per-family exponential constants" in page.locator("#cal-save-note").inner_text()
+
+
+def test_4_a_report_that_cannot_be_saved_greys_out_save_at_once(watched, server):
+    """The report says whether it can be saved (``saveable``): the page greys out Save
+    with the server's words, without a refused save first."""
+    page = open_explorer(watched, server.url)
+    why = ("the calibration leaves structure in the angle that its selected effects do "
+           "not explain: a saved model would not stand for your actuators")
+    page.route("**/v1/calibrate", lambda route: route.fulfill(
+        json={**REPORT, "residual_structured_after": True,
+              "saveable": {"ok": False, "why": why}}))
+    page.set_input_files("#cal-file", str(EXAMPLE_CSV))
+    page.click("#cal-run")
+    page.wait_for_selector("#cal-report:not([hidden])")
+    page.wait_for_function("document.getElementById('save-run').disabled")
+    assert "leaves structure in the angle" in page.locator("#save-note").inner_text()
+    # a report that can be saved leaves Save open
+    page.unroute("**/v1/calibrate")
+    page.route("**/v1/calibrate", lambda route: route.fulfill(
+        json={**REPORT, "saveable": {"ok": True, "why": None}}))
+    page.click("#cal-run")
+    page.wait_for_function("!document.getElementById('save-run').disabled")
+    assert page.locator("#save-note").is_hidden()

@@ -111,6 +111,9 @@ class CalibrationReport(BaseModel):
     candidates: list[Candidate]
     residual_structured_after: bool
     interpretation: str
+    saveable: dict[str, Any] | None = Field(
+        None, description="whether this calibration can be saved as a model (`ok`) and, "
+        "if not, why (`why`): the same words a request with `save` would be refused with")
     saved_model: str | None = None
 
 

@@ -15,7 +15,21 @@ def run_calibration(data: Observations | list[dict[str, Any]], model: Any = None
     """Validate ``data`` (rows or Observations) and run the loop against ``model``: None
     or "paper" (the paper's constants), or any ``surrogate.predictor.Predictor``."""
     obs = data if isinstance(data, Observations) else observations_from_rows(data, strict)
-    return calibrate(obs, baseline_for(model), folds=folds, progress=progress)
+    cal = calibrate(obs, baseline_for(model), folds=folds, progress=progress)
+    cal.report["saveable"] = save_status(cal)
+    return cal
+
+
+def save_status(cal: Calibration) -> dict[str, Any]:
+    """Whether ``save_model`` would keep this calibration, and why not in its own words
+    (``saveable``): in every report, so that a page or a script knows before it asks."""
+    from solver.errors import InputError
+
+    try:
+        saveable(cal)
+    except InputError as exc:
+        return {"ok": False, "why": exc.detail}
+    return {"ok": True, "why": None}
 
 
 def jsonable(value: Any) -> Any:

@@ -51,7 +51,7 @@ from surrogate.calibration._least_squares import (
     paired_cv,
 )
 from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
-from surrogate.calibration._residual import residual_summary
+from surrogate.calibration._residual import residual_summary, scatter_shift
 from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._specimens import SpecimenScatter, specimen_scatter
 from surrogate.calibration._start import Baseline
@@ -199,11 +199,27 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         sd = get_fit(effects).baseline_sd_deg
         return baseline_var if sd is None or not backed else max(sd**2, baseline_var)
 
+    def shift(effects: tuple[str, ...]) -> np.ndarray | None:
+        """The specimens' mean angle above the nominal at each gauge reading
+        (_residual.scatter_shift) at the set's fit; None by injected volume."""
+        if scatter is None:
+            return None
+        f = get_fit(effects)
+        return scatter_shift(lambda s: f.model.angles(f.x, pscale=s), scatter.tau)
+
+    def along(effects: tuple[str, ...]) -> dict:
+        """The set's residuals along the curves, beyond each specimen's own amplitude and
+        pressure scale (_structure.py)."""
+        f = get_fit(effects)
+        return structure_test(obs.curve, f.residual, _nuisance(f))
+
     def leaves(effects: tuple[str, ...], backed: bool = True) -> dict:
         cv, resid = get_cv(effects)
-        return residual_summary(obs, resid, cv, noise, {"structured": False, "z_lag1": 0.0,
-                                                         "z_runs": 0.0},
-                                own_var(effects, backed))
+        quiet = {"structured": False, "z_lag1": 0.0, "z_runs": 0.0}
+        return residual_summary(obs, resid, cv, noise,
+                                along(effects) if scatter is not None else quiet,
+                                own_var(effects, backed), shift(effects),
+                                along_counts=scatter is not None)
 
     candidates, selectable = [], []
     base_joint = get_xv(()).rmse_joint
@@ -265,7 +281,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     nuisance = _nuisance(after)
     structure = structure_test(obs.curve, after.residual, nuisance)
     left = residual_summary(obs, resid_after, rmse_after, noise, structure,
-                            own_var(chosen))
+                            own_var(chosen), shift(chosen),
+                            along_counts=scatter is not None)
     not_identifiable = [{"effect": e.id, "reason": status[e.id]["reason"],
                          "measure": status[e.id]["measure"]}
                         for e in CATALOGUE if status[e.id]["reason"] is not None]

@@ -38,6 +38,11 @@ from surrogate.calibration._noise import NoiseFloor
 Z_SYSTEMATIC = 3.0
 MIN_SIZE_FRACTION = 0.25
 EXCESS_RATIO = 1.10
+# the within-curve test beside the replicate tests (``along_counts``) counts at |z| > 5,
+# not its own 3: with replicates it is the second opinion. Creep without time_s gave
+# lag-1 z 13.6-14.0 and runs z -12.7 to -11.9 (six noise seeds); clean no-time sets up to
+# 3.1 (seed offset 426, where a limit of 3 flagged 0.00 deg beyond the floor)
+ALONG_Z = 5.0
 PHASES = ((1.0, "loading"), (0.0, "hold"), (-1.0, "unloading"))
 
 
@@ -104,7 +109,22 @@ def _mean_product(x_a: np.ndarray, r_a: np.ndarray, x_b: np.ndarray, r_b: np.nda
 
 
 def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
-                     noise: NoiseFloor, structure: dict, baseline_var: float = 0.0) -> dict:
+                     noise: NoiseFloor, structure: dict, baseline_var: float = 0.0,
+                     scatter_shift_deg: np.ndarray | None = None,
+                     along_counts: bool = False) -> dict:
+    """What the out-of-fold residuals ``resid_cv`` (model - data, deg; their RMS
+    ``rmse_after``) leave beyond the floor (the module's docstring). ``scatter_shift_deg``:
+    per row, how far the specimens' mean angle at a gauge pressure lies above the nominal
+    curve's (``scatter_shift``); a right model's residuals average -shift, so it is added
+    back before judging (the reported error stays the plain one). ``along_counts``: the
+    within-curve ``structure`` test counts beside the replicate tests, at ``ALONG_Z``
+    (where the angle is read against the gauge pressure: a specimen's scatter is one
+    shift per curve there, which the test's nuisance directions take out, and creep
+    without time_s shows as runs the replicates share too weakly to count)."""
+    if scatter_shift_deg is not None and np.any(scatter_shift_deg != 0.0):
+        resid_cv = resid_cv + scatter_shift_deg
+        fin = np.isfinite(resid_cv)
+        rmse_after = float(np.sqrt(np.mean(resid_cv[fin] ** 2))) if fin.any() else rmse_after
     floor = noise.rms_deg
     replicates = noise.source == "replicates" and math.isfinite(floor)
     sys_ = systematic_residual(obs, resid_cv) if replicates else None
@@ -129,7 +149,13 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
         if shared:
             why.append(f"replicates share a residual of "
                        f"{math.sqrt(sys_['s2_deg2'] - baseline_var):.2f} deg RMS")
-        structured = excess or shared
+        along = bool(along_counts and (structure["z_lag1"] > ALONG_Z
+                                       or structure["z_runs"] < -ALONG_Z))
+        if along:
+            why.append(f"the residuals run along the curves beyond each specimen's own "
+                       f"scale (lag-1 z = {structure['z_lag1']:.1f}, runs z = "
+                       f"{structure['z_runs']:.1f})")
+        structured = excess or shared or along
     else:
         has_floor = math.isfinite(floor) and math.isfinite(rmse_after)
         unexplained = math.sqrt(max(rmse_after**2 - floor**2, 0.0)) if has_floor else None
@@ -153,6 +179,25 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
     return {"structured": structured, "unexplained_rms_deg": unexplained, "where": bins,
             "systematic": sys_, "sentence": sentence, "excess_allowance": limit if replicates
             and math.isfinite(rmse_after) else None}
+
+
+def scatter_shift(angles, tau: float) -> np.ndarray:
+    """E_e[angle(p / (1 + e))] - angle(p) at every row, e ~ N(0, tau^2) the specimens'
+    pressure-scale scatter (_specimens.py), by three-point Gauss-Hermite: (angle at
+    1 + sqrt(3) tau + angle at 1 - sqrt(3) tau - 2 angle) / 6. ``angles(pscale)`` gives the
+    angle at every row with every curve's pressure scale multiplied by ``pscale``.
+
+    Read against the gauge pressure, a curve that turns steep is convex in p: specimens
+    a few per cent softer bend much further at its top than those as much stiffer bend
+    less, so the replicates' mean lies above the nominal curve there (PDMS 1:15 loading,
+    2 % scatter, no time_s: model - data -2.2 deg at 1800-2200 Pa with the right model).
+    That part of the misfit is the specimens', shared by all of them, not an effect
+    outside the catalogue. 0 where any of the three is past the baseline's range."""
+    if not tau > 0.0:
+        return np.zeros_like(np.asarray(angles(1.0), float))
+    a = math.sqrt(3.0) * tau
+    shift = (angles(1.0 + a) + angles(1.0 - a) - 2.0 * angles(1.0)) / 6.0
+    return np.nan_to_num(shift, nan=0.0, posinf=0.0, neginf=0.0)
 
 
 def cv_rel_se(obs: Observations, resid_cv: np.ndarray, baseline_var: float = 0.0) -> float:

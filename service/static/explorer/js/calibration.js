@@ -138,8 +138,10 @@ export function setupCalibration() {
     note.hidden = !why;
     note.textContent = why ? `A calibration against "${model}" cannot be saved as a model (the server says: ${why}). ` +
       "Its report is still shown; to save the augmented model, choose another starting model." : "";
-    // the report shown: its Save is greyed out, saying why, when it cannot be saved
-    const shownWhy = lastBody ? unsaveable()[lastBody.model] : null;
+    // the report shown: its Save is greyed out, saying why, when it cannot be saved (the
+    // report says so itself; older servers' refusals were learned per starting model)
+    const said = report && report.saveable && report.saveable.ok === false ? report.saveable.why : null;
+    const shownWhy = lastBody ? (said || unsaveable()[lastBody.model]) : null;
     $("save-run").disabled = !!shownWhy;
     $("save-note").hidden = !shownWhy;
     $("save-note").textContent = shownWhy ? `This calibration against "${lastBody.model}" cannot be saved: ${shownWhy}.` : "";
