@@ -131,3 +131,9 @@ def test_runs_along_the_curves_count_where_the_angle_is_read_against_the_gauge()
                             {"structured": True, "z_lag1": 3.1, "z_runs": -0.6},
                             along_counts=True)
     assert not weak["structured"]
+    # with the floor above the error (the steep tops' specimen scatter) the runs still
+    # count, and the sentence does not claim a size beyond the floor
+    wide = NoiseFloor(2.0 * rmse, 100, "replicates", 3, rel_se=0.1)
+    both = residual_summary(obs, resid, rmse, wide, runs, along_counts=True)
+    assert both["structured"] and "within the floor's size" in both["sentence"]
+    assert "0.00 deg" not in both["sentence"]
