@@ -15,6 +15,7 @@ from surrogate.calibration._residual import (
     cv_rel_se,
     excess_limit,
     scatter_shift,
+    specimen_units,
     systematic_residual,
 )
 
@@ -137,3 +138,20 @@ def test_runs_along_the_curves_count_where_the_angle_is_read_against_the_gauge()
     both = residual_summary(obs, resid, rmse, wide, runs, along_counts=True)
     assert both["structured"] and "within the floor's size" in both["sentence"]
     assert "0.00 deg" not in both["sentence"]
+
+
+def test_read_against_the_gauge_the_allowance_counts_the_specimens_it_rests_on():
+    # A lab with a pressure regulator (set points up and down, 3 specimens of 3 %
+    # stiffness scatter per design, no time_s) had its clean sets flagged at 3 of 30 noise
+    # seeds: when 3 specimens happen to agree, the floor and the spread-based error of it
+    # are both small. Where a specimen's stiffness dominates, neither relative error is
+    # taken below a chi-square's 1 / sqrt(2 dof) of the RMS.
+    obs = _replicates(3, 3, 16)
+    assert specimen_units(obs) == (6, 9)
+    assert specimen_units(_replicates(2, 1, 16)) == (0, 2)
+    tight = NoiseFloor(1.0, 100, "replicates", 3, rel_se=0.05)
+    assert math.isclose(excess_limit(tight, 0.05, (6, 9)),
+                        1.0 + 2.0 * math.hypot(1 / math.sqrt(12), 1 / math.sqrt(18)))
+    assert math.isclose(excess_limit(tight, 0.05), 1.0 + 2.0 * math.hypot(0.05, 0.05))  # by volume
+    loose = NoiseFloor(1.0, 100, "replicates", 3, rel_se=0.5)
+    assert math.isclose(excess_limit(loose, 0.4, (6, 9)), 1.0 + 2.0 * math.hypot(0.5, 0.4))

@@ -139,7 +139,8 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
             ratio = math.sqrt(model_part2) / floor
         else:  # replicates that agree exactly (copies of one curve): any misfit counts
             ratio = math.inf if model_part2 > 0 else 0.0
-        limit = excess_limit(noise, cv_rel_se(obs, resid_cv, baseline_var))
+        limit = excess_limit(noise, cv_rel_se(obs, resid_cv, baseline_var),
+                             specimen_units(obs) if along_counts else None)
         excess = ratio > limit
         if excess:
             why.append(f"the cross-validated error is {ratio:.2f} x the replicate floor, "
@@ -218,7 +219,16 @@ def cv_rel_se(obs: Observations, resid_cv: np.ndarray, baseline_var: float = 0.0
     return 0.5 * float(np.std(ms, ddof=1)) / math.sqrt(len(ms)) / model_part2
 
 
-def excess_limit(noise: NoiseFloor, cv_rel: float = float("nan")) -> float:
+def specimen_units(obs: Observations) -> tuple[int, int]:
+    """Degrees of freedom of the floor and of the cross-validated error where a specimen's
+    own stiffness dominates both (read against the gauge pressure): the floor's are the
+    specimens beyond the first of each replicate group, the error's the curves."""
+    groups = [np.unique(obs.curve[obs.group == g]).size for g in np.unique(obs.group)]
+    return sum(n - 1 for n in groups if n > 1), int(np.unique(obs.curve).size)
+
+
+def excess_limit(noise: NoiseFloor, cv_rel: float = float("nan"),
+                 units: tuple[int, int] | None = None) -> float:
     """How far above the floor a right model's cross-validated error may be: EXCESS_RATIO,
     or 1 + 2 relative standard errors of their ratio when that is larger. Both are
     measured on the same few specimens, whose scatter is shared along each curve: with 9
@@ -228,6 +238,12 @@ def excess_limit(noise: NoiseFloor, cv_rel: float = float("nan")) -> float:
     off raises both) left out, which errs towards the wider allowance."""
     rel_f = noise.rel_se if math.isfinite(noise.rel_se) else 0.0
     rel_c = cv_rel if math.isfinite(cv_rel) else 0.0
+    if units is not None:
+        # the spread of a few specimens' values underestimates their own uncertainty
+        # most where it is smallest: not below a chi-square's 1 / sqrt(2 dof) of the RMS
+        dof_f, dof_c = units
+        rel_f = max(rel_f, 1.0 / math.sqrt(2.0 * dof_f)) if dof_f > 0 else rel_f
+        rel_c = max(rel_c, 1.0 / math.sqrt(2.0 * dof_c)) if dof_c > 0 else rel_c
     return max(EXCESS_RATIO, 1.0 + 2.0 * math.hypot(rel_f, rel_c))
 
 
