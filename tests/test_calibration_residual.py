@@ -124,18 +124,18 @@ def test_runs_along_the_curves_count_where_the_angle_is_read_against_the_gauge()
     runs = {"structured": True, "z_lag1": 9.0, "z_runs": -8.0}
     rmse = float(np.sqrt(np.mean(resid**2)))
     off = residual_summary(obs, resid, rmse, floor, runs)
-    on = residual_summary(obs, resid, rmse, floor, runs, along_counts=True)
+    on = residual_summary(obs, resid, rmse, floor, runs, by_gauge=True)
     assert not off["structured"]
     assert on["structured"] and "run along the curves" in on["sentence"]
     # beside the replicate tests only at |z| > 5 (a clean no-time set gave lag-1 z 3.1)
     weak = residual_summary(obs, resid, rmse, floor,
                             {"structured": True, "z_lag1": 3.1, "z_runs": -0.6},
-                            along_counts=True)
+                            by_gauge=True)
     assert not weak["structured"]
     # with the floor above the error (the steep tops' specimen scatter) the runs still
     # count, and the sentence does not claim a size beyond the floor
     wide = NoiseFloor(2.0 * rmse, 100, "replicates", 3, rel_se=0.1)
-    both = residual_summary(obs, resid, rmse, wide, runs, along_counts=True)
+    both = residual_summary(obs, resid, rmse, wide, runs, by_gauge=True)
     assert both["structured"] and "within the floor's size" in both["sentence"]
     assert "0.00 deg" not in both["sentence"]
 

@@ -219,7 +219,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         return residual_summary(obs, resid, cv, noise,
                                 along(effects) if scatter is not None else quiet,
                                 own_var(effects, backed), shift(effects),
-                                along_counts=scatter is not None)
+                                by_gauge=scatter is not None)
 
     candidates, selectable = [], []
     base_joint = get_xv(()).rmse_joint
@@ -282,7 +282,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     structure = structure_test(obs.curve, after.residual, nuisance)
     left = residual_summary(obs, resid_after, rmse_after, noise, structure,
                             own_var(chosen), shift(chosen),
-                            along_counts=scatter is not None)
+                            by_gauge=scatter is not None)
     not_identifiable = [{"effect": e.id, "reason": status[e.id]["reason"],
                          "measure": status[e.id]["measure"]}
                         for e in CATALOGUE if status[e.id]["reason"] is not None]

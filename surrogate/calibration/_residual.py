@@ -38,7 +38,7 @@ from surrogate.calibration._noise import NoiseFloor
 Z_SYSTEMATIC = 3.0
 MIN_SIZE_FRACTION = 0.25
 EXCESS_RATIO = 1.10
-# the within-curve test beside the replicate tests (``along_counts``) counts at |z| > 5,
+# the within-curve test beside the replicate tests (``by_gauge``) counts at |z| > 5,
 # not its own 3: with replicates it is the second opinion. Creep without time_s gave
 # lag-1 z 13.6-14.0 and runs z -12.7 to -11.9 (six noise seeds); clean no-time sets up to
 # 3.1 (seed offset 426, where a limit of 3 flagged it). No size beyond the floor is asked
@@ -113,16 +113,18 @@ def _mean_product(x_a: np.ndarray, r_a: np.ndarray, x_b: np.ndarray, r_b: np.nda
 def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
                      noise: NoiseFloor, structure: dict, baseline_var: float = 0.0,
                      scatter_shift_deg: np.ndarray | None = None,
-                     along_counts: bool = False) -> dict:
+                     by_gauge: bool = False) -> dict:
     """What the out-of-fold residuals ``resid_cv`` (model - data, deg; their RMS
     ``rmse_after``) leave beyond the floor (the module's docstring). ``scatter_shift_deg``:
     per row, how far the specimens' mean angle at a gauge pressure lies above the nominal
     curve's (``scatter_shift``); a right model's residuals average -shift, so it is added
-    back before judging (the reported error stays the plain one). ``along_counts``: the
-    within-curve ``structure`` test counts beside the replicate tests, at ``ALONG_Z``
-    (where the angle is read against the gauge pressure: a specimen's scatter is one
-    shift per curve there, which the test's nuisance directions take out, and creep
-    without time_s shows as runs the replicates share too weakly to count)."""
+    back before judging (the reported error stays the plain one). ``by_gauge``: the angle
+    is read against the gauge pressure, where a specimen's stiffness dominates the
+    scatter: the within-curve ``structure`` test counts beside the replicate tests, at
+    ``ALONG_Z`` (a specimen's scatter is one shift per curve there, which the test's
+    nuisance directions take out, and creep without time_s shows as runs the replicates
+    share too weakly to count), and the excess allowance counts the specimens it rests on
+    (``specimen_units``)."""
     if scatter_shift_deg is not None and np.any(scatter_shift_deg != 0.0):
         resid_cv = resid_cv + scatter_shift_deg
         fin = np.isfinite(resid_cv)
@@ -140,7 +142,7 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
         else:  # replicates that agree exactly (copies of one curve): any misfit counts
             ratio = math.inf if model_part2 > 0 else 0.0
         limit = excess_limit(noise, cv_rel_se(obs, resid_cv, baseline_var),
-                             specimen_units(obs) if along_counts else None)
+                             specimen_units(obs) if by_gauge else None)
         excess = ratio > limit
         if excess:
             why.append(f"the cross-validated error is {ratio:.2f} x the replicate floor, "
@@ -152,7 +154,7 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
         if shared:
             why.append(f"replicates share a residual of "
                        f"{math.sqrt(sys_['s2_deg2'] - baseline_var):.2f} deg RMS")
-        along = bool(along_counts and (structure["z_lag1"] > ALONG_Z
+        along = bool(by_gauge and (structure["z_lag1"] > ALONG_Z
                                        or structure["z_runs"] < -ALONG_Z))
         if along:
             why.append(f"the residuals run along the curves beyond each specimen's own "
