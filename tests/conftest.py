@@ -1,5 +1,7 @@
 """Shared pytest configuration: heavy finite-element cases are opt-in (--runslow); the
-``shipped_client`` fixture (the app over the shipped data, one per test module).
+``shipped_client`` fixture (the app over the shipped data, one per test module); the
+explorer's browser fixtures ``browser`` and ``watched`` (tests/explorer_browser.py; each
+browser test module gives its own ``server``).
 
 Named ``shipped_client``, not ``client``: several modules define their own ``client``
 over fakes or a temporary database, and a conftest fixture of that name would be
@@ -8,7 +10,12 @@ shadowed there silently.
 
 import os
 
-import pytest
+# before anything imports numpy (the explorer's fixtures below do): its OpenBLAS reads
+# this when it loads, and the suite's subprocesses inherit it (pytest_configure)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import pytest  # noqa: E402
+from explorer_browser import browser_fixture, watched_fixture  # noqa: E402,F401 - registered here
 
 _BLAS_LIMIT = []
 
@@ -21,7 +28,6 @@ def pytest_configure(config: pytest.Config) -> None:
     limiting it after PARDISO has run on two threads crashes (benchmarks/RESULTS.md)."""
     from threadpoolctl import ThreadpoolController
 
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     _BLAS_LIMIT.append(ThreadpoolController().select(internal_api="openblas").limit(limits=1))
 
 

@@ -4,9 +4,9 @@ FE solves from service_solves.py in real worker processes) and headless Debian C
 driven by Playwright. Without /usr/bin/chromium or playwright the tests skip, saying why
 (.ci/run installs both).
 
-Screenshots go to test-artifacts/explorer/ (git-ignored). A test module imports the
-fixtures ``browser`` and ``watched`` (as ``browser_fixture``, ``watched_fixture``) and
-defines its own ``server`` fixture.
+Screenshots go to test-artifacts/explorer/ (git-ignored). tests/conftest.py registers
+the fixtures ``browser`` and ``watched`` (``browser_fixture``, ``watched_fixture``) for
+every module; a browser test module defines its own ``server`` fixture.
 """
 
 from __future__ import annotations

@@ -14,15 +14,13 @@ from __future__ import annotations
 import json
 
 import pytest
-from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
+from explorer_browser import (
     API_KEY,
     ROOT,
     LiveServer,
     Watched,
-    browser_fixture,
     open_explorer,
     screenshot,
-    watched_fixture,
 )
 from service_solves import make_curve
 
@@ -516,6 +514,7 @@ def test_4_a_report_that_cannot_be_saved_greys_out_save_at_once(watched, server)
     page.wait_for_selector("#cal-report:not([hidden])")
     page.wait_for_function("document.getElementById('save-run').disabled")
     assert "leaves structure in the angle" in page.locator("#save-note").inner_text()
+    screenshot(page, "audit-calibration-unsaveable-1280")
     # a report that can be saved leaves Save open
     page.unroute("**/v1/calibrate")
     page.route("**/v1/calibrate", lambda route: route.fulfill(

@@ -12,14 +12,12 @@ import json
 
 import httpx
 import pytest
-from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
+from explorer_browser import (
     API_KEY,
     ROOT,
     LiveServer,
-    browser_fixture,
     open_explorer,
     screenshot,
-    watched_fixture,
 )
 from service_solves import fast_solve
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import httpx
 import pytest
-from explorer_browser import LiveServer, Watched, browser_fixture, screenshot  # noqa: F401
+from explorer_browser import LiveServer, Watched, screenshot
 
 pytestmark = pytest.mark.timeout(300)  # a browser that hangs fails the test
 

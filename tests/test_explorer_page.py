@@ -12,13 +12,11 @@ import json
 
 import httpx
 import pytest
-from explorer_browser import (  # noqa: F401 - the fixtures browser, watched
+from explorer_browser import (
     LiveServer,
     Watched,
-    browser_fixture,
     open_explorer,
     screenshot,
-    watched_fixture,
 )
 
 GRID_POINTS = 81  # the page's pressure grid: 0 .. p_max in 80 steps

@@ -411,9 +411,8 @@ def load_emulator(path: str | os.PathLike) -> Emulator:
     except (ValueError, RecursionError) as exc:
         raise SurrogateFileError(path.name, f"cannot be read ({type(exc).__name__})"
                                  ) from None
-    with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
-        emulator = emulator_from_dict(data, path.name, raw)
-    one_blas_thread()
+    one_blas_thread()       # for the loading's algebra and the queries after it
+    emulator = emulator_from_dict(data, path.name, raw)
     with _loaded_lock:
         _loaded[key] = emulator
         while len(_loaded) > LOAD_CACHE_SIZE:
