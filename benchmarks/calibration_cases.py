@@ -7,6 +7,9 @@ solves they are made from (docs/calibration.md, "Tests").
     .venv/bin/python benchmarks/calibration_cases.py --emulator PATH --reports DIR
     .venv/bin/python benchmarks/calibration_cases.py --unseen [CASE ...]
     .venv/bin/python benchmarks/calibration_cases.py --unseen --seed-offset 100   # other noise
+    .venv/bin/python benchmarks/calibration_cases.py --unseen creep-no-time \
+        --seed-offset 400 --seeds 30                         # a rate over 30 noise seeds
+    .venv/bin/python benchmarks/calibration_cases.py --regulator 10   # a regulator lab
 
 The cases are those of tests/test_calibration_loop.py (same labs, truths and seed), run
 against the shipped emulator (or ``--emulator PATH``); one markdown row per case:
@@ -150,6 +153,61 @@ def unseen(wanted: list[str], emulator_path: Path | None = None, seed_offset: in
     return 0
 
 
+def unseen_over_seeds(wanted: list[str], seed_offset: int, seeds: int) -> int:
+    """Each wanted unseen set at the noise seed offsets ``seed_offset`` ...
+    ``seed_offset + seeds - 1``: how often it is right, and its misses (a rate, where one
+    seed says little)."""
+    import test_calibration_unseen as unseen_mod
+
+    for case in unseen_mod.CASES:
+        if wanted and not any(w in case.id for w in wanted):
+            continue
+        right, misses = 0, []
+        for k in range(seed_offset, seed_offset + seeds):
+            unseen_mod.SEED_OFFSET = k
+            report, error, _ = unseen_mod.run_case(case)
+            ok, what = unseen_mod.judge(case, report, error)
+            right += ok
+            if not ok:
+                misses.append(f"{k}: {what}")
+        print(f"{case.id}: right at {right} of {seeds} seed offsets "
+              f"({seed_offset}-{seed_offset + seeds - 1})", flush=True)
+        for m in misses:
+            print(f"    {m}")
+    return 0
+
+
+def regulator(seeds: int) -> int:
+    """A lab with a pressure regulator (tests/test_calibration_unseen.regulator_rows: set
+    points up to 60 deg and back, no pump, no time_s, 3 specimens): six truths at noise
+    seeds 0 ... ``seeds`` - 1, one line each and the count."""
+    import test_calibration_unseen as u
+
+    truths = [
+        ("clean-pdms10", u.designs_std10, u.Truth(), u.Expect("nothing")),
+        ("clean-pdms15", u.designs_std15, u.Truth(), u.Expect("nothing")),
+        ("clean-reversed", u.designs_rev, u.Truth(), u.Expect("nothing")),
+        ("angle-offset-2.5", u.designs_std10, u.Truth(offset_deg=2.5),
+         u.Expect("select", "angle_offset", {"offset_deg": 2.5})),
+        ("pressure-offset-150", u.designs_std15, u.Truth(p0_pa=150.0),
+         u.Expect("select", "pressure_offset", {"p0_pa": 150.0})),
+        ("camera-gain-0.9", u.designs_std10, u.Truth(k_angle=0.9),
+         u.Expect("select", "camera_gain", {"k_angle": 0.9})),
+    ]
+    right = n = 0
+    for seed in range(seeds):
+        for name, designs, truth, expect in truths:
+            case = u.Case(f"regulator-{name}", lambda d=designs, t=truth, k=seed:
+                          u.regulator_rows(d(), t, seed=k), expect)
+            report, error, _ = u.run_case(case)
+            ok, what = u.judge(case, report, error)
+            right += ok
+            n += 1
+            print(f"{'right' if ok else 'WRONG'} | {seed} | {case.id} | {what}", flush=True)
+    print(f"right in {right} of {n}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("cases", nargs="*", help="case ids (default: every case)")
@@ -160,7 +218,21 @@ def main(argv: list[str] | None = None) -> int:
                         help="the unseen-lab data sets (tests/test_calibration_unseen.py)")
     parser.add_argument("--seed-offset", type=int, default=0,
                         help="with --unseen: added to every protocol's noise seed")
+    parser.add_argument("--seeds", type=int, default=None, metavar="N",
+                        help="with --unseen and case ids: each case at N seed offsets from "
+                             "--seed-offset on, counted")
+    parser.add_argument("--regulator", type=int, default=None, metavar="N",
+                        help="a pressure-regulator lab (no pump, no time_s): six truths at "
+                             "noise seeds 0 .. N-1")
     args = parser.parse_args(argv)
+    if args.regulator is not None:
+        if args.regulator < 1:
+            parser.error("--regulator N needs N >= 1 seeds")
+        return regulator(args.regulator)
+    if args.seeds is not None:
+        if not args.unseen or not args.cases or args.seeds < 1:
+            parser.error("--seeds N (N >= 1) goes with --unseen and case ids")
+        return unseen_over_seeds(args.cases, args.seed_offset, args.seeds)
     if args.unseen:
         return unseen(args.cases, args.emulator, args.seed_offset, args.reports)
     from surrogate.emulator.file import load_emulator

@@ -730,12 +730,12 @@ def regulator_rows(designs: list, truth: Truth = Truth(), seed: int = 0,
     ids=["clean", "offset", "camera-gain"])
 def test_a_regulator_lab_whose_three_specimens_happen_to_agree(truth, expect):
     """PDMS 1:10 at the paper's designs, read at regulator set points (no time_s), noise
-    seed 0: the three specimens of each design happen to agree, so the floor (1.04 deg)
-    and the spread-based errors of the floor and the cross-validated error are all small,
-    and the allowance was 1.47x. The clean set was flagged at 1.74x as an effect outside
-    the catalogue, and the same specimens kept the offset and the gain from being
-    selected. The allowance now counts the specimens it rests on (_residual.specimen_units:
-    at least 1.75x with 6 and 9 degrees of freedom)."""
+    seed 0: the three specimens of each design happen to agree, so the floor (1.13 deg)
+    and the spread-based errors of the floor and the cross-validated error are all small.
+    The clean set was flagged at 1.64x its floor as an effect outside the catalogue, and
+    the same specimens kept the offset and the gain from being selected. The allowance
+    now counts the specimens it rests on (_residual.specimen_units: at least 1.75x with 6
+    and 9 degrees of freedom)."""
     case = Case("regulator", lambda: regulator_rows(designs_std10(), truth, seed=0), expect)
     report, error, _ = run_case(case)
     ok, what = judge(case, report, error)
