@@ -370,6 +370,9 @@ def test_11_the_job_line_says_when_the_solver_cuts_its_step_back(watched, server
 def test_14_24_by_time_without_a_flow_rate_no_fe_curve_is_drawn_against_time(watched, server):
     page = open_explorer(watched, server.url)
     page.select_option("#ask_axis", "time_s")
+    # the pressure plot's FE curves are there already: wait for the time plot itself
+    page.wait_for_function("document.getElementById('curve-h').textContent"
+                           " === 'Time - angle curve'")
     page.wait_for_selector('#plot g[data-series^="fe-"]')
     assert page.locator("#curve-h").inner_text() == "Time - angle curve"
     page.fill("#flow", "")
