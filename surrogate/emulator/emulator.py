@@ -166,9 +166,12 @@ FORCE_BAND_FLOOR_MN = 2e-3
 
 def force_backed(force: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Where a force answer is given: its band (mN) within FORCE_BAND_LIMIT x the force,
-    or narrower than FORCE_BAND_FLOOR_MN."""
-    width = np.asarray(upper) - np.asarray(lower)
-    return (width <= FORCE_BAND_LIMIT * np.abs(force) + 1e-9) | (width <= FORCE_BAND_FLOOR_MN)
+    or narrower than FORCE_BAND_FLOOR_MN. A NaN force or band (no force answer) is not
+    backed."""
+    with np.errstate(invalid="ignore"):
+        width = np.asarray(upper, float) - np.asarray(lower, float)
+        relative = width <= FORCE_BAND_LIMIT * np.abs(np.asarray(force, float)) + 1e-9
+        return relative | (width <= FORCE_BAND_FLOOR_MN)
 
 
 FORCE_FORMS = ("per_kpa", "secant_ratio", "angle_ratio")    # PairEmulator.force_form
