@@ -282,8 +282,11 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
                  name: str, bounds: tuple[float, float]) -> list[_Eval]:
     """Bisection along the variable ``name`` within ``bounds`` (all candidates at once,
     geometric) so that the value at the target pressure equals the target; a value past
-    the FE's range counts as too large. Either direction: a candidate is solved when the
-    value minus the target changes sign between the bounds."""
+    the FE's range counts as too large, a design bending the other way as too small (an
+    Ecoflex/Ecoflex membrane thick enough to pass the stiffness balance: without it both
+    ends of t counted as "too large" and a reachable target was called infeasible).
+    Either direction: a candidate is solved when the value minus the target changes sign
+    between the bounds."""
     if not evals:
         return []
     lo = np.full(len(evals), bounds[0])
@@ -292,13 +295,13 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
     def f(x: np.ndarray) -> tuple[np.ndarray, list[Design], dict]:
         designs = [_design(e.pair, {**e.values, name: float(v)}) for e, v in zip(evals, x)]
         r = _screen(model, designs, target, level)
-        _keep_direction(r, _direction(target))     # the other way: no hit there
+        other_way = _keep_direction(r, _direction(target))     # no hit there
         v = np.where(np.isfinite(r["value"]), r["value"] - target.value, np.inf)
-        return v, designs, r
+        return np.where(other_way, -np.inf, v), designs, r
 
     f_lo, _, _ = f(lo)
     f_hi, _, _ = f(hi)
-    ok = (np.sign(f_lo) != np.sign(f_hi)) & (np.isfinite(f_lo) | np.isfinite(f_hi))
+    ok = np.sign(f_lo) != np.sign(f_hi)
     for _ in range(BISECTION_STEPS):
         mid = np.sqrt(lo * hi)
         f_mid, _, _ = f(mid)

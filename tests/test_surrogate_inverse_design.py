@@ -152,6 +152,26 @@ def test_a_pinned_chamber_length_is_met_along_the_next_free_variable(emulator, t
         assert abs(got) == pytest.approx(abs(target.value), rel=0.011)
 
 
+def test_a_soft_pair_that_bends_the_other_way_at_the_thick_end_is_solved_along_t(emulator):
+    """Ecoflex on Ecoflex at L 10 mm (T, b, h pinned): the thin membranes are past the FE's
+    range at 1500 Pa, the thick ones bend towards the membrane (past the stiffness
+    balance), 60 deg lies between (t ~ 0.71 mm). The thick end counted as "too large"
+    like the thin one, and the search said the target was not crossed along t (an audit
+    of the thirty-fifth session)."""
+    from surrogate.design_search import SearchBounds, search_designs
+
+    pair = ("ecoflex_00_30", "ecoflex_00_30")
+    bounds = SearchBounds(L_mm=(10.0, 10.0), T_mm=(1.0, 1.0), b_mm=(1.8, 1.8),
+                          h_mm=(0.15, 0.15), body_stiffness_scale=(1.0, 1.0),
+                          membrane_stiffness_scale=(1.0, 1.0), pairs=(pair,))
+    res = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0, angle_deg=60.0),
+                         bounds)
+    assert res.feasible, res.explanation
+    design = res.candidates[0].design
+    assert 0.67 < design.t_mm < 0.75
+    assert emulator.predict(design, [1500.0]).angle_deg[0] == pytest.approx(60.0, rel=0.011)
+
+
 def test_every_variable_pinned_answers_the_one_design_when_it_meets_the_target(emulator):
     from solver.design import Design
     from surrogate.design_search import SearchBounds, search_designs
