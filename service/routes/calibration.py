@@ -114,6 +114,11 @@ class CalibrationReport(BaseModel):
     saveable: dict[str, Any] | None = Field(
         None, description="whether this calibration can be saved as a model (`ok`) and, "
         "if not, why (`why`): the same words a request with `save` would be refused with")
+    left_out: dict[str, Any] | None = Field(
+        None, description="the readings left out of the fit as past the end of the FE's "
+        "range for their nominal design, predicted afterwards by the calibrated model: "
+        "`readings`, `answered`, `rmse_deg` (degrees, over the answered), `why`; null when "
+        "none were left out")
     saved_model: str | None = None
 
 

@@ -127,9 +127,11 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     channel, noise = pressure_channel(obs, responses, baseline)
     # by volume a reading is past the baseline's range by its volume, not by its gauge
     # pressure (which a specimen's scatter or a gauge effect moves: no selection by it)
-    obs = _usable_rows(obs, responses, baseline, warnings, by_gauge=not channel["used"])
+    all_obs = obs
+    obs, kept = _usable_rows(obs, responses, baseline, warnings, by_gauge=not channel["used"])
     if channel["used"]:
-        obs = _within_volume_range(obs, responses, warnings)
+        obs, kept_v = _within_volume_range(obs, responses, warnings)
+        kept[np.flatnonzero(kept)] = kept_v
 
     traits = data_traits(obs, baseline.open_parameters, channel["used"])
     fits: dict[tuple[str, ...], FitResult] = {}
@@ -344,8 +346,32 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
                            if e.stage == "design" and responses.reach(e).limits},
     }
+    report["left_out"] = _left_out_check(all_obs, kept, make(chosen), after)
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
+
+
+def _left_out_check(all_obs: Observations, kept: np.ndarray, model_for, after: FitResult
+                    ) -> dict | None:
+    """The readings left out of the fit as past the end of the FE's range for their
+    nominal design, predicted by the calibrated model: a stiffer actuator reaches
+    pressures past the nominal's 90 deg, and there the selected effects either predict
+    the readings the fit never saw or do not. None when none were left out; ``answered``
+    0 where the calibrated model has no number there either (or its parameters do not
+    carry over: a curve left out whole took its own parameters with it)."""
+    if np.all(kept):
+        return None
+    out = {"readings": int((~kept).sum()), "answered": 0, "rmse_deg": None,
+           "why": "past the end of the FE's range for their nominal design"}
+    model = model_for(all_obs)
+    if model.layout.names != after.model.layout.names:
+        return out
+    pred = model.angles(after.x)[~kept]
+    err = pred - all_obs.angle_deg[~kept]
+    ok = np.isfinite(err)
+    if ok.any():
+        out.update(answered=int(ok.sum()), rmse_deg=float(np.sqrt(np.mean(err[ok] ** 2))))
+    return out
 
 
 RADIANS_MAX = 2.1  # |angle| in radians of a bend up to 120 deg
@@ -389,10 +415,12 @@ def _radians_warning(y: np.ndarray, pred: np.ndarray) -> str | None:
 
 
 def _usable_rows(obs: Observations, responses: Responses, baseline: Baseline,
-                 warnings: list[str], by_gauge: bool = True) -> Observations:
+                 warnings: list[str], by_gauge: bool = True
+                 ) -> tuple[Observations, np.ndarray]:
     """Refuse a design the baseline cannot answer and pressures where it overflows; drop
     (with a warning) readings past the end of its range at their gauge pressure (the FE
-    stopped there: no number to compare with) when ``by_gauge``."""
+    stopped there: no number to compare with) when ``by_gauge``. Returns the readings
+    kept and which rows of ``obs`` they are."""
     pred = np.empty(obs.n)
     for c in range(obs.n_curves):
         rows = np.flatnonzero(obs.curve == c)
@@ -457,7 +485,7 @@ def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline
 
 
 def _within_volume_range(obs: Observations, responses: Responses, warnings: list[str]
-                         ) -> Observations:
+                         ) -> tuple[Observations, np.ndarray]:
     """Drop (with a warning) readings whose injected volume lies past the end of the
     baseline's range for their nominal design."""
     index = np.array([responses.index[design_key(obs.design(c))]
@@ -471,23 +499,25 @@ def _within_volume_range(obs: Observations, responses: Responses, warnings: list
 
 
 def _keep_within_range(obs: Observations, ok: np.ndarray, field: str, what: str,
-                       axis: str, warnings: list[str]) -> Observations:
-    """The readings ``ok`` (inside the baseline's range for their design), with a warning
-    naming ``field`` when some are dropped; curves left with fewer than 4 readings go too,
-    and fewer than MIN_CURVES curves is a DataError on ``field``."""
+                       axis: str, warnings: list[str]) -> tuple[Observations, np.ndarray]:
+    """The readings ``ok`` (inside the baseline's range for their design) and which rows
+    of ``obs`` they are, with a warning naming ``field`` when some are dropped; curves
+    left with fewer than 4 readings go too, and fewer than MIN_CURVES curves is a
+    DataError on ``field``."""
     if np.all(ok):
-        return obs
-    warnings.append(f"{field}: {int((~ok).sum())} {what} lie past the end of the "
-                    "baseline's range for their design (the FE stopped there) and are not "
-                    "used")
+        return obs, np.ones(obs.n, bool)
+    warnings.append(f"{field}: {int((~ok).sum())} {what} lie past the end of the FE's "
+                    "range for their nominal design (the baseline has no number there) and "
+                    "are left out of the fit")
     keep_curves = [c for c in range(obs.n_curves) if np.sum(ok[obs.curve == c]) >= 4]
-    out = obs.rows(ok & np.isin(obs.curve, keep_curves))
+    kept = ok & np.isin(obs.curve, keep_curves)
+    out = obs.rows(kept)
     if out.n_curves < MIN_CURVES:
         raise DataError(field, f"only {out.n_curves} curve keeps 4 readings within the "
                         f"baseline's range{axis} (the FE's converged range)", None,
                         "at least 2 curves with 4 readings each below the end of the FE's "
                         "range")
-    return out
+    return out, kept
 
 
 GAUGE_LEFT_RATIO = 1.3   # the gauge's cross-validated error over its replicate floor
@@ -1094,4 +1124,9 @@ def interpret(report: dict, left: dict) -> str:
         s.append(gauge)
     for w in report["warnings"]:
         s.append(f"Warning: {w}.")
+    out = report["left_out"]
+    if out is not None and report["selected_effects"]:
+        s.append(f"Of the {out['readings']} readings left out, the calibrated model answers "
+                 + (f"{out['answered']}, to {out['rmse_deg']:.2f} deg RMS (readings its fit "
+                    "never saw)." if out["answered"] else "none either."))
     return " ".join(s)
