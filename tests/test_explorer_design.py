@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 
 import httpx
 import pytest
@@ -244,6 +245,27 @@ def test_a_force_target_no_design_reaches_is_said_beside_the_target(watched, ser
         page.wait_for_selector("#err-inv-kind:not([hidden])")
         assert (answer.json()["errors"][0]["message"]
                 in page.locator("#err-inv-kind").inner_text())
+
+
+def test_a_reachable_force_target_lists_forces_to_three_significant_digits(watched, server):
+    # forces at these sizes are fractions of a mN: to 0.1 mN every row read "0.2 [0.2, 0.2]"
+    # (an audit of the thirty-fifth session); the form's default is a reachable 0.5 mN
+    page = open_explorer(watched, server.url)
+    page.select_option("#inv-kind", "force_at_pressure")
+    assert float(page.input_value("#inv-force")) < 1.0
+    page.fill("#inv-force", "0.3")
+    page.click("#inv-run")
+    page.wait_for_function("!document.getElementById('inv-table').hidden", timeout=120_000)
+    header = [h.inner_text() for h in page.locator("#inv-table thead th").all()]
+    column = next(i for i, h in enumerate(header) if "force" in h)
+    cells = [row.locator("td").nth(column).inner_text()
+             for row in page.locator("#inv-table tbody tr").all()]
+    assert cells
+    for cell in cells:
+        value, band = cell.split(" ", 1)
+        assert re.fullmatch(r"0\.\d{3}", value), cell       # 0.300, not 0.3
+        low, high = (float(v) for v in re.findall(r"[\d.]+", band))
+        assert low < float(value) < high, cell
 
 
 def test_an_inline_stiffness_scaled_material_is_sent_with_scaled_moduli(watched, server):

@@ -127,7 +127,9 @@ export function setupInverse({ loadDesign }) {
     $("inv-table").hidden = candidates.length === 0;
     candidates.forEach((c, k) => {
       const tr = document.createElement("tr");
-      const band = c.value_lower !== null && c.value_upper !== null ? ` [${fmt(c.value_lower, 1)}, ${fmt(c.value_upper, 1)}]` : "";
+      // angles to 0.1 deg; forces (a fraction of a mN at these sizes) to 3 significant digits
+      const value = searched && searched.kind === "force_at_pressure" ? (v) => fmtSig(v) : (v) => fmt(v, 1);
+      const band = c.value_lower !== null && c.value_upper !== null ? ` [${value(c.value_lower)}, ${value(c.value_upper)}]` : "";
       const pband = c.pressure_lower_pa !== null && c.pressure_upper_pa !== null && c.pressure_lower_pa !== c.pressure_upper_pa
         ? ` [${fmt(c.pressure_lower_pa, 0)}, ${fmt(c.pressure_upper_pa, 0)}]` : "";
       const notes = messagesOf(c).filter((m) => !common.includes(m)).join(" ");
@@ -137,7 +139,7 @@ export function setupInverse({ loadDesign }) {
         `${scale(c.body_stiffness_scale)}, ${scale(c.membrane_stiffness_scale)}`,
         fmt(c.L_mm, 2), fmt(c.t_mm, 3),
         ...["T_mm", "b_mm", "h_mm"].map((k) => (typeof geometry[k] === "number" ? fmt(geometry[k], 3) : "")),
-        `${fmt(c.value_at_pressure, 1)}${band}`, `${fmt(c.pressure_needed_pa, 0)}${pband}`, notes || (c.validity?.in_domain === false ? "outside the fitted domain" : "")];
+        `${value(c.value_at_pressure)}${band}`, `${fmt(c.pressure_needed_pa, 0)}${pband}`, notes || (c.validity?.in_domain === false ? "outside the fitted domain" : "")];
       tr.innerHTML = cells.map(() => "<td></td>").join("") + `<td><button type="button" data-candidate="${k}">Load</button></td>`;
       tr.querySelector("button").setAttribute("aria-label", `Load rank ${c.rank}: L ${fmt(c.L_mm, 2)} mm, t ${fmt(c.t_mm, 3)} mm, ${pairLabel(c.body_material, c.membrane_material)}`);
       cells.forEach((v, i) => { tr.children[i].textContent = String(v); });
