@@ -81,8 +81,9 @@ class FieldError(InputError):
 
     def __init__(self, loc: tuple[str | int, ...], message: str,
                  allowed: str | None = None, kind: str = "invalid-input",
-                 others: tuple[FieldError, ...] = ()) -> None:
-        super().__init__(".".join(str(p) for p in loc[1:]) or str(loc[0]), message, allowed)
+                 others: tuple[FieldError, ...] = (), allowed_said: bool = False) -> None:
+        super().__init__(".".join(str(p) for p in loc[1:]) or str(loc[0]), message, allowed,
+                         allowed_said=allowed_said)
         self.loc = loc
         self.kind = kind
         self.others = others
@@ -99,7 +100,8 @@ def located(exc: InputError, prefix: tuple[str | int, ...],
         parts = rename[exc.field]
     kind = "invalid-input" if type(exc) is InputError else _kebab(type(exc).__name__)
     others = tuple(located(o, prefix, rename) for o in getattr(exc, "others", ()))
-    return FieldError(prefix + parts, exc.detail, exc.allowed, kind, others)
+    return FieldError(prefix + parts, exc.detail, exc.allowed, kind, others,
+                      allowed_said=exc.allowed_said)
 
 
 @dataclass

@@ -200,8 +200,11 @@ class OutOfBoxError(InputError):
         self.own_detail, self.nearest_note = detail, nearest_note
         self.others = tuple(others)
         offer = "or solve this design with the FE (POST /v1/solve, `balloon solve`)"
-        text = detail + "".join(f"; also {o.field}: {o.detail} (allowed: {o.allowed})"
-                                for o in self.others)
+        # each field's range beside it, then the nearest design and the offer: a range
+        # at the end of the sentence read as the last clause's (an audit, 2026-12-06)
+        text = (detail + (f" (allowed: {allowed})" if allowed else "")
+                + "".join(f"; also {o.field}: {o.detail} (allowed: {o.allowed})"
+                          for o in self.others))
         if nearest is not None:
             names = GEOMETRY + (("W_mm",) if nearest.W_mm != BOX_WIDTH_MM else ())
             lengths = ", ".join(f"{n}={getattr(nearest, n):g}" for n in names)
@@ -209,7 +212,7 @@ class OutOfBoxError(InputError):
                     f"{nearest.body_material.id}/{nearest.membrane_material.id}; {offer}")
         else:
             text = f"{text}{nearest_note}; {offer}"
-        super().__init__(field, text, allowed)
+        super().__init__(field, text, allowed, allowed_said=bool(allowed))
         self.nearest = nearest
 
     def renamed(self, names: dict[str, str]) -> OutOfBoxError:

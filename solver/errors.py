@@ -23,15 +23,18 @@ class InputError(BalloonError, ValueError):
     """A user-supplied value is invalid.
 
     ``field`` names the offending input (e.g. ``"t_mm"``), ``allowed`` states the
-    allowed range or values in words (e.g. ``"0.05 <= t_mm <= 5"``).
+    allowed range or values in words (e.g. ``"0.05 <= t_mm <= 5"``), said after the
+    message unless ``allowed_said``: the message says it already, in its place.
     """
 
-    def __init__(self, field: str, message: str, allowed: str | None = None) -> None:
+    def __init__(self, field: str, message: str, allowed: str | None = None, *,
+                 allowed_said: bool = False) -> None:
         self.field = field
         self.allowed = allowed
         self.detail = message
+        self.allowed_said = allowed_said
         text = f"{field}: {message}"
-        if allowed:
+        if allowed and not allowed_said:
             text += f" (allowed: {allowed})"
         super().__init__(text)
 

@@ -139,6 +139,19 @@ def test_every_field_outside_the_box_is_named_in_one_refusal(shipped_client):
     assert "defaults of T, b and h" in README and "do not" in README
 
 
+def test_each_fields_range_stands_beside_it_in_the_refusals_sentence(shipped_client):
+    # the first field's range came last, after the nearest design and the FE offer, where
+    # it read as the offer's (an audit of the thirty-fifth session)
+    r = shipped_client.post("/v1/predict", json={"design": {"L_mm": 25, "t_mm": 0.3},
+                                                 "pressures_pa": [1000]})
+    detail = r.json()["detail"]
+    ranges = {e["field"]: e["allowed"] for e in r.json()["errors"]}
+    at = {f: detail.index(f"(allowed: {a})") for f, a in ranges.items()}
+    assert at["design.L_mm"] < detail.index("also") < at["design.t_mm"]
+    assert at["design.t_mm"] < detail.index("the nearest design") < detail.index("POST /v1/solve")
+    assert detail.count("(allowed:") == 2
+
+
 # -- 12, 13: the CLI names the option typed -----------------------------------------------
 @pytest.mark.parametrize(("argv", "option"), [
     (["predict", "--L-mm", "7.1", "--t-mm", "99", "--pressures", "1000"], "--t-mm"),
