@@ -110,6 +110,21 @@ def test_a_semicolon_separated_file_is_named_as_such_before_sending(watched, ser
     assert "lab_semicolon.csv" in message and "separated by ';'" in message
 
 
+def test_the_reports_own_fit_is_drawn_beside_the_data_before_any_save(watched, server):
+    """The report carries its fit at each reading (``predictions``): the page draws it at
+    once. Before, it said the fitted curves would be drawn "once it is saved" while Save
+    was greyed out, and named the emulator's cross-validated error "recalibrated
+    constants" (an audit of the thirty-fifth session)."""
+    page = open_explorer(watched, server.url)
+    page.set_input_files("#cal-file", str(EXAMPLE_CSV))
+    page.click("#cal-run")
+    page.wait_for_selector("#cal-report:not([hidden])", timeout=120_000)
+    fit = page.locator('#cal-plot g[data-series="fit-report"] circle')
+    assert fit.count() > 20
+    assert "once it is saved" not in page.locator("#cal-status").inner_text()
+    assert "nothing to recalibrate" in page.locator("#cal-errors").inner_text()
+
+
 def test_uploading_the_example_csv_shows_the_report_and_saving_asks_for_the_key(watched, server):
     page = open_explorer(watched, server.url)
     page.set_input_files("#cal-file", str(EXAMPLE_CSV))

@@ -119,6 +119,12 @@ class CalibrationReport(BaseModel):
         "range for their nominal design, predicted afterwards by the calibrated model: "
         "`readings`, `answered`, `rmse_deg` (degrees, over the answered), `why`; null when "
         "none were left out")
+    predictions: list[dict[str, Any]] | None = Field(
+        None, description="every reading the fit used: `curve_id`, `pressure_pa` (Pa), "
+        "`angle_deg`, the recalibrated baseline's and the selected effects' fitted angle "
+        "there (`angle_before_deg`, `angle_after_deg`, degrees) and, read against the "
+        "injected volume, the fitted gauge pressure `pressure_after_pa` (Pa; null "
+        "otherwise)")
     saved_model: str | None = None
 
 

@@ -347,8 +347,24 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                            if e.stage == "design" and responses.reach(e).limits},
     }
     report["left_out"] = _left_out_check(all_obs, kept, make(chosen), after)
+    report["predictions"] = _predictions(obs, base, after)
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
+
+
+def _predictions(obs: Observations, base: FitResult, after: FitResult) -> list[dict]:
+    """Every reading the fit used, with the recalibrated baseline's and the selected
+    effects' fitted angle there (deg; each at the reading's own flow rate and time) and,
+    where the gauge is read against the injected volume, the gauge pressure the selected
+    effects give (Pa): what a page or a script draws beside the data without saving."""
+    before, fitted = base.angles(), after.angles()
+    gauge = (after.model.gauge_pressures(after.x) if after.model.by_volume
+             else np.full(obs.n, np.nan))
+    return [{"curve_id": obs.curve_ids[int(c)], "pressure_pa": float(p),
+             "angle_deg": float(a), "angle_before_deg": _num(float(b)),
+             "angle_after_deg": _num(float(f)), "pressure_after_pa": _num(float(g))}
+            for c, p, a, b, f, g in zip(obs.curve, obs.pressure_pa, obs.angle_deg, before,
+                                        fitted, gauge, strict=True)]
 
 
 def _left_out_check(all_obs: Observations, kept: np.ndarray, model_for, after: FitResult

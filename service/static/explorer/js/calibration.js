@@ -219,7 +219,9 @@ export function setupCalibration() {
     errors.innerHTML = "";
     const rowsOut = [
       ["starting model as is", rep.rmse_model_deg],
-      ["recalibrated constants, cross-validated by curve", rep.rmse_before_deg],
+      [(rep.baseline?.open_parameters || []).length
+        ? "recalibrated constants, cross-validated by curve"
+        : "starting model, cross-validated by curve (nothing to recalibrate)", rep.rmse_before_deg],
       ["with the selected effects, cross-validated by curve", rep.rmse_after_deg],
       [`noise floor${rep.noise_floor_source ? " (" + rep.noise_floor_source + ")" : ""}`, rep.noise_floor_deg],
     ];
@@ -290,6 +292,11 @@ export function setupCalibration() {
       }
     }
     if (points) {
+      // the report's own fit at each reading (its flow rate and time); by injected volume
+      // at the gauge pressure the fit gives there
+      data.push({ id: "fit-report", label: "with the selected effects (the report's fit at each reading)", color: "#111827",
+        x: points.items.map((p) => (typeof p.pressure_after_pa === "number" ? p.pressure_after_pa : p.pressure_pa)),
+        y: points.items.map((p) => (typeof p[points.after] === "number" ? p[points.after] : null)), markersOnly: true });
       resid.push({ id: "ra-report", label: "with the selected effects (report)", color: "#111827", x: points.items.map((p) => p.pressure_pa),
         y: points.items.map((p) => (typeof p.angle_deg === "number" && typeof p[points.after] === "number" ? p.angle_deg - p[points.after] : null)), markersOnly: true });
     }
