@@ -297,6 +297,9 @@ def test_10_a_stopped_service_is_said_plainly_and_the_page_recovers(watched, ser
     wait_prediction(page, L_mm=8)
     assert "not answering" not in page.locator("#status").inner_text()
     page.wait_for_function("document.getElementById('health').textContent.includes('FE records')")
+    # the default model is named, not only the exponential file ("surrogate fe-fit")
+    health = page.locator("#health").inner_text()
+    assert "emulator (default model)" in health and 'exponential model "' in health
     # and on returning to the tab, without waiting for the timer
     page.evaluate("window.explorer.retryMs = 600000")
     page.route("**/v1/**", lambda route: route.abort())

@@ -423,7 +423,10 @@ function fieldName(el) {
 // ---------------------------------------------------------------- a service that stopped
 function showHealth() {
   return api("/v1/health").then((h) => {
-    $("health").textContent = `service ${h.version}; ${h.database.records ?? 0} FE records; surrogate ${h.surrogate.loaded ? h.surrogate.name : "not loaded"}`;
+    // the default model first: the emulator; the exponential file is the named model
+    const emulator = h.emulator && h.emulator.loaded ? "emulator (default model)" : "emulator not loaded";
+    const exponential = h.surrogate && h.surrogate.loaded ? `; exponential model "${h.surrogate.name}"` : "";
+    $("health").textContent = `service ${h.version}; ${h.database.records ?? 0} FE records; ${emulator}${exponential}`;
   }).catch((err) => {
     $("health").textContent = err instanceof OfflineError ? "service not answering" : "service health unknown";
     throw err;
