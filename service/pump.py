@@ -112,6 +112,11 @@ def _over(values: list[float | None] | None, flow: float) -> list[float | None] 
     return None if values is None else [None if v is None else v / flow for v in values]
 
 
+# Every pressure at or below this (Pa), none above: a lab that typed kPa (1, 1.5, 2) gets
+# an answer of 0.001 deg and, with this flag, the reason.
+KPA_LOOKALIKE_PA = 20.0
+
+
 def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: str,
                    level: float) -> dict[str, Any]:
     """The plain-data answer of /v1/predict and ``balloon predict`` (PredictResponse)."""
@@ -145,6 +150,12 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
             raise InputError(axis, exc.detail, exc.allowed) from None
     body = prediction_body(prediction, model, level, design)
     body["asked"] = axis
+    if axis == "pressures_pa" and 0.0 < float(np.max(question.pressures_pa)) <= KPA_LOOKALIKE_PA:
+        body["validity"]["flags"].append("pressures_look_like_kpa")
+        body["validity"]["messages"].append(
+            f"every pressure asked is at most {KPA_LOOKALIKE_PA:g} Pa, where the box's "
+            "designs bend by hundredths of a degree: pressures_pa is in Pa (1.5 kPa is "
+            "1500)")
     body["pressure_sites"] = {"pressure_pa": "chamber"}
     if q is not None:
         body["flow_ul_s"] = q

@@ -368,3 +368,15 @@ def test_a_query_by_pressure_reads_the_curve_a_query_by_volume_made(emulator):
                      "force_upper_mn"):
             np.testing.assert_array_equal(getattr(warm, name), getattr(cold, name))
         assert warm.validity == cold.validity
+
+
+def test_pressures_that_look_like_kpa_are_answered_and_flagged(shipped_client):
+    design = {"L_mm": 7.1, "t_mm": 0.5}
+    typed_kpa = shipped_client.post("/v1/predict", json={"design": design,
+                                                         "pressures_pa": [1, 1.5, 2]}).json()
+    assert "pressures_look_like_kpa" in typed_kpa["validity"]["flags"]
+    assert max(typed_kpa["angle_deg"]) < 0.01
+    assert any("1.5 kPa is 1500" in m for m in typed_kpa["validity"]["messages"])
+    pa = shipped_client.post("/v1/predict", json={"design": design,
+                                                  "pressures_pa": [10, 1500]}).json()
+    assert "pressures_look_like_kpa" not in pa["validity"]["flags"]
