@@ -254,6 +254,8 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
         item: dict[str, Any] = {"loc": loc,
                                 "field": ".".join(str(p) for p in loc[1:]) or str(loc[0]),
                                 "message": str(err.get("msg", "invalid value"))}
+        if err.get("type") == "value_error":     # a validator's own words, without
+            item["message"] = str((err.get("ctx") or {}).get("error", item["message"]))
         # a measured row's column (/v1/calibrate's rows) is not the request field of that
         # name elsewhere (its pressure_pa is not a target's): what any cell may hold
         allowed = (FIELD_RANGES.get("rows.*") if "rows" in loc[1:2]

@@ -380,3 +380,19 @@ def test_a_measured_cell_is_not_read_as_the_request_field_of_its_name(client):
                     headers={"content-type": "application/json"})
     error = assert_problem(r, 422, "rows.1.pressure_pa")["errors"][0]
     assert error["allowed"].startswith("a finite number") and "20000" not in error["allowed"]
+
+
+def test_a_material_pair_may_be_written_body_slash_membrane(client):
+    # as the CLI's --pair and the answer's best_reachable write it; before, a string was
+    # "Input should be a valid dictionary" (an audit of the thirty-fifth session)
+    target = {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 30}
+    text = client.post("/v1/inverse", json={"target": target, "model": "paper", "n_results": 1,
+                                            "material_pairs": ["pdms_1_10/ecoflex_00_30"]})
+    assert text.status_code == 200, text.text
+    best = text.json()["candidates"][0]
+    assert (best["body_material"], best["membrane_material"]) == ("pdms_1_10", "ecoflex_00_30")
+    r = client.post("/v1/inverse", json={"target": target, "model": "paper",
+                                         "material_pairs": ["pdms_1_10"]})
+    problem = assert_problem(r, 422, "material_pairs.0")
+    assert "body/membrane" in problem["errors"][0]["message"]
+    assert "Value error" not in problem["detail"]

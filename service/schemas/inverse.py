@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from service.pump import MAX_ANGLE_DEG, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
@@ -36,8 +36,22 @@ class TargetIn(Schema):
 
 
 class MaterialPair(Schema):
+    """A (body, membrane) pair: an object, or the text "body/membrane" the CLI's --pair,
+    the answer's ``pair`` and ``best_reachable`` use."""
+
     body_material: str = Field(pattern=INLINE_MATERIAL_ID)
     membrane_material: str = Field(pattern=INLINE_MATERIAL_ID)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_text(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            parts = value.split("/")
+            if len(parts) != 2:
+                raise ValueError(f"{value!r} is not body/membrane (e.g. "
+                                 "pdms_1_10/ecoflex_00_30)")
+            return {"body_material": parts[0].strip(), "membrane_material": parts[1].strip()}
+        return value
 
 
 def _bound_list(lo: float, hi: float) -> Any:
