@@ -10,6 +10,10 @@ With ``follow_stable_branch`` the solve passes the fold by arc length (the path 
 to 23.5 ul, unstable at constant volume, and turns again), converges the failed step's
 volume on the stable branch found there and goes on: 28.2 deg at 1163.7 Pa and 33.34 ul,
 stable at constant volume up to 50.5 ul (35.8 deg).
+
+All of it on the mesh that was the default when it was measured (``mesh_divisions=
+"former"``, pinned here). On the balanced default mesh the path meets no fold: it passes
+a bifurcation at 31.5 ul, flagged unstable at constant volume (docs/physics.md).
 """
 
 import numpy as np
