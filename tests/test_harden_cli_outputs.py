@@ -83,3 +83,47 @@ def test_the_widest_and_narrowest_default_bodies_are_valid():
     assert Design(W_mm=30.0).validated().body_length_mm == pytest.approx(120.0)
     assert Design(W_mm=0.2, L_mm=0.5, b_mm=0.1).validated().body_length_mm == \
         pytest.approx(0.8)
+
+
+@pytest.fixture()
+def h5_file(tmp_path):
+    import h5py
+
+    path = tmp_path / "C.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["marker"] = "keep me"
+    return path
+
+
+@pytest.mark.parametrize("argv", [
+    ["db", "export", "{db}", "-o", "{db}"],
+    ["db", "export", "{db}", "--format", "json", "-o", "{link}"],
+    ["db", "export", "{db}", "--where", "L_mm=59", "-o", "{hard}"],
+    ["fit", "--db", "{db}", "-o", "{db}"],
+    ["solve", "--max-angle-deg", "1", "--quiet", "--csv", "{db}"],
+])
+def test_an_output_that_is_the_commands_input_or_a_database_is_refused(
+        h5_file, tmp_path, capsys, monkeypatch, argv):
+    """`db export C.h5 -o C.h5` replaced the database with its CSV and said "exported 2404
+    records"; `fit --db C.h5 -o C.h5` and `solve --csv C.h5` did the same (an audit of
+    the thirty-fifth session)."""
+    (tmp_path / "link.h5").symlink_to(h5_file)
+    os.link(h5_file, tmp_path / "hard.h5")
+    before = h5_file.read_bytes()
+    monkeypatch.setattr("solver.stepping.inflate",
+                        lambda *a, **k: pytest.fail("solved before checking the outputs"))
+    names = {"db": h5_file, "link": tmp_path / "link.h5", "hard": tmp_path / "hard.h5"}
+    assert main([a.format(**names) for a in argv]) == 2
+    option = "--csv" if "solve" in argv else "--output"
+    _one_line_error(capsys, 2, option)
+    assert h5_file.read_bytes() == before
+
+
+def test_calibrate_will_not_write_its_report_over_the_data(tmp_path, capsys):
+    data = tmp_path / "lab.csv"
+    text = ("curve_id,L_mm,t_mm,body_material,membrane_material,pressure_pa,angle_deg\n"
+            "a,7.1,0.5,pdms_1_10,ecoflex_00_30,0,0\n")
+    data.write_text(text)
+    assert main(["calibrate", str(data), "--report", str(data)]) == 2
+    _one_line_error(capsys, 2, "--report", "the data file")
+    assert data.read_text() == text

@@ -77,8 +77,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--report", f"directory {args.report.parent} cannot be made "
                          f"({exc.strerror or type(exc).__name__})",
                          "a path in a writable directory") from None
-    check_output(args.report, "--report")
-    check_output(args.plot, "--plot", PLOT_SUFFIXES)
+    data = (("the data file", args.data),)
+    check_output(args.report, "--report", inputs=data)
+    check_output(args.plot, "--plot", PLOT_SUFFIXES, inputs=data)
     obs = load_observations(args.data, strict=args.strict)  # validates before any work
     if args.save is not None:  # a bad or taken name ("" too) is refused before the work
         from service.models import check_new_model_name

@@ -204,7 +204,7 @@ def run_export(args: argparse.Namespace) -> int:
     from service.commands.outputs import check_output
     from solver.store import CurveStore
 
-    check_output(args.output, "--output")
+    check_output(args.output, "--output", inputs=(("the database", args.db),))
     with CurveStore(args.db) as db:
         records = selected(db, args)
     out = sys.stdout if args.output == "-" else open(args.output, "w", newline="",

@@ -49,7 +49,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
     except InputError as exc:
         raise InputError("--level", exc.detail, exc.allowed) from None
     for flag, name in (("--output", args.output), ("--emulator-output", args.emulator_output)):
-        check_output(name, flag)
+        check_output(name, flag, inputs=(("--db", args.db),
+                                          ("--band-calibration-db", args.band_calibration_db)))
     if args.band_calibration_db is not None:
         if args.emulator_output is None:
             raise InputError("--band-calibration-db", "given without --emulator-output",

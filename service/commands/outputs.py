@@ -5,7 +5,10 @@ A path is refused, naming its option, when it is a directory, names something th
 not a regular file (a device, a pipe: the atomic write would replace it -- `fit -o
 /dev/full` did), lies in a directory that does not exist or cannot be written (tried
 with a temporary file there, which root's permissions do not fake), or has a suffix the
-writer cannot produce."""
+writer cannot produce; and when it is the file the command reads (by any name: a
+symlink or a hard link too) or an existing HDF5 file, which no command writes by these
+options (`db export C.h5 -o C.h5` replaced the curve database with its CSV and said
+"exported 2404 records")."""
 
 from __future__ import annotations
 
@@ -21,10 +24,15 @@ PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".eps", ".ps", ".tif",
 VTK_SUFFIXES = (".vtu", ".vtk")
 
 
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
 def check_output(path: str | os.PathLike | None, option: str,
-                 suffixes: tuple[str, ...] | None = None) -> None:
+                 suffixes: tuple[str, ...] | None = None,
+                 inputs: tuple[tuple[str, str | os.PathLike | None], ...] = ()) -> None:
     """InputError naming ``option`` unless ``path`` (None: not asked) can be written as a
-    new or replaced regular file with one of ``suffixes`` (any when None)."""
+    new or replaced regular file with one of ``suffixes`` (any when None) without
+    destroying what the command reads: ``inputs`` are (name, path) of its input files."""
     if path is None or str(path) == "-":
         return
     target = Path(path)
@@ -33,6 +41,17 @@ def check_output(path: str | os.PathLike | None, option: str,
     if target.exists() and not target.is_file():
         raise InputError(option, f"{path} is not a regular file (a device or a pipe): it "
                          "would be replaced", "a path to a regular file")
+    if target.exists():
+        for name, source in inputs:
+            if source is not None and Path(source).exists() and os.path.samefile(target,
+                                                                                   source):
+                raise InputError(option, f"{path} is the file this command reads ({name}): "
+                                 "writing it would destroy it",
+                                 f"a path other than {name}'s")
+        with open(target, "rb") as f:
+            if f.read(len(HDF5_SIGNATURE)) == HDF5_SIGNATURE:
+                raise InputError(option, f"{path} is an HDF5 file (a curve database?): "
+                                 "this would replace it", "a path that is not an HDF5 file")
     parent = target.parent
     if not parent.is_dir():
         raise InputError(option, f"directory {parent} does not exist",
