@@ -119,6 +119,38 @@ def test_the_answer_stops_at_the_volume_stop_and_says_so(emulator, balance_curve
     np.testing.assert_allclose(back.pressure_pa, rp.pressure_pa[:2], rtol=1e-6)
 
 
+@pytest.mark.parametrize(("body", "membrane"), [
+    ("ecoflex_00_30*2", "pdms_1_15*0.5"),        # bends towards the membrane, past -90
+    ("ecoflex_00_30*0.5", "ecoflex_00_30*2"),
+])
+def test_no_angle_past_the_fes_angle_stop_near_the_balance(emulator, body, membrane):
+    """The FE stops at 90 deg or at the volume stop, whichever comes first: the balance
+    model answered a stiff-bodied design 122 and 135 deg at 200 and 480 ul with its band
+    cut to [90, 90] (an audit of the thirty-fifth session)."""
+    from solver.design import Design
+    from solver.design_space import scaled_material
+
+    def material(text: str):
+        preset, scale = text.split("*")
+        return scaled_material(preset, float(scale))
+
+    design = Design(L_mm=18, t_mm=0.5, T_mm=2, b_mm=2.4, h_mm=0.229415,
+                    body_material=material(body), membrane_material=material(membrane))
+    volumes = np.linspace(5.0, 480.0, 96)
+    answer = emulator.predict_volume(design, volumes)
+    angle = np.asarray(answer.angle_deg, float)
+    given = np.isfinite(angle)
+    assert np.all(np.abs(angle[given]) <= 90.0 + 1e-9)
+    for side in (answer.lower_deg, answer.upper_deg):
+        assert np.all(np.abs(np.asarray(side, float)[given]) <= 90.0 + 1e-9)
+    if not given.all():
+        assert "past_fe_range" in answer.validity["flags"]
+        assert abs(answer.validity["fe_limit_angle_deg"]) <= 90.0 + 1e-9
+    by_pressure = emulator.predict(design, np.linspace(100.0, 20000.0, 60))
+    p_angle = np.asarray(by_pressure.angle_deg, float)
+    assert np.all(np.abs(p_angle[np.isfinite(p_angle)]) <= 90.0 + 1e-9)
+
+
 def test_a_scaled_copy_gives_the_same_angles_at_the_scaled_volumes(emulator, balance_curves):
     """The invariances: every length x k scales the volumes by k^3, both layers' mu x s
     the pressures by s; the angles stay (the FE's volume stop, 500 ul, does not scale)."""

@@ -780,6 +780,7 @@ class Emulator:
             angle, lower, upper, p_red = model.by_volume(nodes, v_red, z)
             pressure, volume = p_red * point.pressure_scale, x.copy()
         lower, upper = floored_band(angle, lower, upper)
+        v_limit, stop = self._balance_range_end(model, nodes, v_limit, z)
         past = v_red > v_limit * (1 + 1e-12)
         for a in (angle, lower, upper, pressure if axis == "volume" else volume):
             a[past] = np.nan
@@ -792,9 +793,9 @@ class Emulator:
         except InputError:
             pass    # at the balance itself: no direction, no force model
         at_limit = model.by_volume(nodes, np.array([v_limit]), z)
-        limit_pa, limit_angle = float(at_limit[3][0]) * point.pressure_scale, float(at_limit[0][0])
-        stop = (f"the FE's volume stop ({SolverSettings().max_volume_ul:g} ul, "
-                "SolverSettings.max_volume_ul), where the FE curves near the balance end")
+        limit_pa = float(at_limit[3][0]) * point.pressure_scale
+        top = SolverSettings().max_angle_deg
+        limit_angle = float(np.clip(at_limit[0][0], -top, top))
         flags = ["near_stiffness_balance"]
         messages = [f"this design sits near the balance of the two layers' stiffness, "
                     "where both balloon alike and the FE curve ends at the volume stop "
@@ -825,6 +826,28 @@ class Emulator:
         lower, upper = band_within_fe(lower, upper, SolverSettings().max_angle_deg, validity)
         return self._prediction(design, point, pressure, (angle, lower, upper), level,
                                 validity, force, volume)
+
+    @staticmethod
+    def _balance_range_end(model: BalanceModel, nodes: tuple, v_limit: float, z: float
+                           ) -> tuple[float, str]:
+        """Where the FE's range ends for a design the balance model answers (reduced
+        volume, ul) and why: the volume stop, or the FE's angle stop where the balance
+        model's mean reaches it first. Answered past 90 deg, a design near the balance
+        with a stiff body read 122 and 135 deg at 200 and 480 ul, its band cut to [90, 90]
+        (an audit of the thirty-fifth session)."""
+        top = SolverSettings().max_angle_deg
+        grid = np.linspace(0.0, v_limit, 241)[1:]
+        a = np.abs(model.by_volume(nodes, grid, z)[0])
+        over = np.flatnonzero(a >= top)
+        if not over.size:
+            return v_limit, (f"the FE's volume stop ({SolverSettings().max_volume_ul:g} ul, "
+                             "SolverSettings.max_volume_ul), where the FE curves near the "
+                             "balance end")
+        i = int(over[0])
+        v_end = (float(grid[0]) if i == 0 else
+                 float(np.interp(top, a[i - 1:i + 1], grid[i - 1:i + 1])))
+        return v_end, (f"the FE's angle stop ({top:g} deg, SolverSettings.max_angle_deg), "
+                       "which the balance model's curve reaches before the volume stop")
 
     @staticmethod
     def _volume_curves(cb: CurveBand, z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
