@@ -76,7 +76,8 @@ def create_app(settings: ServiceSettings | None = None, *,
     app.include_router(calibration.router)
     install_pages(app)  # the explorer at /, /docs and /redoc, all offline (service/static)
 
-    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
+    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes,
+                       per_path={"/v1/calibrate": settings.max_calibration_body_bytes})
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins,
                            allow_methods=["GET", "POST", "DELETE"],

@@ -12,29 +12,34 @@ from service.errors import PROBLEM_JSON
 
 
 class BodyLimitMiddleware:
-    """Refuse bodies over ``max_bytes``: by Content-Length before reading, and while
-    reading a body without one (chunked)."""
+    """Refuse bodies over ``max_bytes`` (over ``per_path[path]`` on the paths it names: a
+    lab's measured data set is larger than any other request): by Content-Length before
+    reading, and while reading a body without one (chunked)."""
 
-    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+    def __init__(self, app: ASGIApp, max_bytes: int,
+                 per_path: dict[str, int] | None = None) -> None:
         self.app = app
         self.max_bytes = max_bytes
+        self.per_path = dict(per_path or {})
 
-    def _message(self) -> str:
-        return f"the request body exceeds the limit of {self.max_bytes} bytes"
+    @staticmethod
+    def _message(limit: int) -> str:
+        return f"the request body exceeds the limit of {limit} bytes"
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        limit = self.per_path.get(str(scope.get("path", "")).rstrip("/"), self.max_bytes)
         headers = dict(scope.get("headers") or [])
         length = headers.get(b"content-length")
         if length is not None:
             try:
-                too_large = int(length) > self.max_bytes
+                too_large = int(length) > limit
             except ValueError:
                 too_large = False
             if too_large:
-                await self._refuse(scope, send)
+                await self._refuse(scope, send, limit)
                 return
         received = 0
 
@@ -43,16 +48,16 @@ class BodyLimitMiddleware:
             message = await receive()
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
-                if received > self.max_bytes:
-                    raise HTTPException(413, self._message())
+                if received > limit:
+                    raise HTTPException(413, self._message(limit))
             return message
 
         await self.app(scope, limited, send)
 
-    async def _refuse(self, scope: Scope, send: Send) -> None:
+    async def _refuse(self, scope: Scope, send: Send, limit: int) -> None:
         body = json.dumps({"type": "urn:balloon:problem:payload-too-large",
                            "title": "Request body too large", "status": 413,
-                           "detail": self._message(), "instance": scope.get("path", "")}
+                           "detail": self._message(limit), "instance": scope.get("path", "")}
                           ).encode()
         await send({"type": "http.response.start", "status": 413,
                     "headers": [(b"content-type", PROBLEM_JSON.encode()),

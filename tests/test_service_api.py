@@ -265,6 +265,22 @@ def test_body_limit(client):
     assert assert_problem(r, 413)["type"].endswith(":payload-too-large")   # as announced
 
 
+def test_a_labs_data_set_is_not_refused_by_the_general_body_limit(client):
+    # 600 readings (~95 kB): a lab reading every second fills 64 KiB at ~340 rows, far
+    # below the schema's 20,000 (an audit of the thirty-fifth session); one curve only,
+    # so the loop refuses it at once (422), after reading the whole body
+    rows = [{"curve_id": "s1", "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
+             "membrane_material": "ecoflex_00_30", "time_s": 0.5 * i, "flow_ul_s": 2.5,
+             "pressure_pa": 3.0 * i, "angle_deg": 0.1 * i} for i in range(600)]
+    r = client.post("/v1/calibrate", json={"rows": rows})
+    assert len(r.request.content) > 65_536
+    assert_problem(r, 422, "rows.curve_id")
+    big = {"rows": rows * 30}                      # 18,000 rows, ~3 MB: within the schema
+    assert r.status_code != 413 and client.post("/v1/calibrate", json=big).status_code != 413
+    huge = {"rows": rows, "pad": "x" * (5 * 2**20)}
+    assert_problem(client.post("/v1/calibrate", json=huge), 413)
+
+
 def test_cors_is_off_by_default_and_configurable(client, tmp_path):
     preflight = {"Origin": "https://lab.example", "Access-Control-Request-Method": "POST"}
     r = client.options("/v1/predict", headers=preflight)
