@@ -71,6 +71,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _error(what: object) -> None:
+    """One line on stderr, whatever the message holds: a control character from the
+    user's own input (a CR of a CR-only file, an escape) is shown escaped, not obeyed."""
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(what))
+    print(f"balloon: error: {text}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -80,15 +87,15 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except (InputError, NotFoundError) as exc:
-        print(f"balloon: error: {exc}", file=sys.stderr)
+        _error(exc)
         return 2
     except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         # the file as the user named it and why, without Python's "[Errno 2]"
         what = f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else exc
-        print(f"balloon: error: {what}", file=sys.stderr)
+        _error(what)
         return 2
     except BalloonError as exc:
-        print(f"balloon: error: {exc}", file=sys.stderr)
+        _error(exc)
         return 1
     except KeyboardInterrupt:
         print("balloon: interrupted", file=sys.stderr)
@@ -103,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         # a write the system refused after the checks (a full disk): one line, no trace
         what = (f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror
                 else exc.strerror or type(exc).__name__)
-        print(f"balloon: error: {what}", file=sys.stderr)
+        _error(what)
         return 1
 
 

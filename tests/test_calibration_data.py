@@ -330,3 +330,21 @@ def test_a_loading_reading_at_the_steep_top_of_a_short_curve_is_not_a_hold():
                   85.8, 81.2, 75.4, 67.9, 58.8, 49.3, 34.2, 17.0, -0.1])
     d = directions(np.zeros(t.size, int), p, a, t)
     assert "".join("+0-"[1 - int(x)] for x in d) == "++++++++++0----------"
+
+
+@pytest.mark.parametrize("newline", ["\r", "\r\n", "\n"])
+def test_a_csv_reads_alike_whatever_its_line_ends(tmp_path, newline):
+    """A spreadsheet's "CSV (Macintosh)" ends lines in CR alone: read as one line, it was
+    blamed on the csv module's field size, its CR garbling the terminal (an audit of the
+    thirty-fifth session)."""
+    from surrogate.calibration import load_observations
+
+    lines = ["# a comment", "curve_id,L_mm,t_mm,body_material,membrane_material,"
+             "pressure_pa,angle_deg"]
+    for c in ("a", "b"):
+        lines += [f"{c},7.1,0.5,pdms_1_10,ecoflex_00_30,{p},{p / 100}" for p in (0, 500, 1000, 1500)]
+    path = tmp_path / "lab.csv"
+    path.write_bytes(newline.join(lines).encode() + newline.encode())
+    obs = load_observations(path)
+    assert obs.n == 8 and obs.n_curves == 2
+    assert list(obs.pressure_pa) == [0, 500, 1000, 1500] * 2

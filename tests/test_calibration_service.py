@@ -149,3 +149,21 @@ def test_calibrate_endpoint_names_row_and_column(client):
     assert body["errors"][0]["field"] == "rows.5.t_mm"
     assert "row 6" in body["detail"]
 
+
+
+def test_a_models_directory_that_is_a_file_is_said_not_a_name_conflict(tmp_path):
+    """Every save answered 409 "a model named ... already exists" and /v1/health said ok
+    (an audit of the thirty-fifth session)."""
+    models = tmp_path / "models"
+    models.write_text("not a directory")
+    app = create_app(settings_for(tmp_path, models_dir=models), load_surrogate=False)
+    with TestClient(app) as c:
+        health = c.get("/v1/health").json()
+        assert health["status"] == "degraded"
+        assert any("BALLOON_MODELS_DIR" in p for p in health["problems"])
+        from service.routes.calibration import EXAMPLE_ROWS
+
+        r = c.post("/v1/calibrate", json={"rows": EXAMPLE_ROWS, "model": "paper",
+                                          "save": "z1"}, headers={"X-API-Key": "test-key"})
+    problem = assert_problem(r, 503)
+    assert "BALLOON_MODELS_DIR" in problem["detail"] and str(tmp_path) not in r.text

@@ -127,3 +127,26 @@ def test_calibrate_will_not_write_its_report_over_the_data(tmp_path, capsys):
     assert main(["calibrate", str(data), "--report", str(data)]) == 2
     _one_line_error(capsys, 2, "--report", "the data file")
     assert data.read_text() == text
+
+
+def test_a_control_character_in_the_users_input_is_shown_escaped_on_one_line(capsys):
+    assert main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--body-material",
+                 "pdms\r\x1b[2J", "--pressures", "1000"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "\r" not in err and "\x1b" not in err
+    assert "pdms\\r\\x1b[2J" in err
+
+
+def test_calibrate_checks_its_models_directory_before_the_work(tmp_path, capsys, monkeypatch):
+    """`--save ok3 --models-dir /proc/nope` ran the whole calibration and then said
+    "/proc/nope: No such file or directory" without the option (an audit of the
+    thirty-fifth session)."""
+    data = tmp_path / "d.csv"
+    data.write_text("curve_id,L_mm,t_mm,body_material,membrane_material,pressure_pa,angle_deg\n"
+                    + "".join(f"{c},7.1,0.5,pdms_1_10,ecoflex_00_30,{p},{p / 100}\n"
+                              for c in "ab" for p in (0, 500, 1000, 1500)))
+    monkeypatch.setattr("surrogate.calibration.run_calibration",
+                        lambda *a, **k: pytest.fail("calibrated before checking --models-dir"))
+    assert main(["calibrate", str(data), "--report", str(tmp_path / "r.json"), "--save", "ok3",
+                 "--models-dir", "/proc/nope"]) == 2
+    _one_line_error(capsys, 2, "--models-dir")

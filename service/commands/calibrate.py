@@ -96,6 +96,13 @@ def run(args: argparse.Namespace) -> int:
         if args.models_dir.exists() and not args.models_dir.is_dir():
             raise InputError("--models-dir", f"{args.models_dir} is not a directory",
                              "a directory for saved models (made if missing)")
+        try:        # made and tried now, not after the calibration's work
+            args.models_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError("--models-dir", f"{args.models_dir} cannot be made "
+                             f"({exc.strerror or type(exc).__name__})",
+                             "a directory for saved models (made if missing)") from None
+        check_output(args.models_dir / f"{args.save}.json", "--models-dir")
         if (args.models_dir / f"{args.save}.json").exists():
             raise ModelExistsError(args.save)
         check_new_model_name(args.save, args.models_dir)  # "PAPER", or "lab1" beside "Lab1"

@@ -174,9 +174,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"stability: {note}")
     print(table(curve, with_force=settings.tip != "free"))
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump({"design": design.as_dict(), "settings": settings.as_dict(),
-                       "curve": curve.as_dict()}, fh, indent=1)
+        from surrogate.json_plain import plain_json
+
+        with open(args.json, "w") as fh:    # strict JSON: a free tip's NaN force is null
+            json.dump(plain_json({"design": design.as_dict(), "settings": settings.as_dict(),
+                                  "curve": curve.as_dict()}), fh, indent=1, allow_nan=False)
     if args.csv:
         curve_to_csv(curve, args.csv)
     if args.plot:

@@ -14,7 +14,14 @@ from fastapi import APIRouter, Security
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
 from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
-from service.errors import FIELD_FORMS, FIELD_RANGES, ConflictError, FieldError, located
+from service.errors import (
+    FIELD_FORMS,
+    FIELD_RANGES,
+    ConflictError,
+    FieldError,
+    UnavailableError,
+    located,
+)
 from service.models import check_new_model_name, name_rule
 from service.schemas import Schema
 from service.schemas._ranges import field_ranges
@@ -195,6 +202,10 @@ def _check_save_name(name: str, models_dir: Path) -> None:
     (409). The save itself is an atomic create: of two concurrent saves one wins."""
     from surrogate.calibration._saved import _check_name
 
+    if models_dir.exists() and not models_dir.is_dir():
+        # the server's setting, not the request's: every name was "already exists" (409)
+        raise UnavailableError("saving is unavailable: the server's models directory "
+                               "(BALLOON_MODELS_DIR) is not a directory")
     try:
         _check_name(name)
         check_new_model_name(name, models_dir)

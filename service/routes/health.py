@@ -50,6 +50,9 @@ async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Hea
     if emulator is None:
         problems.append(f"no emulator ({models.emulator_error or 'not loaded'}): the default "
                         "model \"emulator\" answers 503")
+    if settings.models_dir.exists() and not settings.models_dir.is_dir():
+        problems.append("the models directory (BALLOON_MODELS_DIR) is not a directory: "
+                        "saving a calibration answers 503")
     return Health(
         status="degraded" if problems else "ok", problems=problems, version=VERSION,
         database=DatabaseStatus(name=settings.db_path.name, present=present,

@@ -469,8 +469,10 @@ def _plain_keys(row: dict, i: int) -> dict:
 def read_csv_rows(text: str) -> list[dict[str, object]]:
     """Rows of a CSV text (header line first; '#' comment lines and blank lines are
     skipped: a blank line between a comment and the header had made an empty header). A
-    field beyond the csv module's size limit is a DataError naming its row and column."""
-    lines = [ln for ln in io.StringIO(text)
+    field beyond the csv module's size limit is a DataError naming its row and column.
+    Lines may end in LF, CR LF or CR alone (a spreadsheet's "CSV (Macintosh)": read as one
+    line, it was blamed on the field size, its CR garbling the terminal's line)."""
+    lines = [ln for ln in io.StringIO(text, newline=None)
              if ln.strip() and not ln.lstrip().startswith("#")]
     reader = csv.DictReader(lines)
     try:

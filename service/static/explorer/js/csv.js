@@ -23,7 +23,7 @@ function splitLine(line) {
 }
 
 export function parseCsv(text) {
-  const lines = text.split(/\r?\n/).filter((l) => l.trim() !== "" && !l.trimStart().startsWith("#"));
+  const lines = text.split(/\r\n|\r|\n/).filter((l) => l.trim() !== "" && !l.trimStart().startsWith("#"));
   if (!lines.length) throw new Error("the file is empty");
   const header = splitLine(lines[0].replace(/^\uFEFF/, ""));
   if (header.length === 1 && /[;\t]/.test(header[0])) {
