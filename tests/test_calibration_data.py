@@ -342,7 +342,8 @@ def test_a_csv_reads_alike_whatever_its_line_ends(tmp_path, newline):
     lines = ["# a comment", "curve_id,L_mm,t_mm,body_material,membrane_material,"
              "pressure_pa,angle_deg"]
     for c in ("a", "b"):
-        lines += [f"{c},7.1,0.5,pdms_1_10,ecoflex_00_30,{p},{p / 100}" for p in (0, 500, 1000, 1500)]
+        lines += [f"{c},7.1,0.5,pdms_1_10,ecoflex_00_30,{p},{p / 100}"
+                  for p in (0, 500, 1000, 1500)]
     path = tmp_path / "lab.csv"
     path.write_bytes(newline.join(lines).encode() + newline.encode())
     obs = load_observations(path)
