@@ -302,13 +302,22 @@ def _not_json_body(request: Request, errors: list[dict[str, Any]]) -> list[dict[
 
 
 def _allowed_methods(request: Request) -> list[str]:
-    """The methods the published contract has for the request's path."""
+    """The methods the published contract has for the request's path; for a path outside
+    it (the explorer's page, /docs, /openapi.json, static files: their Allow was empty)
+    the methods of the routes that match it."""
+    from starlette.routing import Match
+
     path = request.url.path
     methods: set[str] = set()
     for template, operations in request.app.openapi()["paths"].items():
         pattern = re.sub(r"\\\{[^/]+?\\\}", "[^/]+", re.escape(template))
         if re.fullmatch(pattern, path):
             methods |= {m.upper() for m in operations}
+    if not methods:     # the full path: inside a mount the scope's path is the mount's rest
+        scope = {**request.scope, "path": path, "root_path": ""}
+        for route in request.app.routes:
+            if route.matches(scope)[0] != Match.NONE:
+                methods |= set(getattr(route, "methods", None) or ("GET", "HEAD"))
     return sorted(methods)
 
 

@@ -168,3 +168,13 @@ def test_405_names_every_method_of_the_path(client, spec):
         assert r.status_code == 405, (path, unused)
         assert r.headers["content-type"] == PROBLEM_JSON
         assert r.headers["allow"] == ", ".join(sorted(m.upper() for m in ops)), path
+
+
+@pytest.mark.parametrize("path", ["/", "/docs", "/redoc", "/openapi.json",
+                                  "/static/explorer/js/app.js"])
+def test_405_outside_the_contract_names_the_methods_too(client, path):
+    # the page, the docs and the static files answered 405 with an empty Allow (an audit
+    # of the thirty-fifth session)
+    r = client.post(path)
+    assert r.status_code == 405 and r.headers["content-type"] == PROBLEM_JSON
+    assert r.headers["allow"] == "GET, HEAD"
