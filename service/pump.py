@@ -172,6 +172,22 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
     return body
 
 
+def _without(result: Any, drop: np.ndarray) -> Any:
+    """A copy of an inverse answer with no number at the angles ``drop`` (NaN: null in
+    JSON) and a validity of its own."""
+    from dataclasses import replace
+
+    changes: dict[str, Any] = {"validity": dict(result.validity)}
+    changes["validity"]["flags"] = list(changes["validity"].get("flags", []))
+    changes["validity"]["messages"] = list(changes["validity"].get("messages", []))
+    for name in ("pressure_pa", "lower_pa", "upper_pa", "volume_ul", "volume_lower_ul",
+                 "volume_upper_ul"):
+        values = getattr(result, name, None)
+        if values is not None:
+            changes[name] = np.where(drop, np.nan, np.asarray(values, float))
+    return replace(result, **changes)
+
+
 def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], model: str,
                    level: float, flow_ul_s: float | None = None, inlet: Inlet | None = None
                    ) -> dict[str, Any]:
@@ -186,6 +202,17 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
     check_flow(flow_ul_s, inlet)
     drop = inlet_drop(inlet, flow_ul_s)
     result = surrogate.inverse(design, angles_deg, level=level)
+    # past the FE's pressure stop (SolverSettings.max_pressure_pa), the largest pressure
+    # /v1/predict takes: a design of two layers 50x their presets needed 94 kPa
+    p_stop = AXES["pressures_pa"][1]
+    over = np.asarray(result.pressure_pa, float) > p_stop
+    if over.any():
+        result = _without(result, over)
+        result.validity.setdefault("flags", []).append("past_fe_pressure_stop")
+        result.validity.setdefault("messages", []).append(
+            f"{int(over.sum())} angle(s) need more than {p_stop:g} Pa, where the FE stops "
+            "(SolverSettings.max_pressure_pa) and the largest pressure the service answers: "
+            "no pressure is given there")
     volume = getattr(result, "volume_ul", None)
     if flow_ul_s is not None and volume is None:    # asked for, never silently dropped
         raise InputError("flow_ul_s", f"model {model!r} gives no injected volume for this "

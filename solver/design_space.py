@@ -300,6 +300,16 @@ def locate(design: Design, reduced: bool = False) -> BoxPoint:
         first = outside[0]
         raise OutOfBoxError(first.field, first.detail, first.allowed or "", nearest(),
                             tuple(outside[1:]))
+    for field, s in (("body_material", s_body), ("membrane_material", s_membrane)):
+        lo_l, hi_l = STIFFNESS_SCALE_LIMITS
+        if reduced and not lo_l <= s <= hi_l:
+            # a common factor scales only the pressure axis, but a layer 1e-300 or 9999
+            # times its preset is no silicone of this family (an audit, 2026-12-06)
+            raise OutOfBoxError(field, f"stiffness scale {s:.4g} (mu_kpa = s x the preset's) "
+                                "is past any silicone of this family",
+                                f"{lo_l:g} <= s <= {hi_l:g} for each layer, "
+                                f"{REDUCED_RATIO_RANGE[0]:g} <= s_body / s_membrane <= "
+                                f"{REDUCED_RATIO_RANGE[1]:g}", nearest())
     if reduced:
         ratio = s_body / s_membrane
         lo_s, hi_s = REDUCED_RATIO_RANGE

@@ -14,6 +14,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from service_fakes import assert_problem
 
 from service.cli import main
 from service.settings import DATA_DIR
@@ -380,3 +381,27 @@ def test_pressures_that_look_like_kpa_are_answered_and_flagged(shipped_client):
     pa = shipped_client.post("/v1/predict", json={"design": design,
                                                   "pressures_pa": [10, 1500]}).json()
     assert "pressures_look_like_kpa" not in pa["validity"]["flags"]
+
+
+@pytest.mark.parametrize("scale", ["1e-300", "9999"])
+def test_a_layer_scaled_past_any_silicone_is_refused_naming_it(shipped_client, scale):
+    # a common factor scales only the pressure axis, but 1e-300 answered fe_limit_pa 2e-297
+    # and 9999 a pressure of 19 MPa (an audit of the thirty-fifth session)
+    design = {"L_mm": 7.1, "t_mm": 0.5, "body_material": f"pdms_1_10*{scale}",
+              "membrane_material": f"ecoflex_00_30*{scale}"}
+    r = shipped_client.post("/v1/inverse/pressure", json={"design": design, "angles_deg": [45]})
+    problem = assert_problem(r, 422, "design.body_material")
+    assert "0.01 <= s <= 100" in problem["errors"][0]["allowed"]
+
+
+def test_a_pressure_past_the_fes_pressure_stop_is_not_given(shipped_client):
+    design = {"L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10*50",
+              "membrane_material": "ecoflex_00_30*50"}
+    body = shipped_client.post("/v1/inverse/pressure",
+                               json={"design": design, "angles_deg": [45]}).json()
+    assert body["pressure_pa"] == [None] and body["volume_ul"] == [None]
+    assert "past_fe_pressure_stop" in body["validity"]["flags"]
+    plain = shipped_client.post("/v1/inverse/pressure", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [45]}).json()
+    assert plain["pressure_pa"][0] < 20000
+    assert "past_fe_pressure_stop" not in plain["validity"]["flags"]
