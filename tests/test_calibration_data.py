@@ -349,3 +349,12 @@ def test_a_csv_reads_alike_whatever_its_line_ends(tmp_path, newline):
     obs = load_observations(path)
     assert obs.n == 8 and obs.n_curves == 2
     assert list(obs.pressure_pa) == [0, 500, 1000, 1500] * 2
+
+
+def test_an_unknown_column_with_a_huge_name_is_named_short():
+    rows = [{"curve_id": "a", "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
+             "membrane_material": "ecoflex_00_30", "pressure_pa": 0, "angle_deg": 0,
+             "x" * 10_000: 1}]
+    with pytest.raises(DataError) as err:
+        observations_from_rows(rows)
+    assert "unknown column" in str(err.value) and len(str(err.value)) < 400

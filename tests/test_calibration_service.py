@@ -167,3 +167,12 @@ def test_a_models_directory_that_is_a_file_is_said_not_a_name_conflict(tmp_path)
                                           "save": "z1"}, headers={"X-API-Key": "test-key"})
     problem = assert_problem(r, 503)
     assert "BALLOON_MODELS_DIR" in problem["detail"] and str(tmp_path) not in r.text
+
+
+@pytest.mark.parametrize("model", ["../x", "a/b", "emulator\x00"])
+def test_a_model_name_that_is_a_path_is_refused_as_predict_refuses_it(model):
+    from service.routes.calibration import EXAMPLE_ROWS
+
+    with TestClient(create_app()) as c:
+        r = c.post("/v1/calibrate", json={"rows": EXAMPLE_ROWS, "model": model})
+    assert "not of this form" in assert_problem(r, 422, "model")["detail"]

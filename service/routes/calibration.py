@@ -25,6 +25,7 @@ from service.errors import (
 from service.models import check_new_model_name, name_rule
 from service.schemas import Schema
 from service.schemas._ranges import field_ranges
+from service.schemas.common import MATERIAL_ID
 from solver.errors import ExistsError, InputError
 
 router = APIRouter(prefix="/v1", tags=["calibration"])
@@ -71,7 +72,7 @@ class CalibrateRequest(Schema):
     rows: list[dict[str, Cell]] = Field(..., min_length=1, max_length=20_000,
                                        description="one object per observation",
                                        examples=[EXAMPLE_ROWS])
-    model: str = Field("emulator", min_length=1, max_length=64,
+    model: str = Field("emulator", min_length=1, max_length=64, pattern=MATERIAL_ID,
                        description="baseline: emulator (nothing left open), exponential / "
                        "fitted, paper, or a saved model name")
     save: str | None = Field(None, min_length=1, max_length=64,

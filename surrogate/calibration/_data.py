@@ -242,8 +242,10 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         if not isinstance(raw, dict):
             raise DataError("rows", "a row must be an object of column -> value", i)
         extra = sorted(set(raw) - known)
-        if extra:
-            raise DataError(str(extra[0]), "unknown column", i,
+        if extra:       # named as the file names it, cut short (a 10,000-character key)
+            name = str(extra[0])
+            raise DataError(name if len(name) <= 64 else f"{name[:40]}... ({len(name)} "
+                            "characters)", "unknown column", i,
                             ", ".join(REQUIRED + OPTIONAL + (PUMP_COLUMN,)))
         rec: dict[str, object] = {}
         cid = raw.get("curve_id")
