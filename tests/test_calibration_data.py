@@ -358,3 +358,13 @@ def test_an_unknown_column_with_a_huge_name_is_named_short():
     with pytest.raises(DataError) as err:
         observations_from_rows(rows)
     assert "unknown column" in str(err.value) and len(str(err.value)) < 400
+
+
+@pytest.mark.parametrize(("head", "what"), [(b"\x89HDF\r\n\x1a\n", "HDF5"),
+                                             (b"PK\x03\x04", "xlsx"), (b"%PDF-1.4", "PDF")])
+def test_a_binary_file_given_as_data_is_named_for_what_it_is(tmp_path, head, what):
+    path = tmp_path / "lab.csv"
+    path.write_bytes(head + b"\x00\x01\x02" * 100)
+    with pytest.raises(DataError) as err:
+        load_observations(path)
+    assert what in str(err.value) and "UTF-16" not in str(err.value)

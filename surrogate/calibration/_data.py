@@ -546,6 +546,14 @@ BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe\x00\x00", "utf-32"),
         (b"\x00\x00\xfe\xff", "utf-32"), (b"\xff\xfe", "utf-16"), (b"\xfe\xff", "utf-16"))
 
 
+# what a lab's data file is when it is not text: told by its first bytes (all of these
+# were read as "UTF-16 without a byte-order mark")
+FILE_SIGNATURES = ((b"\x89HDF\r\n\x1a\n", "an HDF5 file (a curve database?)"),
+                   (b"PK\x03\x04", "a zip archive (an Excel .xlsx or .ods workbook?)"),
+                   (b"\xd0\xcf\x11\xe0", "an old Excel .xls workbook"),
+                   (b"\x89PNG", "a PNG image"), (b"%PDF", "a PDF document"))
+
+
 def decode_text(data: bytes, name: str) -> str:
     """Text of a measured-data file: UTF-8, or UTF-16/32 with a byte-order mark. Anything
     else (latin-1 from a spreadsheet, UTF-16 without BOM) is one DataError naming the
@@ -559,6 +567,11 @@ def decode_text(data: bytes, name: str) -> str:
                                               "\n".encode(encoding)[2:]) + 1
                 raise DataError("file", f"{name}: line {line}: not valid {encoding} after "
                                 "its byte-order mark", None, "UTF-8 text") from None
+    for signature, what in FILE_SIGNATURES:
+        if data.startswith(signature):
+            raise DataError("file", f"{name}: this is {what}, not text", None,
+                            "a CSV file (UTF-8, comma-separated; a spreadsheet's 'Save as: "
+                            "CSV UTF-8') or JSON rows")
     if b"\x00" in data[:4096]:
         line = data[:data.index(b"\x00")].count(b"\n") + 1
         raise DataError("file", f"{name}: line {line}: it looks like UTF-16 without a "
