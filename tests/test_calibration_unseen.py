@@ -376,7 +376,7 @@ def _first_specimen(rows: list[dict]) -> list[dict]:
 # them "inlet-R-80-2flows" and "friction-loop" since 2026-12-06 (28 and 23 s: the default
 # suite over its 10 minutes; the inlet resistance at two flow rates and a loop outside the
 # catalogue stay in tests/test_calibration_loop.py's default cases)
-CHEAP = {"clean-one-design-2-flows", "clean-past-fe-range", "radian-angles",
+CHEAP = {"clean-one-design-2-flows", "clean-past-fe-range", "radian-angles", "flipped-angles",
          "unit-in-header", "membrane-0.61-L15.8", "offset-no-time",
          # air in the line, the catalogue's line_compliance (7 s, 2026-12-06); clean data
          # on which a pair with it fitted the gauge's misfit of bodies 1-2 % off the
@@ -435,6 +435,10 @@ def _cases() -> list[Case]:
         Expect("none_selected", warn=("pressure_pa",)))
     add("radian-angles", lambda: [dict(r, angle_deg=round(math.radians(r["angle_deg"]), 4))
                                   for r in lab_rows(designs_std10(), proto=LOOP)],
+        Expect("none_selected", warn=("angle_deg",)))
+    # a protocol that counts the bend positive towards the membrane (2026-12-06)
+    add("flipped-angles", lambda: [dict(r, angle_deg=-r["angle_deg"]) for r in
+                                   lab_rows(designs_std10(), proto=LOOP)],
         Expect("none_selected", warn=("angle_deg",)))
     add("unit-in-header", lambda: [{("pressure_pa [Pa]" if k == "pressure_pa" else k): v
                                     for k, v in r.items()}

@@ -170,9 +170,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     pred_as_is = as_is.angles(as_is.layout.start)
     # by volume a gauge reading past the baseline's range has no angle at that pressure
     rmse_model = float(np.sqrt(np.nanmean((pred_as_is - y) ** 2)))
-    radians = _radians_warning(y, pred_as_is)
-    if radians:
-        warnings.append(radians)
+    for check in (_radians_warning, _sign_warning):
+        said = check(y, pred_as_is)
+        if said:
+            warnings.append(said)
     base = get_fit(())
     rmse_before, resid_before = get_cv(())
 
@@ -391,6 +392,25 @@ def _left_out_check(all_obs: Observations, kept: np.ndarray, model_for, after: F
 
 
 RADIANS_MAX = 2.1  # |angle| in radians of a bend up to 120 deg
+SIGN_SHOWN_DEG = 5.0   # the baseline bends at least this much where a sign is compared
+
+
+def _sign_warning(y: np.ndarray, pred: np.ndarray) -> str | None:
+    """A warning when the measured angles have the opposite sign of the baseline's at
+    most readings where it bends clearly (a protocol that measures positive towards the
+    membrane): the catalogue has no sign flip, and the loop otherwise reports a 25 deg
+    misfit that "no catalogued effect" explains."""
+    shown = np.isfinite(pred) & (np.abs(pred) >= SIGN_SHOWN_DEG) & np.isfinite(y)
+    if shown.sum() < 4:
+        return None
+    opposite = np.sign(y[shown]) == -np.sign(pred[shown])
+    if opposite.mean() < 0.8:
+        return None
+    way = "away from" if np.median(pred[shown]) > 0 else "towards"
+    return (f"angle_deg: at {int(opposite.sum())} of {int(shown.sum())} readings where the "
+            f"baseline bends {SIGN_SHOWN_DEG:g} deg or more the angle has the opposite sign; "
+            f"angle_deg is positive away from the membrane (these designs bend {way} it): "
+            "if your protocol counts the other way, change the sign of angle_deg")
 
 
 def _table_end_pa(predictor, designs: dict, p_max_pa: float) -> float:
