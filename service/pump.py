@@ -157,6 +157,8 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
             "designs bend by hundredths of a degree: pressures_pa is in Pa (1.5 kPa is "
             "1500)")
     body["pressure_sites"] = {"pressure_pa": "chamber"}
+    if q is not None and body.get("volume_ul") is None:     # asked for, never dropped
+        raise _no_volume(model)
     if q is not None:
         body["flow_ul_s"] = q
         body["time_s"] = ([float(t) for t in question.times_s or ()] if axis == "times_s"
@@ -170,6 +172,14 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         body["pump_pressure_pa"] = _plus(body["pressure_pa"], inlet["pressure_drop_pa"])
         body["pressure_sites"]["pump_pressure_pa"] = "pump_gauge"
     return body
+
+
+def _no_volume(model: str) -> InputError:
+    """A flow rate asked of a model that gives no injected volume: refused, never dropped."""
+    return InputError("flow_ul_s", f"model {model!r} gives no injected volume for this "
+                      "design, so no time at a flow rate",
+                      'omit flow_ul_s, or model "emulator" (or an exponential model fitted '
+                      "from FE curves with volumes)")
 
 
 def _without(result: Any, drop: np.ndarray) -> Any:
@@ -215,10 +225,7 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
             "no pressure is given there")
     volume = getattr(result, "volume_ul", None)
     if flow_ul_s is not None and volume is None:    # asked for, never silently dropped
-        raise InputError("flow_ul_s", f"model {model!r} gives no injected volume for this "
-                         "design, so no time at a flow rate",
-                         'omit flow_ul_s, or model "emulator" (or an exponential model '
-                         "fitted from FE curves with volumes)")
+        raise _no_volume(model)
     body: dict[str, Any] = {
         "model": model, "level": level, "design": design.as_dict(),
         "angle_deg": [float(a) for a in angles_deg],

@@ -405,3 +405,11 @@ def test_a_pressure_past_the_fes_pressure_stop_is_not_given(shipped_client):
         "design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [45]}).json()
     assert plain["pressure_pa"][0] < 20000
     assert "past_fe_pressure_stop" not in plain["validity"]["flags"]
+
+
+def test_a_flow_rate_asked_of_a_model_without_volumes_is_refused_by_predict_too(shipped_client):
+    # /v1/inverse/pressure refused it; /v1/predict answered time_s null without a word
+    r = shipped_client.post("/v1/predict", json={"design": {"L_mm": 7.1, "t_mm": 0.5},
+                                                 "pressures_pa": [1000], "flow_ul_s": 2.5,
+                                                 "model": "paper"})
+    assert_problem(r, 422, "flow_ul_s")
