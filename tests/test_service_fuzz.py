@@ -511,8 +511,11 @@ def test_hostile_bodies(fuzz, op_id):
         r, seconds = _send(client, method, path, content=data, headers=h)
         failures += _bad(f"{op_id} [{name}]", r, data.decode("utf-8", "replace"), seconds,
                          limit_s=limit_s)
-        if name.endswith("= list-100k") and r.status_code != 413:
-            failures.append(f"{op_id} [{name}]: {r.status_code}, not 413")
+        # a 100 000-item list is past the body limit (413), except where the limit is a
+        # lab's data set (/v1/calibrate: 4 MiB), which the schema refuses (422)
+        big_ok = (413, 422) if path == "/v1/calibrate" else (413,)
+        if name.endswith("= list-100k") and r.status_code not in big_ok:
+            failures.append(f"{op_id} [{name}]: {r.status_code}, not {big_ok}")
     _report(failures)
 
 
