@@ -119,6 +119,7 @@ def test_the_reports_own_fit_is_drawn_beside_the_data_before_any_save(watched, s
     page.set_input_files("#cal-file", str(EXAMPLE_CSV))
     page.click("#cal-run")
     page.wait_for_selector("#cal-report:not([hidden])", timeout=120_000)
+    page.wait_for_selector('#cal-plot g[data-series="fit-report"] circle', timeout=60_000)
     fit = page.locator('#cal-plot g[data-series="fit-report"] circle')
     assert fit.count() > 20
     assert "once it is saved" not in page.locator("#cal-status").inner_text()

@@ -291,9 +291,10 @@ export function setupCalibration() {
         } catch (err) { notes.push(`augmented model for ${label}: ${err.message}`); }
       }
     }
-    if (points) {
+    if (points && !after) {
       // the report's own fit at each reading (its flow rate and time); by injected volume
-      // at the gauge pressure the fit gives there
+      // at the gauge pressure the fit gives there (once saved, the saved model's curves
+      // stand for it)
       data.push({ id: "fit-report", label: "with the selected effects (the report's fit at each reading)", color: "#111827",
         x: points.items.map((p) => (typeof p.pressure_after_pa === "number" ? p.pressure_after_pa : p.pressure_pa)),
         y: points.items.map((p) => (typeof p[points.after] === "number" ? p[points.after] : null)), markersOnly: true });
