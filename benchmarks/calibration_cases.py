@@ -10,6 +10,7 @@ solves they are made from (docs/calibration.md, "Tests").
     .venv/bin/python benchmarks/calibration_cases.py --unseen creep-no-time \
         --seed-offset 400 --seeds 30                         # a rate over 30 noise seeds
     .venv/bin/python benchmarks/calibration_cases.py --regulator 10   # a regulator lab
+    .venv/bin/python benchmarks/calibration_cases.py --near-fe-end 2  # pumped to 85 deg
 
 The cases are those of tests/test_calibration_loop.py (same labs, truths and seed), run
 against the shipped emulator (or ``--emulator PATH``); one markdown row per case:
@@ -208,6 +209,32 @@ def regulator(seeds: int) -> int:
     return 0
 
 
+def near_fe_end(seeds: int) -> int:
+    """A membrane 1.3x or 0.75x stiff, one design of tests/calibration_lab's FE solves,
+    3 specimens pumped at 2.5 ul/s to ~85 deg and back, read every 2 s (tests/
+    test_calibration_near_the_fe_end.py): right when membrane_stiffness alone is selected
+    within 3 sd of the truth; one line per set and the count."""
+    import test_calibration_near_the_fe_end as near
+
+    right = n = 0
+    for L_mm, t_mm, scale in ((7.1, 0.75, 1.3), (11.1, 0.5, 1.3), (4.1, 0.5, 1.3),
+                              (7.1, 0.75, 0.75), (11.1, 0.5, 0.75)):
+        for seed in range(1, seeds + 1):
+            report = run_calibration(near._pumped_to_85_deg(L_mm, t_mm, scale, seed),
+                                     lab_mod.emulator()).report
+            fitted = report["fitted"]["effects"].get("membrane_mu_scale")
+            ok = (report["selected_effects"] == ["membrane_stiffness"] and fitted is not None
+                  and abs(fitted["value"] - scale) < 3.0 * fitted["sd"])
+            right += ok
+            n += 1
+            size = ("-" if fitted is None else
+                    f"{fitted['value']:.4f} +/- {fitted['sd']:.2g}")
+            print(f"{'right' if ok else 'WRONG'} | L {L_mm:g} t {t_mm:g} membrane x{scale:g} | "
+                  f"seed {seed} | {report['selected_effects']} {size}", flush=True)
+    print(f"right in {right} of {n}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("cases", nargs="*", help="case ids (default: every case)")
@@ -224,7 +251,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--regulator", type=int, default=None, metavar="N",
                         help="a pressure-regulator lab (no pump, no time_s): six truths at "
                              "noise seeds 0 .. N-1")
+    parser.add_argument("--near-fe-end", type=int, default=None, metavar="N",
+                        help="a membrane change read by a pump to ~85 deg, near the FE's "
+                             "end: five designs at noise seeds 1 .. N")
     args = parser.parse_args(argv)
+    if args.near_fe_end is not None:
+        if args.near_fe_end < 1:
+            parser.error("--near-fe-end N needs N >= 1 seeds")
+        return near_fe_end(args.near_fe_end)
     if args.regulator is not None:
         if args.regulator < 1:
             parser.error("--regulator N needs N >= 1 seeds")
