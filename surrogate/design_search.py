@@ -319,6 +319,15 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
     return out
 
 
+# what a candidate's score is, per objective (lower ranks first)
+SCORE_MEANING = {
+    "certainty": "the band's width over the value at the target pressure (lower: surer)",
+    "pressure": "the pressure needed for the target, Pa",
+    "margin": "the band's upper end of the pressure needed, Pa",
+    "compact": "the chamber length L, mm",
+}
+
+
 def _score(e: _Eval, objective: str, target: DesignTarget) -> float:
     if objective == "pressure":
         return e.needed

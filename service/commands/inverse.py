@@ -231,4 +231,7 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                  f"{c.value_upper:<7.2f} " if math.isfinite(c.value_at_pressure)
                  else f"{'--':>8s} {'--':>16s} ")
               + flags)
+    from surrogate.design_search import SCORE_MEANING
+
+    print(f"score ({res.objective}): {SCORE_MEANING.get(res.objective, 'lower ranks first')}")
     return 0

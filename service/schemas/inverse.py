@@ -12,7 +12,7 @@ from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
 from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
 from solver.design import LIMITS_MM
 from solver.design_space import BOX_MM, STIFFNESS_SCALE_LIMITS, STIFFNESS_SCALE_RANGE
-from surrogate.design_search import N_RESULTS_MAX
+from surrogate.design_search import N_RESULTS_MAX, SCORE_MEANING
 from surrogate.exponential.inverse_design import DEFAULT_KIND, MAX_TARGET
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
@@ -117,7 +117,8 @@ class Candidate(BaseModel):
     design: dict[str, Any] | None = Field(None, description="the design, as /v1/predict "
                                           "takes it (lengths mm, materials inline)")
     family: str = Field(description="the material group or fitted family it belongs to")
-    score: float | None = Field(description="the objective's value (lower ranks first)")
+    score: float | None = Field(description="the objective's value, lower ranks first: "
+                                + "; ".join(f"{k}: {v}" for k, v in SCORE_MEANING.items()))
     pressure_needed_pa: float | None = Field(description="pressure that meets the target, Pa")
     pressure_lower_pa: float | None = Field(description="its band's lower edge, Pa")
     pressure_upper_pa: float | None = Field(description="its band's upper edge, Pa")
