@@ -290,3 +290,25 @@ def test_the_other_way_is_offered_only_where_it_reaches_the_target(emulator):
     budget = search_designs(emulator, DesignTarget("pressure_budget", 200.0, angle_deg=60.0),
                             SearchBounds(L_mm=(6.0, 6.0)), n_results=3)
     assert not budget.feasible and "within 200 Pa" in budget.explanation
+
+
+def test_each_candidate_says_what_0_01_mm_of_each_length_does(emulator):
+    """A mould's tolerance read on the answer: the candidates' bands are +-0.3 deg, and
+    rounding a candidate's t to 0.01 mm moved it 1.4 deg (an audit of the thirty-fifth
+    session). The change is checked against the emulator asked afresh."""
+    from dataclasses import replace
+
+    from surrogate.design_search import SearchBounds, search_designs
+
+    res = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0, angle_deg=45.0),
+                         SearchBounds(L_mm=(10.0, 10.0)), n_results=2)
+    for c in res.candidates:
+        change = c.change_per_0_01_mm
+        assert set(change) == {"L_mm", "t_mm", "T_mm", "b_mm", "h_mm"}
+        assert change["t_mm"] < 0 < change["h_mm"]        # thicker membrane: less bend
+        thicker = replace(c.design, t_mm=c.design.t_mm + 0.01, body_length_mm=None,
+                          chamber_offset_mm=None).validated()
+        moved = emulator.predict(thicker, [1500.0]).angle_deg[0] - c.value_at_pressure
+        assert moved == pytest.approx(change["t_mm"], rel=0.15)
+        assert abs(change["t_mm"]) > c.value_upper - c.value_lower   # the point of saying it
+        assert c.as_dict()["change_per_0_01_mm"] == change

@@ -234,4 +234,9 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     from surrogate.design_search import SCORE_MEANING
 
     print(f"score ({res.objective}): {SCORE_MEANING.get(res.objective, 'lower ranks first')}")
+    for c in res.candidates:        # what a mould's tolerance does to each answer
+        if c.change_per_0_01_mm:
+            changes = ", ".join(f"{n.removesuffix('_mm')} {v:+.3g}"
+                                for n, v in c.change_per_0_01_mm.items())
+            print(f"rank {c.rank}, each length 0.01 mm larger: {changes} {unit}")
     return 0

@@ -126,6 +126,10 @@ class Candidate(BaseModel):
         description="predicted angle (deg) or force (mN) at the target pressure")
     value_lower: float | None = Field(description="band's lower edge (deg or mN)")
     value_upper: float | None = Field(description="band's upper edge (deg or mN)")
+    change_per_0_01_mm: dict[str, float] | None = Field(
+        None, description="the value's change (deg or mN) when one length (L_mm, t_mm, "
+        "T_mm, b_mm, h_mm) is made 0.01 mm larger, the others kept: what a mould's "
+        "tolerance does to the answer (design-space search; null otherwise)")
     validity: dict[str, Any] = Field(description="in_domain, flags, messages")
     curve: dict[str, Any] = Field(description="predicted curve from 0 Pa with its band")
 

@@ -133,6 +133,9 @@ class DesignCandidate:
     value_lower: float
     value_upper: float
     curve: Prediction
+    # the value's change (deg or mN) when one length is made 0.01 mm larger, the others
+    # kept: a mould's tolerance read on the answer (design-space search; None otherwise)
+    change_per_0_01_mm: dict[str, float] | None = None
 
     def as_dict(self) -> dict[str, object]:
         from solver.design_space import recognise
@@ -153,7 +156,9 @@ class DesignCandidate:
                 "pressure_lower_pa": self.pressure_lower_pa,
                 "pressure_upper_pa": self.pressure_upper_pa,
                 "value_at_pressure": self.value_at_pressure, "value_lower": self.value_lower,
-                "value_upper": self.value_upper, "validity": self.curve.validity,
+                "value_upper": self.value_upper,
+                "change_per_0_01_mm": self.change_per_0_01_mm,
+                "validity": self.curve.validity,
                 "curve": {k: v for k, v in self.curve.as_dict().items()
                           if k in ("pressure_pa", "angle_deg", "lower_deg", "upper_deg",
                                    "force_mn", "force_lower_mn", "force_upper_mn",

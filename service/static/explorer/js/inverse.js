@@ -132,7 +132,10 @@ export function setupInverse({ loadDesign }) {
       const band = c.value_lower !== null && c.value_upper !== null ? ` [${value(c.value_lower)}, ${value(c.value_upper)}]` : "";
       const pband = c.pressure_lower_pa !== null && c.pressure_upper_pa !== null && c.pressure_lower_pa !== c.pressure_upper_pa
         ? ` [${fmt(c.pressure_lower_pa, 0)}, ${fmt(c.pressure_upper_pa, 0)}]` : "";
-      const notes = messagesOf(c).filter((m) => !common.includes(m)).join(" ");
+      // what a mould's tolerance does: the length whose 0.01 mm moves the value most
+      const tol = Object.entries(c.change_per_0_01_mm || {}).sort((a, b) => Math.abs(b[1]) - Math.abs(a[1]))[0];
+      const tolNote = tol ? `0.01 mm more ${tol[0].replace(/_mm$/, "")}: ${tol[1] >= 0 ? "+" : ""}${fmtSig(tol[1], 2)} ${searched && searched.kind === "force_at_pressure" ? "mN" : "deg"}.` : "";
+      const notes = [tolNote, ...messagesOf(c).filter((m) => !common.includes(m))].filter(Boolean).join(" ");
       const geometry = familyGeometry(c);
       const scale = (s) => (typeof s === "number" ? `x${fmtSig(s)}` : "x1");
       const cells = [c.rank, pairLabel(c.body_material, c.membrane_material),
