@@ -312,3 +312,14 @@ def test_each_candidate_says_what_0_01_mm_of_each_length_does(emulator):
         assert moved == pytest.approx(change["t_mm"], rel=0.15)
         assert abs(change["t_mm"]) > c.value_upper - c.value_lower   # the point of saying it
         assert c.as_dict()["change_per_0_01_mm"] == change
+
+
+def test_a_target_field_the_kind_does_not_use_is_refused_not_dropped():
+    # a force target with an angle too answered for the force alone, silently (an audit
+    # of the thirty-fifth session)
+    with pytest.raises(InputError) as err:
+        DesignTarget("force_at_pressure", 1500.0, angle_deg=30.0, force_mn=0.3).validated()
+    assert err.value.field == "angle_deg"
+    with pytest.raises(InputError) as err:
+        DesignTarget("angle_at_pressure", 1500.0, angle_deg=30.0, force_mn=0.3).validated()
+    assert err.value.field == "force_mn"

@@ -89,6 +89,10 @@ class DesignTarget:
                              + ("none" if value is None else repr(value)),
                              f"0 < |{name}| <= {MAX_TARGET[name]:g} {unit}; "
                              "positive bends away from the membrane, negative towards it")
+        other = "angle_deg" if name == "force_mn" else "force_mn"
+        if getattr(self, other) is not None:    # given, never silently dropped
+            raise InputError(other, f"the {self.kind} target does not use {other}",
+                             f"leave {other} out (the {self.kind} target takes {name})")
         return self
 
     @property
