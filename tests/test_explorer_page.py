@@ -439,3 +439,17 @@ def test_the_ask_axis_switch_asks_by_volume_and_by_time_at_the_flow_rate(watched
     assert page.input_value("#x_axis") == "pressure_pa"
     # the one console line is the browser's note of the refused (422) request
     assert [e for e in watched.errors if "422" not in e] == []
+
+
+def test_where_the_curve_ends_is_said_with_the_servers_number(watched, server):
+    # the page said "from 39.38 ul" (its first empty grid point) beside the server's
+    # "above 38.8 ul" (an audit of the thirty-fifth session)
+    page = open_explorer(watched, server.url)
+    page.select_option("#ask_axis", "volume_ul")
+    page.fill("#v_max", "200")
+    page.dispatch_event("#v_max", "change")
+    page.wait_for_function("window.explorer.request && window.explorer.request.volumes_ul"
+                           " && window.explorer.request.volumes_ul.at(-1) === 200"
+                           " && window.explorer.prediction.angle_deg.includes(null)")
+    end = page.evaluate("window.explorer.prediction.validity.fe_limit_volume_ul")
+    assert f"The curve ends at {end:.2f} ul" in page.locator("#validity").inner_text()

@@ -802,7 +802,17 @@ function showValidity() {
   const messages = [...(v.messages || [])];
   const firstNull = pred.angle_deg.findIndex((a) => a === null);
   const asked = app.request ? app.request[ASK[askAxis()].field] : null;
-  if (firstNull > 0 && asked) messages.push(`No angle is given from ${fmt(asked[firstNull], ASK[askAxis()].digits)} ${ASK[askAxis()].unit} on: past the FE's range the answer is capped there.`);
+  if (firstNull > 0 && asked) {
+    // the FE range's end in the asked axis, as the server states it (the first empty grid
+    // point after it said "39.38 ul" beside the server's "38.8 ul")
+    const flow = app.request && app.request.flow_ul_s;
+    const end = { pressure_pa: v.fe_limit_pa, volume_ul: v.fe_limit_volume_ul,
+      time_s: typeof v.fe_limit_volume_ul === "number" && flow ? v.fe_limit_volume_ul / flow : null }[askAxis()];
+    const { unit, digits } = ASK[askAxis()];
+    messages.push(typeof end === "number"
+      ? `The curve ends at ${fmt(end, digits)} ${unit}, where the FE's range ends: no angle is given beyond it.`
+      : `No angle is given from ${fmt(asked[firstNull], digits)} ${unit} on: past the FE's range the answer is capped there.`);
+  }
   for (const m of messages) {
     const li = document.createElement("li");
     li.textContent = m;
