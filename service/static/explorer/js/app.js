@@ -671,7 +671,9 @@ function curveSeries() {
     // labelled with its materials: the pooled PDMS group holds PDMS 1:10 and 1:15 records
     const pair = `${materialLabel(d.body_material, app.presets)} / ${materialLabel(d.membrane_material, app.presets)}`;
     const size = kw === 1 ? `L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm` : `L=${fmtSig(d.L_mm)} t=${fmtSig(d.t_mm)} mm at W = 3 mm, scaled x${fmtSig(kw)}`;
-    add(`fe-${rec.id}`, `FE ${pair}, ${size}`, data, ["#6b7280", "#9ca3af", "#4b5563", "#a3a3a3", "#737373", "#525252"][k], { dash: "5 4", width: 1.4 });
+    // a dash pattern of its own each: greys alone left two crossing curves alike
+    add(`fe-${rec.id}`, `FE ${pair}, ${size}`, data, ["#6b7280", "#9ca3af", "#4b5563", "#a3a3a3", "#737373", "#525252"][k],
+      { dash: ["5 4", "1.5 3", "9 3 2 3", "3 2", "12 4", "1.5 2 6 2"][k % 6], width: 1.4 });
   });
   // pinned curves without their bands (the table gives the band at the chosen pressure)
   app.pinned.forEach((pin) => { if (pin.prediction) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pin.prediction, pin.color, { width: 1.6, lower: null, upper: null }); });
@@ -810,7 +812,7 @@ function showValidity() {
       time_s: typeof v.fe_limit_volume_ul === "number" && flow ? v.fe_limit_volume_ul / flow : null }[askAxis()];
     const { unit, digits } = ASK[askAxis()];
     messages.push(typeof end === "number"
-      ? `The curve ends at ${fmt(end, digits)} ${unit}, where the FE's range ends: no angle is given beyond it.`
+      ? `The curve ends at ${fmt(end, digits)} ${unit}, where the FE's range ends: the answer is capped there, no angle is given beyond it.`
       : `No angle is given from ${fmt(asked[firstNull], digits)} ${unit} on: past the FE's range the answer is capped there.`);
   }
   for (const m of messages) {
