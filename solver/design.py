@@ -139,7 +139,13 @@ def material_from_input(value: str | OgdenMaterial | dict, field_name: str) -> O
         except InputError as exc:       # a scale the material's limits refuse (x1e308)
             raise InputError(field_name, f"{value!r}: {exc.detail}", exc.allowed) from None
         if found is None:
-            raise InputError(field_name, f"unknown material {value!r}",
+            import difflib
+
+            # a typo's nearest preset (ecoflex_0030, Ecoflex_00_30, pdms_1-10)
+            stem = value.split("*")[0].strip().lower().replace("-", "_")
+            near = difflib.get_close_matches(stem, sorted(MATERIALS), n=1, cutoff=0.6)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise InputError(field_name, f"unknown material {value!r}{hint}",
                              ", ".join(sorted(MATERIALS)) + ", or <preset>*<scale> (every "
                              "mu_kpa of the preset times scale > 0)")
         return found

@@ -363,3 +363,13 @@ def test_a_field_a_design_does_not_take_is_refused_with_how_to_say_it(shipped_cl
     r = client.post("/v1/predict", json={"design": {"L_mm": 7.1, "colour": "red"},
                                          "pressures_pa": [500]})
     assert "leave it out" in r.json()["errors"][0]["allowed"]
+
+
+@pytest.mark.parametrize(("typed", "meant"), [("ecoflex_0030", "ecoflex_00_30"),
+                                              ("Ecoflex_00_30", "ecoflex_00_30"),
+                                              ("pdms_1-10*1.2", "pdms_1_10")])
+def test_a_mistyped_material_is_answered_with_the_preset_meant(shipped_client, typed, meant):
+    r = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5, "membrane_material": typed},
+        "pressures_pa": [1000]})
+    assert f"did you mean {meant!r}" in r.json()["detail"]
