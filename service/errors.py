@@ -21,6 +21,7 @@ Mapping (domain class -> status):
 
 from __future__ import annotations
 
+import difflib
 import logging
 import re
 from dataclasses import dataclass, field
@@ -240,7 +241,35 @@ EXTRA_HINTS = {
                                 '"membrane_material": "ecoflex_00_30*0.8" (every mu x 0.8)'}
 
 
-def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
+def _sibling_fields(request: Request, loc: list[str | int]) -> list[str]:
+    """The fields the object at ``loc[:-1]`` of the request's body takes, read off the
+    published schema of the request's route ([] where it cannot be read): what an unknown
+    field's "did you mean" is chosen from."""
+    try:
+        spec = request.app.openapi()
+        template = request.scope["route"].path
+        op = spec["paths"][template][request.method.lower()]
+        schema = op["requestBody"]["content"]["application/json"]["schema"]
+
+        def resolve(sch: dict) -> dict:
+            while "$ref" in sch:
+                sch = spec["components"]["schemas"][sch["$ref"].rsplit("/", 1)[-1]]
+            for option in sch.get("anyOf", ()):      # an optional object: its object form
+                option = resolve(option)
+                if "properties" in option or "items" in option:
+                    return option
+            return sch
+
+        for part in loc[1:-1]:
+            schema = resolve(schema)
+            schema = schema["items"] if isinstance(part, int) else schema["properties"][part]
+        return list(resolve(schema).get("properties", {}))
+    except (KeyError, TypeError, AttributeError):
+        return []
+
+
+def _validation_errors(exc: RequestValidationError, request: Request | None = None
+                       ) -> list[dict[str, Any]]:
     out = []
     for err in _one_branch(list(exc.errors())):
         if err.get("type") == "json_invalid":
@@ -265,6 +294,13 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
             # value), the way to say it where there is one
             allowed = EXTRA_HINTS.get(names[-1] if names else "", "leave it out: this "
                                       "object does not take it (the schema at /docs)")
+            fields = (_sibling_fields(request, loc) if request is not None and names
+                      and names[-1] not in EXTRA_HINTS else [])
+            # the field with its unit (L for L_mm), else the nearest spelling
+            near = ([f for f in fields if f.startswith(names[-1] + "_")]
+                    or difflib.get_close_matches(names[-1], fields, n=1, cutoff=0.6))
+            if near:        # pressure_pa for pressures_pa, L for L_mm
+                item["message"] += f" (did you mean {near[0]!r}?)"
         elif err.get("type") == "string_pattern_mismatch" and names and names[-1] in FIELD_FORMS:
             allowed = FIELD_FORMS[names[-1]]       # the form in words, not the pattern
             item["message"] = f"{_short(err.get('input'))} is not of this form"
@@ -325,7 +361,7 @@ def install_error_handlers(app: FastAPI) -> None:
     """Route every error through ``problem_for`` (validation errors get one entry per field)."""
 
     async def on_validation(request: Request, exc: RequestValidationError) -> JSONResponse:
-        errors = _not_json_body(request, _validation_errors(exc))
+        errors = _not_json_body(request, _validation_errors(exc, request))
         detail = "; ".join(
             f"{e['field'] or e['loc'][0]}: {e['message']}"
             + (f" (allowed: {e['allowed']})" if "allowed" in e else "") for e in errors)

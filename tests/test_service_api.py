@@ -412,3 +412,17 @@ def test_a_material_pair_may_be_written_body_slash_membrane(client):
     problem = assert_problem(r, 422, "material_pairs.0")
     assert "body/membrane" in problem["errors"][0]["message"]
     assert "Value error" not in problem["detail"]
+
+
+@pytest.mark.parametrize(("path", "body", "field", "meant"), [
+    ("/v1/predict", {"design": {"L_mm": 7.1, "t_mm": 0.5}, "pressure_pa": [1000]},
+     "pressure_pa", "pressures_pa"),
+    ("/v1/predict", {"design": {"L": 7.1, "t_mm": 0.5}, "pressures_pa": [1000]},
+     "design.L", "L_mm"),
+    ("/v1/inverse", {"target": {"kind": "angle_at_pressure", "pressure": 1500,
+                                "angle_deg": 30}}, "target.pressure", "pressure_pa"),
+])
+def test_an_unknown_field_is_answered_with_the_field_meant(client, path, body, field, meant):
+    problem = assert_problem(client.post(path, json=body), 422, field)
+    entry = next(e for e in problem["errors"] if e["field"] == field)
+    assert f"did you mean {meant!r}" in entry["message"]
