@@ -150,6 +150,7 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
             raise InputError(axis, exc.detail, exc.allowed) from None
     body = prediction_body(prediction, model, level, design)
     body["asked"] = axis
+    _cut_at_pressure_stop(body)
     if axis == "pressures_pa" and 0.0 < float(np.max(question.pressures_pa)) <= KPA_LOOKALIKE_PA:
         body["validity"]["flags"].append("pressures_look_like_kpa")
         body["validity"]["messages"].append(
@@ -172,6 +173,31 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         body["pump_pressure_pa"] = _plus(body["pressure_pa"], inlet["pressure_drop_pa"])
         body["pressure_sites"]["pump_pressure_pa"] = "pump_gauge"
     return body
+
+
+ANSWER_FIELDS = ("angle_deg", "lower_deg", "upper_deg", "force_mn", "force_lower_mn",
+                 "force_upper_mn", "pressure_pa")
+
+
+def _cut_at_pressure_stop(body: dict[str, Any]) -> None:
+    """In place: no number where the answered chamber pressure is past the FE's pressure
+    stop (SolverSettings.max_pressure_pa, the largest pressure /v1/predict takes), flag
+    ``past_fe_pressure_stop``: two layers 50x their presets asked by volume were answered
+    76 deg at 104 kPa, where the default FE stops at 20 kPa."""
+    p_stop = AXES["pressures_pa"][1]
+    p = np.array([np.nan if v is None else v for v in body.get("pressure_pa") or []], float)
+    over = p > p_stop
+    if not over.any():
+        return
+    for name in ANSWER_FIELDS:
+        values = body.get(name)
+        if values is not None:
+            body[name] = [None if cut else v for v, cut in zip(values, over, strict=True)]
+    body["validity"]["flags"].append("past_fe_pressure_stop")
+    body["validity"]["messages"].append(
+        f"{int(over.sum())} point(s) need a chamber pressure above {p_stop:g} Pa, where the "
+        "FE stops (SolverSettings.max_pressure_pa) and the largest pressure the service "
+        "answers: no number is given there")
 
 
 def _no_volume(model: str) -> InputError:

@@ -413,3 +413,16 @@ def test_a_flow_rate_asked_of_a_model_without_volumes_is_refused_by_predict_too(
                                                  "pressures_pa": [1000], "flow_ul_s": 2.5,
                                                  "model": "paper"})
     assert_problem(r, 422, "flow_ul_s")
+
+
+def test_by_volume_no_number_past_the_fes_pressure_stop(shipped_client):
+    # two layers 50x their presets asked by volume: 76 deg at 104 kPa was answered, where
+    # the default FE stops at 20 kPa (an audit of the thirty-fifth session)
+    design = {"L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10*50",
+              "membrane_material": "ecoflex_00_30*50"}
+    body = shipped_client.post("/v1/predict", json={"design": design, "volumes_ul": [1, 20],
+                                                    "flow_ul_s": 2.5, "inlet": {}}).json()
+    assert body["angle_deg"][0] is not None and body["pressure_pa"][0] < 20000
+    assert body["angle_deg"][1] is None and body["pressure_pa"][1] is None
+    assert body["pump_pressure_pa"][1] is None
+    assert "past_fe_pressure_stop" in body["validity"]["flags"]
