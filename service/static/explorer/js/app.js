@@ -48,6 +48,9 @@ const FLAG_WORDS = {
   force_past_fe_range: "force past the FE range",
   force_band_too_wide: "force band too wide",
   band_capped_at_fe_range: "band capped at the FE range",
+  past_fe_pressure_stop: "past the FE's 20 kPa pressure stop",
+  pressures_look_like_kpa: "pressures look like kPa",
+  near_stiffness_balance: "near the stiffness balance",
 };
 export const flagWords = (f) => FLAG_WORDS[f] || String(f).replaceAll("_", " ");
 
