@@ -103,3 +103,7 @@ def test_readings_past_the_nominal_designs_range_are_predicted_after_the_fit():
     # scale's 1-2 % (1.286 +/- 0.022 for 1.3) and the specimens' 2 % scatter are 3-6 deg
     assert left_out["rmse_deg"] < 15.0
     assert f"Of the {left_out['readings']} readings left out" in report["interpretation"]
+    shown = [q for q in report["predictions"] if q["left_out"]]
+    assert len(shown) == left_out["readings"]
+    assert all(q["angle_after_deg"] is not None and q["angle_before_deg"] is None
+               for q in shown)

@@ -132,7 +132,8 @@ class CalibrationReport(BaseModel):
         "`angle_deg`, the recalibrated baseline's and the selected effects' fitted angle "
         "there (`angle_before_deg`, `angle_after_deg`, degrees) and, read against the "
         "injected volume, the fitted gauge pressure `pressure_after_pa` (Pa; null "
-        "otherwise)")
+        "otherwise); then the readings left out as past the nominal design's FE range, "
+        "`left_out` true, with the calibrated model's angle there")
     saved_model: str | None = None
 
 

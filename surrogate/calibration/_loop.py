@@ -347,8 +347,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
                            if e.stage == "design" and responses.reach(e).limits},
     }
-    report["left_out"] = _left_out_check(all_obs, kept, make(chosen), after)
-    report["predictions"] = _predictions(obs, base, after)
+    report["left_out"], left_rows = _left_out_check(all_obs, kept, make(chosen), after)
+    report["predictions"] = _predictions(obs, base, after) + left_rows
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
 
@@ -363,32 +363,40 @@ def _predictions(obs: Observations, base: FitResult, after: FitResult) -> list[d
              else np.full(obs.n, np.nan))
     return [{"curve_id": obs.curve_ids[int(c)], "pressure_pa": float(p),
              "angle_deg": float(a), "angle_before_deg": _num(float(b)),
-             "angle_after_deg": _num(float(f)), "pressure_after_pa": _num(float(g))}
+             "angle_after_deg": _num(float(f)), "pressure_after_pa": _num(float(g)),
+             "left_out": False}
             for c, p, a, b, f, g in zip(obs.curve, obs.pressure_pa, obs.angle_deg, before,
                                         fitted, gauge, strict=True)]
 
 
 def _left_out_check(all_obs: Observations, kept: np.ndarray, model_for, after: FitResult
-                    ) -> dict | None:
+                    ) -> tuple[dict | None, list[dict]]:
     """The readings left out of the fit as past the end of the FE's range for their
     nominal design, predicted by the calibrated model: a stiffer actuator reaches
     pressures past the nominal's 90 deg, and there the selected effects either predict
     the readings the fit never saw or do not. None when none were left out; ``answered``
     0 where the calibrated model has no number there either (or its parameters do not
-    carry over: a curve left out whole took its own parameters with it)."""
+    carry over: a curve left out whole took its own parameters with it). With it, the
+    readings as ``predictions`` rows (``left_out`` true; no baseline angle: it has none
+    there)."""
     if np.all(kept):
-        return None
+        return None, []
     out = {"readings": int((~kept).sum()), "answered": 0, "rmse_deg": None,
            "why": "past the end of the FE's range for their nominal design"}
     model = model_for(all_obs)
-    if model.layout.names != after.model.layout.names:
-        return out
-    pred = model.angles(after.x)[~kept]
+    pred = np.full(int((~kept).sum()), np.nan)
+    if model.layout.names == after.model.layout.names:
+        pred = model.angles(after.x)[~kept]
     err = pred - all_obs.angle_deg[~kept]
     ok = np.isfinite(err)
     if ok.any():
         out.update(answered=int(ok.sum()), rmse_deg=float(np.sqrt(np.mean(err[ok] ** 2))))
-    return out
+    rows = np.flatnonzero(~kept)
+    return out, [{"curve_id": all_obs.curve_ids[int(all_obs.curve[i])],
+                  "pressure_pa": float(all_obs.pressure_pa[i]),
+                  "angle_deg": float(all_obs.angle_deg[i]), "angle_before_deg": None,
+                  "angle_after_deg": _num(float(a)), "pressure_after_pa": None,
+                  "left_out": True} for i, a in zip(rows, pred, strict=True)]
 
 
 RADIANS_MAX = 2.1  # |angle| in radians of a bend up to 120 deg

@@ -35,6 +35,15 @@ def plot_calibration(cal, path: str | Path) -> Path:
         d = obs.curve_design(int(obs.curve[obs.group == g][0]))
         ax.plot([], [], "o-", color=color, label=f"L {d['L_mm']:g}, t {d['t_mm']:g} mm"
                 + (f", {d['flow_ul_s']:g} ul/s" if d["flow_ul_s"] == d["flow_ul_s"] else ""))
+    out = [q for q in r.get("predictions") or () if q.get("left_out")]
+    if out:     # past the nominal design's FE range: not in the fit, predicted after it
+        ax.plot([q["pressure_pa"] for q in out], [q["angle_deg"] for q in out], "o", ms=4,
+                mfc="none", color="0.45", label=f"left out of the fit ({len(out)}: past the "
+                "nominal design's FE range)")
+        ax.plot([q["pressure_pa"] for q in out],
+                [np.nan if q["angle_after_deg"] is None else q["angle_after_deg"]
+                 for q in out], "x", ms=4, color="0.2",
+                label="their prediction after the fit")
     ax.plot([], [], "k--", lw=0.8, label=f"baseline {r['baseline']['name']} (recalibrated)")
     ax.plot([], [], "k-", lw=1.2, label="after: " + (", ".join(r["selected_effects"]) or
                                                        "no effect"))
