@@ -17,6 +17,7 @@ from solver.design_space import named_material
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.settings import SolverSettings, settings_from_dict
+from surrogate.json_plain import plain_json as jsonable  # one JSON-plain copy
 
 # a design's own field names (a model's refusal: outside the box, out of family) -> their
 # place in a request body that holds the design under "design"
@@ -78,21 +79,6 @@ def to_settings(settings: SolveSettingsIn, loc: tuple[str, ...] = ("body", "sett
 def finite_list(values: Any) -> list[float | None]:
     """Floats for JSON: NaN and infinity become null."""
     return [v if math.isfinite(v) else None for v in np.asarray(values, float).ravel().tolist()]
-
-
-def jsonable(value: Any) -> Any:
-    """Plain JSON from nested dicts/lists/arrays; non-finite floats become null."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 # the validity fields a Prediction may carry beyond in_domain, flags and messages

@@ -10,7 +10,7 @@ Errors: DataError (an InputError naming row and column), ModelNotFoundError (a
 NotFoundError).
 """
 
-from surrogate.calibration._api import jsonable, run_calibration, saveable
+from surrogate.calibration._api import run_calibration, saveable
 from surrogate.calibration._baseline import PAPER_PARAMETERS, FamilyParameters
 from surrogate.calibration._data import (
     OPTIONAL,
@@ -42,6 +42,7 @@ from surrogate.calibration.effects import (
     rectangular_channel_resistance_pa_per_ul_s,
     round_tube_resistance_pa_per_ul_s,
 )
+from surrogate.json_plain import plain_json as jsonable  # the report as plain JSON
 
 __all__ = [
     "CATALOGUE", "EFFECTS", "EFFECT_IDS", "OPTIONAL", "PAPER_PARAMETERS", "REQUIRED",

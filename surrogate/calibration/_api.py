@@ -32,19 +32,6 @@ def save_status(cal: Calibration) -> dict[str, Any]:
     return {"ok": True, "why": None}
 
 
-def jsonable(value: Any) -> Any:
-    """Plain JSON: non-finite floats become None, tuples lists, numpy scalars Python."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    if hasattr(value, "item") and not isinstance(value, str):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 # Effects a saved model (_saved.py: the exponential model's quasi-static form) carries.
 SAVEABLE_EFFECTS = ("pressure_offset", "hydraulic_resistance", "angle_offset",
                     "membrane_thickness", "viscoelastic_creep")
