@@ -175,27 +175,32 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
     return body
 
 
+# what an answer gives at each point, cut where its chamber pressure is past the FE's stop
 ANSWER_FIELDS = ("angle_deg", "lower_deg", "upper_deg", "force_mn", "force_lower_mn",
                  "force_upper_mn", "pressure_pa")
+INVERSE_FIELDS = ("pressure_pa", "lower_pa", "upper_pa", "volume_ul", "volume_lower_ul",
+                  "volume_upper_ul")
 
 
-def _cut_at_pressure_stop(body: dict[str, Any]) -> None:
-    """In place: no number where the answered chamber pressure is past the FE's pressure
-    stop (SolverSettings.max_pressure_pa, the largest pressure /v1/predict takes), flag
-    ``past_fe_pressure_stop``: two layers 50x their presets asked by volume were answered
-    76 deg at 104 kPa, where the default FE stops at 20 kPa."""
+def _cut_at_pressure_stop(body: dict[str, Any], fields: tuple[str, ...] = ANSWER_FIELDS,
+                          what: str = "point(s)") -> None:
+    """In place: no number in ``fields`` where the answered chamber pressure is past the
+    FE's pressure stop (SolverSettings.max_pressure_pa, the largest pressure /v1/predict
+    takes), flag ``past_fe_pressure_stop``: two layers 50x their presets asked by volume
+    were answered 76 deg at 104 kPa, where the default FE stops at 20 kPa. The fields
+    derived from these (time, the pump gauge) are made after it."""
     p_stop = AXES["pressures_pa"][1]
     p = np.array([np.nan if v is None else v for v in body.get("pressure_pa") or []], float)
     over = p > p_stop
     if not over.any():
         return
-    for name in ANSWER_FIELDS:
+    for name in fields:
         values = body.get(name)
         if values is not None:
             body[name] = [None if cut else v for v, cut in zip(values, over, strict=True)]
     body["validity"]["flags"].append("past_fe_pressure_stop")
     body["validity"]["messages"].append(
-        f"{int(over.sum())} point(s) need a chamber pressure above {p_stop:g} Pa, where the "
+        f"{int(over.sum())} {what} need a chamber pressure above {p_stop:g} Pa, where the "
         "FE stops (SolverSettings.max_pressure_pa) and the largest pressure the service "
         "answers: no number is given there")
 
@@ -206,22 +211,6 @@ def _no_volume(model: str) -> InputError:
                       "design, so no time at a flow rate",
                       'omit flow_ul_s, or model "emulator" (or an exponential model fitted '
                       "from FE curves with volumes)")
-
-
-def _without(result: Any, drop: np.ndarray) -> Any:
-    """A copy of an inverse answer with no number at the angles ``drop`` (NaN: null in
-    JSON) and a validity of its own."""
-    from dataclasses import replace
-
-    changes: dict[str, Any] = {"validity": dict(result.validity)}
-    changes["validity"]["flags"] = list(changes["validity"].get("flags", []))
-    changes["validity"]["messages"] = list(changes["validity"].get("messages", []))
-    for name in ("pressure_pa", "lower_pa", "upper_pa", "volume_ul", "volume_lower_ul",
-                 "volume_upper_ul"):
-        values = getattr(result, name, None)
-        if values is not None:
-            changes[name] = np.where(drop, np.nan, np.asarray(values, float))
-    return replace(result, **changes)
 
 
 def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], model: str,
@@ -238,17 +227,6 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
     check_flow(flow_ul_s, inlet)
     drop = inlet_drop(inlet, flow_ul_s)
     result = surrogate.inverse(design, angles_deg, level=level)
-    # past the FE's pressure stop (SolverSettings.max_pressure_pa), the largest pressure
-    # /v1/predict takes: a design of two layers 50x their presets needed 94 kPa
-    p_stop = AXES["pressures_pa"][1]
-    over = np.asarray(result.pressure_pa, float) > p_stop
-    if over.any():
-        result = _without(result, over)
-        result.validity.setdefault("flags", []).append("past_fe_pressure_stop")
-        result.validity.setdefault("messages", []).append(
-            f"{int(over.sum())} angle(s) need more than {p_stop:g} Pa, where the FE stops "
-            "(SolverSettings.max_pressure_pa) and the largest pressure the service answers: "
-            "no pressure is given there")
     volume = getattr(result, "volume_ul", None)
     if flow_ul_s is not None and volume is None:    # asked for, never silently dropped
         raise _no_volume(model)
@@ -261,6 +239,8 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
         "volume_lower_ul": None if volume is None else finite_list(result.volume_lower_ul),
         "volume_upper_ul": None if volume is None else finite_list(result.volume_upper_ul),
         "validity": jsonable(dict(result.validity)), "pressure_sites": {"pressure_pa": "chamber"}}
+    # two layers 50x their presets needed 94 kPa for 45 deg
+    _cut_at_pressure_stop(body, INVERSE_FIELDS, "angle(s)")
     if flow_ul_s is not None:
         body["flow_ul_s"] = flow_ul_s
         for name in ("", "_lower", "_upper"):

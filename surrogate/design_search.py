@@ -360,6 +360,7 @@ def _tolerance(model: object, design: Design, target: DesignTarget, pressure_pa:
             return float(p.force_mn[0]) if p.force_mn is not None else float("nan")
         return float(p.angle_deg[0])
 
+    here = value(design)            # asked once: only a one-sided difference needs it
     out = {}
     for name in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm"):
         x = getattr(design, name)
@@ -367,7 +368,6 @@ def _tolerance(model: object, design: Design, target: DesignTarget, pressure_pa:
         up, down = (value(replace(design, body_length_mm=None, chamber_offset_mm=None,
                                   **{name: x + s * TOLERANCE_MM}).validated())
                     for s in (1, -1))
-        here = value(design)
         slope = ((up - down) / 2 if np.isfinite(up) and np.isfinite(down) else
                  up - here if np.isfinite(up) else here - down)
         if not np.isfinite(slope):

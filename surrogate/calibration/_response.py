@@ -245,7 +245,10 @@ class Responses:
             between = np.where(np.isfinite(cubic), cubic, linear)
             # nor between a node that has one and a node that does not: the predictor's
             # range ends somewhere between them, and up to there it answers
-            out = np.where(np.isfinite(between), between, _one_sided(out, axis_nodes, theta))
+            # (the fit's hot path: worked out only where such a pair is met)
+            gap = ~np.isfinite(between)
+            out = (np.where(gap, _one_sided(out, axis_nodes, theta), between) if gap.any()
+                   else between)
         return out
 
     def lookup(self, curves: np.ndarray, design_index: np.ndarray, p_pa: np.ndarray
