@@ -12,7 +12,7 @@ from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from typing import Any
 
-from fastapi import FastAPI
+from fastapi import Depends, FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 
 from service._worker import default_solve
@@ -21,6 +21,7 @@ from service.jobs import JobManager
 from service.middleware import BodyLimitMiddleware, HeadAsGetMiddleware, ProblemOnlyMiddleware
 from service.models import ModelRegistry
 from service.openapi import install_contract
+from service.repeated_fields import refuse_repeated_fields
 from service.routes import calibration, curves, health, inverse, jobs, materials, predict
 from service.routes.pages import install_pages
 from service.settings import ServiceSettings, get_settings
@@ -58,7 +59,8 @@ def create_app(settings: ServiceSettings | None = None, *,
 
     app = FastAPI(title="Balloon actuator design service", version=health.VERSION,
                   description=DESCRIPTION, lifespan=lifespan,
-                  docs_url=None, redoc_url=None)  # served from local files by install_pages
+                  docs_url=None, redoc_url=None,  # served from local files by install_pages
+                  dependencies=[Depends(refuse_repeated_fields)])  # a field given twice
     app.state.settings = settings
     app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir,
                                      settings.emulator_path)

@@ -1,0 +1,115 @@
+"""A request field given twice is refused, not read as its last value.
+
+JSON leaves an object's repeated name to the parser (RFC 8259, section 4: "the names
+within an object SHOULD be unique"); Python's ``json`` keeps the last one, and FastAPI
+reads a single-valued query parameter given twice as its last value too. A body with
+``"L_mm": 5`` and ``"L_mm": 50`` says two things, and answering one of them silently is a
+guess: the request is refused with a 422 problem naming the field and where it sits.
+Query parameters that are lists (``measured_pressure_pa`` of /v1/predict/plot) are
+repeated by design and pass.
+
+One app-level dependency, run after FastAPI has read and parsed the body (a body that is
+not JSON is refused by FastAPI's own parse first) and before any route's work.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from fastapi import Request
+
+from service.errors import FieldError
+
+BODY_ALLOWED = "each field once per JSON object"
+QUERY_ALLOWED = "each parameter once; only a list parameter repeats (one value each time)"
+
+
+class _Object(dict):
+    """A parsed JSON object that remembers the names it was given more than once."""
+
+    repeated: tuple[str, ...] = ()
+
+
+def _object(pairs: list[tuple[str, Any]]) -> _Object:
+    obj = _Object(pairs)
+    if len(obj) != len(pairs):
+        seen: set[str] = set()
+        obj.repeated = tuple(dict.fromkeys(k for k, _ in pairs if k in seen or seen.add(k)))
+    return obj
+
+
+def _first_repeat(value: Any, path: tuple[str | int, ...]) -> tuple[str | int, ...] | None:
+    """The location of the first repeated name in a parsed document, depth first."""
+    if isinstance(value, _Object):
+        if value.repeated:
+            return path + (value.repeated[0],)
+        items: Any = value.items()
+    elif isinstance(value, list):
+        items = enumerate(value)
+    else:
+        return None
+    for key, item in items:
+        if isinstance(item, dict | list):
+            found = _first_repeat(item, path + (key,))
+            if found is not None:
+                return found
+    return None
+
+
+def repeated_body_field(body: bytes) -> tuple[str | int, ...] | None:
+    """``("body", ..., name)`` of the first name repeated within one object of a JSON
+    body, or None (also for a body that is not JSON: its parse error is FastAPI's)."""
+    found = False
+
+    def hook(pairs: list[tuple[str, Any]]) -> _Object:
+        nonlocal found
+        obj = _object(pairs)
+        found = found or bool(obj.repeated)
+        return obj
+
+    try:
+        document = json.loads(body, object_pairs_hook=hook)
+    except (ValueError, RecursionError):
+        return None
+    return _first_repeat(document, ("body",)) if found else None
+
+
+def _list_parameters(request: Request) -> tuple[set[str], set[str]]:
+    """(every query parameter, those taking a list) of the request's route, read off its
+    published schema; two empty sets for a route outside the contract (the pages)."""
+    try:
+        op = request.app.openapi()["paths"][request.scope["route"].path][request.method.lower()]
+    except (KeyError, AttributeError):
+        return set(), set()
+    names, lists = set(), set()
+    for param in op.get("parameters", ()):
+        if param.get("in") != "query":
+            continue
+        names.add(param["name"])
+        schema = param.get("schema", {})
+        if any(s.get("type") == "array" for s in (schema, *schema.get("anyOf", ()))):
+            lists.add(param["name"])
+    return names, lists
+
+
+async def refuse_repeated_fields(request: Request) -> None:
+    """Refuse (422, the field's location) a single-valued query parameter given more than
+    once, or a name repeated within one object of a JSON body."""
+    keys = [k for k, _ in request.query_params.multi_items()]
+    if len(keys) != len(set(keys)):
+        names, lists = _list_parameters(request)
+        for key in dict.fromkeys(keys):
+            if key in names and key not in lists and keys.count(key) > 1:
+                raise FieldError(("query", key), f"is given {keys.count(key)} times in the "
+                                 "query string; which one is meant is not guessed",
+                                 allowed=QUERY_ALLOWED)
+    if request.method in ("POST", "PUT", "PATCH"):
+        body = await request.body()
+        if body:
+            loc = repeated_body_field(body)
+            if loc is not None:
+                where = ".".join(str(p) for p in loc[1:-1])
+                raise FieldError(loc, f"is given more than once in "
+                                 f"{'the object ' + where if where else 'the body'}; which "
+                                 "value is meant is not guessed", allowed=BODY_ALLOWED)
