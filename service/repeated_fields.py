@@ -14,65 +14,23 @@ not JSON is refused by FastAPI's own parse first) and before any route's work.
 
 from __future__ import annotations
 
-import json
-from typing import Any
-
 from fastapi import Request
 
 from service.errors import FieldError
+from surrogate.json_repeats import loads_with_repeats
 
 BODY_ALLOWED = "each field once per JSON object"
 QUERY_ALLOWED = "each parameter once; only a list parameter repeats (one value each time)"
 
 
-class _Object(dict):
-    """A parsed JSON object that remembers the names it was given more than once."""
-
-    repeated: tuple[str, ...] = ()
-
-
-def _object(pairs: list[tuple[str, Any]]) -> _Object:
-    obj = _Object(pairs)
-    if len(obj) != len(pairs):
-        seen: set[str] = set()
-        obj.repeated = tuple(dict.fromkeys(k for k, _ in pairs if k in seen or seen.add(k)))
-    return obj
-
-
-def _first_repeat(value: Any, path: tuple[str | int, ...]) -> tuple[str | int, ...] | None:
-    """The location of the first repeated name in a parsed document, depth first."""
-    if isinstance(value, _Object):
-        if value.repeated:
-            return path + (value.repeated[0],)
-        items: Any = value.items()
-    elif isinstance(value, list):
-        items = enumerate(value)
-    else:
-        return None
-    for key, item in items:
-        if isinstance(item, dict | list):
-            found = _first_repeat(item, path + (key,))
-            if found is not None:
-                return found
-    return None
-
-
 def repeated_body_field(body: bytes) -> tuple[str | int, ...] | None:
     """``("body", ..., name)`` of the first name repeated within one object of a JSON
     body, or None (also for a body that is not JSON: its parse error is FastAPI's)."""
-    found = False
-
-    def hook(pairs: list[tuple[str, Any]]) -> _Object:
-        nonlocal found
-        obj = _object(pairs)
-        found = found or bool(obj.repeated)
-        return obj
-
     try:
-        document = json.loads(body, object_pairs_hook=hook)
+        _, loc = loads_with_repeats(body)
     except (ValueError, RecursionError):
         return None
-    return _first_repeat(document, ("body",)) if found else None
+    return None if loc is None else ("body", *loc)
 
 
 def _list_parameters(request: Request) -> tuple[set[str], set[str]]:

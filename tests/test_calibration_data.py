@@ -368,3 +368,15 @@ def test_a_binary_file_given_as_data_is_named_for_what_it_is(tmp_path, head, wha
     with pytest.raises(DataError) as err:
         load_observations(path)
     assert what in str(err.value) and "UTF-16" not in str(err.value)
+
+
+def test_a_json_rows_column_given_twice_is_refused_with_its_row(tmp_path):
+    # json keeps the last value: the row was read as 80 deg without a word
+    path = tmp_path / "lab.json"
+    path.write_text('{"rows": [{"curve_id": "a", "L_mm": 7.1, "t_mm": 0.5, "pressure_pa": 400,'
+                    ' "angle_deg": 4}, {"curve_id": "a", "L_mm": 7.1, "t_mm": 0.5, '
+                    '"pressure_pa": 800, "angle_deg": 8, "angle_deg": 80}]}')
+    with pytest.raises(DataError) as err:
+        load_observations(path)
+    assert err.value.column == "angle_deg" and err.value.row == 2
+    assert "given twice" in str(err.value) and "lab.json" in str(err.value)

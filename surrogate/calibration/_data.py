@@ -22,6 +22,7 @@ import numpy as np
 from solver.materials import MATERIALS
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
+from surrogate.json_repeats import loads_with_repeats
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
             "pressure_pa", "angle_deg")
@@ -595,11 +596,17 @@ def load_observations(path: str | Path, strict: bool = False) -> Observations:
     text = decode_text(path.read_bytes(), path.name)
     if path.suffix.lower() == ".json":
         try:
-            data = json.loads(text)
+            data, repeat = loads_with_repeats(text)
         except (ValueError, RecursionError) as exc:  # JSONDecodeError, an integer of
             # > 4300 digits, or nesting deeper than the parser's recursion limit
             raise DataError("file", f"{path.name}: not valid JSON: {_short(str(exc))}",
                             None) from None
+        if repeat is not None:   # json keeps the last: {"angle_deg": 5, "angle_deg": 50}
+            index = [p for p in repeat[:2] if isinstance(p, int)]
+            raise DataError(str(repeat[-1])[:60], f"{path.name}: {_short(repeat[-1])} is "
+                            "given twice in one object; which value is meant is not "
+                            "guessed", index[0] + 1 if index else None,
+                            "each column once per row")
         rows = data.get("rows") if isinstance(data, dict) else data
         return observations_from_rows(rows, strict)  # type: ignore[arg-type]
     return observations_from_rows(read_csv_rows(text), strict)
