@@ -77,6 +77,13 @@ FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE cu
 # nothing of them and did not reach the volume stop: a held-out design there whose FE
 # stopped at 58 deg (500 ul) was answered to 88 deg, 30 deg off.
 RANGE_Z = 1.0
+# An emulated end at or above RANGE_COMPLETE_DEG is read as the FE's 90-deg angle stop,
+# not as an early end: the range model's mean for a design among complete curves sits at
+# 90 +/- its sd (median sd 6.3 deg), and mean - RANGE_Z sd cut 399 of the 415 complete FE
+# curves of random designs at a median 83.8 deg, with a reason ("nearby curves end early")
+# that was false. Of the 64 early-ended ones (range model means 19-81 deg, 5-95 %), none
+# changes its cut at 85 (benchmarks/RESULTS.md, thirty-sixth session).
+RANGE_COMPLETE_DEG = 85.0
 SIGN_MARGIN = 0.5         # |sign model| below this: too near the stiffness balance
 # The balance model (surrogate.emulator.balance) also answers where it says the FE curve
 # ends at the volume stop: its angle at the last volume node plus BALANCE_TOP_Z of its sd
@@ -298,21 +305,30 @@ class PairEmulator:
         there: the FE's angle stop; the angle at which the emulated injected volume
         ``volume_red_ul`` (reduced, on FINE_ANGLES_DEG) reaches the FE's volume stop; the
         emulated end of the design's FE curve less RANGE_Z sd (``range_model``; pass
-        ``emulated_end_deg(u)`` as ``emulated_end`` when it is already known); the end
-        of an early-ended database curve within FAILED_RADIUS (``failed_distances(u)``
-        when already known)."""
+        ``emulated_end_deg(u)`` as ``emulated_end`` when it is already known) where that
+        end is below RANGE_COMPLETE_DEG or an early-ended database curve lies within
+        NEAR_FAILED_RADIUS; the end of an early-ended database curve within FAILED_RADIUS
+        (``failed_distances(u)`` when already known)."""
         limit, reason = self.fe_limit_angle_deg, self.fe_stop_reason
+        if failed_distances is None:
+            failed_distances = self.failed_distances(u)
         if self.range_model is not None:
             mean_deg, sd_deg = (self.emulated_end_deg(u) if emulated_end is None
                                 else emulated_end)
             end = max(mean_deg - RANGE_Z * sd_deg, 0.0)
-            if end < limit - 1.0:       # not the GP's hundredths of a degree below 90
+            ends_early = mean_deg < RANGE_COMPLETE_DEG
+            near = bool((failed_distances < NEAR_FAILED_RADIUS).any())
+            if (ends_early or near) and end < limit - 1.0:
                 limit = end
-                reason = ("the FE curves of nearby database designs end early (the volume "
-                          "stop, where the balloon grows more than the actuator bends, or a "
-                          "Newton failure): this design's is emulated to end early too, and "
-                          f"its range is taken to end {RANGE_Z:g} sd short of that emulated "
-                          "end")
+                why = ("this design's FE curve is emulated to end early too, at "
+                       f"{mean_deg:.0f} +/- {sd_deg:.0f} deg" if ends_early else
+                       f"one lies within {NEAR_FAILED_RADIUS:g} of this design (unit box), "
+                       f"and where this design's ends is uncertain ({mean_deg:.0f} +/- "
+                       f"{sd_deg:.0f} deg)")
+                reason = ("FE curves of database designs in this neighbourhood end early (the "
+                          "volume stop, where the balloon grows more than the actuator "
+                          f"bends, or a Newton failure): {why}; its range is taken to end "
+                          f"{RANGE_Z:g} sd short of the emulated end")
         if self.fe_max_volume_ul is not None:
             v_stop = self.fe_max_volume_ul / length_scale**3
             over = np.flatnonzero(np.asarray(volume_red_ul) >= v_stop)
@@ -323,8 +339,7 @@ class PairEmulator:
                           "volume reaches there: the balloon grows more than the actuator "
                           "bends")
         if self.failed:
-            near = (self.failed_distances(u) if failed_distances is None
-                    else failed_distances) < FAILED_RADIUS
+            near = failed_distances < FAILED_RADIUS
             for i in np.flatnonzero(near):
                 _, angle, why = self.failed[i]
                 if angle < limit:
@@ -651,7 +666,9 @@ class Emulator:
         p_lim = cb.limit_pressure_pa
         past = p_red > p_lim * (1 + 1e-12)
         p0 = _with_origin(cb.pressure_pa)
-        angle = np.interp(p_red, p0, ANGLES0)
+        # at most the range's end: where the monotone p(theta) is flat at the top, the
+        # limit pressure reads a fine angle past it (90.04 deg for a 90-deg stop)
+        angle = np.minimum(np.interp(p_red, p0, ANGLES0), cb.limit_angle_deg)
         upper = np.interp(p_red, _with_origin(cb.pressure_lower_pa), ANGLES0)
         lower = np.interp(p_red, _with_origin(cb.pressure_upper_pa), ANGLES0)
         lower, upper = floored_band(angle, lower, upper)
@@ -922,9 +939,9 @@ class Emulator:
             messages.append(
                 f"{int(past.sum())} pressure(s) above {fe_limit_pa:.0f} Pa are past the FE's "
                 f"range for this design, which ends at {limit_deg:.1f} deg "
-                f"({cb.stop_reason}): no angle is given there; an FE solve "
-                "(POST /v1/solve) with a larger max_angle_deg or max_volume_ul can go "
-                "further")
+                f"({cb.stop_reason}): no angle is given there; an FE solve of this "
+                "design (POST /v1/solve; its max_angle_deg and max_volume_ul can be raised) "
+                "tells where its curve really ends")
         near = cb.failed_distance
         if near < NEAR_FAILED_RADIUS:
             flags.append("near_early_ended_fe_curves")
