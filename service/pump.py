@@ -151,6 +151,7 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
     body = prediction_body(prediction, model, level, design)
     body["asked"] = axis
     _cut_at_pressure_stop(body)
+    _range_within_pressure_stop(body, surrogate, design, level)
     if axis == "pressures_pa" and 0.0 < float(np.max(question.pressures_pa)) <= KPA_LOOKALIKE_PA:
         body["validity"]["flags"].append("pressures_look_like_kpa")
         body["validity"]["messages"].append(
@@ -205,6 +206,28 @@ def _cut_at_pressure_stop(body: dict[str, Any], fields: tuple[str, ...] = ANSWER
         "answers: no number is given there")
 
 
+def _range_within_pressure_stop(body: dict[str, Any], surrogate: Any, design: Any,
+                                level: float) -> None:
+    """In place: where the model's FE range would end past the FE's pressure stop, it ends
+    at the stop, with the angle and injected volume the model gives there: layers 50x
+    their presets were told an FE range to 105843 Pa while every number past 20 kPa was
+    withheld (past_fe_pressure_stop)."""
+    p_stop = AXES["pressures_pa"][1]
+    validity = body["validity"]
+    limit = validity.get("fe_limit_pa")
+    if not isinstance(limit, int | float) or limit <= p_stop:
+        return
+    at_stop = surrogate.predict(design, [p_stop], level=level)
+    validity["fe_limit_pa"] = p_stop
+    validity["fe_limit_angle_deg"] = float(at_stop.angle_deg[0])
+    volume = getattr(at_stop, "volume_ul", None)
+    if "fe_limit_volume_ul" in validity:
+        validity["fe_limit_volume_ul"] = None if volume is None else float(volume[0])
+    validity["fe_stop_reason"] = (f"the FE's pressure stop ({p_stop:g} Pa, "
+                                  "SolverSettings.max_pressure_pa), reached before the end "
+                                  f"the model gives ({limit:.0f} Pa)")
+
+
 def _no_volume(model: str) -> InputError:
     """A flow rate asked of a model that gives no injected volume: refused, never dropped."""
     return InputError("flow_ul_s", f"model {model!r} gives no injected volume for this "
@@ -241,6 +264,7 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
         "validity": jsonable(dict(result.validity)), "pressure_sites": {"pressure_pa": "chamber"}}
     # two layers 50x their presets needed 94 kPa for 45 deg
     _cut_at_pressure_stop(body, INVERSE_FIELDS, "angle(s)")
+    _range_within_pressure_stop(body, surrogate, design, level)
     if flow_ul_s is not None:
         body["flow_ul_s"] = flow_ul_s
         for name in ("", "_lower", "_upper"):

@@ -426,3 +426,20 @@ def test_by_volume_no_number_past_the_fes_pressure_stop(shipped_client):
     assert body["angle_deg"][1] is None and body["pressure_pa"][1] is None
     assert body["pump_pressure_pa"][1] is None
     assert "past_fe_pressure_stop" in body["validity"]["flags"]
+
+
+@pytest.mark.parametrize("path, ask", [("/v1/predict", {"volumes_ul": [1, 20]}),
+                                       ("/v1/predict", {"pressures_pa": [1000, 19000]}),
+                                       ("/v1/inverse/pressure", {"angles_deg": [45]})])
+def test_the_fe_range_told_ends_at_the_fes_pressure_stop(shipped_client, path, ask):
+    # layers 50x their presets: the numbers past 20 kPa were withheld, but the answer told
+    # an FE range to 105843 Pa (the judge audit of the thirty-sixth session)
+    design = {"L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10*50",
+              "membrane_material": "ecoflex_00_30*50"}
+    validity = shipped_client.post(path, json={"design": design, **ask}).json()["validity"]
+    assert validity["fe_limit_pa"] == 20000
+    assert "pressure stop" in validity["fe_stop_reason"]
+    at_stop = shipped_client.post("/v1/predict", json={"design": design,
+                                                       "pressures_pa": [20000]}).json()
+    assert validity["fe_limit_angle_deg"] == pytest.approx(at_stop["angle_deg"][0])
+    assert validity["fe_limit_volume_ul"] == pytest.approx(at_stop["volume_ul"][0])
