@@ -116,15 +116,18 @@ def named_material(material_id: str) -> OgdenMaterial | None:
 @lru_cache(maxsize=1024)
 def recognise(material: OgdenMaterial) -> tuple[str, float] | None:
     """(preset id, s) when ``material`` is a preset with mu scaled by s (alpha equal,
-    mu ratios equal within SCALE_TOLERANCE); None otherwise. Remembered per material (a
-    frozen value): a query asks it twice for the same two layers."""
+    mu ratios equal within SCALE_TOLERANCE); None otherwise. The Ogden terms are a sum:
+    they match in any order (an Ecoflex written with its alpha 13.02 term first). Remembered
+    per material (a frozen value): a query asks it twice for the same two layers."""
+    terms = sorted(zip(material.alpha, material.mu_kpa))
     for preset_id, base in MATERIALS.items():
         if len(base.alpha) != len(material.alpha):
             continue
+        base_terms = sorted(zip(base.alpha, base.mu_kpa))
         if any(abs(a - b) > 1e-9 * max(1.0, abs(b))
-               for a, b in zip(material.alpha, base.alpha)):
+               for (a, _), (b, _) in zip(terms, base_terms)):
             continue
-        ratios = [m / b for m, b in zip(material.mu_kpa, base.mu_kpa)]
+        ratios = [m / b for (_, m), (_, b) in zip(terms, base_terms)]
         s = ratios[0]
         if s > 0 and all(abs(r / s - 1.0) <= SCALE_TOLERANCE for r in ratios):
             return preset_id, float(s)

@@ -37,3 +37,21 @@ def test_a_scale_the_material_limits_refuse_names_the_layer(shipped_client):
     assert r.status_code == 422
     error = r.json()["errors"][0]
     assert error["field"] == "design.membrane_material" and "1e6 kPa" in error["allowed"]
+
+
+def test_an_inline_ecoflex_with_its_terms_in_the_other_order_is_the_scaled_preset(
+        shipped_client):
+    # the Ogden energy is a sum of its terms: written alpha 13.02 first, the inline
+    # Ecoflex x1.3 was refused as "neither a preset nor a preset with its mu scaled"
+    # (the judge audit of the thirty-sixth session)
+    def ask(mu, alpha):
+        return shipped_client.post("/v1/predict", json={
+            "design": {"L_mm": 7.1, "t_mm": 0.5, "membrane_material": {
+                "id": "lab_eco", "mu_kpa": mu, "alpha": alpha}},
+            "pressures_pa": [800, 1600]})
+
+    swapped = ask([1.3 * 7.879e-09, 1.3 * 1.241], [13.02, 3.034])
+    assert swapped.status_code == 200, swapped.text
+    plain = ask([1.3 * 1.241, 1.3 * 7.879e-09], [3.034, 13.02]).json()
+    assert swapped.json()["angle_deg"] == plain["angle_deg"]
+    assert swapped.json()["upper_deg"] == plain["upper_deg"]
