@@ -13,6 +13,7 @@ Every one implements ``surrogate.predictor.Predictor``: callers never branch on 
 
 from __future__ import annotations
 
+import logging
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,10 +27,14 @@ from solver.errors import BalloonError, ExistsError, InputError, NotFoundError
 BUILT_IN_MODELS = ("emulator", "exponential", "paper")
 BUILT_IN_WORDS = ", ".join(f'"{n}"' for n in BUILT_IN_MODELS)
 
+log = logging.getLogger("balloon.service")
+
 
 @dataclass
 class ModelRegistry:
-    """The loaded surrogate plus lazily built named ones."""
+    """The loaded surrogate plus lazily built named ones. Opening the models directory
+    removes the temporary files of saves a killed process left there (older than a
+    minute: ``surrogate.calibration._saved.remove_stale_temporaries``)."""
 
     surrogate_path: Path
     models_dir: Path
@@ -39,6 +44,14 @@ class ModelRegistry:
     emulator: Any = None
     emulator_error: str | None = None
     _paper: Any = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        from surrogate.calibration._saved import remove_stale_temporaries
+
+        removed = remove_stale_temporaries(self.models_dir)
+        if removed:     # server-side only: the names, never to a client
+            log.info("removed %d temporary file(s) of unfinished saves from the models "
+                     "directory: %s", len(removed), ", ".join(removed))
 
     def load_fitted(self) -> None:
         """Load the emulator and the fitted exponential surrogate (at start-up); a failure

@@ -1,11 +1,15 @@
-"""The content checksum of a model file (surrogate and emulator JSON): any change to a
-file after it was written -- a flipped digit, a hand edit, a truncated array that still
-parses -- is refused on load, never turned into a different number.
+"""The content checksum of a model file (surrogate, emulator and saved calibrated-model
+JSON): any change to a file after it was written -- a flipped digit, a hand edit, a
+truncated array that still parses -- is refused on load, never turned into a different
+number.
 
 ``seal(doc)`` adds ``"content_sha256"``: the sha256 of the document without it, as
 canonical JSON (sorted keys; Python's float repr round-trips exactly, so reading and
-re-serialising gives the same bytes). ``check_seal(doc, origin)`` verifies it; a file
-of older code has none and is checked only by its structure and a trial prediction.
+re-serialising gives the same bytes). ``check_seal(doc, origin)`` verifies it
+(``seal_broken``: whether it fails, for a caller with its own words: the saved calibrated
+models, surrogate/calibration/_saved.py); a file of older code has none and is checked
+only by its structure (and a trial prediction, or a flag on every answer of a saved
+model).
 ``canonical_text(doc)`` is that canonical JSON: a file written as it (the emulator's) is
 verified from its bytes (``check_seal(..., raw=...)``: the checksum's member cut out and
 the rest hashed, no re-serialisation of a 30 MB document; any other text falls back to
@@ -51,19 +55,26 @@ def seal(doc: dict) -> dict:
     return {**doc, KEY: _digest(doc)}
 
 
-def check_seal(doc: dict, origin: str, raw: bytes | None = None) -> None:
-    """SurrogateFileError when ``doc`` carries a checksum that does not match it; ``raw``,
-    the bytes ``doc`` was parsed from, when at hand (a canonical file is checked on them)."""
+def seal_broken(doc: dict, raw: bytes | None = None) -> bool:
+    """Whether ``doc`` carries a checksum that does not match it (False without one);
+    ``raw``, the bytes ``doc`` was parsed from, when at hand (a canonical file is checked
+    on them)."""
     stored = doc.get(KEY)
     if stored is None:
-        return
+        return False
     if raw is not None and isinstance(stored, str) and _raw_matches(raw, stored):
-        return
+        return False
     try:
         found = _digest(doc)
     except (TypeError, ValueError):
         found = None
-    if stored != found:
+    return stored != found
+
+
+def check_seal(doc: dict, origin: str, raw: bytes | None = None) -> None:
+    """SurrogateFileError when ``doc`` carries a checksum that does not match it
+    (``seal_broken``)."""
+    if seal_broken(doc, raw):
         raise SurrogateFileError(origin, "its content changed since it was written (the "
                                  "content_sha256 checksum does not match): refit it with "
                                  "`balloon fit`, or restore it")

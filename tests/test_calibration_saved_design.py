@@ -25,6 +25,7 @@ from surrogate.calibration import (
     save_model,
 )
 from surrogate.calibration._saved import SavedModelError
+from surrogate.file_seal import KEY
 
 
 @pytest.fixture(scope="module")
@@ -94,10 +95,17 @@ def test_the_saved_design_model_refuses_other_pairs_and_damaged_files(membrane_c
         model.predict(Design(body_material=get_material("ecoflex_00_30"),
                              membrane_material=get_material("pdms_1_15")), [500.0])
     assert getattr(err.value, "field", None) == "body_material"
-    doc = json.loads((tmp_path / "lab2.json").read_text())
+    text = (tmp_path / "lab2.json").read_text()
+    doc = json.loads(text)
+    assert isinstance(doc.pop(KEY), str)     # sealed as the emulator's file is
     doc["applied"]["membrane_stiffness"]["membrane_mu_scale"]["value"] = "soft"
-    (tmp_path / "lab3.json").write_text(json.dumps(doc))
+    (tmp_path / "lab3.json").write_text(json.dumps(doc))  # as an earlier version wrote it
     with pytest.raises(SavedModelError, match="membrane_mu_scale"):
+        load_model("lab3", tmp_path, design_space=_emulator)
+    # the sealed file with its scale 0.61 raised to 0.71 (still a scale a fit gives)
+    assert text.count('"value": 0.6') == 1
+    (tmp_path / "lab3.json").write_text(text.replace('"value": 0.6', '"value": 0.7'))
+    with pytest.raises(SavedModelError, match="'lab3'.*checksum does not match"):
         load_model("lab3", tmp_path, design_space=_emulator)
     with pytest.raises(SavedModelError, match="not loaded"):
         load_model("lab2", tmp_path)

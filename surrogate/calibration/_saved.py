@@ -15,13 +15,26 @@ the baseline of the calibration still answered for the measured designs (its lar
 pressure and angle magnitude, found at saving); past it, or past the measured pressures
 when a file of older code has no ``fe_range``, the angle is NaN (null over HTTP) with the
 flag ``past_fe_range``.
+
+Both formats are sealed as the emulator and exponential files are (surrogate/file_seal.py:
+``"content_sha256"``, the sha256 of the rest as canonical JSON; the file itself stays
+indented): a file changed after saving -- a digit raised, a value truncated -- is refused
+on load with ``SavedModelError``, never answered with other numbers. A file of earlier
+versions carries no checksum: it is read as before and every answer is flagged
+``saved_without_checksum``, saying how to have it checked. A save killed before it was
+published leaves its temporary file (``.lab1.json.k3j9x_2a.tmp``, perhaps empty):
+``remove_stale_temporaries``, when the models directory is opened, removes those older
+than a minute, never a save in progress.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import re
+import stat
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -37,11 +50,15 @@ from surrogate.calibration._errors import ModelNotFoundError
 from surrogate.calibration._forward import chamber_pressure_pa, static_angle_deg
 from surrogate.calibration._saved_design import (
     DESIGN_FORMAT,
+    UNSEALED_FLAG,
     DesignSpaceCalibratedModel,
     checked_design_document,
     design_document,
+    unsealed_message,
 )
 from surrogate.exponential.equations import TAU_FORM
+from surrogate.file_seal import KEY as SEAL_KEY
+from surrogate.file_seal import seal, seal_broken
 from surrogate.predictor import band_within_fe
 
 FORMAT = "balloon.calibrated-model/1"
@@ -50,6 +67,9 @@ FORMAT = "balloon.calibrated-model/1"
 NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 # the built-in models' names (service/models.py): a saved model of one could never be chosen
 RESERVED = ("emulator", "exponential", "fitted", "paper")
+# the temporary file solver.atomic_file writes a model through (mkstemp's 8 characters)
+TEMPORARY = re.compile(r"\.(" + NAME_PATTERN.pattern + r")\.json\.[a-z0-9_]{8}\.tmp")
+STALE_AFTER_S = 60.0    # a save takes milliseconds: one in progress is never this old
 
 
 class ModelExistsError(ExistsError, InputError):
@@ -89,6 +109,7 @@ class CalibratedModel:
     flow_ul_s: float | None
     domain: dict
     provenance: dict
+    sealed: bool = True     # False: a file saved before the checksum (UNSEALED_FLAG)
 
     def _family(self, design) -> dict:
         fam = design.family
@@ -141,6 +162,9 @@ class CalibratedModel:
         validity = {"in_domain": not flags, "flags": flags, "messages": messages,
                     "fe_limit_pa": lim_p,
                     "fe_limit_angle_deg": lim_a if math.isfinite(lim_a) else None}
+        if not self.sealed:     # about the file, not the design: in_domain as it is
+            flags.append(UNSEALED_FLAG)
+            messages.append(unsealed_message(self.name))
         lower, upper = angle - half, angle + half
         if math.isfinite(lim_a):
             lower, upper = band_within_fe(lower, upper, lim_a, validity)
@@ -246,9 +270,12 @@ def save_model(cal, name: str, models_dir: str | Path, overwrite: bool = False) 
 
 
 def _write(path: Path, doc: dict, name: str, overwrite: bool) -> Path:
-    """Write ``doc`` as JSON at ``path``: atomically replacing (``overwrite``), or created
-    atomically so that of two concurrent saves of one name exactly one wins."""
-    text = json.dumps(doc, indent=1, allow_nan=False)
+    """Write ``doc`` sealed (its content checksum) as indented JSON at ``path``: atomically
+    replacing (``overwrite``), or created atomically so that of two concurrent saves of one
+    name exactly one wins. The checksum is of ``doc`` as read back (tuples as lists, keys
+    as text), so that loading it finds the same."""
+    plain = json.loads(json.dumps(doc, allow_nan=False))
+    text = json.dumps(seal(plain), indent=1, allow_nan=False)
     if overwrite:
         write_text_atomic(path, text)
     else:
@@ -280,10 +307,11 @@ def _finite(value: object) -> bool:
             and math.isfinite(value))
 
 
-def _checked(doc: object, name: str, design_space: Callable[[], Any] | None = None
-             ) -> CalibratedModel | DesignSpaceCalibratedModel:
+def _checked(doc: object, name: str, design_space: Callable[[], Any] | None = None,
+             sealed: bool = True) -> CalibratedModel | DesignSpaceCalibratedModel:
     """The model of a parsed file, every key and type checked (SavedModelError on the
-    first problem), so that a damaged file fails here and never inside a prediction."""
+    first problem), so that a damaged file fails here and never inside a prediction;
+    ``sealed``: whether the file carried its checksum (``_seal_checked``)."""
     def bad(what: str) -> SavedModelError:
         return SavedModelError(name, what)
 
@@ -291,7 +319,7 @@ def _checked(doc: object, name: str, design_space: Callable[[], Any] | None = No
         raise bad("the file is not a JSON object")
     fmt = doc.get("format")
     if fmt == DESIGN_FORMAT:
-        return checked_design_document(doc, name, bad, design_space)
+        return checked_design_document(doc, name, bad, design_space, sealed)
     if fmt != FORMAT:
         if isinstance(fmt, str) and fmt.startswith(FORMAT.rsplit("/", 1)[0] + "/"):
             raise bad(f"format {fmt!r} is not {FORMAT!r} (a newer version of "
@@ -332,7 +360,20 @@ def _checked(doc: object, name: str, design_space: Callable[[], Any] | None = No
     return CalibratedModel(doc["name"], tuple(doc["families"]),
                            {k: float(v) for k, v in doc["effects"].items()},
                            float(rmse) if rmse is not None else math.nan, doc["flow_ul_s"],
-                           doc["domain"], doc["provenance"])
+                           doc["domain"], doc["provenance"], sealed)
+
+
+def _seal_checked(doc: object, name: str) -> bool:
+    """Whether the parsed file carries its content checksum (False: saved by an earlier
+    version, read as before and flagged); SavedModelError when it carries one that does
+    not match what was read."""
+    if not isinstance(doc, dict) or SEAL_KEY not in doc:
+        return False
+    if not isinstance(doc[SEAL_KEY], str) or seal_broken(doc):
+        raise SavedModelError(name, "its content changed since it was saved (the "
+                              "content_sha256 checksum does not match): restore the file "
+                              "from a copy, or calibrate its data again under a new name")
+    return True
 
 
 def load_model(name: str, models_dir: str | Path,
@@ -353,4 +394,31 @@ def load_model(name: str, models_dir: str | Path,
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (ValueError, RecursionError) as exc:
         raise SavedModelError(name, f"not valid JSON ({type(exc).__name__})") from None
-    return _checked(doc, name, design_space)
+    return _checked(doc, name, design_space, _seal_checked(doc, name))
+
+
+def remove_stale_temporaries(models_dir: str | Path, older_than_s: float = STALE_AFTER_S
+                             ) -> list[str]:
+    """Remove from ``models_dir`` the temporary files of saves that never finished (a
+    process killed between writing and publishing leaves ``.lab1.json.k3j9x_2a.tmp``,
+    perhaps empty, that nothing else removes): only regular files named as a save names
+    them (``TEMPORARY``) and last changed more than ``older_than_s`` ago, so a save in
+    progress is never touched. The names removed, sorted; a file that cannot be removed
+    (read-only directory) is left, as is a missing directory."""
+    folder, removed = Path(models_dir), []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    now = time.time()
+    for entry in entries:
+        if not TEMPORARY.fullmatch(entry.name):
+            continue
+        try:
+            info = entry.stat(follow_symlinks=False)
+            if stat.S_ISREG(info.st_mode) and now - info.st_mtime > older_than_s:
+                os.unlink(folder / entry.name)
+                removed.append(entry.name)
+        except OSError:     # gone meanwhile, or not ours to remove
+            continue
+    return sorted(removed)

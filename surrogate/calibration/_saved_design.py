@@ -20,7 +20,7 @@ difference (the answer at value + sd, or value - sd where that leaves the box).
 File (``<models_dir>/<name>.json``): ``{"format": DESIGN_FORMAT, "name", "baseline",
 "pairs": [[body, membrane], ...], "applied": {effect id: {parameter: {value, sd, unit}}},
 "recorded": {effect id: {parameter: {value, sd, unit}}}, "rmse_deg", "domain": {L_mm,
-t_mm, pressure_pa}, "provenance"}``.
+t_mm, pressure_pa}, "provenance", "content_sha256"}`` (the seal: ``_saved.py``).
 """
 
 from __future__ import annotations
@@ -40,6 +40,8 @@ from surrogate.predictor import one_signed
 
 DESIGN_FORMAT = "balloon.calibrated-design-model/1"
 CALIBRATED_W_MM = 3.0     # measured data carry no width: the paper's, the loader's default
+# on every answer of a model whose file has no content checksum (saved by earlier versions)
+UNSEALED_FLAG = "saved_without_checksum"
 
 # the answer's arrays with a band (value, lower, upper), per call: each is widened
 BANDS = {"predict": (("angle_deg", "lower_deg", "upper_deg"),
@@ -108,6 +110,7 @@ class DesignSpaceCalibratedModel:
     domain: dict
     provenance: dict
     design_space: Callable[[], Any]
+    sealed: bool = True     # False: a file saved before the checksum (UNSEALED_FLAG)
 
     # ---- the three answers -------------------------------------------------------------
     def predict(self, design, pressures_pa, level: float = 0.95):
@@ -193,6 +196,9 @@ class DesignSpaceCalibratedModel:
     def _validity(self, base: dict, design, left_out: list[str]) -> dict:
         flags = list(base.get("flags", []))
         messages = list(base.get("messages", []))
+        if not self.sealed:
+            flags.append(UNSEALED_FLAG)
+            messages.append(unsealed_message(self.name))
         messages.append(f"calibrated model {self.name!r} (against {self.baseline_name!r}): "
                         f"the design as the lab makes it, {self._changes()}"
                         + ("; the band includes these sizes' own uncertainty" if self.applied
@@ -228,6 +234,15 @@ class DesignSpaceCalibratedModel:
         return {**base, "flags": flags, "messages": messages}
 
 
+def unsealed_message(name: str) -> str:
+    """What every answer of a saved model whose file carries no checksum says: it is
+    answered as before, an edit to it would not be noticed, and how to have it sealed."""
+    return (f"saved model {name!r} carries no checksum (saved by an earlier version): an "
+            "edit to its file would go unnoticed; to have it checked, calibrate its data "
+            "again and save it under a new name (the data's sha256 is its "
+            "provenance.data_sha256)")
+
+
 def _preset(material) -> tuple[str, float]:
     """(preset id, stiffness scale) of a layer's material (``recognise``); an inline
     material that is no scaled preset keeps its own id (no calibrated pair has it)."""
@@ -235,10 +250,11 @@ def _preset(material) -> tuple[str, float]:
 
 
 def checked_design_document(doc: dict, name: str, bad: Callable[[str], Exception],
-                            design_space: Callable[[], Any] | None
+                            design_space: Callable[[], Any] | None, sealed: bool = True
                             ) -> DesignSpaceCalibratedModel:
     """The model of a parsed DESIGN_FORMAT file, every key and type checked (``bad`` makes
-    the error), so that a damaged file fails here and never inside a prediction."""
+    the error), so that a damaged file fails here and never inside a prediction;
+    ``sealed``: whether the file carried its checksum (checked by the caller)."""
     def finite(v: object) -> bool:
         return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
 
@@ -285,4 +301,4 @@ def checked_design_document(doc: dict, name: str, bad: Callable[[str], Exception
     return DesignSpaceCalibratedModel(
         doc["name"], doc["baseline"], tuple(tuple(p) for p in pairs), applied,
         doc["recorded"], float(rmse) if rmse is not None else math.nan, doc["domain"],
-        doc["provenance"], design_space)
+        doc["provenance"], design_space, sealed)
