@@ -2,7 +2,9 @@
 database written through the store API (synthetic curves with the paper's constants,
 surrogate/exponential/synthetic_curves.py), so the fitted a must come back as 0.101 deg/mm."""
 
+import hashlib
 import json
+import shlex
 
 import numpy as np
 import pytest
@@ -51,7 +53,11 @@ def test_fit_predict_inverse_commands(db, tmp_path, capsys) -> None:
     assert "pdms_1_10/ecoflex_00_30" in text and "no record holds a force curve" in text
     s = load_surrogate(out)
     assert s.family_fits[0].parameters["exponential"].theta[0] == pytest.approx(0.101, rel=0.01)
-    assert s.provenance["database_path"].endswith("curves.h5")
+    assert s.provenance["database_name"] == db.name     # the name, never the path
+    assert str(db.parent) not in json.dumps(s.provenance["database"])
+    assert s.provenance["database"]["sha256"] == hashlib.sha256(db.read_bytes()).hexdigest()
+    assert s.provenance["fit_command"] == shlex.join(["balloon", "fit", "--db", str(db),
+                                                      "-o", str(out)])
     assert len(s.provenance["record_keys"]) == 12
     assert sorted(p.name for p in (tmp_path / "rep").iterdir())[-1] == "report.json"
     assert len(list((tmp_path / "rep").glob("*.png"))) == 2

@@ -13,6 +13,7 @@ and PNG plots (FE curves against the models, A against L, tau against t).
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -90,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         curves, _ = curves_from_store(args.db)
         s = fit_surrogate(args.db, name=args.name, level=args.level,
-                          progress=not args.no_progress and sys.stderr.isatty())
+                          progress=not args.no_progress and sys.stderr.isatty(),
+                          command=command_line(args))
     except InputError as exc:
         raise InputError(FIT_FLAGS.get(exc.field, exc.field), exc.detail, exc.allowed
                          ) from None
@@ -101,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         from surrogate.emulator.command import fit_and_save, side_by_side
 
         emulator, lines = fit_and_save(args.db, args.emulator_output, args.level,
-                                       args.band_calibration_db)
+                                       args.band_calibration_db, command=command_line(args))
         lines += side_by_side(s.report["families"], emulator)  # type: ignore[attr-defined]
         print("\n".join(lines))
     if args.report_dir:
@@ -110,6 +112,21 @@ def run(args: argparse.Namespace) -> int:
         for p in write_report(s, curves, args.report_dir):
             print(f"wrote {p}")
     return 0
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The command that reproduces this fit (recorded in the files it writes), with the
+    paths as given."""
+    words = ["balloon", "fit", "--db", args.db, "-o", args.output]
+    if args.emulator_output:
+        words += ["--emulator-output", args.emulator_output]
+    if args.band_calibration_db:
+        words += ["--band-calibration-db", args.band_calibration_db]
+    if args.name != "fe-fit":
+        words += ["--name", args.name]
+    if args.level != 0.95:
+        words += ["--level", f"{args.level:g}"]
+    return shlex.join(words)
 
 
 def summary_table(s: object) -> str:

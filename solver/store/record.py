@@ -60,16 +60,33 @@ def package_version() -> str:
         return "0+unknown"
 
 
+# The code a result depends on, relative to the checkout's root: what ``git_commit``
+# checks for changes against HEAD (the shipped data files the fit writes are not code).
+CODE_PATHS = ("solver", "surrogate", "service", "pyproject.toml", ":(exclude)service/data")
+
+
 @lru_cache(maxsize=1)
 def git_commit() -> str:
-    """HEAD of the checkout this code runs from ("" outside git or without git)."""
+    """HEAD of the checkout this code runs from, with ``+dirty`` when a tracked file of
+    the code (CODE_PATHS) differs from it: a result made by uncommitted code names the
+    commit it started from and says that it is not that commit's ("" outside git or
+    without git)."""
     here = Path(__file__).resolve().parent
     try:
         out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
                              text=True, timeout=5, check=False)
+        if out.returncode != 0:
+            return ""
+        top = subprocess.run(["git", "rev-parse", "--show-toplevel"], cwd=here,
+                             capture_output=True, text=True, timeout=5, check=False)
+        changed = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", *CODE_PATHS],
+            cwd=top.stdout.strip() or here, capture_output=True, text=True, timeout=10,
+            check=False)
     except (OSError, subprocess.SubprocessError):
         return ""
-    return out.stdout.strip() if out.returncode == 0 else ""
+    dirty = changed.returncode == 0 and bool(changed.stdout.strip())
+    return out.stdout.strip() + ("+dirty" if dirty else "")
 
 
 def utc_now() -> str:

@@ -13,22 +13,22 @@ from solver.store.record import git_commit, package_version
 from surrogate.emulator.build import fit_emulator
 from surrogate.emulator.emulator import Emulator
 from surrogate.emulator.file import save_emulator
+from surrogate.fit_provenance import database_entry
 
 
 def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95,
-                 calibration_db: str | Path | None = None) -> tuple[Emulator, list[str]]:
+                 calibration_db: str | Path | None = None, command: str = ""
+                 ) -> tuple[Emulator, list[str]]:
     """Fit the emulator to ``db_path``, write it to ``output``; the emulator and summary
     lines (one per material group and bending side). With ``calibration_db`` (FE curves
     of random designs of the box, none of them in ``db_path``), the bands are calibrated
-    on those too (``random_calibration``)."""
+    on those too (``random_calibration``). ``command`` (the fit's command line) and each
+    input database's checksum go into the file's provenance (``surrogate.fit_provenance``)."""
     t0 = time.perf_counter()
     with CurveStore(db_path) as db:
         records = list(db.records(status=None))
         generator = db.metadata.get("generator_command", "")
-    provenance = {"database_name": Path(db_path).name, "database_records": len(records),
-                  "database_command": generator, "package_version": package_version(),
-                  "git_commit": git_commit(), "created_utc": time.strftime(
-                      "%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    provenance = fit_provenance(db_path, len(records), generator, command, calibration_db)
     emulator = fit_emulator(records, name="emulator", level=level, provenance=provenance)
     if calibration_db is not None:
         emulator = _calibrate(emulator, calibration_db, level)
@@ -61,6 +61,25 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95,
         lines.append(random_calibration_lines(cal))
     lines.append(f"emulator fitted in {fit_s:.1f} s; wrote {path}")
     return emulator, lines
+
+
+def fit_provenance(db_path: str | Path, n_records: int, generator: str, command: str,
+                   calibration_db: str | Path | None = None) -> dict[str, object]:
+    """The emulator file's provenance: the code (version, commit), when, the command that
+    reproduces the fit, and each input database by name, records and checksum
+    (``surrogate.fit_provenance``)."""
+    provenance: dict[str, object] = {
+        "database_name": Path(db_path).name, "database_records": n_records,
+        "database_command": generator, "package_version": package_version(),
+        "git_commit": git_commit(),
+        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "fit_command": command, "database": database_entry(db_path, n_records)}
+    if calibration_db is not None:
+        with CurveStore(calibration_db) as db:
+            n_calibration = len(db.keys())
+        provenance["band_calibration_database"] = database_entry(calibration_db,
+                                                                 n_calibration)
+    return provenance
 
 
 def _calibrate(emulator: Emulator, calibration_db: str | Path, level: float) -> Emulator:

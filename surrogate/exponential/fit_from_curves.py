@@ -14,15 +14,14 @@ from __future__ import annotations
 
 import math
 import os
-import subprocess
 from dataclasses import replace
 from datetime import UTC, datetime
-from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
 
 from solver.errors import InputError
+from solver.store.record import git_commit, package_version
 from surrogate.dataset import CurveData, curves_from_store, select_angle_curves, select_force_curves
 from surrogate.exponential import equations
 from surrogate.exponential.family import Domain, Family
@@ -32,6 +31,7 @@ from surrogate.exponential.paper_procedure import paper_procedure
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.surrogate import Surrogate
 from surrogate.exponential.volume_relation import VolumeCurve, fit_volume_relation
+from surrogate.fit_provenance import database_entry
 from surrogate.json_plain import plain_json
 
 EXTENDED_GAIN = 0.9  # extended becomes the default when its LODO RMSE < 0.9 x the paper's
@@ -43,34 +43,18 @@ MIN_THICKNESSES = 2
 MIN_LENGTHS = 2
 
 
-def package_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("balloon-actuator")
-    except PackageNotFoundError:
-        return "0+unknown"
-
-
-def git_commit() -> str:
-    """Commit of the source tree this package runs from, or "" outside a checkout."""
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
-                             capture_output=True, text=True, timeout=5, check=False)
-        return out.stdout.strip() if out.returncode == 0 else ""
-    except (OSError, subprocess.SubprocessError):
-        return ""
-
-
 def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "fe-fit",
                   level: float = 0.95, forms: tuple[str, ...] = equations.FORMS,
-                  progress: bool = False) -> Surrogate:
-    """Fit every family found in ``source`` (a CurveStore path or a list of CurveData)."""
+                  progress: bool = False, command: str = "") -> Surrogate:
+    """Fit every family found in ``source`` (a CurveStore path or a list of CurveData);
+    ``command`` (the fit's command line) goes into the provenance, with the database's
+    name and checksum (``surrogate.fit_provenance``; never its path on this machine)."""
+    database: dict[str, object] = {}
     if isinstance(source, (str, os.PathLike)):
         curves, metadata = curves_from_store(source)
-        db_path = str(Path(source).resolve())
+        database = database_entry(source, len(curves))
     else:
-        curves, metadata, db_path = list(source), {}, ""
+        curves, metadata = list(source), {}
     for f in forms:
         if f not in equations.FORMS:
             raise InputError("forms", f"unknown form {f!r}", " | ".join(equations.FORMS))
@@ -107,7 +91,8 @@ def fit_surrogate(source: str | os.PathLike | list[CurveData], *, name: str = "f
     provenance = {
         "format_version": FORMAT_VERSION, "created_utc": datetime.now(UTC).isoformat(),
         "package_version": package_version(), "git_commit": git_commit(),
-        "database_path": db_path, "database_metadata": plain_json(metadata),
+        "database_name": database.get("name", ""), "database": database,
+        "fit_command": command, "database_metadata": plain_json(metadata),
         "record_keys": used, "n_records": len(used), "level": level, "forms": list(forms),
         "source": "fit of FE curves",
     }

@@ -34,8 +34,10 @@ from surrogate.predictor import (
 )
 from surrogate.volume_control import by_volume
 
+# (database_path: files fitted before 2026-12-06 recorded the database's full path, which
+# answers show by its name, service.convert.public_provenance)
 _PROVENANCE_SUMMARY = ("format_version", "created_utc", "package_version", "git_commit",
-                       "database_path", "source")
+                       "database_name", "database_path", "source")
 
 
 @dataclass(frozen=True)
