@@ -7,6 +7,8 @@ fake_solve: a 6-point curve whose numbers follow from the design alone
 slow_fake_solve: the same after FAKE_SLEEP_S seconds (interrupt and kill tests).
 blocking_fake_solve: fake_solve, except that L_mm = 6.1 touches the file named by
     BALLOON_FAKE_MARKER and then never returns (a deterministic Ctrl-C test).
+pid_sleeping_solve: writes the worker's pid to a file in the directory BALLOON_FAKE_PIDS,
+    then sleeps 120 s (a kill -9 of the job while its workers solve).
 """
 
 from __future__ import annotations
@@ -58,3 +60,11 @@ def blocking_fake_solve(design, settings) -> Curve:
         while True:  # until the job stops this worker
             time.sleep(1.0)
     return fake_solve(design, settings)
+
+
+def pid_sleeping_solve(design, settings) -> Curve:
+    from pathlib import Path
+
+    (Path(os.environ["BALLOON_FAKE_PIDS"]) / str(os.getpid())).touch()
+    time.sleep(120.0)
+    return fake_curve(design)

@@ -1,9 +1,10 @@
-"""``balloon db ls|show|export|seal``: look into a curve database.
+"""``balloon db ls|show|export|seal|salvage``: look into a curve database.
 
     balloon db ls curves.h5 [--status failed] [--where L_mm=7.1 ...] [--json]
     balloon db show curves.h5 [KEY] [--json]      # no KEY: the file's metadata
     balloon db export curves.h5 [KEY ...] --format csv|json [-o OUT] [--where ...]
     balloon db seal curves.h5                     # write a file of older code sealed
+    balloon db salvage curves.h5 -o new.h5        # the intact records of a damaged file
 
 Keys may be abbreviated to any unique prefix. CSV is long format: one row per
 curve point, with the record's key, status and design (lengths in mm, material ids) on
@@ -30,9 +31,11 @@ CSV_CURVE = CSV_COLUMNS
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("db", help="list, show and export curve database records",
+    parser = subparsers.add_parser("db", help="list, show, export, seal and salvage curve "
+                                   "database records",
                                    description="List, show and export the records of a curve "
-                                               "database (docs/database.md).")
+                                               "database, seal it, or salvage its intact "
+                                               "records (docs/database.md).")
     sub = parser.add_subparsers(title="db commands", metavar="ACTION", required=True)
     ls = sub.add_parser("ls", help="list the records")
     ls.add_argument("db", help="curve database (HDF5)")
@@ -63,6 +66,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                       "(files written by this version have both).")
     seal.add_argument("db", help="curve database (HDF5)")
     seal.set_defaults(func=run_seal)
+    salvage = sub.add_parser("salvage", help="copy the intact records of a damaged "
+                             "database to a new file",
+                             description="Copy every record that reads back (its checksum "
+                                         "and key intact) into a new curve database, with "
+                                         "the file's metadata; name the damaged ones. "
+                                         "`balloon precompute` on the new file solves "
+                                         "their designs again.")
+    salvage.add_argument("db", help="curve database (HDF5)")
+    salvage.add_argument("-o", "--output", required=True, metavar="NEW.h5",
+                         help="the new database (must not exist)")
+    salvage.set_defaults(func=run_salvage)
 
 
 def parse_where(items: list[str]) -> dict[str, object]:
@@ -154,6 +168,17 @@ def run_seal(args: argparse.Namespace) -> int:
         db.seal()
         n = len(db)
     print(f"{args.db}: sealed ({n} records)", file=sys.stderr)
+    return 0
+
+
+def run_salvage(args: argparse.Namespace) -> int:
+    from service.commands.outputs import check_output
+    from solver.store.salvage import salvage
+
+    check_output(args.output, "--output", inputs=(("the database", args.db),))
+    result = salvage(args.db, args.output)
+    for line in result.lines():
+        print(line, file=sys.stderr)
     return 0
 
 

@@ -5,6 +5,11 @@ The grid is validated completely before any solve. Each finished solve is writte
 once; Ctrl-C, SIGTERM or a killed job keeps every finished record, and the same command
 resumes.
 The exact command, the grid's text and the versions are recorded in the file's metadata.
+
+Exit codes (docs/database.md): 0 done; 1 solves lost to worker errors, or finished
+results parked (the database could not be written, or another writer held it); 2 refused
+before any solve (a bad grid or option, a damaged database, the database being filled by
+another job or held by another writer); 130 / 143 stopped by Ctrl-C / SIGTERM.
 """
 
 from __future__ import annotations
@@ -147,7 +152,8 @@ def run(args: argparse.Namespace) -> int:
 
     from solver.errors import InputError
     from solver.precompute import load_grid, plan, precompute
-    from solver.store import CurveStore
+    from solver.precompute.job import refuse_damaged
+    from solver.store import CurveStore, StoreBusyError
 
     if not 1 <= args.workers <= 256:
         raise InputError("--workers", f"got {args.workers}", "1 <= N <= 256")
@@ -174,6 +180,7 @@ def run(args: argparse.Namespace) -> int:
         statuses: dict[str, str] = {}
         if Path(args.db).exists():
             with CurveStore(args.db) as db:
+                refuse_damaged(db)
                 statuses = db.statuses()
         todo, summary = plan(grid.points, statuses, args.retry_failed)
         print(f"{grid.source}: {len(grid)} designs; in {args.db}: {summary.skipped_done} "
@@ -192,11 +199,13 @@ def run(args: argparse.Namespace) -> int:
                              retry_failed=args.retry_failed, progress=not args.no_progress,
                              command=command_line(args),
                              metadata=None if origin is None else {"designs_from": origin})
+    except StoreBusyError as exc:  # another job, or a writer past the wait: nothing solved
+        raise InputError("--db", str(exc)) from None
     finally:
         signal.signal(signal.SIGTERM, previous)
     for line in summary.lines():
         print(line, file=sys.stderr)
-    if summary.write_error:  # disk full, read-only: the lines above say where and why
+    if summary.write_error or summary.parked:  # the lines above say where and why
         return 1
     if summary.interrupted:
         return 128 + (terminated[0] if terminated else signal.SIGINT)  # the shell's way

@@ -11,16 +11,34 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import threading
+import time
 from collections.abc import Callable, Iterable, Iterator
 from concurrent import futures as cf
 from typing import Any
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+PARENT_CHECK_S = 1.0   # how often a worker looks for its parent
+ORPHAN_EXIT_CODE = 70  # a worker that outlived its job ends with this status
 
 
-def _ignore_sigint() -> None:
-    """Workers leave Ctrl-C to the parent, which stops them itself."""
+def _init_worker(parent_pid: int) -> None:
+    """In each worker, before its first solve: Ctrl-C is left to the parent, which stops
+    the workers itself; and a daemon thread ends the worker once the parent is gone.
+    The parent's SIGTERM handler stops the workers, but ``kill -9`` of the job tells them
+    nothing: re-parented, they would solve on and then wait for work for ever."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_exit_when_orphaned, args=(parent_pid,), daemon=True,
+                     name="balloon-parent-watch").start()
+
+
+def _exit_when_orphaned(parent_pid: int) -> None:
+    """Compare the worker's parent with the job's pid every PARENT_CHECK_S (a wake-up a
+    second: nothing a solve notices) and end the process at once when they differ (the
+    job died; the worker was re-parented), whatever the solve is doing."""
+    while os.getppid() == parent_pid:
+        time.sleep(PARENT_CHECK_S)
+    os._exit(ORPHAN_EXIT_CODE)
 
 
 class PoolBackend:
@@ -28,7 +46,8 @@ class PoolBackend:
 
     Each worker's BLAS/OpenMP threads are capped at cores // workers (unless the user set
     OMP_NUM_THREADS etc.), so N workers do not oversubscribe the machine; the children
-    inherit the setting from the environment, which ``close`` restores.
+    inherit the setting from the environment, which ``close`` restores. A worker whose
+    parent dies (``kill -9`` of the job) ends itself within PARENT_CHECK_S.
     """
 
     def __init__(self, workers: int) -> None:
@@ -39,7 +58,7 @@ class PoolBackend:
             os.environ.setdefault(name, threads)
         self._pool = cf.ProcessPoolExecutor(
             max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-            initializer=_ignore_sigint)
+            initializer=_init_worker, initargs=(os.getpid(),))
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> cf.Future:
         return self._pool.submit(fn, *args)

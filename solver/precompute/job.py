@@ -16,7 +16,12 @@ finished, and returns a summary with ``interrupted = True``. A write that fails 
 full, read-only file system: StoreWriteError) stops the job the same way, with
 ``write_error`` naming the path and the cause; the database is untouched and the
 finished results are parked (``solver.precompute.parking``) and written first by the
-next run.
+next run. Another writer that holds the database's lock past the store's wait (60 s)
+stops nothing: each result finished meanwhile is parked at once, and written, with the
+parked ones, by the first put that gets the lock again (at the latest at the job's end,
+else by the next run); a finished solve is never dropped.
+
+The job starts only on a database whose records all read back (``refuse_damaged``).
 """
 
 from __future__ import annotations
@@ -33,11 +38,19 @@ from solver.design import Design
 from solver.precompute.grid import GridPoint
 from solver.precompute.parking import park, unpark
 from solver.settings import SolverSettings
-from solver.store import CurveStore, Record, StoreWriteError, failed_curve, make_record
-from solver.store.locking import WriterLock
+from solver.store import (
+    CurveStore,
+    Record,
+    StoreBusyError,
+    StoreWriteError,
+    failed_curve,
+    make_record,
+)
+from solver.store.locking import JOB_SUFFIX, WriterLock, database_path, lock_path
 from solver.store.record import git_commit, package_version, utc_now
 
 SolveFn = Callable[[Design, SolverSettings], Curve]
+BUSY_RETRY_S = 1.0  # the lock's wait once another writer held it past the store's wait
 
 
 def default_solve(design: Design, settings: SolverSettings) -> Curve:
@@ -78,8 +91,10 @@ class JobSummary:
     errors: int = 0                # worker died or result lost: nothing stored
     interrupted: bool = False
     write_error: str | None = None  # the database could not be written: why
-    parked: int = 0                # finished results parked instead (written next run)
+    busy: str | None = None        # another writer holds the lock (results parked): who
+    parked: int = 0                # finished results parked, not written (written next run)
     parked_in: str = ""
+    run_recorded: bool = True      # the run's end is in the file's metadata
     unparked: int = 0              # parked results of an earlier run written this run
     wall_time_s: float = 0.0
     backend: str = ""
@@ -92,6 +107,15 @@ class JobSummary:
     @property
     def not_run(self) -> int:
         return self.to_solve - self.solved - self.errors
+
+    def _busy_lines(self) -> list[str]:
+        """Results parked while another writer held the lock, if any are left."""
+        if not self.parked:
+            return []
+        return [f"not written: {self.busy}",
+                f"{self.parked} finished results parked in {self.parked_in}; rerun the same "
+                "command when the database is free: they are written first, not solved "
+                "again"]
 
     @property
     def designs_per_hour(self) -> float:
@@ -113,9 +137,13 @@ class JobSummary:
                 out.append(f"{self.parked} finished results parked in {self.parked_in}; "
                            "fix the cause and rerun the same command: they are written "
                            f"first, then the {self.not_run} not run are solved")
-        elif self.interrupted:
-            out.append(f"interrupted: {self.not_run} not run; rerun the same command to "
-                       f"continue (finished records are kept)")
+        else:
+            out += self._busy_lines()
+            if self.interrupted:
+                out.append(f"interrupted: {self.not_run} not run; rerun the same command "
+                           f"to continue (finished records are kept)")
+        if not self.run_recorded:
+            out.append(f"the run's end is not recorded in the file's metadata ({self.busy})")
         for key, design, reason in self.failures[:20]:
             out.append(f"  failed {key[:12]} {design}: {reason}")
         if len(self.failures) > 20:
@@ -166,14 +194,7 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
             summary.failures.append((point.key, describe(point.design),
                                      f"worker error {type(exc).__name__}: {exc}"))
         else:
-            if summary.write_error is None:
-                try:
-                    db.put(record)
-                except StoreWriteError as exc:
-                    summary.write_error = str(exc)
-                    park_result(record)
-            else:
-                park_result(record)
+            write(record)
             status = record.curve.status
             setattr(summary, status, getattr(summary, status) + 1)
             if status == "failed":
@@ -187,6 +208,31 @@ def run_job(points: Sequence[GridPoint], db: CurveStore, backend: Any,
         bar.set_postfix(counts, refresh=False)
         if summary.write_error:
             raise _WriteFailed  # stop submitting and waiting: park what has finished
+
+    def write(record: Record) -> None:
+        """Put ``record`` now, after the results parked while another writer held the
+        lock; park it when the database cannot take it (full disk: the job stops; the
+        lock held past the wait: the job goes on, waiting BUSY_RETRY_S a result until
+        the lock is free, and after Ctrl-C)."""
+        if summary.write_error is not None:
+            park_result(record)
+            return
+        wait = BUSY_RETRY_S if summary.busy or summary.interrupted else None
+        try:
+            if summary.parked:  # parked while the lock was held: written first
+                unpark(db, also=[record], lock_timeout_s=wait)
+                summary.parked, summary.busy = 0, None
+            else:
+                db.put(record, lock_timeout_s=wait)
+        except StoreBusyError as exc:
+            park_result(record)
+            if summary.busy is None and summary.parked and progress:
+                bar.write(f"precompute: {exc}; finished results are parked in "
+                          f"{summary.parked_in} until it is free", file=sys.stderr)
+            summary.busy = str(exc)
+        except StoreWriteError as exc:
+            summary.write_error = str(exc)
+            park_result(record)
 
     def park_result(record: Record) -> None:
         try:
@@ -236,17 +282,20 @@ def precompute(grid: Any, db_path: str | Path, workers: int = 1,
     ``grid`` is a ``Grid`` (from ``load_grid``); the backend is a pool of ``workers``
     processes, or Dask when ``scheduler`` (an address) or ``client`` is given.
     One job per database at a time (``<db>.job.lock``; a second one raises
-    StoreBusyError). The writer lock is taken only around each put, so other writers
-    (the service storing its own solves) interleave with a long job.
+    StoreBusyError); a symbolic link is followed to the file it names, whose locks and
+    file are the job's. The writer lock is taken only around each put, so other writers
+    (the service storing its own solves) interleave with a long job. A database with a
+    damaged record is refused before anything is written (``refuse_damaged``).
     """
     from solver.precompute.backends import DaskBackend, PoolBackend
 
-    path = Path(db_path)
-    job_lock = WriterLock(path.with_name(path.name + ".job.lock"),
+    path = database_path(db_path)
+    job_lock = WriterLock(lock_path(path, JOB_SUFFIX),
                           what="being filled by another precompute job")
     job_lock.acquire()
     try:
         with CurveStore(path, mode="a", hold_lock=False) as db:
+            refuse_damaged(db)
             run = {"command": command or "", "grid_source": grid.source,
                    "grid_sha256": grid.sha256, "started_utc": utc_now(),
                    "package_version": package_version(), "git_commit": git_commit()}
@@ -260,13 +309,44 @@ def precompute(grid: Any, db_path: str | Path, workers: int = 1,
             finally:
                 backend.close()
             summary.unparked = unparked
-            if summary.write_error:  # the database cannot take the run's end either
+            if summary.parked and not summary.write_error:
+                _write_parked(db, summary)
+            if summary.write_error or summary.parked:  # nor can it take the run's end
                 return summary
             runs = list(db.metadata.get("runs", []))
             runs[-1] = {**run, "finished_utc": utc_now(), "interrupted": summary.interrupted,
                         "solved": summary.solved, "failed": summary.failed,
                         "errors": summary.errors}
-            db.set_metadata(runs=runs)
+            try:
+                db.set_metadata(runs=runs)
+            except StoreBusyError as exc:  # every record is stored; only this line is not
+                summary.busy, summary.run_recorded = str(exc), False
         return summary
     finally:
         job_lock.release()
+
+
+def refuse_damaged(db: CurveStore) -> None:
+    """DamagedStoreError (one line, exit 2 from the CLI) naming every record of ``db``
+    that does not read back, with the salvage command; nothing when all do.
+
+    Refused rather than solved again: a damaged record says that something other than
+    this code changed the file (a failing disk, another tool), so its other records and
+    its next writes are suspect too; its design and settings may be what changed, so
+    the grid point it stood for is unknown; and every publish would put a fresh seal
+    over it. `balloon db salvage DB -o NEW.h5` copies the intact records to a new file,
+    which this job then completes (the damaged designs are missing there, so solved
+    again). Costs one full read of every record (about 5 ms each) before the first solve."""
+    db.require_intact()
+
+
+def _write_parked(db: CurveStore, summary: JobSummary) -> None:
+    """At the job's end, the results parked while another writer held the lock: written
+    if the lock comes within the store's wait (BUSY_RETRY_S after Ctrl-C), else left
+    parked for the next run."""
+    try:
+        unpark(db, lock_timeout_s=BUSY_RETRY_S if summary.interrupted else None)
+    except StoreBusyError as exc:
+        summary.busy = str(exc)
+        return
+    summary.parked, summary.busy = 0, None

@@ -1,6 +1,7 @@
 """Finished solves that could not be written to the database (disk full, read-only file
-system) are parked, not lost: one small HDF5 file per record, written atomically, and
-written into the database first on the next run of the job.
+system, its writer lock held by another process past the wait) are parked, not lost: one
+small HDF5 file per record, written atomically, and written into the database first by
+the next write that gets through (the job's next put, or its next run).
 
     <db dir>/<db name>.parked/<key>.h5          beside the database when possible,
     ~/.balloon/parked/<db name>-<hash>/<key>.h5  else (a read-only database directory)
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import h5py
@@ -55,10 +57,13 @@ def parked_files(db_path: Path) -> list[Path]:
     return sorted(p for d in parking_dirs(db_path) if d.is_dir() for p in d.glob("*.h5"))
 
 
-def unpark(db: CurveStore) -> int:
-    """Write every parked record of ``db`` (a writer) in one publish, then delete the
-    parked files; returns how many. A parked file that does not read back (damaged) is
-    left where it is and not counted."""
+def unpark(db: CurveStore, also: Sequence[Record] = (),
+           lock_timeout_s: float | None = None) -> int:
+    """Write every parked record of ``db`` (a writer), and ``also``, in one publish (the
+    writer lock waited for up to ``lock_timeout_s``, default the store's), then delete
+    the parked files; returns how many parked records were written. A parked file that
+    does not read back (damaged) is left where it is and not counted. StoreBusyError or
+    StoreWriteError when the database cannot take them: the files stay."""
     files, records = [], []
     for path in parked_files(db.path):
         try:
@@ -67,9 +72,10 @@ def unpark(db: CurveStore) -> int:
             files.append(path)
         except (OSError, KeyError, ValueError, RuntimeError, TypeError):
             continue
-    if not records:
+    if not records and not also:
         return 0
-    db.put_many(records)  # StoreWriteError when it still cannot be written: files stay
+    batch = {r.key: r for r in records} | {r.key: r for r in also}  # one record a key
+    db.put_many(batch.values(), lock_timeout_s)
     for path in files:
         path.unlink(missing_ok=True)
     for directory in parking_dirs(db.path):

@@ -33,21 +33,54 @@ def cause_of(exc: BaseException, path: Path) -> str:
     return f"{type(exc).__name__}: {text}"[:300]
 
 
+# what reading a damaged file or record raises inside h5py and the schema's checks
+READ_ERRORS = (BalloonError, OSError, KeyError, RuntimeError, ValueError, TypeError,
+               IndexError)
+MAX_KEYS_NAMED = 10
+
+
+def salvage_hint(path: Path | str) -> str:
+    """What a user can do with a damaged database (the command that does it)."""
+    return (f"restore it from a copy, or copy its intact records to a new file with "
+            f"`balloon db salvage {path} -o NEW.h5`; `balloon precompute` on NEW.h5 then "
+            f"solves the lost designs again")
+
+
+def _records_of(records: tuple[str, ...]) -> str:
+    """The words naming ``records`` before a file's name: ``record K of`` or ``records
+    K1, K2 of`` (keys cut to 12 digits, at most MAX_KEYS_NAMED of them)."""
+    if not records:
+        return ""
+    shown = ", ".join(k[:12] for k in records[:MAX_KEYS_NAMED])
+    if len(records) > MAX_KEYS_NAMED:
+        shown += f" and {len(records) - MAX_KEYS_NAMED} more"
+    return f"record{'s' if len(records) > 1 else ''} {shown} of "
+
+
 class DamagedStoreError(NotACurveStoreError):
     """Reading the database failed inside the file: bytes damaged (flipped, not only
     truncated), a record unreadable or inconsistent with its key. ``name`` is the file's
-    name (no directory), ``record`` the key when one record is at fault."""
+    name (no directory), ``record`` the key when one record is at fault, ``records``
+    every key named (one or more). The allowed action names `balloon db salvage`."""
 
-    def __init__(self, path: Path, cause: str, record: str | None = None) -> None:
-        self.path, self.name, self.record, self.cause = Path(path), Path(path).name, record, cause
-        where = f"record {record[:12]} of " if record else ""
-        super().__init__("db", f"{where}{path} is damaged ({cause})",
-                         "restore it from a copy, or rebuild it with `balloon precompute`")
+    def __init__(self, path: Path, cause: str, record: str | None = None,
+                 records: tuple[str, ...] | list[str] = ()) -> None:
+        self.path, self.name, self.cause = Path(path), Path(path).name, cause
+        self.records = tuple(records) or ((record,) if record else ())
+        self.record = record or (self.records[0] if self.records else None)
+        super().__init__("db", f"{self._where()}{path} {self._verb()} damaged ({cause})",
+                         salvage_hint(path))
+
+    def _where(self) -> str:
+        return _records_of(self.records)
+
+    def _verb(self) -> str:
+        return "are" if len(self.records) > 1 else "is"
 
     def public(self) -> str:
         """The message with the file's name only (for HTTP answers)."""
-        where = f"record {self.record[:12]} of " if self.record else ""
-        return f"{where}the curve database {self.name} is damaged ({self.cause})"
+        return f"{self._where()}the curve database {self.name} {self._verb()} damaged " \
+               f"({self.cause})"
 
 
 class StoreWriteError(BalloonError):

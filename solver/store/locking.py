@@ -1,7 +1,12 @@
-"""The single-writer lock: an exclusive ``fcntl.flock`` on the sidecar ``<db>.lock`` file.
+"""The single-writer lock: an exclusive ``fcntl.flock`` on the sidecar ``<db>.lock`` file
+(and the precompute job's ``<db>.job.lock``).
 
 The kernel drops the lock when its process ends, however it ends (kill -9 included),
 so a crashed writer never leaves the database locked. Readers never take it.
+
+Locks belong to the real file: a database named through a symbolic link is opened at
+the link's target (``database_path``), so its writes replace the target (not the link)
+and two names of one file share its locks.
 """
 
 from __future__ import annotations
@@ -13,18 +18,40 @@ from pathlib import Path
 
 from solver.store.errors import StoreBusyError, StoreWriteError
 
+WRITER_SUFFIX = ".lock"
+JOB_SUFFIX = ".job.lock"
 
-def lock_path(db_path: Path) -> Path:
-    return db_path.with_name(db_path.name + ".lock")
+
+def database_path(path: str | os.PathLike) -> Path:
+    """The file a database path names: a symbolic link (or a chain of them) resolved to
+    its target, so that a publish renames over the real file and the locks are the real
+    file's; any other path as given (its messages keep the user's words)."""
+    path = Path(path)
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
+def lock_path(db_path: Path, suffix: str = WRITER_SUFFIX) -> Path:
+    """The sidecar lock file of ``db_path``: the writer's, or with JOB_SUFFIX the job's."""
+    return db_path.with_name(db_path.name + suffix)
+
+
+def _database_of(lock: Path) -> Path:
+    """The database a lock file belongs to: its name less the lock's suffix."""
+    for suffix in (JOB_SUFFIX, WRITER_SUFFIX):
+        if lock.name.endswith(suffix) and len(lock.name) > len(suffix):
+            return lock.with_name(lock.name[:-len(suffix)])
+    return lock
 
 
 class WriterLock:
     """Exclusive lock; ``acquire`` waits up to ``timeout_s`` (default: not at all), then
-    raises StoreBusyError naming the holder's pid. ``what`` words the message."""
+    raises StoreBusyError naming the database and the holder's pid. ``what`` words the
+    message."""
 
     def __init__(self, path: Path, what: str = "being written by another process") -> None:
         self.path = Path(path)
         self.what = what
+        self.database = _database_of(self.path)
         self._fd: int | None = None
 
     @property
@@ -48,7 +75,7 @@ class WriterLock:
                 holder = os.read(fd, 64).decode("ascii", "replace").strip() or "?"
                 os.close(fd)
                 raise StoreBusyError(
-                    f"{self.path.with_suffix('')} is {self.what} (pid {holder}); a database "
+                    f"{self.database} is {self.what} (pid {holder}); a database "
                     f"has a single writer and one precompute job at a time: wait for it to "
                     f"finish or stop it") from None
         os.ftruncate(fd, 0)
