@@ -120,10 +120,10 @@ def _title(ax: Any, prediction: dict[str, Any], extra: str = "") -> None:
              f"{d['body_material']['id']} / {d['membrane_material']['id']}{extra}"]
     validity = prediction["validity"]
     if not validity["in_domain"]:
-        from surrogate.predictor import POINT_FLAGS
+        from surrogate.predictor import NOT_ABOUT_THE_DESIGN
 
-        lines.append("outside the model's fitted domain: "
-                     + ", ".join(f for f in validity["flags"] if f not in POINT_FLAGS))
+        lines.append("outside the model's fitted domain: " + ", ".join(
+            f for f in validity["flags"] if f not in NOT_ABOUT_THE_DESIGN))
     ax.set_title("\n".join(lines), fontsize=9)
 
 

@@ -76,12 +76,19 @@ POINT_FLAGS = frozenset({
     "pressure_outside_calibration"})
 
 
+# Flags about the model's file, not about the design: a saved calibrated model written
+# before files carried their checksum.
+FILE_FLAGS = frozenset({"saved_without_checksum"})
+NOT_ABOUT_THE_DESIGN = POINT_FLAGS | FILE_FLAGS
+
+
 def design_in_domain(validity: dict) -> bool:
     """Whether the design is inside the model's domain: the model says so, or its only
     flags are about asked points (POINT_FLAGS: past the FE's range, a band cut there, a
-    force withheld, ...), which keep their own flags."""
+    force withheld, ...) or about the model's file (FILE_FLAGS), which keep their own
+    flags."""
     flags = set(validity.get("flags", ()))
-    return bool(validity.get("in_domain", False)) or not flags - POINT_FLAGS
+    return bool(validity.get("in_domain", False)) or not flags - NOT_ABOUT_THE_DESIGN
 
 
 def one_signed(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, sign: float

@@ -34,7 +34,8 @@ def calibration():
 def client(tmp_path, calibration):
     save_model(calibration, "lab1", tmp_path / "models")
     old = json.loads((tmp_path / "models" / "lab1.json").read_text())
-    del old["domain"]["fe_range"]  # as older code saved it
+    del old["domain"]["fe_range"]  # as older code saved it: without its FE range, and
+    del old["content_sha256"]      # without the checksum (files saved before 2026-12-06)
     (tmp_path / "models" / "old1.json").write_text(json.dumps(old))
     app = create_app(settings_for(tmp_path, surrogate_path=DATA / "surrogate.json",
                                   emulator_path=DATA / "emulator.json"))
