@@ -4,12 +4,15 @@ its intact records to a new file, naming the damaged ones."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from test_store import record_for
 
 from service.cli import main
 from solver.store import CurveStore, DamagedStoreError, StoreBusyError, integrity
+from solver.store.errors import StoreWriteError
 
 LENGTHS_MM = (4.1, 5.1, 7.1, 9.1)
 
@@ -61,6 +64,25 @@ def test_a_database_named_through_a_symlink_is_written_at_its_target(tmp_path):
         CurveStore(link, mode="a")
     with CurveStore(link, mode="a"), pytest.raises(StoreBusyError, match="single writer"):
         CurveStore(real, mode="a")
+
+
+def test_a_database_with_a_second_hard_link_is_refused_for_writing_and_kept(tmp_path,
+                                                                            capsys):
+    # a write renames a new file over one name: the other kept the former records and
+    # its own locks, two databases where there was one (an audit of the thirty-sixth
+    # session; a symbolic link is followed instead)
+    first, second = tmp_path / "a.h5", tmp_path / "b.h5"
+    with CurveStore(first, mode="a") as db:
+        db.put(record_for(L_mm=4.1))
+    os.link(first, second)
+    with pytest.raises(StoreWriteError, match="2 names"):
+        CurveStore(second, mode="a")
+    with CurveStore(second) as db:              # reading it is fine
+        assert len(db) == 1
+    assert main(["db", "seal", str(second)]) != 0
+    err = capsys.readouterr().err
+    assert "hard links" in err and len(err.strip().splitlines()) == 1
+    assert os.stat(first).st_ino == os.stat(second).st_ino   # nothing was split
 
 
 def test_seal_refuses_a_database_with_a_damaged_record_naming_it(damaged, capsys):

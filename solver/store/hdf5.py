@@ -51,7 +51,7 @@ from solver.errors import InputError, NotFoundError
 from solver.settings import SolverSettings
 from solver.store import integrity, schema
 from solver.store.errors import READ_ERRORS, DamagedStoreError, StoreWriteError, cause_of
-from solver.store.locking import WriterLock, database_path, lock_path
+from solver.store.locking import WriterLock, database_path, lock_path, refuse_other_names
 from solver.store.record import Record, utc_now
 
 MODES = ("r", "a")
@@ -118,6 +118,7 @@ class CurveStore:
                 self._lock.acquire()
         try:
             if mode == "a":
+                refuse_other_names(self.path)
                 with self._locked():
                     self._remove_orphans()  # before the first put, ``_file`` reads
                     if not self.path.exists():
@@ -397,6 +398,8 @@ class CurveStore:
         write (disk full, read-only) is then one clean OSError, where HDF5 writing to a
         full disk leaves file handles it can neither flush nor close (and may crash the
         process at exit)."""
+        if not create:
+            refuse_other_names(self.path)
         self._remove_orphans()
         image = io.BytesIO()
         sealed = True     # the source is what this code published: its index is current

@@ -11,6 +11,7 @@ and two names of one file share its locks.
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import os
 import time
@@ -28,6 +29,22 @@ def database_path(path: str | os.PathLike) -> Path:
     file's; any other path as given (its messages keep the user's words)."""
     path = Path(path)
     return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
+def refuse_other_names(path: Path) -> None:
+    """StoreWriteError when the database file has other names (hard links): a publish
+    renames a new file over this name only, so the others would keep the former records
+    and their own locks -- two databases where there was one (a symbolic link is followed
+    instead, ``database_path``). Nothing is written; a missing file passes."""
+    try:
+        names = path.stat().st_nlink
+    except FileNotFoundError:
+        return
+    if names > 1:
+        raise StoreWriteError(path, OSError(errno.EMLINK, (
+            f"it has {names} names (hard links); a write would replace the file under this "
+            "name only and the others would keep the former records: copy it to a file of "
+            "its own (cp) and write to that")))
 
 
 def lock_path(db_path: Path, suffix: str = WRITER_SUFFIX) -> Path:
