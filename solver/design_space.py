@@ -69,8 +69,9 @@ REDUCED_RATIO_RANGE = (STIFFNESS_SCALE_RANGE[0] / STIFFNESS_SCALE_RANGE[1],
                        STIFFNESS_SCALE_RANGE[1] / STIFFNESS_SCALE_RANGE[0])
 # A material is "preset p scaled by s" when its alpha equal p's and its stress is s x p's
 # within this relative tolerance at every stretch of RECOGNITION_STRETCHES (uniaxial,
-# nominal), s the ratio of the initial shear moduli: JSON round trips and 4-digit inputs
-# stay inside, and so does a term that carries no stress there written to 3 digits
+# nominal), s the ratio of the term carrying the initial shear modulus: JSON round trips
+# and 4-digit inputs stay inside, and so does a term that carries no stress there written
+# to 3 digits
 # (Ecoflex's mu = 7.879e-9 kPa at alpha 13.02 as 1.2e-8 for x1.5: 1.5 % off, refused until
 # 2026-12-06 when each mu was held to 1e-3 of its own).
 SCALE_TOLERANCE = 1e-3
@@ -133,7 +134,11 @@ def recognise(material: OgdenMaterial) -> tuple[str, float] | None:
         if any(abs(a - b) > 1e-9 * max(1.0, abs(b))
                for (a, _), (b, _) in zip(terms, base_terms)):
             continue
-        s = material.mu0_kpa / base.mu0_kpa
+        # s from the term that carries the initial shear modulus (exact for a preset
+        # scaled as scaled_material writes it: 100 stays 100, a limit of the box)
+        dominant = max(range(len(base_terms)), key=lambda i: abs(
+            base_terms[i][0] * base_terms[i][1]))
+        s = terms[dominant][1] / base_terms[dominant][1]
         ratio = uniaxial_stress_kpa(material) / uniaxial_stress_kpa(base)
         if s > 0 and bool(np.all(np.abs(ratio / s - 1.0) <= SCALE_TOLERANCE)):
             return preset_id, float(s)
