@@ -330,13 +330,19 @@ def test_an_out_of_range_field_is_refused_beside_it_with_its_allowed_range(watch
     assert page.get_attribute("#L_mm", "aria-invalid") is None
 
 
+def _set_largest(page, field: str, value: str, ready: str) -> None:
+    """Type the curve's largest pressure or volume, commit it, and wait until ``ready``
+    (a JavaScript condition on window.explorer) holds."""
+    page.fill(field, value)
+    page.dispatch_event(field, "change")
+    page.wait_for_function(ready)
+
+
 def test_validity_flags_and_messages_are_shown_in_words(watched, server):
     page = open_explorer(watched, server.url)
     page.fill("#t_mm", "0.55")
-    page.fill("#p_max", "3000")
-    page.dispatch_event("#p_max", "change")
-    page.wait_for_function("window.explorer.prediction"
-                           " && window.explorer.prediction.pressure_pa.at(-1) === 3000")
+    _set_largest(page, "#p_max", "3000", "window.explorer.prediction"
+                 " && window.explorer.prediction.pressure_pa.at(-1) === 3000")
     api = httpx.post(server.url + "/v1/predict", json={
         "design": {"L_mm": 7.1, "t_mm": 0.55}, "pressures_pa": grid(3000.0)}).json()
     assert api["validity"]["messages"], "the design should be flagged past the FE range"
@@ -446,10 +452,9 @@ def test_where_the_curve_ends_is_said_with_the_servers_number(watched, server):
     # "above 38.8 ul" (an audit of the thirty-fifth session)
     page = open_explorer(watched, server.url)
     page.select_option("#ask_axis", "volume_ul")
-    page.fill("#v_max", "200")
-    page.dispatch_event("#v_max", "change")
-    page.wait_for_function("window.explorer.request && window.explorer.request.volumes_ul"
-                           " && window.explorer.request.volumes_ul.at(-1) === 200"
-                           " && window.explorer.prediction.angle_deg.includes(null)")
+    _set_largest(page, "#v_max", "200", "window.explorer.request"
+                 " && window.explorer.request.volumes_ul"
+                 " && window.explorer.request.volumes_ul.at(-1) === 200"
+                 " && window.explorer.prediction.angle_deg.includes(null)")
     end = page.evaluate("window.explorer.prediction.validity.fe_limit_volume_ul")
     assert f"The curve ends at {end:.2f} ul" in page.locator("#validity").inner_text()

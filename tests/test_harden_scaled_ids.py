@@ -71,3 +71,16 @@ def test_a_term_that_carries_no_stress_may_be_written_to_three_digits():
     assert recognise(typed) == ("ecoflex_00_30", pytest.approx(1.5, rel=1e-3))
     wrong = make_material("lab2", [1.862, 1.5 * 1.5 * 7.879e-9], [3.034, 13.02])
     assert recognise(wrong) is None
+
+
+def test_the_recognitions_stress_is_the_neo_hookean_one_for_alpha_2():
+    # an independent reference: one Ogden term with alpha = 2 is neo-Hookean with shear
+    # modulus mu, whose uniaxial nominal stress is mu (l - l^-2) (Treloar)
+    import numpy as np
+
+    from solver.design_space import uniaxial_stress_kpa
+    from solver.materials import make_material
+
+    stretch = np.array([1.1, 1.5, 2.0, 3.0, 4.0])
+    stress = uniaxial_stress_kpa(make_material("nh", [3.0], [2.0]), stretch)
+    assert stress == pytest.approx(3.0 * (stretch - stretch**-2.0), rel=1e-12)
