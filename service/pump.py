@@ -26,11 +26,12 @@ import numpy as np
 
 from solver.errors import InputError
 from surrogate.hydraulics import Inlet
+from surrogate.predictor import FE_PRESSURE_STOP_PA, pressure_stop_reason
 
 # request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
 # schema's Field limits and the CLI's checks)
 AXES: dict[str, tuple[float, float, str]] = {
-    "pressures_pa": (0.0, 20000.0, "Pa"),
+    "pressures_pa": (0.0, FE_PRESSURE_STOP_PA, "Pa"),   # the default FE's pressure stop
     "volumes_ul": (0.0, 10000.0, "ul"),
     "times_s": (0.0, 1e5, "s"),
 }
@@ -199,7 +200,8 @@ def _cut_at_pressure_stop(body: dict[str, Any], fields: tuple[str, ...] = ANSWER
         values = body.get(name)
         if values is not None:
             body[name] = [None if cut else v for v, cut in zip(values, over, strict=True)]
-    body["validity"]["flags"].append("past_fe_pressure_stop")
+    if "past_fe_pressure_stop" not in body["validity"]["flags"]:   # the emulator says it too
+        body["validity"]["flags"].append("past_fe_pressure_stop")
     body["validity"]["messages"].append(
         f"{int(over.sum())} {what} need a chamber pressure above {p_stop:g} Pa, where the "
         "FE stops (SolverSettings.max_pressure_pa) and the largest pressure the service "
@@ -211,7 +213,8 @@ def _range_within_pressure_stop(body: dict[str, Any], surrogate: Any, design: An
     """In place: where the model's FE range would end past the FE's pressure stop, it ends
     at the stop, with the angle and injected volume the model gives there: layers 50x
     their presets were told an FE range to 105843 Pa while every number past 20 kPa was
-    withheld (past_fe_pressure_stop)."""
+    withheld (past_fe_pressure_stop). The emulator ends its range there itself
+    (``pressure_stop_angle``); this is for the models that do not."""
     p_stop = AXES["pressures_pa"][1]
     validity = body["validity"]
     limit = validity.get("fe_limit_pa")
@@ -223,9 +226,7 @@ def _range_within_pressure_stop(body: dict[str, Any], surrogate: Any, design: An
     volume = getattr(at_stop, "volume_ul", None)
     if "fe_limit_volume_ul" in validity:
         validity["fe_limit_volume_ul"] = None if volume is None else float(volume[0])
-    validity["fe_stop_reason"] = (f"the FE's pressure stop ({p_stop:g} Pa, "
-                                  "SolverSettings.max_pressure_pa), reached before the end "
-                                  f"the model gives ({limit:.0f} Pa)")
+    validity["fe_stop_reason"] = pressure_stop_reason(limit)
 
 
 def _no_volume(model: str) -> InputError:

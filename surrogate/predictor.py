@@ -30,6 +30,7 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
+from solver.settings import SolverSettings
 
 MAX_POINTS = 10_000_000  # the most numbers one request may ask for
 
@@ -67,12 +68,24 @@ def band_within_fe(lower: np.ndarray, upper: np.ndarray, limit_deg: float,
     return np.clip(lo, -limit_deg, limit_deg), np.clip(hi, -limit_deg, limit_deg)
 
 
+FE_PRESSURE_STOP_PA = SolverSettings().max_pressure_pa   # the default FE's last pressure
+
+
+def pressure_stop_reason(end_pa: float) -> str:
+    """Why an FE range ends at the FE's pressure stop (FE_PRESSURE_STOP_PA) rather than at
+    ``end_pa`` (Pa), where the model's curves would end: every model says it alike."""
+    return (f"the FE's pressure stop ({FE_PRESSURE_STOP_PA:g} Pa, "
+            "SolverSettings.max_pressure_pa), reached before the end the model gives "
+            f"({end_pa:.0f} Pa)")
+
+
 # Flags about some of the asked points, not about the design: they never make
 # ``validity["in_domain"]`` false, which says whether the design itself is inside the
 # model's domain (the emulator's box, the exponential model's fitted family ranges).
 POINT_FLAGS = frozenset({
     "past_fe_range", "pressure_beyond_fe", "angle_beyond_fe", "band_capped_at_fe_range",
     "force_band_too_wide", "force_past_fe_range", "past_pressure_maximum",
+    "past_fe_pressure_stop",
     "pressure_outside_calibration"})
 
 

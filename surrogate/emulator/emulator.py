@@ -24,7 +24,7 @@ and with the square of the length scale. Volume scales with the cube of the leng
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -54,11 +54,13 @@ from surrogate.emulator.features import (
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES, spline, spread_variance
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
 from surrogate.predictor import (
+    FE_PRESSURE_STOP_PA,
     InversePrediction,
     Prediction,
     band_within_fe,
     number_array,
     one_signed,
+    pressure_stop_reason,
 )
 from surrogate.volume_control import by_volume
 
@@ -406,12 +408,30 @@ class CurveBand:
     # blends in the early-ended curves (early_ended_nodes): the force model's angle
     # (None: the answer's own)
     force_reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    # the range ends at the FE's pressure stop (pressure_stop_angle), not where the
+    # curves here end: the points past it are flagged past_fe_pressure_stop too
+    pressure_stopped: bool = False
 
     @property
     def limit_pressure_pa(self) -> float:
         return float(np.interp(self.limit_angle_deg, FINE_ANGLES_DEG, self.pressure_pa))
 
 
+
+
+def pressure_stop_angle(limit_deg: float, angles_deg: np.ndarray,
+                        pressure_red_pa: np.ndarray, pressure_scale: float) -> float | None:
+    """The angle (deg) where a design's emulated mean p(theta) (``pressure_red_pa`` at
+    ``angles_deg``, reduced: the membrane at s = 1, non-decreasing) reaches the FE's
+    pressure stop, FE_PRESSURE_STOP_PA / ``pressure_scale`` reduced, when that comes
+    before the range's end ``limit_deg``; None when it does not. The memoised curve is
+    shared by every pressure scale of a reduced design, so the stop is applied per
+    question: layers 50x their presets were answered to 105843 Pa in Python while the
+    default FE stops at 20 kPa."""
+    stop_red = FE_PRESSURE_STOP_PA / pressure_scale
+    if float(np.interp(limit_deg, angles_deg, pressure_red_pa)) <= stop_red:
+        return None
+    return float(np.interp(stop_red, pressure_red_pa, angles_deg))
 
 
 def floored_band(angle: np.ndarray, lower: np.ndarray, upper: np.ndarray
@@ -611,6 +631,12 @@ class Emulator:
             kept = memo.get_or_make(key + (bool(volume_band),),
                                     lambda: self._curve_band(point, u, z, volume_band))
         pair_key, band = kept
+        at_stop = pressure_stop_angle(band.limit_angle_deg, FINE_ANGLES_DEG, band.pressure_pa,
+                                      point.pressure_scale)
+        if at_stop is not None:
+            band = replace(band, limit_angle_deg=at_stop, pressure_stopped=True,
+                           stop_reason=pressure_stop_reason(
+                               band.limit_pressure_pa * point.pressure_scale))
         return self.pairs[pair_key], band
 
     def _curve_band(self, point: BoxPoint, u: np.ndarray, z: float, volume_band: bool
@@ -797,7 +823,8 @@ class Emulator:
             angle, lower, upper, p_red = model.by_volume(nodes, v_red, z)
             pressure, volume = p_red * point.pressure_scale, x.copy()
         lower, upper = floored_band(angle, lower, upper)
-        v_limit, stop = self._balance_range_end(model, nodes, v_limit, z)
+        v_limit, stop, pressure_stopped = self._balance_range_end(model, nodes, v_limit, z,
+                                                                  point.pressure_scale)
         past = v_red > v_limit * (1 + 1e-12)
         for a in (angle, lower, upper, pressure if axis == "volume" else volume):
             a[past] = np.nan
@@ -828,6 +855,8 @@ class Emulator:
                               messages, f"{axis}(s)")
         if past.any():
             flags.insert(0, "past_fe_range")
+            if pressure_stopped:
+                flags.insert(1, "past_fe_pressure_stop")
             what = (f"pressure(s) above {limit_pa:.0f} Pa" if axis == "pressure" else
                     f"volume(s) above {v_limit * ls3:.1f} ul")
             messages.insert(0, f"{int(past.sum())} {what} are past the FE's range for this "
@@ -845,26 +874,35 @@ class Emulator:
                                 validity, force, volume)
 
     @staticmethod
-    def _balance_range_end(model: BalanceModel, nodes: tuple, v_limit: float, z: float
-                           ) -> tuple[float, str]:
+    def _balance_range_end(model: BalanceModel, nodes: tuple, v_limit: float, z: float,
+                           pressure_scale: float) -> tuple[float, str, bool]:
         """Where the FE's range ends for a design the balance model answers (reduced
-        volume, ul) and why: the volume stop, or the FE's angle stop where the balance
-        model's mean reaches it first. Answered past 90 deg, a design near the balance
-        with a stiff body read 122 and 135 deg at 200 and 480 ul, its band cut to [90, 90]
-        (an audit of the thirty-fifth session)."""
+        volume, ul) and why: the volume stop, or the FE's angle stop or its pressure stop
+        (FE_PRESSURE_STOP_PA, at ``pressure_scale``) where the balance model's mean
+        reaches one first. Answered past 90 deg, a design near the balance with a stiff
+        body read 122 and 135 deg at 200 and 480 ul, its band cut to [90, 90] (an audit
+        of the thirty-fifth session). The third item: whether it is the pressure stop."""
         top = SolverSettings().max_angle_deg
         grid = np.linspace(0.0, v_limit, 241)[1:]
-        a = np.abs(model.by_volume(nodes, grid, z)[0])
-        over = np.flatnonzero(a >= top)
-        if not over.size:
+        angle, _, _, p_red = model.by_volume(nodes, grid, z)
+        ends = []   # (volume, why) of each stop the mean reaches before the volume stop
+        for x, stop, why in (
+                (np.abs(angle), top, f"the FE's angle stop ({top:g} deg, "
+                 "SolverSettings.max_angle_deg), which the balance model's curve reaches "
+                 "before the volume stop"),
+                (p_red * pressure_scale, FE_PRESSURE_STOP_PA, None)):
+            over = np.flatnonzero(x >= stop)
+            if over.size:
+                i = int(over[0])
+                v_end = (float(grid[0]) if i == 0 else
+                         float(np.interp(stop, x[i - 1:i + 1], grid[i - 1:i + 1])))
+                ends.append((v_end, why or pressure_stop_reason(
+                    float(np.nanmax(p_red)) * pressure_scale), why is None))
+        if not ends:
             return v_limit, (f"the FE's volume stop ({SolverSettings().max_volume_ul:g} ul, "
                              "SolverSettings.max_volume_ul), where the FE curves near the "
-                             "balance end")
-        i = int(over[0])
-        v_end = (float(grid[0]) if i == 0 else
-                 float(np.interp(top, a[i - 1:i + 1], grid[i - 1:i + 1])))
-        return v_end, (f"the FE's angle stop ({top:g} deg, SolverSettings.max_angle_deg), "
-                       "which the balance model's curve reaches before the volume stop")
+                             "balance end"), False
+        return min(ends)
 
     @staticmethod
     def _volume_curves(cb: CurveBand, z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -942,6 +980,8 @@ class Emulator:
                 f"({cb.stop_reason}): no angle is given there; an FE solve of this "
                 "design (POST /v1/solve; its max_angle_deg and max_volume_ul can be raised) "
                 "tells where its curve really ends")
+            if cb.pressure_stopped:
+                flags.append("past_fe_pressure_stop")
         near = cb.failed_distance
         if near < NEAR_FAILED_RADIUS:
             flags.append("near_early_ended_fe_curves")
@@ -1021,6 +1061,8 @@ class Emulator:
                                                 * ls3)}
         if past.any():
             validity["flags"].append("past_fe_range")
+            if cb.pressure_stopped:
+                validity["flags"].append("past_fe_pressure_stop")
             validity["messages"].append(
                 f"no pressure for {int(past.sum())} angle(s) past the FE's range, which ends "
                 f"at {limit_deg:.1f} deg for this design ({cb.stop_reason})")
@@ -1088,6 +1130,8 @@ class Emulator:
                 pt = points[i]
                 limit = pe.fe_range(u[row], volumes[row], pt.length_scale, ends[row])[0]
                 pm, pl, pu = (_with_origin(c[row]) for c in curves)
+                at_stop = pressure_stop_angle(limit, ANGLES0, pm, pt.pressure_scale)
+                limit = limit if at_stop is None else at_stop
                 p_lim = float(np.interp(limit, ANGLES0, pm))
                 q = pressure_pa / pt.pressure_scale
                 if q <= p_lim:
