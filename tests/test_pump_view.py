@@ -111,6 +111,39 @@ def test_inverse_round_trip_by_volume_and_time(shipped_client):
     np.testing.assert_allclose(fwd["pressure_pa"], inv["pressure_pa"], rtol=0.01)
 
 
+# A random box design near the Ecoflex/Ecoflex stiffness balance (the audit of the
+# thirty-seventh session) and its default FE curve (solver.solve, 2026-12-06): 10 and 30 deg
+# at 21.13 and 85.39 ul (936 and 1153 Pa); the curve ends at the volume stop at 37.6 deg.
+BALANCE_DESIGN = {"L_mm": 6.74, "t_mm": 0.522, "T_mm": 0.603, "b_mm": 1.97, "h_mm": 0.208,
+                  "body_material": "ecoflex_00_30*1.065",
+                  "membrane_material": "ecoflex_00_30*1.017"}
+
+
+def test_the_inverse_near_the_stiffness_balance_reads_the_model_the_forward_answer_reads(
+        shipped_client):
+    # the forward answers come from the balance model there, the inverse came from the
+    # per-direction GPs: 28.5 and 125.2 ul for 10 and 30 deg, which the answer by volume
+    # read as 13.8 and 32.7 deg
+    inv = shipped_client.post("/v1/inverse/pressure", json={
+        "design": BALANCE_DESIGN, "angles_deg": [10, 30], "flow_ul_s": 2.5}).json()
+    assert "near_stiffness_balance" in inv["validity"]["flags"]
+    np.testing.assert_allclose(inv["volume_ul"], [21.13, 85.39], rtol=0.1)
+    np.testing.assert_allclose(inv["pressure_pa"], [936, 1153], rtol=0.05)
+    for ask in ({"volumes_ul": inv["volume_ul"]},
+                {"times_s": inv["time_s"], "flow_ul_s": 2.5},
+                {"pressures_pa": inv["pressure_pa"]}):
+        fwd = shipped_client.post("/v1/predict", json={"design": BALANCE_DESIGN, **ask}).json()
+        assert "near_stiffness_balance" in fwd["validity"]["flags"]
+        np.testing.assert_allclose(fwd["angle_deg"], [10, 30], atol=0.05)
+    assert np.all(np.array(inv["volume_lower_ul"]) < inv["volume_ul"])
+    assert np.all(np.array(inv["volume_ul"]) < inv["volume_upper_ul"])
+    # an angle the design does not reach before the FE's volume stop: none, flagged
+    past = shipped_client.post("/v1/inverse/pressure", json={
+        "design": BALANCE_DESIGN, "angles_deg": [60]}).json()
+    assert past["volume_ul"] == [None] and past["pressure_pa"] == [None]
+    assert "past_fe_range" in past["validity"]["flags"]
+
+
 def test_inverse_volume_agrees_with_the_fe_record_at_a_database_design(shipped_client, emulator):
     record = next(r for r in database_records(emulator, every=7)
                   if r.curve.status == "complete" and r.curve.angle_deg[-1] >= 60)
