@@ -73,7 +73,7 @@ def band_within_fe(lower: np.ndarray, upper: np.ndarray, limit_deg: float,
 POINT_FLAGS = frozenset({
     "past_fe_range", "pressure_beyond_fe", "angle_beyond_fe", "band_capped_at_fe_range",
     "force_band_too_wide", "force_past_fe_range", "past_pressure_maximum",
-    "pressure_outside_calibration"})
+    "pressure_outside_calibration", "force_at_free_tip_pressure"})
 
 
 # Flags about the model's file, not about the design: a saved calibrated model written

@@ -144,6 +144,29 @@ def test_the_inverse_near_the_stiffness_balance_reads_the_model_the_forward_answ
     assert "past_fe_range" in past["validity"]["flags"]
 
 
+def test_the_force_by_volume_or_time_says_which_force_it_is(shipped_client):
+    """The force an answer by volume or time gives is the blocked tip's at the chamber
+    pressure the free actuator reaches there; a lab that blocks the tip and runs the pump
+    reads more. Default FE of this random design (2026-12-06), free and tip="blocked": at
+    41.8 ul the free chamber is at 2284 Pa, the blocked tip pushes 0.481 mN at 2284 Pa but
+    0.611 mN at 41.8 ul (its chamber at 2530 Pa). The answer did not say which it gave."""
+    design = {"L_mm": 11.709, "t_mm": 0.738, "T_mm": 0.899, "b_mm": 2.195, "h_mm": 0.145,
+              "body_material": "pdms_1_10*1.397", "membrane_material": "ecoflex_00_30*1.245"}
+    for ask in ({"volumes_ul": [20.9, 41.8]}, {"times_s": [8.36, 16.72], "flow_ul_s": 2.5}):
+        ans = shipped_client.post("/v1/predict", json={"design": design, **ask}).json()
+        assert all(f is not None for f in ans["force_mn"])
+        assert "force_at_free_tip_pressure" in ans["validity"]["flags"]
+        said = " ".join(ans["validity"]["messages"])
+        assert "force_mn is the blocked tip's force at the chamber pressure the free" in said
+        # by pressure, at the chamber pressures answered, the same force: no flag there
+        by_p = shipped_client.post("/v1/predict", json={"design": design,
+                                                        "pressures_pa": ans["pressure_pa"]})
+        by_p = by_p.json()
+        np.testing.assert_allclose(by_p["force_mn"], ans["force_mn"], rtol=1e-9)
+        assert "force_at_free_tip_pressure" not in by_p["validity"]["flags"]
+        assert by_p["validity"]["in_domain"] and ans["validity"]["in_domain"]
+
+
 def test_inverse_volume_agrees_with_the_fe_record_at_a_database_design(shipped_client, emulator):
     record = next(r for r in database_records(emulator, every=7)
                   if r.curve.status == "complete" and r.curve.angle_deg[-1] >= 60)
