@@ -85,8 +85,7 @@ def pressure_stop_reason(end_pa: float) -> str:
 POINT_FLAGS = frozenset({
     "past_fe_range", "pressure_beyond_fe", "angle_beyond_fe", "band_capped_at_fe_range",
     "force_band_too_wide", "force_past_fe_range", "past_pressure_maximum",
-    "past_fe_pressure_stop",
-    "pressure_outside_calibration"})
+    "past_fe_pressure_stop", "pressure_outside_calibration", "force_at_free_tip_pressure"})
 
 
 # Flags about the model's file, not about the design: a saved calibrated model written

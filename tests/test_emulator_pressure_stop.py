@@ -101,3 +101,9 @@ def test_the_balance_model_stops_there_too(emulator):
     assert "pressure stop" in r.validity["fe_stop_reason"]
     by_p = emulator.predict(design, [0.5 * STOP_PA, 1.5 * STOP_PA])
     assert np.isnan(by_p.angle_deg[1])
+    # the inverse (the balance model's too): an angle the design reaches only past the stop
+    target = 0.999 * plain.validity["fe_limit_angle_deg"]
+    assert abs(r.validity["fe_limit_angle_deg"]) < abs(target)
+    inv = emulator.inverse(design, [target])
+    assert np.isnan(inv.pressure_pa[0]) and np.isnan(inv.volume_ul[0])
+    assert {"past_fe_range", "past_fe_pressure_stop"} <= set(inv.validity["flags"])

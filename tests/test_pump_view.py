@@ -111,6 +111,62 @@ def test_inverse_round_trip_by_volume_and_time(shipped_client):
     np.testing.assert_allclose(fwd["pressure_pa"], inv["pressure_pa"], rtol=0.01)
 
 
+# A random box design near the Ecoflex/Ecoflex stiffness balance (the audit of the
+# thirty-seventh session) and its default FE curve (solver.solve, 2026-12-06): 10 and 30 deg
+# at 21.13 and 85.39 ul (936 and 1153 Pa); the curve ends at the volume stop at 37.6 deg.
+BALANCE_DESIGN = {"L_mm": 6.74, "t_mm": 0.522, "T_mm": 0.603, "b_mm": 1.97, "h_mm": 0.208,
+                  "body_material": "ecoflex_00_30*1.065",
+                  "membrane_material": "ecoflex_00_30*1.017"}
+
+
+def test_the_inverse_near_the_stiffness_balance_reads_the_model_the_forward_answer_reads(
+        shipped_client):
+    # the forward answers come from the balance model there, the inverse came from the
+    # per-direction GPs: 28.5 and 125.2 ul for 10 and 30 deg, which the answer by volume
+    # read as 13.8 and 32.7 deg
+    inv = shipped_client.post("/v1/inverse/pressure", json={
+        "design": BALANCE_DESIGN, "angles_deg": [10, 30], "flow_ul_s": 2.5}).json()
+    assert "near_stiffness_balance" in inv["validity"]["flags"]
+    np.testing.assert_allclose(inv["volume_ul"], [21.13, 85.39], rtol=0.1)
+    np.testing.assert_allclose(inv["pressure_pa"], [936, 1153], rtol=0.05)
+    for ask in ({"volumes_ul": inv["volume_ul"]},
+                {"times_s": inv["time_s"], "flow_ul_s": 2.5},
+                {"pressures_pa": inv["pressure_pa"]}):
+        fwd = shipped_client.post("/v1/predict", json={"design": BALANCE_DESIGN, **ask}).json()
+        assert "near_stiffness_balance" in fwd["validity"]["flags"]
+        np.testing.assert_allclose(fwd["angle_deg"], [10, 30], atol=0.05)
+    assert np.all(np.array(inv["volume_lower_ul"]) < inv["volume_ul"])
+    assert np.all(np.array(inv["volume_ul"]) < inv["volume_upper_ul"])
+    # an angle the design does not reach before the FE's volume stop: none, flagged
+    past = shipped_client.post("/v1/inverse/pressure", json={
+        "design": BALANCE_DESIGN, "angles_deg": [60]}).json()
+    assert past["volume_ul"] == [None] and past["pressure_pa"] == [None]
+    assert "past_fe_range" in past["validity"]["flags"]
+
+
+def test_the_force_by_volume_or_time_says_which_force_it_is(shipped_client):
+    """The force an answer by volume or time gives is the blocked tip's at the chamber
+    pressure the free actuator reaches there; a lab that blocks the tip and runs the pump
+    reads more. Default FE of this random design (2026-12-06), free and tip="blocked": at
+    41.8 ul the free chamber is at 2284 Pa, the blocked tip pushes 0.481 mN at 2284 Pa but
+    0.611 mN at 41.8 ul (its chamber at 2530 Pa). The answer did not say which it gave."""
+    design = {"L_mm": 11.709, "t_mm": 0.738, "T_mm": 0.899, "b_mm": 2.195, "h_mm": 0.145,
+              "body_material": "pdms_1_10*1.397", "membrane_material": "ecoflex_00_30*1.245"}
+    for ask in ({"volumes_ul": [20.9, 41.8]}, {"times_s": [8.36, 16.72], "flow_ul_s": 2.5}):
+        ans = shipped_client.post("/v1/predict", json={"design": design, **ask}).json()
+        assert all(f is not None for f in ans["force_mn"])
+        assert "force_at_free_tip_pressure" in ans["validity"]["flags"]
+        said = " ".join(ans["validity"]["messages"])
+        assert "force_mn is the blocked tip's force at the chamber pressure the free" in said
+        # by pressure, at the chamber pressures answered, the same force: no flag there
+        by_p = shipped_client.post("/v1/predict", json={"design": design,
+                                                        "pressures_pa": ans["pressure_pa"]})
+        by_p = by_p.json()
+        np.testing.assert_allclose(by_p["force_mn"], ans["force_mn"], rtol=1e-9)
+        assert "force_at_free_tip_pressure" not in by_p["validity"]["flags"]
+        assert by_p["validity"]["in_domain"] and ans["validity"]["in_domain"]
+
+
 def test_inverse_volume_agrees_with_the_fe_record_at_a_database_design(shipped_client, emulator):
     record = next(r for r in database_records(emulator, every=7)
                   if r.curve.status == "complete" and r.curve.angle_deg[-1] >= 60)

@@ -89,6 +89,26 @@ def _pressure_at(v_red: np.ndarray, p_nodes: np.ndarray) -> np.ndarray:
                     np.exp(log_p))
 
 
+def first_reach(v_red: np.ndarray, angle_deg: np.ndarray, target_deg: np.ndarray
+                ) -> np.ndarray:
+    """For each signed target angle, the first volume of the rising grid ``v_red`` at which
+    the signed ``angle_deg`` on it reaches the target (as far from zero, the same sign),
+    linear between grid points; 0 for a target of 0, NaN where it is never reached."""
+    out = np.full(np.shape(target_deg), np.nan)
+    for i, t in enumerate(np.asarray(target_deg, float)):
+        if t == 0.0:
+            out[i] = 0.0
+            continue
+        signed = np.sign(t) * angle_deg
+        hit = np.flatnonzero(signed >= abs(t))
+        if not hit.size:
+            continue
+        k = int(hit[0])
+        out[i] = v_red[0] if k == 0 else float(np.interp(
+            abs(t), signed[k - 1:k + 1], v_red[k - 1:k + 1]))
+    return out
+
+
 def _increasing(p: np.ndarray) -> np.ndarray:
     """``p`` made strictly increasing (a flat stretch rises by 1e-9 relative a node)."""
     p = np.maximum.accumulate(p)
@@ -142,6 +162,32 @@ class BalanceModel:
         v_red = _volume_at(p_red, p_nodes)
         return (*self._band(v_red, angle, sd, z, self.band_scale_pressure), v_red)
 
+
+    def volumes_for(self, nodes: tuple, angle_deg: np.ndarray, v_end: float, z: float
+                    ) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
+        """The answer by volume read backwards: for each signed target angle (deg), the
+        first reduced injected volume (ul) up to ``v_end`` at which the model's angle
+        reaches it -- a syringe pump reaches it there first --, and the reduced chamber
+        pressure (Pa) at that volume; each as (value, lower, upper), NaN where the angle
+        is not reached by ``v_end``. The volume band is where the angle band by volume
+        reaches the target, the pressure band where the angle band by pressure does (the
+        bands ``by_volume`` and ``by_pressure`` give), so that each forward answer at the
+        value returned gives the target."""
+        angle, sd, p_nodes = nodes
+        grid = np.concatenate(([0.0], np.geomspace(VOLUME_NODES_UL[0] * 1e-3, v_end, 4000)))
+        mean = _angle_at(grid, angle)
+        target = np.asarray(angle_deg, float)
+        volume = first_reach(grid, mean, target)
+        edges = []
+        for scale in (self.band_scale_volume, self.band_scale_pressure):
+            half = z * scale * _angle_at(grid, sd)
+            a, b = first_reach(grid, mean - half, target), first_reach(grid, mean + half, target)
+            edges.append((np.fmin(a, b), np.where(np.isnan(a) | np.isnan(b), np.nan,
+                                                  np.fmax(a, b))))
+        (v_lo, v_hi), (pv_lo, pv_hi) = edges
+        pressure = tuple(np.where(np.isnan(v), np.nan, _pressure_at(np.nan_to_num(v), p_nodes))
+                         for v in (volume, pv_lo, pv_hi))
+        return (volume, v_lo, v_hi), pressure
 
     @staticmethod
     def _band(v_red: np.ndarray, angle: np.ndarray, sd: np.ndarray, z: float, scale: float

@@ -186,6 +186,15 @@ def force_backed(force: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.
 FORCE_FORMS = ("per_kpa", "secant_ratio", "angle_ratio")    # PairEmulator.force_form
 
 
+def balance_message(designs: int) -> str:
+    """What an answer near the stiffness balance is read from (its first message)."""
+    return ("this design sits near the balance of the two layers' stiffness, where both "
+            "balloon alike and the FE curve ends at the volume stop short of 90 deg (either "
+            "way round): answered by the signed angle at fixed injected volumes, "
+            f"interpolated across the balance from {designs} FE curves that end there "
+            "(docs/surrogate.md); ")
+
+
 @dataclass(frozen=True)
 class PairEmulator:
     """The emulator of one material pair (body, membrane).
@@ -810,11 +819,8 @@ class Emulator:
         force model where the design has a direction, none at the balance itself."""
         model = self.balance_models[point.group]
         z = z_value(level)
-        u = point.coordinates()
         ls3 = point.length_scale**3
-        v_limit = min(float(VOLUME_NODES_UL[-1]),
-                      BALANCE_VOLUME_MARGIN * SolverSettings().max_volume_ul / ls3)
-        nodes = model.nodes(u)
+        nodes = model.nodes(point.coordinates())
         if axis == "pressure":
             angle, lower, upper, v_red = model.by_pressure(nodes, x / point.pressure_scale, z)
             pressure, volume = x.copy(), v_red * ls3
@@ -823,8 +829,8 @@ class Emulator:
             angle, lower, upper, p_red = model.by_volume(nodes, v_red, z)
             pressure, volume = p_red * point.pressure_scale, x.copy()
         lower, upper = floored_band(angle, lower, upper)
-        v_limit, stop, pressure_stopped = self._balance_range_end(model, nodes, v_limit, z,
-                                                                  point.pressure_scale)
+        v_limit, stop, pressure_stopped, limit_pa, limit_angle = self._balance_limits(
+            model, nodes, point, z)
         past = v_red > v_limit * (1 + 1e-12)
         for a in (angle, lower, upper, pressure if axis == "volume" else volume):
             a[past] = np.nan
@@ -836,16 +842,8 @@ class Emulator:
                 f[past] = np.nan
         except InputError:
             pass    # at the balance itself: no direction, no force model
-        at_limit = model.by_volume(nodes, np.array([v_limit]), z)
-        limit_pa = float(at_limit[3][0]) * point.pressure_scale
-        top = SolverSettings().max_angle_deg
-        limit_angle = float(np.clip(at_limit[0][0], -top, top))
         flags = ["near_stiffness_balance"]
-        messages = [f"this design sits near the balance of the two layers' stiffness, "
-                    "where both balloon alike and the FE curve ends at the volume stop "
-                    "short of 90 deg (either way round): answered by the signed angle at "
-                    "fixed injected volumes, interpolated across the balance from "
-                    f"{model.designs} FE curves that end there (docs/surrogate.md); "
+        messages = [balance_message(model.designs)
                     + ("no force is emulated where the direction is undecided; "
                        if force is None else "the blocked-tip force is the force model's "
                        "for the direction the design bends; ")
@@ -872,6 +870,60 @@ class Emulator:
         lower, upper = band_within_fe(lower, upper, SolverSettings().max_angle_deg, validity)
         return self._prediction(design, point, pressure, (angle, lower, upper), level,
                                 validity, force, volume)
+
+    def _balance_limits(self, model: BalanceModel, nodes: tuple, point: BoxPoint, z: float
+                        ) -> tuple[float, str, bool, float, float]:
+        """The FE's range of a design the balance model answers: (its end as a reduced
+        injected volume in ul, why it ends there, whether that is the FE's pressure stop,
+        the chamber pressure in Pa and the signed angle in deg there)."""
+        v_stop = min(float(VOLUME_NODES_UL[-1]),
+                     BALANCE_VOLUME_MARGIN * SolverSettings().max_volume_ul
+                     / point.length_scale**3)
+        v_limit, stop, pressure_stopped = self._balance_range_end(model, nodes, v_stop, z,
+                                                                  point.pressure_scale)
+        at_limit = model.by_volume(nodes, np.array([v_limit]), z)
+        top = SolverSettings().max_angle_deg
+        return (v_limit, stop, pressure_stopped, float(at_limit[3][0]) * point.pressure_scale,
+                float(np.clip(at_limit[0][0], -top, top)))
+
+    def _balance_inverse(self, design: Design, point: BoxPoint, angles: np.ndarray,
+                         level: float) -> InversePrediction:
+        """The inverse near the stiffness balance, from the balance model that answers by
+        pressure and by volume there (``BalanceModel.volumes_for``): for each signed
+        angle the chamber pressure (Pa) and injected volume (ul) where the model's angle
+        first reaches it, with their bands; none where it is not reached within the FE's
+        range (the volume stop, or the angle stop). The per-direction GPs' inverse, used
+        here until 2026-12-06, gave 28.5 and 125 ul for 10 and 30 deg where the FE needs
+        21.1 and 85.4 ul, and the answer by those volumes read 13.8 and 32.7 deg (an
+        audit of the thirty-seventh session)."""
+        model = self.balance_models[point.group]
+        z = z_value(level)
+        ls3, s = point.length_scale**3, point.pressure_scale
+        nodes = model.nodes(point.coordinates())
+        v_limit, stop, pressure_stopped, limit_pa, limit_angle = self._balance_limits(
+            model, nodes, point, z)
+        volumes, pressures = model.volumes_for(nodes, angles, v_limit, z)
+        validity: dict[str, object] = {
+            "in_domain": True, "flags": ["near_stiffness_balance"],
+            "messages": [balance_message(model.designs) + "the injected volume and chamber "
+                         "pressure are where its angle first reaches each target; an FE "
+                         "solve (POST /v1/solve) gives this design's own curve"],
+            "fe_limit_pa": limit_pa, "fe_limit_angle_deg": limit_angle,
+            "fe_stop_reason": stop, "fe_limit_volume_ul": v_limit * ls3}
+        unreached = np.isnan(volumes[0])
+        if unreached.any():
+            validity["flags"].insert(0, "past_fe_range")
+            if pressure_stopped:
+                validity["flags"].insert(1, "past_fe_pressure_stop")
+            validity["messages"].insert(
+                0, f"no pressure for {int(unreached.sum())} angle(s) not reached within the "
+                   f"FE's range, which ends at {limit_angle:.1f} deg for this design ({stop})")
+        return InversePrediction(design=design, angle_deg=angles, pressure_pa=pressures[0] * s,
+                                 lower_pa=pressures[1] * s, upper_pa=pressures[2] * s,
+                                 level=level, validity=validity, model=self.name,
+                                 form="emulator", provenance=dict(self.provenance),
+                                 volume_ul=volumes[0] * ls3, volume_lower_ul=volumes[1] * ls3,
+                                 volume_upper_ul=volumes[2] * ls3)
 
     @staticmethod
     def _balance_range_end(model: BalanceModel, nodes: tuple, v_limit: float, z: float,
@@ -1038,6 +1090,8 @@ class Emulator:
         z = z_value(level)
         ang = number_array(angle_deg, "angle_deg", "deg")
         point = locate(design, reduced=True)
+        if self.balance_model_for(point) is not None:
+            return self._balance_inverse(design, point, ang, level)
         pe, cb = self.curve_band(point, z)
         signed = ang * pe.sign
         if (signed < 0).any():

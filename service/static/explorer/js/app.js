@@ -47,6 +47,7 @@ const FLAG_WORDS = {
   band_undercovers_random_designs: "band too narrow here (random designs)",
   force_past_fe_range: "force past the FE range",
   force_band_too_wide: "force band too wide",
+  force_at_free_tip_pressure: "force: blocked tip at the free actuator's pressure",
   band_capped_at_fe_range: "band capped at the FE range",
   past_fe_pressure_stop: "past the FE's 20 kPa pressure stop",
   pressures_look_like_kpa: "pressures look like kPa",
