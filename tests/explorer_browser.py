@@ -149,3 +149,16 @@ def open_explorer(watched: Watched, url: str):
     page.goto(url + "/")
     page.wait_for_selector("body[data-ready=true]")
     return page
+
+
+def wait_prediction(page, **design):
+    """Wait until the prediction shown is of a design with these values (to 1e-9)."""
+    cond = " && ".join(f"Math.abs(p.design.{k} - {v}) < 1e-9" for k, v in design.items())
+    page.wait_for_function(
+        f"(() => {{ const p = window.explorer.prediction; return p && {cond}; }})()")
+
+
+def change(page, selector, value):
+    """Type ``value`` into a field and commit it (the change event)."""
+    page.fill(selector, str(value))
+    page.dispatch_event(selector, "change")

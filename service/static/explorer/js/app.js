@@ -396,7 +396,7 @@ async function update() {
       : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
   rewriteLink();
-  refreshPinned(grid);
+  refreshPinned(grid, controller);
   afterAnswer(controller, mark);
 }
 
@@ -679,7 +679,10 @@ function curveSeries() {
       { dash: ["5 4", "1.5 3", "9 3 2 3", "3 2", "12 4", "1.5 2 6 2"][k % 6], width: 1.4 });
   });
   // pinned curves without their bands (the table gives the band at the chosen pressure)
-  app.pinned.forEach((pin) => { if (pin.prediction) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pin.prediction, pin.color, { width: 1.6, lower: null, upper: null }); });
+  app.pinned.forEach((pin) => {
+    const pr = pinnedAnswer(pin);
+    if (pr) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pr, pin.color, { width: 1.6, lower: null, upper: null });
+  });
   const key = designKey(app.state);
   const own = ownRecord();
   const ownData = own && feData(own, false);
@@ -846,19 +849,42 @@ function pin() {
   const used = new Set(app.pinned.map((p) => p.n));
   let n = 1;
   while (used.has(n)) n++;
-  app.pinned.push({ n, state: { ...app.state }, prediction: app.prediction, color: COLORS[n], ask: JSON.stringify(askPart(axisGrid(gridMax(), N_POINTS))) });
+  app.pinned.push({ n, state: { ...app.state }, prediction: app.prediction, color: COLORS[n], ask: askOf(app.request) });
   renderCompare();
   redraw();
 }
 
-async function refreshPinned(grid) {
+// The pinned designs asked the question of the answer shown (``controller``'s): a newer
+// question aborts it, and an answer to an older one is never kept (it set a pinned row's
+// "angle at 500 Pa" to its angle at 1500 Pa of the former 3000 Pa grid).
+// A predict request's question without its design (the asked axis's grid, flow rate,
+// inlet, model), as text; ``currentAsk``: the one the page asks now.
+function askOf(body) {
+  const { design: _, ...ask } = body;
+  return JSON.stringify(ask);
+}
+
+function currentAsk() {
+  return JSON.stringify(askPart(axisGrid(gridMax(), N_POINTS)));
+}
+
+// A pinned design's answer to the page's question now; null while it answers another
+// (its row and curve wait for the answer rather than read a former grid's points).
+function pinnedAnswer(pin) {
+  return pin.prediction && pin.ask === currentAsk() ? pin.prediction : null;
+}
+
+async function refreshPinned(grid, controller) {
   const ask = JSON.stringify(askPart(grid));  // the same question of every pinned design
   for (const pin of app.pinned) {
     if (pin.prediction && pin.ask === ask) continue;
+    let prediction = null;
     try {
-      pin.prediction = await api("/v1/predict", { method: "POST", body: predictBody(pin.state, grid) });
-      pin.ask = ask;
-    } catch { pin.prediction = null; }
+      prediction = await api("/v1/predict", { method: "POST", body: predictBody(pin.state, grid), signal: controller.signal });
+    } catch (err) { if (isAbort(err)) return; }
+    if (controller.signal.aborted) return;
+    pin.prediction = prediction;
+    pin.ask = prediction ? ask : null;
     renderCompare();
     redraw();
   }
@@ -874,7 +900,7 @@ function renderCompare() {
   const i = opIndex();
   for (const pin of app.pinned) {
     const tr = document.createElement("tr");
-    const pr = pin.prediction;
+    const pr = pinnedAnswer(pin);
     const a = pr ? pr.angle_deg[i] : null;
     const force = pr && pr.force_mn ? pr.force_mn[i] : null;
     const cells = [
@@ -1002,7 +1028,7 @@ function exportCsv() {
 
 function exportJson() {
   const data = { exported_utc: new Date().toISOString(), request: app.request, prediction: app.prediction,
-    pinned: app.pinned.map((p) => ({ design: designBody(p.state, app.presets), prediction: p.prediction })),
+    pinned: app.pinned.map((p) => ({ design: designBody(p.state, app.presets), prediction: pinnedAnswer(p) })),
     fe_curves: app.nearest.map((r) => ({ id: r.id, design: r.design, curve: { pressure_pa: r.curve.pressure_pa, volume_ul: r.curve.volume_ul, angle_deg: r.curve.angle_deg, force_mn: r.curve.force_mn } })),
     shown: shownCurves() };
   download("balloon-curves.json", JSON.stringify(data, null, 1), "application/json");

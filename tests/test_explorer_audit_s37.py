@@ -1,0 +1,69 @@
+"""The explorer's fixes from the thirty-seventh session's lab-user audit, in real headless
+Chromium on one live server (the shipped emulator and database): a pinned design's answer
+to a former question never overwrites the newer one; where the curve ends is said at the
+curve's own end; an empty flow rate is kept in the link; a stiffness scale the solver
+cannot take is named beside its field and no FE solve is offered for it; small forces and
+volumes keep their digits; text that is no number is called so.
+Screenshots: test-artifacts/explorer/s37-*.png.
+"""
+
+from __future__ import annotations
+
+import httpx
+import pytest
+from explorer_browser import LiveServer, change, open_explorer, screenshot, wait_prediction
+
+pytestmark = pytest.mark.timeout(300)
+
+GRID_POINTS = 81
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    with LiveServer(tmp_path_factory.mktemp("explorer-s37")) as live:
+        yield live
+
+
+def grid(p_max: float) -> list[float]:
+    return [p_max * i / (GRID_POINTS - 1) for i in range(GRID_POINTS)]
+
+
+def test_a_pinned_designs_answer_to_a_former_grid_never_overwrites_the_newer_one(watched, server):
+    # a pinned row read "angle at 500 Pa: 18.4 deg": the standard design's angle at 1500 Pa
+    # of the 3000 Pa grid, whose answer came back after the 1000 Pa grid's
+    page = open_explorer(watched, server.url)
+    page.click("#pin")
+    page.fill("#L_mm", "9")
+    wait_prediction(page, L_mm=9)
+    held = []
+
+    def hold_the_pinned_3000_pa_answer(route):
+        body = route.request.post_data_json
+        if body["design"]["L_mm"] == 7.1 and body["pressures_pa"][-1] == 3000:
+            held.append(route)
+        else:
+            route.continue_()
+
+    page.route("**/v1/predict", hold_the_pinned_3000_pa_answer)
+    change(page, "#p_max", 3000)
+    for _ in range(1000):  # up to ~20 s
+        if held:
+            break
+        page.wait_for_timeout(20)
+    assert held, "the pinned design was not asked the 3000 Pa grid"
+    change(page, "#p_max", 1000)
+    page.wait_for_function("window.explorer.pinned[0].prediction"
+                           " && window.explorer.pinned[0].prediction.pressure_pa.at(-1) === 1000")
+    try:
+        held[0].continue_()
+    except Exception:  # the page has given the request up
+        pass
+    page.wait_for_timeout(1000)
+    pinned = page.evaluate("window.explorer.pinned[0].prediction")
+    assert pinned["pressure_pa"][-1] == 1000
+    want = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 7.1}, "pressures_pa": grid(1000.0)}).json()["angle_deg"][40]
+    row = page.locator("#compare-table tbody tr").first.inner_text()
+    assert page.inner_text("#compare-p-h") == "angle at 500 Pa"
+    assert f"{want:.1f} deg" in row
+    screenshot(page, "s37-pinned-after-a-late-answer")
