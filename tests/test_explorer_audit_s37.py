@@ -67,3 +67,24 @@ def test_a_pinned_designs_answer_to_a_former_grid_never_overwrites_the_newer_one
     assert page.inner_text("#compare-p-h") == "angle at 500 Pa"
     assert f"{want:.1f} deg" in row
     screenshot(page, "s37-pinned-after-a-late-answer")
+
+
+def test_the_curves_end_is_said_where_the_curve_ends(watched, server):
+    # the exponential model's curve of this design ends at the family's largest FE angle
+    # (2500 Pa); the page said "The curve ends at 3117 Pa" (the family's last FE pressure)
+    page = open_explorer(watched, server.url)
+    page.select_option("#pair", "2")
+    change(page, "#model", "exponential")
+    change(page, "#p_max", 20000)
+    page.wait_for_function("window.explorer.prediction"
+                           " && window.explorer.prediction.model === 'exponential'"
+                           " && window.explorer.request.pressures_pa.at(-1) === 20000")
+    pred = page.evaluate("window.explorer.prediction")
+    first = pred["angle_deg"].index(None)
+    last_p, first_p = pred["pressure_pa"][first - 1], pred["pressure_pa"][first]
+    assert pred["validity"]["fe_limit_pa"] > first_p  # the case: the angle cap comes first
+    text = page.locator("#validity").inner_text()
+    assert f"ends at {pred['validity']['fe_limit_pa']:.0f} Pa" not in text
+    assert (f"The curve ends at {last_p:.0f} Pa: the answer is capped there, no angle is given "
+            f"from {first_p:.0f} Pa on") in text
+    screenshot(page, "s37-exponential-curve-end")

@@ -812,14 +812,19 @@ function showValidity() {
   const asked = app.request ? app.request[ASK[askAxis()].field] : null;
   if (firstNull > 0 && asked) {
     // the FE range's end in the asked axis, as the server states it (the first empty grid
-    // point after it said "39.38 ul" beside the server's "38.8 ul")
+    // point after it said "39.38 ul" beside the server's "38.8 ul"), where the curve ends
+    // there: between its last answered point and its first empty one (an exponential
+    // model's curve ends earlier, at the family's largest FE angle, than the family's
+    // last FE pressure, which the page had called the curve's end)
     const flow = app.request && app.request.flow_ul_s;
     const end = { pressure_pa: v.fe_limit_pa, volume_ul: v.fe_limit_volume_ul,
       time_s: typeof v.fe_limit_volume_ul === "number" && flow ? v.fe_limit_volume_ul / flow : null }[askAxis()];
     const { unit, digits } = ASK[askAxis()];
-    messages.push(typeof end === "number"
+    const [last, first] = [asked[firstNull - 1], asked[firstNull]];
+    const atEnd = typeof end === "number" && end >= last - 1e-9 * first && end <= first * (1 + 1e-9);
+    messages.push(atEnd
       ? `The curve ends at ${fmt(end, digits)} ${unit}, where the FE's range ends: the answer is capped there, no angle is given beyond it.`
-      : `No angle is given from ${fmt(asked[firstNull], digits)} ${unit} on: past the FE's range the answer is capped there.`);
+      : `The curve ends at ${fmt(last, digits)} ${unit}: the answer is capped there, no angle is given from ${fmt(first, digits)} ${unit} on (past the FE's range, above).`);
   }
   for (const m of messages) {
     const li = document.createElement("li");
