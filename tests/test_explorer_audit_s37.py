@@ -88,3 +88,18 @@ def test_the_curves_end_is_said_where_the_curve_ends(watched, server):
     assert (f"The curve ends at {last_p:.0f} Pa: the answer is capped there, no angle is given "
             f"from {first_p:.0f} Pa on") in text
     screenshot(page, "s37-exponential-curve-end")
+
+
+def test_a_link_keeps_an_empty_flow_rate(watched, server):
+    # a view without a flow rate reopened at the page's 2.5 ul/s: its readout gained a time
+    # and a curve asked by time, refused without one, was drawn
+    page = open_explorer(watched, server.url)
+    change(page, "#flow", "")
+    page.wait_for_function("window.explorer.request && !('flow_ul_s' in window.explorer.request)")
+    assert "time" not in page.inner_text("#p_op-out")
+    page.reload()
+    page.wait_for_selector("body[data-ready=true]")
+    assert page.input_value("#flow") == ""
+    assert "flow_ul_s" not in page.evaluate("window.explorer.request")
+    assert "time" not in page.inner_text("#p_op-out")
+    assert page.locator("#link-note").is_hidden()

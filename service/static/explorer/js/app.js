@@ -288,7 +288,7 @@ function showAskAxis() {
 // rewrites it, a page opened with one starts from it.
 function view() {
   const near = checkNumber($("nearby"), { integer: true });
-  return { ask: askAxis(), max: gridMax(), flow: flowRate() ?? undefined, inlet: $("inlet").checked,
+  return { ask: askAxis(), max: gridMax(), flow: flowRate(), inlet: $("inlet").checked,
            model: $("model").value.trim() || "emulator",
            x: app.wantAxes?.x ?? $("x_axis").value, y: app.wantAxes?.y ?? $("y_axis").value,
            near: near.value ?? undefined };
@@ -317,7 +317,7 @@ function applyLink(hash, reset = false) {
   const v = link.view;
   if (v.ask) $("ask_axis").value = v.ask;
   if (v.max) $(ASK[askAxis()].input).value = String(v.max);
-  if (v.flow) $("flow").value = String(v.flow);
+  if (v.flow !== undefined) $("flow").value = v.flow === null ? "" : String(v.flow);
   if (v.inlet !== undefined) $("inlet").checked = v.inlet;
   if (v.model) $("model").value = v.model;
   if (v.near !== undefined) $("nearby").value = String(v.near);

@@ -1,8 +1,8 @@
 // The page's design and curve request in the address's fragment ("#W_mm=3&L_mm=7.1&..."),
 // so that a view can be bookmarked, shared and reopened as it was. Pure functions: the
 // fragment is text from anywhere, so only known keys with valid values are taken (numbers
-// finite and > 0, the pair an index, the axis one of three, the model a name); the others
-// are returned as ignored, never interpreted.
+// finite and > 0, the pair an index, the axis one of three, the model a name; an empty
+// flow rate, none); the others are returned as ignored, never interpreted.
 
 import { FIELDS, PAIRS, W_FIELD } from "./design.js";
 
@@ -19,7 +19,7 @@ function positive(text) {
 }
 
 // {design: {...state keys}, view: {ask, max, flow, inlet, model, x, y, near},
-//  ignored: ["key", ...]}
+//  ignored: ["key", ...]}; view.flow null: the link's flow rate is none ("flow=").
 export function readLink(hash) {
   const out = { design: {}, view: {}, ignored: [] };
   const text = String(hash || "").replace(/^#/, "");
@@ -36,6 +36,8 @@ export function readLink(hash) {
       if (Number.isInteger(k) && k >= 0 && k < PAIRS.length && value.trim() !== "") out.design.pair = k; else ok = false;
     } else if (key === "ask") {
       if (ASK_AXES.includes(value)) out.view.ask = value; else ok = false;
+    } else if (key === "flow" && value.trim() === "") {
+      out.view.flow = null;
     } else if (key === "max" || key === "flow") {
       const v = positive(value);
       if (v === null) ok = false; else out.view[key] = v;
@@ -56,7 +58,8 @@ export function readLink(hash) {
   return out;
 }
 
-// The fragment of a state (design keys) and view ({ask, max, flow, inlet, model, x, y, near}).
+// The fragment of a state (design keys) and view ({ask, max, flow, inlet, model, x, y, near};
+// flow null: none, written "flow=" so that the link does not reopen at the page's default).
 export function writeLink(state, view) {
   const params = new URLSearchParams();
   for (const key of NUMBER_KEYS) if (Number.isFinite(state[key])) params.set(key, String(state[key]));
@@ -64,6 +67,7 @@ export function writeLink(state, view) {
   params.set("ask", view.ask);
   if (Number.isFinite(view.max)) params.set("max", String(view.max));
   if (Number.isFinite(view.flow)) params.set("flow", String(view.flow));
+  else if (view.flow === null) params.set("flow", "");
   if (view.inlet) params.set("inlet", "1");
   if (view.model) params.set("model", view.model);
   if (view.x && view.x !== view.ask) params.set("x", view.x);
