@@ -103,3 +103,23 @@ def test_a_link_keeps_an_empty_flow_rate(watched, server):
     assert "flow_ul_s" not in page.evaluate("window.explorer.request")
     assert "time" not in page.inner_text("#p_op-out")
     assert page.locator("#link-note").is_hidden()
+
+
+def test_a_link_keeps_the_readouts_point(watched, server):
+    # the readout (angle, band, force at one pressure) reopened at the grid's middle: a
+    # shared "angle at 1250 Pa" came back as the angle at 1000 Pa
+    page = open_explorer(watched, server.url)
+    page.focus("#p_op")
+    for _ in range(10):
+        page.keyboard.press("ArrowRight")
+    readout = page.inner_text("#p_op-out")
+    assert readout.startswith("1250 Pa: angle")
+    page.reload()
+    page.wait_for_selector("body[data-ready=true]")
+    assert page.inner_text("#p_op-out") == readout
+    assert page.locator("#link-note").is_hidden()
+    # a point past the curve's end is named, not moved to the end
+    page.goto(server.url + "/#L_mm=7.1&max=2000&at=5000")
+    page.wait_for_function("document.getElementById('link-note').textContent.includes('at')")
+    page.wait_for_function("window.explorer.prediction")
+    assert page.inner_text("#p_op-out").startswith("1000 Pa:")

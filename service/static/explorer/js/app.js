@@ -161,6 +161,7 @@ function buildFields() {
     if (max > 0) app.opFraction = Number($("p_op").value) / max;
     showOperatingPoint();
     redraw();
+    rewriteLink();  // the readout's point is part of the view
   });
 }
 
@@ -284,14 +285,15 @@ function showAskAxis() {
 }
 
 // ---------------------------------------------------------------- the view's link
-// The address's fragment holds the design and the curve request (link.js): each answer
-// rewrites it, a page opened with one starts from it.
+// The address's fragment holds the design, the curve request and the readout's point
+// (link.js): each answer and each move of the readout rewrites it, a page opened with one
+// starts from it.
 function view() {
   const near = checkNumber($("nearby"), { integer: true });
   return { ask: askAxis(), max: gridMax(), flow: flowRate(), inlet: $("inlet").checked,
            model: $("model").value.trim() || "emulator",
            x: app.wantAxes?.x ?? $("x_axis").value, y: app.wantAxes?.y ?? $("y_axis").value,
-           near: near.value ?? undefined };
+           near: near.value ?? undefined, at: (gridMax() * opIndex()) / (N_POINTS - 1) };
 }
 
 function rewriteLink() {
@@ -323,7 +325,10 @@ function applyLink(hash, reset = false) {
   if (v.near !== undefined) $("nearby").value = String(v.near);
   showAskAxis();
   app.wantAxes = v.x || v.y ? { x: v.x, y: v.y } : null;
-  app.opFraction = 0.5;
+  // the readout's point, on the curve's grid (one past its end is named, not moved)
+  const max = gridMax();
+  if (v.at !== undefined && v.at > max) link.ignored.push("at");
+  app.opFraction = v.at !== undefined && v.at <= max ? v.at / max : 0.5;
   const note = $("link-note");
   note.hidden = link.ignored.length === 0;
   note.textContent = link.ignored.length ? `The link's ${link.ignored.join(", ")} ignored (unknown or not a valid value).` : "";
