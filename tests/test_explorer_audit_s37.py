@@ -123,3 +123,20 @@ def test_a_link_keeps_the_readouts_point(watched, server):
     page.wait_for_function("document.getElementById('link-note').textContent.includes('at')")
     page.wait_for_function("window.explorer.prediction")
     assert page.inner_text("#p_op-out").startswith("1000 Pa:")
+
+
+@pytest.mark.parametrize("scale", ["-1", "0"])
+def test_a_stiffness_scale_at_or_below_zero_is_named_beside_it_and_offers_no_solve(
+        watched, server, scale):
+    # sent as a material of moduli <= 0: the refusal named design.body_material.mu_kpa
+    # (no field of the page) and the page offered an FE solve that the server refused
+    page = open_explorer(watched, server.url)
+    posts = len([u for u in watched.requests if u.endswith("/v1/predict")])
+    page.fill("#body_scale", scale)
+    page.wait_for_selector("#err-body_scale:not([hidden]), #refused:not([hidden])")
+    error = page.inner_text("#err-body_scale")
+    assert error.startswith("Body stiffness scale s:") and "allowed: 0.5 to 2" in error
+    page.wait_for_timeout(500)
+    assert page.locator("#refused").is_hidden()
+    assert len([u for u in watched.requests if u.endswith("/v1/predict")]) == posts
+    assert "Body stiffness scale s" in page.inner_text("#status")

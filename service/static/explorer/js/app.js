@@ -104,10 +104,12 @@ function addField(box, f, onValue) {
   range.addEventListener("input", () => { num.value = range.value; app.inputErrors.delete(`err-${f.name}`); onValue(Number(range.value)); });
   num.addEventListener("input", () => {
     // an empty field is named beside it, never silently kept at its former value; a
-    // number the server does not take (L 70, t -1) is sent, and its answer names the range
+    // number the server does not take (L 70, t -1) is sent, and its answer names the range.
+    // A width or a stiffness scale <= 0 is no design at all: named here (a scale of -1 was
+    // sent as a material of negative moduli and offered an FE solve the server refused)
     const text = num.value.trim();
     const v = Number(text);
-    if (text === "" || !Number.isFinite(v) || (f === W_FIELD && !(v > 0))) {
+    if (text === "" || !Number.isFinite(v) || ((f === W_FIELD || f.unit === "x") && !(v > 0))) {
       const r = fieldRange(f, app.state.W_mm);
       const unit = f.unit === "x" ? " x preset moduli" : ` ${f.unit}`;
       app.inputErrors.set(`err-${f.name}`, `${text === "" ? "empty" : `${text} is not a usable value`} (allowed: ${r.min} to ${r.max}${unit})`);
