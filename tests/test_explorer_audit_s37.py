@@ -140,3 +140,16 @@ def test_a_stiffness_scale_at_or_below_zero_is_named_beside_it_and_offers_no_sol
     assert page.locator("#refused").is_hidden()
     assert len([u for u in watched.requests if u.endswith("/v1/predict")]) == posts
     assert "Body stiffness scale s" in page.inner_text("#status")
+
+
+def test_text_that_is_no_number_in_a_design_field_is_called_so(watched, server):
+    # "1e" typed into L was named "empty" (a number box reads such text as "")
+    page = open_explorer(watched, server.url)
+    page.focus("#L_mm")
+    page.keyboard.press("Control+A")
+    page.keyboard.type("1e")
+    page.wait_for_selector("#err-L_mm:not([hidden])")
+    error = page.inner_text("#err-L_mm")
+    assert error == "Chamber length L (mm): not a number (allowed: 4 to 18 mm)"
+    page.fill("#L_mm", "")
+    page.wait_for_function("document.getElementById('err-L_mm').textContent.includes('empty')")

@@ -112,7 +112,9 @@ function addField(box, f, onValue) {
     if (text === "" || !Number.isFinite(v) || ((f === W_FIELD || f.unit === "x") && !(v > 0))) {
       const r = fieldRange(f, app.state.W_mm);
       const unit = f.unit === "x" ? " x preset moduli" : ` ${f.unit}`;
-      app.inputErrors.set(`err-${f.name}`, `${text === "" ? "empty" : `${text} is not a usable value`} (allowed: ${r.min} to ${r.max}${unit})`);
+      // a number box holding text that is no number ("1e", "--1") reads as empty: badInput
+      const what = text !== "" ? `${text} is not a usable value` : (num.validity.badInput ? "not a number" : "empty");
+      app.inputErrors.set(`err-${f.name}`, `${what} (allowed: ${r.min} to ${r.max}${unit})`);
       app.inputMark = performance.now();
       schedule(DEBOUNCE_MS);
       return;
