@@ -9,6 +9,8 @@ Screenshots: test-artifacts/explorer/s37-*.png.
 
 from __future__ import annotations
 
+import re
+
 import httpx
 import pytest
 from explorer_browser import LiveServer, change, open_explorer, screenshot, wait_prediction
@@ -153,3 +155,23 @@ def test_text_that_is_no_number_in_a_design_field_is_called_so(watched, server):
     assert error == "Chamber length L (mm): not a number (allowed: 4 to 18 mm)"
     page.fill("#L_mm", "")
     page.wait_for_function("document.getElementById('err-L_mm').textContent.includes('empty')")
+
+
+def test_a_small_force_keeps_three_significant_digits(watched, server):
+    # the box's corner (L 4, t 0.5, T 0.6, b 1, h 0.1) read "force 0.00 mN [0.00, 0.00]"
+    corner = {"L_mm": 4, "t_mm": 0.5, "T_mm": 0.6, "b_mm": 1, "h_mm": 0.1}
+    page = open_explorer(watched, server.url)
+    page.click("#pin")  # the standard design, for the compare table's force
+    for name, value in corner.items():
+        page.fill(f"#{name}", str(value))
+    wait_prediction(page, **corner)
+    page.click("#pin")
+    api = httpx.post(server.url + "/v1/predict", json={
+        "design": corner, "pressures_pa": grid(2000.0), "flow_ul_s": 2.5}).json()
+    force, lower, upper = (api[k][40] for k in ("force_mn", "force_lower_mn", "force_upper_mn"))
+    assert force < 0.005  # the case: a few uN
+    readout = page.inner_text("#p_op-out")
+    shown = re.search(r"force (\S+) mN \[(\S+), (\S+)\]", readout).groups()
+    assert [float(v) for v in shown] == pytest.approx([force, lower, upper], rel=5e-3)
+    row = page.locator("#compare-table tbody tr").nth(1).inner_text()
+    assert float(re.search(r"(\S+) mN", row).group(1)) == pytest.approx(force, rel=5e-3)

@@ -372,7 +372,7 @@ def test_force_volume_and_capped_angles_are_rendered_when_the_response_has_them(
 
     page.route("**/v1/predict", extend)
     open_explorer(watched, server.url)
-    assert "force 10.00 mN" in page.locator("#p_op-out").inner_text()
+    assert "force 10.0 mN" in page.locator("#p_op-out").inner_text()
     assert "volume 1.00 ul" in page.locator("#p_op-out").inner_text()
     assert any("capped" in t for t in page.locator("#validity li").all_inner_texts())
     page.select_option("#x_axis", "volume_ul")

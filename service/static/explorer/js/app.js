@@ -766,14 +766,16 @@ function showOperatingPoint() {
   let text = `${fmt(at, ask.digits)} ${ask.unit}: angle ${a === null ? "not predicted (past the FE range)" : fmt(a, 1) + " deg"}`;
   if (a !== null) text += ` [${fmt(pred.lower_deg[i], 1)}, ${fmt(pred.upper_deg[i], 1)}] (${Math.round(pred.level * 100)} %)`;
   if (pred.force_mn && pred.force_mn[i] !== null && pred.force_mn[i] !== undefined) {
-    text += `; force ${fmt(pred.force_mn[i], 2)} mN`;
-    if (pred.force_lower_mn && pred.force_upper_mn) text += ` [${fmt(pred.force_lower_mn[i], 2)}, ${fmt(pred.force_upper_mn[i], 2)}]`;
+    // forces, volumes and times to 3 significant digits: they scale with the design's size
+    // (a corner of the box read "force 0.00 mN [0.00, 0.00]" for 0.0030 [0.0017, 0.0048])
+    text += `; force ${fmtSig(pred.force_mn[i])} mN`;
+    if (pred.force_lower_mn && pred.force_upper_mn) text += ` [${fmtSig(pred.force_lower_mn[i])}, ${fmtSig(pred.force_upper_mn[i])}]`;
   }
   const has = (k) => Array.isArray(pred[k]) && pred[k][i] !== null && pred[k][i] !== undefined;
   if (axis !== "pressure_pa" && has("pressure_pa")) text += `; chamber pressure ${fmt(pred.pressure_pa[i], 0)} Pa`;
   if (has("pump_pressure_pa")) text += `; pump gauge ${fmt(pred.pump_pressure_pa[i], 0)} Pa`;
-  if (axis !== "volume_ul" && has("volume_ul")) text += `; volume ${fmt(pred.volume_ul[i], 2)} ul`;
-  if (axis !== "time_s" && has("time_s")) text += `; time ${fmt(pred.time_s[i], 1)} s`;
+  if (axis !== "volume_ul" && has("volume_ul")) text += `; volume ${fmtSig(pred.volume_ul[i])} ul`;
+  if (axis !== "time_s" && has("time_s")) text += `; time ${fmtSig(pred.time_s[i])} s`;
   out.textContent = text;
   renderCompare();
 }
@@ -922,7 +924,7 @@ function renderCompare() {
       designLabel(pin.state),
       a === null || a === undefined ? "-" : `${fmt(a, 1)} deg`,
       pr && a !== null ? `${fmt(pr.lower_deg[i], 1)} - ${fmt(pr.upper_deg[i], 1)}` : "-",
-      force === null || force === undefined ? "-" : `${fmt(force, 2)} mN`,
+      force === null || force === undefined ? "-" : `${fmtSig(force)} mN`,
       pr ? ((pr.validity.flags || []).length ? pr.validity.flags.map(flagWords).join(", ")
         : (pr.validity.in_domain ? "in domain" : "outside the fitted domain")) : "no prediction",
     ];
