@@ -175,3 +175,22 @@ def test_a_small_force_keeps_three_significant_digits(watched, server):
     assert [float(v) for v in shown] == pytest.approx([force, lower, upper], rel=5e-3)
     row = page.locator("#compare-table tbody tr").nth(1).inner_text()
     assert float(re.search(r"(\S+) mN", row).group(1)) == pytest.approx(force, rel=5e-3)
+
+
+def test_no_fe_curve_is_called_this_designs_while_a_design_field_is_in_error(watched, server):
+    # with L emptied, the standard design's stored FE curve was drawn as "FE curve of this
+    # design" and read out at 1000 Pa
+    page = open_explorer(watched, server.url)
+    page.wait_for_function("window.explorer.stored")  # the standard design's own record
+    page.fill("#L_mm", "")
+    page.wait_for_selector("#err-L_mm:not([hidden])")
+    page.wait_for_timeout(300)
+    assert series_ids(page) == []
+    assert page.inner_text("#p_op-out") == "1000 Pa: no model prediction"
+    page.fill("#L_mm", "7.1")
+    wait_prediction(page, L_mm=7.1)
+    assert "prediction" in series_ids(page)
+
+
+def series_ids(page) -> list[str]:
+    return page.eval_on_selector_all("#plot g[data-series]", "gs => gs.map(g => g.dataset.series)")

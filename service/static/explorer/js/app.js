@@ -628,8 +628,11 @@ function endText(rec, what) {
 
 // The FE record drawn for the design shown: its finished solve's, else its stored one
 // when the model gives no curve or the record ended early (a complete one is already
-// drawn first among the nearest FE curves).
+// drawn first among the nearest FE curves). None while a design field is in error: the
+// design shown is not the one whose fields were last good (an emptied L drew and read out
+// "FE curve of this design" of the former L).
 function ownRecord() {
+  if (app.inputErrors.size) return null;
   const key = designKey(app.state);
   const stored = app.stored && app.stored.key === key ? app.stored.record : null;
   return app.solved.get(key) || (stored && (!app.prediction || stored.curve.status !== "complete") ? stored : null);
