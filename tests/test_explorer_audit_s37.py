@@ -194,3 +194,43 @@ def test_no_fe_curve_is_called_this_designs_while_a_design_field_is_in_error(wat
 
 def series_ids(page) -> list[str]:
     return page.eval_on_selector_all("#plot g[data-series]", "gs => gs.map(g => g.dataset.series)")
+
+
+@pytest.mark.parametrize(("design", "nearest"), [
+    ({"L_mm": 20, "t_mm": 1.5}, {"L_mm": 18, "t_mm": 1.2, "body_material": "pdms_1_10"}),
+    ({"L_mm": 20, "W_mm": 6}, {"L_mm": 20, "t_mm": 1.0, "W_mm": 6}),
+    ({"body_material": {"id": "pdms_1_10_x5", "mu_kpa": [5 * 21.66], "alpha": [3.268]}},
+     {"body_material": "pdms_1_10*2"}),
+])
+def test_an_out_of_box_refusal_carries_the_nearest_design_a_request_takes(server, design,
+                                                                           nearest):
+    refused = httpx.post(server.url + "/v1/predict", json={"design": design,
+                                                           "pressures_pa": [1000]})
+    assert refused.status_code == 422
+    problem = refused.json()
+    assert problem["type"] == "urn:balloon:problem:out-of-box"
+    assert nearest.items() <= problem["nearest_design"].items()
+    again = httpx.post(server.url + "/v1/predict", json={"design": problem["nearest_design"],
+                                                         "pressures_pa": [1000]})
+    assert again.status_code == 200
+
+
+def test_a_refused_design_offers_its_nearest_design_in_the_box_to_load(watched, server):
+    # the nearest design was only words in the refusal ("L_mm=18, t_mm=0.5, ...
+    # pdms_1_10/ecoflex_00_30"), to be typed in again field by field
+    page = open_explorer(watched, server.url)
+    page.fill("#L_mm", "20")
+    page.wait_for_selector("#load-nearest:not([hidden])")
+    assert page.inner_text("#load-nearest") == ("Load the nearest design in the box: L 18 t 0.5 "
+                                                "T 1 b 1.8 h 0.15 mm, PDMS 1:10 / Ecoflex 00-30")
+    screenshot(page, "s37-refused-with-nearest")
+    page.click("#load-nearest")
+    wait_prediction(page, L_mm=18)
+    assert page.input_value("#L_mm") == "18" and page.locator("#refused").is_hidden()
+    # a stiffness ratio outside the box: the nearest has the body at its box's edge
+    page.fill("#body_scale", "5")
+    page.wait_for_selector("#load-nearest:not([hidden])")
+    page.click("#load-nearest")
+    page.wait_for_function("window.explorer.prediction"
+                           " && window.explorer.prediction.design.body_material.id.endsWith('x2')")
+    assert page.input_value("#body_scale") == "2" and page.locator("#refused").is_hidden()

@@ -9,7 +9,7 @@ import { api, ApiError, clearMessage, clearProblems, isAbort, OfflineError, show
 import { setupCalibration } from "./calibration.js";
 import {
   FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
-  materialLabel, pairLabel, scaledLengths, shown,
+  materialLabel, pairLabel, scaledLengths, shown, stateOfDesign,
 } from "./design.js";
 import { checkNumber } from "./fields.js";
 import { setupInverse } from "./inverse.js";
@@ -943,6 +943,12 @@ function showRefused() {
   const box = $("refused");
   box.hidden = !app.refused;
   if (app.refused) $("refused-detail").textContent = app.refused.message;
+  // the server's nearest design inside the box (an out-of-box refusal), one click away
+  const near = app.refused && app.refused.problem.nearest_design ? stateOfDesign(app.refused.problem.nearest_design) : null;
+  const button = $("load-nearest");
+  button.hidden = !near;
+  button.textContent = near ? `Load the nearest design in the box: ${designLabel(near)}` : "";
+  button.onclick = near ? () => loadDesign(near) : null;
 }
 
 async function solve() {
