@@ -234,3 +234,33 @@ def test_a_refused_design_offers_its_nearest_design_in_the_box_to_load(watched, 
     page.wait_for_function("window.explorer.prediction"
                            " && window.explorer.prediction.design.body_material.id.endsWith('x2')")
     assert page.input_value("#body_scale") == "2" and page.locator("#refused").is_hidden()
+
+
+def test_the_inlet_takes_the_labs_tubing_and_the_link_keeps_it(watched, server):
+    # only the paper's inlet channel could be chosen: 500 mm of 0.5 mm tubing adds 880 Pa
+    # at 2.5 ul/s to the pump gauge, and the page left it out
+    inlet = {"tubing_length_mm": 500, "tubing_bore_mm": 0.5}
+    page = open_explorer(watched, server.url)
+    page.check("#inlet")
+    page.dispatch_event("#inlet", "change")
+    change(page, "#tubing_length", 500)
+    page.wait_for_function("window.explorer.request.inlet"
+                           " && window.explorer.request.inlet.tubing_length_mm === 500")
+    assert page.evaluate("window.explorer.request.inlet") == inlet
+    api = httpx.post(server.url + "/v1/predict", json={
+        "design": {"L_mm": 7.1}, "pressures_pa": grid(2000.0), "flow_ul_s": 2.5,
+        "inlet": inlet}).json()
+    assert f"pump gauge {api['pump_pressure_pa'][40]:.0f} Pa" in page.inner_text("#p_op-out")
+    r = api["inlet"]["resistance_pa_per_ul_s"]
+    assert f"R = {r:.0f} Pa per ul/s" in page.inner_text("#inlet-note")
+    screenshot(page, "s37-inlet-tubing")
+    page.reload()
+    page.wait_for_selector("body[data-ready=true]")
+    assert page.evaluate("window.explorer.request.inlet") == inlet
+    assert page.input_value("#tubing_length") == "500" and page.is_visible("#tubing_bore")
+    # a length without a usable bore is named beside the bore and nothing is asked
+    page.fill("#tubing_bore", "")
+    page.dispatch_event("#tubing_bore", "change")
+    page.wait_for_selector("#err-tubing_bore:not([hidden])")
+    assert page.inner_text("#err-tubing_bore").startswith("Tubing bore (mm): empty (allowed:")
+    assert page.evaluate("window.explorer.prediction") is None

@@ -155,9 +155,10 @@ function buildFields() {
   const pair = $("pair");
   PAIRS.forEach(([b, m], k) => pair.add(new Option(pairLabel(b, m), String(k))));
   pair.addEventListener("change", () => onInput("pair", Number(pair.value)));
-  for (const id of ["p_max", "v_max", "t_max", "flow", "inlet", "model", "nearby"]) {
+  for (const id of ["p_max", "v_max", "t_max", "flow", "inlet", "tubing_length", "tubing_bore", "model", "nearby"]) {
     $(id).addEventListener("change", () => { $("view-note").textContent = ""; schedule(0); });
   }
+  $("inlet").addEventListener("change", showInlet);
   $("ask_axis").addEventListener("change", onAskAxis);
   for (const id of ["x_axis", "y_axis"]) $(id).addEventListener("change", () => { redraw(); rewriteLink(); });
   $("p_op").addEventListener("input", () => {
@@ -254,6 +255,12 @@ function pageErrors() {
   if (max.error) out.push([$(`err-${a.field}`), max.error]);
   const flow = checkNumber($("flow"), { optional: true, unit: "ul/s" });
   if (flow.error) out.push([$("err-flow_ul_s"), flow.error]);
+  if ($("inlet").checked) {
+    const length = checkNumber($("tubing_length"), { unit: "mm" });
+    if (length.error) out.push([$("err-tubing_length"), length.error]);
+    const bore = checkNumber($("tubing_bore"), { unit: "mm" });
+    if (length.value > 0 && bore.error) out.push([$("err-tubing_bore"), bore.error]);
+  }
   return out;
 }
 
@@ -262,8 +269,31 @@ function askPart(grid) {
   const body = { [ASK[askAxis()].field]: grid, model: $("model").value.trim() || "emulator", level: LEVEL };
   const q = flowRate();
   if (q !== null) body.flow_ul_s = q;
-  if ($("inlet").checked) body.inlet = {};
+  if ($("inlet").checked) body.inlet = inletPart();
   return body;
+}
+
+// The inlet's hydraulic path: the paper's channel, and the tubing from the pump when its
+// length is > 0 (Hagen-Poiseuille in series, surrogate/hydraulics.py). A field in error
+// is named by pageErrors and nothing is asked.
+function inletPart() {
+  const length = checkNumber($("tubing_length")).value;
+  if (!(length > 0)) return {};
+  return { tubing_length_mm: length, tubing_bore_mm: checkNumber($("tubing_bore")).value };
+}
+
+// The tubing's fields with the inlet; the answer's resistance under them.
+function showInlet() {
+  for (const el of document.querySelectorAll("[data-inlet]")) el.hidden = !$("inlet").checked;
+}
+
+// The inlet's resistance R and, at the flow rate, its pressure drop R Q (the answer's).
+function showInletNote() {
+  const inlet = app.prediction && app.prediction.inlet;
+  const R = inlet && inlet.resistance_pa_per_ul_s;
+  $("inlet-note").textContent = typeof R !== "number" ? ""
+    : `Inlet resistance R = ${fmtSig(R)} Pa per ul/s` +
+      (typeof inlet.pressure_drop_pa === "number" ? `: R Q = ${fmtSig(inlet.pressure_drop_pa)} Pa at ${fmtSig(inlet.flow_ul_s)} ul/s.` : ".");
 }
 
 function predictBody(state, grid) {
@@ -294,7 +324,9 @@ function showAskAxis() {
 // starts from it.
 function view() {
   const near = checkNumber($("nearby"), { integer: true });
+  const inlet = $("inlet").checked ? inletPart() : {};
   return { ask: askAxis(), max: gridMax(), flow: flowRate(), inlet: $("inlet").checked,
+           tubing: inlet.tubing_length_mm, bore: inlet.tubing_bore_mm,
            model: $("model").value.trim() || "emulator",
            x: app.wantAxes?.x ?? $("x_axis").value, y: app.wantAxes?.y ?? $("y_axis").value,
            near: near.value ?? undefined, at: (gridMax() * opIndex()) / (N_POINTS - 1) };
@@ -325,6 +357,9 @@ function applyLink(hash, reset = false) {
   if (v.max) $(ASK[askAxis()].input).value = String(v.max);
   if (v.flow !== undefined) $("flow").value = v.flow === null ? "" : String(v.flow);
   if (v.inlet !== undefined) $("inlet").checked = v.inlet;
+  if (v.tubing !== undefined) $("tubing_length").value = String(v.tubing);
+  if (v.bore !== undefined) $("tubing_bore").value = String(v.bore);
+  showInlet();
   if (v.model) $("model").value = v.model;
   if (v.near !== undefined) $("nearby").value = String(v.near);
   showAskAxis();
@@ -349,6 +384,8 @@ const DESIGN_SLOTS = () => {
   slots.times_s = $("err-times_s");
   slots.flow_ul_s = $("err-flow_ul_s");
   slots.inlet = $("err-inlet");
+  slots["inlet.tubing_length_mm"] = $("err-tubing_length");
+  slots["inlet.tubing_bore_mm"] = $("err-tubing_bore");
   slots.model = $("err-model");
   return slots;
 };
@@ -411,6 +448,7 @@ async function update() {
 
 // What every answer (or page-side refusal) redraws; the nearest FE curves come after.
 function afterAnswer(controller, mark) {
+  showInletNote();
   $("pin").disabled = app.pinned.length >= MAX_PINNED || !app.prediction;
   $("pin").title = app.prediction ? "" : "nothing to pin: there is no prediction for this design";
   showRefused();
@@ -518,6 +556,9 @@ async function applySchemaLimits() {
   set("p_max", items(predict.pressures_pa), { min: false });
   set("v_max", items(predict.volumes_ul), { min: false });
   set("t_max", items(predict.times_s), { min: false });
+  const inlet = schemas.InletIn?.properties || {};
+  set("tubing_length", inlet.tubing_length_mm);
+  set("tubing_bore", inlet.tubing_bore_mm?.anyOf?.find((a) => a.type === "number") || inlet.tubing_bore_mm);
 }
 
 async function offersSolve(err, body) {

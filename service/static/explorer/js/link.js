@@ -1,9 +1,9 @@
 // The page's design and curve request in the address's fragment ("#W_mm=3&L_mm=7.1&..."),
 // so that a view can be bookmarked, shared and reopened as it was. Pure functions: the
 // fragment is text from anywhere, so only known keys with valid values are taken (numbers
-// finite and > 0, the readout's point finite and >= 0, the pair an index, the axis one of
-// three, the model a name; an empty flow rate, none); the others are returned as ignored,
-// never interpreted.
+// finite and > 0, the readout's point and the tubing length finite and >= 0, the pair an
+// index, the axis one of three, the model a name; an empty flow rate, none); the others
+// are returned as ignored, never interpreted.
 
 import { FIELDS, PAIRS, W_FIELD } from "./design.js";
 
@@ -24,7 +24,7 @@ function nonNegative(text) {
   return text.trim() !== "" && Number.isFinite(v) && v >= 0 ? v : null;
 }
 
-// {design: {...state keys}, view: {ask, max, flow, inlet, model, x, y, near, at},
+// {design: {...state keys}, view: {ask, max, flow, inlet, tubing, bore, model, x, y, near, at},
 //  ignored: ["key", ...]}; view.flow null: the link's flow rate is none ("flow=").
 export function readLink(hash) {
   const out = { design: {}, view: {}, ignored: [] };
@@ -47,9 +47,12 @@ export function readLink(hash) {
     } else if (key === "max" || key === "flow") {
       const v = positive(value);
       if (v === null) ok = false; else out.view[key] = v;
-    } else if (key === "at") {
+    } else if (key === "at" || key === "tubing") {
       const v = nonNegative(value);
-      if (v === null) ok = false; else out.view.at = v;
+      if (v === null) ok = false; else out.view[key] = v;
+    } else if (key === "bore") {
+      const v = positive(value);
+      if (v === null) ok = false; else out.view.bore = v;
     } else if (key === "inlet") {
       if (value === "1" || value === "0") out.view.inlet = value === "1"; else ok = false;
     } else if (key === "model") {
@@ -67,8 +70,9 @@ export function readLink(hash) {
   return out;
 }
 
-// The fragment of a state (design keys) and view ({ask, max, flow, inlet, model, x, y, near,
-// at: the readout's point on the asked axis;
+// The fragment of a state (design keys) and view ({ask, max, flow, inlet, tubing, bore
+// (the inlet's tubing length and bore, mm), model, x, y, near, at: the readout's point on
+// the asked axis;
 // flow null: none, written "flow=" so that the link does not reopen at the page's default).
 export function writeLink(state, view) {
   const params = new URLSearchParams();
@@ -80,6 +84,10 @@ export function writeLink(state, view) {
   else if (view.flow === null) params.set("flow", "");
   if (Number.isFinite(view.at)) params.set("at", String(view.at));
   if (view.inlet) params.set("inlet", "1");
+  if (view.inlet && view.tubing > 0 && Number.isFinite(view.bore)) {
+    params.set("tubing", String(view.tubing));
+    params.set("bore", String(view.bore));
+  }
   if (view.model) params.set("model", view.model);
   if (view.x && view.x !== view.ask) params.set("x", view.x);
   if (view.y && view.y !== "angle") params.set("y", view.y);
