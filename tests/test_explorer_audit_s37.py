@@ -13,7 +13,16 @@ import re
 
 import httpx
 import pytest
-from explorer_browser import LiveServer, change, open_explorer, screenshot, wait_prediction
+from explorer_browser import (
+    LiveServer,
+    change,
+    hold_predict,
+    open_explorer,
+    release,
+    screenshot,
+    wait_held,
+    wait_prediction,
+)
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -37,29 +46,14 @@ def test_a_pinned_designs_answer_to_a_former_grid_never_overwrites_the_newer_one
     page.click("#pin")
     page.fill("#L_mm", "9")
     wait_prediction(page, L_mm=9)
-    held = []
-
-    def hold_the_pinned_3000_pa_answer(route):
-        body = route.request.post_data_json
-        if body["design"]["L_mm"] == 7.1 and body["pressures_pa"][-1] == 3000:
-            held.append(route)
-        else:
-            route.continue_()
-
-    page.route("**/v1/predict", hold_the_pinned_3000_pa_answer)
+    held = hold_predict(page, lambda body: body["design"]["L_mm"] == 7.1
+                        and body["pressures_pa"][-1] == 3000)
     change(page, "#p_max", 3000)
-    for _ in range(1000):  # up to ~20 s
-        if held:
-            break
-        page.wait_for_timeout(20)
-    assert held, "the pinned design was not asked the 3000 Pa grid"
+    late = wait_held(page, held, "the pinned design's 3000 Pa grid")
     change(page, "#p_max", 1000)
     page.wait_for_function("window.explorer.pinned[0].prediction"
                            " && window.explorer.pinned[0].prediction.pressure_pa.at(-1) === 1000")
-    try:
-        held[0].continue_()
-    except Exception:  # the page has given the request up
-        pass
+    release(late)
     page.wait_for_timeout(1000)
     pinned = page.evaluate("window.explorer.pinned[0].prediction")
     assert pinned["pressure_pa"][-1] == 1000
@@ -264,3 +258,19 @@ def test_the_inlet_takes_the_labs_tubing_and_the_link_keeps_it(watched, server):
     page.wait_for_selector("#err-tubing_bore:not([hidden])")
     assert page.inner_text("#err-tubing_bore").startswith("Tubing bore (mm): empty (allowed:")
     assert page.evaluate("window.explorer.prediction") is None
+
+
+def test_a_design_pinned_while_its_change_is_asked_gets_its_own_curve(watched, server):
+    # pinned while L 9 was being asked, the row "L 9" kept L 7.1's answer (5.8 deg at
+    # 1000 Pa) for as long as the question stayed the same
+    page = open_explorer(watched, server.url)
+    held = hold_predict(page, lambda body: body["design"]["L_mm"] == 9)
+    page.fill("#L_mm", "9")
+    asked = wait_held(page, held, "L 9")
+    page.click("#pin")
+    release(asked)
+    wait_prediction(page, L_mm=9)
+    page.wait_for_function("window.explorer.pinned[0].prediction")
+    assert page.evaluate("window.explorer.pinned[0].prediction.design.L_mm") == 9
+    want = page.evaluate("window.explorer.prediction.angle_deg[40]")
+    assert f"{want:.1f} deg" in page.locator("#compare-table tbody tr").first.inner_text()

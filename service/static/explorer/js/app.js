@@ -909,7 +909,12 @@ function pin() {
   const used = new Set(app.pinned.map((p) => p.n));
   let n = 1;
   while (used.has(n)) n++;
-  app.pinned.push({ n, state: { ...app.state }, prediction: app.prediction, color: COLORS[n], ask: askOf(app.request) });
+  // the answer shown is this design's unless a change is still being asked (a pin made
+  // then kept the former design's curve under the new design's name): then the pinned
+  // design waits for its own answer, which the pending change's refreshPinned asks
+  const own = designKey(app.state) === JSON.stringify(app.request.design);
+  app.pinned.push({ n, state: { ...app.state }, prediction: own ? app.prediction : null, color: COLORS[n],
+                    ask: own ? askOf(app.request) : null });
   renderCompare();
   redraw();
 }
