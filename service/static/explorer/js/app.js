@@ -919,9 +919,6 @@ function pin() {
   redraw();
 }
 
-// The pinned designs asked the question of the answer shown (``controller``'s): a newer
-// question aborts it, and an answer to an older one is never kept (it set a pinned row's
-// "angle at 500 Pa" to its angle at 1500 Pa of the former 3000 Pa grid).
 // A predict request's question without its design (the asked axis's grid, flow rate,
 // inlet, model), as text; ``currentAsk``: the one the page asks now.
 function askOf(body) {
@@ -939,6 +936,9 @@ function pinnedAnswer(pin) {
   return pin.prediction && pin.ask === currentAsk() ? pin.prediction : null;
 }
 
+// The pinned designs asked the question of the answer shown (``controller``'s): a newer
+// question aborts it, and an answer to an older one is never kept (it set a pinned row's
+// "angle at 500 Pa" to its angle at 1500 Pa of the former 3000 Pa grid).
 async function refreshPinned(grid, controller) {
   const ask = JSON.stringify(askPart(grid));  // the same question of every pinned design
   for (const pin of app.pinned) {
