@@ -78,16 +78,19 @@ class QueueFullError(UnavailableError):
 class FieldError(InputError):
     """An InputError located in the request: ``loc`` is the full path, e.g.
     ``("body", "design", "t_mm")``; ``others`` are further fields of the same refusal
-    (a design outside the box in several lengths), each a FieldError."""
+    (a design outside the box in several lengths), each a FieldError; ``nearest``: an
+    out-of-box refusal's nearest design inside the box (a ``solver.design.Design``)."""
 
     def __init__(self, loc: tuple[str | int, ...], message: str,
                  allowed: str | None = None, kind: str = "invalid-input",
-                 others: tuple[FieldError, ...] = (), allowed_said: bool = False) -> None:
+                 others: tuple[FieldError, ...] = (), allowed_said: bool = False,
+                 nearest: Any = None) -> None:
         super().__init__(".".join(str(p) for p in loc[1:]) or str(loc[0]), message, allowed,
                          allowed_said=allowed_said)
         self.loc = loc
         self.kind = kind
         self.others = others
+        self.nearest = nearest
 
 
 def located(exc: InputError, prefix: tuple[str | int, ...],
@@ -102,7 +105,7 @@ def located(exc: InputError, prefix: tuple[str | int, ...],
     kind = "invalid-input" if type(exc) is InputError else _kebab(type(exc).__name__)
     others = tuple(located(o, prefix, rename) for o in getattr(exc, "others", ()))
     return FieldError(prefix + parts, exc.detail, exc.allowed, kind, others,
-                      allowed_said=exc.allowed_said)
+                      allowed_said=exc.allowed_said, nearest=getattr(exc, "nearest", None))
 
 
 @dataclass
@@ -147,7 +150,9 @@ def problem_for(exc: BaseException) -> Problem:
         kind = getattr(exc, "kind", None) or (
             "invalid-input" if type(exc) is InputError else _kebab(type(exc).__name__))
         errors = [_error_entry(e) for e in (exc, *getattr(exc, "others", ()))]
-        return Problem(422, "Invalid input", str(exc), kind, errors=errors)
+        nearest = getattr(exc, "nearest", None)
+        extra = {} if nearest is None else {"nearest_design": _nearest_design(nearest)}
+        return Problem(422, "Invalid input", str(exc), kind, errors=errors, extra=extra)
     if isinstance(exc, NotFoundError):
         return Problem(404, "Not found", str(exc), "not-found")
     if isinstance(exc, SolverError):
@@ -166,6 +171,15 @@ def _error_entry(exc: InputError) -> dict[str, Any]:
     if exc.allowed:
         error["allowed"] = exc.allowed
     return error
+
+
+def _nearest_design(design: Any) -> dict[str, Any]:
+    """An out-of-box refusal's nearest design inside the box as a request takes it: the
+    lengths (mm) and each layer by id (a scaled preset ``pdms_1_10*2``), so that a client
+    can ask it instead (the explorer's "Load the nearest design")."""
+    lengths = {n: getattr(design, n) for n in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm")}
+    return {**lengths, "body_material": design.body_material.id,
+            "membrane_material": design.membrane_material.id}
 
 
 def _kebab(name: str) -> str:

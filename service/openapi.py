@@ -37,6 +37,10 @@ class Problem(BaseModel):
     detail: str = Field(description="what was wrong and what to do, in one sentence")
     instance: str = Field(description="the request path")
     errors: list[ProblemItem] | None = Field(None, description="one per invalid field")
+    nearest_design: dict[str, Any] | None = Field(
+        None, description="a design outside the model's box (urn:balloon:problem:out-of-box): "
+        "the nearest design inside it as a request's design takes it (L_mm, t_mm, T_mm, "
+        "b_mm, h_mm, W_mm; each layer by id, a scaled preset as <preset>*<s>)")
 
 
 STATUS_WORDS = {

@@ -149,3 +149,49 @@ def open_explorer(watched: Watched, url: str):
     page.goto(url + "/")
     page.wait_for_selector("body[data-ready=true]")
     return page
+
+
+def wait_prediction(page, **design):
+    """Wait until the prediction shown is of a design with these values (to 1e-9)."""
+    cond = " && ".join(f"Math.abs(p.design.{k} - {v}) < 1e-9" for k, v in design.items())
+    page.wait_for_function(
+        f"(() => {{ const p = window.explorer.prediction; return p && {cond}; }})()")
+
+
+def change(page, selector, value):
+    """Type ``value`` into a field and commit it (the change event)."""
+    page.fill(selector, str(value))
+    page.dispatch_event(selector, "change")
+
+
+def hold_predict(page, wanted=lambda body: True) -> list:
+    """Route POST /v1/predict so that the first request whose JSON body ``wanted`` accepts
+    is held (the test answers it later with ``continue_()``); the others pass. The list
+    of held routes fills when that request is sent."""
+    held: list = []
+
+    def route(r):
+        if not held and wanted(r.request.post_data_json):
+            held.append(r)
+        else:
+            r.continue_()
+
+    page.route("**/v1/predict", route)
+    return held
+
+
+def wait_held(page, held: list, what: str):
+    """The held route of ``hold_predict`` once its request is sent (up to ~20 s)."""
+    for _ in range(1000):
+        if held:
+            return held[0]
+        page.wait_for_timeout(20)
+    raise AssertionError(f"{what} was never asked")
+
+
+def release(route) -> None:
+    """Answer a held request, unless the page has already given it up (aborted)."""
+    try:
+        route.continue_()
+    except Exception:  # the browser no longer waits for it
+        pass

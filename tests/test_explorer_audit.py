@@ -19,8 +19,10 @@ from explorer_browser import (
     ROOT,
     LiveServer,
     Watched,
+    change,
     open_explorer,
     screenshot,
+    wait_prediction,
 )
 from service_solves import make_curve
 
@@ -43,17 +45,6 @@ def partial_solve(design, settings, on_step=None):
 def server(tmp_path_factory):
     with LiveServer(tmp_path_factory.mktemp("explorer-audit"), solve_fn=partial_solve) as live:
         yield live
-
-
-def wait_prediction(page, **design):
-    cond = " && ".join(f"Math.abs(p.design.{k} - {v}) < 1e-9" for k, v in design.items())
-    page.wait_for_function(
-        f"(() => {{ const p = window.explorer.prediction; return p && {cond}; }})()")
-
-
-def change(page, selector, value):
-    page.fill(selector, str(value))
-    page.dispatch_event(selector, "change")
 
 
 def predict_posts(watched) -> int:

@@ -15,8 +15,11 @@ import pytest
 from explorer_browser import (
     LiveServer,
     Watched,
+    hold_predict,
     open_explorer,
+    release,
     screenshot,
+    wait_held,
 )
 
 GRID_POINTS = 81  # the page's pressure grid: 0 .. p_max in 80 steps
@@ -214,29 +217,15 @@ def test_the_address_holds_the_view_and_a_link_reopens_it(watched, server):
 
 def test_a_stale_prediction_is_cancelled_and_never_drawn_over_a_newer_one(watched, server):
     page = open_explorer(watched, server.url)
-    held, failed = [], []
+    failed = []
     page.on("requestfailed",
             lambda r: failed.append(r.post_data_json) if "/v1/predict" in r.url else None)
-
-    def hold_the_first(route):
-        if not held:
-            held.append(route)  # answered only after the newer request has been drawn
-        else:
-            route.continue_()
-
-    page.route("**/v1/predict", hold_the_first)
+    held = hold_predict(page)  # answered only after the newer request has been drawn
     page.fill("#L_mm", "9")
-    for _ in range(1000):  # up to ~20 s
-        if held:
-            break
-        page.wait_for_timeout(20)
-    assert held, "the first prediction request was never sent"
+    first = wait_held(page, held, "the first prediction request")
     page.fill("#L_mm", "10")
     wait_prediction(page, L_mm=10)
-    try:
-        held[0].continue_()
-    except Exception:  # the browser has already given the request up
-        pass
+    release(first)
     page.wait_for_timeout(500)
     assert page.evaluate("window.explorer.prediction.design.L_mm") == 10
     assert [b["design"]["L_mm"] for b in failed] == [9]  # aborted by the page
@@ -372,7 +361,7 @@ def test_force_volume_and_capped_angles_are_rendered_when_the_response_has_them(
 
     page.route("**/v1/predict", extend)
     open_explorer(watched, server.url)
-    assert "force 10.00 mN" in page.locator("#p_op-out").inner_text()
+    assert "force 10.0 mN" in page.locator("#p_op-out").inner_text()
     assert "volume 1.00 ul" in page.locator("#p_op-out").inner_text()
     assert any("capped" in t for t in page.locator("#validity li").all_inner_texts())
     page.select_option("#x_axis", "volume_ul")

@@ -9,7 +9,7 @@ import { api, ApiError, clearMessage, clearProblems, isAbort, OfflineError, show
 import { setupCalibration } from "./calibration.js";
 import {
   FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
-  materialLabel, pairLabel, scaledLengths, shown,
+  materialLabel, pairLabel, scaledLengths, shown, stateOfDesign,
 } from "./design.js";
 import { checkNumber } from "./fields.js";
 import { setupInverse } from "./inverse.js";
@@ -105,13 +105,17 @@ function addField(box, f, onValue) {
   range.addEventListener("input", () => { num.value = range.value; app.inputErrors.delete(`err-${f.name}`); onValue(Number(range.value)); });
   num.addEventListener("input", () => {
     // an empty field is named beside it, never silently kept at its former value; a
-    // number the server does not take (L 70, t -1) is sent, and its answer names the range
+    // number the server does not take (L 70, t -1) is sent, and its answer names the range.
+    // A width or a stiffness scale <= 0 is no design at all: named here (a scale of -1 was
+    // sent as a material of negative moduli and offered an FE solve the server refused)
     const text = num.value.trim();
     const v = Number(text);
-    if (text === "" || !Number.isFinite(v) || (f === W_FIELD && !(v > 0))) {
+    if (text === "" || !Number.isFinite(v) || ((f === W_FIELD || f.unit === "x") && !(v > 0))) {
       const r = fieldRange(f, app.state.W_mm);
       const unit = f.unit === "x" ? " x preset moduli" : ` ${f.unit}`;
-      app.inputErrors.set(`err-${f.name}`, `${text === "" ? "empty" : `${text} is not a usable value`} (allowed: ${r.min} to ${r.max}${unit})`);
+      // a number box holding text that is no number ("1e", "--1") reads as empty: badInput
+      const what = text !== "" ? `${text} is not a usable value` : (num.validity.badInput ? "not a number" : "empty");
+      app.inputErrors.set(`err-${f.name}`, `${what} (allowed: ${r.min} to ${r.max}${unit})`);
       app.inputMark = performance.now();
       schedule(DEBOUNCE_MS);
       return;
@@ -152,9 +156,10 @@ function buildFields() {
   const pair = $("pair");
   PAIRS.forEach(([b, m], k) => pair.add(new Option(pairLabel(b, m), String(k))));
   pair.addEventListener("change", () => onInput("pair", Number(pair.value)));
-  for (const id of ["p_max", "v_max", "t_max", "flow", "inlet", "model", "nearby"]) {
+  for (const id of ["p_max", "v_max", "t_max", "flow", "inlet", "tubing_length", "tubing_bore", "model", "nearby"]) {
     $(id).addEventListener("change", () => { $("view-note").textContent = ""; schedule(0); });
   }
+  $("inlet").addEventListener("change", showInlet);
   $("ask_axis").addEventListener("change", onAskAxis);
   for (const id of ["x_axis", "y_axis"]) $(id).addEventListener("change", () => { redraw(); rewriteLink(); });
   $("p_op").addEventListener("input", () => {
@@ -162,6 +167,7 @@ function buildFields() {
     if (max > 0) app.opFraction = Number($("p_op").value) / max;
     showOperatingPoint();
     redraw();
+    rewriteLink();  // the readout's point is part of the view
   });
 }
 
@@ -250,6 +256,12 @@ function pageErrors() {
   if (max.error) out.push([$(`err-${a.field}`), max.error]);
   const flow = checkNumber($("flow"), { optional: true, unit: "ul/s" });
   if (flow.error) out.push([$("err-flow_ul_s"), flow.error]);
+  if ($("inlet").checked) {
+    const length = checkNumber($("tubing_length"), { unit: "mm" });
+    if (length.error) out.push([$("err-tubing_length"), length.error]);
+    const bore = checkNumber($("tubing_bore"), { unit: "mm" });
+    if (length.value > 0 && bore.error) out.push([$("err-tubing_bore"), bore.error]);
+  }
   return out;
 }
 
@@ -258,8 +270,31 @@ function askPart(grid) {
   const body = { [ASK[askAxis()].field]: grid, model: $("model").value.trim() || "emulator", level: LEVEL };
   const q = flowRate();
   if (q !== null) body.flow_ul_s = q;
-  if ($("inlet").checked) body.inlet = {};
+  if ($("inlet").checked) body.inlet = inletPart();
   return body;
+}
+
+// The inlet's hydraulic path: the paper's channel, and the tubing from the pump when its
+// length is > 0 (Hagen-Poiseuille in series, surrogate/hydraulics.py). A field in error
+// is named by pageErrors and nothing is asked.
+function inletPart() {
+  const length = checkNumber($("tubing_length")).value;
+  if (!(length > 0)) return {};
+  return { tubing_length_mm: length, tubing_bore_mm: checkNumber($("tubing_bore")).value };
+}
+
+// The tubing's fields with the inlet; the answer's resistance under them.
+function showInlet() {
+  for (const el of document.querySelectorAll("[data-inlet]")) el.hidden = !$("inlet").checked;
+}
+
+// The inlet's resistance R and, at the flow rate, its pressure drop R Q (the answer's).
+function showInletNote() {
+  const inlet = app.prediction && app.prediction.inlet;
+  const R = inlet && inlet.resistance_pa_per_ul_s;
+  $("inlet-note").textContent = typeof R !== "number" ? ""
+    : `Inlet resistance R = ${fmtSig(R)} Pa per ul/s` +
+      (typeof inlet.pressure_drop_pa === "number" ? `: R Q = ${fmtSig(inlet.pressure_drop_pa)} Pa at ${fmtSig(inlet.flow_ul_s)} ul/s.` : ".");
 }
 
 function predictBody(state, grid) {
@@ -285,14 +320,17 @@ function showAskAxis() {
 }
 
 // ---------------------------------------------------------------- the view's link
-// The address's fragment holds the design and the curve request (link.js): each answer
-// rewrites it, a page opened with one starts from it.
+// The address's fragment holds the design, the curve request and the readout's point
+// (link.js): each answer and each move of the readout rewrites it, a page opened with one
+// starts from it.
 function view() {
   const near = checkNumber($("nearby"), { integer: true });
-  return { ask: askAxis(), max: gridMax(), flow: flowRate() ?? undefined, inlet: $("inlet").checked,
+  const inlet = $("inlet").checked ? inletPart() : {};
+  return { ask: askAxis(), max: gridMax(), flow: flowRate(), inlet: $("inlet").checked,
+           tubing: inlet.tubing_length_mm, bore: inlet.tubing_bore_mm,
            model: $("model").value.trim() || "emulator",
            x: app.wantAxes?.x ?? $("x_axis").value, y: app.wantAxes?.y ?? $("y_axis").value,
-           near: near.value ?? undefined };
+           near: near.value ?? undefined, at: (gridMax() * opIndex()) / (N_POINTS - 1) };
 }
 
 function rewriteLink() {
@@ -318,13 +356,19 @@ function applyLink(hash, reset = false) {
   const v = link.view;
   if (v.ask) $("ask_axis").value = v.ask;
   if (v.max) $(ASK[askAxis()].input).value = String(v.max);
-  if (v.flow) $("flow").value = String(v.flow);
+  if (v.flow !== undefined) $("flow").value = v.flow === null ? "" : String(v.flow);
   if (v.inlet !== undefined) $("inlet").checked = v.inlet;
+  if (v.tubing !== undefined) $("tubing_length").value = String(v.tubing);
+  if (v.bore !== undefined) $("tubing_bore").value = String(v.bore);
+  showInlet();
   if (v.model) $("model").value = v.model;
   if (v.near !== undefined) $("nearby").value = String(v.near);
   showAskAxis();
   app.wantAxes = v.x || v.y ? { x: v.x, y: v.y } : null;
-  app.opFraction = 0.5;
+  // the readout's point, on the curve's grid (one past its end is named, not moved)
+  const max = gridMax();
+  if (v.at !== undefined && v.at > max) link.ignored.push("at");
+  app.opFraction = v.at !== undefined && v.at <= max ? v.at / max : 0.5;
   const note = $("link-note");
   note.hidden = link.ignored.length === 0;
   note.textContent = link.ignored.length ? `The link's ${link.ignored.join(", ")} ignored (unknown or not a valid value).` : "";
@@ -341,6 +385,8 @@ const DESIGN_SLOTS = () => {
   slots.times_s = $("err-times_s");
   slots.flow_ul_s = $("err-flow_ul_s");
   slots.inlet = $("err-inlet");
+  slots["inlet.tubing_length_mm"] = $("err-tubing_length");
+  slots["inlet.tubing_bore_mm"] = $("err-tubing_bore");
   slots.model = $("err-model");
   return slots;
 };
@@ -397,12 +443,13 @@ async function update() {
       : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
   rewriteLink();
-  refreshPinned(grid);
+  refreshPinned(grid, controller);
   afterAnswer(controller, mark);
 }
 
 // What every answer (or page-side refusal) redraws; the nearest FE curves come after.
 function afterAnswer(controller, mark) {
+  showInletNote();
   $("pin").disabled = app.pinned.length >= MAX_PINNED || !app.prediction;
   $("pin").title = app.prediction ? "" : "nothing to pin: there is no prediction for this design";
   showRefused();
@@ -510,6 +557,9 @@ async function applySchemaLimits() {
   set("p_max", items(predict.pressures_pa), { min: false });
   set("v_max", items(predict.volumes_ul), { min: false });
   set("t_max", items(predict.times_s), { min: false });
+  const inlet = schemas.InletIn?.properties || {};
+  set("tubing_length", inlet.tubing_length_mm);
+  set("tubing_bore", inlet.tubing_bore_mm?.anyOf?.find((a) => a.type === "number") || inlet.tubing_bore_mm);
 }
 
 async function offersSolve(err, body) {
@@ -620,8 +670,11 @@ function endText(rec, what) {
 
 // The FE record drawn for the design shown: its finished solve's, else its stored one
 // when the model gives no curve or the record ended early (a complete one is already
-// drawn first among the nearest FE curves).
+// drawn first among the nearest FE curves). None while a design field is in error: the
+// design shown is not the one whose fields were last good (an emptied L drew and read out
+// "FE curve of this design" of the former L).
 function ownRecord() {
+  if (app.inputErrors.size) return null;
   const key = designKey(app.state);
   const stored = app.stored && app.stored.key === key ? app.stored.record : null;
   return app.solved.get(key) || (stored && (!app.prediction || stored.curve.status !== "complete") ? stored : null);
@@ -680,7 +733,10 @@ function curveSeries() {
       { dash: ["5 4", "1.5 3", "9 3 2 3", "3 2", "12 4", "1.5 2 6 2"][k % 6], width: 1.4 });
   });
   // pinned curves without their bands (the table gives the band at the chosen pressure)
-  app.pinned.forEach((pin) => { if (pin.prediction) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pin.prediction, pin.color, { width: 1.6, lower: null, upper: null }); });
+  app.pinned.forEach((pin) => {
+    const pr = pinnedAnswer(pin);
+    if (pr) add(`pin-${pin.n}`, `#${pin.n} ${designLabel(pin.state)}`, pr, pin.color, { width: 1.6, lower: null, upper: null });
+  });
   const key = designKey(app.state);
   const own = ownRecord();
   const ownData = own && feData(own, false);
@@ -755,14 +811,16 @@ function showOperatingPoint() {
   let text = `${fmt(at, ask.digits)} ${ask.unit}: angle ${a === null ? "not predicted (past the FE range)" : fmt(a, 1) + " deg"}`;
   if (a !== null) text += ` [${fmt(pred.lower_deg[i], 1)}, ${fmt(pred.upper_deg[i], 1)}] (${Math.round(pred.level * 100)} %)`;
   if (pred.force_mn && pred.force_mn[i] !== null && pred.force_mn[i] !== undefined) {
-    text += `; force ${fmt(pred.force_mn[i], 2)} mN`;
-    if (pred.force_lower_mn && pred.force_upper_mn) text += ` [${fmt(pred.force_lower_mn[i], 2)}, ${fmt(pred.force_upper_mn[i], 2)}]`;
+    // forces, volumes and times to 3 significant digits: they scale with the design's size
+    // (a corner of the box read "force 0.00 mN [0.00, 0.00]" for 0.0030 [0.0017, 0.0048])
+    text += `; force ${fmtSig(pred.force_mn[i])} mN`;
+    if (pred.force_lower_mn && pred.force_upper_mn) text += ` [${fmtSig(pred.force_lower_mn[i])}, ${fmtSig(pred.force_upper_mn[i])}]`;
   }
   const has = (k) => Array.isArray(pred[k]) && pred[k][i] !== null && pred[k][i] !== undefined;
   if (axis !== "pressure_pa" && has("pressure_pa")) text += `; chamber pressure ${fmt(pred.pressure_pa[i], 0)} Pa`;
   if (has("pump_pressure_pa")) text += `; pump gauge ${fmt(pred.pump_pressure_pa[i], 0)} Pa`;
-  if (axis !== "volume_ul" && has("volume_ul")) text += `; volume ${fmt(pred.volume_ul[i], 2)} ul`;
-  if (axis !== "time_s" && has("time_s")) text += `; time ${fmt(pred.time_s[i], 1)} s`;
+  if (axis !== "volume_ul" && has("volume_ul")) text += `; volume ${fmtSig(pred.volume_ul[i])} ul`;
+  if (axis !== "time_s" && has("time_s")) text += `; time ${fmtSig(pred.time_s[i])} s`;
   out.textContent = text;
   renderCompare();
 }
@@ -810,14 +868,19 @@ function showValidity() {
   const asked = app.request ? app.request[ASK[askAxis()].field] : null;
   if (firstNull > 0 && asked) {
     // the FE range's end in the asked axis, as the server states it (the first empty grid
-    // point after it said "39.38 ul" beside the server's "38.8 ul")
+    // point after it said "39.38 ul" beside the server's "38.8 ul"), where the curve ends
+    // there: between its last answered point and its first empty one (an exponential
+    // model's curve ends earlier, at the family's largest FE angle, than the family's
+    // last FE pressure, which the page had called the curve's end)
     const flow = app.request && app.request.flow_ul_s;
     const end = { pressure_pa: v.fe_limit_pa, volume_ul: v.fe_limit_volume_ul,
       time_s: typeof v.fe_limit_volume_ul === "number" && flow ? v.fe_limit_volume_ul / flow : null }[askAxis()];
     const { unit, digits } = ASK[askAxis()];
-    messages.push(typeof end === "number"
+    const [last, first] = [asked[firstNull - 1], asked[firstNull]];
+    const atEnd = typeof end === "number" && end >= last - 1e-9 * first && end <= first * (1 + 1e-9);
+    messages.push(atEnd
       ? `The curve ends at ${fmt(end, digits)} ${unit}, where the FE's range ends: the answer is capped there, no angle is given beyond it.`
-      : `No angle is given from ${fmt(asked[firstNull], digits)} ${unit} on: past the FE's range the answer is capped there.`);
+      : `The curve ends at ${fmt(last, digits)} ${unit}: the answer is capped there, no angle is given from ${fmt(first, digits)} ${unit} on (past the FE's range, above).`);
   }
   for (const m of messages) {
     const li = document.createElement("li");
@@ -847,19 +910,47 @@ function pin() {
   const used = new Set(app.pinned.map((p) => p.n));
   let n = 1;
   while (used.has(n)) n++;
-  app.pinned.push({ n, state: { ...app.state }, prediction: app.prediction, color: COLORS[n], ask: JSON.stringify(askPart(axisGrid(gridMax(), N_POINTS))) });
+  // the answer shown is this design's unless a change is still being asked (a pin made
+  // then kept the former design's curve under the new design's name): then the pinned
+  // design waits for its own answer, which the pending change's refreshPinned asks
+  const own = designKey(app.state) === JSON.stringify(app.request.design);
+  app.pinned.push({ n, state: { ...app.state }, prediction: own ? app.prediction : null, color: COLORS[n],
+                    ask: own ? askOf(app.request) : null });
   renderCompare();
   redraw();
 }
 
-async function refreshPinned(grid) {
+// A predict request's question without its design (the asked axis's grid, flow rate,
+// inlet, model), as text; ``currentAsk``: the one the page asks now.
+function askOf(body) {
+  const { design: _, ...ask } = body;
+  return JSON.stringify(ask);
+}
+
+function currentAsk() {
+  return JSON.stringify(askPart(axisGrid(gridMax(), N_POINTS)));
+}
+
+// A pinned design's answer to the page's question now; null while it answers another
+// (its row and curve wait for the answer rather than read a former grid's points).
+function pinnedAnswer(pin) {
+  return pin.prediction && pin.ask === currentAsk() ? pin.prediction : null;
+}
+
+// The pinned designs asked the question of the answer shown (``controller``'s): a newer
+// question aborts it, and an answer to an older one is never kept (it set a pinned row's
+// "angle at 500 Pa" to its angle at 1500 Pa of the former 3000 Pa grid).
+async function refreshPinned(grid, controller) {
   const ask = JSON.stringify(askPart(grid));  // the same question of every pinned design
   for (const pin of app.pinned) {
     if (pin.prediction && pin.ask === ask) continue;
+    let prediction = null;
     try {
-      pin.prediction = await api("/v1/predict", { method: "POST", body: predictBody(pin.state, grid) });
-      pin.ask = ask;
-    } catch { pin.prediction = null; }
+      prediction = await api("/v1/predict", { method: "POST", body: predictBody(pin.state, grid), signal: controller.signal });
+    } catch (err) { if (isAbort(err)) return; }
+    if (controller.signal.aborted) return;
+    pin.prediction = prediction;
+    pin.ask = prediction ? ask : null;
     renderCompare();
     redraw();
   }
@@ -875,7 +966,7 @@ function renderCompare() {
   const i = opIndex();
   for (const pin of app.pinned) {
     const tr = document.createElement("tr");
-    const pr = pin.prediction;
+    const pr = pinnedAnswer(pin);
     const a = pr ? pr.angle_deg[i] : null;
     const force = pr && pr.force_mn ? pr.force_mn[i] : null;
     const cells = [
@@ -883,7 +974,7 @@ function renderCompare() {
       designLabel(pin.state),
       a === null || a === undefined ? "-" : `${fmt(a, 1)} deg`,
       pr && a !== null ? `${fmt(pr.lower_deg[i], 1)} - ${fmt(pr.upper_deg[i], 1)}` : "-",
-      force === null || force === undefined ? "-" : `${fmt(force, 2)} mN`,
+      force === null || force === undefined ? "-" : `${fmtSig(force)} mN`,
       pr ? ((pr.validity.flags || []).length ? pr.validity.flags.map(flagWords).join(", ")
         : (pr.validity.in_domain ? "in domain" : "outside the fitted domain")) : "no prediction",
     ];
@@ -899,6 +990,12 @@ function showRefused() {
   const box = $("refused");
   box.hidden = !app.refused;
   if (app.refused) $("refused-detail").textContent = app.refused.message;
+  // the server's nearest design inside the box (an out-of-box refusal), one click away
+  const near = app.refused && app.refused.problem.nearest_design ? stateOfDesign(app.refused.problem.nearest_design) : null;
+  const button = $("load-nearest");
+  button.hidden = !near;
+  button.textContent = near ? `Load the nearest design in the box: ${designLabel(near)}` : "";
+  button.onclick = near ? () => loadDesign(near) : null;
 }
 
 async function solve() {
@@ -1003,7 +1100,7 @@ function exportCsv() {
 
 function exportJson() {
   const data = { exported_utc: new Date().toISOString(), request: app.request, prediction: app.prediction,
-    pinned: app.pinned.map((p) => ({ design: designBody(p.state, app.presets), prediction: p.prediction })),
+    pinned: app.pinned.map((p) => ({ design: designBody(p.state, app.presets), prediction: pinnedAnswer(p) })),
     fe_curves: app.nearest.map((r) => ({ id: r.id, design: r.design, curve: { pressure_pa: r.curve.pressure_pa, volume_ul: r.curve.volume_ul, angle_deg: r.curve.angle_deg, force_mn: r.curve.force_mn } })),
     shown: shownCurves() };
   download("balloon-curves.json", JSON.stringify(data, null, 1), "application/json");

@@ -95,15 +95,35 @@ export function materialId(m) {
   return typeof m === "string" ? m : m.id;
 }
 
+// A layer's id as [preset, stiffness scale]: "<preset>*<s>" (the store's and the server's
+// name of a scaled preset, solver.design_space.scaled_material) or "<preset>_x<s>" (this
+// page's inline material); any other id at scale 1.
+export function presetAndScale(id) {
+  const match = String(id).match(/^(.*?)(?:\*([0-9.eE+-]+)|_x([0-9.]+))$/);
+  return match ? [match[1], Number(match[2] || match[3])] : [String(id), 1];
+}
+
+// A design as the server writes it (an out-of-box refusal's ``nearest_design``: lengths
+// in mm, each layer by id) as the page's state; null for a pair this page does not offer.
+export function stateOfDesign(d) {
+  const [body, bodyScale] = presetAndScale(d.body_material);
+  const [membrane, membraneScale] = presetAndScale(d.membrane_material);
+  const pair = PAIRS.findIndex(([b, m]) => b === body && m === membrane);
+  const lengths = [W_FIELD, ...FIELDS].filter((f) => f.name.endsWith("_mm")).map((f) => f.name);
+  if (pair < 0 || !(bodyScale > 0 && membraneScale > 0) || !lengths.every((n) => d[n] > 0)) return null;
+  const state = { pair, body_scale: bodyScale, membrane_scale: membraneScale };
+  for (const n of lengths) state[n] = d[n];
+  return state;
+}
+
 // A stored record's layer as people read it: the preset's name, and its stiffness scale
 // when not 1 ("PDMS 1:15 x0.968"). The store names a scaled layer "<preset>*<s>", an
 // inline one sent by this page "<preset>_x<s>"; with the presets (GET /v1/materials) the
 // scale is read off the moduli instead.
 export function materialLabel(m, presets) {
   const id = materialId(m);
-  const match = id.match(/^(.*?)(?:\*([0-9.eE+-]+)|_x([0-9.]+))$/);
-  const base = match ? match[1] : id;
-  let scale = match ? Number(match[2] || match[3]) : 1;
+  const [base, idScale] = presetAndScale(id);
+  let scale = idScale;
   const preset = presets && presets[base];
   if (preset && typeof m === "object" && m.mu_kpa && preset.mu_kpa[0]) scale = m.mu_kpa[0] / preset.mu_kpa[0];
   const name = MATERIAL_NAMES[base] || base;
