@@ -70,6 +70,11 @@ from surrogate.volume_control import by_volume
 # 2155-record fit), 6 of the 9 designs within 0.3 of one missed the per-curve target
 # (RMSE 1.1-6.2 deg) and 7 had band coverage 0.35-0.76; of the 27 further away, 3 and 4.
 NEAR_FAILED_RADIUS = 0.3
+# A design this many times the box's size (W / 3 mm) or larger that reaches the FE's volume
+# stop is told so, not that its balloon grows more than it bends: at W = 20 mm the curve
+# ended at 0.2 deg for its k^3 = 296x volume, explained as a balloon that does not bend
+# (the explorer audit of the thirty-seventh session).
+VOLUME_STOP_SCALE = 1.5
 FAILED_RADIUS = 0.15      # unit-cube distance within which an early-ended FE curve limits
 # The emulated end of a design's FE curve (PairEmulator.range_model, a GP of where every
 # database curve of the group ends: 90 deg, or earlier at the volume stop or a Newton
@@ -347,8 +352,13 @@ class PairEmulator:
                 limit = float(FINE_ANGLES_DEG[over[0]])
                 reason = (f"the default FE stops at {self.fe_max_volume_ul:g} ul injected "
                           "(SolverSettings.max_volume_ul), which this design's emulated "
-                          "volume reaches there: the balloon grows more than the actuator "
-                          "bends")
+                          "volume reaches there: " + (
+                              "the balloon grows more than the actuator bends"
+                              if length_scale <= VOLUME_STOP_SCALE else
+                              f"a copy {length_scale:.3g}x the box's size in every length "
+                              f"holds {length_scale**3:.3g}x its volume, so it reaches the "
+                              "stop at a smaller angle (POST /v1/solve with a larger "
+                              "max_volume_ul gives the rest)"))
         if self.failed:
             near = failed_distances < FAILED_RADIUS
             for i in np.flatnonzero(near):
