@@ -306,10 +306,34 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
             item["message"] = f"{_short(err.get('input'))} is not of this form"
         elif not allowed and names:
             allowed = FIELD_FORMS.get(names[-1])   # a material that is a number, null, ...
+        if not allowed:     # a choice of words, an object or the body: what it takes
+            allowed = _allowed_by_kind(err, request, loc)
+            if err.get("type") in ("literal_error", "enum"):    # the words: in allowed
+                item["message"] = f"{_short(err.get('input'))} is not one of these"
         if allowed:
             item["allowed"] = allowed
         out.append(item)
     return out
+
+
+BODY_ALLOWED = "a UTF-8 JSON document of the documented shape"
+# pydantic's error types of a value that is not the object (or the JSON document) asked
+OBJECT_EXPECTED = ("model_type", "model_attributes_type", "dict_type", "missing")
+
+
+def _allowed_by_kind(err: dict[str, Any], request: Request | None,
+                     loc: list[str | int]) -> str | None:
+    """The allowed values of a field without a range: a field of fixed words (its words),
+    an object (its fields, read off the published schema), the body itself (a JSON
+    document); None where none of these applies."""
+    if err.get("type") in ("literal_error", "enum"):
+        return str((err.get("ctx") or {}).get("expected", "")) or None
+    if err.get("type") not in OBJECT_EXPECTED:
+        return None
+    fields = _sibling_fields(request, [*loc, ""]) if request is not None else []
+    if fields:
+        return "a JSON object of " + ", ".join(fields) + " (the schema at /docs)"
+    return BODY_ALLOWED if loc == ["body"] else None
 
 
 def _short(value: Any, limit: int = 40) -> str:
@@ -321,7 +345,7 @@ def _short(value: Any, limit: int = 40) -> str:
 def _unparsed_body(message: str) -> dict[str, Any]:
     """The error entry of a body that is not the JSON document asked for."""
     return {"loc": ["body"], "field": "body", "message": message,
-            "allowed": "a UTF-8 JSON document of the documented shape"}
+            "allowed": BODY_ALLOWED}
 
 
 def _not_json_body(request: Request, errors: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -1,0 +1,93 @@
+"""Hostile requests of the thirty-seventh session: refusals that named the field but not
+what it takes. A field of fixed words (``status``, ``objective``, ``target.kind``,
+``pressures_at``, ``settings.element``), an object sent as something else or left out
+(``design``, ``target``, the body), a measured cell that is not a number, missing or an
+empty curve id, a curve whose design changes, and a design of no fitted family came back
+422 without ``allowed``."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi.testclient import TestClient
+from service_fakes import assert_problem, settings_for
+
+from service.app import create_app
+from service.routes.calibration import EXAMPLE_ROWS
+
+KEY = {"X-API-Key": "test-key"}
+
+
+@pytest.fixture
+def client(tmp_path):
+    app = create_app(settings_for(tmp_path), load_surrogate=False)
+    with TestClient(app, raise_server_exceptions=False) as c:
+        yield c
+
+
+def _allowed(body: dict, field: str) -> str:
+    """The ``allowed`` of the error at ``field`` (the test fails where it has none)."""
+    entries = [e for e in body["errors"] if e["field"] == field]
+    assert entries, body
+    assert entries[0].get("allowed"), entries[0]
+    return entries[0]["allowed"]
+
+
+@pytest.mark.parametrize("method, path, kw, field, words", [
+    ("get", "/v1/curves", {"params": {"status": "done"}}, "status", "'complete'"),
+    ("post", "/v1/predict", {"json": {"pressures_pa": [500], "pressures_at": "gauge",
+                                      "model": "paper"}}, "pressures_at", "'pump_gauge'"),
+    ("post", "/v1/inverse", {"json": {"target": {"kind": "angle", "pressure_pa": 1500,
+                                                 "angle_deg": 45}, "model": "paper"}},
+     "target.kind", "'angle_at_pressure'"),
+    ("post", "/v1/inverse", {"json": {"target": {"pressure_pa": 1500, "angle_deg": 45},
+                                      "objective": "fast", "model": "paper"}},
+     "objective", "'certainty'"),
+    ("post", "/v1/solve", {"json": {"settings": {"element": "hex3"}}, "headers": KEY},
+     "settings.element", "'hex1'"),
+])
+def test_a_field_of_fixed_words_states_them(client, method, path, kw, field, words):
+    body = assert_problem(getattr(client, method)(path, **kw), 422, field)
+    assert words in _allowed(body, field)
+    entry = next(e for e in body["errors"] if e["field"] == field)
+    assert "is not one of these" in entry["message"], entry
+
+
+@pytest.mark.parametrize("path, sent, field, names", [
+    ("/v1/predict", {"design": "7.1", "pressures_pa": [500], "model": "paper"}, "design",
+     ("L_mm", "t_mm", "membrane_material")),
+    ("/v1/inverse", {"model": "paper"}, "target", ("kind", "pressure_pa", "angle_deg")),
+    ("/v1/inverse/pressure", [1, 2], "body", ("design", "angles_deg")),
+])
+def test_an_object_sent_as_something_else_or_left_out_states_its_fields(
+        client, path, sent, field, names):
+    body = assert_problem(client.post(path, json=sent), 422, field)
+    allowed = _allowed(body, field)
+    assert all(name in allowed for name in names), allowed
+
+
+def _rows(column: str, value, row: int = 2) -> list[dict]:
+    rows = [dict(r) for r in EXAMPLE_ROWS]
+    rows[row][column] = value
+    return rows
+
+
+@pytest.mark.parametrize("column, value, allowed", [
+    ("pressure_pa", "abc", "pressure_pa <= "),
+    ("angle_deg", "NaN", "angle_deg <= 720"),
+    ("L_mm", None, "0 < L_mm <= 60"),
+    ("time_s", "", "0 <= time_s <= "),
+    ("curve_id", None, "non-empty text"),
+    ("t_mm", 0.6, "one t_mm in every row of curve 's1'"),
+])
+def test_a_refused_measured_cell_states_what_it_may_hold(client, column, value, allowed):
+    r = client.post("/v1/calibrate", json={"rows": _rows(column, value), "model": "paper"})
+    body = assert_problem(r, 422, f"rows.2.{column}")
+    assert allowed in _allowed(body, f"rows.2.{column}")
+
+
+def test_a_design_of_no_fitted_family_states_the_families(client):
+    r = client.post("/v1/predict", json={"design": {"b_mm": 1.2}, "pressures_pa": [500],
+                                         "model": "paper"})
+    body = assert_problem(r, 422, "design")
+    assert "pdms_1_10/ecoflex_00_30" in _allowed(body, "design")
+    assert body["detail"].count("pdms_1_10/ecoflex_00_30") == 1, body["detail"]  # once
