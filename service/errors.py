@@ -242,13 +242,16 @@ EXTRA_HINTS = {
 
 
 def _sibling_fields(request: Request, loc: list[str | int]) -> list[str]:
-    """The fields the object at ``loc[:-1]`` of the request's body takes, read off the
-    published schema of the request's route ([] where it cannot be read): what an unknown
-    field's "did you mean" is chosen from."""
+    """The fields the object at ``loc[:-1]`` of the request's body takes (its query
+    parameters for ``loc`` in the query), read off the published schema of the request's
+    route ([] where it cannot be read): what an unknown field's "did you mean" is chosen
+    from."""
     try:
         spec = request.app.openapi()
         template = request.scope["route"].path
         op = spec["paths"][template][request.method.lower()]
+        if loc[0] == "query":       # the operation's query parameters
+            return [p["name"] for p in op.get("parameters", ()) if p.get("in") == "query"]
         schema = op["requestBody"]["content"]["application/json"]["schema"]
 
         def resolve(sch: dict) -> dict:

@@ -91,3 +91,26 @@ def test_a_design_of_no_fitted_family_states_the_families(client):
     body = assert_problem(r, 422, "design")
     assert "pdms_1_10/ecoflex_00_30" in _allowed(body, "design")
     assert body["detail"].count("pdms_1_10/ecoflex_00_30") == 1, body["detail"]  # once
+
+
+@pytest.mark.parametrize("method, path, kw", [
+    ("post", "/v1/predict?model=exponential", {"json": {"pressures_pa": [500],
+                                                        "model": "paper"}}),
+    ("post", "/v1/calibrate?save=lab1", {"json": {"rows": EXAMPLE_ROWS, "model": "paper"}}),
+    ("get", "/v1/health?verbose=1", {}),
+    ("get", "/v1/materials?limit=1", {}),
+    ("get", "/v1/jobs/" + "0" * 32 + "?wait=1", {}),
+])
+def test_a_query_string_an_operation_does_not_read_is_refused(client, method, path, kw):
+    """It was ignored: POST /v1/predict?model=exponential answered from the body's model."""
+    name = path.split("?")[1].split("=")[0]
+    body = assert_problem(getattr(client, method)(path, **kw), 422, name)
+    assert body["errors"][0]["loc"] == ["query", name]
+    assert "no query string" in _allowed(body, name)
+
+
+def test_operations_with_query_parameters_and_pages_keep_theirs(client):
+    assert client.get("/v1/curves?limit=2").status_code in (200, 503)   # no database: 503
+    assert "did you mean 'limit'" in client.get("/v1/curves?limt=2").text
+    assert client.get("/?L_mm=3").status_code == 200
+    assert client.get("/openapi.json?x=1").status_code == 200
