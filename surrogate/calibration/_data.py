@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from solver.bounded_read import read_bounded
 from solver.materials import MATERIALS
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
@@ -36,6 +37,9 @@ PUMP_STATES = {"load": 1.0, "hold": 0.0, "unload": -1.0}
 DEFAULTS = {"T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15}
 MIN_POINTS_PER_CURVE = 4
 MAX_ROWS = 200_000
+#: the largest data file read (MAX_ROWS rows of ~150 bytes is 30 MB): a file is read up to
+#: one byte past it, so /dev/zero or a stray 10 GB file is refused without filling memory
+MAX_FILE_BYTES = 64 * 2**20
 
 # column -> (lowest, highest, inclusive lower bound?) for numeric checks
 RANGES: dict[str, tuple[float, float, bool]] = {
@@ -525,6 +529,9 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
         except csv.Error as exc:
             raise _csv_error(exc, lines, i + 1) from None
         i += 1
+        if i > MAX_ROWS:     # refused before building the rest (a 10^6-row file)
+            raise DataError("rows", f"more than {MAX_ROWS} rows", None,
+                            f"at most {MAX_ROWS}")
         if None in raw:
             raise DataError("row", "more values than columns", i,
                             "one value per column of the header")
@@ -571,7 +578,9 @@ BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe\x00\x00", "utf-32"),
 FILE_SIGNATURES = ((b"\x89HDF\r\n\x1a\n", "an HDF5 file (a curve database?)"),
                    (b"PK\x03\x04", "a zip archive (an Excel .xlsx or .ods workbook?)"),
                    (b"\xd0\xcf\x11\xe0", "an old Excel .xls workbook"),
-                   (b"\x89PNG", "a PNG image"), (b"%PDF", "a PDF document"))
+                   (b"\x89PNG", "a PNG image"), (b"%PDF", "a PDF document"),
+                   (b"\x1f\x8b", "a gzip-compressed file (unpack it first: gunzip)"),
+                   (b"\xfd7zXZ\x00", "an xz-compressed file (unpack it first: unxz)"))
 
 
 def decode_text(data: bytes, name: str) -> str:
@@ -612,7 +621,8 @@ def decode_text(data: bytes, name: str) -> str:
 def load_observations(path: str | Path, strict: bool = False) -> Observations:
     """Read a CSV file (or JSON: a list of row objects, or {"rows": [...]}) and validate."""
     path = Path(path)
-    text = decode_text(path.read_bytes(), path.name)
+    text = decode_text(read_bounded(path, MAX_FILE_BYTES, "file", f"a data file ({MAX_ROWS} "
+                                    "rows)"), path.name)
     if path.suffix.lower() == ".json":
         try:
             data, repeat = loads_with_repeats(text)

@@ -1,0 +1,69 @@
+"""Hostile input files of the thirty-seventh session: a grid or a measured-data file was
+read whole before any check (``balloon precompute /dev/zero`` grew to 2.7 GB and ended
+in a MemoryError traceback; ``balloon calibrate`` likewise, and a 10^6-row file was
+parsed whole, 11 s and 1.1 GB, before its row count was refused); a gzip-compressed
+data file was told "it looks like UTF-16 without a byte-order mark"."""
+
+from __future__ import annotations
+
+import gzip
+
+import pytest
+
+import solver.precompute.grid
+import surrogate.calibration._data as data
+from service.cli import main
+from surrogate.calibration import DataError
+
+GRID = ('name = "small"\n[[sweep]]\npairs = [["pdms_1_10", "ecoflex_00_30"]]\n'
+        "L_mm = [7.1]\nt_mm = 0.5\n")
+CSV = ("curve_id,L_mm,t_mm,body_material,membrane_material,pressure_pa,angle_deg\n"
+       + "".join(f"s{c},7.1,0.5,pdms_1_10,ecoflex_00_30,{p},{p / 100 + c}\n"
+                 for c in (1, 2) for p in (0, 400, 800, 1200, 1600)))
+
+
+def _one_line_error(capsys, *words: str) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for w in words:
+        assert w in err, err
+    return err
+
+
+def test_a_grid_file_past_the_bound_is_refused_before_it_is_read_whole(
+        tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(solver.precompute.grid, "MAX_GRID_BYTES", 1000, raising=False)
+    grid = tmp_path / "big.toml"
+    grid.write_text(GRID + "# padding\n" * 200)        # 2 kB: valid, past the bound
+    assert main(["precompute", str(grid), "--db", str(tmp_path / "db.h5"),
+                 "--dry-run"]) == 2
+    _one_line_error(capsys, "grid:", "larger than", "at most")
+    assert not (tmp_path / "db.h5").exists()
+
+
+def test_a_data_file_past_the_bound_is_refused_before_it_is_read_whole(
+        tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(data, "MAX_FILE_BYTES", 300, raising=False)
+    path = tmp_path / "lab.csv"
+    path.write_text(CSV)                                # ~600 bytes: valid, past the bound
+    assert main(["calibrate", str(path), "--model", "paper", "--report",
+                 str(tmp_path / "r.json")]) == 2
+    _one_line_error(capsys, "file:", "larger than", "at most")
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_rows_past_the_limit_are_refused_while_reading(monkeypatch):
+    """The CSV reader stops at the limit's next row (it built all 10^6 rows before)."""
+    monkeypatch.setattr(data, "MAX_ROWS", 5)
+    with pytest.raises(DataError, match="more than 5 rows") as exc:
+        data.read_csv_rows(CSV)
+    assert exc.value.allowed == "at most 5"
+
+
+def test_a_compressed_data_file_is_told_so(tmp_path, capsys):
+    path = tmp_path / "lab.csv.gz"
+    path.write_bytes(gzip.compress(CSV.encode()))
+    assert main(["calibrate", str(path), "--model", "paper", "--report",
+                 str(tmp_path / "r.json")]) == 2
+    err = _one_line_error(capsys, "gzip-compressed", "gunzip")
+    assert "UTF-16" not in err.split("allowed")[0]
