@@ -9,6 +9,7 @@ from __future__ import annotations
 import gzip
 
 import pytest
+from test_harden_s30_cli import _one_line_error
 
 import solver.precompute.grid
 import surrogate.calibration._data as data
@@ -20,14 +21,6 @@ GRID = ('name = "small"\n[[sweep]]\npairs = [["pdms_1_10", "ecoflex_00_30"]]\n'
 CSV = ("curve_id,L_mm,t_mm,body_material,membrane_material,pressure_pa,angle_deg\n"
        + "".join(f"s{c},7.1,0.5,pdms_1_10,ecoflex_00_30,{p},{p / 100 + c}\n"
                  for c in (1, 2) for p in (0, 400, 800, 1200, 1600)))
-
-
-def _one_line_error(capsys, *words: str) -> str:
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "Traceback" not in err, err
-    for w in words:
-        assert w in err, err
-    return err
 
 
 def test_a_grid_file_past_the_bound_is_refused_before_it_is_read_whole(
