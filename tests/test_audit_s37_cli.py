@@ -7,6 +7,7 @@ data file was told "it looks like UTF-16 without a byte-order mark"."""
 from __future__ import annotations
 
 import gzip
+import os
 
 import pytest
 from test_harden_s30_cli import _one_line_error
@@ -60,3 +61,24 @@ def test_a_compressed_data_file_is_told_so(tmp_path, capsys):
                  str(tmp_path / "r.json")]) == 2
     err = _one_line_error(capsys, "gzip-compressed", "gunzip")
     assert "UTF-16" not in err.split("allowed")[0]
+
+
+@pytest.mark.parametrize("argv, what", [
+    (["fit", "--db", "{dir}", "-o", "{tmp}/out.json"], "is a directory"),
+    (["db", "ls", "{dir}"], "is a directory"),
+    (["db", "show", "/dev/null"], "not a regular file"),
+    (["db", "seal", "{dir}"], "is a directory"),
+    (["db", "salvage", "{fifo}", "-o", "{tmp}/new.h5"], "not a regular file"),
+])
+def test_a_database_path_naming_a_directory_or_device_says_what_is_there(
+        tmp_path, capsys, argv, what):
+    """It was "no curve database at .; create one with `balloon precompute GRID.toml
+    --db .`": advice that cannot be followed."""
+    (tmp_path / "adir.h5").mkdir()
+    os.mkfifo(tmp_path / "fifo.h5")
+    names = {"dir": tmp_path / "adir.h5", "fifo": tmp_path / "fifo.h5", "tmp": tmp_path}
+    assert main([a.format(**names) for a in argv]) == 2
+    err = _one_line_error(capsys, what, "not a curve database",
+                          "allowed: the path of an HDF5 file")
+    assert "create one" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["adir.h5", "fifo.h5"]  # nothing new

@@ -51,7 +51,13 @@ from solver.errors import InputError, NotFoundError
 from solver.settings import SolverSettings
 from solver.store import integrity, schema
 from solver.store.errors import READ_ERRORS, DamagedStoreError, StoreWriteError, cause_of
-from solver.store.locking import WriterLock, database_path, lock_path, refuse_other_names
+from solver.store.locking import (
+    WriterLock,
+    database_path,
+    lock_path,
+    no_database,
+    refuse_other_names,
+)
 from solver.store.record import Record, utc_now
 
 MODES = ("r", "a")
@@ -124,8 +130,8 @@ class CurveStore:
                     if not self.path.exists():
                         self._publish(lambda f: None, create=True)
             elif not self.path.is_file():
-                raise NotFoundError(f"no curve database at {self.path}; create one with "
-                                    f"`balloon precompute GRID.toml --db {self.path}`")
+                raise no_database(self.path, "; create one with `balloon precompute "
+                                  f"GRID.toml --db {self.path}`")
             self._file()
         except BaseException:
             self.close()
