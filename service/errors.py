@@ -292,6 +292,11 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
         # name elsewhere (its pressure_pa is not a target's): what any cell may hold
         allowed = (FIELD_RANGES.get("rows.*") if "rows" in loc[1:2]
                    else FIELD_RANGES.get(names[-1]) if names else None)
+        if err.get("type") in OBJECT_TYPES:
+            # an object was asked for: its fields, not the range of a field of that name
+            # elsewhere (the plot's query `inlet` is true or false, the body's an object;
+            # an item of `material_pairs` is not its list's "1-20 values")
+            allowed = _allowed_by_kind(err, request, loc) or allowed
         if err.get("type") == "extra_forbidden":
             # a field this object does not take: no range of it (it is refused whatever its
             # value), the way to say it where there is one
@@ -320,8 +325,10 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
 
 
 BODY_ALLOWED = "a UTF-8 JSON document of the documented shape"
-# pydantic's error types of a value that is not the object (or the JSON document) asked
-OBJECT_EXPECTED = ("model_type", "model_attributes_type", "dict_type", "missing")
+# pydantic's error types of a value that is not the object asked for; with "missing",
+# those of an object (or the JSON document) asked for and not there
+OBJECT_TYPES = ("model_type", "model_attributes_type", "dict_type")
+OBJECT_EXPECTED = (*OBJECT_TYPES, "missing")
 
 
 def _allowed_by_kind(err: dict[str, Any], request: Request | None,

@@ -114,3 +114,20 @@ def test_operations_with_query_parameters_and_pages_keep_theirs(client):
     assert "did you mean 'limit'" in client.get("/v1/curves?limt=2").text
     assert client.get("/?L_mm=3").status_code == 200
     assert client.get("/openapi.json?x=1").status_code == 200
+
+
+@pytest.mark.parametrize("path, sent, field, names", [
+    ("/v1/predict", {"pressures_pa": [500], "flow_ul_s": 2.5, "inlet": 5, "model": "paper"},
+     "inlet", ("channel_width_mm", "viscosity_pa_s")),
+    ("/v1/inverse", {"target": {"pressure_pa": 1500, "angle_deg": 45},
+                     "material_pairs": [5], "model": "paper"}, "material_pairs.0",
+     ("body_material", "membrane_material")),
+])
+def test_an_object_field_is_not_told_the_range_of_a_namesake(client, path, sent, field,
+                                                              names):
+    """The body's ``inlet`` was told "true or false" (the plot's query parameter of that
+    name); an item of ``material_pairs`` its list's "1-20 values"."""
+    body = assert_problem(client.post(path, json=sent), 422, field)
+    allowed = _allowed(body, field)
+    assert all(name in allowed for name in names), allowed
+    assert "true or false" not in allowed and "values" not in allowed, allowed
