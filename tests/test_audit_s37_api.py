@@ -131,3 +131,29 @@ def test_an_object_field_is_not_told_the_range_of_a_namesake(client, path, sent,
     allowed = _allowed(body, field)
     assert all(name in allowed for name in names), allowed
     assert "true or false" not in allowed and "values" not in allowed, allowed
+
+
+def _calibrate(tmp_path, rows, **limits):
+    app = create_app(settings_for(tmp_path, **limits), load_surrogate=False)
+    with TestClient(app, raise_server_exceptions=False) as c:
+        return c.post("/v1/calibrate", json={"rows": rows, "model": "paper", "folds": 2})
+
+
+def test_more_curves_than_the_server_calibrates_are_refused_before_the_work(tmp_path):
+    """20,000 rows of 5,000 curves (the schema's limits) kept a worker busy past 5 min."""
+    rows = EXAMPLE_ROWS + [dict(r, curve_id="s3") for r in EXAMPLE_ROWS[:5]]
+    body = assert_problem(_calibrate(tmp_path, rows, max_calibration_curves=2), 422, "rows")
+    assert "3 curves" in body["detail"] and "BALLOON_MAX_CALIBRATION_CURVES" in body["detail"]
+    assert _allowed(body, "rows").startswith("at most 2 curves per request")
+
+
+def test_more_designs_than_the_server_calibrates_are_refused_before_the_work(tmp_path):
+    rows = [dict(r, L_mm=9.1) if r["curve_id"] == "s2" else r for r in EXAMPLE_ROWS]
+    body = assert_problem(_calibrate(tmp_path, rows, max_calibration_designs=1), 422, "rows")
+    assert "2 nominal designs" in body["detail"]
+    assert _allowed(body, "rows").startswith("at most 1 nominal designs per request")
+
+
+def test_data_within_the_limits_are_calibrated(tmp_path):
+    r = _calibrate(tmp_path, EXAMPLE_ROWS, max_calibration_curves=2, max_calibration_designs=1)
+    assert r.status_code == 200, r.text
