@@ -11,10 +11,12 @@ import os
 
 import pytest
 from test_harden_s30_cli import _one_line_error
+from test_store import record_for
 
 import solver.precompute.grid
 import surrogate.calibration._data as data
 from service.cli import main
+from solver.store import CurveStore
 from surrogate.calibration import DataError
 
 GRID = ('name = "small"\n[[sweep]]\npairs = [["pdms_1_10", "ecoflex_00_30"]]\n'
@@ -82,3 +84,18 @@ def test_a_database_path_naming_a_directory_or_device_says_what_is_there(
                           "allowed: the path of an HDF5 file")
     assert "create one" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["adir.h5", "fifo.h5"]  # nothing new
+
+
+@pytest.mark.parametrize("where, words", [
+    ("L_mm=nan", ("L_mm: nan is not a finite number", "allowed: 0.5 <= L_mm <= 60")),
+    ("t_mm=abc", ("t_mm: 'abc' is not a finite number", "allowed: 0.05 <= t_mm <= 5")),
+    ("max_angle_deg=inf", ("max_angle_deg: inf is not a finite number",)),
+    ("status=done", ("status: got 'done'", "complete | stopped | failed")),
+])
+def test_a_filter_no_record_can_meet_is_refused(tmp_path, capsys, where, words):
+    """``balloon db ls DB --where L_mm=nan`` listed "0 records" and exited 0."""
+    with CurveStore(tmp_path / "db.h5", mode="a") as db:
+        db.put(record_for(L_mm=7.1))
+    for command in ("ls", "export"):
+        assert main(["db", command, str(tmp_path / "db.h5"), "--where", where]) == 2
+        _one_line_error(capsys, *words)

@@ -86,6 +86,23 @@ def _fsync_path(path: Path, directory: bool = False) -> None:
         os.close(fd)
 
 
+def _check_filter(name: str, value: object) -> None:
+    """InputError for a filter no record can meet for want of sense: an unknown field, a
+    length that is not a finite number (``balloon db ls --where L_mm=nan`` listed "0
+    records"), a status that is none."""
+    if name not in QUERY_FIELDS:
+        raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if name in LIMITS_MM and not (number and math.isfinite(value)):  # type: ignore[arg-type]
+        lo, hi = LIMITS_MM[name]
+        raise InputError(name, f"{value!r} is not a finite number", f"{lo:g} <= {name} <= "
+                         f"{hi:g} (mm)")
+    if number and not math.isfinite(value):  # type: ignore[arg-type]
+        raise InputError(name, f"{value!r} is not a finite number", "a finite number")
+    if name == "status" and value not in STATUSES:
+        raise InputError("status", f"got {value!r}", " | ".join(STATUSES))
+
+
 def _matches(value: object, wanted: object) -> bool:
     if isinstance(wanted, (int, float)) and not isinstance(wanted, bool):
         return isinstance(value, (int, float)) and math.isclose(
@@ -265,9 +282,8 @@ class CurveStore:
     def summaries(self, **filters: object) -> list[dict[str, Any]]:
         """Per record: key, status, reason, design (flat, material ids), settings, n_steps,
         provenance -- without loading the curves; ``filters`` as for ``query``."""
-        for name in filters:
-            if name not in QUERY_FIELDS:
-                raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
+        for name, value in filters.items():
+            _check_filter(name, value)
         with self._mutex, self._reading():
             f = self._file()       # once: the records and the index of the same version
             group = f[schema.RECORDS]
