@@ -157,3 +157,13 @@ def test_more_designs_than_the_server_calibrates_are_refused_before_the_work(tmp
 def test_data_within_the_limits_are_calibrated(tmp_path):
     r = _calibrate(tmp_path, EXAMPLE_ROWS, max_calibration_curves=2, max_calibration_designs=1)
     assert r.status_code == 200, r.text
+
+
+def test_a_force_target_on_a_model_without_force_is_refused_at_its_kind(client):
+    """It was 200 "not reachable by any design ... widen the bounds" after 128 designs."""
+    r = client.post("/v1/inverse", json={"target": {"kind": "force_at_pressure",
+                                                    "pressure_pa": 1500, "force_mn": 1},
+                                         "model": "paper"})
+    body = assert_problem(r, 422, "target.kind")
+    assert "gives no blocked-tip force" in body["detail"]
+    assert "angle_at_pressure" in _allowed(body, "target.kind")

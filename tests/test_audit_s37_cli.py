@@ -99,3 +99,9 @@ def test_a_filter_no_record_can_meet_is_refused(tmp_path, capsys, where, words):
     for command in ("ls", "export"):
         assert main(["db", command, str(tmp_path / "db.h5"), "--where", where]) == 2
         _one_line_error(capsys, *words)
+
+
+def test_a_force_target_on_a_model_without_force_is_one_line(capsys):
+    assert main(["inverse", "--kind", "force_at_pressure", "--pressure-pa", "1500",
+                 "--force-mn", "1", "--model", "paper"]) == 2
+    _one_line_error(capsys, "gives no blocked-tip force", "allowed: angle_at_pressure")
