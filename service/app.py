@@ -26,6 +26,7 @@ from service.routes import calibration, curves, health, inverse, jobs, materials
 from service.routes.pages import install_pages
 from service.settings import ServiceSettings, get_settings
 from service.store_access import ResultWriter
+from service.unread_query import refuse_unread_query
 
 DESCRIPTION = """\
 Design questions about bending balloon actuators (two bonded silicone layers).
@@ -60,7 +61,8 @@ def create_app(settings: ServiceSettings | None = None, *,
     app = FastAPI(title="Balloon actuator design service", version=health.VERSION,
                   description=DESCRIPTION, lifespan=lifespan,
                   docs_url=None, redoc_url=None,  # served from local files by install_pages
-                  dependencies=[Depends(refuse_repeated_fields)])  # a field given twice
+                  dependencies=[Depends(refuse_repeated_fields),  # a field given twice
+                                Depends(refuse_unread_query)])  # a query string ignored
     app.state.settings = settings
     app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir,
                                      settings.emulator_path)

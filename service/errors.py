@@ -256,13 +256,16 @@ EXTRA_HINTS = {
 
 
 def _sibling_fields(request: Request, loc: list[str | int]) -> list[str]:
-    """The fields the object at ``loc[:-1]`` of the request's body takes, read off the
-    published schema of the request's route ([] where it cannot be read): what an unknown
-    field's "did you mean" is chosen from."""
+    """The fields the object at ``loc[:-1]`` of the request's body takes (its query
+    parameters for ``loc`` in the query), read off the published schema of the request's
+    route ([] where it cannot be read): what an unknown field's "did you mean" is chosen
+    from."""
     try:
         spec = request.app.openapi()
         template = request.scope["route"].path
         op = spec["paths"][template][request.method.lower()]
+        if loc[0] == "query":       # the operation's query parameters
+            return [p["name"] for p in op.get("parameters", ()) if p.get("in") == "query"]
         schema = op["requestBody"]["content"]["application/json"]["schema"]
 
         def resolve(sch: dict) -> dict:
@@ -303,6 +306,11 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
         # name elsewhere (its pressure_pa is not a target's): what any cell may hold
         allowed = (FIELD_RANGES.get("rows.*") if "rows" in loc[1:2]
                    else FIELD_RANGES.get(names[-1]) if names else None)
+        if err.get("type") in OBJECT_TYPES:
+            # an object was asked for: its fields, not the range of a field of that name
+            # elsewhere (the plot's query `inlet` is true or false, the body's an object;
+            # an item of `material_pairs` is not its list's "1-20 values")
+            allowed = _allowed_by_kind(err, request, loc) or allowed
         if err.get("type") == "extra_forbidden":
             # a field this object does not take: no range of it (it is refused whatever its
             # value), the way to say it where there is one
@@ -320,10 +328,36 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
             item["message"] = f"{_short(err.get('input'))} is not of this form"
         elif not allowed and names:
             allowed = FIELD_FORMS.get(names[-1])   # a material that is a number, null, ...
+        if not allowed:     # a choice of words, an object or the body: what it takes
+            allowed = _allowed_by_kind(err, request, loc)
+            if err.get("type") in ("literal_error", "enum"):    # the words: in allowed
+                item["message"] = f"{_short(err.get('input'))} is not one of these"
         if allowed:
             item["allowed"] = allowed
         out.append(item)
     return out
+
+
+BODY_ALLOWED = "a UTF-8 JSON document of the documented shape"
+# pydantic's error types of a value that is not the object asked for; with "missing",
+# those of an object (or the JSON document) asked for and not there
+OBJECT_TYPES = ("model_type", "model_attributes_type", "dict_type")
+OBJECT_EXPECTED = (*OBJECT_TYPES, "missing")
+
+
+def _allowed_by_kind(err: dict[str, Any], request: Request | None,
+                     loc: list[str | int]) -> str | None:
+    """The allowed values of a field without a range: a field of fixed words (its words),
+    an object (its fields, read off the published schema), the body itself (a JSON
+    document); None where none of these applies."""
+    if err.get("type") in ("literal_error", "enum"):
+        return str((err.get("ctx") or {}).get("expected", "")) or None
+    if err.get("type") not in OBJECT_EXPECTED:
+        return None
+    fields = _sibling_fields(request, [*loc, ""]) if request is not None else []
+    if fields:
+        return "a JSON object of " + ", ".join(fields) + " (the schema at /docs)"
+    return BODY_ALLOWED if loc == ["body"] else None
 
 
 def _short(value: Any, limit: int = 40) -> str:
@@ -335,7 +369,7 @@ def _short(value: Any, limit: int = 40) -> str:
 def _unparsed_body(message: str) -> dict[str, Any]:
     """The error entry of a body that is not the JSON document asked for."""
     return {"loc": ["body"], "field": "body", "message": message,
-            "allowed": "a UTF-8 JSON document of the documented shape"}
+            "allowed": BODY_ALLOWED}
 
 
 def _not_json_body(request: Request, errors: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -33,13 +33,13 @@ def repeated_body_field(body: bytes) -> tuple[str | int, ...] | None:
     return None if loc is None else ("body", *loc)
 
 
-def _list_parameters(request: Request) -> tuple[set[str], set[str]]:
+def query_parameters(request: Request) -> tuple[set[str], set[str]] | None:
     """(every query parameter, those taking a list) of the request's route, read off its
-    published schema; two empty sets for a route outside the contract (the pages)."""
+    published schema; None for a route outside the contract (the pages)."""
     try:
         op = request.app.openapi()["paths"][request.scope["route"].path][request.method.lower()]
     except (KeyError, AttributeError):
-        return set(), set()
+        return None
     names, lists = set(), set()
     for param in op.get("parameters", ()):
         if param.get("in") != "query":
@@ -56,7 +56,7 @@ async def refuse_repeated_fields(request: Request) -> None:
     once, or a name repeated within one object of a JSON body."""
     keys = [k for k, _ in request.query_params.multi_items()]
     if len(keys) != len(set(keys)):
-        names, lists = _list_parameters(request)
+        names, lists = query_parameters(request) or (set(), set())
         for key in dict.fromkeys(keys):
             if key in names and key not in lists and keys.count(key) > 1:
                 raise FieldError(("query", key), f"is given {keys.count(key)} times in the "

@@ -59,6 +59,16 @@ class ServiceSettings(BaseSettings):
         4 * 2**20, ge=1024, le=64 * 2**20,
         description="largest accepted body of POST /v1/calibrate, bytes: a lab's data set "
         "(the schema's 20,000 rows at ~150 bytes a row; 340 rows filled the general limit)")
+    max_calibration_curves: int = Field(
+        200, ge=2, le=20_000,
+        description="most curves (distinct curve_id) one POST /v1/calibrate calibrates: the "
+        "loop's work grows with them (5,000 curves of 4 readings took over 5 min CPU "
+        "against the paper's model; a lab's file is some 20)")
+    max_calibration_designs: int = Field(
+        20, ge=1, le=20_000,
+        description="most nominal designs (material pair, T, b, h, L, t) one POST "
+        "/v1/calibrate calibrates: each is a curve of the baseline (100 designs took "
+        "100 s CPU against the emulator; a lab's file has a few)")
     cors_origins: list[str] = Field(default_factory=list,
                                     description="origins allowed by CORS; empty disables CORS")
 

@@ -216,13 +216,15 @@ def _screen(model: object, designs: list[Design], target: DesignTarget, level: f
                 "needed_hi": out["needed_hi"], "sign": out["sign"]}
     keys = ("value", "value_lo", "value_hi", "needed", "needed_lo", "needed_hi", "sign")
     res = {k: np.full(len(designs), np.nan) for k in keys}
+    res["no_force"] = np.zeros(len(designs), bool)
     for i, design in enumerate(designs):
         try:
             pred = model.predict(design, [target.pressure_pa], level=level)  # type: ignore
         except InputError:
             continue
         if target.kind == "force_at_pressure":
-            if pred.force_mn is None:
+            if pred.force_mn is None:       # the model has no force for this design
+                res["no_force"][i] = True
                 continue
             vals = np.abs([pred.force_mn[0], pred.force_lower_mn[0], pred.force_upper_mn[0]])
             res["sign"][i] = np.sign(pred.force_mn[0]) if np.isfinite(pred.force_mn[0]) else 0
@@ -420,6 +422,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     feasible: list[_Eval] = []
     best_reach: dict[str, object] = {}
     other_way = 0.0          # the largest |value| of designs bending against the target
+    no_force = 0             # designs the model answers with no force (force targets)
     for pair in bounds.allowed_pairs():
         slices = slices_fn(pair) if slices_fn is not None else None
         if slices is not None and not slices:
@@ -437,6 +440,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             continue
         r = _screen(model, designs, target, level)
         n_evaluated += len(designs)
+        no_force += int(np.sum(r.get("no_force", False)))
         against = r["value"][r["sign"] == -direction]
         if np.any(np.isfinite(against)):
             other_way = max(other_way, float(np.nanmax(against)))
@@ -470,6 +474,13 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         hits = _solve_along(model, solved, target, level, knob, ranges[knob])
         n_evaluated += (BISECTION_STEPS + 3) * len(solved)
         feasible += hits
+    if no_force and not best_reach and not feasible:
+        # not "unreachable: widen the bounds": the model has no force to search with
+        raise InputError("kind", f"the model {getattr(model, 'name', '')!r} gives no "
+                         "blocked-tip force for the designs inside the bounds",
+                         "angle_at_pressure or pressure_budget with this model, or "
+                         "force_at_pressure with a model fitted with force curves (the "
+                         "emulator)")
     feasible = [e for e in feasible if np.isfinite(_score(e, objective, target))]
     feasible.sort(key=lambda e: _score(e, objective, target))
     chosen: list[_Eval] = []

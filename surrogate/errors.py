@@ -13,10 +13,11 @@ from solver.errors import InputError
 
 class OutOfFamilyError(InputError):
     """The surrogate has no fitted family for this design; ``family`` is the design's
-    family tuple (body id, membrane id, T_mm, b_mm, h_mm)."""
+    family tuple (body id, membrane id, T_mm, b_mm, h_mm); ``allowed`` the fitted families
+    (the message says them in its place)."""
 
-    def __init__(self, message: str, family: tuple = ()) -> None:
-        super().__init__("design", message)
+    def __init__(self, message: str, family: tuple = (), allowed: str | None = None) -> None:
+        super().__init__("design", message, allowed, allowed_said=True)
         self.family = family
 
 

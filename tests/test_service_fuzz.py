@@ -17,7 +17,8 @@ mutated deterministically (``SEED``), a sample of each operation's mutations per
 - query parameters the same way as text; path ids with '../', '%00', 10 000 characters.
 
 Every answer: never 5xx; an error is ``application/problem+json`` with title, status
-and detail; no local path, no stack trace; a 2xx JSON body parses with a strict parser
+and detail, a 422's every entry of ``errors`` with its field and ``allowed``; no local
+path, no stack trace; a 2xx JSON body parses with a strict parser
 (no NaN or Infinity) and every angle it gives is a physical one (|angle| <= 360 deg).
 
 The app is the shipped emulator and fitted surrogate over a small temporary database
@@ -229,6 +230,11 @@ def violations(response: Any, sent: str, seconds: float,
             missing = [k for k in ("title", "status", "detail") if not body.get(k)]
             if missing or body["status"] != status:
                 out.append(f"problem document lacks {missing} or has another status")
+            if status == 422:   # each refusal names its field and what the field takes
+                bare = [e.get("field") for e in body.get("errors") or [{}]
+                        if not (e.get("field") and e.get("allowed"))]
+                if bare:
+                    out.append(f"422 without a field or its allowed values: {bare[:3]}")
         except (ValueError, AttributeError, TypeError) as exc:
             out.append(f"error body is no JSON object: {exc}")
     elif 200 <= status < 300 and ctype.startswith("application/json"):

@@ -159,11 +159,11 @@ def run_ls(args: argparse.Namespace) -> int:
 def run_seal(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from solver.errors import NotFoundError
     from solver.store import CurveStore
+    from solver.store.locking import no_database
 
     if not Path(args.db).is_file():  # writing mode would create an empty database
-        raise NotFoundError(f"no curve database at {args.db}: nothing to seal")
+        raise no_database(args.db, ": nothing to seal")
     with CurveStore(args.db, mode="a") as db:
         db.seal()
         n = len(db)

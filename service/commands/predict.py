@@ -240,7 +240,8 @@ def open_model_file(path: Path, form: str | None) -> object:
     from surrogate import open_surrogate
     from surrogate.emulator import load_emulator
 
-    head = path.read_text(encoding="utf-8", errors="replace")[:200]
+    with path.open("rb") as file:      # its head only (the file may be large)
+        head = file.read(200).decode("utf-8", errors="replace")
     if '"balloon-emulator"' in head:
         return load_emulator(path)
     return open_surrogate(str(path)).with_form(form)

@@ -168,6 +168,7 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
         _check_save_name(request.save, settings.models_dir)  # before the work
     try:  # the data's errors: the loader's, then the loop's (e.g. fewer than 2 curves)
         obs = observations_from_rows(request.rows, strict=request.strict)
+        _check_size(obs, settings)
         start = "paper" if request.model == "paper" else models.get(request.model)
         cal = run_calibration(obs, start, folds=request.folds)
     except DataError as exc:
@@ -188,6 +189,25 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
             raise located(exc, ("body",), {"name": ("save",)}) from None
         report["saved_model"] = request.save
     return CalibrationReport(**report)
+
+
+def _check_size(obs: Any, settings: Any) -> None:
+    """422 at ``rows`` when the data hold more curves or nominal designs than this server
+    calibrates in one request (``BALLOON_MAX_CALIBRATION_CURVES``, ``..._DESIGNS``): the
+    loop's work grows with both, and 20,000 rows of 5,000 curves kept a worker busy past
+    5 minutes. ``balloon calibrate`` on one's own machine has no such limit."""
+    designs = {tuple(v for k, v in obs.curve_design(i).items()
+                     if k not in ("curve_id", "flow_ul_s")) for i in range(obs.n_curves)}
+    for count, limit, what, setting in (
+            (obs.n_curves, settings.max_calibration_curves, "curves (distinct curve_id)",
+             "BALLOON_MAX_CALIBRATION_CURVES"),
+            (len(designs), settings.max_calibration_designs, "nominal designs (material "
+             "pair, T_mm, b_mm, h_mm, L_mm, t_mm)", "BALLOON_MAX_CALIBRATION_DESIGNS")):
+        if count > limit:
+            raise FieldError(("body", "rows"), f"{count} {what}: more than this server "
+                             f"calibrates in one request ({limit}, {setting})",
+                             f"at most {limit} {what.split(' (')[0]} per request; "
+                             "`balloon calibrate` runs any number on your machine")
 
 
 def _conflict(exc: ExistsError, name: str) -> ConflictError:

@@ -35,6 +35,7 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from solver.bounded_read import read_bounded
 from solver.design import LIMITS_MM, Design
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial, make_material
@@ -50,6 +51,7 @@ BLOCKED_MAX_PRESSURE_PA = 3000.0   # blocked-tip force curves: to this chamber p
 #                                    (past the emulator's force range, 2500 Pa)
 RANGE_KEYS = ("start", "stop", "num")
 MAX_POINTS = 100_000
+MAX_GRID_BYTES = 16 * 2**20   # a grid is sweeps and samples (a few kB); read no more
 MAX_NESTING = 100  # what a grid needs is 3 ([[body, membrane], ...] in a table)
 
 
@@ -372,7 +374,7 @@ def load_grid(path: str | Path) -> Grid:
     """Read and validate a grid file; FileNotFoundError if it does not exist, GridError
     naming the line when it is not UTF-8 text (TOML is UTF-8; a binary file is refused)."""
     path = Path(path)
-    raw = path.read_bytes()
+    raw = read_bounded(path, MAX_GRID_BYTES, "grid", "a grid file (TOML)")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -51,7 +51,13 @@ from solver.errors import InputError, NotFoundError
 from solver.settings import SolverSettings
 from solver.store import integrity, schema
 from solver.store.errors import READ_ERRORS, DamagedStoreError, StoreWriteError, cause_of
-from solver.store.locking import WriterLock, database_path, lock_path, refuse_other_names
+from solver.store.locking import (
+    WriterLock,
+    database_path,
+    lock_path,
+    no_database,
+    refuse_other_names,
+)
 from solver.store.record import Record, utc_now
 
 MODES = ("r", "a")
@@ -78,6 +84,23 @@ def _fsync_path(path: Path, directory: bool = False) -> None:
         os.fsync(fd)
     finally:
         os.close(fd)
+
+
+def _check_filter(name: str, value: object) -> None:
+    """InputError for a filter no record can meet for want of sense: an unknown field, a
+    length that is not a finite number (``balloon db ls --where L_mm=nan`` listed "0
+    records"), a status that is none."""
+    if name not in QUERY_FIELDS:
+        raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if name in LIMITS_MM and not (number and math.isfinite(value)):  # type: ignore[arg-type]
+        lo, hi = LIMITS_MM[name]
+        raise InputError(name, f"{value!r} is not a finite number", f"{lo:g} <= {name} <= "
+                         f"{hi:g} (mm)")
+    if number and not math.isfinite(value):  # type: ignore[arg-type]
+        raise InputError(name, f"{value!r} is not a finite number", "a finite number")
+    if name == "status" and value not in STATUSES:
+        raise InputError("status", f"got {value!r}", " | ".join(STATUSES))
 
 
 def _matches(value: object, wanted: object) -> bool:
@@ -124,8 +147,8 @@ class CurveStore:
                     if not self.path.exists():
                         self._publish(lambda f: None, create=True)
             elif not self.path.is_file():
-                raise NotFoundError(f"no curve database at {self.path}; create one with "
-                                    f"`balloon precompute GRID.toml --db {self.path}`")
+                raise no_database(self.path, "; create one with `balloon precompute "
+                                  f"GRID.toml --db {self.path}`")
             self._file()
         except BaseException:
             self.close()
@@ -259,9 +282,8 @@ class CurveStore:
     def summaries(self, **filters: object) -> list[dict[str, Any]]:
         """Per record: key, status, reason, design (flat, material ids), settings, n_steps,
         provenance -- without loading the curves; ``filters`` as for ``query``."""
-        for name in filters:
-            if name not in QUERY_FIELDS:
-                raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
+        for name, value in filters.items():
+            _check_filter(name, value)
         with self._mutex, self._reading():
             f = self._file()       # once: the records and the index of the same version
             group = f[schema.RECORDS]

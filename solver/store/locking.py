@@ -17,6 +17,7 @@ import os
 import time
 from pathlib import Path
 
+from solver.errors import InputError, NotFoundError
 from solver.store.errors import StoreBusyError, StoreWriteError
 
 WRITER_SUFFIX = ".lock"
@@ -29,6 +30,20 @@ def database_path(path: str | os.PathLike) -> Path:
     file's; any other path as given (its messages keep the user's words)."""
     path = Path(path)
     return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
+def no_database(path: str | os.PathLike, then: str) -> Exception:
+    """The error for a database path that names no database file: NotFoundError ("no
+    curve database at PATH" + ``then``, what to do) when nothing is there; an InputError
+    at ``db`` saying what is there instead -- a directory, a device or a pipe -- where
+    "create one there" would be no advice (``balloon fit --db .`` was told to run
+    ``balloon precompute GRID.toml --db .``)."""
+    path = Path(path)
+    if not path.exists():
+        return NotFoundError(f"no curve database at {path}{then}")
+    what = "a directory" if path.is_dir() else "not a regular file (a device or a pipe)"
+    return InputError("db", f"{path} is {what}, not a curve database",
+                      "the path of an HDF5 file written by balloon precompute")
 
 
 def refuse_other_names(path: Path) -> None:

@@ -27,7 +27,7 @@ from solver.errors import InputError, NotFoundError
 from solver.store import integrity
 from solver.store.errors import DamagedStoreError
 from solver.store.hdf5 import CurveStore
-from solver.store.locking import database_path
+from solver.store.locking import database_path, no_database
 from solver.store.record import Record, utc_now
 
 MANAGED = ("format", "schema_version", "created_utc", "updated_utc", "n_records")
@@ -109,7 +109,7 @@ def salvage(source: str | Path, target: str | Path) -> Salvaged:
     (HDF5's structures themselves are damaged: only a copy can restore it)."""
     source_path, target_path = database_path(source), Path(target)
     if not source_path.is_file():
-        raise NotFoundError(f"no curve database at {source}: nothing to salvage")
+        raise no_database(source, ": nothing to salvage")
     if target_path.exists() or target_path.is_symlink():
         raise InputError("--output", f"{target} exists",
                          "the path of a new file: salvage never writes into a database")

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from solver.bounded_read import read_bounded
 from solver.materials import MATERIALS
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
@@ -36,6 +37,9 @@ PUMP_STATES = {"load": 1.0, "hold": 0.0, "unload": -1.0}
 DEFAULTS = {"T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15}
 MIN_POINTS_PER_CURVE = 4
 MAX_ROWS = 200_000
+#: the largest data file read (MAX_ROWS rows of ~150 bytes is 30 MB): a file is read up to
+#: one byte past it, so /dev/zero or a stray 10 GB file is refused without filling memory
+MAX_FILE_BYTES = 64 * 2**20
 
 # column -> (lowest, highest, inclusive lower bound?) for numeric checks
 RANGES: dict[str, tuple[float, float, bool]] = {
@@ -192,18 +196,32 @@ class Observations:
 
 def _number(value: object, column: str, row: int) -> float:
     if isinstance(value, bool):
-        raise DataError(column, f"not a number: {value!r}", row)
+        raise _cell_error(column, f"not a number: {value!r}", row)
     if value is None or (isinstance(value, str) and value.strip() == ""):
         return math.nan
     try:
         x = float(value)  # type: ignore[arg-type]
     except OverflowError:
-        raise DataError(column, "number too large: " + _short(value), row) from None
+        raise _cell_error(column, "number too large: " + _short(value), row) from None
     except (TypeError, ValueError):
-        raise DataError(column, "not a number: " + _short(value), row) from None
+        raise _cell_error(column, "not a number: " + _short(value), row) from None
     if not math.isfinite(x):
-        raise DataError(column, "not a finite number: " + _short(value), row)
+        raise _cell_error(column, "not a finite number: " + _short(value), row)
     return x
+
+
+def range_words(column: str) -> str:
+    """What a cell of ``column`` may hold, in words: its range (``RANGES``; units in the
+    column's name), or for ``curve_id`` any text naming the curve."""
+    if column == "curve_id":
+        return "any non-empty text naming the curve (one specimen at one flow rate)"
+    lo, hi, inclusive = RANGES[column]
+    return f"{lo:g} {'<=' if inclusive else '<'} {column} <= {hi:g}"
+
+
+def _cell_error(column: str, message: str, row: int) -> DataError:
+    """A refused cell of ``column`` in data row ``row``, with what the cell may hold."""
+    return DataError(column, message, row, range_words(column))
 
 
 def _short(value: object) -> str:
@@ -215,9 +233,8 @@ def _check_range(x: float, column: str, row: int) -> None:
     lo, hi, inclusive = RANGES[column]
     ok = (lo <= x if inclusive else lo < x) and x <= hi
     if not ok:
-        sign = "<=" if inclusive else "<"
         what = "negative" if x < 0 and lo >= 0 else "out of range"
-        raise DataError(column, f"{what}: {x:g}", row, f"{lo:g} {sign} {column} <= {hi:g}")
+        raise _cell_error(column, f"{what}: {x:g}", row)
 
 
 def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
@@ -241,7 +258,8 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     parsed = []
     for i, raw in enumerate(rows, start=1):
         if not isinstance(raw, dict):
-            raise DataError("rows", "a row must be an object of column -> value", i)
+            raise DataError("rows", "a row must be an object of column -> value", i,
+                            "an object of the columns " + ", ".join(REQUIRED + OPTIONAL))
         extra = sorted(set(raw) - known)
         if extra:       # named as the file names it, cut short (a 10,000-character key)
             name = str(extra[0])
@@ -251,7 +269,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         rec: dict[str, object] = {}
         cid = raw.get("curve_id")
         if cid is None or str(cid).strip() == "":
-            raise DataError("curve_id", "empty curve id", i)
+            raise _cell_error("curve_id", "empty curve id", i)
         rec["curve_id"] = str(cid).strip()
         for name in ("body_material", "membrane_material"):
             value = str(raw.get(name, "") or "").strip()
@@ -262,15 +280,15 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         for name in ("L_mm", "t_mm", "pressure_pa", "angle_deg"):
             x = _number(raw.get(name), name, i)
             if math.isnan(x):
-                raise DataError(name, "missing value", i)
+                raise _cell_error(name, "missing value", i)
             _check_range(x, name, i)
             rec[name] = x
         for name in OPTIONAL:
             x = _number(raw.get(name), name, i) if name in present else math.nan
             if math.isnan(x):
                 if name in present and name in ("time_s", "flow_ul_s"):
-                    raise DataError(name, "missing value (the column is present, so every "
-                                    "row needs one)", i)
+                    raise _cell_error(name, "missing value (the column is present, so "
+                                      "every row needs one)", i)
                 x = DEFAULTS.get(name, math.nan)
             else:
                 _check_range(x, name, i)
@@ -410,7 +428,9 @@ def _build(parsed: list[dict[str, object]], present: list[str],
                 a, b = first[key], parsed[j][key]
                 if a != b and not (isinstance(a, float) and math.isnan(a) and b != b):
                     raise DataError(key, f"curve {cid!r} changes {key} from {a!r} to {b!r}; "
-                                    "one curve is one specimen at one flow rate", j + 1)
+                                    "one curve is one specimen at one flow rate", j + 1,
+                                    f"one {key} in every row of curve {cid!r} ({a!r} in "
+                                    "its first)")
         if len(idx) < MIN_POINTS_PER_CURVE:
             raise DataError("curve_id", f"curve {cid!r} has {len(idx)} points", idx[-1] + 1,
                             f"at least {MIN_POINTS_PER_CURVE} points per curve")
@@ -465,7 +485,8 @@ def _plain_keys(row: dict, i: int) -> dict:
     out = {(k.lstrip("\ufeff").strip() if isinstance(k, str) else k): v
            for k, v in row.items()}
     if len(out) != len(row):
-        raise DataError("rows", "a column is named twice (up to spaces)", i)
+        raise DataError("rows", "a column is named twice (up to spaces)", i,
+                        "each column once per row")
     return out
 
 
@@ -483,7 +504,8 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     except csv.Error as exc:
         raise _csv_error(exc, lines, 0) from None
     if fieldnames is None:
-        raise DataError("header", "the file is empty", None)
+        raise DataError("header", "the file is empty", None,
+                        "a header line naming the columns " + ", ".join(REQUIRED))
     names = [n.strip() for n in fieldnames]
     for sep, what in ((";", "';'"), ("\t", "tabs")):
         if len(names) == 1 and sep in names[0]:
@@ -493,7 +515,7 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
                             "comma-separated values with '.' as the decimal mark (save as "
                             "CSV UTF-8, comma-delimited)")
     if len(set(names)) != len(names):
-        raise DataError("header", "a column name is repeated", 0)
+        raise DataError("header", "a column name is repeated", 0, "each column once")
     for name in REQUIRED:
         if name not in names:
             raise _missing(name, set(names))
@@ -507,8 +529,12 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
         except csv.Error as exc:
             raise _csv_error(exc, lines, i + 1) from None
         i += 1
+        if i > MAX_ROWS:     # refused before building the rest (a 10^6-row file)
+            raise DataError("rows", f"more than {MAX_ROWS} rows", None,
+                            f"at most {MAX_ROWS}")
         if None in raw:
-            raise DataError("row", "more values than columns", i)
+            raise DataError("row", "more values than columns", i,
+                            "one value per column of the header")
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
     return out
 
@@ -552,7 +578,9 @@ BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe\x00\x00", "utf-32"),
 FILE_SIGNATURES = ((b"\x89HDF\r\n\x1a\n", "an HDF5 file (a curve database?)"),
                    (b"PK\x03\x04", "a zip archive (an Excel .xlsx or .ods workbook?)"),
                    (b"\xd0\xcf\x11\xe0", "an old Excel .xls workbook"),
-                   (b"\x89PNG", "a PNG image"), (b"%PDF", "a PDF document"))
+                   (b"\x89PNG", "a PNG image"), (b"%PDF", "a PDF document"),
+                   (b"\x1f\x8b", "a gzip-compressed file (unpack it first: gunzip)"),
+                   (b"\xfd7zXZ\x00", "an xz-compressed file (unpack it first: unxz)"))
 
 
 def decode_text(data: bytes, name: str) -> str:
@@ -593,14 +621,16 @@ def decode_text(data: bytes, name: str) -> str:
 def load_observations(path: str | Path, strict: bool = False) -> Observations:
     """Read a CSV file (or JSON: a list of row objects, or {"rows": [...]}) and validate."""
     path = Path(path)
-    text = decode_text(path.read_bytes(), path.name)
+    text = decode_text(read_bounded(path, MAX_FILE_BYTES, "file", f"a data file ({MAX_ROWS} "
+                                    "rows)"), path.name)
     if path.suffix.lower() == ".json":
         try:
             data, repeat = loads_with_repeats(text)
         except (ValueError, RecursionError) as exc:  # JSONDecodeError, an integer of
             # > 4300 digits, or nesting deeper than the parser's recursion limit
             raise DataError("file", f"{path.name}: not valid JSON: {_short(str(exc))}",
-                            None) from None
+                            None, "a JSON list of row objects, or {\"rows\": [...]}"
+                            ) from None
         if repeat is not None:   # json keeps the last: {"angle_deg": 5, "angle_deg": 50}
             index = [p for p in repeat[:2] if isinstance(p, int)]
             raise DataError(str(repeat[-1])[:60], f"{path.name}: {_short(repeat[-1])} is "

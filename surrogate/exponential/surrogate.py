@@ -88,7 +88,8 @@ class Surrogate:
         for fam in self.family_fits:
             if fam.matches(design):
                 return fam
-        raise OutOfFamilyError(_out_of_family_message(self, design), design.family)
+        raise OutOfFamilyError(_out_of_family_message(self, design), design.family,
+                               "a design of a fitted family: " + _covered(self))
 
     def _params(self, fam: Family, form: str | None) -> ModelParameters:
         form = form or self.form or fam.default_form
@@ -292,9 +293,14 @@ def _no_volume_message(s: Surrogate, fam: Family) -> str:
             f"{fam.label} ({why})")
 
 
+def _covered(s: Surrogate) -> str:
+    """The fitted families in words (material pair, T, b, h), "none" without any."""
+    return "; ".join(f.label for f in s.family_fits) or "none"
+
+
 def _out_of_family_message(s: Surrogate, design: Design) -> str:
     body, membrane, T, b, h = design.family
-    covered = "; ".join(f.label for f in s.family_fits) or "none"
+    covered = _covered(s)
     same_ids = [f for f in s.family_fits if f.key == design.family]
     note = (" (a family with these material ids exists, but its Ogden parameters differ)"
             if same_ids else "")
