@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import InputError
-from surrogate.hydraulics import Inlet
+from surrogate.hydraulics import NEGLIGIBLE_TIME_CONSTANT_S, STEADY_TIME_CONSTANTS, Inlet
 from surrogate.predictor import FE_PRESSURE_STOP_PA, pressure_stop_reason
 
 # request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
@@ -102,7 +102,37 @@ def inlet_drop(inlet: Inlet | None, flow_ul_s: float | None) -> dict[str, Any] |
     drop = inlet.pressure_drop_pa(flow_ul_s)   # refuses a flow that is not laminar
     return {**inlet.as_dict(), "resistance_pa_per_ul_s": inlet.resistance_pa_per_ul_s,
             "flow_ul_s": flow_ul_s, "pressure_drop_pa": drop,
-            "reynolds_number": inlet.reynolds_number(flow_ul_s)}
+            "reynolds_number": inlet.reynolds_number(flow_ul_s),
+            "time_constant_s": inlet.time_constant_s}
+
+
+def _pump_gauge(body: dict[str, Any], drop: dict[str, Any], what: str = "point(s)") -> None:
+    """In place: the pump gauge's reading, chamber pressure + R Q, where it is read; none
+    before STEADY_TIME_CONSTANTS time constants of the line after the pump starts (time_s:
+    volume / flow), flag ``pump_pressure_not_steady``. With the fluid's compressibility
+    alone (tau, ``Inlet.time_constant_s``, a lower bound) 100 Pa s in 100 m of 0.05 mm
+    tubing read 1.6e14 Pa, a steady R Q never reached (tau ~ 6e6 s)."""
+    body["pump_pressure_pa"] = _plus(body["pressure_pa"], drop["pressure_drop_pa"])
+    body["pressure_sites"]["pump_pressure_pa"] = "pump_gauge"
+    tau = drop["time_constant_s"]
+    if tau <= NEGLIGIBLE_TIME_CONSTANT_S:
+        return
+    times = body.get("time_s") or [None] * len(body["pump_pressure_pa"])
+    early = [t is None or t < STEADY_TIME_CONSTANTS * tau for t in times]
+    if not any(early):
+        return
+    body["pump_pressure_pa"] = [None if e else v
+                                for v, e in zip(body["pump_pressure_pa"], early, strict=True)]
+    body["validity"]["flags"].append("pump_pressure_not_steady")
+    body["validity"]["messages"].append(
+        f"no pump-gauge pressure at {sum(early)} {what}: the fluid in the inlet "
+        f"({drop['resistance_pa_per_ul_s']:.3g} Pa per ul/s, compressible) takes "
+        f"tau = {tau:.3g} s or more to carry the flow, so the "
+        f"gauge reads R Q = {drop['pressure_drop_pa']:.3g} Pa above the chamber only "
+        f"after ~{STEADY_TIME_CONSTANTS:g} tau ({STEADY_TIME_CONSTANTS * tau:.3g} s), and "
+        f"until then the chamber's volume lags the pump's by up to Q tau = "
+        f"{drop['flow_ul_s'] * tau:.3g} ul; a shorter or wider line, or a thinner fluid, "
+        "shortens it")
 
 
 def _plus(values: list[float | None], offset: float) -> list[float | None]:
@@ -130,6 +160,13 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         p = np.asarray(question.pressures_pa, float)
         if question.pressures_at == "pump_gauge" and inlet is not None:
             drop = inlet["pressure_drop_pa"]
+            tau = inlet["time_constant_s"]
+            if tau > NEGLIGIBLE_TIME_CONSTANT_S:
+                raise InputError("pressures_at", f"the inlet's fluid takes tau = {tau:.3g} s "
+                                 "to carry the flow, so a gauge reading is not the chamber's "
+                                 "plus R Q until long after the pump starts",
+                                 '"chamber", or an inlet whose time constant is at most '
+                                 f"{NEGLIGIBLE_TIME_CONSTANT_S:g} s")
             if (p < drop).any():
                 raise InputError("pressures_pa", f"{p.min():g} Pa at the pump gauge is below "
                                  f"the inlet's drop R Q = {drop:.1f} Pa at {q:g} ul/s",
@@ -174,8 +211,7 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
                 f"at {q:g} ul/s the FE's range ends after {v_lim / q:.1f} s")
     if inlet is not None:
         body["inlet"] = inlet
-        body["pump_pressure_pa"] = _plus(body["pressure_pa"], inlet["pressure_drop_pa"])
-        body["pressure_sites"]["pump_pressure_pa"] = "pump_gauge"
+        _pump_gauge(body, inlet)
     return body
 
 
@@ -292,6 +328,5 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
             body[f"time{name}_s"] = _over(body[f"volume{name}_ul"], flow_ul_s)
     if drop is not None:
         body["inlet"] = drop
-        body["pump_pressure_pa"] = _plus(body["pressure_pa"], drop["pressure_drop_pa"])
-        body["pressure_sites"]["pump_pressure_pa"] = "pump_gauge"
+        _pump_gauge(body, drop, "angle(s)")
     return body

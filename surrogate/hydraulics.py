@@ -15,8 +15,18 @@ the flow rate Q: p_pump = p_chamber + R Q, R = R_channel + R_tubing, in series.
 - Round tube of bore d = 2 r: R = 8 mu L / (pi r^4).
 
 Both hold while the flow is laminar: the Reynolds number rho U D_h / mu is refused above
-``LAMINAR_REYNOLDS`` (water density assumed for rho). Entrance effects, compliance of the
-tubing and the fluid's inertia are neglected (at the paper's 2.5 ul/s: Re ~ 8).
+``LAMINAR_REYNOLDS`` (water density assumed for rho). Entrance effects and the fluid's
+inertia are neglected (at the paper's 2.5 ul/s: Re ~ 8).
+
+R Q is the steady reading. The fluid in the line is compressible, so the line is a
+compliance C = V_line / K (K the bulk modulus, water's; the tubing's walls add to it, so
+this is a lower bound) behind the resistance: after the pump starts, the gauge rises to R Q
+above the chamber with the time constant tau = R C, and the chamber's volume lags the
+pump's by up to Q tau. For the paper's channel tau ~ 3e-9 s, with 300 mm of 0.8 mm tubing
+~ 4e-6 s: nothing to say. A viscous fluid in a long fine tube (100 Pa s, 100 m of 0.05 mm)
+gives tau ~ 6e6 s, where the steady R Q (1.6e14 Pa) is never read (two audits of the
+thirty-seventh session): ``Inlet.time_constant_s``, and the answer withholds the gauge
+before ``STEADY_TIME_CONSTANTS`` tau.
 Units: 1 ul/s = 1e-9 m^3/s, so R in Pa per ul/s = R_SI * 1e-9.
 """
 
@@ -30,6 +40,13 @@ from solver.errors import InputError
 WATER_VISCOSITY_PA_S = 1.0e-3     # water at 20 degC
 WATER_DENSITY_KG_M3 = 998.0       # water at 20 degC (Reynolds number only)
 LAMINAR_REYNOLDS = 2000.0         # Hagen-Poiseuille is refused above this
+WATER_BULK_MODULUS_PA = 2.2e9     # water at 20 degC: the line's compliance V / K
+# The gauge reads R Q above the chamber from this many time constants on (the chamber's
+# volume then lags the pump's by Q tau, 1 % of the volume injected or less); a time
+# constant at or below NEGLIGIBLE_TIME_CONSTANT_S is below what a lab's gauge or camera
+# resolves.
+STEADY_TIME_CONSTANTS = 100.0
+NEGLIGIBLE_TIME_CONSTANT_S = 1e-3
 
 # The paper's inlet: a straight channel 0.5 mm wide, 3 mm long, 150 um high (SU-8 mould).
 CHANNEL_WIDTH_MM = 0.5
@@ -100,6 +117,21 @@ class Inlet:
             r += round_tube_resistance_pa_per_ul_s(self.tubing_length_mm, self.tubing_bore_mm,
                                                    self.viscosity_pa_s)
         return r
+
+    @property
+    def line_volume_ul(self) -> float:
+        """The fluid between the gauge and the chamber: channel w h L plus tubing
+        pi d^2 / 4 L, ul (mm^3)."""
+        v = self.channel_width_mm * self.channel_height_mm * self.channel_length_mm
+        if self.tubing_length_mm > 0 and self.tubing_bore_mm:
+            v += math.pi * self.tubing_bore_mm**2 / 4.0 * self.tubing_length_mm
+        return v
+
+    @property
+    def time_constant_s(self) -> float:
+        """tau = R C, C = V_line / K the compressibility of the fluid in the line (s; a
+        lower bound: elastic tubing walls add compliance)."""
+        return self.resistance_pa_per_ul_s * self.line_volume_ul / WATER_BULK_MODULUS_PA
 
     def reynolds_number(self, flow_ul_s: float) -> float:
         """The largest Reynolds number on the path (channel, tubing) at ``flow_ul_s``."""

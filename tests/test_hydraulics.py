@@ -67,3 +67,54 @@ def test_laminar_flow_is_checked_and_bad_dimensions_are_named():
         Inlet(channel_width_mm=-1.0)
     assert err.value.field == "inlet.channel_width_mm"
     assert math.isfinite(Inlet(tubing_length_mm=0.0).resistance_pa_per_ul_s)
+
+
+def test_the_lines_time_constant_by_hand():
+    """tau = R V_line / K: the fluid's compressibility behind the resistance. The paper's
+    channel: R 26.3 Pa per ul/s, 0.225 ul of water, tau = 26.3 x 0.225 / 2.2e9 s."""
+    from surrogate.hydraulics import WATER_BULK_MODULUS_PA
+
+    paper = Inlet()
+    assert paper.line_volume_ul == pytest.approx(0.5 * 0.15 * 3.0)
+    assert paper.time_constant_s == pytest.approx(
+        paper.resistance_pa_per_ul_s * 0.225 / WATER_BULK_MODULUS_PA, rel=1e-12)
+    assert paper.time_constant_s < 1e-8
+    viscous = Inlet(tubing_length_mm=1e5, tubing_bore_mm=0.05, viscosity_pa_s=100.0)
+    tube_ul = math.pi * 0.05**2 / 4 * 1e5
+    assert viscous.line_volume_ul == pytest.approx(0.225 + tube_ul)
+    r_tube = 8 * 100.0 * 100.0 / (math.pi * 0.025e-3**4) * 1e-9      # Pa per ul/s
+    assert viscous.time_constant_s == pytest.approx(
+        (r_tube + Inlet(viscosity_pa_s=100.0).resistance_pa_per_ul_s) * viscous.line_volume_ul
+        / WATER_BULK_MODULUS_PA, rel=1e-9)
+    assert 5e6 < viscous.time_constant_s < 7e6
+
+
+def test_no_pump_gauge_reading_before_the_line_carries_the_flow(shipped_client):
+    """100 Pa s in 100 m of 0.05 mm tubing read 1.6e14 Pa at the pump gauge with a 200
+    (two audits of the thirty-seventh session): the steady R Q is never reached there."""
+    viscous = {"tubing_length_mm": 1e5, "tubing_bore_mm": 0.05, "viscosity_pa_s": 100.0}
+    body = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5}, "volumes_ul": [1.0, 5.0], "flow_ul_s": 2.5,
+        "inlet": viscous}).json()
+    assert body["pump_pressure_pa"] == [None, None]
+    assert body["pressure_pa"][0] is not None and body["angle_deg"][0] is not None
+    assert "pump_pressure_not_steady" in body["validity"]["flags"]
+    assert body["validity"]["in_domain"] is True
+    assert body["inlet"]["time_constant_s"] > 1e6
+    inverse = shipped_client.post("/v1/inverse/pressure", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [10.0], "flow_ul_s": 2.5,
+        "inlet": viscous}).json()
+    assert inverse["pump_pressure_pa"] == [None]
+    assert "pump_pressure_not_steady" in inverse["validity"]["flags"]
+    r = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5}, "pressures_pa": [2000.0], "flow_ul_s": 2.5,
+        "inlet": viscous, "pressures_at": "pump_gauge"})
+    assert r.status_code == 422
+    assert r.json()["errors"][0]["field"] == "pressures_at"
+    # the paper's channel: the gauge at every point, as before, and tau said
+    plain = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5}, "volumes_ul": [1.0, 5.0], "flow_ul_s": 2.5,
+        "inlet": {}}).json()
+    assert None not in plain["pump_pressure_pa"]
+    assert "pump_pressure_not_steady" not in plain["validity"]["flags"]
+    assert plain["inlet"]["time_constant_s"] < 1e-8

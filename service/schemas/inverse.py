@@ -185,5 +185,6 @@ class PressureResponse(BaseModel):
         {"pressure_pa": "chamber"}, description="which pressure each pressure field reports")
     pump_pressure_pa: OptFloats = Field(None, description="what a gauge at the pump reads "
                                         "while pumping at flow_ul_s, Pa (inlet given)")
-    inlet: dict[str, Any] | None = Field(None, description="the inlet as used (R, R Q, Re)")
+    inlet: dict[str, Any] | None = Field(None, description="the inlet as used (R, R Q, Re, "
+                                         "the line's time constant tau)")
     validity: dict[str, Any] = Field(description="in_domain, flags, messages")

@@ -139,10 +139,13 @@ class PredictResponse(BaseModel):
         {"pressure_pa": "chamber"}, description="which pressure each pressure field reports: "
         "pressure_pa the chamber's, pump_pressure_pa the pump gauge's")
     pump_pressure_pa: OptFloats = Field(None, description="what a gauge at the pump reads, "
-                                        "Pa: chamber pressure + R Q (inlet given)")
+                                        "Pa: chamber pressure + R Q (inlet given; null "
+                                        "before the line's flow is steady, flag "
+                                        "pump_pressure_not_steady)")
     inlet: dict[str, Any] | None = Field(None, description="the inlet as used: dimensions, "
                                          "resistance_pa_per_ul_s, pressure_drop_pa (R Q), "
-                                         "reynolds_number")
+                                         "reynolds_number, time_constant_s (tau = R C, C the "
+                                         "line's fluid's compressibility: a lower bound)")
     validity: Validity = Field(description="whether the answer is inside the model's domain")
     form: str | None = Field(None, description='model form: "exponential" (the paper\'s) '
                              'or "extended"')
