@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from solver.materials import MATERIALS
+from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
 from surrogate.json_repeats import loads_with_repeats
@@ -471,32 +472,31 @@ def _plain_keys(row: dict, i: int) -> dict:
 
 def read_csv_rows(text: str) -> list[dict[str, object]]:
     """Rows of a CSV text (header line first; '#' comment lines and blank lines are
-    skipped: a blank line between a comment and the header had made an empty header). A
-    field beyond the csv module's size limit is a DataError naming its row and column.
-    Lines may end in LF, CR LF or CR alone (a spreadsheet's "CSV (Macintosh)": read as one
-    line, it was blamed on the field size, its CR garbling the terminal's line)."""
+    skipped: a blank line between a comment and the header had made an empty header; so
+    are a spreadsheet's empty rows, separators only). A field beyond the csv module's
+    size limit is a DataError naming its row and column. Lines may end in LF, CR LF or CR
+    alone (a spreadsheet's "CSV (Macintosh)": read as one line, it was blamed on the
+    field size, its CR garbling the terminal's line). Fields are separated by ',', or by
+    ';' or tabs with ',' as the decimal mark (a German Excel's CSV; _csv_dialect.py). A
+    column without a name in the header (a trailing separator) is dropped when it is
+    empty on every row."""
     lines = [ln for ln in io.StringIO(text, newline=None)
-             if ln.strip() and not ln.lstrip().startswith("#")]
-    reader = csv.DictReader(lines)
-    try:
-        fieldnames = reader.fieldnames
-    except csv.Error as exc:
-        raise _csv_error(exc, lines, 0) from None
-    if fieldnames is None:
+             if not is_blank(ln) and not ln.lstrip().startswith("#")]
+    if not lines:
         raise DataError("header", "the file is empty", None)
-    names = [n.strip() for n in fieldnames]
-    for sep, what in ((";", "';'"), ("\t", "tabs")):
-        if len(names) == 1 and sep in names[0]:
-            # a spreadsheet's export where the decimal mark is a comma
-            raise DataError("header", f"the header is one column separated by {what}: the "
-                            "file is not comma-separated", 0,
-                            "comma-separated values with '.' as the decimal mark (save as "
-                            "CSV UTF-8, comma-delimited)")
+    sep = separator(lines[0])
+    try:
+        names = [n.strip() for n in next(csv.reader(lines[:1], delimiter=sep))]
+    except csv.Error as exc:
+        raise _csv_error(exc, lines, 0, sep) from None
+    unnamed = {k: f"column {k + 1}" for k, n in enumerate(names) if n == ""}
+    names = [unnamed.get(k, n) for k, n in enumerate(names)]
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0)
     for name in REQUIRED:
         if name not in names:
             raise _missing(name, set(names))
+    reader = csv.DictReader(lines[1:], fieldnames=names, delimiter=sep)
     out = []
     i = 0
     while True:
@@ -505,12 +505,19 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
         except StopIteration:
             break
         except csv.Error as exc:
-            raise _csv_error(exc, lines, i + 1) from None
+            raise _csv_error(exc, lines, i + 1, sep) from None
         i += 1
         if None in raw:
             raise DataError("row", "more values than columns", i)
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
-    return out
+    for name in unnamed.values():
+        filled = next((j for j, r in enumerate(out, 1) if r.get(name)), None)
+        if filled is not None:
+            raise DataError(name, "holds values but has no name in the header", filled,
+                            "a header naming every column that holds values")
+        for r in out:
+            r.pop(name, None)
+    return decimal_commas(out, tuple(RANGES), sep)
 
 
 def _missing(name: str, columns: set) -> DataError:
@@ -531,11 +538,11 @@ def _missing(name: str, columns: set) -> DataError:
                      "columns " + ", ".join(REQUIRED))
 
 
-def _csv_error(exc: csv.Error, lines: list[str], row: int) -> DataError:
+def _csv_error(exc: csv.Error, lines: list[str], row: int, sep: str) -> DataError:
     """One line for an unreadable CSV row: its number and the column of its longest
     field (the csv module's field size limit is what usually fails)."""
-    header = [h.strip() for h in lines[0].split(",")] if lines else []
-    fields = lines[row].split(",") if row < len(lines) else [""]
+    header = [h.strip() for h in lines[0].split(sep)] if lines else []
+    fields = lines[row].split(sep) if row < len(lines) else [""]
     k = max(range(len(fields)), key=lambda j: len(fields[j]))
     column = header[k] if k < len(header) else f"column {k + 1}"
     return DataError(column, f"unreadable CSV field of {len(fields[k].strip())} "
