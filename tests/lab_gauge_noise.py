@@ -13,7 +13,9 @@ with; drop it to read the data as a lab without the pump's log would give them).
   1 s, an inlet resistance of 80 Pa per ul/s (the gauge reads p + R Q);
 * ``loop_stiff_membrane``: the membrane 25 % stiffer than its preset (the FE solve of
   that design), 2 ul/s, loading 12.5 s, holding 5 s, withdrawing 12.5 s, read every
-  2.5 s; written as a German Excel writes CSV (';', decimal commas, a byte-order mark).
+  2.5 s; written as a German Excel writes CSV (';', decimal commas, a byte-order mark);
+* ``loop_thick_membrane``: the membranes 0.08 mm thicker than written (the FE solves of
+  t 0.68 and 0.78 mm, written 0.6 and 0.7), the same loop, German Excel too.
 
 Regenerate (6 solves of ~20-45 s; run alone):
 
@@ -33,7 +35,7 @@ COLUMNS = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
            "pressure_pa", "angle_deg", "time_s", "flow_ul_s", "pump")
 
 
-def fe_curve(L_mm: float, t_mm: float, membrane_mu_scale: float):
+def fe_curve(L_mm: float, t_mm: float, membrane_mu_scale: float = 1.0):
     from solver import Design, SolverSettings, solve
     from solver.design_space import scaled_material
 
@@ -61,7 +63,7 @@ def measure(curves: dict, flows, protocol, read_s: float, R_pa_per_ul_s: float =
     rng = np.random.default_rng(seed)
     rows = []
     for key, (L, t_mm) in DESIGNS.items():
-        vv, pv, av = curves[key]
+        vv, pv, av = curves[key]   # the actuator as built; the row has the nominal
         for q in flows:
             for s in range(3):
                 sp, sa = 1 + 0.02 * rng.standard_normal(2)
@@ -98,6 +100,7 @@ def write(rows: list[dict], path: Path, comment: str, german: bool = False) -> N
 def main() -> int:
     nominal = {k: fe_curve(L, t, 1.0) for k, (L, t) in DESIGNS.items()}
     stiff = {k: fe_curve(L, t, 1.25) for k, (L, t) in DESIGNS.items()}
+    thick = {k: fe_curve(L, round(t + 0.08, 6)) for k, (L, t) in DESIGNS.items()}
     source = "made by tests/lab_gauge_noise.py from FE solves (solver.solve, default settings)"
     write(measure(nominal, (1.0, 3.0), (("load", 10.0),), 1.0, R_pa_per_ul_s=80.0),
           DATA / "lab_gauge_noise_loading_two_flows.csv",
@@ -105,6 +108,9 @@ def main() -> int:
     write(measure(stiff, (2.0,), (("load", 12.5), ("hold", 5.0), ("unload", 12.5)), 2.5),
           DATA / "lab_gauge_noise_loop_stiff_membrane.csv",
           source + ": membrane x1.25, gauge noise 1.5 %", german=True)
+    write(measure(thick, (2.0,), (("load", 12.5), ("hold", 5.0), ("unload", 12.5)), 2.5),
+          DATA / "lab_gauge_noise_loop_thick_membrane.csv",
+          source + ": membranes 0.08 mm thicker than written, gauge noise 1.5 %", german=True)
     return 0
 
 
