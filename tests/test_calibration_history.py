@@ -82,3 +82,38 @@ def test_a_thicker_membrane_read_off_the_gauge_is_not_a_pressure_gain():
     assert not report["residual_structured_after"]
     if report["rmse_after_deg"] > report["rmse_before_deg"]:
         assert "held-out curves do not tell the two apart" in report["interpretation"]
+
+
+def _clock_moved(rows: list[dict], by_s: float) -> list[dict]:
+    return [{**r, "time_s": str(round(float(r["time_s"]) + by_s, 2))} for r in rows]
+
+
+def test_a_clock_started_at_the_first_reading_is_said():
+    """The lab's clock starts at its first reading, one 2.5 s interval into the pumping:
+    every injected volume is 5 ul short. Read as given, the membrane 25 % stiffer was not
+    found (8.8 deg flagged as an effect outside the catalogue) and nothing said why; now
+    a warning names time_s and the fix, and --strict refuses the data."""
+    rows, _ = lab_rows("loop_stiff_membrane")
+    obs = observations_from_rows(_clock_moved(rows, -2.5))
+    said = [w for w in obs.warnings if w.startswith("time_s:")]
+    assert len(said) == 1 and "pump's start" in said[0] and "add one reading" in said[0]
+    assert not observations_from_rows(rows).warnings     # the pump's own clock: nothing
+    from surrogate.calibration import DataError
+    with pytest.raises(DataError) as err:
+        observations_from_rows(_clock_moved(rows, -2.5), strict=True)
+    assert err.value.column == "time_s"
+
+
+def test_a_clock_far_from_the_pump_start_is_named_in_the_error():
+    """A logger clock 100 s ahead of the pump: every volume lies past the FE's range.
+    The error said "only 0 curve keeps 4 readings ..."; it now asks whether time_s
+    counts from the pump's start."""
+    from calibration_lab import emulator
+
+    from surrogate.calibration import DataError, run_calibration
+
+    rows, _ = lab_rows("loop_stiff_membrane")
+    with pytest.raises(DataError) as err:
+        run_calibration(_clock_moved(rows, 100.0), emulator())
+    assert err.value.column == "time_s" and "pump's start" in str(err.value)
+    assert "0 of 6 curves" in str(err.value) and "\n" not in str(err.value)

@@ -23,6 +23,7 @@ from solver.materials import MATERIALS
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
+from surrogate.calibration._pump_clock import clock_warning
 from surrogate.json_repeats import loads_with_repeats
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
@@ -356,6 +357,10 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
                          f"{', '.join(map(repr, still[:3]))}{' ...' if len(still) > 3 else ''}"
                          ", which bends: the data say no fluid was injected there, so its "
                          "injected volume is 0 throughout; give the pump's rate", None))
+    clock = clock_warning(by_curve) if "time_s" in present and "flow_ul_s" in present \
+        else None
+    if clock:
+        warnings.append(clock)
     if strict and warnings:
         column, message, row = warnings[0]
         raise DataError(column, message + " (refused: strict)", row,

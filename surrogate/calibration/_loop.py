@@ -557,8 +557,11 @@ def _keep_within_range(obs: Observations, ok: np.ndarray, field: str, what: str,
     kept = ok & np.isin(obs.curve, keep_curves)
     out = obs.rows(kept)
     if out.n_curves < MIN_CURVES:
-        raise DataError(field, f"only {out.n_curves} curve keeps 4 readings within the "
-                        f"baseline's range{axis} (the FE's converged range)", None,
+        hint = ("; does time_s count from the pump's start, the chamber at rest? (the "
+                "injected volume is flow x time_s)" if field == "time_s" else "")
+        raise DataError(field, f"{out.n_curves} of {obs.n_curves} curves keep 4 readings "
+                        f"within the baseline's range{axis} (the FE's converged "
+                        f"range){hint}", None,
                         "at least 2 curves with 4 readings each below the end of the FE's "
                         "range")
     return out, kept
