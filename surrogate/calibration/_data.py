@@ -525,6 +525,12 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     return decimal_commas(out, tuple(RANGES), sep)
 
 
+#: the units a lab may write a required column's quantity in: a column named with one
+#: of them ('p_mbar', 'Druck [kPa]', 'theta (rad)') is named as the one found in its place
+QUANTITY_UNITS = {"pressure_pa": ("pa", "kpa", "hpa", "mbar", "bar", "psi", "mmhg"),
+                  "angle_deg": ("deg", "rad", "°", "degree", "degrees")}
+
+
 def _missing(name: str, columns: set) -> DataError:
     """A required column is missing: one line naming it, and the column the file has in
     its place when one looks like it (a unit or case added: 'pressure_pa [Pa]',
@@ -533,9 +539,16 @@ def _missing(name: str, columns: set) -> DataError:
         text = str(text).lower().replace("(", "[").split("[")[0].strip()
         return text.replace(" ", "_")
 
+    def unit_of(text: str) -> str:   # 'p (mbar)', 'p [mbar]', 'p_mbar' -> 'mbar'
+        text = str(text).lower().replace("(", "[").replace(")", "]")
+        inside = text.split("[", 1)[1].split("]")[0] if "[" in text else ""
+        return (inside or text.rsplit("_", 1)[-1]).strip()
+
     stem = name.rsplit("_", 1)[0]
+    units = QUANTITY_UNITS.get(name, ())
     near = sorted(c for c in map(str, columns)
-                  if base(c) in (name, stem) or base(c).rsplit("_", 1)[0] == stem)
+                  if base(c) in (name, stem) or base(c).rsplit("_", 1)[0] == stem
+                  or unit_of(c) in units)
     unit = {"pa": "Pa", "deg": "deg", "mm": "mm"}.get(name.rsplit("_", 1)[-1])
     found = (f" (found {near[0]!r}: the column must be named exactly {name}"
              + (f", its values in {unit}" if unit else "") + ")") if near else ""
