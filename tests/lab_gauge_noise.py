@@ -16,6 +16,9 @@ with; drop it to read the data as a lab without the pump's log would give them).
   2.5 s; written as a German Excel writes CSV (';', decimal commas, a byte-order mark);
 * ``loop_thick_membrane``: the membranes 0.08 mm thicker than written (the FE solves of
   t 0.68 and 0.78 mm, written 0.6 and 0.7), the same loop, German Excel too.
+* ``loop_kink``: the nominal designs, the same loop at 1 and 2 ul/s, and a kink forming
+  in the tubing after 7.5 s: from then on the gauge reads p + R Q d with R 300 Pa per
+  ul/s (d the pump's state), an effect outside the catalogue (its R changes mid-run).
 
 Regenerate (6 solves of ~20-45 s; run alone):
 
@@ -59,7 +62,7 @@ def _pump(protocol, q: float):
 
 
 def measure(curves: dict, flows, protocol, read_s: float, R_pa_per_ul_s: float = 0.0,
-            seed: int = 1) -> list[dict]:
+            seed: int = 1, kink_after_s: float | None = None) -> list[dict]:
     rng = np.random.default_rng(seed)
     rows = []
     for key, (L, t_mm) in DESIGNS.items():
@@ -69,7 +72,10 @@ def measure(curves: dict, flows, protocol, read_s: float, R_pa_per_ul_s: float =
                 sp, sa = 1 + 0.02 * rng.standard_normal(2)
                 tt, v, d = _pump(protocol, q)
                 assert v.max() < vv[-1]
-                gauge = sp * np.interp(v, vv, pv) + R_pa_per_ul_s * q * d
+                R = np.full_like(tt, R_pa_per_ul_s)
+                if kink_after_s is not None:
+                    R[tt > kink_after_s] = 300.0
+                gauge = sp * np.interp(v, vv, pv) + R * q * d
                 angle = sa * np.interp(v, vv, av)
                 reads = np.arange(read_s, tt[-1] + 1e-9, read_s)
                 for k, i in enumerate(np.searchsorted(tt, reads - 1e-9)):
@@ -111,6 +117,10 @@ def main() -> int:
     write(measure(thick, (2.0,), (("load", 12.5), ("hold", 5.0), ("unload", 12.5)), 2.5),
           DATA / "lab_gauge_noise_loop_thick_membrane.csv",
           source + ": membranes 0.08 mm thicker than written, gauge noise 1.5 %", german=True)
+    write(measure(nominal, (1.0, 2.0), (("load", 12.5), ("hold", 5.0), ("unload", 12.5)), 2.5,
+                  seed=3, kink_after_s=7.5),
+          DATA / "lab_gauge_noise_loop_kink.csv",
+          source + ": a kink of 300 Pa per ul/s from 7.5 s, gauge noise 1.5 %")
     return 0
 
 

@@ -117,3 +117,21 @@ def test_a_clock_far_from_the_pump_start_is_named_in_the_error():
         run_calibration(_clock_moved(rows, 100.0), emulator())
     assert err.value.column == "time_s" and "pump's start" in str(err.value)
     assert "0 of 6 curves" in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_kink_in_the_tubing_is_not_read_as_an_inlet_resistance():
+    """A kink forms after 7.5 s (the gauge reads 300 Pa per ul/s above the chamber from
+    then on): outside the catalogue. Before, an inlet resistance of 209 +/- 1 Pa per ul/s
+    and a gauge offset of -112 Pa were selected while the gauge was left at 5.6 x its
+    floor; a gauge effect must now leave the gauge within its floor to be selected."""
+    from calibration_lab import emulator
+
+    from surrogate.calibration import run_calibration
+
+    rows, _ = lab_rows("loop_kink")
+    report = run_calibration(rows, emulator()).report
+    gauge_read = {"pressure_offset", "pressure_gain", "hydraulic_resistance",
+                  "pressure_relaxation", "gauge_drift"}
+    assert not gauge_read & set(report["selected_effects"])
+    assert report["gauge_left_after"]["left"]
+    assert "no catalogued effect explains" in report["interpretation"]

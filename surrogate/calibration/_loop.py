@@ -233,11 +233,20 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         if cand["selectable"] or not cand["why_not"] or cand["unbacked"]:
             rest = leaves(effects, backed=not cand["unbacked"])
             cand["unexplained_rms_deg"] = rest["unexplained_rms_deg"]
+            gauge = _gauge_left(_pressure_rms(get_xv(effects), channel), channel,
+                                rest["excess_allowance"]) if _reads_gauge(effects) else None
             if rest["structured"]:
                 cand["selectable"] = cand["unbacked"] = False
                 cand["why_not"].append(
                     f"leaves a shared residual of {rest['unexplained_rms_deg']:.2f} deg: it "
                     "does not explain the data (something outside the catalogue acts)")
+            elif gauge and gauge["left"]:
+                cand["selectable"] = cand["unbacked"] = False
+                cand["why_not"].append(
+                    f"leaves the gauge at {gauge['rmse_pa']:.0f} Pa against its floor of "
+                    f"{gauge['floor_pa']:.0f} Pa ({gauge['ratio']:.2f} x, more than "
+                    f"{gauge['limit']:.2f} x): an effect read off the gauge that does not "
+                    "explain the gauge is not its explanation")
             elif not cand["unbacked"] and get_fit(effects).baseline_sd_deg is not None:
                 # what it leaves is within the baseline's band at the fitted design, but
                 # would not be within its band at the nominal designs
@@ -568,6 +577,17 @@ def _keep_within_range(obs: Observations, ok: np.ndarray, field: str, what: str,
 
 
 GAUGE_LEFT_RATIO = 1.3   # the gauge's cross-validated error over its replicate floor
+
+
+def _reads_gauge(effects: tuple[str, ...]) -> bool:
+    """A set with a member of the gauge alone (its pressure stage: offset, gain, the
+    inlet's R Q; or a time effect of the gauge: relaxation, drift): its size is read off
+    the gauge, so it must leave the gauge within its floor (``_gauge_left``) to be
+    selected. Until 2026-12-06 only the angle's residual was asked: a kink forming in the
+    tubing mid-run (its R Q from 0 to 300 Pa per ul/s) was read as an inlet resistance
+    of 209 +/- 1 Pa per ul/s with a gauge offset of -112 Pa, the gauge left at 5.6 x its
+    floor (said, but the sizes reported as found)."""
+    return any(EFFECTS[e].stage == "pressure" or EFFECTS[e].lags == "gauge" for e in effects)
 
 
 def _gauge_left(rmse_pa: float | None, channel: dict, allowance: float | None
