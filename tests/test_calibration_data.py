@@ -102,18 +102,67 @@ def test_latin1_file_is_one_line_naming_file_line_and_encoding(tmp_path):
     assert str(tmp_path) not in msg and "\n" not in msg
 
 
-@pytest.mark.parametrize("sep, what", [(";", "';'"), ("\t", "tabs")])
-def test_a_semicolon_or_tab_separated_file_is_named_as_such(tmp_path, sep, what):
-    """A spreadsheet's export with a decimal comma (';' between fields): it had read as
-    one column and answered "curve_id: required column is missing" -- the header has
-    curve_id."""
-    text = csv_text(rows()).replace(",", sep)
-    if sep == ";":
-        text = text.replace(".", ",")
+def _german_excel(data: list[dict], sep: str = ";") -> bytes:
+    """``data`` as a German Excel's "CSV UTF-8" writes it: a byte-order mark, a comment,
+    ';' between fields, ',' as the decimal mark, CR LF, its empty rows as separators
+    only and blank lines at the end."""
+    cols = list(data[0])
+    lines = ["# specimen batch 12, 2026-12-06", sep.join(cols)]
+    lines += [sep.join(str(r[c]).replace(".", ",") if c not in ("curve_id", "body_material",
+                                                                "membrane_material")
+                       else str(r[c]) for c in cols) for r in data]
+    lines += [sep * (len(cols) - 1), sep * (len(cols) - 1), "", ""]
+    return ("\ufeff" + "\r\n".join(lines)).encode("utf-8")
+
+
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_a_german_excel_csv_reads_as_the_comma_separated_file(tmp_path, sep):
+    """A German (French, Italian) Excel writes ';' between fields and ',' as the decimal
+    mark, and its save dialog cannot change that: it was refused ("the file is not
+    comma-separated ... save as CSV UTF-8, comma-delimited", which such an Excel cannot
+    do). It reads as the comma-separated file does: the same rows, the same sha256."""
+    data = [{**r, "t_mm": "0.55", "angle_deg": str(float(r["angle_deg"]) + 0.25)}
+            for r in rows()]
+    plain = load_observations(_write(tmp_path / "plain.csv", csv_text(data).encode()))
+    german = load_observations(_write(tmp_path / "de.csv", _german_excel(data, sep)))
+    assert german.sha256 == plain.sha256
+    assert np.array_equal(german.angle_deg, plain.angle_deg)
+    assert np.array_equal(german.t_mm, plain.t_mm) and german.t_mm[0] == 0.55
+
+
+def test_excel_empty_rows_of_separators_are_blank_lines(tmp_path):
+    """Excel exports a row it once formatted as ',,,,,,' (';;;;;;'): it was read as a
+    data row and the whole file refused ("curve_id: row 11: empty curve id")."""
+    text = csv_text(rows()) + "\n,,,,,,\n , ,,,,,\n"
+    obs = load_observations(_write(tmp_path / "lab.csv", text.encode()))
+    assert obs.n == 10
+
+
+def test_an_unnamed_empty_column_is_dropped_and_an_unnamed_full_one_named(tmp_path):
+    """A trailing separator on every line makes a column with no name: it was refused as
+    ": row 1: unknown column" (no column named). Empty, it is dropped; holding values,
+    the error names it by its place."""
+    lines = csv_text(rows()).split("\n")
+    empty = "\r\n".join(ln + "," for ln in lines)
+    assert load_observations(_write(tmp_path / "a.csv", empty.encode())).n == 10
+    full = "\n".join([lines[0] + ","] + [ln + ",7" for ln in lines[1:]])
     with pytest.raises(DataError) as err:
-        load_observations(_write(tmp_path / "lab.csv", text.encode("utf-8")))
-    assert err.value.column == "header" and f"separated by {what}" in str(err.value)
-    assert "comma-separated" in err.value.allowed
+        load_observations(_write(tmp_path / "b.csv", full.encode()))
+    assert err.value.column == "column 8" and "no name" in str(err.value)
+    assert err.value.row == 1
+
+
+@pytest.mark.parametrize("cell", ["1.234,5", "2.5"])
+def test_a_decimal_point_beside_decimal_commas_names_row_and_column(tmp_path, cell):
+    """In a ';' file whose numbers use ',' a '.' is a thousands separator or a decimal
+    point: not guessed."""
+    data = rows()
+    data[3] = {**data[3], "pressure_pa": cell}
+    with pytest.raises(DataError) as err:
+        load_observations(_write(tmp_path / "de.csv", _german_excel(data).replace(
+            cell.replace(".", ",").encode(), cell.encode())))
+    assert err.value.column == "pressure_pa" and err.value.row == 4
+    assert "decimal mark" in str(err.value) and "\n" not in str(err.value)
 
 
 def test_utf16_without_bom_is_named(tmp_path):
@@ -380,3 +429,16 @@ def test_a_json_rows_column_given_twice_is_refused_with_its_row(tmp_path):
         load_observations(path)
     assert err.value.column == "angle_deg" and err.value.row == 2
     assert "given twice" in str(err.value) and "lab.json" in str(err.value)
+
+
+@pytest.mark.parametrize("header, column", [("p_mbar", "pressure_pa"),
+                                            ("Druck [kPa]", "pressure_pa"),
+                                            ("theta (rad)", "angle_deg")])
+def test_a_required_column_named_by_its_unit_is_named_in_the_error(tmp_path, header, column):
+    """A lab names its pressure 'p_mbar': the error said only "pressure_pa: required
+    column is missing"; it now names the column found in its place and the unit wanted."""
+    text = csv_text(rows()).replace(column, header, 1)
+    with pytest.raises(DataError) as err:
+        load_observations(_write(tmp_path / "lab.csv", text.encode()))
+    assert err.value.column == column
+    assert f"found {header!r}" in str(err.value) and "\n" not in str(err.value)

@@ -96,18 +96,23 @@ def test_an_unreachable_target_is_explained_and_a_bad_bound_shown_beside_its_fie
     assert page.get_attribute("#inv-L-lo", "aria-invalid") == "true"
 
 
-def test_a_semicolon_separated_file_is_named_as_such_before_sending(watched, server, tmp_path):
-    """A spreadsheet's export with decimal commas read as one column; the server then
-    answered "curve_id: required column is missing" though the header has it."""
-    text = EXAMPLE_CSV.read_text().replace(",", ";").replace(".", ",")
-    path = tmp_path / "lab_semicolon.csv"
-    path.write_text(text)
+def test_a_german_excel_csv_is_read_as_the_comma_separated_file(watched, server):
+    """A German Excel's CSV (a byte-order mark, ';' between fields, ',' as the decimal
+    mark, rows of separators only at the end) was refused before sending ("save the file
+    as comma-separated values", which such an Excel cannot do); the page now sends the
+    rows the comma-separated file gives, as the CLI reads them."""
+    plain = EXAMPLE_CSV.read_text()
+    lines = [ln.split(",") for ln in plain.splitlines() if not ln.startswith("#")]
+    german = "\ufeff# lab 2\r\n" + "".join(
+        ";".join(cell if k in (0, 3, 4) else cell.replace(".", ",")
+                 for k, cell in enumerate(cells)) + "\r\n"
+        for cells in lines) + ";;;;;;;;\r\n\r\n"
     page = open_explorer(watched, server.url)
-    page.set_input_files("#cal-file", str(path))
-    page.click("#cal-run")
-    page.wait_for_selector("#err-cal-rows:not([hidden])")
-    message = page.locator("#err-cal-rows").inner_text()
-    assert "lab_semicolon.csv" in message and "separated by ';'" in message
+    read = page.evaluate("""async ([a, b]) => {
+        const m = await import("/static/explorer/js/csv.js");
+        return [m.parseCsv(a), m.parseCsv(b)];
+    }""", [german, plain])
+    assert read[0] == read[1] and len(read[0]) == 288
 
 
 def test_the_reports_own_fit_is_drawn_beside_the_data_before_any_save(watched, server):

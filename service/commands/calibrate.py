@@ -126,6 +126,9 @@ def run(args: argparse.Namespace) -> int:
           f"floor {deg(report['noise_floor_deg'])} deg); selected: "
           f"{', '.join(report['selected_effects']) or 'none'}"
           f"{'; RESIDUAL STRUCTURE REMAINS' if report['residual_structured_after'] else ''}")
+    if report.get("rmse_pressure_before_pa") is not None:   # read by injected volume
+        print(f"gauge pressure error (cross-validated): {report['rmse_pressure_before_pa']:.0f} "
+              f"Pa before, {report['rmse_pressure_after_pa']:.0f} Pa after")
     print(report["interpretation"])
     if args.save is not None:   # the report, plot and summary come whatever the save does
         check_new_model_name(args.save, args.models_dir)  # one saved meanwhile

@@ -21,8 +21,10 @@ import numpy as np
 
 from solver.bounded_read import read_bounded
 from solver.materials import MATERIALS
+from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
+from surrogate.calibration._pump_clock import clock_warning
 from surrogate.json_repeats import loads_with_repeats
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
@@ -373,6 +375,10 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
                          f"{', '.join(map(repr, still[:3]))}{' ...' if len(still) > 3 else ''}"
                          ", which bends: the data say no fluid was injected there, so its "
                          "injected volume is 0 throughout; give the pump's rate", None))
+    clock = clock_warning(by_curve) if "time_s" in present and "flow_ul_s" in present \
+        else None
+    if clock:
+        warnings.append(clock)
     if strict and warnings:
         column, message, row = warnings[0]
         raise DataError(column, message + " (refused: strict)", row,
@@ -492,33 +498,32 @@ def _plain_keys(row: dict, i: int) -> dict:
 
 def read_csv_rows(text: str) -> list[dict[str, object]]:
     """Rows of a CSV text (header line first; '#' comment lines and blank lines are
-    skipped: a blank line between a comment and the header had made an empty header). A
-    field beyond the csv module's size limit is a DataError naming its row and column.
-    Lines may end in LF, CR LF or CR alone (a spreadsheet's "CSV (Macintosh)": read as one
-    line, it was blamed on the field size, its CR garbling the terminal's line)."""
+    skipped: a blank line between a comment and the header had made an empty header; so
+    are a spreadsheet's empty rows, separators only). A field beyond the csv module's
+    size limit is a DataError naming its row and column. Lines may end in LF, CR LF or CR
+    alone (a spreadsheet's "CSV (Macintosh)": read as one line, it was blamed on the
+    field size, its CR garbling the terminal's line). Fields are separated by ',', or by
+    ';' or tabs with ',' as the decimal mark (a German Excel's CSV; _csv_dialect.py). A
+    column without a name in the header (a trailing separator) is dropped when it is
+    empty on every row."""
     lines = [ln for ln in io.StringIO(text, newline=None)
-             if ln.strip() and not ln.lstrip().startswith("#")]
-    reader = csv.DictReader(lines)
-    try:
-        fieldnames = reader.fieldnames
-    except csv.Error as exc:
-        raise _csv_error(exc, lines, 0) from None
-    if fieldnames is None:
+             if not is_blank(ln) and not ln.lstrip().startswith("#")]
+    if not lines:
         raise DataError("header", "the file is empty", None,
                         "a header line naming the columns " + ", ".join(REQUIRED))
-    names = [n.strip() for n in fieldnames]
-    for sep, what in ((";", "';'"), ("\t", "tabs")):
-        if len(names) == 1 and sep in names[0]:
-            # a spreadsheet's export where the decimal mark is a comma
-            raise DataError("header", f"the header is one column separated by {what}: the "
-                            "file is not comma-separated", 0,
-                            "comma-separated values with '.' as the decimal mark (save as "
-                            "CSV UTF-8, comma-delimited)")
+    sep = separator(lines[0])
+    try:
+        names = [n.strip() for n in next(csv.reader(lines[:1], delimiter=sep))]
+    except csv.Error as exc:
+        raise _csv_error(exc, lines, 0, sep) from None
+    unnamed = {k: f"column {k + 1}" for k, n in enumerate(names) if n == ""}
+    names = [unnamed.get(k, n) for k, n in enumerate(names)]
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0, "each column once")
     for name in REQUIRED:
         if name not in names:
             raise _missing(name, set(names))
+    reader = csv.DictReader(lines[1:], fieldnames=names, delimiter=sep)
     out = []
     i = 0
     while True:
@@ -527,7 +532,7 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
         except StopIteration:
             break
         except csv.Error as exc:
-            raise _csv_error(exc, lines, i + 1) from None
+            raise _csv_error(exc, lines, i + 1, sep) from None
         i += 1
         if i > MAX_ROWS:     # refused before building the rest (a 10^6-row file)
             raise DataError("rows", f"more than {MAX_ROWS} rows", None,
@@ -536,7 +541,20 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
             raise DataError("row", "more values than columns", i,
                             "one value per column of the header")
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
-    return out
+    for name in unnamed.values():
+        filled = next((j for j, r in enumerate(out, 1) if r.get(name)), None)
+        if filled is not None:
+            raise DataError(name, "holds values but has no name in the header", filled,
+                            "a header naming every column that holds values")
+        for r in out:
+            r.pop(name, None)
+    return decimal_commas(out, tuple(RANGES), sep)
+
+
+#: the units a lab may write a required column's quantity in: a column named with one
+#: of them ('p_mbar', 'Druck [kPa]', 'theta (rad)') is named as the one found in its place
+QUANTITY_UNITS = {"pressure_pa": ("pa", "kpa", "hpa", "mbar", "bar", "psi", "mmhg"),
+                  "angle_deg": ("deg", "rad", "°", "degree", "degrees")}
 
 
 def _missing(name: str, columns: set) -> DataError:
@@ -547,9 +565,16 @@ def _missing(name: str, columns: set) -> DataError:
         text = str(text).lower().replace("(", "[").split("[")[0].strip()
         return text.replace(" ", "_")
 
+    def unit_of(text: str) -> str:   # 'p (mbar)', 'p [mbar]', 'p_mbar' -> 'mbar'
+        text = str(text).lower().replace("(", "[").replace(")", "]")
+        inside = text.split("[", 1)[1].split("]")[0] if "[" in text else ""
+        return (inside or text.rsplit("_", 1)[-1]).strip()
+
     stem = name.rsplit("_", 1)[0]
+    units = QUANTITY_UNITS.get(name, ())
     near = sorted(c for c in map(str, columns)
-                  if base(c) in (name, stem) or base(c).rsplit("_", 1)[0] == stem)
+                  if base(c) in (name, stem) or base(c).rsplit("_", 1)[0] == stem
+                  or unit_of(c) in units)
     unit = {"pa": "Pa", "deg": "deg", "mm": "mm"}.get(name.rsplit("_", 1)[-1])
     found = (f" (found {near[0]!r}: the column must be named exactly {name}"
              + (f", its values in {unit}" if unit else "") + ")") if near else ""
@@ -557,11 +582,11 @@ def _missing(name: str, columns: set) -> DataError:
                      "columns " + ", ".join(REQUIRED))
 
 
-def _csv_error(exc: csv.Error, lines: list[str], row: int) -> DataError:
+def _csv_error(exc: csv.Error, lines: list[str], row: int, sep: str) -> DataError:
     """One line for an unreadable CSV row: its number and the column of its longest
     field (the csv module's field size limit is what usually fails)."""
-    header = [h.strip() for h in lines[0].split(",")] if lines else []
-    fields = lines[row].split(",") if row < len(lines) else [""]
+    header = [h.strip() for h in lines[0].split(sep)] if lines else []
+    fields = lines[row].split(sep) if row < len(lines) else [""]
     k = max(range(len(fields)), key=lambda j: len(fields[j]))
     column = header[k] if k < len(header) else f"column {k + 1}"
     return DataError(column, f"unreadable CSV field of {len(fields[k].strip())} "

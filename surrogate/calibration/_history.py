@@ -79,9 +79,17 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
     rate is well above the camera's noise, an interval bending by at least MOVING_SHARE
     of it, the way its pressure goes (beyond HOLD_MIN_PA), ran: at the top of a stiff
     curve the pressure rises by < 1 % of its range per reading while the angle still
-    moves by 5-8 % of the bend. One bending by less than STILL_SHARE of it, its pressure
-    within twice the hold tolerance or falling, stood: a hold whose gauge noise exceeds
-    1 % of a soft curve's range, or the inlet's R Q vanishing when the pump stops (the
+    moves by 5-8 % of the bend. So did one whose gauge says the pump ran the other way:
+    a pump withdrawing cannot bend the actuator on at half its loading rate (creep of
+    g < 0.75 makes unloading's bend fall or rise at most (2g - 1) x the rate), while a
+    gauge read to 1-2 % falls by its noise where a curve's pressure flattens near its
+    top (until 2026-12-06 such a reading was unloading, the replicates' vote made it
+    theirs, and every later volume was two intervals off). One bending by less than
+    STILL_SHARE of it, its pressure within twice the hold tolerance, or within half of
+    what the pump moves it in the running intervals at that bend, or falling, stood: a
+    hold whose gauge noise exceeds 1 % of a soft curve's range (a gauge read to 1.5 %
+    rises by 50-85 Pa at 2.3 kPa in a hold: until 2026-12-06 that read as loading where
+    the pump moves it by 250), or the inlet's R Q vanishing when the pump stops (the
     pressure drops, the bend stays)."""
     if d.size < 3:
         return d
@@ -97,13 +105,15 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
             return d
         near = ran[np.argsort(np.abs(level[ran] - level[i]))[:3]]
         expected = float(np.median(rate[near])) * dt[i]
+        pumped_pa = float(np.median(np.abs(dp[near] / dt[near]))) * dt[i]
         if expected <= floor or level[i] < BEND_LOW * float(np.max(bend)):
             continue
         agrees = np.sign(da[i]) == np.sign(dp[i]) and abs(dp[i]) > HOLD_MIN_PA
-        if abs(da[i]) >= MOVING_SHARE * expected and agrees:
+        against = d[i] == -np.sign(da[i])  # the gauge read the pump running backwards
+        if abs(da[i]) >= MOVING_SHARE * expected and (agrees or against):
             out[i] = np.sign(da[i])
         elif (abs(da[i]) <= STILL_SHARE * expected and expected > 2 * floor
-              and (abs(dp[i]) <= 2 * tol_p or dp[i] < 0)):
+              and (abs(dp[i]) <= max(2 * tol_p, MOVING_SHARE * pumped_pa) or dp[i] < 0)):
             out[i] = 0.0
     return out
 

@@ -2,10 +2,14 @@
 // CSV: a header line, '#' lines are comments, an empty cell means "absent". Cells of
 // the text columns stay text; the others become numbers when they read as one and are
 // otherwise sent as written, so that the server's check names the row and the column.
+// The dialect is the server's (surrogate/calibration/_csv_dialect.py): ',' between
+// fields, or ';' or tabs with ',' as the decimal mark when the numbers have one (a
+// German Excel's CSV); rows of separators only are blank; a column without a name in
+// the header is dropped when empty (a trailing separator), else named by its place.
 
 const TEXT_COLUMNS = new Set(["curve_id", "body_material", "membrane_material"]);
 
-function splitLine(line) {
+function splitLine(line, sep) {
   const out = [];
   let cur = "", quoted = false;
   for (let i = 0; i < line.length; i++) {
@@ -15,30 +19,38 @@ function splitLine(line) {
       else if (c === '"') quoted = false;
       else cur += c;
     } else if (c === '"') quoted = true;
-    else if (c === ",") { out.push(cur); cur = ""; }
+    else if (c === sep) { out.push(cur); cur = ""; }
     else cur += c;
   }
   out.push(cur);
   return out.map((s) => s.trim());
 }
 
+function separatorOf(header) {
+  if (header.includes(",")) return ",";
+  if (header.includes(";")) return ";";
+  return header.includes("\t") ? "\t" : ",";
+}
+
 export function parseCsv(text) {
-  const lines = text.split(/\r\n|\r|\n/).filter((l) => l.trim() !== "" && !l.trimStart().startsWith("#"));
+  const lines = text.replace(/^\uFEFF/, "").split(/\r\n|\r|\n/)
+    .filter((l) => l.replace(/[\s,;]/g, "") !== "" && !l.trimStart().startsWith("#"));
   if (!lines.length) throw new Error("the file is empty");
-  const header = splitLine(lines[0].replace(/^\uFEFF/, ""));
-  if (header.length === 1 && /[;\t]/.test(header[0])) {
-    // a spreadsheet's export where the decimal mark is a comma: not comma-separated
-    const sep = header[0].includes(";") ? "';'" : "tabs";
-    throw new Error(`the header is one column separated by ${sep}: save the file as ` +
-      "comma-separated values with '.' as the decimal mark (CSV UTF-8, comma-delimited)");
-  }
-  return lines.slice(1).map((line) => {
-    const cells = splitLine(line);
+  const sep = separatorOf(lines[0]);
+  const header = splitLine(lines[0], sep).map((name, k) => name || `column ${k + 1}`);
+  const cells = lines.slice(1).map((line) => splitLine(line, sep));
+  // with ';' or tabs, ',' is the decimal mark when any number has one; a cell that
+  // also has a '.' goes as written, and the server names its row and column
+  const decimalComma = sep !== "," && cells.some((r) => r.some((c, k) =>
+    !TEXT_COLUMNS.has(header[k]) && c.includes(",")));
+  return cells.map((line) => {
     const row = {};
     header.forEach((name, k) => {
-      const cell = cells[k] ?? "";
+      let cell = line[k] ?? "";
       if (cell === "") return;
       if (TEXT_COLUMNS.has(name)) { row[name] = cell; return; }
+      if (decimalComma && cell.includes(".")) { row[name] = cell; return; }
+      if (decimalComma) cell = cell.replace(",", ".");
       const v = Number(cell);
       row[name] = Number.isFinite(v) ? v : cell;
     });

@@ -1,0 +1,66 @@
+"""A spreadsheet's CSV dialect: the field separator and the decimal mark of a lab's file.
+
+Excel writes "CSV" with the list separator and the decimal mark of its locale: in a
+German (French, Italian, ...) locale that is ``;`` between fields and ``,`` as the
+decimal mark (``0,75``), and its "CSV UTF-8" adds a byte-order mark. The locale cannot
+be changed from the save dialog, so such a file is read as it is, not refused:
+
+* the separator is the header's: ``,`` when the header has one, else ``;`` or a tab
+  when the header splits on it;
+* with ``;`` or a tab, the decimal mark of the numeric columns is ``,`` when any of
+  their cells has one (otherwise ``.``, as a LabVIEW or pandas export writes). A cell
+  that then also holds a ``.`` (``1.234,5``: a thousands separator) or holds only a
+  ``.`` beside cells with ``,`` is ambiguous and is an error naming its row and column,
+  never guessed.
+
+A comma-separated file keeps ``.`` as its only decimal mark: a quoted ``"1,5"`` there
+may be 1.5 or 15 hundred, and is the usual "not a number" error.
+"""
+
+from __future__ import annotations
+
+from surrogate.calibration._errors import DataError
+
+SEPARATORS = (",", ";", "\t")
+
+
+def separator(header_line: str) -> str:
+    """The field separator of a CSV file, from its header line."""
+    if "," in header_line:
+        return ","
+    for sep in (";", "\t"):
+        if sep in header_line:
+            return sep
+    return ","
+
+
+def is_blank(line: str) -> bool:
+    """A line of separators and spaces only: a spreadsheet's empty row (Excel exports a
+    row it once formatted as ``;;;;;;``), skipped as a blank line is."""
+    return not line.strip(" \t\r\n,;")
+
+
+def decimal_commas(rows: list[dict[str, object]], numeric: tuple[str, ...], sep: str
+                   ) -> list[dict[str, object]]:
+    """``rows`` with the decimal commas of their numeric columns read as points, when the
+    file is separated by ``sep`` other than ',' and writes its decimals with ','.
+    Raises DataError (row 1-based, the column) on a cell whose mark is ambiguous."""
+    if sep == ",":
+        return rows
+    def cells():
+        for i, row in enumerate(rows, start=1):
+            for name in numeric:
+                value = row.get(name)
+                if isinstance(value, str):
+                    yield i, name, value
+
+    if not any("," in value for _, _, value in cells()):
+        return rows
+    for i, name, value in cells():
+        if "." in value:
+            raise DataError(name, f"{value!r} has a '.' while the file's numbers use ',' "
+                            "as the decimal mark (a thousands separator?)", i,
+                            "numbers written as the rest of the file writes them, "
+                            "'0,75', without thousands separators")
+    return [{k: (v.replace(",", ".") if k in numeric and isinstance(v, str) else v)
+             for k, v in row.items()} for row in rows]
