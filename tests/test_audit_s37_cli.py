@@ -105,3 +105,21 @@ def test_a_force_target_on_a_model_without_force_is_one_line(capsys):
     assert main(["inverse", "--kind", "force_at_pressure", "--pressure-pa", "1500",
                  "--force-mn", "1", "--model", "paper"]) == 2
     _one_line_error(capsys, "gives no blocked-tip force", "allowed: angle_at_pressure")
+
+
+def test_predict_with_the_exponential_model_does_not_load_the_emulator(capsys, monkeypatch):
+    """`balloon predict --model exponential` loaded the emulator too (12 s and 667 MB
+    against 2.7 s for the paper model; the hostile-input audit of this session)."""
+    import surrogate.emulator
+
+    loaded = []
+
+    def record(*args, **kwargs):     # a loading failure is kept, not raised: count calls
+        loaded.append(args)
+        raise RuntimeError("not loaded in this test")
+
+    monkeypatch.setattr(surrogate.emulator, "load_emulator", record)
+    assert main(["predict", "--model", "exponential", "--L-mm", "7.1", "--t-mm", "0.5",
+                 "--pressures", "1000"]) == 0
+    assert "1000" in capsys.readouterr().out
+    assert loaded == []

@@ -223,8 +223,8 @@ def surrogate_from_args(args: argparse.Namespace) -> object:
     settings = get_settings()
     models_dir = getattr(args, "models_dir", None) or settings.models_dir
     registry = ModelRegistry(settings.surrogate_path, models_dir, settings.emulator_path)
-    if spec in ("emulator", "fitted", "exponential"):
-        registry.load_fitted()
+    if spec in ("fitted", "exponential"):
+        registry.load_exponential()     # the emulator loads only when asked (get)
     try:
         model = registry.get(spec) if spec != "paper" else open_surrogate("paper")
     except NotFoundError as exc:
