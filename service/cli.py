@@ -68,7 +68,31 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(title="commands", metavar="COMMAND")
     for name in COMMAND_MODULES:
         import_module(name).register(subparsers)
+    parser.set_defaults(commands=subparsers.choices)    # for _file_error's argument names
     return parser
+
+
+def _file_error(args: argparse.Namespace, exc: OSError) -> str:
+    """The file as the user named it and why it cannot be used, with the argument that
+    named it and what that takes: `balloon calibrate nothere.csv` had said only
+    "nothere.csv: No such file or directory" (the hostile-input audit of the thirty-
+    seventh session)."""
+    what = f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else str(exc)
+    commands = getattr(args, "commands", None) or {}
+    command = next((p for p in commands.values()
+                    if p.get_default("func") is getattr(args, "func", None)), None)
+    if command is None or not exc.filename:
+        return what
+    for action in command._actions:     # noqa: SLF001 - argparse lists them nowhere else
+        value = getattr(args, action.dest, None)
+        if value is not None and str(value) == str(exc.filename):
+            name = (action.option_strings[-1] if action.option_strings
+                    else action.metavar or action.dest.upper())
+            takes = ("a file this user may read (or write, for an output)"
+                     if isinstance(exc, PermissionError) else "an existing file, not a "
+                     "directory" if isinstance(exc, IsADirectoryError) else "an existing file")
+            return f"{name}: {what} (allowed: {takes})"
+    return what
 
 
 def _error(what: object) -> None:
@@ -91,8 +115,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         # the file as the user named it and why, without Python's "[Errno 2]"
-        what = f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else exc
-        _error(what)
+        _error(_file_error(args, exc))
         return 2
     except BalloonError as exc:
         _error(exc)

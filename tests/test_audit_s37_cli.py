@@ -123,3 +123,18 @@ def test_predict_with_the_exponential_model_does_not_load_the_emulator(capsys, m
                  "--pressures", "1000"]) == 0
     assert "1000" in capsys.readouterr().out
     assert loaded == []
+
+
+@pytest.mark.parametrize(("command", "name"), [
+    (["calibrate", "{path}", "--report", "{tmp}/r.json"], "DATA"),
+    (["precompute", "{path}", "--db", "{tmp}/x.h5", "--dry-run"], "GRID.toml"),
+])
+@pytest.mark.parametrize("kind", ["missing", "directory"])
+def test_an_input_file_that_is_not_there_names_its_argument(tmp_path, capsys, command, name,
+                                                            kind):
+    """`balloon calibrate nothere.csv` said only "nothere.csv: No such file or directory":
+    the argument that named it and what it takes are said too."""
+    path = tmp_path / "nothere.csv" if kind == "missing" else tmp_path
+    argv = [w.format(path=path, tmp=tmp_path) for w in command]
+    assert main(argv) == 2
+    _one_line_error(capsys, f"{name}: {path}", "(allowed: an existing file")
