@@ -33,7 +33,7 @@ from solver.design_space import PAIRS, BoxPoint, locate
 from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
-from surrogate.emulator.balance import VOLUME_NODES_UL, BalanceModel
+from surrogate.emulator.balance import VOLUME_NODES_UL, BalanceModel, first_reach
 from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.design_memo import DesignMemo
 from surrogate.emulator.early_ended_nodes import early_weight
@@ -947,17 +947,14 @@ class Emulator:
         top = SolverSettings().max_angle_deg
         grid = np.linspace(0.0, v_limit, 241)[1:]
         angle, _, _, p_red = model.by_volume(nodes, grid, z)
-        ends = []   # (volume, why) of each stop the mean reaches before the volume stop
+        ends = []   # (volume, why, pressure stop?) of each stop reached before the volume stop
         for x, stop, why in (
                 (np.abs(angle), top, f"the FE's angle stop ({top:g} deg, "
                  "SolverSettings.max_angle_deg), which the balance model's curve reaches "
                  "before the volume stop"),
                 (p_red * pressure_scale, FE_PRESSURE_STOP_PA, None)):
-            over = np.flatnonzero(x >= stop)
-            if over.size:
-                i = int(over[0])
-                v_end = (float(grid[0]) if i == 0 else
-                         float(np.interp(stop, x[i - 1:i + 1], grid[i - 1:i + 1])))
+            v_end = float(first_reach(grid, x, np.array([stop]))[0])
+            if np.isfinite(v_end):
                 ends.append((v_end, why or pressure_stop_reason(
                     float(np.nanmax(p_red)) * pressure_scale), why is None))
         if not ends:
