@@ -21,8 +21,6 @@ from __future__ import annotations
 
 from surrogate.calibration._errors import DataError
 
-SEPARATORS = (",", ";", "\t")
-
 
 def separator(header_line: str) -> str:
     """The field separator of a CSV file, from its header line."""
