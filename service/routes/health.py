@@ -11,6 +11,7 @@ from service.schemas import Health
 from service.schemas.health import DatabaseStatus, JobsStatus, SurrogateStatus
 from service.store_access import database_state
 from solver.precompute.parking import parked_files
+from solver.store.locking import unwritable
 
 router = APIRouter(prefix="/v1", tags=["health"])
 
@@ -38,6 +39,9 @@ async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Hea
         problems.append(f"no curve database {settings.db_path.name}: /v1/curves answers 503")
     elif db_error:
         problems.append(f"{db_error}: /v1/curves answers 503")
+    unstorable = unwritable(settings.db_path)
+    if unstorable:
+        problems.append(f"the curve database {unstorable}: POST /v1/solve answers 503")
     parked = len(parked_files(settings.db_path))
     if parked:
         problems.append(f"{parked} finished solve result(s) parked: the curve database "

@@ -10,7 +10,7 @@ from fastapi.responses import JSONResponse
 
 from service.convert import to_design, to_settings
 from service.deps import ApiKeyDep, JobsDep, SettingsDep
-from service.errors import ConflictError, FieldError
+from service.errors import ConflictError, FieldError, UnavailableError
 from service.jobs import JobState
 from service.schemas import Job, SolveRequest
 from service.schemas.jobs import Progress
@@ -41,6 +41,7 @@ def solve(request: SolveRequest, jobs: JobsDep, settings: SettingsDep) -> JSONRe
     design = to_design(request.design)
     solver_settings = to_settings(request.settings)
     _check_size(design, solver_settings, settings.max_solve_dofs)
+    _check_storable(settings.db_path)
     key = record_key(design, solver_settings)
     if stored_key(settings.db_path, key):
         raise ConflictError(f"this design and settings are already in the database as "
@@ -48,6 +49,19 @@ def solve(request: SolveRequest, jobs: JobsDep, settings: SettingsDep) -> JSONRe
     job = jobs.submit(design, solver_settings, key)
     return JSONResponse(job_view(job).model_dump(), status_code=202,
                         headers={"Location": f"/v1/jobs/{job.id}"})
+
+
+def _check_storable(db_path: Any) -> None:
+    """503 before queueing when the database cannot take the finished solve (a
+    directory, a device, a second hard link, a directory that takes no file:
+    ``solver.store.locking.unwritable``): the server's setting, not the client's input,
+    and a job would only fail after its solve. The words name the file, not its path."""
+    from solver.store.locking import unwritable
+
+    why = unwritable(db_path)
+    if why:
+        raise UnavailableError(f"this server cannot store a solve: its curve database "
+                               f"(BALLOON_DB_PATH) {why}; nothing was queued")
 
 
 def _check_size(design: Any, solver_settings: Any, max_dofs: int) -> None:

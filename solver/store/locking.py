@@ -41,9 +41,41 @@ def no_database(path: str | os.PathLike, then: str) -> Exception:
     path = Path(path)
     if not path.exists():
         return NotFoundError(f"no curve database at {path}{then}")
-    what = "a directory" if path.is_dir() else "not a regular file (a device or a pipe)"
-    return InputError("db", f"{path} is {what}, not a curve database",
+    return InputError("db", f"{path} is {_what_is_there(path)}, not a curve database",
                       "the path of an HDF5 file written by balloon precompute")
+
+
+def _what_is_there(path: Path) -> str:
+    """What a database path that is no regular file names, in words."""
+    return "a directory" if path.is_dir() else "not a regular file (a device or a pipe)"
+
+
+def unwritable(path: str | os.PathLike) -> str | None:
+    """Why a put could not publish into the database at ``path``, in words that name the
+    file by its name only (a server sends them to clients), or None when it can. A put
+    writes a new file beside the database and renames it over (its directory must take
+    both) under the sidecar lock ``<db>.lock``; a missing file is created by the first
+    put. Checked before work whose result a put must store (the service's solve jobs):
+    a directory, a device, a second hard link, a directory that does not exist or takes
+    no new file would otherwise fail the put after the work."""
+    path = database_path(path)
+    name = path.name
+    if path.exists() and not path.is_file():
+        return f"{name} is {_what_is_there(path)}, not a curve database"
+    try:
+        names = path.stat().st_nlink
+    except FileNotFoundError:
+        names = 1
+    if names > 1:
+        return f"{name} has {names} names (hard links): a write would replace one of them"
+    if not path.parent.is_dir():
+        return f"the directory of {name} does not exist"
+    if not os.access(path.parent, os.W_OK | os.X_OK):
+        return f"the directory of {name} takes no new file (read-only or no permission)"
+    lock = lock_path(path)
+    if lock.exists() and not os.access(lock, os.W_OK):
+        return f"its lock file {lock.name} is not writable"
+    return None
 
 
 def refuse_other_names(path: Path) -> None:
