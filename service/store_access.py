@@ -50,9 +50,13 @@ def open_store(path: Path) -> Iterator[Any]:
 
 
 def _unreadable(path: Path, exc: BaseException) -> str:
+    return f"the curve database cannot be read: {_public(path, exc)}"
+
+
+def _public(path: Path, exc: BaseException) -> str:
+    """A store error's words with the database named by its name, not its path."""
     public = getattr(exc, "public", None)
-    text = public() if public else str(exc).replace(str(path), path.name)
-    return f"the curve database cannot be read: {text}"
+    return public() if public else str(exc).replace(str(path), path.name)
 
 
 def database_state(path: Path) -> tuple[int | None, str | None]:
@@ -117,15 +121,24 @@ def stored_key(path: Path, key: str) -> bool:
 
 class ResultParkedError(BalloonError):
     """The solve finished but the database could not take it (disk full, read-only file
-    system): the record is parked beside it (``solver.precompute.parking``, as the
-    precompute job does) and written with the next write that succeeds. The message
-    names the database by its name only (clients read it)."""
+    system, a damaged record that a publish would seal over): the record is parked
+    beside it (``solver.precompute.parking``, as the precompute job does) and written
+    with the next write that succeeds. The message names the database by its name only
+    (clients read it); ``then`` says what to do first, where waiting does not help."""
 
-    def __init__(self, key: str, name: str, cause: str) -> None:
+    def __init__(self, key: str, name: str, cause: str, then: str = "") -> None:
         super().__init__(f"the solve finished but the curve database {name} cannot be "
                          f"written ({cause}); the result is kept (parked) and written with "
-                         "the next write that succeeds")
+                         f"the next write that succeeds{then}")
         self.key = key
+
+
+def _after_salvage(name: str) -> str:
+    """What to run when the database holds a damaged record (no put seals over one)."""
+    return (f": run `balloon db salvage {name} -o NEW.h5` where the server's database "
+            f"is and put NEW.h5 in place of {name} (the damaged records are named; "
+            "`balloon precompute` solves them again), then the next solve writes the "
+            "parked results")
 
 
 class ResultWriter:
@@ -139,9 +152,14 @@ class ResultWriter:
         self._lock = threading.Lock()
 
     def __call__(self, design: Any, settings: Any, curve: Any) -> str:
-        from solver.precompute.parking import park, unpark
+        from solver.precompute.parking import unpark
         from solver.store import CurveStore
-        from solver.store.errors import StoreBusyError, StoreWriteError
+        from solver.store.errors import (
+            DamagedStoreError,
+            NotACurveStoreError,
+            StoreBusyError,
+            StoreWriteError,
+        )
         from solver.store.record import make_record
 
         record = make_record(design, settings, curve)
@@ -158,8 +176,22 @@ class ResultWriter:
                         raise
                     time.sleep(1.0)
                 except StoreWriteError as exc:
-                    try:
-                        park(record, self.path)
-                    except OSError as lost:
-                        raise StoreWriteError(self.path, lost) from exc
+                    self._park(record, exc)
                     raise ResultParkedError(record.key, self.path.name, exc.cause) from None
+                except NotACurveStoreError as exc:  # a damaged record, or no database
+                    self._park(record, exc)
+                    then = (_after_salvage(self.path.name)
+                            if isinstance(exc, DamagedStoreError) else "")
+                    raise ResultParkedError(record.key, self.path.name,
+                                            _public(self.path, exc), then) from None
+
+    def _park(self, record: Any, exc: BaseException) -> None:
+        """Park ``record`` beside the database; StoreWriteError when no parking directory
+        takes it either (then it is lost, and the job says so)."""
+        from solver.precompute.parking import park
+        from solver.store.errors import StoreWriteError
+
+        try:
+            park(record, self.path)
+        except OSError as lost:
+            raise StoreWriteError(self.path, lost) from exc

@@ -389,8 +389,7 @@ class CurveStore:
         with self._mutex:
             self._require_writer()
             with self._locked():
-                self.require_intact()
-                self._publish(lambda f: None, repack=True)
+                self._publish(lambda f: None, repack=True, verify=True)
 
     def _require_writer(self) -> None:
         if self.mode != "a" or self._closed:
@@ -409,12 +408,20 @@ class CurveStore:
 
     def _publish(self, change: Any, create: bool = False,
                  drop: frozenset[str] | set[str] = frozenset(), repack: bool = False,
-                 changed: frozenset[str] | set[str] = frozenset()) -> None:
+                 changed: frozenset[str] | set[str] = frozenset(),
+                 verify: bool = False) -> None:
         """Copy the file (rewritten record by record when records are dropped or when it
         is not sealed), apply ``change(h5file)`` to the copy and bring its summary index
         up to date (``changed``: the records ``change`` wrote; schema.py), rewrite the
         result when ``repack`` (no freed bytes survive), fsync, rename over. Called with
         the writer lock held.
+
+        The published copy is sealed, and a seal vouches for every record in it: the
+        records of an unsealed source (older code, another tool) are read back first --
+        and of any source when ``verify`` -- and a record that does not read back
+        refuses the publish (DamagedStoreError naming it, the file unchanged; `balloon db
+        salvage` copies the intact ones). A sealed source's records are what this code
+        published: its seal was checked when it was opened.
 
         The copy is built in memory and written to disk with plain file I/O: a failed
         write (disk full, read-only) is then one clean OSError, where HDF5 writing to a
@@ -432,6 +439,8 @@ class CurveStore:
             with self._reading():
                 published = self.path.read_bytes()
             sealed = integrity.is_sealed_image(published)
+            if verify or not sealed:
+                self.require_intact()     # about 5 ms a record; once per unsealed file
             if drop or not sealed:
                 self._repack(image, drop)  # an unsealed file: read through the check
             else:
