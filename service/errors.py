@@ -15,6 +15,7 @@ Mapping (domain class -> status):
     ConflictError, ExistsError (a saved model's name)    409
     PayloadTooLargeError                                413
     QueueFullError, UnavailableError                    503 with Retry-After
+    Cancelled (the client disconnected; nobody reads it) 499, as proxies log it
     SolverError, any other BalloonError                 422
     anything unexpected                                 500, logged; no stack trace is sent
 """
@@ -33,6 +34,7 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from solver.errors import BalloonError, ExistsError, InputError, NotFoundError, SolverError
+from surrogate.errors import Cancelled
 
 log = logging.getLogger("balloon.service")
 
@@ -157,6 +159,8 @@ def problem_for(exc: BaseException) -> Problem:
         return Problem(404, "Not found", str(exc), "not-found")
     if isinstance(exc, SolverError):
         return Problem(422, "Solver error", str(exc), "solver-error")
+    if isinstance(exc, Cancelled):  # the work stopped because its client left (the log's)
+        return Problem(499, "Client closed request", str(exc), "client-closed-request")
     if isinstance(exc, BalloonError):  # e.g. the surrogate's OutOfFamilyError
         return Problem(422, "Cannot answer for this input", str(exc),
                        _kebab(type(exc).__name__))

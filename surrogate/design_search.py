@@ -35,6 +35,7 @@ fewer and missed the best of a search for 5, and one for 5 that of one for 20).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -50,6 +51,7 @@ from solver.design_space import (
 )
 from solver.errors import InputError
 from surrogate.band_level import z_value
+from surrogate.errors import stop_if_cancelled
 from surrogate.exponential.inverse_design import (
     DesignCandidate,
     DesignTarget,
@@ -281,7 +283,8 @@ def solve_variable(ranges: dict[str, tuple[float, float]]) -> str | None:
 
 
 def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level: float,
-                 name: str, bounds: tuple[float, float]) -> list[_Eval]:
+                 name: str, bounds: tuple[float, float],
+                 cancel: threading.Event | None = None) -> list[_Eval]:
     """Bisection along the variable ``name`` within ``bounds`` (all candidates at once,
     geometric) so that the value at the target pressure equals the target; a value past
     the FE's range counts as too large, a design bending the other way as too small (an
@@ -305,6 +308,7 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
     f_hi, _, _ = f(hi)
     ok = np.sign(f_lo) != np.sign(f_hi)
     for _ in range(BISECTION_STEPS):
+        stop_if_cancelled(cancel)
         mid = np.sqrt(lo * hi)
         f_mid, _, _ = f(mid)
         same = np.sign(f_mid) == np.sign(f_lo)
@@ -408,8 +412,11 @@ def _unit(e: _Eval, ranges: dict[str, tuple[float, float]]) -> np.ndarray:
 
 def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                    objective: str | None = None, n_results: int = 5, level: float = 0.95,
-                   seed: int = 0) -> InverseDesignResult:
-    """Ranked designs meeting ``target`` (see the module docstring)."""
+                   seed: int = 0, cancel: threading.Event | None = None
+                   ) -> InverseDesignResult:
+    """Ranked designs meeting ``target`` (see the module docstring). ``cancel``: set by
+    another thread, the search stops at its next batch of designs (a pair's screen, a
+    bisection step, a candidate asked back) with ``surrogate.errors.Cancelled``."""
     z_value(level)   # a level outside 0.5..1 (NaN) is refused, not searched as "unreachable"
     target = target.validated()
     objective = resolve_objective(target, objective)
@@ -424,6 +431,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     other_way = 0.0          # the largest |value| of designs bending against the target
     no_force = 0             # designs the model answers with no force (force targets)
     for pair in bounds.allowed_pairs():
+        stop_if_cancelled(cancel)
         slices = slices_fn(pair) if slices_fn is not None else None
         if slices is not None and not slices:
             continue
@@ -471,7 +479,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                          <= 0.01 * target.value]
             continue
         solved = near[:SOLVED_PER_PAIR]
-        hits = _solve_along(model, solved, target, level, knob, ranges[knob])
+        hits = _solve_along(model, solved, target, level, knob, ranges[knob], cancel)
         n_evaluated += (BISECTION_STEPS + 3) * len(solved)
         feasible += hits
     if no_force and not best_reach and not feasible:
@@ -485,6 +493,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     feasible.sort(key=lambda e: _score(e, objective, target))
     chosen: list[_Eval] = []
     for e in feasible:
+        stop_if_cancelled(cancel)
         u = _unit(e, ranges)
         if all(e.pair != c.pair or np.linalg.norm(u - _unit(c, ranges)) >= MIN_SPACING
                for c in chosen) and _answers_as_screened(model, e, target, level):
@@ -493,6 +502,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             break
     candidates = []
     for rank, e in enumerate(chosen, 1):
+        stop_if_cancelled(cancel)
         # the curve from 0 Pa to the target pressure (a budget's: to where the design meets
         # the angle -- drawn to the budget it reached past the FE's range, and every
         # recommended design was flagged past_fe_range)

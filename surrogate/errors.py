@@ -4,11 +4,15 @@
     ├── OutOfFamilyError       the design's family (material pair, T, b, h) is not fitted;
     │                          the message says which precompute to run
     └── SurrogateFileError     a surrogate file is unreadable or of a newer format version
+    BalloonError
+    └── Cancelled              long work stopped because its caller no longer wants it
 """
 
 from __future__ import annotations
 
-from solver.errors import InputError
+import threading
+
+from solver.errors import BalloonError, InputError
 
 
 class OutOfFamilyError(InputError):
@@ -27,3 +31,17 @@ class SurrogateFileError(InputError):
     def __init__(self, path: str, message: str) -> None:
         super().__init__("model", f"{path}: {message}")
         self.path = path
+
+
+class Cancelled(BalloonError):
+    """Long work (a calibration, a design search) stopped at a loop boundary because its
+    caller set the ``cancel`` event it was given (the service: its HTTP client
+    disconnected). Nothing is answered or saved."""
+
+
+def stop_if_cancelled(cancel: threading.Event | None) -> None:
+    """Raise Cancelled when ``cancel`` is set; the long loops call it at their natural
+    boundaries (a fit, a cross-validation, a batch of designs screened), so the work
+    stops within one of them. ``None``: never cancelled (the CLI, scripts)."""
+    if cancel is not None and cancel.is_set():
+        raise Cancelled("stopped: the caller no longer wants the answer")

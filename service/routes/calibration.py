@@ -7,13 +7,15 @@ augmented model (``save``) changes server state, so it needs the API key.
 from __future__ import annotations
 
 import math
+import threading
 from pathlib import Path
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Security
+from fastapi import APIRouter, Request, Security
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
 from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
+from service.disconnect import unless_disconnected
 from service.errors import (
     FIELD_FORMS,
     FIELD_RANGES,
@@ -152,9 +154,18 @@ def effects() -> EffectList:
 
 @router.post("/calibrate", response_model=CalibrationReport,
              summary="Find what the model misses in measured curves; error before and after")
-def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDep,
-              key: Annotated[str | None, Security(API_KEY_HEADER)] = None
-              ) -> CalibrationReport:
+async def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDep,
+                    http: Request,
+                    key: Annotated[str | None, Security(API_KEY_HEADER)] = None
+                    ) -> CalibrationReport:
+    """The calibration runs in a worker thread and stops soon after its client
+    disconnects (service.disconnect): nothing is saved then."""
+    return await unless_disconnected(
+        http, lambda cancel: _calibrate(request, models, settings, key, cancel))
+
+
+def _calibrate(request: CalibrateRequest, models: Any, settings: Any, key: str | None,
+               cancel: threading.Event) -> CalibrationReport:
     from surrogate.calibration import (
         DataError,
         jsonable,
@@ -170,7 +181,7 @@ def calibrate(request: CalibrateRequest, models: ModelsDep, settings: SettingsDe
         obs = observations_from_rows(request.rows, strict=request.strict)
         _check_size(obs, settings)
         start = "paper" if request.model == "paper" else models.get(request.model)
-        cal = run_calibration(obs, start, folds=request.folds)
+        cal = run_calibration(obs, start, folds=request.folds, cancel=cancel)
     except DataError as exc:
         loc: tuple[str | int, ...] = ("body", "rows")
         if exc.row is not None:

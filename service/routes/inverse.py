@@ -3,10 +3,14 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+import threading
+from typing import Any
+
+from fastapi import APIRouter, Request
 
 from service.convert import DESIGN_LOCS, jsonable, to_design
 from service.deps import ModelsDep
+from service.disconnect import unless_disconnected
 from service.errors import located
 from service.models import require
 from service.schemas import InverseRequest, InverseResponse, PressureRequest, PressureResponse
@@ -33,9 +37,15 @@ def _pair(values: list[float] | None) -> tuple[float, float] | None:
 
 @router.post("/inverse", response_model=InverseResponse,
              summary="Designs that meet a target, ranked; or why none can")
-def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
+async def inverse(request: InverseRequest, models: ModelsDep, http: Request
+                  ) -> InverseResponse:
     """Searches L, t, T, b, h (and the stiffness scales when bounded) within the bounds,
-    for every allowed material pair the model covers (surrogate.design_search)."""
+    for every allowed material pair the model covers (surrogate.design_search). The
+    search stops soon after its client disconnects (service.disconnect)."""
+    return await unless_disconnected(http, lambda cancel: _search(request, models, cancel))
+
+
+def _search(request: InverseRequest, models: Any, cancel: threading.Event) -> InverseResponse:
     from surrogate import DesignTarget
     from surrogate.design_search import SearchBounds, search_designs
 
@@ -55,7 +65,8 @@ def inverse(request: InverseRequest, models: ModelsDep) -> InverseResponse:
                          membrane_stiffness_scale=_pair(
                              request.membrane_stiffness_scale_bounds),
                          pairs=pairs),
-            objective=request.objective, n_results=request.n_results, level=request.level)
+            objective=request.objective, n_results=request.n_results, level=request.level,
+            cancel=cancel)
     except InputError as exc:
         raise located(exc, ("body",), DESIGN_FIELDS) from None
     out = jsonable(result.as_dict())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import threading
 from typing import Any
 
 from surrogate.calibration._data import Observations, observations_from_rows
@@ -11,11 +12,14 @@ from surrogate.calibration._start import baseline_for
 
 
 def run_calibration(data: Observations | list[dict[str, Any]], model: Any = None,
-                    folds: int = 5, progress=None, strict: bool = False) -> Calibration:
+                    folds: int = 5, progress=None, strict: bool = False,
+                    cancel: threading.Event | None = None) -> Calibration:
     """Validate ``data`` (rows or Observations) and run the loop against ``model``: None
-    or "paper" (the paper's constants), or any ``surrogate.predictor.Predictor``."""
+    or "paper" (the paper's constants), or any ``surrogate.predictor.Predictor``.
+    ``cancel``: set by another thread, the loop stops at its next fit or
+    cross-validation with ``surrogate.errors.Cancelled``."""
     obs = data if isinstance(data, Observations) else observations_from_rows(data, strict)
-    cal = calibrate(obs, baseline_for(model), folds=folds, progress=progress)
+    cal = calibrate(obs, baseline_for(model), folds=folds, progress=progress, cancel=cancel)
     cal.report["saveable"] = save_status(cal)
     return cal
 

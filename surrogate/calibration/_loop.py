@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,6 +58,7 @@ from surrogate.calibration._specimens import SpecimenScatter, specimen_scatter
 from surrogate.calibration._start import Baseline
 from surrogate.calibration._structure import structure_test
 from surrogate.calibration.effects import CATALOGUE, EFFECTS, DataTraits, Effect
+from surrogate.errors import stop_if_cancelled
 from surrogate.exponential.equations import TAU_FORM
 
 Z_SIGNIFICANT = 3.0
@@ -102,9 +104,12 @@ def _num(x: float) -> float | None:
     return float(x) if x is not None and math.isfinite(x) else None
 
 
-def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=None
-              ) -> Calibration:
-    """Run the loop on validated observations against ``baseline``."""
+def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=None,
+              cancel: threading.Event | None = None) -> Calibration:
+    """Run the loop on validated observations against ``baseline``. ``cancel``: checked
+    before the baseline is tabulated and at every fit and cross-validation (where
+    ``progress`` ticks); once set, the loop ends with ``Cancelled``."""
+    stop_if_cancelled(cancel)
     if obs.n_curves < MIN_CURVES:
         ids = ", ".join(repr(c) for c in obs.curve_ids)
         raise DataError("curve_id", f"{obs.n_curves} curve ({ids}): cross-validation by "
@@ -113,7 +118,11 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                         "specimens of one design also give the noise floor")
     folds_requested = folds
     k = folds_used(folds, obs.n_curves)
-    tick = progress or (lambda: None)
+    def tick() -> None:
+        stop_if_cancelled(cancel)
+        if progress is not None:
+            progress()
+
     warnings = list(obs.warnings)
 
     designs = {}
@@ -124,6 +133,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                           1.6 * float(np.max(np.abs(obs.pressure_pa))) + 200.0)
     v_max = 1.25 * float(np.max(obs.volume_ul)) + 1.0 if obs.has_volume else None
     responses = Responses(baseline.predictor, designs, p_max, v_max)
+    stop_if_cancelled(cancel)
     channel, noise = pressure_channel(obs, responses, baseline)
     # by volume a reading is past the baseline's range by its volume, not by its gauge
     # pressure (which a specimen's scatter or a gauge effect moves: no selection by it)
