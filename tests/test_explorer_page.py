@@ -135,7 +135,7 @@ def test_a_new_width_scales_the_design_and_its_ranges_and_the_curve_is_the_scale
     assert page.get_attribute("#L_mm", "max") == "36"
     assert page.get_attribute("#L_mm-range", "min") == "8"
     assert page.locator("#L_mm-range-text").inner_text() == "8 - 36 mm"
-    assert page.get_attribute("#body_scale", "max") == "2"  # the stiffness scales keep theirs
+    assert page.get_attribute("#body_scale", "max") == "100"  # the stiffness scales keep theirs
     drawn = series(page, "prediction")
     body = {"design": {"L_mm": 14.2, "t_mm": 1.0, "T_mm": 2.0, "b_mm": 3.6, "h_mm": 0.3,
                        "W_mm": 6.0, "body_material": "pdms_1_10",

@@ -9,7 +9,7 @@ import { api, ApiError, clearMessage, clearProblems, isAbort, OfflineError, show
 import { setupCalibration } from "./calibration.js";
 import {
   FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
-  materialLabel, pairLabel, scaledLengths, shown, stateOfDesign,
+  materialLabel, pairLabel, scaledLengths, shown, stateOfDesign, takeScaleLimits,
 } from "./design.js";
 import { checkNumber } from "./fields.js";
 import { setupInverse } from "./inverse.js";
@@ -91,16 +91,17 @@ function addField(box, f, onValue) {
   div.innerHTML = `
     <label for="${f.name}">${f.label}${unit}</label>
     <div class="pair">
-      <input type="range" id="${f.name}-range" min="${f.min}" max="${f.max}" step="${f.step}"
+      <input type="range" id="${f.name}-range" step="${f.step}"
         value="${f.value}" aria-label="${f.label} slider" tabindex="-1">
-      <input type="number" id="${f.name}" name="${f.name}" min="${f.min}" max="${f.max}" step="${f.step}"
+      <input type="number" id="${f.name}" name="${f.name}" step="${f.step}"
         value="${f.value}" required aria-describedby="${f.name}-range-text">
     </div>
-    <span class="muted small" id="${f.name}-range-text">${rangeText(f, f)}</span>
+    <span class="muted small" id="${f.name}-range-text"></span>
     <p class="field-error" id="err-${f.name}" data-for="${f.name}" hidden></p>`;
   box.appendChild(div);
   const range = div.querySelector(`#${f.name}-range`);
   const num = div.querySelector(`#${f.name}`);
+  showRange(f, fieldRange(f, app.state.W_mm));
   range.tabIndex = 0;
   range.addEventListener("input", () => { num.value = range.value; app.inputErrors.delete(`err-${f.name}`); onValue(Number(range.value)); });
   num.addEventListener("input", () => {
@@ -111,11 +112,9 @@ function addField(box, f, onValue) {
     const text = num.value.trim();
     const v = Number(text);
     if (text === "" || !Number.isFinite(v) || ((f === W_FIELD || f.unit === "x") && !(v > 0))) {
-      const r = fieldRange(f, app.state.W_mm);
-      const unit = f.unit === "x" ? " x preset moduli" : ` ${f.unit}`;
       // a number box holding text that is no number ("1e", "--1") reads as empty: badInput
       const what = text !== "" ? `${text} is not a usable value` : (num.validity.badInput ? "not a number" : "empty");
-      app.inputErrors.set(`err-${f.name}`, `${what} (allowed: ${r.min} to ${r.max}${unit})`);
+      app.inputErrors.set(`err-${f.name}`, `${what} (allowed: ${allowedText(f, fieldRange(f, app.state.W_mm))})`);
       app.inputMark = performance.now();
       schedule(DEBOUNCE_MS);
       return;
@@ -126,17 +125,34 @@ function addField(box, f, onValue) {
   });
 }
 
-function rangeText(f, r) {
-  return `${r.min} - ${r.max}${f.unit === "x" ? " x preset moduli" : " " + f.unit}`;
+// A field's allowed values in an error's words.
+function allowedText(f, r) {
+  if (f.unit !== "x") return `${r.min} to ${r.max} ${f.unit}`;
+  if (r.min === null || !f.ratio) return "more than 0 x preset moduli";
+  return `${r.min} to ${r.max} x preset moduli, body / membrane ${f.ratio[0]} to ${f.ratio[1]}`;
 }
 
-// The lengths' ranges at the design's width (the box scaled by W / 3 mm), on both inputs.
-function showRanges() {
-  for (const f of FIELDS) {
-    const r = fieldRange(f, app.state.W_mm);
-    for (const id of [f.name, `${f.name}-range`]) { $(id).min = String(r.min); $(id).max = String(r.max); }
-    $(`${f.name}-range-text`).textContent = rangeText(f, r);
+function rangeText(f, r) {
+  if (f.unit !== "x") return `${r.min} - ${r.max} ${f.unit}`;
+  if (r.min === null || !f.ratio) return "x preset moduli";   // the server has not said yet
+  return `${r.min} - ${r.max} x preset moduli; body / membrane ${f.ratio[0]} - ${f.ratio[1]}`;
+}
+
+// A field's range on its inputs and in its words: a length's at the design's width (the
+// box scaled by W / 3 mm); a stiffness scale's number takes each layer's range, its slider
+// spans the ratio's (one layer moved, the other at 1: every position in the box).
+function showRange(f, r) {
+  const slider = f.unit === "x" && f.ratio ? { min: f.ratio[0], max: f.ratio[1] } : r;
+  for (const [id, lim] of [[f.name, r], [`${f.name}-range`, slider]]) {
+    if (lim.min === null) continue;
+    $(id).min = String(lim.min);
+    $(id).max = String(lim.max);
   }
+  $(`${f.name}-range-text`).textContent = rangeText(f, r);
+}
+
+function showRanges() {
+  for (const f of FIELDS) showRange(f, fieldRange(f, app.state.W_mm));
 }
 
 // The state's values on the inputs of ``fields`` (all of them and the pair by default).
@@ -1129,6 +1145,9 @@ async function start() {
   // the presets are needed only for a stiffness scale != 1: the first curve does not wait
   const materials = api("/v1/materials").then((list) => {
     for (const m of list.items) app.presets[m.id] = m;
+    takeScaleLimits(list.stiffness_scale);   // the limits the server answers within
+    showRanges();
+    showValues(FIELDS.filter((f) => f.unit === "x"));
   }).catch((err) => {
     $("err-design").textContent = `Materials unavailable: ${err.message}`;
     $("err-design").hidden = false;

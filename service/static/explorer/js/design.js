@@ -1,8 +1,10 @@
 // The design box the explorer offers and the request a design becomes.
 //
 // Ranges: the design box of the whole-box emulator (geometry L 4-18 mm, t 0.5-1.2 mm,
-// T 0.6-2.0 mm, b 1.0-2.4 mm, h 0.10-0.30 mm at W = 3 mm; four material pairs; each
-// layer's stiffness scale s in [0.5, 2]). At another width W the lengths' ranges are the
+// T 0.6-2.0 mm, b 1.0-2.4 mm, h 0.10-0.30 mm at W = 3 mm; four material pairs; the
+// stiffness scales the server's: GET /v1/materials `stiffness_scale`, each layer's own s
+// and the ratio s_body / s_membrane, from solver/design_space.py -- scaling both layers by
+// one factor only scales the pressure axis). At another width W the lengths' ranges are the
 // box scaled by W / 3 mm: a design with every length scaled by one factor bends alike at the
 // same pressure (solver/design_space.py), so the emulator answers every scaled copy of the
 // box. Defaults: the paper's standard design (Table 3), which is also what the API assumes
@@ -15,9 +17,22 @@ export const FIELDS = [
   { name: "T_mm", label: "Body thickness above chamber T", unit: "mm", min: 0.6, max: 2.0, step: 0.05, value: 1.0 },
   { name: "b_mm", label: "Chamber width b", unit: "mm", min: 1.0, max: 2.4, step: 0.05, value: 1.8 },
   { name: "h_mm", label: "Chamber height h", unit: "mm", min: 0.1, max: 0.3, step: 0.01, value: 0.15 },
-  { name: "body_scale", label: "Body stiffness scale s", unit: "x", min: 0.5, max: 2, step: 0.05, value: 1 },
-  { name: "membrane_scale", label: "Membrane stiffness scale s", unit: "x", min: 0.5, max: 2, step: 0.05, value: 1 },
+  // min, max: each layer's s; ratio: s_body / s_membrane (the slider's span: one layer
+  // alone, the other at 1). Until GET /v1/materials answers, none is known.
+  { name: "body_scale", label: "Body stiffness scale s", unit: "x", min: null, max: null, ratio: null, step: 0.05, value: 1 },
+  { name: "membrane_scale", label: "Membrane stiffness scale s", unit: "x", min: null, max: null, ratio: null, step: 0.05, value: 1 },
 ];
+
+// The stiffness scales' limits as the server states them (GET /v1/materials'
+// `stiffness_scale`: {layer: [low, high], ratio: [low, high]}), onto FIELDS.
+export function takeScaleLimits(limits) {
+  if (!limits || !Array.isArray(limits.layer) || !Array.isArray(limits.ratio)) return;
+  for (const f of FIELDS) {
+    if (f.unit !== "x") continue;
+    [f.min, f.max] = limits.layer;
+    f.ratio = limits.ratio;
+  }
+}
 export const W_MM = 3.0;  // the paper's width, at which FIELDS give the box
 // The width: 1-10 mm keeps the scaled box inside the API's length limits (L <= 60 mm).
 export const W_FIELD = { name: "W_mm", label: "Actuator width W", unit: "mm", min: 1, max: 10, step: 0.1, value: W_MM };
