@@ -186,12 +186,23 @@ class ResultWriter:
                                             _public(self.path, exc), then) from None
 
     def _park(self, record: Any, exc: BaseException) -> None:
-        """Park ``record`` beside the database; StoreWriteError when no parking directory
+        """Park ``record`` beside the database; ResultLostError when no parking directory
         takes it either (then it is lost, and the job says so)."""
         from solver.precompute.parking import park
-        from solver.store.errors import StoreWriteError
+        from solver.store.errors import cause_of
 
         try:
             park(record, self.path)
         except OSError as lost:
-            raise StoreWriteError(self.path, lost) from exc
+            raise ResultLostError(self.path.name, cause_of(lost, self.path)) from exc
+
+
+class ResultLostError(BalloonError):
+    """Neither the database nor a parking directory took a finished solve. Names the
+    database by its name only (the job's error reaches clients; the store's own
+    StoreWriteError names the path)."""
+
+    def __init__(self, name: str, cause: str) -> None:
+        super().__init__(f"neither the curve database {name} nor a parking directory (beside "
+                         f"it, or ~/.balloon/parked) takes the result ({cause}); it is lost: "
+                         "solve it again once the server's disk takes files")

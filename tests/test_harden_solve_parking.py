@@ -50,3 +50,23 @@ def test_a_solve_the_database_cannot_take_is_parked_and_written_later(tmp_path,
         assert client.get(f"/v1/curves/{first['key']}").status_code == 200
         health = client.get("/v1/health").json()
         assert not any("parked" in p for p in health["problems"])
+
+
+def test_a_solve_nothing_can_take_is_named_lost_without_a_local_path(tmp_path, monkeypatch):
+    # the database and every parking directory refuse (a full disk): the job's error
+    # named the database by its full path (the store's StoreWriteError)
+    db_path = tmp_path / "curves.h5"
+    app = create_app(settings_for(tmp_path, db_path=db_path), solve_fn=fast_solve,
+                     load_surrogate=False)
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    with TestClient(app, raise_server_exceptions=False) as client:
+        monkeypatch.setattr("solver.store.hdf5._write_file", full)
+        monkeypatch.setattr("solver.precompute.parking.park", full)
+        first = client.post("/v1/solve", json=SOLVE, headers=KEY).json()
+        job = wait_for(client, first["id"], ("finished", "parked", "failed"))
+    assert job["status"] == "failed", job
+    assert "curves.h5" in job["error"] and "No space left on device" in job["error"]
+    assert "lost" in job["error"] and str(tmp_path) not in job["error"], job["error"]
