@@ -60,3 +60,12 @@ def test_a_database_path_with_no_file_yet_is_solved(tmp_path):
         health = client.get("/v1/health").json()
         assert not any("POST /v1/solve" in p for p in health["problems"])
     assert len(written) == 1
+
+
+def test_without_an_api_key_health_does_not_blame_the_database_for_solves(tmp_path):
+    # solves are disabled (403) without a key: the database's state is no reason then
+    path, _ = _directory(tmp_path)
+    with make_client(tmp_path, fast_solve, db_path=path, api_key=None) as client:
+        assert client.post("/v1/solve", json=SOLVE, headers=KEY).status_code == 403
+        problems = client.get("/v1/health").json()["problems"]
+    assert not any("POST /v1/solve" in p for p in problems), problems

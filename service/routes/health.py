@@ -39,7 +39,7 @@ async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Hea
         problems.append(f"no curve database {settings.db_path.name}: /v1/curves answers 503")
     elif db_error:
         problems.append(f"{db_error}: /v1/curves answers 503")
-    unstorable = unwritable(settings.db_path)
+    unstorable = unwritable(settings.db_path) if settings.api_key else None  # else 403
     if unstorable:
         problems.append(f"the curve database {unstorable}: POST /v1/solve answers 503")
     parked = len(parked_files(settings.db_path))
