@@ -36,15 +36,18 @@ def _rows(n: int, m: int, outputs: int = 6, seed: int = 0):
     return u, f(u), ue, ye
 
 
-def test_each_curve_loses_its_last_reached_node_on_both_axes():
-    y = np.full((3, 8), np.nan)
-    y[0, :4] = y[0, 4:] = 1.0           # reaches all 4 nodes
-    y[1, :2] = y[1, 4:6] = 2.0          # reaches 2
-    y[2, :1] = y[2, 4:5] = 3.0          # reaches 1: nothing left
-    out = short_of_the_end(y, 4)
-    np.testing.assert_array_equal(np.isfinite(out).sum(1), [6, 2, 0])
+def test_each_curve_loses_its_last_reached_node_where_the_last_fe_step_holds_it():
+    """The nodes are ANGLE_NODES_DEG's first four here (0.1, 0.2, 0.3, 0.5 deg)."""
+    y = np.full((4, 8), np.nan)
+    y[0, :4] = y[0, 4:] = 1.0           # reaches all 4 nodes, last step from 0.4 deg
+    y[1, :2] = y[1, 4:6] = 2.0          # reaches 2, last step from 0.15
+    y[2, :1] = y[2, 4:5] = 3.0          # reaches 1, last step from 0: nothing left
+    y[3, :3] = y[3, 4:7] = 4.0          # reaches 3 (0.3 deg); its last step from 0.31 deg
+    out = short_of_the_end(y, 4, np.array([0.4, 0.15, 0.0, 0.31]))
+    np.testing.assert_array_equal(np.isfinite(out).sum(1), [6, 2, 0, 6])
     assert np.isnan(out[0, 3]) and np.isnan(out[0, 7]) and np.isnan(out[1, [1, 5]]).all()
-    assert np.isfinite(y).sum() == 14   # the input is left alone
+    np.testing.assert_array_equal(out[3], y[3])   # the node lies below the last step: kept
+    assert np.isfinite(y).sum() == 20   # the input is left alone
 
 
 def test_the_weight_is_one_below_the_blend_zero_above_linear_between():

@@ -83,6 +83,7 @@ class _Rows:
     signs: list
     failed_signs: list
     failed_y: list        # node outputs of the early-ended curves (NaN past their end)
+    failed_last_step: list  # the angle each one's last FE step started from (deg)
     by_volume: list       # (u, (v_red, p_red, signed angle)) of every curve (balance.py)
 
 
@@ -111,7 +112,7 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
             continue
         c = rec.curve
         if rec.settings == free_settings:
-            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], [], [], []))
+            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], [], [], [], []))
             f = curve_features(c.pressure_pa / point.pressure_scale,
                                c.volume_ul / point.length_scale**3, c.angle_deg)
             u = point.coordinates()
@@ -122,6 +123,7 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
                                     c.reason))
                 rows.failed_signs.append(f.sign)
                 rows.failed_y.append(np.concatenate((f.log_p, f.log_v)))
+                rows.failed_last_step.append(f.last_step_from_deg)
                 continue
             rows.u.append(u)
             rows.y.append(np.concatenate((f.log_p, f.log_v)))
@@ -153,8 +155,8 @@ GEOMETRY_COORDINATES = 5          # the first five unit-cube coordinates: L, t, 
 
 
 def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
-                  early_u: np.ndarray | None = None, early_y: np.ndarray | None = None
-                  ) -> CurveGPs:
+                  early_u: np.ndarray | None = None, early_y: np.ndarray | None = None,
+                  early_last_step_deg: np.ndarray | None = None) -> CurveGPs:
     """The curve GPs of a group from node outputs ``y`` (n, 64) of its complete curves:
     the 32 pressure nodes share one kernel (a query's band is one product over the
     database, not one per node), each volume node has its own, the volume nodes above 30
@@ -167,11 +169,14 @@ def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
     one per node put 188. With the
     early-ended curves' coordinates ``early_u`` and node outputs ``early_y`` (NaN past
     their end), their means for designs emulated to end early (``early_ended_nodes``; each
-    curve short of its last reached node)."""
+    curve short of its last reached node where that lies in the FE's last step, which
+    started at ``early_last_step_deg``)."""
     anchor = anchor_index()
     early = None
     if early_u is not None and early_y is not None and len(early_u):
-        z = rise_outputs(short_of_the_end(early_y, N_NODES), anchor)
+        step_from = (np.zeros(len(early_y)) if early_last_step_deg is None
+                     else early_last_step_deg)      # none given: every last node dropped
+        z = rise_outputs(short_of_the_end(early_y, N_NODES, step_from), anchor)
         reached = np.isfinite(z[:, 0])
         if reached.any():
             early = EarlyEndedRows(np.asarray(early_u, float)[reached], z[reached])
@@ -453,7 +458,9 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
              if s == sign and np.isfinite(rows.failed_y[i][0])]
     early_u = np.array([rows.failed[i][0] for i in early]).reshape(-1, u.shape[1])
     early_y = np.array([rows.failed_y[i] for i in early]).reshape(-1, y.shape[1])
-    vgp = fit_curve_gps(u, y, seed=seed, early_u=early_u, early_y=early_y)
+    early_step = np.array([rows.failed_last_step[i] for i in early])
+    vgp = fit_curve_gps(u, y, seed=seed, early_u=early_u, early_y=early_y,
+                        early_last_step_deg=early_step)
     cv_mean, cv_var = cross_validated(u, y, seed)
     band_scale = node_band_scales(curves, cv_mean, cv_var, cv_band_target(level))
     near = near_failed_mask(u, rows.failed)

@@ -34,7 +34,7 @@ import numpy as np
 from surrogate.emulator.early_ended_nodes import ConditionedMeans, EarlyEndedRows
 from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES
 from surrogate.emulator.shape_gps import TOP_PRESSURE_FROM, ShapeGPs
-from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
+from surrogate.emulator.vector_gp import VectorGP
 
 VOLUME_RISE_ANCHOR_DEG = 30.0
 # the smallest rise in log V a training curve is given (V grows with theta on the rising
@@ -215,19 +215,13 @@ class CurveGPs:
                 p_var = np.concatenate((p_var[..., :TOP_PRESSURE_FROM], t_var), axis=-1)
             out = np.concatenate((p_mean, v_mean), axis=-1)
             out_var = np.concatenate((p_var, v_var), axis=-1)
+            # the blend's shift is the conditioned means minus the answer's own (the volume
+            # GPs' and the top pressure GPs' above 45 deg), so that at weight 1 the node
+            # outputs are the conditioned means: an early-ended database curve is
+            # reproduced on both axes (by volume 406 -> 470 of 565 within 0.2 deg, where
+            # the volume outputs' shift had been gp's conditioned minus its own;
+            # thirty-eighth session)
             mean, var = out, out_var
-            on = np.asarray(0.0 if early_weight is None else early_weight) > 0
-            if on.any():
-                # the blend's shift of the volume outputs is gp's (conditioned minus own):
-                # its own volume means where a row is blended (``_blend`` reads no other
-                # row); of the pressure outputs, conditioned minus the answer's own (the
-                # top pressure GPs' above 45 deg), so that at weight 1 the pressure nodes
-                # are the conditioned means (an early-ended database curve reproduced)
-                mean = out.copy()
-                if many:
-                    mean[on, N_NODES:] = self.gp.predict_many(u[on], MEANS_ONLY)[0][:, N_NODES:]
-                else:
-                    mean[N_NODES:] = self.gp.predict(u, MEANS_ONLY)[0][N_NODES:]
         blend = self._blend(u, mean, early_weight)
         plain = None
         if blend is not None:

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import solve_triangular
 
+from surrogate.emulator.features import ANGLE_NODES_DEG
 from surrogate.emulator.gp import (
     GaussianProcess,
     basis,
@@ -56,20 +57,32 @@ from surrogate.emulator.gp import (
 from surrogate.emulator.vector_gp import CHUNK_ROWS, VectorGP
 
 BLEND_DEG = (60.0, 80.0)   # emulated end (deg): conditioned mean below, complete-curve above
+# unit-cube distance from an early-ended database curve within which the conditioned mean
+# is blended in whatever the emulated end (1 at the curve, 0 at this distance): the
+# emulated end is a smooth GP that puts an early-ended database design's own end at 61-90
+# deg, so with its weight alone the design's own FE curve was not reproduced (by pressure
+# 358 -> 395 of 565 within 0.2 deg; thirty-eighth session). Half the typical distance
+# between neighbouring database designs, so random designs far from them are unchanged.
+AT_CURVE_RADIUS = 0.05
 
 
-def short_of_the_end(y: np.ndarray, n_nodes: int) -> np.ndarray:
+def short_of_the_end(y: np.ndarray, n_nodes: int, last_step_from_deg: np.ndarray
+                     ) -> np.ndarray:
     """Node outputs ``y`` (m, 2 n_nodes: pressure nodes, then volume nodes; NaN past each
-    curve's end) without each curve's last reached node on either axis. That node lies in
-    the FE's last step, which the stop interrupts (the volume stop within the step, a
-    Newton failure at a pressure maximum), where the interpolated curve is least sure; on
-    the FE curves of random designs, curves within the per-curve target (complete /
-    early-ended, emulator answers) by pressure 381 / 36 -> 384 / 36 and by volume 363 / 19
-    -> 366 / 22 of 415 / 64 and 414 / 62 (benchmarks/RESULTS.md, twenty-fourth session)."""
+    curve's end) without each curve's last reached node on either axis where that node
+    lies in the FE's last step (above ``last_step_from_deg``, per curve: the angle the
+    step started from), which the stop interrupts (the volume stop within the step, a
+    Newton failure at a pressure maximum), where the interpolated curve is least sure.
+    Dropping it on the FE curves of random designs, curves within the per-curve target
+    (complete / early-ended, emulator answers): by pressure 381 / 36 -> 384 / 36 and by
+    volume 363 / 19 -> 366 / 22 of 415 / 64 and 414 / 62 (twenty-fourth session). A node
+    below the last step is an interpolated FE value like any other: keeping it took the
+    early-ended database curves reproduced within 0.2 deg by pressure 372 -> 424 of 565
+    (thirty-eighth session; benchmarks/RESULTS.md)."""
     out = np.array(y, float)
     reach = np.isfinite(out[:, :n_nodes]).sum(1)
     for i, r in enumerate(reach):
-        if r:
+        if r and ANGLE_NODES_DEG[r - 1] > last_step_from_deg[i]:
             out[i, r - 1] = out[i, n_nodes + r - 1] = np.nan
     return out
 
@@ -79,6 +92,14 @@ def early_weight(end_deg: np.ndarray | float) -> np.ndarray:
     ``end_deg`` (deg): 1 below BLEND_DEG[0], 0 above BLEND_DEG[1], linear between."""
     lo, hi = BLEND_DEG
     return np.clip((hi - np.asarray(end_deg, float)) / (hi - lo), 0.0, 1.0)
+
+
+def at_curve_weight(distance: np.ndarray | float) -> np.ndarray:
+    """The conditioned mean's weight for a design ``distance`` (unit cube) from the
+    nearest early-ended database curve of its direction: 1 - distance / AT_CURVE_RADIUS,
+    0 beyond (``AT_CURVE_RADIUS``). The blend's weight is the larger of this and
+    ``early_weight``."""
+    return np.clip(1.0 - np.asarray(distance, float) / AT_CURVE_RADIUS, 0.0, 1.0)
 
 
 @dataclass(frozen=True)

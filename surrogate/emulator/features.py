@@ -60,6 +60,8 @@ class CurveFeatures:
     log_p, log_v      log(p_k / theta_k), log(V_k / theta_k) per node (Pa/deg, ul/deg)
     end_angle_deg     last angle of the rising branch (|angle|)
     end_pressure_pa   its pressure
+    last_step_from_deg  the angle the FE's last step on it started from (|angle|; 0 with
+                      fewer than two points)
     """
 
     sign: float
@@ -67,6 +69,7 @@ class CurveFeatures:
     log_v: np.ndarray
     end_angle_deg: float
     end_pressure_pa: float
+    last_step_from_deg: float = 0.0
 
 
 def bending_sign(angle_deg: np.ndarray) -> float:
@@ -115,7 +118,8 @@ def curve_features(pressure_pa: np.ndarray, volume_ul: np.ndarray,
         log_p[nodes] = lp_n - ln
         log_v[nodes] = lv_n - ln
     end_angle, end_pressure = (float(a_abs[-1]), float(p[-1])) if len(a_abs) else (0.0, 0.0)
-    return CurveFeatures(sign, log_p, log_v, end_angle, end_pressure)
+    step_from = float(a_abs[-2]) if len(a_abs) >= 2 else 0.0
+    return CurveFeatures(sign, log_p, log_v, end_angle, end_pressure, step_from)
 
 
 def force_features(pressure_pa: np.ndarray, force_mn: np.ndarray) -> np.ndarray:
