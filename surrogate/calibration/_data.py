@@ -23,6 +23,14 @@ from solver.bounded_read import read_bounded
 from solver.materials import MATERIALS
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
+from surrogate.calibration._headers import (
+    UNITS,
+    Reading,
+    allowed_units,
+    canonical_unit,
+    header_form,
+    read_headers,
+)
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
 from surrogate.calibration._pump_clock import clock_warning
 from surrogate.json_repeats import loads_with_repeats
@@ -89,6 +97,9 @@ class Observations:
     switch_names: tuple[str, ...] = ()
     #: the history is the pump's own log (the ``pump`` column), not read off the readings
     pump_logged: bool = False
+    #: the headers read as a canonical column in another unit or spelling
+    #: (``Pressure (kPa)`` as pressure_pa x 1000: _headers.py), their values converted
+    columns_read: tuple[Reading, ...] = ()
 
     def __post_init__(self) -> None:
         if self.direction is None:
@@ -174,7 +185,7 @@ class Observations:
             self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
             self.direction[keep], self.warnings, self.volume_ul[keep],
             self.switch_after[keep], self.switch_at[keep], self.switch_names,
-            self.pump_logged)
+            self.pump_logged, self.columns_read)
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
@@ -251,6 +262,13 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     if len(rows) > MAX_ROWS:
         raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
     rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
+    headers = list(dict.fromkeys(k for r in rows if isinstance(r, dict) for k in r))
+    readings = read_headers(headers, tuple(RANGES))
+    converted = {r.column: r for r in readings.values() if r.header != r.column}
+    if converted:       # the file's names -> the canonical columns, values converted below
+        rename = {r.header: r.column for r in converted.values()}
+        rows = [{rename.get(k, k): v for k, v in r.items()} if isinstance(r, dict) else r
+                for r in rows]
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
     known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN}
     for name in REQUIRED:
@@ -279,29 +297,48 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
                 raise DataError(name, f"unknown material {value!r}", i,
                                 ", ".join(sorted(MATERIALS)))
             rec[name] = value
-        for name in ("L_mm", "t_mm", "pressure_pa", "angle_deg"):
-            x = _number(raw.get(name), name, i)
-            if math.isnan(x):
-                raise _cell_error(name, "missing value", i)
-            _check_range(x, name, i)
-            rec[name] = x
-        for name in OPTIONAL:
-            x = _number(raw.get(name), name, i) if name in present else math.nan
-            if math.isnan(x):
-                if name in present and name in ("time_s", "flow_ul_s"):
-                    raise _cell_error(name, "missing value (the column is present, so "
-                                      "every row needs one)", i)
-                x = DEFAULTS.get(name, math.nan)
-            else:
+        try:
+            for name in ("L_mm", "t_mm", "pressure_pa", "angle_deg"):
+                x = _number(raw.get(name), name, i) * _factor(converted, name)
+                if math.isnan(x):
+                    raise _cell_error(name, "missing value", i)
                 _check_range(x, name, i)
-            rec[name] = x
+                rec[name] = x
+            for name in OPTIONAL:
+                x = (_number(raw.get(name), name, i) * _factor(converted, name)
+                     if name in present else math.nan)
+                if math.isnan(x):
+                    if name in present and name in ("time_s", "flow_ul_s"):
+                        raise _cell_error(name, "missing value (the column is present, so "
+                                          "every row needs one)", i)
+                    x = DEFAULTS.get(name, math.nan)
+                else:
+                    _check_range(x, name, i)
+                rec[name] = x
+        except DataError as exc:
+            raise _as_written(exc, converted) from None
         if PUMP_COLUMN in columns:
             rec[PUMP_COLUMN] = _pump_state(raw.get(PUMP_COLUMN), i)
         parsed.append(rec)
     parsed, warnings = _suspicious(parsed, present, strict)
     if PUMP_COLUMN in columns:
         present = present + [PUMP_COLUMN]
-    return _build(parsed, present, tuple(warnings))
+    return _build(parsed, present, tuple(warnings), tuple(converted.values()))
+
+
+def _factor(converted: dict[str, Reading], column: str) -> float:
+    """What the values of ``column`` are multiplied by (its header's unit -> its own)."""
+    return converted[column].factor if column in converted else 1.0
+
+
+def _as_written(exc: DataError, converted: dict[str, Reading]) -> DataError:
+    """A refused cell of a converted column, named by the file's header (over HTTP the
+    field is ``rows.<i>.<the key sent>``) and saying how it was read."""
+    reading = converted.get(exc.column)
+    if reading is None:
+        return exc
+    return DataError(reading.header, f"{exc.detail.removeprefix(f'row {exc.row}: ')} "
+                     f"({reading.words()})", exc.row, exc.allowed)
 
 
 def _pump_state(value: object, row: int) -> float:
@@ -421,7 +458,8 @@ def _mixed_units(kept: list[dict[str, object]]) -> list[tuple[str, str, int | No
 
 
 def _build(parsed: list[dict[str, object]], present: list[str],
-           warnings: tuple[str, ...] = ()) -> Observations:
+           warnings: tuple[str, ...] = (), columns_read: tuple[Reading, ...] = ()
+           ) -> Observations:
     by_curve: dict[str, list[int]] = {}
     for i, rec in enumerate(parsed):
         by_curve.setdefault(str(rec["curve_id"]), []).append(i)
@@ -473,7 +511,7 @@ def _build(parsed: list[dict[str, object]], present: list[str],
         col("L_mm"), col("t_mm"), col("pressure_pa"), col("angle_deg"), col("time_s"),
         col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed),
         direction=col(PUMP_COLUMN) if PUMP_COLUMN in present else None, warnings=warnings,
-        pump_logged=PUMP_COLUMN in present)
+        pump_logged=PUMP_COLUMN in present, columns_read=columns_read)
 
 
 def _hash(parsed: list[dict[str, object]]) -> str:
@@ -520,8 +558,9 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     names = [unnamed.get(k, n) for k, n in enumerate(names)]
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0, "each column once")
+    readings = read_headers(names, tuple(RANGES))   # 'Pressure (kPa)' is pressure_pa
     for name in REQUIRED:
-        if name not in names:
+        if name not in names and name not in {r.column for r in readings.values()}:
             raise _missing(name, set(names))
     reader = csv.DictReader(lines[1:], fieldnames=names, delimiter=sep)
     out = []
@@ -548,19 +587,13 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
                             "a header naming every column that holds values")
         for r in out:
             r.pop(name, None)
-    return decimal_commas(out, tuple(RANGES), sep)
-
-
-#: the units a lab may write a required column's quantity in: a column named with one
-#: of them ('p_mbar', 'Druck [kPa]', 'theta (rad)') is named as the one found in its place
-QUANTITY_UNITS = {"pressure_pa": ("pa", "kpa", "hpa", "mbar", "bar", "psi", "mmhg"),
-                  "angle_deg": ("deg", "rad", "°", "degree", "degrees")}
+    return decimal_commas(out, tuple(RANGES) + tuple(readings), sep)
 
 
 def _missing(name: str, columns: set) -> DataError:
     """A required column is missing: one line naming it, and the column the file has in
-    its place when one looks like it (a unit or case added: 'pressure_pa [Pa]',
-    'Angle_deg', 'pressure (kPa)')."""
+    its place when one looks like it (a unit added to a name read as no quantity:
+    'pressure gauge (kPa)'; a case or space changed: 'Curve_ID')."""
     def base(text: str) -> str:
         text = str(text).lower().replace("(", "[").split("[")[0].strip()
         return text.replace(" ", "_")
@@ -571,13 +604,14 @@ def _missing(name: str, columns: set) -> DataError:
         return (inside or text.rsplit("_", 1)[-1]).strip()
 
     stem = name.rsplit("_", 1)[0]
-    units = QUANTITY_UNITS.get(name, ())
+    unit = canonical_unit(name)
+    dimension = unit[1] if unit else None
     near = sorted(c for c in map(str, columns)
                   if base(c) in (name, stem) or base(c).rsplit("_", 1)[0] == stem
-                  or unit_of(c) in units)
-    unit = {"pa": "Pa", "deg": "deg", "mm": "mm"}.get(name.rsplit("_", 1)[-1])
-    found = (f" (found {near[0]!r}: the column must be named exactly {name}"
-             + (f", its values in {unit}" if unit else "") + ")") if near else ""
+                  or (dimension and UNITS.get(unit_of(c), ("",))[0] == dimension))
+    how = (f"name it {header_form(name)} with {allowed_units(dimension)}" if dimension
+           else f"the column must be named exactly {name}")
+    found = f" (found {near[0]!r}: {how})" if near else ""
     return DataError(name, "required column is missing" + found, None,
                      "columns " + ", ".join(REQUIRED))
 

@@ -308,6 +308,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                         "h_mm"), f, strict=False)) for f in obs.families],
                  "has_time_s": obs.has_time, "has_flow_ul_s": obs.has_flow,
                  "pump_logged": obs.pump_logged,
+                 "columns_read": [r.as_dict() for r in obs.columns_read],
                  "flow_rates_ul_s": sorted({float(q) for q in np.round(
                      obs.flow_ul_s[np.isfinite(obs.flow_ul_s)], 6)}),
                  "readings": h, "holds": traits.has_holds, "unloading": traits.has_unloading,
@@ -1218,6 +1219,9 @@ def interpret(report: dict, left: dict) -> str:
         s.append(gauge)
     for w in report["warnings"]:
         s.append(f"Warning: {w}.")
+    read = report["data"]["columns_read"]
+    if read:
+        s.append("Columns read: " + "; ".join(r["reading"] for r in read) + ".")
     out = report["left_out"]
     if out is not None and report["selected_effects"]:
         s.append(f"Of the {out['readings']} readings left out, the calibrated model answers "

@@ -7,7 +7,7 @@
 // a missing one is left out, never invented.
 
 import { ApiError, api, clearProblems, showProblem } from "./api.js";
-import { parseMeasured } from "./csv.js";
+import { asRead, parseMeasured } from "./csv.js";
 import { COLORS, renderPlot } from "./plot.js";
 import { $, download, fmt, fmtSig } from "./util.js";
 
@@ -265,7 +265,7 @@ export function setupCalibration() {
   }
 
   async function plots(rep, body) {
-    const groups = groupByDesign(body.rows);
+    const groups = groupByDesign(asRead(body.rows, rep.data && rep.data.columns_read));
     const start = (rep.model && rep.model.name) || body.model;
     const after = rep.saved_model || null;
     const points = reportPoints(rep);
