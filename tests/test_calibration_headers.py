@@ -154,3 +154,21 @@ def test_the_json_rows_and_the_csv_read_alike(tmp_path):
     a = load_observations(_write(tmp_path / "lab.csv", csv_text(data)))
     b = load_observations(_write(tmp_path / "lab.json", json.dumps({"rows": data})))
     assert a.sha256 == b.sha256 and a.columns_read == b.columns_read
+
+
+def test_the_cli_converts_and_says_how_it_read_each_header(tmp_path, capsys):
+    """``balloon calibrate`` on a file in kPa and minutes: the report's data and its
+    interpretation (printed) say how the headers were read."""
+    from test_calibration_service import main, measured_rows
+
+    data = [{**r, "time_s": r["time_s"] / 60.0} for r in measured_rows()]
+    data = relabel(relabel(data, "pressure_pa", "Pressure (kPa)", 1000.0), "time_s",
+                   "t [min]", 60.0)
+    path = _write(tmp_path / "lab.csv", csv_text(data))
+    code = main(["calibrate", str(path), "--report", str(tmp_path / "r.json"), "--model",
+                 "paper"])
+    assert code == 0
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert [r["reading"] for r in report["data"]["columns_read"]] == [
+        "`Pressure (kPa)` read as pressure_pa x 1000", "`t [min]` read as time_s x 60"]
+    assert "`Pressure (kPa)` read as pressure_pa x 1000" in capsys.readouterr().out

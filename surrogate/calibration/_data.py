@@ -44,6 +44,12 @@ OPTIONAL = ("T_mm", "b_mm", "h_mm", "time_s", "flow_ul_s", "angle_sd_deg", "forc
 #: leaking chamber's gauge and bend fall during a hold as if it were unloading.
 PUMP_COLUMN = "pump"
 PUMP_STATES = {"load": 1.0, "hold": 0.0, "unload": -1.0}
+#: the run of a specimen, optional: a lab loads one specimen several times. With it a
+#: curve is one run (curve_id and run), curve_id names the specimen, and its runs count
+#: as one specimen wherever specimens are the units (``Observations.specimen``). A
+#: header named by any of ``RUN_NAMES`` (any case) is this column.
+RUN_COLUMN = "run"
+RUN_NAMES = ("run", "cycle", "repeat", "repetition", "trial")
 DEFAULTS = {"T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15}
 MIN_POINTS_PER_CURVE = 4
 MAX_ROWS = 200_000
@@ -100,8 +106,15 @@ class Observations:
     #: the headers read as a canonical column in another unit or spelling
     #: (``Pressure (kPa)`` as pressure_pa x 1000: _headers.py), their values converted
     columns_read: tuple[Reading, ...] = ()
+    #: the specimen of each row: its curves are the runs of one specimen (the ``run``
+    #: column: the same specimen loaded again), at any flow rate; without ``run`` every
+    #: curve is a specimen of its own. Specimens, not runs, are the independent units
+    #: of the scatter between specimens, the held-out folds and the noise floor.
+    specimen: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
+        if self.specimen is None:
+            object.__setattr__(self, "specimen", np.asarray(self.curve).copy())
         if self.direction is None:
             object.__setattr__(self, "direction",
                                directions(self.curve, self.pressure_pa, self.angle_deg,
@@ -137,6 +150,24 @@ class Observations:
     @property
     def n_curves(self) -> int:
         return len(self.curve_ids)
+
+    @property
+    def n_specimens(self) -> int:
+        return int(np.unique(self.specimen).size)
+
+    def curve_specimen(self) -> np.ndarray:
+        """Specimen index of each curve."""
+        out = np.zeros(self.n_curves, dtype=int)
+        out[self.curve] = self.specimen
+        return out
+
+    def replicate_unit(self) -> np.ndarray:
+        """Per row, one index per specimen within its replicate group (design and flow
+        rate): a specimen's runs at one flow rate are one unit of the scatter between
+        specimens; the curve itself without runs."""
+        _, unit = np.unique(np.stack([self.specimen, self.group]), axis=1,
+                            return_inverse=True)
+        return unit.ravel()
 
     @property
     def has_time(self) -> bool:
@@ -178,6 +209,7 @@ class Observations:
         remap = np.full(self.n_curves, -1)
         remap[old] = np.arange(old.size)
         _, group = np.unique(self.group[keep], return_inverse=True)
+        _, specimen = np.unique(self.specimen[keep], return_inverse=True)
         return Observations(
             tuple(self.curve_ids[i] for i in old), self.families, remap[self.curve[keep]],
             self.family[keep], group, self.L_mm[keep], self.t_mm[keep],
@@ -185,7 +217,7 @@ class Observations:
             self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
             self.direction[keep], self.warnings, self.volume_ul[keep],
             self.switch_after[keep], self.switch_at[keep], self.switch_names,
-            self.pump_logged, self.columns_read)
+            self.pump_logged, self.columns_read, specimen.ravel())
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
@@ -269,8 +301,9 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         rename = {r.header: r.column for r in converted.values()}
         rows = [{rename.get(k, k): v for k, v in r.items()} if isinstance(r, dict) else r
                 for r in rows]
+    rows = _run_named(rows, headers)
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
-    known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN}
+    known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN, RUN_COLUMN}
     for name in REQUIRED:
         if name not in columns:
             raise _missing(name, columns)
@@ -285,12 +318,15 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             name = str(extra[0])
             raise DataError(name if len(name) <= 64 else f"{name[:40]}... ({len(name)} "
                             "characters)", "unknown column", i,
-                            ", ".join(REQUIRED + OPTIONAL + (PUMP_COLUMN,)))
+                            ", ".join(REQUIRED + OPTIONAL + (PUMP_COLUMN, RUN_COLUMN)))
         rec: dict[str, object] = {}
         cid = raw.get("curve_id")
         if cid is None or str(cid).strip() == "":
             raise _cell_error("curve_id", "empty curve id", i)
         rec["curve_id"] = str(cid).strip()
+        if RUN_COLUMN in columns:        # one run of the specimen curve_id
+            rec["specimen"] = rec["curve_id"]
+            rec["curve_id"] = f"{rec['curve_id']} run {_run_label(raw.get(RUN_COLUMN), i)}"
         for name in ("body_material", "membrane_material"):
             value = str(raw.get(name, "") or "").strip()
             if value not in MATERIALS:
@@ -339,6 +375,33 @@ def _as_written(exc: DataError, converted: dict[str, Reading]) -> DataError:
         return exc
     return DataError(reading.header, f"{exc.detail.removeprefix(f'row {exc.row}: ')} "
                      f"({reading.words()})", exc.row, exc.allowed)
+
+
+def _run_named(rows: list, headers: list) -> list:
+    """``rows`` with a header of ``RUN_NAMES`` ('Cycle', 'Repeat') named ``run``; two such
+    headers are a DataError naming both."""
+    named = [h for h in headers if isinstance(h, str) and h.strip().lower() in RUN_NAMES]
+    if len(named) > 1:
+        raise DataError(named[1], f"{named[0]!r} and {named[1]!r} both name the run of a "
+                        "specimen", None, "one run column")
+    if not named or named[0] == RUN_COLUMN:
+        return rows
+    return [{(RUN_COLUMN if k == named[0] else k): v for k, v in r.items()}
+            if isinstance(r, dict) else r for r in rows]
+
+
+def _run_label(value: object, row: int) -> str:
+    """A run's label as text ('2' of 2, 2.0 or ' 2 '); an empty one is a DataError."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    text = "" if value is None or isinstance(value, bool) else str(value).strip()
+    if text.replace(".", "", 1).isdigit() and float(text).is_integer():
+        text = str(int(float(text)))
+    if not text or len(text) > 40:
+        raise DataError(RUN_COLUMN, "missing run" if not text else "run label of "
+                        f"{len(text)} characters", row, "a run label (1, 2, 3 or any short "
+                        "text) in every row once the column is present")
+    return text
 
 
 def _pump_state(value: object, row: int) -> float:
@@ -483,7 +546,11 @@ def _build(parsed: list[dict[str, object]], present: list[str],
             if len(set(times)) != len(times):
                 raise DataError("time_s", f"curve {cid!r} repeats a time", idx[-1] + 1,
                                 "distinct times within a curve")
+    _same_design_per_specimen(parsed, by_curve, design_keys)
     curve_ids = tuple(by_curve)
+    specimens: dict[str, int] = {}
+    specimen_of = [specimens.setdefault(str(parsed[by_curve[c][0]].get("specimen", c)),
+                                        len(specimens)) for c in curve_ids]
     families: dict[tuple, int] = {}
     groups: dict[tuple, int] = {}
     rows_sorted: list[tuple[int, int, int, dict]] = []
@@ -511,7 +578,26 @@ def _build(parsed: list[dict[str, object]], present: list[str],
         col("L_mm"), col("t_mm"), col("pressure_pa"), col("angle_deg"), col("time_s"),
         col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed),
         direction=col(PUMP_COLUMN) if PUMP_COLUMN in present else None, warnings=warnings,
-        pump_logged=PUMP_COLUMN in present, columns_read=columns_read)
+        pump_logged=PUMP_COLUMN in present, columns_read=columns_read,
+        specimen=np.array([specimen_of[c] for c, _, _, _ in rows_sorted], dtype=int))
+
+
+def _same_design_per_specimen(parsed: list[dict[str, object]],
+                              by_curve: dict[str, list[int]], keys: tuple[str, ...]) -> None:
+    """The runs of one specimen are of one design (a DataError naming the run that
+    changes it)."""
+    first: dict[str, int] = {}
+    for cid, idx in by_curve.items():
+        spec = parsed[idx[0]].get("specimen")
+        if spec is None:
+            continue
+        j0 = first.setdefault(str(spec), idx[0])
+        for key in keys:
+            a, b = parsed[j0][key], parsed[idx[0]][key]
+            if a != b:
+                raise DataError(key, f"specimen {spec!r} changes {key} from {a!r} to {b!r} "
+                                f"in {cid!r}; its runs are one specimen", idx[0] + 1,
+                                f"one {key} in every run of specimen {spec!r}")
 
 
 def _hash(parsed: list[dict[str, object]]) -> str:

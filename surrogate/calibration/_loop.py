@@ -111,8 +111,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                         "curve needs a second curve to predict", None,
                         f"at least {MIN_CURVES} curves (distinct curve_id); replicate "
                         "specimens of one design also give the noise floor")
+    _check_specimens(obs, "curve_id", "")
     folds_requested = folds
-    k = folds_used(folds, obs.n_curves)
+    k = folds_used(folds, obs.n_specimens)
     tick = progress or (lambda: None)
     warnings = list(obs.warnings)
 
@@ -283,7 +284,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     for cand in candidates:
         if cand["rmse_cv_deg"] is not None:  # both channels, paired by curve
             cand["paired_z"] = _num(paired_cv(get_xv(tuple(cand["effects"])).joint,
-                                              xv_chosen.joint, xv_chosen.curves(obs.curve)))
+                                              xv_chosen.joint,
+                                              xv_chosen.curves(obs.specimen)))
     alike = _indistinguishable(candidates, chosen)
     # a set the data prefer that fails only for want of the baseline's backing: reported
     # beside the selection (its CV advantage may be the baseline's own error there)
@@ -304,6 +306,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "model": {"name": baseline.name},
         "baseline": baseline.as_dict(),
         "data": {"sha256": obs.sha256, "n_rows": obs.n, "n_curves": obs.n_curves,
+                 "n_specimens": obs.n_specimens,
                  "families": [dict(zip(("body_material", "membrane_material", "T_mm", "b_mm",
                                         "h_mm"), f, strict=False)) for f in obs.families],
                  "has_time_s": obs.has_time, "has_flow_ul_s": obs.has_flow,
@@ -327,7 +330,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "rmse_pressure_after_pa": _pressure_rms(get_xv(chosen), channel),
         "gauge_left_after": _gauge_left(_pressure_rms(get_xv(chosen), channel), channel,
                                         left["excess_allowance"]),
-        "cross_validation": {"method": "grouped K-fold by curve", "folds": k,
+        "cross_validation": {"method": "grouped K-fold by curve" if obs.n_specimens ==
+                             obs.n_curves else "grouped K-fold by specimen (its runs held "
+                             "out together)", "folds": k,
                              "folds_requested": folds_requested},
         "selected_effects": list(chosen),
         "candidates": candidates,
@@ -574,7 +579,19 @@ def _keep_within_range(obs: Observations, ok: np.ndarray, field: str, what: str,
                         f"range){hint}", None,
                         "at least 2 curves with 4 readings each below the end of the FE's "
                         "range")
+    _check_specimens(out, field, f" keep 4 readings within the baseline's range{axis}")
     return out, kept
+
+
+def _check_specimens(obs: Observations, field: str, where: str) -> None:
+    """Runs of one specimen are no second specimen: cross-validation holds a specimen
+    out with all its runs, so it needs two (a DataError on ``field`` otherwise)."""
+    if obs.n_specimens < MIN_CURVES:
+        raise DataError(field, f"the curves that{where or ' are given'} are runs of one "
+                        f"specimen ({obs.n_curves} runs): cross-validation by specimen "
+                        "needs a second specimen to predict", None,
+                        f"at least {MIN_CURVES} specimens (distinct curve_id beside the "
+                        "run column)")
 
 
 GAUGE_LEFT_RATIO = 1.3   # the gauge's cross-validated error over its replicate floor
@@ -705,7 +722,7 @@ def _angle_not_worse(xv: CrossValidation, base: CrossValidation, f: FitResult) -
     15 Pa floor) lost to a pressure gain of 1.079 that left the gauge at 22 Pa."""
     if xv.rmse_deg <= base.rmse_deg * (1 + 1e-9):
         return True
-    z = paired_cv(xv.angle, base.angle, f.model.obs.curve)
+    z = paired_cv(xv.angle, base.angle, f.model.obs.specimen)
     return bool(np.isfinite(z) and z < Z_ALIKE)
 
 
@@ -773,9 +790,10 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
                        "below the recalibrated baseline's: it moves the gauge pressure at the "
                        "injected volume the wrong way")
     n_params = sum(1 for e in effects for p in EFFECTS[e].parameters if p.tested)
-    n_curves = f.model.obs.n_curves
-    if n_curves < n_params + MIN_SPARE_CURVES:
-        reasons.append(f"{n_params} tested parameters from {n_curves} curves: each curve "
+    n_units = f.model.obs.n_specimens     # a specimen's runs share its stiffness
+    if n_units < n_params + MIN_SPARE_CURVES:
+        unit = "curves" if n_units == f.model.obs.n_curves else "specimens (their runs as one)"
+        reasons.append(f"{n_params} tested parameters from {n_units} {unit}: each curve "
                        "is one specimen's own stiffness and camera, so a cross-validation "
                        f"by curve needs {n_params + MIN_SPARE_CURVES} curves to back them "
                        "(measure more specimens)")
@@ -916,7 +934,8 @@ def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baselin
     m = AugmentedModel(obs, responses, (), baseline.open_parameters)
     f = fit(m)
     r = np.where(np.abs(f.residual) < R_CAP_DEG, f.residual, np.nan)  # capped: no answer
-    return specimen_scatter(r, m.pressure_scale_direction(f.x), obs.curve, obs.group)
+    return specimen_scatter(r, m.pressure_scale_direction(f.x), obs.replicate_unit(),
+                            obs.group)
 
 
 # the pump's switch times are freed where the joint error falls and the angle's rises by
