@@ -1140,11 +1140,12 @@ def interpret(report: dict, left: dict) -> str:
                 "selected or saved. Calibrate against the emulator (the default, whose "
                 "range is each design's own), or leave out the readings past the model's "
                 "range.")
+    unit = "specimen" if "specimen" in report["cross_validation"]["method"] else "curve"
     s = [f"The baseline {b['name']!r} as is misses the data by "
          f"{report['rmse_model_deg']:.2f} deg RMS"
          + (" (the angle read at the gauge's pressure)" if by_volume else "")
-         + f"; {opened} it predicts unseen curves to "
-         f"{before:.2f} deg (cross-validated by curve"
+         + f"; {opened} it predicts unseen {unit}s to "
+         f"{before:.2f} deg (cross-validated by {unit}"
          + (", the angle read at the injected volume" if by_volume else "")
          + f"), {floor}."]
     if report["pump_switches"]["open"]:

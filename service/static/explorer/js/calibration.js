@@ -217,12 +217,14 @@ export function setupCalibration() {
     $("cal-interpretation").textContent = rep.interpretation || "";
     const errors = $("cal-errors").querySelector("tbody");
     errors.innerHTML = "";
+    // by curve, or by specimen when the data have runs (docs/measured-data.md, "Runs")
+    const by = /specimen/.test((rep.cross_validation && rep.cross_validation.method) || "") ? "by specimen" : "by curve";
     const rowsOut = [
       ["starting model as is", rep.rmse_model_deg],
       [(rep.baseline?.open_parameters || []).length
-        ? "recalibrated constants, cross-validated by curve"
-        : "starting model, cross-validated by curve (nothing to recalibrate)", rep.rmse_before_deg],
-      ["with the selected effects, cross-validated by curve", rep.rmse_after_deg],
+        ? `recalibrated constants, cross-validated ${by}`
+        : `starting model, cross-validated ${by} (nothing to recalibrate)`, rep.rmse_before_deg],
+      [`with the selected effects, cross-validated ${by}`, rep.rmse_after_deg],
       [`noise floor${rep.noise_floor_source ? " (" + rep.noise_floor_source + ")" : ""}`, rep.noise_floor_deg],
     ];
     for (const [label, v] of rowsOut) {
