@@ -133,3 +133,25 @@ def test_a_missing_run_label_names_its_row():
     with pytest.raises(DataError) as err:
         observations_from_rows(data)
     assert err.value.column == "run" and err.value.row == 8
+
+
+def test_http_reads_runs_as_the_cli_does(tmp_path):
+    """POST /v1/calibrate: runs of one specimen alone are a 422 on rows.curve_id (not a
+    500 from a cross-validation with one fold); two specimens' runs answer by specimen."""
+    from fastapi.testclient import TestClient
+    from service_fakes import assert_problem, settings_for
+
+    from service.app import create_app
+
+    app = create_app(settings_for(tmp_path), load_surrogate=False)
+    with TestClient(app) as client:
+        r = client.post("/v1/calibrate", json={"rows": fe_runs(1, specimens=1),
+                                               "model": "paper"})
+        body = assert_problem(r, 422)
+        assert body["errors"][0]["field"] == "rows.curve_id"
+        assert "runs of one specimen" in body["detail"]
+        r = client.post("/v1/calibrate", json={"rows": fe_runs(1), "model": "paper"})
+    assert r.status_code == 200, r.text
+    report = r.json()
+    assert report["data"]["n_specimens"] == 2 and report["data"]["n_curves"] == 6
+    assert "cross-validated by specimen" in report["interpretation"]
