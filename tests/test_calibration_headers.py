@@ -172,3 +172,14 @@ def test_the_cli_converts_and_says_how_it_read_each_header(tmp_path, capsys):
     assert [r["reading"] for r in report["data"]["columns_read"]] == [
         "`Pressure (kPa)` read as pressure_pa x 1000", "`t [min]` read as time_s x 60"]
     assert "`Pressure (kPa)` read as pressure_pa x 1000" in capsys.readouterr().out
+
+
+@pytest.mark.timeout(10)
+@pytest.mark.parametrize("key", ["p" + " " * 10_000 + "(kPa)", "p_" * 5_000])
+def test_a_huge_key_is_an_unknown_column_said_short_and_fast(key):
+    """Every split of a 10,000-character key read as a header took 0.4-0.6 s (a stray
+    key over HTTP, many of them): a key beyond 100 characters names no quantity."""
+    data = [{**r, key: 1} for r in rows()]
+    with pytest.raises(DataError) as err:
+        observations_from_rows(data)
+    assert "unknown column" in str(err.value) and len(str(err.value)) < 400

@@ -395,7 +395,7 @@ def _run_label(value: object, row: int) -> str:
     if isinstance(value, float) and value.is_integer():
         value = int(value)
     text = "" if value is None or isinstance(value, bool) else str(value).strip()
-    if text.replace(".", "", 1).isdigit() and float(text).is_integer():
+    if text.replace(".", "", 1).isdecimal() and float(text).is_integer():
         text = str(int(float(text)))
     if not text or len(text) > 40:
         raise DataError(RUN_COLUMN, "missing run" if not text else "run label of "

@@ -52,6 +52,9 @@ QUANTITY_NAMES: dict[str | None, tuple[str, ...]] = {
     "angle_sd_deg": ("angle sd", "angle uncertainty"),
     None: ("volume", "v", "V", "injected volume", "vol"),
 }
+#: a longer header names no quantity (its every split read would take a second at 10,000
+#: characters: a stray key over HTTP)
+MAX_HEADER_CHARS = 100
 VOLUME_WORDS = ("an injected-volume column is not read: the calibration computes each "
                 "reading's volume from time_s and flow_ul_s (give those)")
 
@@ -138,6 +141,8 @@ def read_header(header: str, numeric: tuple[str, ...]) -> Reading | None:
     quantity in an unknown unit, without a unit, or an injected volume."""
     if header in numeric:
         return Reading(header, header, 1.0)
+    if len(header) > MAX_HEADER_CHARS:     # no lab's header: an unknown column, said short
+        return None
     names = _names(numeric)
     splits = [_split(header)]
     parts = header.split("_")   # 'p_mbar', 'Flow_ml_min': every split of the name
