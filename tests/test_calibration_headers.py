@@ -48,7 +48,8 @@ HEADERS = [
     ("Force (mN)", "force_mn", 1.0), ("Force [N]", "force_mn", 1000.0),
     ("Tip force (gf)", "force_mn", 9.80665),
     ("Flow (ul/s)", "flow_ul_s", 1.0), ("Flow rate [µl/s]", "flow_ul_s", 1.0),
-    ("Flow (ml/min)", "flow_ul_s", 1000.0 / 60.0),
+    ("Flow (ml/min)", "flow_ul_s", 1000.0 / 60.0), ("Q [ml/h]", "flow_ul_s", 1000.0 / 3600.0),
+    ("Flow_ul_min", "flow_ul_s", 1.0 / 60.0),
 ]
 
 

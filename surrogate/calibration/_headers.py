@@ -34,6 +34,7 @@ UNITS: dict[str, tuple[str, float]] = {
     "deg": ("angle", 1.0), "°": ("angle", 1.0), "degree": ("angle", 1.0),
     "degrees": ("angle", 1.0), "rad": ("angle", 180.0 / math.pi),
     "s": ("time", 1.0), "sec": ("time", 1.0), "ms": ("time", 1e-3), "min": ("time", 60.0),
+    "h": ("time", 3600.0),
     "ul": ("volume", 1.0), "ml": ("volume", 1000.0),
     "cmh2o": ("pressure", 98.0665),
     "mn": ("force", 1.0), "n": ("force", 1000.0), "gf": ("force", 9.80665),
