@@ -135,14 +135,21 @@ def test_a_converted_cell_out_of_range_is_named_by_its_header():
 
 def test_http_names_the_header_as_sent(tmp_path):
     """Over HTTP the rows' keys are the file's headers (the explorer page sends them as
-    read): a refused header is the problem's field."""
+    read): a refused header is the problem's field, a read one is said in the report."""
     app = create_app(settings_for(tmp_path), load_surrogate=False)
     data = relabel(rows(), "angle_deg", "Angle (grad)", 1.0)
+    from test_calibration_service import measured_rows
+
+    kpa = relabel(measured_rows(), "pressure_pa", "Pressure (kPa)", 1000.0)
     with TestClient(app) as client:
         r = client.post("/v1/calibrate", json={"rows": data, "model": "paper"})
+        ok = client.post("/v1/calibrate", json={"rows": kpa, "model": "paper"})
     body = assert_problem(r, 422)
     assert body["errors"][0]["field"] == "rows.Angle (grad)"
     assert "not a unit of angle" in body["detail"]
+    assert ok.status_code == 200, ok.text
+    assert ok.json()["data"]["columns_read"][0]["reading"] == (
+        "`Pressure (kPa)` read as pressure_pa x 1000")
 
 
 def _write(path, text: str):
