@@ -431,14 +431,17 @@ def test_a_json_rows_column_given_twice_is_refused_with_its_row(tmp_path):
     assert "given twice" in str(err.value) and "lab.json" in str(err.value)
 
 
-@pytest.mark.parametrize("header, column", [("p_mbar", "pressure_pa"),
-                                            ("Druck [kPa]", "pressure_pa"),
-                                            ("theta (rad)", "angle_deg")])
+@pytest.mark.parametrize("header, column", [("gauge_reading_mbar", "pressure_pa"),
+                                            ("Druckmessung [kPa]", "pressure_pa"),
+                                            ("Biegung (rad)", "angle_deg")])
 def test_a_required_column_named_by_its_unit_is_named_in_the_error(tmp_path, header, column):
-    """A lab names its pressure 'p_mbar': the error said only "pressure_pa: required
-    column is missing"; it now names the column found in its place and the unit wanted."""
+    """A lab names its pressure by a word the header reading does not know
+    ('Druckmessung [kPa]'): the error said only "pressure_pa: required column is
+    missing"; it names the column found in its place and how to name it. ('p_mbar',
+    'Druck [kPa]', 'theta (rad)' are read and converted: test_calibration_headers.py.)"""
     text = csv_text(rows()).replace(column, header, 1)
     with pytest.raises(DataError) as err:
         load_observations(_write(tmp_path / "lab.csv", text.encode()))
     assert err.value.column == column
     assert f"found {header!r}" in str(err.value) and "\n" not in str(err.value)
+    assert "(unit)" in str(err.value)

@@ -21,7 +21,8 @@ from surrogate.calibration._residual import (
 
 
 def _obs(n_curves: int, per_curve: int) -> SimpleNamespace:
-    return SimpleNamespace(n_curves=n_curves, curve=np.repeat(np.arange(n_curves), per_curve))
+    curve = np.repeat(np.arange(n_curves), per_curve)
+    return SimpleNamespace(n_curves=n_curves, curve=curve, specimen=curve)
 
 
 def test_the_cross_validated_errors_own_uncertainty_counts_curves_not_readings():
@@ -54,7 +55,8 @@ def _replicates(groups: int, per_group: int, readings: int) -> SimpleNamespace:
     n = groups * per_group
     curve = np.repeat(np.arange(n), readings)
     return SimpleNamespace(n_curves=n, curve=curve, group=curve // per_group,
-                           time_s=np.tile(np.arange(1.0, readings + 1), n), has_time=True)
+                           time_s=np.tile(np.arange(1.0, readings + 1), n), has_time=True,
+                           specimen=curve, curve_specimen=lambda: np.arange(n))
 
 
 def _specimen_residuals(rng, obs, readings: int) -> np.ndarray:

@@ -121,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
     for w in report["warnings"]:
         print(f"warning: {w}", file=sys.stderr)
     print(f"angle error: the model as is {deg(report['rmse_model_deg'])} deg RMS; "
-          f"cross-validated by curve, the recalibrated baseline {deg(report['rmse_before_deg'])}"
+          f"cross-validated {report['cross_validation']['method'].split('K-fold ')[-1]}, "
+          f"the recalibrated baseline {deg(report['rmse_before_deg'])}"
           f" deg and with the selected effects {deg(report['rmse_after_deg'])} deg (noise "
           f"floor {deg(report['noise_floor_deg'])} deg); selected: "
           f"{', '.join(report['selected_effects']) or 'none'}"

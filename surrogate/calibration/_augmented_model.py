@@ -337,10 +337,10 @@ class AugmentedModel:
         base = self.angles(x)
         return np.nan_to_num((self.angles(x, pscale=1.0 + h) - base) / h)
 
-    def residual_curves(self) -> np.ndarray:
-        """The curve of every residual row (the pressure channel's rows repeat the
-        angles')."""
-        c = self.obs.curve
+    def residual_specimens(self) -> np.ndarray:
+        """The specimen of every residual row (the pressure channel's rows repeat the
+        angles'): a specimen's runs share its scatter (the curve without runs)."""
+        c = self.obs.specimen
         return np.concatenate([c, c]) if self.by_volume else c
 
     def whiten(self, r: np.ndarray) -> np.ndarray:
@@ -352,7 +352,7 @@ class AugmentedModel:
             return r
         if self._scale_direction is None:
             self._scale_direction = self.pressure_scale_direction(self.layout.start)
-        return self.scatter.whiten(r, self._scale_direction, self.residual_curves())
+        return self.scatter.whiten(r, self._scale_direction, self.residual_specimens())
 
     def _prepare_substeps(self) -> None:
         """Pressure (and injected volume) linear in time between readings, SUBSTEPS per

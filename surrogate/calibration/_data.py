@@ -23,6 +23,14 @@ from solver.bounded_read import read_bounded
 from solver.materials import MATERIALS
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
+from surrogate.calibration._headers import (
+    UNITS,
+    Reading,
+    allowed_units,
+    canonical_unit,
+    header_form,
+    read_headers,
+)
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
 from surrogate.calibration._pump_clock import clock_warning
 from surrogate.json_repeats import loads_with_repeats
@@ -36,6 +44,12 @@ OPTIONAL = ("T_mm", "b_mm", "h_mm", "time_s", "flow_ul_s", "angle_sd_deg", "forc
 #: leaking chamber's gauge and bend fall during a hold as if it were unloading.
 PUMP_COLUMN = "pump"
 PUMP_STATES = {"load": 1.0, "hold": 0.0, "unload": -1.0}
+#: the run of a specimen, optional: a lab loads one specimen several times. With it a
+#: curve is one run (curve_id and run), curve_id names the specimen, and its runs count
+#: as one specimen wherever specimens are the units (``Observations.specimen``). A
+#: header named by any of ``RUN_NAMES`` (any case) is this column.
+RUN_COLUMN = "run"
+RUN_NAMES = ("run", "cycle", "repeat", "repetition", "trial")
 DEFAULTS = {"T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15}
 MIN_POINTS_PER_CURVE = 4
 MAX_ROWS = 200_000
@@ -89,8 +103,18 @@ class Observations:
     switch_names: tuple[str, ...] = ()
     #: the history is the pump's own log (the ``pump`` column), not read off the readings
     pump_logged: bool = False
+    #: the headers read as a canonical column in another unit or spelling
+    #: (``Pressure (kPa)`` as pressure_pa x 1000: _headers.py), their values converted
+    columns_read: tuple[Reading, ...] = ()
+    #: the specimen of each row: its curves are the runs of one specimen (the ``run``
+    #: column: the same specimen loaded again), at any flow rate; without ``run`` every
+    #: curve is a specimen of its own. Specimens, not runs, are the independent units
+    #: of the scatter between specimens, the held-out folds and the noise floor.
+    specimen: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
+        if self.specimen is None:
+            object.__setattr__(self, "specimen", np.asarray(self.curve).copy())
         if self.direction is None:
             object.__setattr__(self, "direction",
                                directions(self.curve, self.pressure_pa, self.angle_deg,
@@ -126,6 +150,24 @@ class Observations:
     @property
     def n_curves(self) -> int:
         return len(self.curve_ids)
+
+    @property
+    def n_specimens(self) -> int:
+        return int(np.unique(self.specimen).size)
+
+    def curve_specimen(self) -> np.ndarray:
+        """Specimen index of each curve."""
+        out = np.zeros(self.n_curves, dtype=int)
+        out[self.curve] = self.specimen
+        return out
+
+    def replicate_unit(self) -> np.ndarray:
+        """Per row, one index per specimen within its replicate group (design and flow
+        rate): a specimen's runs at one flow rate are one unit of the scatter between
+        specimens; the curve itself without runs."""
+        _, unit = np.unique(np.stack([self.specimen, self.group]), axis=1,
+                            return_inverse=True)
+        return unit.ravel()
 
     @property
     def has_time(self) -> bool:
@@ -167,6 +209,7 @@ class Observations:
         remap = np.full(self.n_curves, -1)
         remap[old] = np.arange(old.size)
         _, group = np.unique(self.group[keep], return_inverse=True)
+        _, specimen = np.unique(self.specimen[keep], return_inverse=True)
         return Observations(
             tuple(self.curve_ids[i] for i in old), self.families, remap[self.curve[keep]],
             self.family[keep], group, self.L_mm[keep], self.t_mm[keep],
@@ -174,7 +217,7 @@ class Observations:
             self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
             self.direction[keep], self.warnings, self.volume_ul[keep],
             self.switch_after[keep], self.switch_at[keep], self.switch_names,
-            self.pump_logged)
+            self.pump_logged, self.columns_read, specimen.ravel())
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
@@ -251,8 +294,16 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     if len(rows) > MAX_ROWS:
         raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
     rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
+    headers = list(dict.fromkeys(k for r in rows if isinstance(r, dict) for k in r))
+    readings = read_headers(headers, tuple(RANGES))
+    converted = {r.column: r for r in readings.values() if r.header != r.column}
+    if converted:       # the file's names -> the canonical columns, values converted below
+        rename = {r.header: r.column for r in converted.values()}
+        rows = [{rename.get(k, k): v for k, v in r.items()} if isinstance(r, dict) else r
+                for r in rows]
+    rows = _run_named(rows, headers)
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
-    known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN}
+    known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN, RUN_COLUMN}
     for name in REQUIRED:
         if name not in columns:
             raise _missing(name, columns)
@@ -267,41 +318,90 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             name = str(extra[0])
             raise DataError(name if len(name) <= 64 else f"{name[:40]}... ({len(name)} "
                             "characters)", "unknown column", i,
-                            ", ".join(REQUIRED + OPTIONAL + (PUMP_COLUMN,)))
+                            ", ".join(REQUIRED + OPTIONAL + (PUMP_COLUMN, RUN_COLUMN)))
         rec: dict[str, object] = {}
         cid = raw.get("curve_id")
         if cid is None or str(cid).strip() == "":
             raise _cell_error("curve_id", "empty curve id", i)
         rec["curve_id"] = str(cid).strip()
+        if RUN_COLUMN in columns:        # one run of the specimen curve_id
+            rec["specimen"] = rec["curve_id"]
+            rec["curve_id"] = f"{rec['curve_id']} run {_run_label(raw.get(RUN_COLUMN), i)}"
         for name in ("body_material", "membrane_material"):
             value = str(raw.get(name, "") or "").strip()
             if value not in MATERIALS:
                 raise DataError(name, f"unknown material {value!r}", i,
                                 ", ".join(sorted(MATERIALS)))
             rec[name] = value
-        for name in ("L_mm", "t_mm", "pressure_pa", "angle_deg"):
-            x = _number(raw.get(name), name, i)
-            if math.isnan(x):
-                raise _cell_error(name, "missing value", i)
-            _check_range(x, name, i)
-            rec[name] = x
-        for name in OPTIONAL:
-            x = _number(raw.get(name), name, i) if name in present else math.nan
-            if math.isnan(x):
-                if name in present and name in ("time_s", "flow_ul_s"):
-                    raise _cell_error(name, "missing value (the column is present, so "
-                                      "every row needs one)", i)
-                x = DEFAULTS.get(name, math.nan)
-            else:
+        try:
+            for name in ("L_mm", "t_mm", "pressure_pa", "angle_deg"):
+                x = _number(raw.get(name), name, i) * _factor(converted, name)
+                if math.isnan(x):
+                    raise _cell_error(name, "missing value", i)
                 _check_range(x, name, i)
-            rec[name] = x
+                rec[name] = x
+            for name in OPTIONAL:
+                x = (_number(raw.get(name), name, i) * _factor(converted, name)
+                     if name in present else math.nan)
+                if math.isnan(x):
+                    if name in present and name in ("time_s", "flow_ul_s"):
+                        raise _cell_error(name, "missing value (the column is present, so "
+                                          "every row needs one)", i)
+                    x = DEFAULTS.get(name, math.nan)
+                else:
+                    _check_range(x, name, i)
+                rec[name] = x
+        except DataError as exc:
+            raise _as_written(exc, converted) from None
         if PUMP_COLUMN in columns:
             rec[PUMP_COLUMN] = _pump_state(raw.get(PUMP_COLUMN), i)
         parsed.append(rec)
     parsed, warnings = _suspicious(parsed, present, strict)
     if PUMP_COLUMN in columns:
         present = present + [PUMP_COLUMN]
-    return _build(parsed, present, tuple(warnings))
+    return _build(parsed, present, tuple(warnings), tuple(converted.values()))
+
+
+def _factor(converted: dict[str, Reading], column: str) -> float:
+    """What the values of ``column`` are multiplied by (its header's unit -> its own)."""
+    return converted[column].factor if column in converted else 1.0
+
+
+def _as_written(exc: DataError, converted: dict[str, Reading]) -> DataError:
+    """A refused cell of a converted column, named by the file's header (over HTTP the
+    field is ``rows.<i>.<the key sent>``) and saying how it was read."""
+    reading = converted.get(exc.column)
+    if reading is None:
+        return exc
+    return DataError(reading.header, f"{exc.detail.removeprefix(f'row {exc.row}: ')} "
+                     f"({reading.words()})", exc.row, exc.allowed)
+
+
+def _run_named(rows: list, headers: list) -> list:
+    """``rows`` with a header of ``RUN_NAMES`` ('Cycle', 'Repeat') named ``run``; two such
+    headers are a DataError naming both."""
+    named = [h for h in headers if isinstance(h, str) and h.strip().lower() in RUN_NAMES]
+    if len(named) > 1:
+        raise DataError(named[1], f"{named[0]!r} and {named[1]!r} both name the run of a "
+                        "specimen", None, "one run column")
+    if not named or named[0] == RUN_COLUMN:
+        return rows
+    return [{(RUN_COLUMN if k == named[0] else k): v for k, v in r.items()}
+            if isinstance(r, dict) else r for r in rows]
+
+
+def _run_label(value: object, row: int) -> str:
+    """A run's label as text ('2' of 2, 2.0 or ' 2 '); an empty one is a DataError."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    text = "" if value is None or isinstance(value, bool) else str(value).strip()
+    if text.replace(".", "", 1).isdecimal() and float(text).is_integer():
+        text = str(int(float(text)))
+    if not text or len(text) > 40:
+        raise DataError(RUN_COLUMN, "missing run" if not text else "run label of "
+                        f"{len(text)} characters", row, "a run label (1, 2, 3 or any short "
+                        "text) in every row once the column is present")
+    return text
 
 
 def _pump_state(value: object, row: int) -> float:
@@ -421,7 +521,8 @@ def _mixed_units(kept: list[dict[str, object]]) -> list[tuple[str, str, int | No
 
 
 def _build(parsed: list[dict[str, object]], present: list[str],
-           warnings: tuple[str, ...] = ()) -> Observations:
+           warnings: tuple[str, ...] = (), columns_read: tuple[Reading, ...] = ()
+           ) -> Observations:
     by_curve: dict[str, list[int]] = {}
     for i, rec in enumerate(parsed):
         by_curve.setdefault(str(rec["curve_id"]), []).append(i)
@@ -445,7 +546,11 @@ def _build(parsed: list[dict[str, object]], present: list[str],
             if len(set(times)) != len(times):
                 raise DataError("time_s", f"curve {cid!r} repeats a time", idx[-1] + 1,
                                 "distinct times within a curve")
+    _same_design_per_specimen(parsed, by_curve, design_keys)
     curve_ids = tuple(by_curve)
+    specimens: dict[str, int] = {}
+    specimen_of = [specimens.setdefault(str(parsed[by_curve[c][0]].get("specimen", c)),
+                                        len(specimens)) for c in curve_ids]
     families: dict[tuple, int] = {}
     groups: dict[tuple, int] = {}
     rows_sorted: list[tuple[int, int, int, dict]] = []
@@ -473,7 +578,26 @@ def _build(parsed: list[dict[str, object]], present: list[str],
         col("L_mm"), col("t_mm"), col("pressure_pa"), col("angle_deg"), col("time_s"),
         col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed),
         direction=col(PUMP_COLUMN) if PUMP_COLUMN in present else None, warnings=warnings,
-        pump_logged=PUMP_COLUMN in present)
+        pump_logged=PUMP_COLUMN in present, columns_read=columns_read,
+        specimen=np.array([specimen_of[c] for c, _, _, _ in rows_sorted], dtype=int))
+
+
+def _same_design_per_specimen(parsed: list[dict[str, object]],
+                              by_curve: dict[str, list[int]], keys: tuple[str, ...]) -> None:
+    """The runs of one specimen are of one design (a DataError naming the run that
+    changes it)."""
+    first: dict[str, int] = {}
+    for cid, idx in by_curve.items():
+        spec = parsed[idx[0]].get("specimen")
+        if spec is None:
+            continue
+        j0 = first.setdefault(str(spec), idx[0])
+        for key in keys:
+            a, b = parsed[j0][key], parsed[idx[0]][key]
+            if a != b:
+                raise DataError(key, f"specimen {spec!r} changes {key} from {a!r} to {b!r} "
+                                f"in {cid!r}; its runs are one specimen", idx[0] + 1,
+                                f"one {key} in every run of specimen {spec!r}")
 
 
 def _hash(parsed: list[dict[str, object]]) -> str:
@@ -520,8 +644,9 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     names = [unnamed.get(k, n) for k, n in enumerate(names)]
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0, "each column once")
+    readings = read_headers(names, tuple(RANGES))   # 'Pressure (kPa)' is pressure_pa
     for name in REQUIRED:
-        if name not in names:
+        if name not in names and name not in {r.column for r in readings.values()}:
             raise _missing(name, set(names))
     reader = csv.DictReader(lines[1:], fieldnames=names, delimiter=sep)
     out = []
@@ -548,19 +673,13 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
                             "a header naming every column that holds values")
         for r in out:
             r.pop(name, None)
-    return decimal_commas(out, tuple(RANGES), sep)
-
-
-#: the units a lab may write a required column's quantity in: a column named with one
-#: of them ('p_mbar', 'Druck [kPa]', 'theta (rad)') is named as the one found in its place
-QUANTITY_UNITS = {"pressure_pa": ("pa", "kpa", "hpa", "mbar", "bar", "psi", "mmhg"),
-                  "angle_deg": ("deg", "rad", "°", "degree", "degrees")}
+    return decimal_commas(out, tuple(RANGES) + tuple(readings), sep)
 
 
 def _missing(name: str, columns: set) -> DataError:
     """A required column is missing: one line naming it, and the column the file has in
-    its place when one looks like it (a unit or case added: 'pressure_pa [Pa]',
-    'Angle_deg', 'pressure (kPa)')."""
+    its place when one looks like it (a unit added to a name read as no quantity:
+    'pressure gauge (kPa)'; a case or space changed: 'Curve_ID')."""
     def base(text: str) -> str:
         text = str(text).lower().replace("(", "[").split("[")[0].strip()
         return text.replace(" ", "_")
@@ -571,13 +690,14 @@ def _missing(name: str, columns: set) -> DataError:
         return (inside or text.rsplit("_", 1)[-1]).strip()
 
     stem = name.rsplit("_", 1)[0]
-    units = QUANTITY_UNITS.get(name, ())
+    unit = canonical_unit(name)
+    dimension = unit[1] if unit else None
     near = sorted(c for c in map(str, columns)
                   if base(c) in (name, stem) or base(c).rsplit("_", 1)[0] == stem
-                  or unit_of(c) in units)
-    unit = {"pa": "Pa", "deg": "deg", "mm": "mm"}.get(name.rsplit("_", 1)[-1])
-    found = (f" (found {near[0]!r}: the column must be named exactly {name}"
-             + (f", its values in {unit}" if unit else "") + ")") if near else ""
+                  or (dimension and UNITS.get(unit_of(c), ("",))[0] == dimension))
+    how = (f"name it {header_form(name)} with {allowed_units(dimension)}" if dimension
+           else f"the column must be named exactly {name}")
+    found = f" (found {near[0]!r}: {how})" if near else ""
     return DataError(name, "required column is missing" + found, None,
                      "columns " + ", ".join(REQUIRED))
 

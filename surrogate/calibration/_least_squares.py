@@ -154,14 +154,15 @@ def fit(model: AugmentedModel, x0: np.ndarray | None = None) -> FitResult:
             res = other
     r = res.fun
     r0 = r if model.scatter is None else raw(res.x)
-    cov = cluster_covariance(res.jac, r, model.residual_curves())
+    cov = cluster_covariance(res.jac, r, model.residual_specimens())
     return FitResult(model, res.x, float(r @ r), r.size, cov, bool(res.success), r0[:n],
                      res.jac, residual_pressure=r0[n:] if r0.size > n else None)
 
 
 def cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np.ndarray:
     """(J'J)^-1 [sum_c (J_c' r_c)(J_c' r_c)'] (J'J)^-1 x G/(G-1): covariance of the fitted
-    parameters robust to scatter shared within a curve."""
+    parameters robust to scatter shared within a cluster (a specimen: its runs share its
+    stiffness)."""
     bread = np.linalg.pinv(jac.T @ jac)
     g = np.zeros((int(curve.max()) + 1, jac.shape[1]))
     np.add.at(g, curve, jac * r[:, None])
@@ -171,8 +172,9 @@ def cluster_covariance(jac: np.ndarray, r: np.ndarray, curve: np.ndarray) -> np.
 
 
 def curve_folds(n_curves: int, k: int = 5) -> list[np.ndarray]:
-    """Grouped K-fold by curve: curve i is held out in fold i mod K (replicates, usually
-    listed together, land in different folds); K is reduced to ``n_curves``."""
+    """Grouped K-fold: unit i (a curve, or a specimen with all its runs) is held out in
+    fold i mod K (replicates, usually listed together, land in different folds); K is
+    reduced to ``n_curves``, the number of units."""
     if n_curves < 2 or k < 2:
         raise ValueError(f"cross-validation by curve needs >= 2 curves and folds, got "
                          f"{n_curves} curves, {k} folds (check_calibratable says so first)")
@@ -212,12 +214,15 @@ class CrossValidation:
 
 def cross_validate(obs: Observations, make: Callable[[Observations], AugmentedModel],
                    full: FitResult, k: int = 5) -> CrossValidation:
-    """Predicting each held-out curve from a fit that did not see it: the per-row
+    """Predicting each held-out curve from a fit that did not see it, nor any other run
+    of its specimen (folds by specimen; by curve without runs): the per-row
     out-of-fold residuals (NaN where a held-out curve falls past the baseline's range).
     A family absent from a training set keeps its open scales at 1 (the baseline as is)."""
     resid = np.empty(obs.n)
     resid_p = np.empty(obs.n) if full.model.pressure_weight > 0.0 else None
-    for held in curve_folds(obs.n_curves, k):
+    specimen = obs.curve_specimen()   # a specimen's runs are held out together
+    for held_specimens in curve_folds(obs.n_specimens, k):
+        held = np.flatnonzero(np.isin(specimen, held_specimens))
         train = obs.subset(np.setdiff1d(np.arange(obs.n_curves), held))
         test = obs.subset(held)
         m_train = make(train)
@@ -245,8 +250,9 @@ def _transfer(f: FitResult, target: AugmentedModel) -> np.ndarray:
 
 def paired_cv(resid_a: np.ndarray, resid_b: np.ndarray, curve: np.ndarray) -> float:
     """How decisively held-out curves tell set A from set B: z of the mean difference of
-    squared out-of-fold errors, A - B, with curves as the independent units (a specimen's
-    scatter is shared along its curve). Negative: A predicts unseen curves better."""
+    squared out-of-fold errors, A - B, with ``curve`` (per row: the specimen, whose
+    scatter is shared along its curves and runs) as the independent units. Negative: A
+    predicts unseen specimens better."""
     ok = np.isfinite(resid_a) & np.isfinite(resid_b)
     if not np.any(ok):
         return float("nan")

@@ -116,8 +116,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                         "curve needs a second curve to predict", None,
                         f"at least {MIN_CURVES} curves (distinct curve_id); replicate "
                         "specimens of one design also give the noise floor")
+    _check_specimens(obs, "curve_id", "")
     folds_requested = folds
-    k = folds_used(folds, obs.n_curves)
+    k = folds_used(folds, obs.n_specimens)
     def tick() -> None:
         stop_if_cancelled(cancel)
         if progress is not None:
@@ -293,7 +294,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     for cand in candidates:
         if cand["rmse_cv_deg"] is not None:  # both channels, paired by curve
             cand["paired_z"] = _num(paired_cv(get_xv(tuple(cand["effects"])).joint,
-                                              xv_chosen.joint, xv_chosen.curves(obs.curve)))
+                                              xv_chosen.joint,
+                                              xv_chosen.curves(obs.specimen)))
     alike = _indistinguishable(candidates, chosen)
     # a set the data prefer that fails only for want of the baseline's backing: reported
     # beside the selection (its CV advantage may be the baseline's own error there)
@@ -314,10 +316,12 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "model": {"name": baseline.name},
         "baseline": baseline.as_dict(),
         "data": {"sha256": obs.sha256, "n_rows": obs.n, "n_curves": obs.n_curves,
+                 "n_specimens": obs.n_specimens,
                  "families": [dict(zip(("body_material", "membrane_material", "T_mm", "b_mm",
                                         "h_mm"), f, strict=False)) for f in obs.families],
                  "has_time_s": obs.has_time, "has_flow_ul_s": obs.has_flow,
                  "pump_logged": obs.pump_logged,
+                 "columns_read": [r.as_dict() for r in obs.columns_read],
                  "flow_rates_ul_s": sorted({float(q) for q in np.round(
                      obs.flow_ul_s[np.isfinite(obs.flow_ul_s)], 6)}),
                  "readings": h, "holds": traits.has_holds, "unloading": traits.has_unloading,
@@ -336,7 +340,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "rmse_pressure_after_pa": _pressure_rms(get_xv(chosen), channel),
         "gauge_left_after": _gauge_left(_pressure_rms(get_xv(chosen), channel), channel,
                                         left["excess_allowance"]),
-        "cross_validation": {"method": "grouped K-fold by curve", "folds": k,
+        "cross_validation": {"method": "grouped K-fold by curve" if obs.n_specimens ==
+                             obs.n_curves else "grouped K-fold by specimen (its runs held "
+                             "out together)", "folds": k,
                              "folds_requested": folds_requested},
         "selected_effects": list(chosen),
         "candidates": candidates,
@@ -583,7 +589,19 @@ def _keep_within_range(obs: Observations, ok: np.ndarray, field: str, what: str,
                         f"range){hint}", None,
                         "at least 2 curves with 4 readings each below the end of the FE's "
                         "range")
+    _check_specimens(out, field, f" keep 4 readings within the baseline's range{axis}")
     return out, kept
+
+
+def _check_specimens(obs: Observations, field: str, where: str) -> None:
+    """Runs of one specimen are no second specimen: cross-validation holds a specimen
+    out with all its runs, so it needs two (a DataError on ``field`` otherwise)."""
+    if obs.n_specimens < MIN_CURVES:
+        raise DataError(field, f"the curves that{where or ' are given'} are runs of one "
+                        f"specimen ({obs.n_curves} runs): cross-validation by specimen "
+                        "needs a second specimen to predict", None,
+                        f"at least {MIN_CURVES} specimens (distinct curve_id beside the "
+                        "run column)")
 
 
 GAUGE_LEFT_RATIO = 1.3   # the gauge's cross-validated error over its replicate floor
@@ -714,7 +732,7 @@ def _angle_not_worse(xv: CrossValidation, base: CrossValidation, f: FitResult) -
     15 Pa floor) lost to a pressure gain of 1.079 that left the gauge at 22 Pa."""
     if xv.rmse_deg <= base.rmse_deg * (1 + 1e-9):
         return True
-    z = paired_cv(xv.angle, base.angle, f.model.obs.curve)
+    z = paired_cv(xv.angle, base.angle, f.model.obs.specimen)
     return bool(np.isfinite(z) and z < Z_ALIKE)
 
 
@@ -782,9 +800,10 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
                        "below the recalibrated baseline's: it moves the gauge pressure at the "
                        "injected volume the wrong way")
     n_params = sum(1 for e in effects for p in EFFECTS[e].parameters if p.tested)
-    n_curves = f.model.obs.n_curves
-    if n_curves < n_params + MIN_SPARE_CURVES:
-        reasons.append(f"{n_params} tested parameters from {n_curves} curves: each curve "
+    n_units = f.model.obs.n_specimens     # a specimen's runs share its stiffness
+    if n_units < n_params + MIN_SPARE_CURVES:
+        unit = "curves" if n_units == f.model.obs.n_curves else "specimens (their runs as one)"
+        reasons.append(f"{n_params} tested parameters from {n_units} {unit}: each curve "
                        "is one specimen's own stiffness and camera, so a cross-validation "
                        f"by curve needs {n_params + MIN_SPARE_CURVES} curves to back them "
                        "(measure more specimens)")
@@ -925,7 +944,8 @@ def _specimen_scatter(obs: Observations, responses: Responses, baseline: Baselin
     m = AugmentedModel(obs, responses, (), baseline.open_parameters)
     f = fit(m)
     r = np.where(np.abs(f.residual) < R_CAP_DEG, f.residual, np.nan)  # capped: no answer
-    return specimen_scatter(r, m.pressure_scale_direction(f.x), obs.curve, obs.group)
+    return specimen_scatter(r, m.pressure_scale_direction(f.x), obs.replicate_unit(),
+                            obs.group)
 
 
 # the pump's switch times are freed where the joint error falls and the angle's rises by
@@ -1130,11 +1150,12 @@ def interpret(report: dict, left: dict) -> str:
                 "selected or saved. Calibrate against the emulator (the default, whose "
                 "range is each design's own), or leave out the readings past the model's "
                 "range.")
+    unit = "specimen" if "specimen" in report["cross_validation"]["method"] else "curve"
     s = [f"The baseline {b['name']!r} as is misses the data by "
          f"{report['rmse_model_deg']:.2f} deg RMS"
          + (" (the angle read at the gauge's pressure)" if by_volume else "")
-         + f"; {opened} it predicts unseen curves to "
-         f"{before:.2f} deg (cross-validated by curve"
+         + f"; {opened} it predicts unseen {unit}s to "
+         f"{before:.2f} deg (cross-validated by {unit}"
          + (", the angle read at the injected volume" if by_volume else "")
          + f"), {floor}."]
     if report["pump_switches"]["open"]:
@@ -1228,6 +1249,9 @@ def interpret(report: dict, left: dict) -> str:
         s.append(gauge)
     for w in report["warnings"]:
         s.append(f"Warning: {w}.")
+    read = report["data"]["columns_read"]
+    if read:
+        s.append("Columns read: " + "; ".join(r["reading"] for r in read) + ".")
     out = report["left_out"]
     if out is not None and report["selected_effects"]:
         s.append(f"Of the {out['readings']} readings left out, the calibrated model answers "

@@ -9,12 +9,17 @@ pressure within the segment's range) for loading and unloading, at the same time
 the segment began for a hold. So a loading/unloading loop, creep during a hold or a
 flow-rate effect is not counted as scatter (replicates share it), while the specimen's
 own pressure-angle scatter is, as the model's cross-validated error counts it. For
-independent specimens E[(y - mean_others)^2] = sigma^2 (1 + 1/k), k the number of others:
+independent specimens E[(y - mean_others)^2] = sigma^2 (1 + 1/k), k the number of others.
+The others are other specimens: the runs of one specimen (the ``run`` column) share its
+stiffness, so a run is never compared with its own specimen's runs, another specimen's
+runs are averaged into one curve of that specimen before the mean, and k counts specimens
+(3 runs of 2 specimens compared run with run made a floor of the runs' repeatability, not
+of a new specimen's scatter):
 
     floor^2 = sum (y - mean_others)^2 / (1 + 1/k) / N
 
 the error a perfect model of the design's mean makes on a specimen it has not seen.
-``rel_se``: its relative standard error, from the spread of the per-curve mean squares
+``rel_se``: its relative standard error, from the spread of the per-specimen mean squares
 (specimen scatter makes it 5-15 % with 3 specimens of 3-6 designs).
 Without replicates: second differences along each curve of at least 8 readings (reading
 noise only, no specimen scatter; the curvature between sparse readings adds to it:
@@ -97,10 +102,11 @@ def _end_slope(obs: Observations, rows: np.ndarray) -> float:
 
 def noise_floor(obs: Observations) -> NoiseFloor:
     sq, n_used, groups = 0.0, 0, 0
-    per_curve: dict[int, list[float]] = {}
+    per_curve: dict[int, list[float]] = {}   # per specimen
+    spec = obs.curve_specimen()
     for g in np.unique(obs.group):
         curves = np.unique(obs.curve[obs.group == g])
-        if curves.size < 2:
+        if np.unique(spec[curves]).size < 2:
             continue
         rows_of = {int(c): np.flatnonzero(obs.curve == c) for c in curves}
         seg_of = {c: segments(obs.direction[r]) for c, r in rows_of.items()}
@@ -113,15 +119,16 @@ def noise_floor(obs: Observations) -> NoiseFloor:
                 d = obs.direction[rows[m]][0]
                 p = obs.pressure_pa[rows[m]]
                 t_rel = t[m] - t[m][0]
-                o = np.array([_other_at(obs, rows2, seg_of[c2], d, k, p, t_rel)
-                              for c2, rows2 in rows_of.items() if c2 != c])
+                o = _by_specimen([(spec[c2], _other_at(obs, rows2, seg_of[c2], d, k, p,
+                                                        t_rel))
+                                  for c2, rows2 in rows_of.items() if spec[c2] != spec[c]])
                 share = _replicate_share(obs.angle_deg[rows[m]], o)
                 if share is None:
                     continue
                 term, n = share
                 sq += term
                 n_used += n
-                acc = per_curve.setdefault(c, [0.0, 0])
+                acc = per_curve.setdefault(int(spec[c]), [0.0, 0])
                 acc[0] += term
                 acc[1] += n
                 used_here += 1
@@ -167,10 +174,11 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
     if not obs.has_volume:
         return None
     sq, n_used = 0.0, 0
-    per_curve: dict[int, list[float]] = {}
+    per_curve: dict[int, list[float]] = {}   # per specimen
+    spec = obs.curve_specimen()
     for g in np.unique(obs.group):
         curves = np.unique(obs.curve[obs.group == g])
-        if curves.size < 2:
+        if np.unique(spec[curves]).size < 2:
             continue
         cut = {}
         for c in curves:
@@ -183,22 +191,23 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
                 t = obs.time_s[r] - obs.time_s[r][0]
                 others = []
                 for c2, parts2 in cut.items():
-                    if c2 == c or k >= len(parts2) or parts2[k][1] != d:
+                    if spec[c2] == spec[c] or k >= len(parts2) or parts2[k][1] != d:
                         continue
                     r2 = parts2[k][0]
                     t2 = obs.time_s[r2] - obs.time_s[r2][0]
-                    others.append(np.interp(t, t2, y[r2], left=np.nan, right=np.nan)
-                                  if t2.size > 1 else np.where(t == 0, y[r2][0], np.nan))
+                    others.append((spec[c2], np.interp(t, t2, y[r2], left=np.nan,
+                                                       right=np.nan)
+                                   if t2.size > 1 else np.where(t == 0, y[r2][0], np.nan)))
                 if not others:
                     continue
-                o = np.array(others)
+                o = _by_specimen(others)
                 share = _replicate_share(y[r], o)
                 if share is None:
                     continue
                 term, n = share
                 sq += term
                 n_used += n
-                acc = per_curve.setdefault(c, [0.0, 0])
+                acc = per_curve.setdefault(int(spec[c]), [0.0, 0])
                 acc[0] += term
                 acc[1] += n
     if n_used < MIN_READINGS or sq <= 0:
@@ -209,6 +218,20 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
            if means.size >= 2 else float("nan"))
     return NoiseFloor(float(np.sqrt(floor2)), n_used, "replicates", len(np.unique(obs.group)),
                       rel)
+
+
+def _by_specimen(others: list[tuple[int, np.ndarray]]) -> np.ndarray:
+    """The other curves' values (rows: curves, columns: readings) with the runs of each
+    specimen averaged into one row (NaN where none of its runs has a value)."""
+    specimens = sorted({int(s) for s, _ in others})
+    out = np.full((len(specimens), others[0][1].size if others else 0), np.nan)
+    for i, s in enumerate(specimens):
+        runs = np.array([v for s2, v in others if s2 == s])
+        have = np.isfinite(runs)
+        n = have.sum(axis=0)
+        out[i] = np.where(n > 0, np.where(have, runs, 0.0).sum(axis=0) / np.maximum(n, 1),
+                          np.nan)
+    return out
 
 
 def _replicate_share(y: np.ndarray, others: np.ndarray) -> tuple[float, int] | None:

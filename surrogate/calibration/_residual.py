@@ -49,10 +49,16 @@ PHASES = ((1.0, "loading"), (0.0, "hold"), (-1.0, "unloading"))
 
 
 def systematic_residual(obs: Observations, resid: np.ndarray) -> dict | None:
-    """S^2, its standard error and the number of curves used; None without replicates.
+    """S^2, its standard error and the number of curves used (specimens: the runs of one
+    count once); None without replicates.
 
     S^2 is the mean over curves c of mean_t r_c(t) x mean_{c' != c} r_c'(t), the other
-    replicates of c's group read at c's times. Written as pairs of curves,
+    replicates of c's group read at c's times. The units are specimens: two runs of one
+    specimen share its stiffness, so their product is no test and is left out, and the
+    run pairs of two specimens are one pair, their products averaged (products that
+    share a specimen's runs are correlated: 2 specimens x 3 runs of one FE design made 9
+    "independent" pairs and an error of 0.037 deg^2 where one pair leaves it unknown).
+    Written as pairs of curves,
     S^2 = sum_pairs a_p w_p, with w_p the pair's mean product (both ways round) and
     a_p = 2 / (N (n_g - 1)) for N curves and a group of n_g. The standard error counts
     the pairs, not the curves, as the units: under no shared residual the products of two
@@ -71,15 +77,20 @@ def systematic_residual(obs: Observations, resid: np.ndarray) -> dict | None:
                 for c, r in rows_of.items()}
 
         ids = list(rows_of)
+        specimen = obs.curve_specimen()
         pair = {}
         for i, a in enumerate(ids):
             for b in ids[i + 1:]:
+                if specimen[a] == specimen[b]:
+                    continue    # two runs of one specimen share its scatter: no test
                 ra, rb = resid[rows_of[a]], resid[rows_of[b]]
                 (ab, n_ab) = _mean_product(x_of[a], ra, x_of[b], rb)
                 (ba, n_ba) = _mean_product(x_of[b], rb, x_of[a], ra)
                 both = [v for v, n in ((ab, n_ab), (ba, n_ba)) if n >= 2]
                 if both:
-                    pair[(a, b)] = float(np.mean(both))
+                    key = tuple(sorted((int(specimen[a]), int(specimen[b]))))
+                    pair.setdefault(key, []).append(float(np.mean(both)))
+        pair = {ab: float(np.mean(v)) for ab, v in pair.items()}
         used = sorted({c for ab in pair for c in ab})
         if len(used) < 2:
             continue
@@ -210,11 +221,11 @@ def scatter_shift(angles, tau: float) -> np.ndarray:
 
 def cv_rel_se(obs: Observations, resid_cv: np.ndarray, baseline_var: float = 0.0) -> float:
     """Relative standard error of the cross-validated error sqrt(rmse^2 - baseline_var),
-    from the spread of the per-curve mean squares of ``resid_cv``: a specimen's scatter is
-    shared along its curve, so the curves, not the readings, are the independent units
-    (as for the floor's ``rel_se``); NaN with fewer than two curves."""
-    ms = [float(np.mean(resid_cv[rows] ** 2)) for c in range(obs.n_curves)
-          if (rows := np.flatnonzero((obs.curve == c) & np.isfinite(resid_cv))).size]
+    from the spread of the per-specimen mean squares of ``resid_cv``: a specimen's scatter
+    is shared along its curves (its runs), so the specimens, not the readings or the runs,
+    are the independent units (as for the floor's ``rel_se``); NaN with fewer than two."""
+    ms = [float(np.mean(resid_cv[rows] ** 2)) for s in np.unique(obs.specimen)
+          if (rows := np.flatnonzero((obs.specimen == s) & np.isfinite(resid_cv))).size]
     model_part2 = float(np.mean(resid_cv[np.isfinite(resid_cv)] ** 2)) - baseline_var
     if len(ms) < 2 or model_part2 <= 0:
         return float("nan")
@@ -224,9 +235,10 @@ def cv_rel_se(obs: Observations, resid_cv: np.ndarray, baseline_var: float = 0.0
 def specimen_units(obs: Observations) -> tuple[int, int]:
     """Degrees of freedom of the floor and of the cross-validated error where a specimen's
     own stiffness dominates both (read against the gauge pressure): the floor's are the
-    specimens beyond the first of each replicate group, the error's the curves."""
-    groups = [np.unique(obs.curve[obs.group == g]).size for g in np.unique(obs.group)]
-    return sum(n - 1 for n in groups if n > 1), int(np.unique(obs.curve).size)
+    specimens beyond the first of each replicate group, the error's the specimens (the
+    runs of one specimen count once)."""
+    groups = [np.unique(obs.specimen[obs.group == g]).size for g in np.unique(obs.group)]
+    return sum(n - 1 for n in groups if n > 1), int(np.unique(obs.specimen).size)
 
 
 def excess_limit(noise: NoiseFloor, cv_rel: float = float("nan"),

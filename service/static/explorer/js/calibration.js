@@ -7,7 +7,7 @@
 // a missing one is left out, never invented.
 
 import { ApiError, api, clearProblems, showProblem } from "./api.js";
-import { parseMeasured } from "./csv.js";
+import { asRead, parseMeasured } from "./csv.js";
 import { COLORS, renderPlot } from "./plot.js";
 import { $, download, fmt, fmtSig } from "./util.js";
 
@@ -217,12 +217,14 @@ export function setupCalibration() {
     $("cal-interpretation").textContent = rep.interpretation || "";
     const errors = $("cal-errors").querySelector("tbody");
     errors.innerHTML = "";
+    // by curve, or by specimen when the data have runs (docs/measured-data.md, "Runs")
+    const by = /specimen/.test((rep.cross_validation && rep.cross_validation.method) || "") ? "by specimen" : "by curve";
     const rowsOut = [
       ["starting model as is", rep.rmse_model_deg],
       [(rep.baseline?.open_parameters || []).length
-        ? "recalibrated constants, cross-validated by curve"
-        : "starting model, cross-validated by curve (nothing to recalibrate)", rep.rmse_before_deg],
-      ["with the selected effects, cross-validated by curve", rep.rmse_after_deg],
+        ? `recalibrated constants, cross-validated ${by}`
+        : `starting model, cross-validated ${by} (nothing to recalibrate)`, rep.rmse_before_deg],
+      [`with the selected effects, cross-validated ${by}`, rep.rmse_after_deg],
       [`noise floor${rep.noise_floor_source ? " (" + rep.noise_floor_source + ")" : ""}`, rep.noise_floor_deg],
     ];
     for (const [label, v] of rowsOut) {
@@ -265,7 +267,7 @@ export function setupCalibration() {
   }
 
   async function plots(rep, body) {
-    const groups = groupByDesign(body.rows);
+    const groups = groupByDesign(asRead(body.rows, rep.data && rep.data.columns_read));
     const start = (rep.model && rep.model.name) || body.model;
     const after = rep.saved_model || null;
     const points = reportPoints(rep);

@@ -65,3 +65,21 @@ export function parseMeasured(name, text) {
   }
   return parseCsv(text);
 }
+
+// The rows as the server read them: the report's data.columns_read says which header was
+// read as which column and by what factor ("Pressure (kPa)" as pressure_pa x 1000:
+// surrogate/calibration/_headers.py), so the page draws what was calibrated, in Pa and
+// degrees, from the server's own reading rather than one of its own.
+export function asRead(rows, readings) {
+  if (!Array.isArray(readings) || !readings.length) return rows;
+  const by = new Map(readings.map((r) => [r.header, r]));
+  return rows.map((row) => {
+    const out = {};
+    for (const [k, v] of Object.entries(row)) {
+      const r = by.get(k);
+      if (!r) out[k] = v;
+      else out[r.column] = typeof v === "number" ? v * r.factor : v;
+    }
+    return out;
+  });
+}
