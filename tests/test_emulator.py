@@ -196,6 +196,23 @@ def test_refusal_names_the_nearest_in_box_design(emulator):
     assert info.value.nearest is not None and info.value.nearest.L_mm == 18.0
 
 
+def test_a_direction_with_too_few_curves_is_refused_in_words(emulator):
+    """Database record 66ee5bf2 (service/data/curves.h5): Ecoflex x3.95 on PDMS 1:15, a
+    reversed pair stiff enough in the body to bend away from the membrane (its FE curve
+    +82 deg at the volume stop). The database holds 3 curves of that direction, too few to
+    emulate: the refusal names the direction and what is answered, not the emulator's
+    internal group keys ("allowed: ecoflex_00_30/ecoflex_00_30+, ..." before)."""
+    design = Design(L_mm=7.703335, t_mm=0.546804, T_mm=1.767237, b_mm=1.196761,
+                    h_mm=0.220012, body_material=scaled_material("ecoflex_00_30", 3.95208),
+                    membrane_material=MATERIALS["pdms_1_15"])
+    with pytest.raises(InputError) as err:
+        emulator.predict(design, [500.0])
+    assert err.value.field == "body_material"
+    assert "bends away from the membrane" in err.value.detail
+    assert "towards the membrane" in err.value.allowed and "POST /v1/solve" in err.value.allowed
+    assert "+" not in err.value.allowed
+
+
 def test_a_design_near_an_early_ended_database_curve_is_flagged(emulator):
     """Within NEAR_FAILED_RADIUS of a database curve that ended early the answer carries
     the flag and says why and what to do; the standard design is far from every one."""

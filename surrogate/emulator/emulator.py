@@ -663,11 +663,18 @@ class Emulator:
 
     def _pair_key(self, point: BoxPoint, u: np.ndarray | None = None) -> str:
         """The key of the pair emulator that answers for ``point`` (group and direction)."""
-        key = point.group + ("+" if self._sign(point, u) > 0 else "-")
+        sign = self._sign(point, u)
+        key = point.group + ("+" if sign > 0 else "-")
         if key not in self.pairs:
-            raise InputError("body_material", f"the emulator '{self.name}' has too few FE "
-                             f"curves for {point.pair[0]}/{point.pair[1]} here",
-                             ", ".join(sorted(self.pairs)))
+            here = "away from" if sign > 0 else "towards"
+            other = "towards" if sign > 0 else "away from"
+            raise InputError("body_material", f"{point.pair[0]} on {point.pair[1]} bends "
+                             f"{here} the membrane at this stiffness contrast, a direction "
+                             f"of this pair that the emulator '{self.name}' has too few FE "
+                             "curves of to emulate",
+                             f"a stiffness contrast at which this pair bends {other} the "
+                             "membrane, as its database curves do, or an FE solve of this "
+                             "design (POST /v1/solve)")
         return key
 
     def curve_band(self, point: BoxPoint, z: float, volume_band: bool = True
