@@ -382,6 +382,44 @@ def _tolerance(model: object, design: Design, target: DesignTarget, pressure_pa:
     return out
 
 
+#: fractions of the target pressure tried, highest first, for the highest pressure at which
+#: designs inside the bounds are still within their FE range (past_range_explanation)
+LOWER_PRESSURE_FRACTIONS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.05)
+
+
+def past_range_explanation(model: object, screened: list[list[Design]], target: DesignTarget,
+                           level: float, direction: float,
+                           cancel: threading.Event | None = None) -> str | None:
+    """Why no design inside the bounds answers an exact target where each one is past its
+    FE range at the target pressure (a soft design that bends past the FE curve's end
+    before it, a force asked past the blocked-tip curves' range), with what is possible:
+    the highest of LOWER_PRESSURE_FRACTIONS x the target pressure (Pa) at which designs of
+    ``screened`` (each pair's candidates) are answered, and the largest |value| there;
+    None when no design is answered at any of them (no FE range to name).
+    Until 2026-12-06 this said "not reachable ...: widen the bounds (longer chamber,
+    thinner membrane, softer membrane) or raise the pressure" -- the wrong way."""
+    what, unit = (("force", "mN") if target.kind == "force_at_pressure" else ("angle", "deg"))
+    text = (f"the target {what} {direction * target.value:g} {unit} at "
+            f"{target.pressure_pa:g} Pa has no answer: every design bending "
+            f"{_WAY[direction]} inside the bounds is past its FE range at "
+            f"{target.pressure_pa:g} Pa (no number the FE supports there)")
+    for fraction in LOWER_PRESSURE_FRACTIONS:
+        lower = replace(target, pressure_pa=fraction * target.pressure_pa)
+        largest = 0.0
+        for designs in screened:
+            stop_if_cancelled(cancel)
+            r = _screen(model, designs, lower, level)
+            _keep_direction(r, direction)
+            if np.any(np.isfinite(r["value"])):
+                largest = max(largest, float(np.nanmax(r["value"])))
+        if largest > 0:
+            return (text + f"; at {lower.pressure_pa:.4g} Pa designs there reach up to "
+                    f"{direction * largest:.3g} {unit}: lower the pressure (pressure_pa)"
+                    + ("" if target.kind == "force_at_pressure" else
+                       ", or ask for a pressure_budget target"))
+    return None
+
+
 # what a candidate's score is, per objective (lower ranks first)
 SCORE_MEANING = {
     "certainty": "the band's width over the value at the target pressure (lower: surer)",
@@ -426,6 +464,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         raise InputError("n_results", f"got {n_results}", f"1 <= n_results <= {N_RESULTS_MAX}")
     direction = _direction(target)
     n_evaluated = 0
+    screened: list[list[Design]] = []   # each pair's candidates (past_range_explanation)
     feasible: list[_Eval] = []
     best_reach: dict[str, object] = {}
     other_way = 0.0          # the largest |value| of designs bending against the target
@@ -448,6 +487,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             continue
         r = _screen(model, designs, target, level)
         n_evaluated += len(designs)
+        screened.append(designs)
         no_force += int(np.sum(r.get("no_force", False)))
         against = r["value"][r["sign"] == -direction]
         if np.any(np.isfinite(against)):
@@ -546,6 +586,13 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                 + (f"the value does not cross the target along {knob} within its bounds"
                    if knob else "every variable is pinned")
                 + "; widen the bounds of the chamber length or the membrane thickness")
+        elif reach is None and target.kind != "pressure_budget" and (
+                lower := past_range_explanation(model, screened, target, level,
+                                                direction, cancel)) is not None:
+            # no design has a number at the target pressure, and some have one below it:
+            # their FE range ends below it (bent past the range's end, or past the force's
+            # range), so "raise the pressure" would be the wrong way
+            explanation = lower
         else:
             where = ("within" if target.kind == "pressure_budget" else "at")
             widen = ("widen the bounds (longer chamber, thinner membrane, softer membrane) "
