@@ -382,6 +382,19 @@ def _tolerance(model: object, design: Design, target: DesignTarget, pressure_pa:
     return out
 
 
+def fe_angle_end(model: object, design: Design, pressure_pa: float, level: float
+                 ) -> float | None:
+    """|angle| (deg) at which ``design``'s FE range ends, as the model's prediction at
+    ``pressure_pa`` states it (``validity["fe_limit_angle_deg"]``: the emulator's, 90 deg
+    at the FE's angle stop); None where the model states none."""
+    try:
+        end = model.predict(design, [pressure_pa], level=level).validity.get(  # type: ignore
+            "fe_limit_angle_deg")
+    except InputError:
+        return None
+    return abs(float(end)) if end is not None and np.isfinite(end) else None
+
+
 #: fractions of the target pressure tried, highest first, for the highest pressure at which
 #: designs inside the bounds are still within their FE range (past_range_explanation)
 LOWER_PRESSURE_FRACTIONS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.05)
@@ -467,6 +480,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     screened: list[list[Design]] = []   # each pair's candidates (past_range_explanation)
     feasible: list[_Eval] = []
     best_reach: dict[str, object] = {}
+    best_design: Design | None = None   # the design of best_reach
     other_way = 0.0          # the largest |value| of designs bending against the target
     no_force = 0             # designs the model answers with no force (force targets)
     for pair in bounds.allowed_pairs():
@@ -504,6 +518,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             top = max(reachable, key=lambda e: e.value)
             if not best_reach or top.value > abs(best_reach["largest_value"]):  # type: ignore
                 # signed: the way the target asks (the search matched magnitudes)
+                best_design = top.design
                 best_reach = {"largest_value": direction * top.value,
                               "design": top.design.as_dict(),
                               "pair": "/".join(pair), "at_pressure_pa": target.pressure_pa}
@@ -593,6 +608,17 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             # their FE range ends below it (bent past the range's end, or past the force's
             # range), so "raise the pressure" would be the wrong way
             explanation = lower
+        elif what == "angle" and reach is not None and best_design is not None and (
+                end := fe_angle_end(model, best_design, target.pressure_pa, level)
+                ) is not None and reach >= end - 1.0 and target.value > end:
+            # the best design reaches the end of the FE's range: past it no design's angle
+            # is known, so neither wider bounds nor more pressure gives a number there
+            explanation = (f"the target angle {direction * target.value:g} deg lies past "
+                           f"the FE's range, which ends at {direction * end:g} deg for the "
+                           f"designs inside the bounds that reach it (up to "
+                           f"{direction * reach:.3g} deg at {target.pressure_pa:g} Pa): no "
+                           f"angle past it is known; ask for at most {end:g} deg in size "
+                           "(angle_deg)")
         else:
             where = ("within" if target.kind == "pressure_budget" else "at")
             widen = ("widen the bounds (longer chamber, thinner membrane, softer membrane) "
