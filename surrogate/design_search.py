@@ -400,14 +400,15 @@ def fe_angle_end(model: object, design: Design, pressure_pa: float, level: float
 LOWER_PRESSURE_FRACTIONS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.05)
 
 
-def past_range_explanation(model: object, screened: list[list[Design]], target: DesignTarget,
-                           level: float, direction: float,
+def past_range_explanation(model: object, past_range: list[list[Design]],
+                           target: DesignTarget, level: float, direction: float,
                            cancel: threading.Event | None = None) -> str | None:
     """Why no design inside the bounds answers an exact target where each one is past its
     FE range at the target pressure (a soft design that bends past the FE curve's end
     before it, a force asked past the blocked-tip curves' range), with what is possible:
     the highest of LOWER_PRESSURE_FRACTIONS x the target pressure (Pa) at which designs of
-    ``screened`` (each pair's candidates) are answered, and the largest |value| there;
+    ``past_range`` (each pair's candidates with no number at the target pressure) are
+    answered, and the largest |value| there;
     None when no design is answered at any of them (no FE range to name).
     Until 2026-12-06 this said "not reachable ...: widen the bounds (longer chamber,
     thinner membrane, softer membrane) or raise the pressure" -- the wrong way."""
@@ -419,7 +420,7 @@ def past_range_explanation(model: object, screened: list[list[Design]], target: 
     for fraction in LOWER_PRESSURE_FRACTIONS:
         lower = replace(target, pressure_pa=fraction * target.pressure_pa)
         largest = 0.0
-        for designs in screened:
+        for designs in past_range:
             stop_if_cancelled(cancel)
             r = _screen(model, designs, lower, level)
             _keep_direction(r, direction)
@@ -477,7 +478,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         raise InputError("n_results", f"got {n_results}", f"1 <= n_results <= {N_RESULTS_MAX}")
     direction = _direction(target)
     n_evaluated = 0
-    screened: list[list[Design]] = []   # each pair's candidates (past_range_explanation)
+    past_range: list[list[Design]] = []   # per pair: those with no number (see below)
     feasible: list[_Eval] = []
     best_reach: dict[str, object] = {}
     best_design: Design | None = None   # the design of best_reach
@@ -501,7 +502,11 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             continue
         r = _screen(model, designs, target, level)
         n_evaluated += len(designs)
-        screened.append(designs)
+        # the designs bending the way asked with no number at the target pressure
+        past = [d for d, sign, v in zip(designs, r["sign"], r["value"], strict=True)
+                if sign == direction and not np.isfinite(v)]
+        if past:
+            past_range.append(past)
         no_force += int(np.sum(r.get("no_force", False)))
         against = r["value"][r["sign"] == -direction]
         if np.any(np.isfinite(against)):
@@ -602,7 +607,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                    if knob else "every variable is pinned")
                 + "; widen the bounds of the chamber length or the membrane thickness")
         elif reach is None and target.kind != "pressure_budget" and (
-                lower := past_range_explanation(model, screened, target, level,
+                lower := past_range_explanation(model, past_range, target, level,
                                                 direction, cancel)) is not None:
             # no design has a number at the target pressure, and some have one below it:
             # their FE range ends below it (bent past the range's end, or past the force's
