@@ -6,6 +6,9 @@ blocked-tip force's 2500 Pa) before the target pressure."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
 PAIR = ["pdms_1_15/ecoflex_00_30"]
@@ -47,3 +50,61 @@ def test_an_angle_past_the_fe_angle_stop_is_named_not_widen_the_bounds(shipped_c
     assert "raise the pressure" not in text and "widen the bounds" not in text, text
     assert "past the FE's range, which ends at 90 deg" in text, text
     assert "ask for at most 90 deg in size (angle_deg)" in text, text
+
+
+# designs the search listed, solved by the default FE (the file names its source)
+FE_CASES = json.loads((Path(__file__).parent / "data" / "fe_inverse_search_s38.json")
+                      .read_text())
+# Left open (thirty-eighth session): the designs a force search lists near the top of what
+# the box reaches are those whose blocked-tip FE curve fails soon past the target pressure
+# (2150-2230 Pa for 1 mN at 2000 Pa): there the force / free-angle ratio is learned from the
+# blocked curves that run on, and read 14 % high (the free angle is right: 54.9 deg emulated,
+# 55.2 FE, rank 1); and the best force "reachable" at 2000 Pa, 1.53 mN, is at a design whose
+# blocked-tip FE failed at 1909 Pa. The emulator has no model of where a blocked-tip curve
+# ends (its range model is the free curves'); fixing it needs a refit.
+FORCE_OPEN = {
+    "Q4b-rank1": "FE 0.885 mN below the band 0.912-1.096 (answer 1.000)",
+    "Q4b-rank2": "FE 0.834 mN below the band 0.893-1.122 (answer 1.000)",
+    "Q4b-rank3": "FE 0.848 mN below the band 0.887-1.127 (answer 1.000)",
+    "Q4c-rank1": "FE 0.318 mN above the band 0.288-0.312 (answer 0.300)",
+    "Q4c-rank2": "FE 0.315 mN above the band 0.287-0.314 (answer 0.300)",
+    "Q4b-best_reachable": "1.53 mN given at 2000 Pa; the FE's blocked tip failed at 1909 Pa",
+}
+
+
+@pytest.mark.parametrize("case", [
+    pytest.param(c, id=c["id"], marks=([pytest.mark.xfail(reason=FORCE_OPEN[c["id"]],
+                                                          strict=False)]
+                                       if c["id"] in FORCE_OPEN else []))
+    for c in FE_CASES["force_cases"]])
+def test_force_search_answers_against_the_blocked_tip_fe(shipped_client, case):
+    """The designs POST /v1/inverse listed for a blocked-tip force (1 mN at 2000 Pa over
+    the box; 0.3 mN at 2000 Pa, L pinned to 10 mm), solved by the default FE with the tip
+    held (tests/data/fe_inverse_search_s38.json, its source named there): the force's band
+    at the target pressure covers the FE's, and no force is given where the FE has none."""
+    r = shipped_client.post("/v1/predict", json={"design": case["design"],
+                                                 "pressures_pa": [case["pressure_pa"]]})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    force = (body.get("force_mn") or [None])[0]
+    if case["fe_force_mn"] is None:
+        assert force is None, (force, case["fe_reason"])
+        return
+    assert force is not None
+    lo, hi = body["force_lower_mn"][0], body["force_upper_mn"][0]
+    assert lo <= case["fe_force_mn"] <= hi, (case["fe_force_mn"], lo, hi)
+
+
+@pytest.mark.parametrize("case", FE_CASES["angle_cases"], ids=lambda c: c["id"])
+def test_angle_search_answers_against_the_fe(shipped_client, case):
+    """The designs POST /v1/inverse listed for angle targets -- 60 deg at 3 kPa over the
+    box and in a narrow box of one pair, 45 deg within 1500 Pa (compact), 30 deg at 1 kPa
+    with both layers' stiffness scaled, -40 deg at 2 kPa (the reversed pair), 45 deg at
+    2 kPa with L pinned -- solved by the default FE: the answer's band at the target
+    pressure (a budget's: at the pressure it needs) covers the FE's angle (all 12 did)."""
+    r = shipped_client.post("/v1/predict", json={"design": case["design"],
+                                                 "pressures_pa": [case["pressure_pa"]]})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    lo, hi = sorted((body["lower_deg"][0], body["upper_deg"][0]))
+    assert lo <= case["fe_angle_deg"] <= hi, (case["fe_angle_deg"], lo, hi)
