@@ -402,14 +402,16 @@ LOWER_PRESSURE_FRACTIONS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.05)
 
 def past_range_explanation(model: object, past_range: list[list[Design]],
                            target: DesignTarget, level: float, direction: float,
+                           needed_pa: list[float] | None = None,
                            cancel: threading.Event | None = None) -> str | None:
     """Why no design inside the bounds answers an exact target where each one is past its
     FE range at the target pressure (a soft design that bends past the FE curve's end
     before it, a force asked past the blocked-tip curves' range), with what is possible:
     the highest of LOWER_PRESSURE_FRACTIONS x the target pressure (Pa) at which designs of
     ``past_range`` (each pair's candidates with no number at the target pressure) are
-    answered, and the largest |value| there;
-    None when no design is answered at any of them (no FE range to name).
+    answered, and the largest |value| there, and the pressures (Pa) at which they reach
+    the target angle (``needed_pa``); None when no design is answered at any of them (no
+    FE range to name).
     Until 2026-12-06 this said "not reachable ...: widen the bounds (longer chamber,
     thinner membrane, softer membrane) or raise the pressure" -- the wrong way."""
     what, unit = (("force", "mN") if target.kind == "force_at_pressure" else ("angle", "deg"))
@@ -427,10 +429,12 @@ def past_range_explanation(model: object, past_range: list[list[Design]],
             if np.any(np.isfinite(r["value"])):
                 largest = max(largest, float(np.nanmax(r["value"])))
         if largest > 0:
+            reached = (f" (they reach {direction * target.value:g} deg at "
+                       f"{min(needed_pa):.4g}-{max(needed_pa):.4g} Pa)" if needed_pa else "")
             return (text + f"; at {lower.pressure_pa:.4g} Pa designs there reach up to "
-                    f"{direction * largest:.3g} {unit}: lower the pressure (pressure_pa)"
-                    + ("" if target.kind == "force_at_pressure" else
-                       ", or ask for a pressure_budget target"))
+                    f"{direction * largest:.3g} {unit}{reached}: lower the pressure "
+                    "(pressure_pa)" + ("" if target.kind == "force_at_pressure" else
+                                       ", or ask for a pressure_budget target"))
     return None
 
 
@@ -479,6 +483,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     direction = _direction(target)
     n_evaluated = 0
     past_range: list[list[Design]] = []   # per pair: those with no number (see below)
+    past_needed: list[float] = []           # the pressures they need for the angle, Pa
     feasible: list[_Eval] = []
     best_reach: dict[str, object] = {}
     best_design: Design | None = None   # the design of best_reach
@@ -503,10 +508,10 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         r = _screen(model, designs, target, level)
         n_evaluated += len(designs)
         # the designs bending the way asked with no number at the target pressure
-        past = [d for d, sign, v in zip(designs, r["sign"], r["value"], strict=True)
-                if sign == direction and not np.isfinite(v)]
-        if past:
-            past_range.append(past)
+        is_past = (r["sign"] == direction) & ~np.isfinite(r["value"])
+        if np.any(is_past):
+            past_range.append([d for d, past in zip(designs, is_past, strict=True) if past])
+            past_needed += [float(v) for v in r["needed"][is_past] if np.isfinite(v)]
         no_force += int(np.sum(r.get("no_force", False)))
         against = r["value"][r["sign"] == -direction]
         if np.any(np.isfinite(against)):
@@ -608,7 +613,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                 + "; widen the bounds of the chamber length or the membrane thickness")
         elif reach is None and target.kind != "pressure_budget" and (
                 lower := past_range_explanation(model, past_range, target, level,
-                                                direction, cancel)) is not None:
+                                                direction, past_needed, cancel)) is not None:
             # no design has a number at the target pressure, and some have one below it:
             # their FE range ends below it (bent past the range's end, or past the force's
             # range), so "raise the pressure" would be the wrong way

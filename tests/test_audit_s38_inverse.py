@@ -14,16 +14,17 @@ import pytest
 PAIR = ["pdms_1_15/ecoflex_00_30"]
 
 
-@pytest.mark.parametrize("target, bounds, lower_pa", [
+@pytest.mark.parametrize("target, bounds, lower_pa, where", [
     # soft designs bend past the FE's 90 deg long before 10 kPa (up to 89 deg at 3 kPa)
     ({"angle_deg": 30, "pressure_pa": 10000}, {"L_bounds_mm": [16, 18],
-                                                "t_bounds_mm": [0.5, 0.6]}, 3000),
+                                                "t_bounds_mm": [0.5, 0.6]}, 3000,
+     "(they reach 30 deg at "),
     # the blocked-tip force is modelled to 2500 Pa (the database's force range)
     ({"kind": "force_at_pressure", "force_mn": 1.0, "pressure_pa": 2800},
-     {"L_bounds_mm": [8, 10]}, 2240),
+     {"L_bounds_mm": [8, 10]}, 2240, "mN: lower the pressure"),
 ])
 def test_a_target_past_every_designs_fe_range_says_lower_the_pressure(
-        shipped_client, target, bounds, lower_pa):
+        shipped_client, target, bounds, lower_pa, where):
     r = shipped_client.post("/v1/inverse", json={"target": target, "material_pairs": PAIR,
                                                  **bounds})
     assert r.status_code == 200, r.text
@@ -32,7 +33,7 @@ def test_a_target_past_every_designs_fe_range_says_lower_the_pressure(
     text = body["explanation"]
     assert "raise the pressure" not in text and "widen the bounds" not in text, text
     assert "past its FE range" in text and "lower the pressure (pressure_pa)" in text, text
-    assert f"at {lower_pa:g} Pa designs there reach up to" in text, text
+    assert f"at {lower_pa:g} Pa designs there reach up to" in text and where in text, text
 
 
 @pytest.mark.parametrize("kind", ["angle_at_pressure", "pressure_budget"])
