@@ -382,6 +382,62 @@ def _tolerance(model: object, design: Design, target: DesignTarget, pressure_pa:
     return out
 
 
+def fe_angle_end(model: object, design: Design, pressure_pa: float, level: float
+                 ) -> float | None:
+    """|angle| (deg) at which ``design``'s FE range ends, as the model's prediction at
+    ``pressure_pa`` states it (``validity["fe_limit_angle_deg"]``: the emulator's, 90 deg
+    at the FE's angle stop); None where the model states none."""
+    try:
+        end = model.predict(design, [pressure_pa], level=level).validity.get(  # type: ignore
+            "fe_limit_angle_deg")
+    except InputError:
+        return None
+    return abs(float(end)) if end is not None and np.isfinite(end) else None
+
+
+#: fractions of the target pressure tried, highest first, for the highest pressure at which
+#: designs inside the bounds are still within their FE range (past_range_explanation)
+LOWER_PRESSURE_FRACTIONS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.05)
+
+
+def past_range_explanation(model: object, past_range: list[list[Design]],
+                           target: DesignTarget, level: float, direction: float,
+                           needed_pa: list[float] | None = None,
+                           cancel: threading.Event | None = None) -> str | None:
+    """Why no design inside the bounds answers an exact target where each one is past its
+    FE range at the target pressure (a soft design that bends past the FE curve's end
+    before it, a force asked past the blocked-tip curves' range), with what is possible:
+    the highest of LOWER_PRESSURE_FRACTIONS x the target pressure (Pa) at which designs of
+    ``past_range`` (each pair's candidates with no number at the target pressure) are
+    answered, and the largest |value| there, and the pressures (Pa) at which they reach
+    the target angle (``needed_pa``); None when no design is answered at any of them (no
+    FE range to name).
+    Until 2026-12-06 this said "not reachable ...: widen the bounds (longer chamber,
+    thinner membrane, softer membrane) or raise the pressure" -- the wrong way."""
+    what, unit = (("force", "mN") if target.kind == "force_at_pressure" else ("angle", "deg"))
+    text = (f"the target {what} {direction * target.value:g} {unit} at "
+            f"{target.pressure_pa:g} Pa has no answer: every design bending "
+            f"{_WAY[direction]} inside the bounds is past its FE range at "
+            f"{target.pressure_pa:g} Pa (no number the FE supports there)")
+    for fraction in LOWER_PRESSURE_FRACTIONS:
+        lower = replace(target, pressure_pa=fraction * target.pressure_pa)
+        largest = 0.0
+        for designs in past_range:
+            stop_if_cancelled(cancel)
+            r = _screen(model, designs, lower, level)
+            _keep_direction(r, direction)
+            if np.any(np.isfinite(r["value"])):
+                largest = max(largest, float(np.nanmax(r["value"])))
+        if largest > 0:
+            reached = (f" (they reach {direction * target.value:g} deg at "
+                       f"{min(needed_pa):.4g}-{max(needed_pa):.4g} Pa)" if needed_pa else "")
+            return (text + f"; at {lower.pressure_pa:.4g} Pa designs there reach up to "
+                    f"{direction * largest:.3g} {unit}{reached}: lower the pressure "
+                    "(pressure_pa)" + ("" if target.kind == "force_at_pressure" else
+                                       ", or ask for a pressure_budget target"))
+    return None
+
+
 # what a candidate's score is, per objective (lower ranks first)
 SCORE_MEANING = {
     "certainty": "the band's width over the value at the target pressure (lower: surer)",
@@ -426,8 +482,11 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         raise InputError("n_results", f"got {n_results}", f"1 <= n_results <= {N_RESULTS_MAX}")
     direction = _direction(target)
     n_evaluated = 0
+    past_range: list[list[Design]] = []   # per pair: those with no number (see below)
+    past_needed: list[float] = []           # the pressures they need for the angle, Pa
     feasible: list[_Eval] = []
     best_reach: dict[str, object] = {}
+    best_design: Design | None = None   # the design of best_reach
     other_way = 0.0          # the largest |value| of designs bending against the target
     no_force = 0             # designs the model answers with no force (force targets)
     for pair in bounds.allowed_pairs():
@@ -448,6 +507,11 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             continue
         r = _screen(model, designs, target, level)
         n_evaluated += len(designs)
+        # the designs bending the way asked with no number at the target pressure
+        is_past = (r["sign"] == direction) & ~np.isfinite(r["value"])
+        if np.any(is_past):
+            past_range.append([d for d, past in zip(designs, is_past, strict=True) if past])
+            past_needed += [float(v) for v in r["needed"][is_past] if np.isfinite(v)]
         no_force += int(np.sum(r.get("no_force", False)))
         against = r["value"][r["sign"] == -direction]
         if np.any(np.isfinite(against)):
@@ -464,6 +528,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             top = max(reachable, key=lambda e: e.value)
             if not best_reach or top.value > abs(best_reach["largest_value"]):  # type: ignore
                 # signed: the way the target asks (the search matched magnitudes)
+                best_design = top.design
                 best_reach = {"largest_value": direction * top.value,
                               "design": top.design.as_dict(),
                               "pair": "/".join(pair), "at_pressure_pa": target.pressure_pa}
@@ -546,6 +611,24 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                 + (f"the value does not cross the target along {knob} within its bounds"
                    if knob else "every variable is pinned")
                 + "; widen the bounds of the chamber length or the membrane thickness")
+        elif reach is None and target.kind != "pressure_budget" and (
+                lower := past_range_explanation(model, past_range, target, level,
+                                                direction, past_needed, cancel)) is not None:
+            # no design has a number at the target pressure, and some have one below it:
+            # their FE range ends below it (bent past the range's end, or past the force's
+            # range), so "raise the pressure" would be the wrong way
+            explanation = lower
+        elif what == "angle" and reach is not None and best_design is not None and (
+                end := fe_angle_end(model, best_design, target.pressure_pa, level)
+                ) is not None and reach >= end - 1.0 and target.value > end:
+            # the best design reaches the end of the FE's range: past it no design's angle
+            # is known, so neither wider bounds nor more pressure gives a number there
+            explanation = (f"the target angle {direction * target.value:g} deg lies past "
+                           f"the FE's range, which ends at {direction * end:g} deg for the "
+                           f"designs inside the bounds that reach it (up to "
+                           f"{direction * reach:.3g} deg at {target.pressure_pa:g} Pa): no "
+                           f"angle past it is known; ask for at most {end:g} deg in size "
+                           "(angle_deg)")
         else:
             where = ("within" if target.kind == "pressure_budget" else "at")
             widen = ("widen the bounds (longer chamber, thinner membrane, softer membrane) "

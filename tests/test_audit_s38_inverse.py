@@ -1,0 +1,112 @@
+"""Inverse design audited against the FE in the thirty-eighth session (POST /v1/inverse
+over the shipped emulator): a target asked at a pressure past every design's FE range got
+"not reachable ...: widen the bounds (longer chamber, thinner membrane, softer membrane)
+or raise the pressure" -- the wrong way: those designs pass the FE's range (90 deg, or the
+blocked-tip force's 2500 Pa) before the target pressure."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+PAIR = ["pdms_1_15/ecoflex_00_30"]
+
+
+@pytest.mark.parametrize("target, bounds, lower_pa, where", [
+    # soft designs bend past the FE's 90 deg long before 10 kPa (up to 89 deg at 3 kPa)
+    ({"angle_deg": 30, "pressure_pa": 10000}, {"L_bounds_mm": [16, 18],
+                                                "t_bounds_mm": [0.5, 0.6]}, 3000,
+     "(they reach 30 deg at "),
+    # the blocked-tip force is modelled to 2500 Pa (the database's force range)
+    ({"kind": "force_at_pressure", "force_mn": 1.0, "pressure_pa": 2800},
+     {"L_bounds_mm": [8, 10]}, 2240, "mN: lower the pressure"),
+])
+def test_a_target_past_every_designs_fe_range_says_lower_the_pressure(
+        shipped_client, target, bounds, lower_pa, where):
+    r = shipped_client.post("/v1/inverse", json={"target": target, "material_pairs": PAIR,
+                                                 **bounds})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert not body["feasible"] and body["candidates"] == []
+    text = body["explanation"]
+    assert "raise the pressure" not in text and "widen the bounds" not in text, text
+    assert "past its FE range" in text and "lower the pressure (pressure_pa)" in text, text
+    assert f"at {lower_pa:g} Pa designs there reach up to" in text and where in text, text
+
+
+@pytest.mark.parametrize("kind", ["angle_at_pressure", "pressure_budget"])
+def test_an_angle_past_the_fe_angle_stop_is_named_not_widen_the_bounds(shipped_client, kind):
+    """120 deg at 3 kPa: soft designs reach the FE curves' end, 90 deg (the default
+    solve's angle stop), well before; past it no angle is known. It said "the largest
+    reachable at 3000 Pa is 90 deg: widen the bounds ... or raise the pressure"."""
+    r = shipped_client.post("/v1/inverse", json={
+        "target": {"kind": kind, "angle_deg": 120, "pressure_pa": 3000},
+        "material_pairs": PAIR, "L_bounds_mm": [16, 18], "t_bounds_mm": [0.5, 0.6]})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert not body["feasible"] and body["candidates"] == []
+    text = body["explanation"]
+    assert "raise the pressure" not in text and "widen the bounds" not in text, text
+    assert "past the FE's range, which ends at 90 deg" in text, text
+    assert "ask for at most 90 deg in size (angle_deg)" in text, text
+
+
+# designs the search listed, solved by the default FE (the file names its source)
+FE_CASES = json.loads((Path(__file__).parent / "data" / "fe_inverse_search_s38.json")
+                      .read_text())
+# Left open (thirty-eighth session): the designs a force search lists near the top of what
+# the box reaches are those whose blocked-tip FE curve fails soon past the target pressure
+# (2150-2230 Pa for 1 mN at 2000 Pa): there the force / free-angle ratio is learned from the
+# blocked curves that run on, and read 14 % high (the free angle is right: 54.9 deg emulated,
+# 55.2 FE, rank 1); and the best force "reachable" at 2000 Pa, 1.53 mN, is at a design whose
+# blocked-tip FE failed at 1909 Pa. The emulator has no model of where a blocked-tip curve
+# ends (its range model is the free curves'); fixing it needs a refit.
+FORCE_OPEN = {
+    "Q4b-rank1": "FE 0.885 mN below the band 0.912-1.096 (answer 1.000)",
+    "Q4b-rank2": "FE 0.834 mN below the band 0.893-1.122 (answer 1.000)",
+    "Q4b-rank3": "FE 0.848 mN below the band 0.887-1.127 (answer 1.000)",
+    "Q4c-rank1": "FE 0.318 mN above the band 0.288-0.312 (answer 0.300)",
+    "Q4c-rank2": "FE 0.315 mN above the band 0.287-0.314 (answer 0.300)",
+    "Q4b-best_reachable": "1.53 mN given at 2000 Pa; the FE's blocked tip failed at 1909 Pa",
+}
+
+
+@pytest.mark.parametrize("case", [
+    pytest.param(c, id=c["id"], marks=([pytest.mark.xfail(reason=FORCE_OPEN[c["id"]],
+                                                          strict=False)]
+                                       if c["id"] in FORCE_OPEN else []))
+    for c in FE_CASES["force_cases"]])
+def test_force_search_answers_against_the_blocked_tip_fe(shipped_client, case):
+    """The designs POST /v1/inverse listed for a blocked-tip force (1 mN at 2000 Pa over
+    the box; 0.3 mN at 2000 Pa, L pinned to 10 mm), solved by the default FE with the tip
+    held (tests/data/fe_inverse_search_s38.json, its source named there): the force's band
+    at the target pressure covers the FE's, and no force is given where the FE has none."""
+    r = shipped_client.post("/v1/predict", json={"design": case["design"],
+                                                 "pressures_pa": [case["pressure_pa"]]})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    force = (body.get("force_mn") or [None])[0]
+    if case["fe_force_mn"] is None:
+        assert force is None, (force, case["fe_reason"])
+        return
+    assert force is not None
+    lo, hi = body["force_lower_mn"][0], body["force_upper_mn"][0]
+    assert lo <= case["fe_force_mn"] <= hi, (case["fe_force_mn"], lo, hi)
+
+
+@pytest.mark.parametrize("case", FE_CASES["angle_cases"], ids=lambda c: c["id"])
+def test_angle_search_answers_against_the_fe(shipped_client, case):
+    """The designs POST /v1/inverse listed for angle targets -- 60 deg at 3 kPa over the
+    box and in a narrow box of one pair, 45 deg within 1500 Pa (compact), 30 deg at 1 kPa
+    with both layers' stiffness scaled, -40 deg at 2 kPa (the reversed pair), 45 deg at
+    2 kPa with L pinned, -30 deg at 1200 Pa (Ecoflex on Ecoflex), 70 deg within 2500 Pa
+    by margin -- solved by the default FE: the answer's band at the target pressure (a
+    budget's: at the pressure it needs) covers the FE's angle (all 16 did)."""
+    r = shipped_client.post("/v1/predict", json={"design": case["design"],
+                                                 "pressures_pa": [case["pressure_pa"]]})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    lo, hi = sorted((body["lower_deg"][0], body["upper_deg"][0]))
+    assert lo <= case["fe_angle_deg"] <= hi, (case["fe_angle_deg"], lo, hi)
