@@ -8,7 +8,9 @@ of the shipped database read the way labs read them) and mutates it one way: eve
 pressure 0, a constant angle, one or two readings per curve, identical replicates, 30 deg
 of noise, pressures shifted below 0, time running backwards, shuffled rows, a flow rate of
 0, half the rows dropped, every angle negative, pressures x 1000, one time for every
-reading. Printed: BUG (an exception other than InputError), MULTILINE (an InputError of
+reading, the curves read as runs of a few specimens (or all of one), a column renamed to
+a header with a unit (`Pressure (kPa)`, `Angle [rad]`, `t [min]` ...) or given twice.
+Printed: BUG (an exception other than InputError), MULTILINE (an InputError of
 more than one line), AFTER>BEFORE (a report whose rmse_after exceeds rmse_before), SLOW
 (over 60 s), and the count.
 """
@@ -54,6 +56,32 @@ def _each(column: str, f):
     return apply
 
 
+def _as_runs(per_specimen: int):
+    """The curves read as runs: every ``per_specimen`` curves one specimen (the run column,
+    docs/measured-data.md "Runs"); one specimen holding every curve is refused."""
+    def apply(rows: list[dict]) -> list[dict]:
+        ids = sorted({r["curve_id"] for r in rows})
+        where = {c: (f"spec{i // per_specimen}", i % per_specimen) for i, c in enumerate(ids)}
+        return [{**r, "curve_id": where[r["curve_id"]][0], "run": where[r["curve_id"]][1]}
+                for r in rows]
+    return apply
+
+
+def _header(column: str, header: str, per_unit: float):
+    """``column`` renamed to a header with a unit, its values divided by ``per_unit`` (the
+    unit's size in the column's own unit): ``Pressure (kPa)`` holds pressure_pa / 1000."""
+    def apply(rows: list[dict]) -> list[dict]:
+        out = []
+        for r in rows:
+            r = dict(r)
+            if column in r:
+                value = r.pop(column)
+                r[header] = value / per_unit if isinstance(value, (int, float)) else value
+            out.append(r)
+        return out
+    return apply
+
+
 def mutations(rng: np.random.Generator) -> list:
     return [
         _each("pressure_pa", lambda p: 0.0),
@@ -70,6 +98,15 @@ def mutations(rng: np.random.Generator) -> list:
         _each("angle_deg", lambda a: -abs(a)),
         _each("pressure_pa", lambda p: 1000.0 * p),
         _each("time_s", lambda t: 1.0),
+        _as_runs(2),
+        _as_runs(3),
+        _as_runs(1000),
+        _header("pressure_pa", "Pressure (kPa)", 1000.0),
+        _header("pressure_pa", "p / psi", 6894.757293168361),
+        _header("angle_deg", "Angle [rad]", 180.0 / np.pi),
+        _header("time_s", "t [min]", 60.0),
+        _header("flow_ul_s", "Flow (ml/min)", 1000.0 / 60.0),
+        lambda rows: [{**r, "Pressure (kPa)": r.get("pressure_pa", 0.0) / 1000.0} for r in rows],
     ]
 
 
