@@ -191,3 +191,15 @@ def test_a_huge_key_is_an_unknown_column_said_short_and_fast(key):
     with pytest.raises(DataError) as err:
         observations_from_rows(data)
     assert "unknown column" in str(err.value) and len(str(err.value)) < 400
+
+
+def test_a_huge_header_in_place_of_a_missing_column_is_said_short():
+    """A 5000-character header that looks like the missing pressure column ('Pressure
+    (kkk...Pa)') was echoed whole in the refusal (5258 characters over HTTP and the CLI);
+    it is shown cut, with its length."""
+    header = "Pressure (" + "k" * 5000 + "Pa)"
+    data = [{(header if k == "pressure_pa" else k): v for k, v in r.items()} for r in rows()]
+    with pytest.raises(DataError) as err:
+        observations_from_rows(data)
+    text = str(err.value)
+    assert "pressure_pa" in text and "characters" in text and len(text) < 400, text[:500]

@@ -697,7 +697,7 @@ def _missing(name: str, columns: set) -> DataError:
                   or (dimension and UNITS.get(unit_of(c), ("",))[0] == dimension))
     how = (f"name it {header_form(name)} with {allowed_units(dimension)}" if dimension
            else f"the column must be named exactly {name}")
-    found = f" (found {near[0]!r}: {how})" if near else ""
+    found = f" (found {_short(near[0])}: {how})" if near else ""
     return DataError(name, "required column is missing" + found, None,
                      "columns " + ", ".join(REQUIRED))
 
