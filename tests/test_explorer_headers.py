@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 import pytest
-from explorer_browser import LiveServer, open_explorer
+from explorer_browser import LiveServer, open_explorer, screenshot
 
 from surrogate.calibration import jsonable, load_observations, observations_from_rows
 
@@ -67,3 +67,4 @@ def test_the_page_sends_what_the_server_reads_as_the_cli_does_and_draws_it_in_pa
     x, y = json.loads(g.get_attribute("data-x")), json.loads(g.get_attribute("data-y"))
     np.testing.assert_allclose(x, cli.pressure_pa, rtol=1e-12)
     np.testing.assert_allclose(y, cli.angle_deg, rtol=1e-12)
+    screenshot(page, "s38-calibration-kpa-header")

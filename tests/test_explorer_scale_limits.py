@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from explorer_browser import LiveServer, open_explorer, wait_prediction
+from explorer_browser import LiveServer, open_explorer, screenshot, wait_prediction
 from fastapi.testclient import TestClient
 from service_fakes import settings_for
 
@@ -72,10 +72,12 @@ def test_the_page_states_the_servers_stiffness_scales(watched, server):
                            " && window.explorer.prediction.design.membrane_material.id"
                            ".endsWith('x3')")
     assert page.locator("#refused").is_hidden()
+    screenshot(page, "s38-both-layers-3x")
     page.fill("#body_scale", "0")
     page.wait_for_selector("#err-body_scale:not([hidden])")
     assert ("allowed: 0.01 to 100 x preset moduli, body / membrane 0.25 to 4"
             in page.inner_text("#err-body_scale"))
+    screenshot(page, "s38-scale-zero-refused")
 
 
 @pytest.mark.timeout(300)
