@@ -166,17 +166,16 @@ def fit_curve_gps(u: np.ndarray, y: np.ndarray, seed: int = 0,
     the top ones only from TOP_PRESSURE_MIN_DESIGNS designs).
     On the FE curves of 252 random designs (benchmarks/RESULTS.md, nineteenth session)
     one kernel for the pressure nodes put 190 curves within the per-curve target where
-    one per node put 188. With the
-    early-ended curves' coordinates ``early_u`` and node outputs ``early_y`` (NaN past
-    their end), their means for designs emulated to end early (``early_ended_nodes``; each
+    one per node put 188. With the early-ended curves' coordinates ``early_u``, node
+    outputs ``early_y`` (NaN past their end) and ``early_last_step_deg`` (all three, or
+    none), their means for designs emulated to end early (``early_ended_nodes``; each
     curve short of its last reached node where that lies in the FE's last step, which
     started at ``early_last_step_deg``)."""
     anchor = anchor_index()
     early = None
-    if early_u is not None and early_y is not None and len(early_u):
-        step_from = (np.zeros(len(early_y)) if early_last_step_deg is None
-                     else early_last_step_deg)      # none given: every last node dropped
-        z = rise_outputs(short_of_the_end(early_y, N_NODES, step_from), anchor)
+    if early_u is not None and early_y is not None and early_last_step_deg is not None \
+            and len(early_u):
+        z = rise_outputs(short_of_the_end(early_y, N_NODES, early_last_step_deg), anchor)
         reached = np.isfinite(z[:, 0])
         if reached.any():
             early = EarlyEndedRows(np.asarray(early_u, float)[reached], z[reached])
