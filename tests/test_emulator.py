@@ -663,7 +663,7 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves(shipped_re
         node_band_scales,
     )
 
-    free, _ = _collect(shipped_records)
+    free, _, _ = _collect(shipped_records)
     rows = free["ecoflex_00_30/pdms_1_15"]
     keep = np.array(rows.signs) < 0
     # the first 50 of the pair's curves (151 in the shipped database): the calibration is
@@ -1039,7 +1039,7 @@ def test_force_bands_calibrated_by_cross_validation_cover_designs_left_out(emula
     from surrogate.band_level import z_value
     from surrogate.emulator import build
 
-    _, force = build._collect(r for r in shipped_records if build.is_force_record(r.settings))
+    _, force, _ = build._collect(r for r in shipped_records if build.is_force_record(r.settings))
     inside = []
     for key, pe in emulator.pairs.items():
         fu, per_kpa = (np.array(a) for a in force[key[:-1]])

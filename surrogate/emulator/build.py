@@ -34,6 +34,7 @@ from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.balance import BalanceModel, fit_balance_model
+from surrogate.emulator.blocked_range import BlockedRange, fit_blocked_range
 from surrogate.emulator.curve_gps import CurveGPs, anchor_index, rise_outputs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows, short_of_the_end
 from surrogate.emulator.emulator import (
@@ -101,10 +102,14 @@ def is_force_record(settings: SolverSettings) -> bool:
             == default_free_settings())
 
 
-def _collect(records: Iterable) -> tuple[dict, dict]:
+def _collect(records: Iterable) -> tuple[dict, dict, dict]:
+    """The records' rows by group: free-tip curves (``_Rows``), blocked-tip force rows
+    ((unit coordinates, F / p at the force nodes) per design) and blocked-tip ends
+    ((unit coordinates, last pressure reduced Pa, stop reason) per design)."""
     free_settings = default_free_settings()
     free: dict[tuple[str, str], _Rows] = {}
     force: dict = {}
+    ends: dict = {}
     for rec in records:
         try:
             point = locate(rec.design, reduced=True)
@@ -141,9 +146,13 @@ def _collect(records: Iterable) -> tuple[dict, dict]:
                 key = tuple(np.round(point.coordinates(), 9))
                 if key not in rows_f or np.isfinite(y).sum() > np.isfinite(rows_f[key]).sum():
                     rows_f[key] = y
+                    ends.setdefault(point.group, {})[key] = (
+                        float(c.pressure_pa[-1] / point.pressure_scale), c.reason)
     force = {g: ([np.array(k) for k in rows_f], list(rows_f.values()))
              for g, rows_f in force.items()}
-    return free, force
+    ends = {g: (np.array(list(e)), np.array([v[0] for v in e.values()]),
+                [v[1] for v in e.values()]) for g, e in ends.items()}
+    return free, force, ends
 
 
 ANGLE_BINS_DEG = (0.0, 10.0, 20.0, 40.0, 60.0, 75.0, 90.0)   # band calibration bins
@@ -446,8 +455,8 @@ def force_band_scale(u: np.ndarray, y: np.ndarray, level: float, seed: int = 0) 
 
 
 def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float, seed: int,
-             force_rows: tuple[list, list] | None, range_model: VectorGP | None = None
-             ) -> tuple[PairEmulator, dict]:
+             force_rows: tuple[list, list] | None, range_model: VectorGP | None = None,
+             blocked_range: BlockedRange | None = None) -> tuple[PairEmulator, dict]:
     u = np.array(rows.u)[keep]
     y = np.array(rows.y)[keep]
     curves = [c for c, k in zip(rows.curves, keep) if k]
@@ -483,12 +492,15 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         fe_max_volume_ul=default_free_settings().max_volume_ul,
         coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
         force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[2],
-        range_model=range_model)
+        range_model=range_model,
+        blocked_range=blocked_range if force_gp is not None else None)
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gp.gps),
               "force_designs": force_designs if force_gp is not None else 0,
               "force_band_scale": force_scale,
               "force_limit_pa": force_limit_pa if force_gp is not None else None,
+              "blocked_tip_ended_early": (len(blocked_range.ended) if force_gp is not None
+                                          and blocked_range is not None else 0),
               "fitted": True, **cv}
     return pe, report
 
@@ -498,7 +510,7 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
     """One emulator per material group (``solver.design_space.GROUPS``) and bending sign
     with at least MIN_DESIGNS complete curves; where a group bends both ways (a soft body
     on a soft membrane), a GP of the sign over the box says which applies."""
-    free, force = _collect(records)
+    free, force, blocked_ends = _collect(records)
     models: dict[str, PairEmulator] = {}
     sign_models: dict[str, object] = {}
     balance_models: dict[str, BalanceModel] = {}
@@ -527,6 +539,9 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
             ends = np.concatenate((np.full(len(rows.u), LIMIT_ANGLE_DEG),
                                    [a for _, a, _ in rows.failed])) / 90.0
             range_model = fit_vector_gp(all_u, ends[:, None], seed=seed)
+        # where each blocked-tip curve of the group ends (the force's range)
+        blocked_range = (fit_blocked_range(*blocked_ends[group], seed=seed)
+                         if group in blocked_ends else None)
         for sign in (1.0, -1.0):
             keep = signs == sign
             key = group + ("+" if sign > 0 else "-")
@@ -536,7 +551,7 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
                                             "fitted": False}
                 continue
             pe, rep = _fit_one(key, rows, keep, sign, level, seed, force.get(group),
-                               range_model)
+                               range_model, blocked_range)
             models[key] = pe
             report["pairs"][key] = rep  # type: ignore[index]
     if not models:

@@ -34,6 +34,7 @@ from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.balance import VOLUME_NODES_UL, BalanceModel, first_reach
+from surrogate.emulator.blocked_range import BlockedRange
 from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.design_memo import DesignMemo
 from surrogate.emulator.early_ended_nodes import (
@@ -251,6 +252,9 @@ class PairEmulator:
     fe_max_volume_ul: float | None = None   # the FE's volume stop (whole actuator, ul)
     range_model: VectorGP | None = None     # the end angle / 90 deg of the group's curves
     near_failed_band_scale: np.ndarray | None = None
+    # where the group's blocked-tip FE curves end (the force's range; None: the group's
+    # force range at every design, as in files before format 16)
+    blocked_range: BlockedRange | None = None
 
     def __post_init__(self) -> None:
         # the early-ended curves' unit coordinates, stacked once for fe_range's distances
@@ -424,13 +428,24 @@ class PairEmulator:
             return -f, -f_hi, -f_lo
         return f, f_lo, f_hi
 
-    def force_end_pa(self, free_end_pa: float) -> float:
+    def force_end_pa(self, free_end_pa: float, blocked_end_pa: float = float("inf")
+                     ) -> float:
         """The highest reduced pressure (Pa) the force is given at: the end of the group's
-        blocked-tip FE curves and, for "angle_ratio" (read off the free curve), of the
+        blocked-tip FE curves, of the design's own (``blocked_end_pa``, from
+        ``blocked_ends_pa``) and, for "angle_ratio" (read off the free curve), of the
         design's free curve, which ends at ``free_end_pa``."""
+        end = min(self.force_limit_pa, blocked_end_pa)
         if self.force_form == "angle_ratio":
-            return min(self.force_limit_pa, free_end_pa)
-        return self.force_limit_pa
+            return min(end, free_end_pa)
+        return end
+
+    def blocked_ends_pa(self, u: np.ndarray) -> np.ndarray:
+        """The last reduced pressure (Pa) at which each row of ``u`` (m, 6) is given a
+        force by where its blocked-tip FE curve is emulated to end
+        (``blocked_range.BlockedRange.force_ends_pa``; inf without that model)."""
+        if self.blocked_range is None:
+            return np.full(len(np.atleast_2d(u)), np.inf)
+        return self.blocked_range.force_ends_pa(u)
 
     def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
         """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
@@ -464,6 +479,9 @@ class CurveBand:
     # the range ends at the FE's pressure stop (pressure_stop_angle), not where the
     # curves here end: the points past it are flagged past_fe_pressure_stop too
     pressure_stopped: bool = False
+    # the last reduced pressure (Pa) at which the force is given by where this design's
+    # blocked-tip FE curve is emulated to end (PairEmulator.blocked_ends_pa)
+    blocked_end_pa: float = float("inf")
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -733,8 +751,10 @@ class Emulator:
                 p_var = self.spread_variance(np.concatenate((p_var, var[N_NODES:])))
             p_sd = np.sqrt(p_var[:N_NODES]) * scales[:N_NODES]
             reference = tuple(_monotone(c) for c in node_curves(p_mean, p_sd, z))
+        blocked_end = (float(pe.blocked_ends_pa(u)[0]) if pe.force is not None
+                       else float("inf"))
         return pair_key, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw,
-                                   mean, u, nearest, reference)
+                                   mean, u, nearest, reference, blocked_end_pa=blocked_end)
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -1023,7 +1043,7 @@ class Emulator:
             lambda: pe.force.predict(cb.coordinates))
         sd = np.sqrt(var) * pe.force_band_scale
         scale = point.pressure_scale * point.length_scale**2
-        past = p_red > pe.force_end_pa(cb.limit_pressure_pa) * (1 + 1e-12)
+        past = p_red > pe.force_end_pa(cb.limit_pressure_pa, cb.blocked_end_pa) * (1 + 1e-12)
         pm, pl, pu = cb.force_reference or (cb.pressure_pa, cb.pressure_lower_pa,
                                             cb.pressure_upper_pa)
         angle = np.interp(p_red, _with_origin(pm), ANGLES0)
@@ -1115,7 +1135,8 @@ class Emulator:
         NaN where the angle itself is past the range): its band too wide within the
         force's range, or past that range (``force_past_fe_range``). ``points`` names the
         points as the question asked them ("pressure(s)", "volume(s)")."""
-        f_lim = pe.force_end_pa(cb.limit_pressure_pa) * point.pressure_scale
+        f_end = pe.force_end_pa(cb.limit_pressure_pa, cb.blocked_end_pa)
+        f_lim = f_end * point.pressure_scale
         within = p <= f_lim * (1 + 1e-12)        # False at NaN: past the angle's range
         unbacked = np.isnan(force[0]) & within
         if unbacked.any():
@@ -1126,11 +1147,15 @@ class Emulator:
                             "with tip = blocked gives it)")
         if not within.all():
             flags.append("force_past_fe_range")
-            why = ("the end of the blocked-tip FE curves"
-                   if f_lim >= pe.force_limit_pa * point.pressure_scale * (1 - 1e-12)
-                   else "the end of this design's free-tip range (the force is "
-                        "emulated as its ratio to the free tip's angle at the same "
-                        "pressure)")
+            if f_end >= cb.blocked_end_pa * (1 - 1e-12):
+                why = pe.blocked_range.reason(  # type: ignore[union-attr]
+                    cb.coordinates, point.pressure_scale)
+            elif f_end >= pe.force_limit_pa * (1 - 1e-12):
+                why = "the end of the blocked-tip FE curves"
+            else:
+                why = ("the end of this design's free-tip range (the force is "
+                       "emulated as its ratio to the free tip's angle at the same "
+                       "pressure)")
             messages.append(f"force is given up to {f_lim:.0f} Pa, {why}")
 
     def inverse(self, design: Design, angle_deg: object, level: float = 0.95
@@ -1218,6 +1243,7 @@ class Emulator:
             if pe.force is not None:
                 fmean, fvar = pe.force.predict_many(u)
                 fsd = np.sqrt(fvar) * pe.force_band_scale
+                blocked_ends = pe.blocked_ends_pa(u)
                 if plain is not None:
                     # the force model's angle and band: the complete-curve GPs' (as
                     # curve_band)
@@ -1248,7 +1274,7 @@ class Emulator:
                     out["needed"][i] = np.interp(a, ANGLES0, pm) * s
                     out["needed_lo"][i] = np.interp(a, ANGLES0, pl) * s
                     out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
-                if fmean is not None and q <= pe.force_end_pa(p_lim):
+                if fmean is not None and q <= pe.force_end_pa(p_lim, blocked_ends[row]):
                     scale = pt.pressure_scale * pt.length_scale**2
                     qa = np.array([q])
                     fm, fl, fu = (_with_origin(c[row]) for c in force_curves)

@@ -35,6 +35,7 @@ from threadpoolctl import ThreadpoolController
 from solver.atomic_file import write_text_atomic
 from solver.design_space import SAMPLED
 from surrogate.emulator.balance import BalanceModel, balance_model_from_dict
+from surrogate.emulator.blocked_range import blocked_range_from_dict
 from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
@@ -54,7 +55,9 @@ from surrogate.file_seal import canonical_text, check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 14  # 14: top_pressure_gps, the pressure nodes from 45 deg read with the
+FORMAT_VERSION = 15  # 15: blocked_range, where each design's blocked-tip FE curve ends
+                     # (blocked_range.py; 14 read: none, the group's force range);
+                     # 14: top_pressure_gps, the pressure nodes from 45 deg read with the
                      # shape below (shape_gps.py; 13 read: none, the curve GPs' own);
                      # 13: volume_gps, the volume nodes read with the pressure curve's
                      # shape (shape_gps.py; 12 read: none, the curve GPs' own);
@@ -93,7 +96,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul,
             "range_model": None if pe.range_model is None else pe.range_model.as_dict(),
             "near_failed_band_scale": None if pe.near_failed_band_scale is None
-            else pe.near_failed_band_scale.tolist()})
+            else pe.near_failed_band_scale.tolist(),
+            "blocked_range": None if pe.blocked_range is None else pe.blocked_range.as_dict()})
     return seal(plain_json({
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
@@ -147,7 +151,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
                 range_model=None if p.get("range_model") is None
                 else vector_gp_from_dict(p["range_model"]),
                 near_failed_band_scale=None if p.get("near_failed_band_scale") is None
-                else _band_scales(p["near_failed_band_scale"]))
+                else _band_scales(p["near_failed_band_scale"]),
+                blocked_range=blocked_range_from_dict(p.get("blocked_range")))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
         if not pairs:
@@ -349,6 +354,8 @@ def _check_pair(pe: PairEmulator) -> None:
         _check_gp(pe.force, f"pair {pe.pair} force")
     if pe.range_model is not None:
         _check_gp(pe.range_model, f"pair {pe.pair} range model")
+    if pe.blocked_range is not None:
+        _check_gp(pe.blocked_range.model, f"pair {pe.pair} blocked range")
 
 
 def _variance_nodes(nodes: object) -> np.ndarray:

@@ -1,0 +1,133 @@
+"""Where a design's blocked-tip FE curve ends, and so where its force is emulated to.
+
+The blocked-tip force is emulated from the group's blocked-tip FE curves that reach its
+force range (``build.force_range``), but many end before it: under volume control the
+chamber pressure levels off as the balloon runs away (dp/dV falls to 5-12 % of its
+mid-curve value, median by group) and Newton fails just past that pressure maximum; soft
+pairs also reach the FE's 500 ul volume stop. In the shipped database, 16 of 92 PDMS-bodied
+blocked-tip designs end below 2500 Pa, 36 of 107 reversed-pair and 75 of 107 Ecoflex on
+Ecoflex designs. Until 2026-12-06 the force was answered to the group's force range at
+every design: an inverse design for 1 mN at 2000 Pa listed three designs whose blocked-tip
+FE failed at 2150-2230 Pa, their FE forces 12-17 % below the answer and below its band,
+and called 1.53 mN "reachable" at a design whose blocked tip failed at 1909 Pa.
+
+``BlockedRange`` is a GP over the box of log(end / BLOCKED_MAX_PRESSURE_PA) of every
+blocked-tip FE curve of the group (the end pressure reduced to the membrane at its preset,
+a curve that reached the grid's stop read as ending there), the same kind of model as the
+free curves' range model (``PairEmulator.range_model``). The force is given up to
+BLOCKED_END_SHARE of the emulated end less BLOCKED_RANGE_Z sd: near the pressure maximum
+the force falls below what the complete curves the force model learnt from say. On the
+database's early-ended blocked-tip curves (not in the force model; each end left out of
+the range GP), the force answered above 0.8 of the FE end was 0.89 inside its 95 % band,
+0.91 with this cut, and 2 of 124 curves were answered past their FE end, none with it;
+12 % of those curves' points are no longer answered, 0.1 % of the held-out random designs'
+complete curves' (benchmarks/RESULTS.md, thirty-ninth session).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver.precompute.grid import BLOCKED_MAX_PRESSURE_PA
+from surrogate.emulator.vector_gp import VectorGP, fit_vector_gp, vector_gp_from_dict
+
+BLOCKED_RANGE_Z = 1.0       # sd short of the emulated end
+BLOCKED_END_SHARE = 0.9     # of the emulated end, less that: the force's last pressure
+
+
+def ended_at_pressure_stop(reason: str) -> bool:
+    """Whether a blocked-tip FE curve's stop reason (``solver.stepping``) is the solve's
+    own pressure stop, i.e. it did not end early."""
+    return reason.startswith("reached max_pressure_pa")
+
+
+def _cause(reason: str) -> str:
+    if reason.startswith("reached max_volume_ul"):
+        return "reaches the FE's volume stop"
+    return ("reaches a pressure maximum, where the balloon runs away and the FE's "
+            "Newton iterations fail")
+
+
+@dataclass(frozen=True)
+class BlockedRange:
+    """The emulated end of a group's blocked-tip FE curves over the box.
+
+    model    GP of log(end_pa / cap_pa) over the unit box (one output)
+    cap_pa   the blocked-tip solves' pressure stop (reduced Pa); a curve that reached it
+             counts as ending there
+    ended    (unit coordinates, end pressure reduced Pa, FE stop reason) of the group's
+             blocked-tip curves that ended before cap_pa (the reason of the nearest says
+             why a query's range ends)
+    """
+
+    model: VectorGP
+    cap_pa: float
+    ended: tuple = ()
+
+    def ends_pa(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The emulated end pressure (reduced Pa) of the blocked-tip FE curve at each row
+        of ``u`` (m, 6), and the sd of its log."""
+        m, var = self.model.predict_many(np.atleast_2d(u))
+        return self.cap_pa * np.exp(m[:, 0]), np.sqrt(np.maximum(var[:, 0], 0.0))
+
+    def force_ends_pa(self, u: np.ndarray) -> np.ndarray:
+        """The last reduced pressure (Pa) at which the force is given at each row of
+        ``u``: BLOCKED_END_SHARE of the emulated end less BLOCKED_RANGE_Z sd (of its
+        log)."""
+        end, sd_log = self.ends_pa(u)
+        return BLOCKED_END_SHARE * end * np.exp(-BLOCKED_RANGE_Z * sd_log)
+
+    def reason(self, u: np.ndarray, pressure_scale: float) -> str:
+        """Why the force ends where ``force_ends_pa`` says, for the design at unit
+        coordinates ``u`` (its pressure scale converts to chamber Pa)."""
+        end, sd_log = (float(x[0]) for x in self.ends_pa(u))
+        cause = "reaches a pressure maximum or the FE's volume stop"
+        if self.ended:
+            near = np.argmin([np.sum((np.asarray(e[0]) - u) ** 2) for e in self.ended])
+            cause = _cause(self.ended[near][2])
+        return (f"this design's blocked-tip FE curve is emulated to end at "
+                f"{end * pressure_scale:.0f} Pa (+/- {100 * sd_log:.0f} %): nearby "
+                f"blocked-tip FE curves end where the chamber {cause}, and near that end "
+                "the force falls below what the force model learnt from curves that run on; "
+                f"the force is given to {100 * BLOCKED_END_SHARE:.0f} % of that end, "
+                f"{BLOCKED_RANGE_Z:g} sd short")
+
+    def as_dict(self) -> dict:
+        return {"model": self.model.as_dict(), "cap_pa": self.cap_pa,
+                "ended": [[np.asarray(u).tolist(), float(p), str(r)]
+                          for u, p, r in self.ended]}
+
+
+def blocked_range_from_dict(d: dict | None) -> BlockedRange | None:
+    """The blocked range stored by ``as_dict`` (None: none stored); ValueError, TypeError
+    or KeyError for a damaged one."""
+    if d is None:
+        return None
+    cap = float(d["cap_pa"])
+    if not (np.isfinite(cap) and cap > 0):
+        raise ValueError(f"blocked_range cap_pa {cap!r}: a positive pressure (Pa)")
+    model = vector_gp_from_dict(d["model"])
+    if model.center.shape != (1,):
+        raise ValueError("blocked_range model: one output (the log of the end pressure)")
+    ended = tuple((np.array(u, float), float(p), str(r)) for u, p, r in d["ended"])
+    if any(u.shape != model.gps[0].x.shape[1:] or not 0 < p <= cap for u, p, _ in ended):
+        raise ValueError("blocked_range ended: unit coordinates and an end within the cap")
+    return BlockedRange(model, cap, ended)
+
+
+def fit_blocked_range(u: np.ndarray, end_pa: np.ndarray, reasons: list[str], seed: int = 0
+                      ) -> BlockedRange | None:
+    """The blocked range of a group from its blocked-tip FE curves: unit coordinates
+    ``u`` (n, 6), their last pressures ``end_pa`` (reduced Pa) and stop reasons; None
+    when every curve reached the pressure stop (nothing to emulate) or there are none."""
+    cap = BLOCKED_MAX_PRESSURE_PA
+    early = np.array([not ended_at_pressure_stop(r) for r in reasons], bool)
+    if not len(u) or not early.any():
+        return None
+    end = np.where(early, np.minimum(np.asarray(end_pa, float), cap), cap)
+    model = fit_vector_gp(np.asarray(u, float), np.log(end / cap)[:, None], seed=seed)
+    ended = tuple((np.asarray(u[i], float), float(end[i]), reasons[i])
+                  for i in np.flatnonzero(early & (end < cap)))
+    return BlockedRange(model, cap, ended)
