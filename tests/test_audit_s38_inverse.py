@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 PAIR = ["pdms_1_15/ecoflex_00_30"]
@@ -60,17 +61,18 @@ FE_CASES = json.loads((Path(__file__).parent / "data" / "fe_inverse_search_s38.j
 # the box reaches are those whose blocked-tip FE curve fails soon past the target pressure
 # (2150-2230 Pa for 1 mN at 2000 Pa): there the force / free-angle ratio is learned from the
 # blocked curves that run on, and read 14 % high (the free angle is right: 54.9 deg emulated,
-# 55.2 FE, rank 1); and the best force "reachable" at 2000 Pa, 1.53 mN, is at a design whose
-# blocked-tip FE failed at 1909 Pa. The emulator has no model of where a blocked-tip curve
-# ends (its range model is the free curves'); fixing it needs a refit.
+# 55.2 FE, rank 1); and the best force "reachable" at 2000 Pa, 1.53 mN, was at a design whose
+# blocked-tip FE failed at 1909 Pa. Since the thirty-ninth session the emulator knows where
+# each design's blocked-tip curve ends (surrogate/emulator/blocked_range.py) and gives no
+# force in its last 10 %: ranks 1 and 2 and the "best reachable" get none at 2000 Pa (their
+# FE curves end at 2175, 2150 and 1909 Pa). Rank 3 (FE end 2230 Pa, emulated 2300) is still
+# answered 15 % high; the Q4c ranks are a few % off at the bands' edge.
 FORCE_OPEN = {
-    "Q4b-rank1": "FE 0.885 mN below the band 0.912-1.096 (answer 1.000)",
-    "Q4b-rank2": "FE 0.834 mN below the band 0.893-1.122 (answer 1.000)",
     "Q4b-rank3": "FE 0.848 mN below the band 0.887-1.127 (answer 1.000)",
     "Q4c-rank1": "FE 0.318 mN above the band 0.288-0.312 (answer 0.300)",
     "Q4c-rank2": "FE 0.315 mN above the band 0.287-0.314 (answer 0.300)",
-    "Q4b-best_reachable": "1.53 mN given at 2000 Pa; the FE's blocked tip failed at 1909 Pa",
 }
+NEAR_END = 1.15    # an FE curve failing within this x the asked pressure: near its end
 
 
 @pytest.mark.parametrize("case", [
@@ -82,16 +84,22 @@ def test_force_search_answers_against_the_blocked_tip_fe(shipped_client, case):
     """The designs POST /v1/inverse listed for a blocked-tip force (1 mN at 2000 Pa over
     the box; 0.3 mN at 2000 Pa, L pinned to 10 mm), solved by the default FE with the tip
     held (tests/data/fe_inverse_search_s38.json, its source named there): the force's band
-    at the target pressure covers the FE's, and no force is given where the FE has none."""
+    at the target pressure covers the FE's; no force is given where the FE has none, and
+    none is withheld but near the end of the design's blocked-tip FE curve."""
     r = shipped_client.post("/v1/predict", json={"design": case["design"],
                                                  "pressures_pa": [case["pressure_pa"]]})
     assert r.status_code == 200, r.text
     body = r.json()
     force = (body.get("force_mn") or [None])[0]
     if case["fe_force_mn"] is None:
-        assert force is None, (force, case["fe_reason"])
+        assert force is None or np.isnan(force), (force, case["fe_reason"])
         return
-    assert force is not None
+    if force is None or np.isnan(force):
+        # withheld only near the end of the design's blocked-tip FE curve, and said so
+        assert case["fe_status"] == "failed", case["fe_reason"]
+        assert case["fe_last_pressure_pa"] < NEAR_END * case["pressure_pa"], case["fe_reason"]
+        assert "force_past_fe_range" in body["validity"]["flags"]
+        return
     lo, hi = body["force_lower_mn"][0], body["force_upper_mn"][0]
     assert lo <= case["fe_force_mn"] <= hi, (case["fe_force_mn"], lo, hi)
 
