@@ -18,10 +18,10 @@ free curves' range model (``PairEmulator.range_model``). The force is given up t
 BLOCKED_END_SHARE of the emulated end less BLOCKED_RANGE_Z sd: near the pressure maximum
 the force falls below what the complete curves the force model learnt from say (the
 answers above 0.9 of the FE end 1-43 % high, median by group, on the database's
-early-ended blocked-tip curves, which the force model is not fitted on). With the cut, of the database's 181
-early-ended blocked-tip curves none is given a force past its FE end (4 before), of the
-held-out sets' 27 none (1); the share of their FE points given a force fell 0.349 -> 0.330
-and 0.426 -> 0.401, on the held-out complete curves 850 -> 849 of 1240
+early-ended blocked-tip curves, which the force model is not fitted on). With the cut, of the
+database's 181 early-ended blocked-tip curves none is given a force past its FE end (4
+before), of the held-out sets' 27 none (1); the share of their FE points given a force
+fell 0.349 -> 0.330 and 0.426 -> 0.401, on the held-out complete curves 850 -> 849 of 1240
 (``benchmarks/blocked_tip_ends.py``; benchmarks/RESULTS.md, thirty-ninth session).
 """
 
