@@ -106,7 +106,7 @@ def test_the_inverse_search_lists_no_design_past_its_blocked_tip_end(emulator):
         point = locate(c.design, reduced=True)
         pe = next(pe for k, pe in emulator.pairs.items() if k[:-1] == point.group
                   and pe.blocked_range is not None)
-        assert pe.blocked_ends_pa(point.coordinates())[0] >= 2000.0 / point.pressure_scale
+        assert pe.blocked_ends_pa(point.coordinates())[0][0] >= 2000.0 / point.pressure_scale
         pred = emulator.predict(c.design, [2000.0])
         assert np.isfinite(pred.force_mn[0])
 
@@ -131,6 +131,7 @@ def test_the_blocked_range_is_stored_older_files_read_without_it_and_damage_is_r
     back = emulator_from_dict(d, "other.json").pairs[key]
     u = np.array([e[0] for e in pe.blocked_range.ended[:5]])
     np.testing.assert_allclose(back.blocked_ends_pa(u), pe.blocked_ends_pa(u), rtol=1e-12)
+    assert back.blocked_range.near_end_band_scale == pe.blocked_range.near_end_band_scale
     assert back.blocked_range.ended[0][2] == pe.blocked_range.ended[0][2]
 
     stored = d["pairs"][0].pop("blocked_range")
@@ -139,7 +140,9 @@ def test_the_blocked_range_is_stored_older_files_read_without_it_and_damage_is_r
     assert old.blocked_range is None and np.isinf(old.blocked_ends_pa(u)).all()
     d["format_version"] = FORMAT_VERSION
     for field, value in (("cap_pa", -1.0), ("cap_pa", "x"), ("ended", [[[0.5], 100.0, "r"]]),
-                         ("ended", [[stored["ended"][0][0], 1e9, "r"]]), ("model", None)):
+                         ("ended", [[stored["ended"][0][0], 1e9, "r"]]), ("model", None),
+                         ("near_end_band_scale", [0.5, 1.0]), ("near_end_band_scale", [2.0]),
+                         ("near_end_band_scale", "x")):
         d["pairs"][0]["blocked_range"] = {**stored, field: value}
         with pytest.raises(SurrogateFileError, match="damaged emulator file"):
             emulator_from_dict(d, "other.json")

@@ -36,6 +36,10 @@ from surrogate.emulator.vector_gp import VectorGP, fit_vector_gp, vector_gp_from
 
 BLOCKED_RANGE_Z = 1.0       # sd short of the emulated end
 BLOCKED_END_SHARE = 0.9     # of the emulated end, less that: the force's last pressure
+# The force band near the end: p / the emulated end (mean) from these on, one multiplier
+# of the band's half-widths per bin (``near_end_band_scales``), 1 below the first.
+NEAR_END_FROM = (0.7, 0.8)
+NEAR_END_MIN_POINTS = 30    # a bin with fewer calibration points takes the next lower's
 
 
 def ended_at_pressure_stop(reason: str) -> bool:
@@ -66,6 +70,9 @@ class BlockedRange:
     model: VectorGP
     cap_pa: float
     ended: tuple = ()
+    # multipliers of the force band's half-widths at p / emulated end >= NEAR_END_FROM[i]
+    # (``near_end_band_scales``; ones: not calibrated)
+    near_end_band_scale: tuple[float, ...] = (1.0,) * len(NEAR_END_FROM)
 
     def ends_pa(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The emulated end pressure (reduced Pa) of the blocked-tip FE curve at each row
@@ -73,12 +80,31 @@ class BlockedRange:
         m, var = self.model.predict_many(np.atleast_2d(u))
         return self.cap_pa * np.exp(m[:, 0]), np.sqrt(np.maximum(var[:, 0], 0.0))
 
-    def force_ends_pa(self, u: np.ndarray) -> np.ndarray:
+    def force_ends_pa(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The last reduced pressure (Pa) at which the force is given at each row of
-        ``u``: BLOCKED_END_SHARE of the emulated end less BLOCKED_RANGE_Z sd (of its
-        log)."""
+        ``u`` (BLOCKED_END_SHARE of the emulated end less BLOCKED_RANGE_Z sd of its log),
+        and the emulated end itself (reduced Pa, the mean)."""
         end, sd_log = self.ends_pa(u)
-        return BLOCKED_END_SHARE * end * np.exp(-BLOCKED_RANGE_Z * sd_log)
+        return BLOCKED_END_SHARE * end * np.exp(-BLOCKED_RANGE_Z * sd_log), end
+
+    def band_scales(self, pressure_red_pa: np.ndarray, end_pa: np.ndarray | float
+                    ) -> np.ndarray:
+        """The force band's multiplier at each reduced pressure (Pa) of a design whose
+        blocked-tip curve is emulated to end at ``end_pa`` (reduced, the mean; an array
+        broadcasts: one row per design)."""
+        s = np.asarray(pressure_red_pa, float) / np.asarray(end_pa, float)
+        which = np.searchsorted(NEAR_END_FROM, s, side="right")      # 0: below the first
+        return np.concatenate(([1.0], self.near_end_band_scale))[which]
+
+    def left_out_ends_pa(self, u: np.ndarray) -> np.ndarray:
+        """The emulated end (reduced Pa, the mean) of each row of ``u`` that is one of
+        the model's own designs as the model would emulate it without that design
+        (leave-one-out); inf for any other row."""
+        gp = self.model.gps[0]
+        mean, _ = self.model.loo()
+        own = {tuple(x): self.cap_pa * float(np.exp(m))
+               for x, m in zip(np.round(gp.x, 9), mean[:, 0], strict=True)}
+        return np.array([own.get(tuple(x), np.inf) for x in np.round(np.atleast_2d(u), 9)])
 
     def reason(self, u: np.ndarray, pressure_scale: float) -> str:
         """Why the force ends where ``force_ends_pa`` says, for the design at unit
@@ -98,7 +124,25 @@ class BlockedRange:
     def as_dict(self) -> dict:
         return {"model": self.model.as_dict(), "cap_pa": self.cap_pa,
                 "ended": [[np.asarray(u).tolist(), float(p), str(r)]
-                          for u, p, r in self.ended]}
+                          for u, p, r in self.ended],
+                "near_end_band_scale": list(self.near_end_band_scale)}
+
+
+def near_end_band_scales(factors: np.ndarray, s: np.ndarray, level: float
+                         ) -> tuple[float, ...]:
+    """The force band's multipliers near the end of the blocked-tip curve, one per bin of
+    NEAR_END_FROM: the ``level`` quantile of the calibration points' ``factors`` (by how
+    much the band's half-width would have to grow to reach the FE value) at p / emulated
+    end ``s`` in the bin, never below 1 nor below the bin before; a bin with fewer than
+    NEAR_END_MIN_POINTS points takes the bin before's."""
+    out, last = [], 1.0
+    edges = (*NEAR_END_FROM, np.inf)
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        f = np.asarray(factors, float)[(s >= lo) & (s < hi)]
+        if len(f) >= NEAR_END_MIN_POINTS:
+            last = max(last, float(np.quantile(f, level)))
+        out.append(last)
+    return tuple(out)
 
 
 def blocked_range_from_dict(d: dict | None) -> BlockedRange | None:
@@ -115,7 +159,11 @@ def blocked_range_from_dict(d: dict | None) -> BlockedRange | None:
     ended = tuple((np.array(u, float), float(p), str(r)) for u, p, r in d["ended"])
     if any(u.shape != model.gps[0].x.shape[1:] or not 0 < p <= cap for u, p, _ in ended):
         raise ValueError("blocked_range ended: unit coordinates and an end within the cap")
-    return BlockedRange(model, cap, ended)
+    scales = tuple(float(x) for x in d.get("near_end_band_scale", (1.0,) * len(NEAR_END_FROM)))
+    if len(scales) != len(NEAR_END_FROM) or not all(1.0 <= x < 1e3 for x in scales):
+        raise ValueError(f"blocked_range near_end_band_scale {scales!r}: "
+                         f"{len(NEAR_END_FROM)} multipliers >= 1")
+    return BlockedRange(model, cap, ended, scales)
 
 
 def fit_blocked_range(u: np.ndarray, end_pa: np.ndarray, reasons: list[str], seed: int = 0

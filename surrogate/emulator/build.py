@@ -34,7 +34,12 @@ from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.balance import BalanceModel, fit_balance_model
-from surrogate.emulator.blocked_range import BlockedRange, fit_blocked_range
+from surrogate.emulator.blocked_range import (
+    NEAR_END_FROM,
+    BlockedRange,
+    fit_blocked_range,
+    near_end_band_scales,
+)
 from surrogate.emulator.curve_gps import CurveGPs, anchor_index, rise_outputs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows, short_of_the_end
 from surrogate.emulator.emulator import (
@@ -59,6 +64,7 @@ from surrogate.emulator.features import (
     force_angle_feature,
     force_features,
 )
+from surrogate.emulator.force_gps import fit_force_nodewise, nodes_reached
 from surrogate.emulator.shape_gps import (
     TOP_PRESSURE_FROM,
     TOP_PRESSURE_MIN_DESIGNS,
@@ -428,10 +434,17 @@ def force_range(u: np.ndarray, y: np.ndarray, share: float = FORCE_SHARE
     return 0, u[:0], y[:0, :0]
 
 
-def force_band_scale(u: np.ndarray, y: np.ndarray, level: float, seed: int = 0) -> float:
-    """The force band's sd multiplier: the ``level`` quantile of the cross-validated
-    |error| / sd of the force variable over every design and node (each fold's GP refitted
-    without it, ``cross_validated``), over the level's z; never below MIN_BAND_SCALE.
+def force_band_scale(u: np.ndarray, y: np.ndarray, level: float, seed: int = 0,
+                     end_pa: np.ndarray | None = None) -> tuple[float, tuple[float, ...]]:
+    """The force band's sd multiplier, and its further multipliers near the end of a
+    design's blocked-tip curve: from the cross-validated |error| / sd of the force
+    variable (each fold's GPs refitted without it, ``force_gps.fit_force_nodewise``) at
+    every node each design ``u`` reaches (``y``: NaN past its end). The multiplier is the
+    ``level`` quantile over all of them, over the level's z, never below MIN_BAND_SCALE;
+    near the end (``end_pa``: each design's blocked-tip end as the blocked range emulates
+    it without that design, reduced Pa; None: not known) each bin of node pressure / end
+    from ``blocked_range.NEAR_END_FROM`` on gets the quantile of its own points over the
+    overall one (``blocked_range.near_end_band_scales``).
 
     Why not the closed-form leave-one-out (until 2026-12-02, eighth session): with the
     hyperparameters fitted to every design it put the multiplier below 1 in every group
@@ -447,11 +460,19 @@ def force_band_scale(u: np.ndarray, y: np.ndarray, level: float, seed: int = 0) 
         # a fold of 5 leaves too few designs for a GP in 6 inputs below 2 x MIN_DESIGNS:
         # then one design (or PDMS twin pair) at a time
         fm, fv = cross_validated(u, y, seed, folds=CV_FOLDS if n >= 2 * MIN_DESIGNS else n,
-                                 fit=fit_force_gps)
+                                 fit=fit_force_nodewise)
     except ValueError:          # still too few to refit: the closed form, hyperparameters kept
-        fm, fv = fit_force_gps(u, y, seed=seed).loo()
-    zs = (np.abs(fm - y) / np.sqrt(np.maximum(fv, 1e-300))).ravel()
-    return float(max(np.quantile(zs, level) / z_value(level), MIN_BAND_SCALE))
+        complete = nodes_reached(y) >= y.shape[1]
+        fm, fv = np.full(y.shape, np.nan), np.full(y.shape, np.nan)
+        fm[complete], fv[complete] = fit_force_gps(u[complete], y[complete], seed=seed).loo()
+    zs = np.abs(fm - y) / np.sqrt(np.maximum(fv, 1e-300))
+    ok = np.isfinite(zs)
+    scale = float(max(np.quantile(zs[ok], level) / z_value(level), MIN_BAND_SCALE))
+    near = (1.0,) * len(NEAR_END_FROM)
+    if end_pa is not None:
+        share = FORCE_PRESSURE_NODES_PA[None, :y.shape[1]] / np.asarray(end_pa)[:, None]
+        near = near_end_band_scales(zs[ok] / (z_value(level) * scale), share[ok], level)
+    return scale, near
 
 
 def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float, seed: int,
@@ -476,12 +497,20 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     cv["near_failed"] = _near_failed_report(curves, cv_mean, cv_var, band_scale, near, level)
     force_gp, force_scale, force_nodes, force_designs = None, 1.0, 0, 0
     if force_rows is not None:
-        force_nodes, fu, fy = force_range(*force_angle_rows(
-            np.array(force_rows[0]), np.array(force_rows[1]), vgp, sign))
+        au, ay = force_angle_rows(np.array(force_rows[0]), np.array(force_rows[1]), vgp,
+                                  sign)
+        force_nodes, fu, fy = force_range(au, ay)
         force_designs = len(fu)
     if force_designs >= MIN_DESIGNS:
-        force_gp = fit_force_gps(fu, fy, seed=seed)
-        force_scale = force_band_scale(fu, fy, level, seed)
+        # every design that reaches the first node, each node conditioned on those that
+        # reach it (force_gps.py)
+        reach = nodes_reached(ay[:, :force_nodes]) > 0
+        au, ay = au[reach], ay[reach, :force_nodes]
+        force_gp = fit_force_nodewise(au, ay, seed=seed)
+        ends = None if blocked_range is None else blocked_range.left_out_ends_pa(au)
+        force_scale, near_end = force_band_scale(au, ay, level, seed, ends)
+        if blocked_range is not None:
+            blocked_range = replace(blocked_range, near_end_band_scale=near_end)
     force_limit_pa = float(FORCE_PRESSURE_NODES_PA[max(force_nodes, 1) - 1])
     failed = tuple((np.array(fu), fa, fr) for fu, fa, fr in rows.failed)
     pe = PairEmulator(
@@ -497,10 +526,15 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gp.gps),
               "force_designs": force_designs if force_gp is not None else 0,
+              "force_designs_by_node": ([int(len(g.y)) for g in force_gp.gps]
+                                        if force_gp is not None else []),
               "force_band_scale": force_scale,
               "force_limit_pa": force_limit_pa if force_gp is not None else None,
               "blocked_tip_ended_early": (len(blocked_range.ended) if force_gp is not None
                                           and blocked_range is not None else 0),
+              "force_near_end_band_scale": (list(blocked_range.near_end_band_scale)
+                                            if force_gp is not None
+                                            and blocked_range is not None else None),
               "fitted": True, **cv}
     return pe, report
 

@@ -439,13 +439,26 @@ class PairEmulator:
             return min(end, free_end_pa)
         return end
 
-    def blocked_ends_pa(self, u: np.ndarray) -> np.ndarray:
+    def blocked_ends_pa(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The last reduced pressure (Pa) at which each row of ``u`` (m, 6) is given a
-        force by where its blocked-tip FE curve is emulated to end
-        (``blocked_range.BlockedRange.force_ends_pa``; inf without that model)."""
+        force by where its blocked-tip FE curve is emulated to end, and that end (reduced
+        Pa; ``blocked_range.BlockedRange.force_ends_pa``; inf without that model)."""
         if self.blocked_range is None:
-            return np.full(len(np.atleast_2d(u)), np.inf)
+            inf = np.full(len(np.atleast_2d(u)), np.inf)
+            return inf, inf
         return self.blocked_range.force_ends_pa(u)
+
+    def force_sd_scales(self, blocked_mean_pa: np.ndarray | float) -> np.ndarray | float:
+        """The force GP's sd multiplier at each force node (rows: designs whose
+        blocked-tip curves are emulated to end at ``blocked_mean_pa``, reduced Pa):
+        ``force_band_scale``, times ``BlockedRange.band_scales`` near that end."""
+        if self.blocked_range is None or self.force is None:
+            return self.force_band_scale
+        nodes = FORCE_PRESSURE_NODES_PA[:len(self.force.center)]
+        ends = np.asarray(blocked_mean_pa, float)
+        return self.force_band_scale * self.blocked_range.band_scales(
+            nodes if ends.ndim == 0 else nodes[None, :], ends if ends.ndim == 0
+            else ends[:, None])
 
     def force_per_kpa(self, feature: np.ndarray, node_mean: np.ndarray) -> np.ndarray:
         """F/p (mN/kPa) from the force GP's variable, given the emulated free-curve
@@ -482,6 +495,7 @@ class CurveBand:
     # the last reduced pressure (Pa) at which the force is given by where this design's
     # blocked-tip FE curve is emulated to end (PairEmulator.blocked_ends_pa)
     blocked_end_pa: float = float("inf")
+    blocked_mean_pa: float = float("inf")   # that curve's emulated end (reduced Pa)
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -751,10 +765,12 @@ class Emulator:
                 p_var = self.spread_variance(np.concatenate((p_var, var[N_NODES:])))
             p_sd = np.sqrt(p_var[:N_NODES]) * scales[:N_NODES]
             reference = tuple(_monotone(c) for c in node_curves(p_mean, p_sd, z))
-        blocked_end = (float(pe.blocked_ends_pa(u)[0]) if pe.force is not None
-                       else float("inf"))
+        blocked = (pe.blocked_ends_pa(u) if pe.force is not None
+                   else (np.full(1, np.inf), np.full(1, np.inf)))
         return pair_key, CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw,
-                                   mean, u, nearest, reference, blocked_end_pa=blocked_end)
+                                   mean, u, nearest, reference,
+                                   blocked_end_pa=float(blocked[0][0]),
+                                   blocked_mean_pa=float(blocked[1][0]))
 
     # -- Predictor -----------------------------------------------------------------------
     def predict(self, design: Design, pressures_pa: object, level: float = 0.95
@@ -1041,7 +1057,7 @@ class Emulator:
         mean, var = self._memo.get_or_make(  # type: ignore[attr-defined]
             ("force", pe.pair, cb.coordinates.tobytes()),
             lambda: pe.force.predict(cb.coordinates))
-        sd = np.sqrt(var) * pe.force_band_scale
+        sd = np.sqrt(var) * pe.force_sd_scales(cb.blocked_mean_pa)
         scale = point.pressure_scale * point.length_scale**2
         past = p_red > pe.force_end_pa(cb.limit_pressure_pa, cb.blocked_end_pa) * (1 + 1e-12)
         pm, pl, pu = cb.force_reference or (cb.pressure_pa, cb.pressure_lower_pa,
@@ -1242,8 +1258,8 @@ class Emulator:
             force_curves = curves
             if pe.force is not None:
                 fmean, fvar = pe.force.predict_many(u)
-                fsd = np.sqrt(fvar) * pe.force_band_scale
-                blocked_ends = pe.blocked_ends_pa(u)
+                blocked_ends, blocked_means = pe.blocked_ends_pa(u)
+                fsd = np.sqrt(fvar) * pe.force_sd_scales(blocked_means)
                 if plain is not None:
                     # the force model's angle and band: the complete-curve GPs' (as
                     # curve_band)

@@ -40,6 +40,7 @@ from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows
 from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
+from surrogate.emulator.force_gps import force_gps_from_dict
 from surrogate.emulator.shape_gps import (
     TOP_PRESSURE_FROM,
     TOP_SHAPE_NODES_DEG,
@@ -56,7 +57,9 @@ from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
 FORMAT_VERSION = 15  # 15: blocked_range, where each design's blocked-tip FE curve ends
-                     # (blocked_range.py; 14 read: none, the group's force range);
+                     # (blocked_range.py; 14 read: none, the group's force range), and
+                     # the force GPs in segments, each node conditioned on every design
+                     # that reaches it (force_gps.py; 14 read: one VectorGP);
                      # 14: top_pressure_gps, the pressure nodes from 45 deg read with the
                      # shape below (shape_gps.py; 13 read: none, the curve GPs' own);
                      # 13: volume_gps, the volume nodes read with the pressure curve's
@@ -141,7 +144,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
                 fe_stop_reason=str(p["fe_stop_reason"]),
                 coordinates=np.array(p["coordinates"], float),
                 keys=tuple(str(k) for k in p["keys"]),
-                force=None if p["force"] is None else vector_gp_from_dict(p["force"]),
+                force=None if p["force"] is None else force_gps_from_dict(p["force"]),
                 force_band_scale=float(p["force_band_scale"]),
                 force_limit_pa=float(p["force_limit_pa"]),
                 failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]),
