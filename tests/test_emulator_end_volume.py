@@ -1,5 +1,6 @@
 """The range by injected volume ends where nearby database curves' FE ended at a Newton
-failure (``PairEmulator.end_volume_cap_ul``; emulator file format 15).
+failure (``PairEmulator.end_volume_cap_ul``; emulator file format 15), and at the FE's
+volume stop itself, not at the fine angle after it.
 
 Reference numbers: the FE curves of service/data/curves.h5 (their last injected volume);
 the emulators are fitted from them here or read from the shipped file.
@@ -164,3 +165,19 @@ def test_the_balance_model_stops_where_its_newton_failed_database_curve_ended(
     assert "past_fe_range" in r.validity["flags"]
     assert r.validity["fe_limit_volume_ul"] == pytest.approx(end_ul, rel=1e-6)
     assert f"ended at about {end_ul:.0f} ul" in r.validity["messages"][0]
+
+
+def test_the_range_by_volume_ends_at_the_fes_volume_stop_itself(shipped_records):
+    """Database design da1e0959 (Ecoflex on Ecoflex; its FE failed at 50.0 deg and 499.8
+    ul): its emulated volume passes the FE's 500 ul stop steeply, 7 % between two fine
+    angles 0.25 deg apart. The range was read at the first fine angle past the stop, and
+    by volume answered to 534.6 ul, where the FE stops at 500; it now ends at 500 ul."""
+    from surrogate.emulator import load_emulator
+
+    e = load_emulator(DATA_DIR / "emulator.json")
+    design = _record(shipped_records, "da1e0959").design
+    r = e.predict_volume(design, [495.0, 510.0])
+    assert np.isfinite(r.angle_deg[0]) and np.isnan(r.angle_deg[1])
+    assert "past_fe_range" in r.validity["flags"]
+    assert r.validity["fe_limit_volume_ul"] == pytest.approx(500.0, rel=1e-9)
+    assert "max_volume_ul" in r.validity["fe_stop_reason"]

@@ -415,10 +415,9 @@ class PairEmulator:
                           f"bends, or a Newton failure): {why}; its range is taken to end "
                           f"{RANGE_Z:g} sd short of the emulated end")
         if self.fe_max_volume_ul is not None:
-            v_stop = self.fe_max_volume_ul / length_scale**3
-            over = np.flatnonzero(np.asarray(volume_red_ul) >= v_stop)
-            if len(over) and FINE_ANGLES_DEG[over[0]] < limit:
-                limit = float(FINE_ANGLES_DEG[over[0]])
+            at_stop = angle_at_volume_deg(volume_red_ul, self.fe_max_volume_ul / length_scale**3)
+            if at_stop is not None and at_stop < limit:
+                limit = at_stop
                 reason = (f"the default FE stops at {self.fe_max_volume_ul:g} ul injected "
                           "(SolverSettings.max_volume_ul), which this design's emulated "
                           "volume reaches there: " + (
