@@ -87,6 +87,7 @@ class _Rows:
     keys: list
     curves: list          # (p_red, v_red, angle) per record, for cross-validation
     failed: list          # (u, end angle, reason)
+    failed_end_volume: list  # the FE's last injected volume of each, reduced (ul)
     signs: list
     failed_signs: list
     failed_y: list        # node outputs of the early-ended curves (NaN past their end)
@@ -123,7 +124,8 @@ def _collect(records: Iterable) -> tuple[dict, dict, dict]:
             continue
         c = rec.curve
         if rec.settings == free_settings:
-            rows = free.setdefault(point.group, _Rows([], [], [], [], [], [], [], [], [], []))
+            rows = free.setdefault(point.group,
+                                  _Rows([], [], [], [], [], [], [], [], [], [], []))
             f = curve_features(c.pressure_pa / point.pressure_scale,
                                c.volume_ul / point.length_scale**3, c.angle_deg)
             u = point.coordinates()
@@ -132,6 +134,8 @@ def _collect(records: Iterable) -> tuple[dict, dict, dict]:
             if f.end_angle_deg < LIMIT_ANGLE_DEG or not np.isfinite(f.log_p).all():
                 rows.failed.append((u.tolist(), min(f.end_angle_deg, LIMIT_ANGLE_DEG),
                                     c.reason))
+                rows.failed_end_volume.append(float(np.max(c.volume_ul))
+                                              / point.length_scale**3)
                 rows.failed_signs.append(f.sign)
                 rows.failed_y.append(np.concatenate((f.log_p, f.log_v)))
                 rows.failed_last_step.append(f.last_step_from_deg)
@@ -522,7 +526,8 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         coordinates=u, keys=keys, force=force_gp, force_band_scale=force_scale,
         force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[2],
         range_model=range_model,
-        blocked_range=blocked_range if force_gp is not None else None)
+        blocked_range=blocked_range if force_gp is not None else None,
+        failed_end_volume_ul=np.array(rows.failed_end_volume, float))
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gp.gps),
               "force_designs": force_designs if force_gp is not None else 0,

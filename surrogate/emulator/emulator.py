@@ -201,6 +201,21 @@ def ended_at_volume_stop(reason: str) -> bool:
     return reason.startswith("reached max_volume_ul")
 
 
+def ended_at_newton_failure(reason: str) -> bool:
+    """Whether an FE curve's stop reason (``solver.stepping``) is a step that did not
+    converge, not one of the FE's stops (``reached max_...``)."""
+    return not reason.startswith("reached ")
+
+
+def end_volume_reason(volume_ul: float) -> str:
+    """Why a design's range ends at ``volume_ul`` injected (whole actuator, ul): the
+    volume at which early-ended database curves within FAILED_RADIUS ended
+    (``PairEmulator.end_volume_cap_ul``, scaled to the design's size)."""
+    return (f"the FE curves of nearby database designs ended at about {volume_ul:.0f} ul "
+            "injected (at this design's size; a Newton failure, where the FE could go no "
+            "further)")
+
+
 def balance_message(designs: int) -> str:
     """What an answer near the stiffness balance is read from (its first message)."""
     return ("this design sits near the balance of the two layers' stiffness, where both "
@@ -253,8 +268,11 @@ class PairEmulator:
     range_model: VectorGP | None = None     # the end angle / 90 deg of the group's curves
     near_failed_band_scale: np.ndarray | None = None
     # where the group's blocked-tip FE curves end (the force's range; None: the group's
-    # force range at every design, as in files before format 16)
+    # force range at every design, as in files before format 15)
     blocked_range: BlockedRange | None = None
+    # the FE's last injected volume (reduced, ul) of each curve of ``failed``, in its order
+    # (None: files before format 15, no volume cap)
+    failed_end_volume_ul: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         # the early-ended curves' unit coordinates, stacked once for fe_range's distances
@@ -284,6 +302,19 @@ class PairEmulator:
             near = d < NEAR_FAILED_RADIUS
             out[near] *= self.near_failed_band_scale
         return out
+
+    def end_volume_cap_ul(self, failed_distances: np.ndarray) -> float | None:
+        """The smallest injected volume (reduced, ul) at which an early-ended database curve
+        within FAILED_RADIUS (unit cube; ``failed_distances`` from ``failed_distances(u)``)
+        ended at a Newton failure, where the FE could go no further; None when none did
+        (or the file holds no end volumes). Curves ended at one of the FE's stops (volume,
+        angle, pressure: settings, not the physics) do not count."""
+        if self.failed_end_volume_ul is None or not len(failed_distances):
+            return None
+        ends = [v for (_, _, why), v, d in zip(self.failed, self.failed_end_volume_ul,
+                                                failed_distances, strict=True)
+                if d < FAILED_RADIUS and ended_at_newton_failure(why)]
+        return float(min(ends)) if ends else None
 
     def ends_short_of_volume_stop_at(self, u: np.ndarray) -> bool:
         """Whether the nearest early-ended database curve of the group lies within
@@ -362,7 +393,11 @@ class PairEmulator:
         ``emulated_end_deg(u)`` as ``emulated_end`` when it is already known) where that
         end is below RANGE_COMPLETE_DEG or an early-ended database curve lies within
         NEAR_FAILED_RADIUS; the end of an early-ended database curve within FAILED_RADIUS
-        (``failed_distances(u)`` when already known)."""
+        (``failed_distances(u)`` when already known); the angle at which the emulated
+        volume reaches the last FE volume of such a curve that ended at a Newton failure
+        (``end_volume_cap_ul``: near such an end the emulated V(theta) is least sure;
+        database design dad39d92, whose FE failed at 71.3 deg and 142.6 ul, was answered by
+        volume to 199.5 ul)."""
         limit, reason = self.fe_limit_angle_deg, self.fe_stop_reason
         if failed_distances is None:
             failed_distances = self.failed_distances(u)
@@ -384,10 +419,9 @@ class PairEmulator:
                           f"bends, or a Newton failure): {why}; its range is taken to end "
                           f"{RANGE_Z:g} sd short of the emulated end")
         if self.fe_max_volume_ul is not None:
-            v_stop = self.fe_max_volume_ul / length_scale**3
-            over = np.flatnonzero(np.asarray(volume_red_ul) >= v_stop)
-            if len(over) and FINE_ANGLES_DEG[over[0]] < limit:
-                limit = float(FINE_ANGLES_DEG[over[0]])
+            at_stop = angle_at_volume_deg(volume_red_ul, self.fe_max_volume_ul / length_scale**3)
+            if at_stop is not None and at_stop < limit:
+                limit = at_stop
                 reason = (f"the default FE stops at {self.fe_max_volume_ul:g} ul injected "
                           "(SolverSettings.max_volume_ul), which this design's emulated "
                           "volume reaches there: " + (
@@ -397,6 +431,12 @@ class PairEmulator:
                               f"holds {length_scale**3:.3g}x its volume, so it reaches the "
                               "stop at a smaller angle (POST /v1/solve with a larger "
                               "max_volume_ul gives the rest)"))
+        cap_ul = self.end_volume_cap_ul(failed_distances)
+        at_cap = None if cap_ul is None else angle_at_volume_deg(volume_red_ul, cap_ul)
+        if at_cap is not None and at_cap < limit:
+            limit = at_cap
+            reason = (end_volume_reason(cap_ul * length_scale**3) + ", which this design's "
+                      "emulated volume reaches there")
         if self.failed:
             near = failed_distances < FAILED_RADIUS
             for i in np.flatnonzero(near):
@@ -552,6 +592,17 @@ def volume_shape(v: np.ndarray) -> np.ndarray:
     left a plateau, and the angle read at a volume on it jumped by 20 deg or more."""
     lv = np.log(v) - _VOLUME_FLOOR
     return np.exp(np.maximum.accumulate(lv, axis=-1) + _VOLUME_FLOOR)
+
+
+def angle_at_volume_deg(volume_red_ul: np.ndarray, v_red: float) -> float | None:
+    """The angle (deg) at which an emulated V(theta) (``volume_red_ul``: reduced ul on
+    FINE_ANGLES_DEG, non-decreasing, ``volume_shape``) reaches the reduced volume
+    ``v_red`` (ul), linear between the fine angles as a query by volume reads it (so that
+    the range's end by volume is ``v_red`` itself); None where it does not."""
+    v = np.asarray(volume_red_ul, float)
+    if v[-1] < v_red:
+        return None
+    return float(np.interp(v_red, _with_origin(v), ANGLES0))
 
 
 def emulated_volume_ul(log_v_nodes: np.ndarray) -> np.ndarray:
@@ -968,8 +1019,16 @@ class Emulator:
         v_stop = min(float(VOLUME_NODES_UL[-1]),
                      BALANCE_VOLUME_MARGIN * SolverSettings().max_volume_ul
                      / point.length_scale**3)
-        v_limit, stop, pressure_stopped = self._balance_range_end(model, nodes, v_stop, z,
-                                                                  point.pressure_scale)
+        # the group's early-ended curves (the same in both directions' pair emulators)
+        pe = self.pairs.get(point.group + "+") or self.pairs.get(point.group + "-")
+        cap_ul = (None if pe is None else
+                  pe.end_volume_cap_ul(pe.failed_distances(point.coordinates())))
+        cap_reason = None
+        if cap_ul is not None and cap_ul < v_stop:
+            v_stop = cap_ul
+            cap_reason = end_volume_reason(cap_ul * point.length_scale**3)
+        v_limit, stop, pressure_stopped = self._balance_range_end(
+            model, nodes, v_stop, z, point.pressure_scale, cap_reason)
         at_limit = model.by_volume(nodes, np.array([v_limit]), z)
         top = SolverSettings().max_angle_deg
         return (v_limit, stop, pressure_stopped, float(at_limit[3][0]) * point.pressure_scale,
@@ -1016,13 +1075,16 @@ class Emulator:
 
     @staticmethod
     def _balance_range_end(model: BalanceModel, nodes: tuple, v_limit: float, z: float,
-                           pressure_scale: float) -> tuple[float, str, bool]:
+                           pressure_scale: float, volume_reason: str | None = None
+                           ) -> tuple[float, str, bool]:
         """Where the FE's range ends for a design the balance model answers (reduced
         volume, ul) and why: the volume stop, or the FE's angle stop or its pressure stop
         (FE_PRESSURE_STOP_PA, at ``pressure_scale``) where the balance model's mean
         reaches one first. Answered past 90 deg, a design near the balance with a stiff
         body read 122 and 135 deg at 200 and 480 ul, its band cut to [90, 90] (an audit
-        of the thirty-fifth session). The third item: whether it is the pressure stop."""
+        of the thirty-fifth session). The third item: whether it is the pressure stop.
+        ``volume_reason``: why the range ends at ``v_limit`` when that is not the volume
+        stop (``end_volume_reason``)."""
         top = SolverSettings().max_angle_deg
         grid = np.linspace(0.0, v_limit, 241)[1:]
         angle, _, _, p_red = model.by_volume(nodes, grid, z)
@@ -1037,9 +1099,10 @@ class Emulator:
                 ends.append((v_end, why or pressure_stop_reason(
                     float(np.nanmax(p_red)) * pressure_scale), why is None))
         if not ends:
-            return v_limit, (f"the FE's volume stop ({SolverSettings().max_volume_ul:g} ul, "
-                             "SolverSettings.max_volume_ul), where the FE curves near the "
-                             "balance end"), False
+            return v_limit, volume_reason or (
+                f"the FE's volume stop ({SolverSettings().max_volume_ul:g} ul, "
+                "SolverSettings.max_volume_ul), where the FE curves near the balance end"
+            ), False
         return min(ends)
 
     @staticmethod

@@ -57,9 +57,12 @@ from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
 FORMAT_VERSION = 15  # 15: blocked_range, where each design's blocked-tip FE curve ends
-                     # (blocked_range.py; 14 read: none, the group's force range), and
-                     # the force GPs in segments, each node conditioned on every design
-                     # that reaches it (force_gps.py; 14 read: one VectorGP);
+                     # (blocked_range.py; 14 read: none, the group's force range); the
+                     # force GPs in segments, each node conditioned on every design that
+                     # reaches it (force_gps.py; 14 read: one VectorGP);
+                     # failed_end_volume_ul, the early-ended curves' last FE injected
+                     # volumes (reduced), which cap the range by volume near them
+                     # (emulator.PairEmulator.end_volume_cap_ul; 14 read: none, no cap);
                      # 14: top_pressure_gps, the pressure nodes from 45 deg read with the
                      # shape below (shape_gps.py; 13 read: none, the curve GPs' own);
                      # 13: volume_gps, the volume nodes read with the pressure curve's
@@ -87,6 +90,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "fe_limit_angle_deg": pe.fe_limit_angle_deg, "fe_stop_reason": pe.fe_stop_reason,
             "coordinates": pe.coordinates.tolist(), "keys": list(pe.keys),
             "failed": [[np.asarray(u).tolist(), a, r] for u, a, r in pe.failed],
+            "failed_end_volume_ul": None if pe.failed_end_volume_ul is None
+            else np.asarray(pe.failed_end_volume_ul, float).tolist(),
             "curves": pe.curves.gp.as_dict(),
             "volume_rise_anchor": pe.curves.volume_rise_anchor,
             "early_ended_nodes": None if pe.curves.early_ended is None else {
@@ -155,7 +160,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
                 else vector_gp_from_dict(p["range_model"]),
                 near_failed_band_scale=None if p.get("near_failed_band_scale") is None
                 else _band_scales(p["near_failed_band_scale"]),
-                blocked_range=blocked_range_from_dict(p.get("blocked_range")))
+                blocked_range=blocked_range_from_dict(p.get("blocked_range")),
+                failed_end_volume_ul=_end_volumes(p))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
         if not pairs:
@@ -223,11 +229,28 @@ def _precheck_pair(p: dict) -> None:
     if form not in FORCE_FORMS:
         raise ValueError(f"pair {p['pair']}: force_form {form!r} is not one of "
                          f"{', '.join(FORCE_FORMS)}")
+    _end_volumes(p)
     volume = p.get("fe_max_volume_ul")
     if volume is not None and not (math.isfinite(float(volume)) and float(volume) > 0):
         raise ValueError(f"pair {p['pair']}: fe_max_volume_ul must be a positive number")
     if not np.isfinite(coordinates).all():
         raise ValueError(f"pair {p['pair']}: coordinates are not finite")
+
+
+def _end_volumes(p: dict) -> np.ndarray | None:
+    """A pair's early-ended curves' last FE injected volumes (reduced ul, one per entry of
+    ``failed``; None before format 15); ValueError when damaged."""
+    value = p.get("failed_end_volume_ul")
+    if value is None:
+        return None
+    numbers = isinstance(value, list) and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    out = np.array(value if numbers else [], float)
+    if (not numbers or out.shape != (len(p["failed"]),) or not np.isfinite(out).all()
+            or (out <= 0).any()):
+        raise ValueError(f"pair {p['pair']}: failed_end_volume_ul must be one positive "
+                         "number (ul) per early-ended curve of failed")
+    return out
 
 
 def _check_group_coverage(report: dict) -> None:
