@@ -507,7 +507,8 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(
     range and pushes the way the group bends) the force model gives the FE's force (mN) to
     5 % of its largest value within the range (the ratio is interpolated between nodes),
     with a band about it, most of it is answered (the band within 2 x the force), and
-    nothing is given past the range (the group's, or the free curve's end)."""
+    nothing is given past the range (the group's, the free curve's end, or 90 % of where
+    the design's blocked-tip curve is emulated to end)."""
     import surrogate.emulator.emulator as emulator_module
     from surrogate.emulator.build import is_force_record
 
@@ -523,7 +524,7 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(
         except InputError:
             continue                         # near the Ecoflex/Ecoflex balance
         c = rec.curve
-        limit_red = pe.force_end_pa(cb.limit_pressure_pa)
+        limit_red = pe.force_end_pa(cb.limit_pressure_pa, cb.blocked_end_pa)
         if (c.pressure_pa.max() < pe.force_limit_pa * point.pressure_scale
                 or limit_red < pe.force_limit_pa or pe.sign * c.force_mn[-1] <= 0):
             continue     # its blocked or free curve ends before the group's force range

@@ -22,7 +22,8 @@ early-ended blocked-tip curves, which the force model is not fitted on). With th
 database's 181 early-ended blocked-tip curves none is given a force past its FE end (4
 before), of the held-out sets' 27 none (1); the share of their FE points given a force
 fell 0.349 -> 0.330 and 0.426 -> 0.401, on the held-out complete curves 850 -> 849 of 1240
-(``benchmarks/blocked_tip_ends.py``; benchmarks/RESULTS.md, thirty-ninth session).
+(``benchmarks/blocked_tip_ends.py``, the refit with this change alone; benchmarks/RESULTS.md,
+thirty-ninth session).
 """
 
 from __future__ import annotations
