@@ -75,10 +75,19 @@ class BlockedRange:
     # (``near_end_band_scales``; ones: not calibrated)
     near_end_band_scale: tuple[float, ...] = (1.0,) * len(NEAR_END_FROM)
 
+    def __post_init__(self) -> None:
+        # the ended curves' unit coordinates stacked once (``reason``'s nearest)
+        object.__setattr__(self, "_ended_u", np.array([np.asarray(e[0], float)
+                                                      for e in self.ended]))
+
     def ends_pa(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The emulated end pressure (reduced Pa) of the blocked-tip FE curve at each row
         of ``u`` (m, 6), and the sd of its log."""
-        m, var = self.model.predict_many(np.atleast_2d(u))
+        u = np.asarray(u, float)
+        if u.ndim == 1:         # one design: the single-row path (a query's)
+            m, var = (a[None, :] for a in self.model.predict(u))
+        else:
+            m, var = self.model.predict_many(u)
         return self.cap_pa * np.exp(m[:, 0]), np.sqrt(np.maximum(var[:, 0], 0.0))
 
     def force_ends_pa(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -113,7 +122,7 @@ class BlockedRange:
         end, sd_log = (float(x[0]) for x in self.ends_pa(u))
         cause = "reaches a pressure maximum or the FE's volume stop"
         if self.ended:
-            near = np.argmin([np.sum((np.asarray(e[0]) - u) ** 2) for e in self.ended])
+            near = int(np.argmin(np.sum((self._ended_u - u) ** 2, axis=1)))
             cause = _cause(self.ended[near][2])
         return (f"this design's blocked-tip FE curve is emulated to end at "
                 f"{end * pressure_scale:.0f} Pa (+/- {100 * sd_log:.0f} %): nearby "

@@ -278,6 +278,10 @@ class PairEmulator:
         # the early-ended curves' unit coordinates, stacked once for fe_range's distances
         object.__setattr__(self, "_failed_u", np.array(
             [np.asarray(fu, float) for fu, _, _ in self.failed]) if self.failed else None)
+        # and which of them ended at a Newton failure, for end_volume_cap_ul (a loop over
+        # them in Python cost 60 us of every query)
+        object.__setattr__(self, "_newton_failed", np.array(
+            [ended_at_newton_failure(why) for _, _, why in self.failed], bool))
 
     def failed_distances(self, u: np.ndarray) -> np.ndarray:
         """Unit-cube distance from ``u`` to each database curve of the group that ended
@@ -311,10 +315,8 @@ class PairEmulator:
         angle, pressure: settings, not the physics) do not count."""
         if self.failed_end_volume_ul is None or not len(failed_distances):
             return None
-        ends = [v for (_, _, why), v, d in zip(self.failed, self.failed_end_volume_ul,
-                                                failed_distances, strict=True)
-                if d < FAILED_RADIUS and ended_at_newton_failure(why)]
-        return float(min(ends)) if ends else None
+        near = (np.asarray(failed_distances) < FAILED_RADIUS) & self._newton_failed
+        return float(np.min(self.failed_end_volume_ul[near])) if near.any() else None
 
     def ends_short_of_volume_stop_at(self, u: np.ndarray) -> bool:
         """Whether the nearest early-ended database curve of the group lies within

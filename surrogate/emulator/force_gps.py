@@ -25,8 +25,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from surrogate.emulator.gp import from_hyperparameters
-from surrogate.emulator.vector_gp import VectorGP, fit_output_gps, vector_gp_from_dict
+from surrogate.emulator.gp import from_hyperparameters, matern52_in_place
+from surrogate.emulator.vector_gp import (
+    VectorGP,
+    _a_inv,
+    _kinv_h,
+    _linv,
+    fit_output_gps,
+    vector_gp_from_dict,
+)
 
 
 def nodes_reached(y: np.ndarray) -> np.ndarray:
@@ -43,6 +50,40 @@ class ForceGPs:
 
     segments: tuple[VectorGP, ...]
 
+    def __post_init__(self) -> None:
+        # One query's arrays, all segments stacked over the first segment's rows (every
+        # later training set is a subset of it; a segment's arrays are zero at the rows
+        # it lacks): L^-1 of each kernel, K^-1 H, A^-1, and every output's GLS
+        # coefficients, alpha, signal variance and segment. A query is one kernel row and
+        # a few batched products (each segment's own VectorGP.predict took 30-40 us,
+        # mostly call overhead: 5 segments tripled the force's share of a first query).
+        first = self.segments[0].gps[0]
+        n = len(first.x)
+        place = {row.tobytes(): i for i, row in enumerate(first.x)}
+        linv = np.zeros((len(self.segments), n, n))
+        kinv_h = np.zeros((len(self.segments), n, len(first.beta)))
+        alpha = np.zeros((sum(len(seg.gps) for seg in self.segments), n))
+        a_inv, segment_of, out = [], [], 0
+        for q, seg in enumerate(self.segments):
+            gp = seg.gps[0]
+            if not np.array_equal(gp.varying, first.varying):
+                raise ValueError("force GPs: segments with different mean bases")
+            idx = np.array([place[row.tobytes()] for row in gp.x])
+            linv[q][np.ix_(idx, idx)] = _linv(gp)
+            kinv_h[q][idx] = _kinv_h(gp)
+            a_inv.append(_a_inv(gp))
+            for g in seg.gps:
+                alpha[out, idx] = g.alpha
+                segment_of.append(q)
+                out += 1
+        gps = self.gps
+        object.__setattr__(self, "_lean", {
+            "x": first.x, "inv_l2": 1.0 / first.lengths**2, "varying": first.varying,
+            "linv": linv, "kinv_h": kinv_h, "a_inv": np.array(a_inv), "alpha": alpha,
+            "beta": np.array([g.beta for g in gps]),
+            "s2": np.array([g.signal_var for g in gps]), "segment_of": np.array(segment_of),
+            "center": self.center, "scale": np.concatenate([s.scale for s in self.segments])})
+
     @property
     def gps(self) -> tuple:
         """Every node's GP, in node order."""
@@ -53,9 +94,22 @@ class ForceGPs:
         return np.concatenate([s.center for s in self.segments])
 
     def predict(self, u: np.ndarray, variance_of=None) -> tuple[np.ndarray, np.ndarray]:
-        """Mean and variance at every node for one input row ``u``."""
-        parts = [s.predict(u, variance_of) for s in self.segments]
-        return np.concatenate([m for m, _ in parts]), np.concatenate([v for _, v in parts])
+        """Mean and variance at every node for one input row ``u`` (``variance_of``: as
+        VectorGP's; given, the segments' own predict answers)."""
+        if variance_of is not None:
+            parts = [s.predict(u, variance_of) for s in self.segments]
+            return (np.concatenate([m for m, _ in parts]),
+                    np.concatenate([v for _, v in parts]))
+        st = self._lean  # type: ignore[attr-defined]
+        u = np.asarray(u, float).ravel()
+        k = matern52_in_place(((st["x"] - u) ** 2) @ st["inv_l2"])
+        h = np.concatenate(([1.0], u[st["varying"]]))
+        v = st["linv"] @ k                                           # (segments, n)
+        rr = h - k @ st["kinv_h"]                                    # (segments, p)
+        shared = np.maximum(1.0 - np.einsum("sn,sn->s", v, v)
+                            + np.einsum("sp,spq,sq->s", rr, st["a_inv"], rr), 0.0)
+        mean = st["center"] + st["scale"] * (st["beta"] @ h + st["alpha"] @ k)
+        return mean, st["scale"] ** 2 * st["s2"] * shared[st["segment_of"]]
 
     def predict_many(self, u: np.ndarray, variance_of=None) -> tuple[np.ndarray, np.ndarray]:
         """Means and variances (N, nodes) at the rows of ``u``."""
