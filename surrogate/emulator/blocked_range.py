@@ -116,10 +116,13 @@ class BlockedRange:
                for x, m in zip(np.round(gp.x, 9), mean[:, 0], strict=True)}
         return np.array([own.get(tuple(x), np.inf) for x in np.round(np.atleast_2d(u), 9)])
 
-    def reason(self, u: np.ndarray, pressure_scale: float) -> str:
-        """Why the force ends where ``force_ends_pa`` says, for the design at unit
-        coordinates ``u`` (its pressure scale converts to chamber Pa)."""
-        end, sd_log = (float(x[0]) for x in self.ends_pa(u))
+    def reason(self, u: np.ndarray, end_pa: float, force_end_pa: float,
+               pressure_scale: float) -> str:
+        """Why the force ends where ``force_ends_pa`` says (``force_end_pa``, with the
+        emulated end ``end_pa``; both reduced Pa, as it returned them) for the design at
+        unit coordinates ``u`` (its pressure scale converts to chamber Pa)."""
+        end = end_pa
+        sd_log = np.log(BLOCKED_END_SHARE * end_pa / force_end_pa) / BLOCKED_RANGE_Z
         cause = "reaches a pressure maximum or the FE's volume stop"
         if self.ended:
             near = int(np.argmin(np.sum((self._ended_u - u) ** 2, axis=1)))

@@ -1230,7 +1230,8 @@ class Emulator:
             flags.append("force_past_fe_range")
             if f_end >= cb.blocked_end_pa * (1 - 1e-12):
                 why = pe.blocked_range.reason(  # type: ignore[union-attr]
-                    cb.coordinates, point.pressure_scale)
+                    cb.coordinates, cb.blocked_mean_pa, cb.blocked_end_pa,
+                    point.pressure_scale)
             elif f_end >= pe.force_limit_pa * (1 - 1e-12):
                 why = "the end of the blocked-tip FE curves"
             else:
