@@ -395,6 +395,31 @@ def fe_angle_end(model: object, design: Design, pressure_pa: float, level: float
     return abs(float(end)) if end is not None and np.isfinite(end) else None
 
 
+#: pressures tried above the target's, as multiples of it (force_past_target)
+HIGHER_PRESSURE_FACTORS = tuple(np.round(np.linspace(1.0, 2.0, 41), 3))
+
+
+def force_past_target(model: object, design: Design, pressure_pa: float, level: float
+                      ) -> tuple[float, float] | None:
+    """The highest pressure (Pa) up to 2x ``pressure_pa`` at which ``design``'s force is
+    still given, and the largest |force| (mN) up to it, where the force ends before 2x
+    (the design's blocked-tip FE curve ends at a pressure maximum, or its free range
+    does); None where it goes on (more pressure gives more force) or is never given."""
+    p = pressure_pa * np.array(HIGHER_PRESSURE_FACTORS)
+    try:
+        pred = model.predict(design, p, level=level)  # type: ignore[attr-defined]
+    except InputError:
+        return None
+    if pred.force_mn is None:
+        return None
+    force = np.abs(np.asarray(pred.force_mn, float))
+    given = np.isfinite(force)
+    if not given.any() or given[-1]:
+        return None
+    last = int(np.flatnonzero(given)[-1])
+    return float(p[last]), float(np.max(force[:last + 1]))
+
+
 #: fractions of the target pressure tried, highest first, for the highest pressure at which
 #: designs inside the bounds are still within their FE range (past_range_explanation)
 LOWER_PRESSURE_FRACTIONS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.05)
@@ -631,10 +656,23 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                            "(angle_deg)")
         else:
             where = ("within" if target.kind == "pressure_budget" else "at")
-            widen = ("widen the bounds (longer chamber, thinner membrane, softer membrane) "
-                     "or raise the pressure" if solve_variable(ranges) is not None else
+            # a force target: more pressure helps only as far as the best design's force
+            # is given (its blocked-tip FE curve ends at a pressure maximum, or its free
+            # range ends)
+            end = (force_past_target(model, best_design, target.pressure_pa, level)
+                   if what == "force" and best_design is not None else None)
+            widen = ("widen the bounds (longer chamber, thinner membrane, softer membrane)"
+                     if solve_variable(ranges) is not None else
                      "every variable is pinned to one design: free a bound (L, t, T, b, h "
-                     "or a stiffness scale) or raise the pressure")
+                     "or a stiffness scale)")
+            if end is None or end[1] >= target.value:
+                widen += " or raise the pressure"
+            else:
+                widen += (f"; for the design that reaches the most at "
+                          f"{target.pressure_pa:g} Pa raising the pressure does not get "
+                          f"there: its force is given only to {end[0]:.0f} Pa, up to "
+                          f"{direction * end[1]:.3g} {unit} (past it the FE's blocked-tip "
+                          "or free curve ends: /v1/predict says which)")
             explanation = (f"the target {what} {direction * target.value:g} {unit} {where} "
                            f"{target.pressure_pa:g} Pa is not reachable by any design "
                            f"bending {_WAY[direction]} inside the bounds"

@@ -146,3 +146,20 @@ def test_the_blocked_range_is_stored_older_files_read_without_it_and_damage_is_r
         d["pairs"][0]["blocked_range"] = {**stored, field: value}
         with pytest.raises(SurrogateFileError, match="damaged emulator file"):
             emulator_from_dict(d, "other.json")
+
+
+def test_a_force_past_what_the_box_reaches_is_not_told_to_raise_the_pressure(emulator):
+    """1 mN at 2000 Pa: no design reaches it (0.93 mN the most), and the design that
+    reaches the most has its force only a little further (its blocked-tip FE curve ends
+    soon past 2000 Pa): "or raise the pressure" was the wrong advice."""
+    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.exponential.inverse_design import DesignTarget
+
+    result = search_designs(emulator, DesignTarget("force_at_pressure", 2000.0, force_mn=1.0),
+                            SearchBounds(), n_results=3)
+    assert not result.feasible
+    text = result.explanation
+    assert "or raise the pressure" not in text, text
+    assert "raising the pressure does not get there: its force is given only to" in text, text
+    given = float(text.split("given only to ")[1].split(" Pa")[0])
+    assert 2000.0 <= given < 2400.0, text
