@@ -59,3 +59,27 @@ def test_too_few_designs_reaching_every_node_is_refused():
     y[1:, 2] = np.nan
     with pytest.raises(ValueError, match="fewer than 2 designs reach every force node"):
         fit_force_nodewise(u, y)
+
+
+def test_damaged_force_segments_are_refused_naming_the_file(emulator):
+    """No segments, or a later segment trained on a design the first lacks (every later
+    training set is a subset of the first): SurrogateFileError, not a wrong answer."""
+    from surrogate.emulator.file import emulator_from_dict, emulator_to_dict
+    from surrogate.errors import SurrogateFileError
+    from surrogate.file_seal import KEY
+
+    key = "pdms/ecoflex_00_30+"
+    d = emulator_to_dict(emulator)
+    d.pop(KEY, None)
+    d["pairs"] = [p for p in d["pairs"] if p["pair"] == key]
+    force = d["pairs"][0]["force"]
+    assert emulator_from_dict(d, "ok.json").pairs[key].force is not None
+    for damaged in ({"segments": []},
+                    {"segments": [force["segments"][0], {
+                        **force["segments"][1],
+                        "gps": [{**g, "x": [[v + 0.5 for v in row] for row in g["x"]]}
+                                for g in force["segments"][1]["gps"]]}]}):
+        d["pairs"][0]["force"] = damaged
+        with pytest.raises(SurrogateFileError, match="damaged emulator file"):
+            emulator_from_dict(d, "other.json")
+    d["pairs"][0]["force"] = force
