@@ -24,7 +24,7 @@ from solver.design_space import locate
 from solver.errors import InputError
 from solver.store import CurveStore
 from surrogate import load_surrogate
-from surrogate.emulator import emulator as emulator_module
+from surrogate.emulator import force_answer as force_answer_module
 from surrogate.emulator import load_emulator
 from surrogate.emulator.build import ANGLE_BINS_DEG, angle_bin
 
@@ -126,11 +126,11 @@ def _force(e, rec, out: HeldOut) -> None:
         return
     answered = np.isfinite(p.force_mn)
     # the force model's own accuracy, also where the answer withholds it (band > 2x force)
-    limit, emulator_module.FORCE_BAND_LIMIT = emulator_module.FORCE_BAND_LIMIT, np.inf
+    limit, force_answer_module.FORCE_BAND_LIMIT = force_answer_module.FORCE_BAND_LIMIT, np.inf
     try:
         p = e.predict(rec.design, c.pressure_pa[keep])
     finally:
-        emulator_module.FORCE_BAND_LIMIT = limit
+        force_answer_module.FORCE_BAND_LIMIT = limit
     ok = np.isfinite(p.force_mn)
     out.force_withheld += int((ok & ~answered).sum())
     fe = c.force_mn[keep][ok]

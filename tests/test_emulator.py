@@ -509,7 +509,7 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(
     with a band about it, most of it is answered (the band within 2 x the force), and
     nothing is given past the range (the group's, the free curve's end, or 90 % of where
     the design's blocked-tip curve is emulated to end)."""
-    import surrogate.emulator.emulator as emulator_module
+    import surrogate.emulator.force_answer as force_answer_module
     from surrogate.emulator.build import is_force_record
 
     assert all(pe.force is not None and pe.force_form == "angle_ratio"
@@ -532,7 +532,7 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(
         limit_pa = limit_red * point.pressure_scale
         inside = (c.pressure_pa > 0) & (c.pressure_pa <= limit_pa)
         with monkeypatch.context() as m:
-            m.setattr(emulator_module, "FORCE_BAND_LIMIT", np.inf)
+            m.setattr(force_answer_module, "FORCE_BAND_LIMIT", np.inf)
             model = emulator.predict(rec.design, c.pressure_pa[inside])
         f, lo, hi = model.force_mn, model.force_lower_mn, model.force_upper_mn
         fe = c.force_mn[inside]
@@ -629,7 +629,7 @@ def test_no_force_number_where_its_band_is_wider_than_twice_the_force(emulator):
     FORCE_BAND_FLOOR_MN, far below what a force sensor resolves), no force is given and
     validity says why; the standard design has a force at every pressure of its range,
     its first steps (0.01 uN, the initial reaction's sign uncertain) included."""
-    from surrogate.emulator.emulator import FORCE_BAND_FLOOR_MN, FORCE_BAND_LIMIT
+    from surrogate.emulator.force_answer import FORCE_BAND_FLOOR_MN, FORCE_BAND_LIMIT
 
     p = np.linspace(100.0, 2000.0, 20)
     for d in (Design(), Design(L_mm=10, t_mm=0.9, T_mm=1.3, b_mm=1.6, h_mm=0.2)):
@@ -844,8 +844,8 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(
     # a database design: the force GP interpolates its own F / theta, so the force model
     # (read where the answer withholds it too: with 16 free curves the free angle's band,
     # part of the force band, is wide) reproduces its FE curve, inside its band
-    import surrogate.emulator.emulator as emulator_module
-    monkeypatch.setattr(emulator_module, "FORCE_BAND_LIMIT", np.inf)
+    import surrogate.emulator.force_answer as force_answer_module
+    monkeypatch.setattr(force_answer_module, "FORCE_BAND_LIMIT", np.inf)
     full = e.predict(rec.design, c.pressure_pa[inside])
     fe = c.force_mn[inside]
     np.testing.assert_allclose(full.force_mn, fe, atol=0.02 * np.abs(fe).max())

@@ -47,8 +47,9 @@ from solver.materials import MATERIALS
 from solver.precompute.grid import GridPoint
 from solver.settings import SolverSettings
 from solver.store.keys import record_key
-from surrogate.emulator.emulator import FAILED_RADIUS, N_NODES, Emulator, PairEmulator
-from surrogate.emulator.features import ANGLE_NODES_DEG
+from surrogate.emulator.emulator import Emulator
+from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES
+from surrogate.emulator.pair_emulator import FAILED_RADIUS, PairEmulator
 
 CANDIDATES = 1024
 MIN_SPACING = 0.12

@@ -42,29 +42,30 @@ from surrogate.emulator.blocked_range import (
 )
 from surrogate.emulator.curve_gps import CurveGPs, anchor_index, rise_outputs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows, short_of_the_end
-from surrogate.emulator.emulator import (
-    ANGLES0,
-    FORCE_FORMS,
-    N_NODES,
-    NEAR_FAILED_RADIUS,
-    Emulator,
-    PairEmulator,
-    _monotone,
-    _with_origin,
-    floored_band,
-    free_angles_deg,
-    nearest_distance,
-    node_curves,
-    volume_shape,
-)
+from surrogate.emulator.emulator import Emulator
 from surrogate.emulator.features import (
     ANGLE_NODES_DEG,
     FORCE_PRESSURE_NODES_PA,
+    N_NODES,
     curve_features,
     force_angle_feature,
     force_features,
 )
 from surrogate.emulator.force_gps import fit_force_nodewise, nodes_reached
+from surrogate.emulator.node_curves import (
+    ANGLES0,
+    _monotone,
+    _with_origin,
+    floored_band,
+    free_angles_deg,
+    node_curves,
+)
+from surrogate.emulator.pair_emulator import (
+    FORCE_FORMS,
+    NEAR_FAILED_RADIUS,
+    PairEmulator,
+    nearest_distance,
+)
 from surrogate.emulator.shape_gps import (
     TOP_PRESSURE_FROM,
     TOP_PRESSURE_MIN_DESIGNS,
@@ -74,6 +75,7 @@ from surrogate.emulator.shape_gps import (
 )
 from surrogate.emulator.variance_nodes import choose as choose_variance_nodes
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP, fit_output_gps, fit_vector_gp
+from surrogate.emulator.volume_curve import volume_shape
 
 LIMIT_ANGLE_DEG = 90.0            # the default FE's stop (SolverSettings.max_angle_deg)
 MIN_DESIGNS = 10

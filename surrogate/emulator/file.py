@@ -38,9 +38,10 @@ from surrogate.emulator.balance import BalanceModel, balance_model_from_dict
 from surrogate.emulator.blocked_range import blocked_range_from_dict
 from surrogate.emulator.curve_gps import CurveGPs
 from surrogate.emulator.early_ended_nodes import EarlyEndedRows
-from surrogate.emulator.emulator import FORCE_FORMS, N_NODES, Emulator, PairEmulator
-from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA
+from surrogate.emulator.emulator import Emulator
+from surrogate.emulator.features import ANGLE_NODES_DEG, FORCE_PRESSURE_NODES_PA, N_NODES
 from surrogate.emulator.force_gps import force_gps_from_dict
+from surrogate.emulator.pair_emulator import FORCE_FORMS, PairEmulator
 from surrogate.emulator.shape_gps import (
     TOP_PRESSURE_FROM,
     TOP_SHAPE_NODES_DEG,
@@ -62,7 +63,7 @@ FORMAT_VERSION = 15  # 15: blocked_range, where each design's blocked-tip FE cur
                      # reaches it (force_gps.py; 14 read: one VectorGP);
                      # failed_end_volume_ul, the early-ended curves' last FE injected
                      # volumes (reduced), which cap the range by volume near them
-                     # (emulator.PairEmulator.end_volume_cap_ul; 14 read: none, no cap);
+                     # (pair_emulator.PairEmulator.end_volume_cap_ul; 14 read: none, no cap);
                      # 14: top_pressure_gps, the pressure nodes from 45 deg read with the
                      # shape below (shape_gps.py; 13 read: none, the curve GPs' own);
                      # 13: volume_gps, the volume nodes read with the pressure curve's
@@ -255,7 +256,7 @@ def _end_volumes(p: dict) -> np.ndarray | None:
 
 def _check_group_coverage(report: dict) -> None:
     """The calibration's per-group coverage, which queries read for the flag
-    ``band_undercovers_random_designs`` (``Emulator.random_design_coverage``): each cell a
+    ``band_undercovers_random_designs`` (``validity.random_design_coverage``): each cell a
     share in [0, 1] or None, with non-negative counts of points and curves."""
     cal = report.get("random_design_calibration") or {}
     for pair, axes in (cal.get("group_coverage_after") or {}).items():

@@ -37,16 +37,16 @@ from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.build import ANGLE_BINS_DEG, angle_bin
-from surrogate.emulator.emulator import (
+from surrogate.emulator.curve_band import volume_curves
+from surrogate.emulator.emulator import Emulator
+from surrogate.emulator.features import (
     ANGLE_BAND_FLOOR_DEG,
-    ANGLES0,
+    ANGLE_NODES_DEG,
     FINE_ANGLES_DEG,
     N_NODES,
-    NEAR_FAILED_RADIUS,
-    Emulator,
-    _with_origin,
 )
-from surrogate.emulator.features import ANGLE_NODES_DEG
+from surrogate.emulator.node_curves import ANGLES0, _with_origin
+from surrogate.emulator.pair_emulator import NEAR_FAILED_RADIUS
 
 MIN_CELL_POINTS = 40
 GROUP_MIN_POINTS = 3 * MIN_CELL_POINTS     # a group's own factors from this many points
@@ -109,7 +109,7 @@ def point_factors(emulator: Emulator, records: Iterable, level: float = 0.95
         theta = theta[keep]
         p_red = c.pressure_pa[keep] / point.pressure_scale
         v_red = c.volume_ul[keep] / point.length_scale**3
-        vm, vl, vh = emulator._volume_curves(cb, z)
+        vm, vl, vh = volume_curves(cb, z)
         for axis, x, curves in (
                 ("pressure", p_red, tuple(_with_origin(k) for k in (
                     cb.pressure_pa, cb.pressure_lower_pa, cb.pressure_upper_pa))),

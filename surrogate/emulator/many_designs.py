@@ -1,0 +1,106 @@
+"""Many designs at once, for the inverse design's search (``surrogate.design_search``).
+
+The same answers as a query of one design at a time (the angle with its band at one
+pressure, the pressure needed for one angle, the force), each group's designs in one batch
+of GP predictions.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from solver.design import Design
+from solver.design_space import locate
+from surrogate.band_level import z_value
+from surrogate.emulator.fe_range import fe_range, pressure_stop_angle
+from surrogate.emulator.features import N_NODES
+from surrogate.emulator.force_answer import force_backed
+from surrogate.emulator.node_curves import ANGLES0, _with_origin, node_curves
+from surrogate.emulator.volume_curve import emulated_volume_ul
+from surrogate.predictor import one_signed
+
+if TYPE_CHECKING:
+    from surrogate.emulator.emulator import Emulator
+
+
+def evaluate_designs(emulator: Emulator, designs: list[Design], pressure_pa: float,
+                     angle_deg: float | None, level: float = 0.95) -> dict[str, np.ndarray]:
+    """Many designs at once (inverse design): |angle| (deg) with its band at
+    ``pressure_pa``, and the pressure needed for |``angle_deg``| with its band (NaN
+    past the FE's range), and which way each bends (``sign``: +1 away from the
+    membrane, -1 towards it, 0 near a balance, where no answer is given); arrays in
+    the order of ``designs``. Raises InputError for a design outside the box."""
+    z = z_value(level)
+    points = [locate(d, reduced=True) for d in designs]
+    coords = np.array([pt.coordinates() for pt in points])
+    out = {k: np.full(len(designs), np.nan) for k in (
+        "angle", "angle_lo", "angle_hi", "needed", "needed_lo", "needed_hi", "force",
+        "force_lo", "force_hi")}
+    out["sign"] = np.zeros(len(designs))
+    by_pair: dict[str, list[int]] = {}
+    for key, idx in emulator._signed_groups(points, coords).items():
+        if key in emulator.pairs:
+            by_pair[key] = idx
+    for key, idx in by_pair.items():
+        pe = emulator.pairs[key]
+        out["sign"][idx] = 1.0 if key.endswith("+") else -1.0
+        u = coords[idx]
+        # the variance as a single query reads it: exact at variance_nodes, spread
+        mean, var, ends, plain = (
+            pe.curve_nodes_many(u, variance_of=emulator.variance_nodes)
+            if pe.curves.per_output else pe.curve_nodes_many(u))
+        if pe.curves.per_output:
+            var = np.array([emulator.spread_variance(row) for row in var])
+        scales = pe.band_scales(pe.nearest_failed(u))
+        y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * scales[:, :N_NODES]
+        curves = [np.maximum.accumulate(c, axis=1) for c in node_curves(y, sd, z)]
+        fmean = fsd = None
+        force_curves = curves
+        if pe.force is not None:
+            fmean, fvar = pe.force.predict_many(u)
+            blocked_ends, blocked_means = pe.blocked_ends_pa(u)
+            fsd = np.sqrt(fvar) * pe.force_sd_scales(blocked_means)
+            if plain is not None:
+                # the force model's angle and band: the complete-curve GPs' (as
+                # curve_band)
+                p_mean, p_var = plain
+                if pe.curves.per_output:
+                    p_var = np.array([emulator.spread_variance(np.concatenate((r, v)))
+                                      for r, v in zip(p_var, var[:, N_NODES:],
+                                                      strict=True)])
+                p_sd = np.sqrt(p_var[:, :N_NODES]) * scales[:, :N_NODES]
+                force_curves = [np.maximum.accumulate(c, axis=1)
+                                for c in node_curves(p_mean, p_sd, z)]
+        volumes = emulated_volume_ul(mean[:, N_NODES:])
+        for row, i in enumerate(idx):
+            pt = points[i]
+            limit = fe_range(pe, u[row], volumes[row], pt.length_scale, ends[row])[0]
+            pm, pl, pu = (_with_origin(c[row]) for c in curves)
+            at_stop = pressure_stop_angle(limit, ANGLES0, pm, pt.pressure_scale)
+            limit = limit if at_stop is None else at_stop
+            p_lim = float(np.interp(limit, ANGLES0, pm))
+            q = pressure_pa / pt.pressure_scale
+            if q <= p_lim:
+                out["angle"][i] = np.interp(q, pm, ANGLES0)
+                out["angle_lo"][i] = np.interp(q, pu, ANGLES0)
+                out["angle_hi"][i] = np.interp(q, pl, ANGLES0)
+            if angle_deg is not None and abs(angle_deg) <= limit:
+                a = abs(angle_deg)
+                s = pt.pressure_scale
+                out["needed"][i] = np.interp(a, ANGLES0, pm) * s
+                out["needed_lo"][i] = np.interp(a, ANGLES0, pl) * s
+                out["needed_hi"][i] = np.interp(a, ANGLES0, pu) * s
+            if fmean is not None and q <= pe.force_end_pa(p_lim, blocked_ends[row]):
+                scale = pt.pressure_scale * pt.length_scale**2
+                qa = np.array([q])
+                fm, fl, fu = (_with_origin(c[row]) for c in force_curves)
+                a, a_lo, a_hi = (np.interp(qa, c, ANGLES0) for c in (fm, fu, fl))
+                vals = [scale * float(v[0]) for v in one_signed(*pe.force_reduced(
+                    fmean[row], fsd[row], mean[row], qa, a, a_lo, a_hi, z), pe.sign)]
+                lo_f, hi_f = vals[1], vals[2]
+                if force_backed(vals[0], lo_f, hi_f):
+                    out["force"][i] = vals[0]
+                    out["force_lo"][i], out["force_hi"][i] = lo_f, hi_f
+    return out
