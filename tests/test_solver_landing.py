@@ -149,3 +149,16 @@ def test_the_corrections_stay_inside_the_bracket_past_a_pressure_maximum():
 def test_the_cavity_volume_at_the_volume_stop():
     # The half model injects twice its cavity's change.
     assert volume_load_at(3.0, lambda v: 2.0 * (v - 1.5), 1.5) == pytest.approx(3.0)
+
+
+def test_pressure_control_is_unchanged():
+    # Its last step's pressure was already capped at max_pressure_pa; its angle stop is
+    # still met one step past (no landing under pressure control).
+    by_pressure = SolverSettings(element="hex1", control="pressure", max_angle_deg=0.5)
+    curve = solve(SHORT, by_pressure)
+    assert curve.reason == "reached max_angle_deg = 0.5" and curve.angle_deg[-1] > 0.55
+    assert "landing_steps" not in curve.timings_s
+    capped = solve(SHORT, SolverSettings(element="hex1", control="pressure",
+                                         max_pressure_pa=300.0))
+    assert capped.reason == "reached max_pressure_pa = 300.0"
+    assert capped.pressure_pa[-1] == 300.0
