@@ -34,9 +34,12 @@ class SolverSettings:
                       ~2x the dofs; docs/verification.md)
     element           "hex2" (27-node triquadratic, default) or "hex1" (8-node trilinear)
     control           "volume" (injected volume, pressure is an unknown) or "pressure"
-    max_angle_deg     stop once the bending angle's magnitude exceeds this
-    max_pressure_pa   stop once the cavity pressure exceeds this
-    max_volume_ul     stop once the injected volume (whole actuator) exceeds this
+    max_angle_deg     stop once the bending angle's magnitude reaches this
+    max_pressure_pa   stop once the cavity pressure reaches this
+    max_volume_ul     stop once the injected volume (whole actuator) reaches this
+                      (the curve's last point lands on the stop: at or past it by at most
+                      0.1 % of it and 0.01 deg; volume control, solver/landing.py; under
+                      pressure control the pressure stop only, the others one step past)
     flow_ul_s         injection rate used to report time = volume / flow (the paper: 2.5)
     bulk_ratio        bulk modulus over initial shear modulus, K / mu0, per material
     newton_tol        relative residual ||R|| / ||p dV/du|| (a stall at the rounding floor

@@ -36,6 +36,15 @@ pressure, if more) per step (so that the curve is resolved where the angle is sm
 and the pressure rises fast).
 A step that cannot converge after the cut-backs ends the curve with status
 "failed" and the reason.
+
+The curve ends on its stop, not one step past it. Under pressure control the last step's
+pressure is capped at max_pressure_pa, under volume control its volume at max_volume_ul;
+and a volume step that converged past max_angle_deg or max_pressure_pa is replaced by one
+from the previous converged state to the volume at which the stop is met (solver/
+landing.py: interpolated, then up to two secant corrections; the landed state at or past
+the stop by at most 0.1 % of it and 0.01 deg). Only the curve's last point moves; where
+no landing converges nearer the stop, or the step switched branch, the step past the
+stop ends the curve, as before the landing.
 """
 
 from __future__ import annotations
@@ -51,6 +60,16 @@ from solver.branching import lowest_volume_neutral_mode, pass_fold, switch_branc
 from solver.curve import Curve
 from solver.design import Design
 from solver.discrete import ActuatorModel, Evaluation
+from solver.landing import (
+    STOPS,
+    Point,
+    interpolated_load,
+    land,
+    landing_tolerance,
+    stop_values,
+    stops_reached,
+    volume_load_at,
+)
 from solver.linear import factorize
 from solver.mesh import MeshDivisions
 from solver.settings import SolverSettings
@@ -423,7 +442,8 @@ def inflate_model(model, settings: SolverSettings,
     def report_step() -> None:
         """The last converged step to ``on_step``, with the cut-backs so far: after every
         converged step and after every cut-back (a job's page then says why the curve
-        stands still: 70 s at one pressure had looked like a hang)."""
+        stands still: 70 s at one pressure had looked like a hang); a step landed on a
+        stop is reported again under the same number as the step past it it replaces."""
         if on_step is not None and len(rows["p"]) > 1:
             on_step({"step": len(rows["p"]) - 1, "pressure_pa": rows["p"][-1],
                      "volume_ul": rows["v"][-1], "angle_deg": rows["a"][-1],
@@ -480,6 +500,56 @@ def inflate_model(model, settings: SolverSettings,
                   f"{volume:.6g}")
         return out, volume
 
+    def land_on_stop(reached: list[str], before: tuple, after_load: float,
+                     history_: list[State]) -> tuple[str, Converged, int] | None:
+        """The last converged step (rows[-1], at the volume ``after_load``) reached the
+        stops ``reached``: the converged state on the stop met first from ``before`` (the
+        previous converged state (u, q, p, evaluation), rows[-2]), by solver/landing.py,
+        as (stop, state, its Newton solves); None where the step needs no landing (it
+        is on the volume stop, or ``before`` was past a stop too) or none converged
+        nearer the stop than the step itself (the curve then ends on it, as before).
+        Each landing step starts from the Hermite predictor through the last converged
+        states (the step past the stop among them: an interpolation), else from
+        ``before``."""
+        was = stop_values(rows["a"][-2], rows["p"][-2], rows["v"][-2])
+        now = stop_values(rows["a"][-1], rows["p"][-1], rows["v"][-1])
+        if any(was[name] >= limits[name] for name in reached):
+            return None
+        before_load = before[3].volume_mm3
+        loads = {name: volume_stop_mm3 if name == "max_volume_ul" else interpolated_load(
+            limits[name], Point(before_load, was[name]), Point(after_load, now[name]))
+            for name in reached}
+        stop = min(reached, key=lambda name: loads[name])     # met first along the step
+        if stop == "max_volume_ul":
+            return None
+        tried = list(history_)
+        solves = 0
+
+        def converge(load_: float) -> Point | None:
+            nonlocal solves
+            model.timings["landing_steps"] = model.timings.get("landing_steps", 0) + 1
+            guess = predictor(tried, load_)
+            for u0, q0, p0, start in ([] if guess is None else [(*guess, None)]) + [before]:
+                try:
+                    out = mixed_newton_step(model, u0, q0, p0, settings, load_, None,
+                                            backend, start=start)
+                except (StepFailed, FloatingPointError):
+                    continue
+                solves += out.iterations
+                tried.append(State(load_, out.u, out.q, out.pressure_pa, out.rate))
+                del tried[:-PREDICTOR_POINTS]
+                values = stop_values(model.end_face_kinematics(out.u)[0], out.pressure_pa,
+                                     model.injected_volume_ul(out.evaluation.volume_mm3))
+                return Point(load_, values[stop], out)
+            return None
+
+        limit = limits[stop]
+        best = land(limit, landing_tolerance(stop, limit), Point(before_load, was[stop]),
+                    Point(after_load, now[stop]), converge)
+        if best is None or abs(best.value - limit) >= abs(now[stop] - limit):
+            return None
+        return stop, best.state, solves
+
     last = model.evaluate(u, p, pressures=q)
     record(u, p, 0, 0.0, 0, last)
     # Initial increments: a small fraction of the chamber volume, or of the membrane modulus.
@@ -493,12 +563,20 @@ def inflate_model(model, settings: SolverSettings,
                      path_rate(model, last, b0, float(last.g @ b0), volume_control))]
     extrapolate = True
     switch_index = -1
+    limits = {name: getattr(settings, name) for name in STOPS}
+    # The cavity volume at max_volume_ul, and past it by the Newton tolerance on the
+    # volume (so that the state converged there is at or past the stop): the last volume
+    # step is capped at it.
+    volume_stop_mm3 = (volume_load_at(settings.max_volume_ul, model.injected_volume_ul,
+                                      model.volume0_mm3)
+                       + settings.newton_tol * model.volume0_mm3 if volume_control else np.inf)
     fold_attempted = False       # the switch at a failed step is tried once per curve (its
                                  # arc length costs minutes on the actuator)
     failures_here = 0            # failed attempts from the current converged state
     for _ in range(settings.max_steps):
-        # Under pressure control the last step lands on max_pressure_pa, not beyond it.
-        load = (last.volume_mm3 + step) if volume_control else (
+        # The last step lands on max_volume_ul under volume control and on max_pressure_pa
+        # under pressure control, not beyond it (the other stops: ``land_on_stop``).
+        load = min(last.volume_mm3 + step, volume_stop_mm3) if volume_control else (
             min(p + step, settings.max_pressure_pa))
         guess = predictor(history, load) if extrapolate else None
         try:
@@ -540,7 +618,7 @@ def inflate_model(model, settings: SolverSettings,
                                             f"cut-backs: {exc}")
                 break
             continue
-        before = (u, q, p, last.volume_mm3)
+        before = (u, q, p, last)
         u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
         extrapolate = True
         failures_here = 0
@@ -552,7 +630,8 @@ def inflate_model(model, settings: SolverSettings,
                 and rows["negv"][-1] > 0):
             # Where the step crossed the bifurcation, switch just past it (the pump's
             # path leaves the primary branch there); else, or if that fails, here.
-            near = (near_bifurcation(before[:3], (u, q, p), before[3], last.volume_mm3)
+            near = (near_bifurcation(before[:3], (u, q, p), before[3].volume_mm3,
+                                     last.volume_mm3)
                     if rows["negv"][-2] == 0 else None)
             switch = None
             if near is not None:
@@ -580,14 +659,20 @@ def inflate_model(model, settings: SolverSettings,
             allowed = max(MAX_PRESSURE_STEP_PA, MAX_RELATIVE_PRESSURE_STEP * abs(p))
             factor = min(factor, max(0.5, allowed / d_pressure))
         step *= factor
-        if abs(angle) >= settings.max_angle_deg:
-            status, reason = "complete", f"reached max_angle_deg = {settings.max_angle_deg}"
-            break
-        if p >= settings.max_pressure_pa:
-            status, reason = "complete", f"reached max_pressure_pa = {settings.max_pressure_pa}"
-            break
-        if rows["v"][-1] >= settings.max_volume_ul:
-            status, reason = "complete", f"reached max_volume_ul = {settings.max_volume_ul}"
+        reached = stops_reached(limits, stop_values(angle, p, rows["v"][-1]),
+                                at_volume_cap=volume_control and load >= volume_stop_mm3)
+        if reached:
+            stop = reached[0]
+            if volume_control and switch_index != len(rows["p"]) - 1:
+                landing = land_on_stop(reached, before, load, history)
+                if landing is not None:
+                    stop, out, landing_solves = landing
+                    for column in rows.values():
+                        column.pop()
+                    u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
+                    record(u, p, its + landing_solves, out.residual, out.negative_pivots,
+                           last, out.g_kinv_g)
+            status, reason = "complete", f"reached {stop} = {limits[stop]}"
             break
 
     pressure = np.array(rows["p"])

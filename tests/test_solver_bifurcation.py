@@ -9,7 +9,9 @@ constant total volume (one balloon grows while the other shrinks) and the stable
 has two unequal balloons. Measured with this mesh (1560 dofs, ~3 s per solve): the
 primary branch's lowest volume-neutral eigenvalue crosses zero at 4.40 mm^3 (octant
 volumes; exact 4.31 mm^3), the solve switches at step 11 and ends with inner stretches
-1.22 and 2.59 at 60 ul; the equal state at that volume has 1 unstable mode.
+1.25 and 2.43 at 60 ul (1.22 and 2.59 at 71.7 ul, one step past the volume stop, before
+the last step was capped at it, solver/landing.py); the equal state at that volume has 1
+unstable mode.
 """
 
 import numpy as np
@@ -114,7 +116,8 @@ def test_an_imperfect_pair_leaves_the_equal_state_without_a_switch():
     # A 1 % thinner second wall makes the pitchfork imperfect; for this supercritical one
     # the primary path itself turns smoothly onto the unequal branch (no fold): every
     # state is stable at constant volume and the thinner balloon takes the volume.
-    # Measured: stretches 1.21 and 2.62 at 74 ul.
+    # Measured: stretches 1.23 and 2.44 at 60 ul (1.21 and 2.62 at 74 ul, one step past
+    # the volume stop, before the last step was capped at it).
     model = TwoBalloonModel(NEO_HOOKE, imperfection=0.01)
     curve, u = inflate_model(model, SolverSettings(max_volume_ul=MAX_VOLUME_UL))
     assert curve.status == "complete" and curve.branch_switch_index == -1
