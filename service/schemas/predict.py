@@ -112,6 +112,12 @@ class Validity(BaseModel):
                                               "limit point (flag past_pressure_maximum), Pa")
     pressure_maximum_volume_ul: float | None = Field(None, description="the injected volume "
                                                      "at that maximum, ul")
+    high_stretch_from_deg: float | None = Field(
+        None, description="the angle from which the design's emulated membrane stretch "
+        "enters the range where FE curves often end in Newton failures (flag "
+        "high_membrane_stretch), degrees, signed as the design's angles")
+    high_stretch_from_pa: float | None = Field(None, description="the chamber pressure "
+                                               "there, Pa")
 
 
 OptFloats = list[float | None] | None

@@ -25,7 +25,7 @@ without it, read at the curve's own pressures).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -73,6 +73,12 @@ from surrogate.emulator.shape_gps import (
     VOLUME_SHAPE_NODES_DEG,
     fit_shape_gps,
 )
+from surrogate.emulator.stretch_hazard import (
+    StretchHazard,
+    fit_stretch_hazard,
+    reached_hazard,
+    stretch_nodes,
+)
 from surrogate.emulator.variance_nodes import choose as choose_variance_nodes
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP, fit_output_gps, fit_vector_gp
 from surrogate.emulator.volume_curve import volume_shape
@@ -95,6 +101,9 @@ class _Rows:
     failed_y: list        # node outputs of the early-ended curves (NaN past their end)
     failed_last_step: list  # the angle each one's last FE step started from (deg)
     by_volume: list       # (u, (v_red, p_red, signed angle)) of every curve (balance.py)
+    stretch: list         # stretch_hazard.stretch_nodes of each complete curve (as u)
+    hazard: list          # (stretch reached HAZARD_STRETCH, ended in a Newton failure)
+                          # of every curve (stretch_hazard.py)
 
 
 def default_free_settings() -> SolverSettings:
@@ -127,12 +136,14 @@ def _collect(records: Iterable) -> tuple[dict, dict, dict]:
         c = rec.curve
         if rec.settings == free_settings:
             rows = free.setdefault(point.group,
-                                  _Rows([], [], [], [], [], [], [], [], [], [], []))
+                                  _Rows(*([] for _ in fields(_Rows))))
             f = curve_features(c.pressure_pa / point.pressure_scale,
                                c.volume_ul / point.length_scale**3, c.angle_deg)
             u = point.coordinates()
             rows.by_volume.append((u, (c.volume_ul / point.length_scale**3,
                                        c.pressure_pa / point.pressure_scale, c.angle_deg)))
+            rows.hazard.append((reached_hazard(c.max_membrane_stretch),
+                                c.status == "failed"))
             if f.end_angle_deg < LIMIT_ANGLE_DEG or not np.isfinite(f.log_p).all():
                 rows.failed.append((u.tolist(), min(f.end_angle_deg, LIMIT_ANGLE_DEG),
                                     c.reason))
@@ -148,6 +159,7 @@ def _collect(records: Iterable) -> tuple[dict, dict, dict]:
             rows.curves.append((c.pressure_pa / point.pressure_scale,
                                 c.volume_ul / point.length_scale**3, c.angle_deg))
             rows.signs.append(f.sign)
+            rows.stretch.append(stretch_nodes(c.angle_deg, c.max_membrane_stretch))
         elif is_force_record(rec.settings):
             y = force_features(c.pressure_pa / point.pressure_scale,
                                c.force_mn / (point.pressure_scale * point.length_scale**2))
@@ -483,7 +495,8 @@ def force_band_scale(u: np.ndarray, y: np.ndarray, level: float, seed: int = 0,
 
 def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float, seed: int,
              force_rows: tuple[list, list] | None, range_model: VectorGP | None = None,
-             blocked_range: BlockedRange | None = None) -> tuple[PairEmulator, dict]:
+             blocked_range: BlockedRange | None = None,
+             stretch_hazard: StretchHazard | None = None) -> tuple[PairEmulator, dict]:
     u = np.array(rows.u)[keep]
     y = np.array(rows.y)[keep]
     curves = [c for c, k in zip(rows.curves, keep) if k]
@@ -529,7 +542,8 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
         force_limit_pa=force_limit_pa, failed=failed, force_form=FORCE_FORMS[2],
         range_model=range_model,
         blocked_range=blocked_range if force_gp is not None else None,
-        failed_end_volume_ul=np.array(rows.failed_end_volume, float))
+        failed_end_volume_ul=np.array(rows.failed_end_volume, float),
+        stretch_hazard=stretch_hazard)
     report = {"designs": int(keep.sum()), "failed_designs": len(failed),
               "components": len(vgp.gp.gps),
               "force_designs": force_designs if force_gp is not None else 0,
@@ -542,6 +556,9 @@ def _fit_one(key: str, rows: _Rows, keep: np.ndarray, sign: float, level: float,
               "force_near_end_band_scale": (list(blocked_range.near_end_band_scale)
                                             if force_gp is not None
                                             and blocked_range is not None else None),
+              "stretch_hazard": (None if stretch_hazard is None else
+                                 {"reached": stretch_hazard.reached,
+                                  "failed": stretch_hazard.failed}),
               "fitted": True, **cv}
     return pe, report
 
@@ -583,6 +600,12 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
         # where each blocked-tip curve of the group ends (the force's range)
         blocked_range = (fit_blocked_range(*blocked_ends[group], seed=seed)
                          if group in blocked_ends else None)
+        # the group's emulated membrane stretch, and how often its FE curves failed past
+        # the hazard stretch (stretch_hazard.py)
+        hazard = np.array(rows.hazard, bool).reshape(-1, 2)
+        stretch_hazard = fit_stretch_hazard(
+            np.array(rows.u), np.array(rows.stretch), reached=int(hazard[:, 0].sum()),
+            failed=int((hazard[:, 0] & hazard[:, 1]).sum()), seed=seed)
         for sign in (1.0, -1.0):
             keep = signs == sign
             key = group + ("+" if sign > 0 else "-")
@@ -592,7 +615,7 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
                                             "fitted": False}
                 continue
             pe, rep = _fit_one(key, rows, keep, sign, level, seed, force.get(group),
-                               range_model, blocked_range)
+                               range_model, blocked_range, stretch_hazard)
             models[key] = pe
             report["pairs"][key] = rep  # type: ignore[index]
     if not models:

@@ -51,6 +51,9 @@ class CurveBand:
     # blocked-tip FE curve is emulated to end (PairEmulator.blocked_ends_pa)
     blocked_end_pa: float = float("inf")
     blocked_mean_pa: float = float("inf")   # that curve's emulated end (reduced Pa)
+    # the angle (deg, unsigned) from which the emulated membrane stretch passes the
+    # hazard stretch (StretchHazard.onset_deg; inf: it does not, or no such model)
+    stretch_onset_deg: float = float("inf")
 
     @property
     def limit_pressure_pa(self) -> float:
@@ -91,9 +94,11 @@ def design_curve_band(emulator: Emulator, pe: PairEmulator, point: BoxPoint,
         reference = tuple(_monotone(c) for c in node_curves(p_mean, p_sd, z))
     blocked = (pe.blocked_ends_pa(u) if pe.force is not None
                else (np.full(1, np.inf), np.full(1, np.inf)))
+    onset = (float("inf") if pe.stretch_hazard is None
+             else pe.stretch_hazard.onset_deg(u))
     return CurveBand(p, lo, hi, v, limit, reason, mean[N_NODES:], v_sd, p_raw, mean, u,
                      nearest, reference, blocked_end_pa=float(blocked[0][0]),
-                     blocked_mean_pa=float(blocked[1][0]))
+                     blocked_mean_pa=float(blocked[1][0]), stretch_onset_deg=onset)
 
 
 def volume_curves(cb: CurveBand, z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -64,6 +64,7 @@ from surrogate.emulator.validity import (
     UNDERCOVER_LEVEL,
     UNDERCOVER_MIN_POINTS,
     answer_validity,
+    stretch_flag,
 )
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES, spline, spread_variance
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
@@ -281,7 +282,8 @@ class Emulator:
             angle, lower, upper = -angle, -upper, -lower
         angle, lower, upper = one_signed(angle, lower, upper, pe.sign)
         force = blocked_force(self._memo, pe, cb, point, p_red, z)  # type: ignore[attr-defined]
-        validity = answer_validity(self.report, pe, cb, point, p, past, force)
+        validity = answer_validity(self.report, pe, cb, point, p, past, force,
+                                   answered_deg=np.abs(angle))
         validity["fe_limit_volume_ul"] = float(
             np.interp(cb.limit_angle_deg, ANGLES0, _with_origin(cb.volume_ul))
             * point.length_scale**3)
@@ -350,7 +352,7 @@ class Emulator:
         force = blocked_force(self._memo, pe, cb, point, p_red, z)  # type: ignore[attr-defined]
         # pressure is NaN at the volumes past the range: no force is asked there
         validity = answer_validity(self.report, pe, cb, point, pressure, past, force,
-                                   "volume")
+                                   "volume", answered_deg=np.abs(angle))
         if past.any():
             validity["messages"][0] = (
                 f"{int(past.sum())} volume(s) above {v_lim * ls3:.1f} ul are past the FE's "
@@ -415,6 +417,7 @@ class Emulator:
             validity["messages"].append(
                 f"no pressure for {int(past.sum())} angle(s) past the FE's range, which ends "
                 f"at {limit_deg:.1f} deg for this design ({cb.stop_reason})")
+        stretch_flag(pe, cb, point, np.where(past, np.nan, signed), validity)
 
         def answered(x: np.ndarray) -> np.ndarray:
             return np.where(past, np.nan, x)

@@ -50,6 +50,7 @@ from surrogate.emulator.shape_gps import (
     shape_gps_from_dict,
     shape_scaling,
 )
+from surrogate.emulator.stretch_hazard import stretch_hazard_from_dict
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES
 from surrogate.emulator.vector_gp import MEANS_ONLY, vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
@@ -57,7 +58,9 @@ from surrogate.file_seal import canonical_text, check_header, check_seal, seal
 from surrogate.json_plain import plain_json
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 15  # 15: blocked_range, where each design's blocked-tip FE curve ends
+FORMAT_VERSION = 16  # 16: stretch_hazard, the emulated membrane stretch and the flag
+                     # high_membrane_stretch (stretch_hazard.py; 15 read: none, no flag);
+                     # 15: blocked_range, where each design's blocked-tip FE curve ends
                      # (blocked_range.py; 14 read: none, the group's force range); the
                      # force GPs in segments, each node conditioned on every design that
                      # reaches it (force_gps.py; 14 read: one VectorGP);
@@ -106,7 +109,9 @@ def emulator_to_dict(e: Emulator) -> dict:
             "range_model": None if pe.range_model is None else pe.range_model.as_dict(),
             "near_failed_band_scale": None if pe.near_failed_band_scale is None
             else pe.near_failed_band_scale.tolist(),
-            "blocked_range": None if pe.blocked_range is None else pe.blocked_range.as_dict()})
+            "blocked_range": None if pe.blocked_range is None else pe.blocked_range.as_dict(),
+            "stretch_hazard": None if pe.stretch_hazard is None
+            else pe.stretch_hazard.as_dict()})
     return seal(plain_json({
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION, "name": e.name,
         "angle_nodes_deg": ANGLE_NODES_DEG.tolist(),
@@ -162,7 +167,8 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
                 near_failed_band_scale=None if p.get("near_failed_band_scale") is None
                 else _band_scales(p["near_failed_band_scale"]),
                 blocked_range=blocked_range_from_dict(p.get("blocked_range")),
-                failed_end_volume_ul=_end_volumes(p))
+                failed_end_volume_ul=_end_volumes(p),
+                stretch_hazard=stretch_hazard_from_dict(p.get("stretch_hazard")))
         sign_models = {str(g): vector_gp_from_dict(m)
                        for g, m in (d.get("sign_models") or {}).items()}
         if not pairs:
@@ -383,6 +389,8 @@ def _check_pair(pe: PairEmulator) -> None:
         _check_gp(pe.range_model, f"pair {pe.pair} range model")
     if pe.blocked_range is not None:
         _check_gp(pe.blocked_range.model, f"pair {pe.pair} blocked range")
+    if pe.stretch_hazard is not None:
+        _check_gp(pe.stretch_hazard.model, f"pair {pe.pair} stretch hazard")
 
 
 def _variance_nodes(nodes: object) -> np.ndarray:

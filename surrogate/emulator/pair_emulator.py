@@ -28,6 +28,7 @@ from surrogate.emulator.features import (
     free_secant_deg_per_pa,
     per_kpa_from_feature,
 )
+from surrogate.emulator.stretch_hazard import StretchHazard
 from surrogate.emulator.vector_gp import VectorGP
 
 # Unit-cube distance within which a database curve that ended early (volume stop, Newton
@@ -116,6 +117,9 @@ class PairEmulator:
     # the FE's last injected volume (reduced, ul) of each curve of ``failed``, in its order
     # (None: files before format 15, no volume cap)
     failed_end_volume_ul: np.ndarray | None = None
+    # the group's emulated membrane stretch and its FE curves' failures past the hazard
+    # stretch (the flag high_membrane_stretch; None: files before format 16)
+    stretch_hazard: StretchHazard | None = None
 
     def __post_init__(self) -> None:
         # the early-ended curves' unit coordinates, stacked once for fe_range's distances

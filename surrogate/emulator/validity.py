@@ -3,8 +3,10 @@
 ``past_fe_range`` (and ``past_fe_pressure_stop``) where asked past the design's FE range,
 ``near_early_ended_fe_curves`` within NEAR_FAILED_RADIUS of a database curve that ended
 early, ``band_undercovers_random_designs`` where the group's band covered too little of
-the FE curves of random designs (the second calibration, ``random_calibration``), and the
-force's flags (``force_answer.force_flags``). The FE's range itself: ``fe_limit_pa``,
+the FE curves of random designs (the second calibration, ``random_calibration``),
+``high_membrane_stretch`` at answered angles past which the design's emulated membrane
+stretch enters the range where FE curves often end in Newton failures (``stretch_hazard``),
+and the force's flags (``force_answer.force_flags``). The FE's range itself: ``fe_limit_pa``,
 ``fe_limit_angle_deg``, ``fe_stop_reason``.
 """
 
@@ -14,8 +16,10 @@ import numpy as np
 
 from solver.design_space import BoxPoint
 from surrogate.emulator.curve_band import CurveBand
+from surrogate.emulator.features import FINE_ANGLES_DEG
 from surrogate.emulator.force_answer import force_flags
 from surrogate.emulator.pair_emulator import NEAR_FAILED_RADIUS, PairEmulator
+from surrogate.emulator.stretch_hazard import FLAG
 
 # A design whose group and side (near or far from early-ended curves) had its band cover
 # less than this share of the points of FE curves of random designs, after the band's
@@ -53,12 +57,32 @@ def undercover(report: dict, pe: PairEmulator, cb: CurveBand, axis: str
             "says here; an FE solve (POST /v1/solve) gives this design's own curve")
 
 
+def stretch_flag(pe: PairEmulator, cb: CurveBand, point: BoxPoint,
+                 answered_deg: np.ndarray, validity: dict) -> None:
+    """Add the flag ``high_membrane_stretch``, its message and where it starts
+    (``high_stretch_from_deg``, signed as the design's angles, and ``high_stretch_from_pa``)
+    to ``validity`` where answered angles ``answered_deg`` (unsigned deg; NaN: not
+    answered) reach the angle from which this design's emulated membrane stretch passes
+    the hazard stretch (``stretch_hazard``)."""
+    onset = cb.stretch_onset_deg
+    a = np.asarray(answered_deg, float)
+    hit = np.isfinite(a) & (a >= onset)
+    if pe.stretch_hazard is None or not hit.any():
+        return
+    onset_pa = float(np.interp(onset, FINE_ANGLES_DEG, cb.pressure_pa)) * point.pressure_scale
+    validity["flags"].append(FLAG)
+    validity["messages"].append(pe.stretch_hazard.message(onset, onset_pa, int(hit.sum())))
+    validity["high_stretch_from_deg"] = pe.sign * onset
+    validity["high_stretch_from_pa"] = onset_pa
+
+
 def answer_validity(report: dict, pe: PairEmulator, cb: CurveBand, point: BoxPoint,
-                    p: np.ndarray, past: np.ndarray, force: object, axis: str = "pressure"
-                    ) -> dict[str, object]:
+                    p: np.ndarray, past: np.ndarray, force: object, axis: str = "pressure",
+                    answered_deg: np.ndarray | None = None) -> dict[str, object]:
     """The validity of an answer at chamber pressures ``p`` (Pa; ``past`` where past
     the FE's range) by ``axis`` ("pressure" or "volume"), ``force`` the force answered
-    (None: no force model), ``report`` the fit's (``Emulator.report``)."""
+    (None: no force model), ``report`` the fit's (``Emulator.report``), ``answered_deg``
+    the answered angles (unsigned deg, NaN where none: the stretch flag)."""
     flags: list[str] = []
     messages: list[str] = []
     fe_limit_pa = cb.limit_pressure_pa * point.pressure_scale
@@ -92,6 +116,9 @@ def answer_validity(report: dict, pe: PairEmulator, cb: CurveBand, point: BoxPoi
         force_flags(pe, cb, point, p, force, flags, messages, f"{axis}(s)")
     # in_domain: the design is in the box (a design outside is refused before this);
     # the points past the FE's range have their own flag, past_fe_range
-    return {"in_domain": True, "flags": flags, "messages": messages,
-            "fe_limit_pa": fe_limit_pa, "fe_limit_angle_deg": limit_deg,
-            "fe_stop_reason": cb.stop_reason}
+    validity = {"in_domain": True, "flags": flags, "messages": messages,
+                "fe_limit_pa": fe_limit_pa, "fe_limit_angle_deg": limit_deg,
+                "fe_stop_reason": cb.stop_reason}
+    if answered_deg is not None:
+        stretch_flag(pe, cb, point, answered_deg, validity)
+    return validity
