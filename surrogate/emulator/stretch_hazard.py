@@ -122,4 +122,10 @@ def stretch_hazard_from_dict(d: dict | None) -> StretchHazard | None:
     if list(d["nodes_deg"]) != STRETCH_NODES_DEG.tolist() or \
             float(d["hazard_stretch"]) != HAZARD_STRETCH:
         raise ValueError("stretch hazard nodes or threshold differ from this code's")
-    return StretchHazard(vector_gp_from_dict(d["model"]), int(d["reached"]), int(d["failed"]))
+    reached, failed = d["reached"], d["failed"]
+    if not (isinstance(reached, int) and isinstance(failed, int) and 0 <= failed <= reached):
+        raise ValueError("stretch hazard counts must be integers, 0 <= failed <= reached")
+    model = vector_gp_from_dict(d["model"])
+    if model.gps[0].x.shape[1] != 6 or len(model.center) != len(STRETCH_NODES_DEG):
+        raise ValueError("stretch hazard model of the wrong shape")
+    return StretchHazard(model, reached, failed)

@@ -52,6 +52,7 @@ const FLAG_WORDS = {
   past_fe_pressure_stop: "past the FE's 20 kPa pressure stop",
   pressures_look_like_kpa: "pressures look like kPa",
   near_stiffness_balance: "near the stiffness balance",
+  high_membrane_stretch: "membrane stretch where FE curves often fail",
 };
 export const flagWords = (f) => FLAG_WORDS[f] || String(f).replaceAll("_", " ");
 
