@@ -12,6 +12,7 @@ import numpy as np
 
 from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
+from service.schemas.predict import Validity
 from solver.design import LIMITS_MM, Design, design_from_dict
 from solver.design_space import named_material
 from solver.errors import InputError
@@ -81,9 +82,10 @@ def finite_list(values: Any) -> list[float | None]:
     return [v if math.isfinite(v) else None for v in np.asarray(values, float).ravel().tolist()]
 
 
-# the validity fields a Prediction may carry beyond in_domain, flags and messages
-VALIDITY_FIELDS = ("fe_limit_pa", "fe_limit_angle_deg", "fe_stop_reason", "fe_limit_volume_ul",
-                   "pressure_maximum_pa", "pressure_maximum_volume_ul")
+# the validity fields a Prediction may carry beyond in_domain, flags and messages: the
+# HTTP schema's (one table: a field added there reaches the CLI and HTTP alike)
+VALIDITY_FIELDS = tuple(n for n in Validity.model_fields
+                        if n not in ("in_domain", "flags", "messages"))
 
 
 def prediction_body(prediction: Any, model: str, level: float | None = None,

@@ -167,3 +167,23 @@ def test_the_hazard_is_stored_older_files_read_without_it_and_damage_is_refused(
         d["pairs"][0]["stretch_hazard"] = {**stored, field: value}
         with pytest.raises(SurrogateFileError, match="damaged emulator file"):
             emulator_from_dict(d, "other.json")
+
+
+def test_the_flag_and_where_it_starts_reach_the_http_answer(shipped_client):
+    """POST /v1/predict and /v1/inverse/pressure carry the flag, its message and
+    high_stretch_from_deg / _pa (the Validity schema keeps them)."""
+    design = {"L_mm": 7.1, "t_mm": 0.5, "T_mm": 1.5, "b_mm": 2.0, "h_mm": 0.2}
+    inv = shipped_client.post("/v1/inverse/pressure", json={"design": design,
+                                                   "angles_deg": [20.0, 58.0]})
+    assert inv.status_code == 200, inv.text
+    v = inv.json()["validity"]
+    assert FLAG in v["flags"] and 20.0 < v["high_stretch_from_deg"] < 58.0
+    p_above = inv.json()["pressure_pa"][1]
+    r = shipped_client.post("/v1/predict", json={"design": design,
+                                                 "pressures_pa": [100.0, p_above]})
+    assert r.status_code == 200, r.text
+    v = r.json()["validity"]
+    assert FLAG in v["flags"]
+    assert v["high_stretch_from_pa"] == pytest.approx(
+        inv.json()["validity"]["high_stretch_from_pa"])
+    assert any("stretch passes 7" in m for m in v["messages"])
