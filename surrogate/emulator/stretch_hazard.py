@@ -85,12 +85,14 @@ class StretchHazard:
         a0, a1 = STRETCH_NODES_DEG[k - 1], STRETCH_NODES_DEG[k]
         return float(a0 + (a1 - a0) * (HAZARD_STRETCH - s0) / (s1 - s0))
 
-    def message(self, onset_deg: float, onset_pa: float, answered: int) -> str:
+    def message(self, onset_deg: float, onset_pa: float, answered: int, group: str) -> str:
         """The flag's sentence for ``answered`` points at or above ``onset_deg``
-        (unsigned; chamber pressure ``onset_pa`` there)."""
-        share = (f"{self.failed} of the {self.reached} database FE curves of this pair "
-                 "that reached it ended in a Newton failure before 90 deg"
-                 if self.reached else "no database FE curve of this pair reached it")
+        (unsigned; chamber pressure ``onset_pa`` there) of a design of ``group``
+        (body/membrane, as ``solver.design_space.GROUPS`` names it)."""
+        share = (f"{self.failed} of the {self.reached} FE curves of the database's "
+                 f"{group} designs that reached it ended in a Newton failure before 90 deg"
+                 if self.reached else f"no FE curve of the database's {group} designs "
+                 "reached it")
         return (f"{answered} answered point(s) lie at or above {onset_deg:.0f} deg "
                 f"({onset_pa:.0f} Pa), where this design's emulated membrane stretch passes "
                 f"{HAZARD_STRETCH:g} (the largest stretch at the membrane's bonded edge on "

@@ -71,7 +71,8 @@ def stretch_flag(pe: PairEmulator, cb: CurveBand, point: BoxPoint,
         return
     onset_pa = float(np.interp(onset, FINE_ANGLES_DEG, cb.pressure_pa)) * point.pressure_scale
     validity["flags"].append(FLAG)
-    validity["messages"].append(pe.stretch_hazard.message(onset, onset_pa, int(hit.sum())))
+    validity["messages"].append(pe.stretch_hazard.message(onset, onset_pa, int(hit.sum()),
+                                                          pe.pair.rstrip("+-")))
     validity["high_stretch_from_deg"] = pe.sign * onset
     validity["high_stretch_from_pa"] = onset_pa
 
