@@ -142,6 +142,10 @@ BAD = {
     "missing": (bad("volume_ul", 3, ""), "volume_ul", "missing value"),
     "a dip while loading": (bad("volume_ul", 2, 1.0), "volume_ul", "2.5, 1, 7.5 ul inside "
                             "a loading run"),
+    "against the pump's log": ([{**r, "pump": "hold" if i == 3 else "load" if i < 4
+                                 else "unload"} for i, r in enumerate(small_rows())],
+                               "volume_ul", "moves from 7.5 to 10 ul where the pump column "
+                               "logs 'hold'"),
     "a time unit": ([{("Volume (s)" if k == "volume_ul" else k): v for k, v in r.items()}
                      for r in small_rows()], "Volume (s)", "not a unit of volume"),
 }

@@ -643,7 +643,9 @@ def _build(parsed: list[dict[str, object]], present: list[str],
         rows_sorted += [(ci, fi, gi, parsed[j]) for j in idx]
         if "volume_ul" in present:
             check_runs(cid, [float(parsed[j]["volume_ul"]) for j in idx],  # type: ignore
-                       [j + 1 for j in idx], volume_step_ul)
+                       [j + 1 for j in idx], volume_step_ul,
+                       [float(parsed[j][PUMP_COLUMN]) for j in idx]  # type: ignore
+                       if PUMP_COLUMN in present else None)
 
     def col(name: str) -> np.ndarray:
         return np.array([float(r[name]) for _, _, _, r in rows_sorted])

@@ -75,13 +75,17 @@ def volume_directions(curve: np.ndarray, volume_ul: np.ndarray, step_ul: float
     return out
 
 
-def check_runs(curve_id: str, volume_ul: list[float], file_rows: list[int], step_ul: float
-               ) -> None:
+def check_runs(curve_id: str, volume_ul: list[float], file_rows: list[int], step_ul: float,
+               logged: list[float] | None = None) -> None:
     """A DataError naming ``volume_ul`` and the file row where one curve's measured
     volume (in history order, from 0 at rest before its first reading) reverses for a
     single reading inside a run: up, down, up (or down, up, down) by more than the log's
-    resolution."""
+    resolution; or, with the pump's logged states (``logged``: +1 load, 0 hold, -1
+    unload since the previous reading), moves against them by more than
+    ``tolerance_ul``."""
     v = [0.0] + list(volume_ul)
+    if logged is not None:
+        _check_against_log(curve_id, np.asarray(v), file_rows, step_ul, logged)
     s = volume_steps(np.asarray(v), step_ul)
     for k in range(1, s.size - 1):
         if s[k] != 0 and s[k - 1] == s[k + 1] == -s[k]:
@@ -90,6 +94,21 @@ def check_runs(curve_id: str, volume_ul: list[float], file_rows: list[int], step
                             f"{v[k + 1]:g}, {v[k + 2]:g} ul inside a {run} run: no pump "
                             "reverses for one reading (a typo, or a column of another "
                             "quantity?)", file_rows[k], ALLOWED)
+
+
+def _check_against_log(curve_id: str, v: np.ndarray, file_rows: list[int], step_ul: float,
+                       logged: list[float]) -> None:
+    """The measured volume ``v`` (0 at rest first) against the pump's logged states."""
+    dv = np.diff(v)
+    tol = tolerance_ul(v[1:], step_ul)
+    words = {1.0: ("load", "falls"), 0.0: ("hold", "moves"), -1.0: ("unload", "rises")}
+    for k, d in enumerate(logged):
+        if (d > 0 and dv[k] < -tol[k]) or (d == 0 and abs(dv[k]) > tol[k]) or (
+                d < 0 and dv[k] > tol[k]):
+            state, verb = words[float(d)]
+            raise DataError("volume_ul", f"curve_id {curve_id!r} {verb} from {v[k]:g} to "
+                            f"{v[k + 1]:g} ul where the pump column logs {state!r}: no "
+                            "pump does that", file_rows[k], ALLOWED)
 
 
 def disagreements(curve: np.ndarray, curve_ids: tuple[str, ...], measured_ul: np.ndarray,
