@@ -1,7 +1,7 @@
 """Headers with units, as labs write them (``Pressure (kPa)``, ``Angle [°]``, ``t [min]``):
 read as the canonical columns, the values converted once, the reading said in the report;
-an unknown unit, a unitless quantity, an injected volume and two headers of one column
-refused naming the header (docs/measured-data.md, "Headers with units")."""
+an unknown unit, a unitless quantity and two headers of one column refused naming the
+header (docs/measured-data.md, "Headers with units")."""
 
 from __future__ import annotations
 
@@ -116,11 +116,17 @@ def test_two_headers_of_one_quantity_are_refused_naming_both():
     assert "'pressure_pa' and 'Pressure (kPa)' are both read as pressure_pa" in str(err.value)
 
 
-def test_an_injected_volume_column_is_refused_saying_what_gives_it():
-    data = [{**r, "Volume (uL)": 1.25 * r["time_s"]} for r in rows()]
-    with pytest.raises(DataError) as err:
-        observations_from_rows(data)
-    assert err.value.column == "Volume (uL)" and "time_s and flow_ul_s" in str(err.value)
+@pytest.mark.parametrize("header, factor", [("Volume (uL)", 1.0), ("V [ml]", 1000.0),
+                                            ("volume_mm^3", 1.0), ("Injected volume (nl)",
+                                                                   1e-3), ("vol / cc", 1000.0)])
+def test_an_injected_volume_column_is_read_in_its_unit(header, factor):
+    """A pump's dispensed volume (until 2026-12-07 refused: "an injected-volume column is
+    not read") is volume_ul, converted once (docs/measured-data.md)."""
+    data = relabel([{**r, "volume_ul": 1.25 * r["time_s"]} for r in rows()], "volume_ul",
+                   header, factor)
+    obs = observations_from_rows(data)
+    assert obs.columns_read[0].column == "volume_ul" and obs.columns_read[0].factor == factor
+    np.testing.assert_allclose(obs.measured_volume_ul, 1.25 * obs.time_s)
 
 
 def test_a_converted_cell_out_of_range_is_named_by_its_header():

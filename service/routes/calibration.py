@@ -41,6 +41,11 @@ EXAMPLE_ROWS = [
                         ("s2", [(0, -0.2), (400, 1.9), (800, 5.1), (1200, 12.6), (1600, 31.4)]))
     for i, (p, a) in enumerate(points)
 ]
+# The same readings from a lab that logs the syringe pump's dispensed volume, not time
+# (docs/measured-data.md, "A measured volume").
+EXAMPLE_ROWS_BY_VOLUME = [
+    {k: v for k, v in row.items() if k not in ("time_s", "flow_ul_s")}
+    | {"volume_ul": 2.5 * row["time_s"]} for row in EXAMPLE_ROWS]
 
 
 MAX_CELL_INT = 10**15  # larger integers are no measurement (and overflow a float)
@@ -73,7 +78,7 @@ class CalibrateRequest(Schema):
 
     rows: list[dict[str, Cell]] = Field(..., min_length=1, max_length=20_000,
                                        description="one object per observation",
-                                       examples=[EXAMPLE_ROWS])
+                                       examples=[EXAMPLE_ROWS, EXAMPLE_ROWS_BY_VOLUME])
     model: str = Field("emulator", min_length=1, max_length=64, pattern=MATERIAL_ID,
                        description="baseline: emulator (nothing left open), exponential / "
                        "fitted, paper, or a saved model name")

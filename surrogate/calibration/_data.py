@@ -3,7 +3,8 @@
 The contract is in docs/measured-data.md. Required columns: curve_id, L_mm, t_mm,
 body_material, membrane_material, pressure_pa, angle_deg. Optional: T_mm, b_mm (standard
 design's defaults, 1 and 1.8 mm), h_mm (0.15 mm), time_s, flow_ul_s, angle_sd_deg, force_mn,
-and the pump's own log (``pump``: load, hold or unload). Every row is checked before
+the pump's dispensed volume (``volume_ul``: _measured_volume.py) and the pump's own log
+(``pump``: load, hold or unload). Every row is checked before
 anything is built, so a bad file is never half-loaded.
 """
 
@@ -32,12 +33,22 @@ from surrogate.calibration._headers import (
     read_headers,
 )
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
+from surrogate.calibration._measured_volume import (
+    check_runs,
+    disagreements,
+    is_absent,
+    volume_directions,
+    written_step_ul,
+)
 from surrogate.calibration._pump_clock import clock_warning
 from surrogate.json_repeats import loads_with_repeats
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
             "pressure_pa", "angle_deg")
-OPTIONAL = ("T_mm", "b_mm", "h_mm", "time_s", "flow_ul_s", "angle_sd_deg", "force_mn")
+OPTIONAL = ("T_mm", "b_mm", "h_mm", "time_s", "flow_ul_s", "angle_sd_deg", "force_mn",
+            "volume_ul")
+#: optional columns that, once present, need a value on every row (the pump's record)
+EVERY_ROW = ("time_s", "flow_ul_s", "volume_ul")
 #: the pump's own log, optional: what it did in the interval ending at each reading (since
 #: the previous one; the first reading: since the start). Given, it is the history
 #: (``Observations.direction``) instead of what the readings suggest (_history.py): a
@@ -64,6 +75,7 @@ RANGES: dict[str, tuple[float, float, bool]] = {
     "pressure_pa": (-1e5, 1e6, True), "angle_deg": (-720.0, 720.0, True),
     "time_s": (0.0, 1e6, True), "flow_ul_s": (0.0, 1e4, True),
     "angle_sd_deg": (0.0, 360.0, False), "force_mn": (-1e6, 1e6, True),
+    "volume_ul": (0.0, 1e6, True),
 }
 
 
@@ -92,8 +104,10 @@ class Observations:
     sha256: str
     direction: np.ndarray = None  # type: ignore[assignment]
     warnings: tuple[str, ...] = ()
-    #: the pump's injected volume at each reading (ul; NaN without time_s and flow_ul_s),
-    #: from the whole history of each curve (_history.injected_volume_ul)
+    #: the pump's injected volume at each reading (ul; NaN without time_s and flow_ul_s
+    #: or a measured volume), from the whole history of each curve
+    #: (_history.injected_volume_ul), or the measured one (``measured_volume_ul``) where
+    #: there is no history or it disagrees (_measured_volume.py)
     volume_ul: np.ndarray = None  # type: ignore[assignment]
     #: where the pump changed state between readings (_history.pump_switches): per row
     #: and switch, the injected volume (ul) one reading interval of shift moves; computed
@@ -111,26 +125,69 @@ class Observations:
     #: curve is a specimen of its own. Specimens, not runs, are the independent units
     #: of the scatter between specimens, the held-out folds and the noise floor.
     specimen: np.ndarray = None  # type: ignore[assignment]
+    #: the ``volume_ul`` column (ul; NaN without it), the step of its last written digit
+    #: (ul) and, per row, whether ``volume_ul`` is the measured volume
+    measured_volume_ul: np.ndarray = None  # type: ignore[assignment]
+    volume_step_ul: float = 0.0
+    volume_measured: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if self.specimen is None:
             object.__setattr__(self, "specimen", np.asarray(self.curve).copy())
+        if self.measured_volume_ul is None:
+            object.__setattr__(self, "measured_volume_ul", np.full(self.n, np.nan))
+        measured = not is_absent(self.measured_volume_ul)
+        by_history = self.has_time and self.has_flow
         if self.direction is None:
-            object.__setattr__(self, "direction",
-                               directions(self.curve, self.pressure_pa, self.angle_deg,
-                                          self.time_s, self.group))
+            object.__setattr__(self, "direction", volume_directions(
+                self.curve, self.measured_volume_ul, self.volume_step_ul)
+                if measured and not by_history else
+                directions(self.curve, self.pressure_pa, self.angle_deg, self.time_s,
+                           self.group))
         if self.volume_ul is None:
-            object.__setattr__(self, "volume_ul", injected_volume_ul(
-                self.curve, self.time_s, self.flow_ul_s, self.direction))
+            self._take_volume(measured, by_history)
+        if self.volume_measured is None:
+            object.__setattr__(self, "volume_measured", np.full(self.n, measured))
         if self.switch_after is None:
             after, at, names = (np.zeros((self.n, 0)), np.zeros((self.n, 0)), ())
-            if self.has_volume:
+            if self.has_volume and by_history:
                 keys = [self._program_key(c) for c in range(self.n_curves)]
                 after, at, names = pump_switches(self.curve, self.time_s, self.flow_ul_s,
                                                  self.direction, self.volume_ul, keys)
+                after, at, names = _without_rows(after, at, names, self.volume_measured)
             object.__setattr__(self, "switch_after", after)
             object.__setattr__(self, "switch_at", at)
             object.__setattr__(self, "switch_names", names)
+
+    def _take_volume(self, measured: bool, by_history: bool) -> None:
+        """The injected volume: the pump history's (time_s, flow_ul_s); without them the
+        measured one; with both, the measured one on the curves where they disagree
+        (their history then read off the measured volume, unless the pump logged it),
+        with a warning (_measured_volume.py)."""
+        pump = injected_volume_ul(self.curve, self.time_s, self.flow_ul_s, self.direction)
+        if not measured:
+            object.__setattr__(self, "volume_ul", pump)
+            return
+        if not by_history:
+            object.__setattr__(self, "volume_ul", self.measured_volume_ul.copy())
+            return
+        off, words = disagreements(self.curve, self.curve_ids, self.measured_volume_ul,
+                                   pump, self.volume_step_ul)
+        object.__setattr__(self, "volume_ul", np.where(off, self.measured_volume_ul, pump))
+        object.__setattr__(self, "volume_measured", off)
+        object.__setattr__(self, "warnings", self.warnings + tuple(words))
+        if not self.pump_logged:
+            object.__setattr__(self, "direction", np.where(off, volume_directions(
+                self.curve, self.measured_volume_ul, self.volume_step_ul), self.direction))
+
+    @property
+    def volume_source(self) -> str:
+        """Where the injected volume comes from, in words (the report's data)."""
+        if not self.has_volume:
+            return "none"
+        if not np.any(self.volume_measured):
+            return "pump history"
+        return "measured" if np.all(self.volume_measured) else "pump history and measured"
 
     def _program_key(self, c: int) -> str:
         """Replicates of one design at one flow rate: one pump program."""
@@ -140,7 +197,8 @@ class Observations:
 
     @property
     def has_volume(self) -> bool:
-        """Every reading's injected volume is known (time_s and flow_ul_s)."""
+        """Every reading's injected volume is known (time_s and flow_ul_s, or
+        volume_ul)."""
         return bool(self.n and np.all(np.isfinite(self.volume_ul)))
 
     @property
@@ -217,7 +275,8 @@ class Observations:
             self.flow_ul_s[keep], self.angle_sd_deg[keep], self.force_mn[keep], self.sha256,
             self.direction[keep], self.warnings, self.volume_ul[keep],
             self.switch_after[keep], self.switch_at[keep], self.switch_names,
-            self.pump_logged, self.columns_read, specimen.ravel())
+            self.pump_logged, self.columns_read, specimen.ravel(),
+            self.measured_volume_ul[keep], self.volume_step_ul, self.volume_measured[keep])
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
@@ -309,6 +368,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             raise _missing(name, columns)
     present = [c for c in OPTIONAL if c in columns]
     parsed = []
+    written: list[float] = []    # the volume_ul column as written (its last digit)
     for i, raw in enumerate(rows, start=1):
         if not isinstance(raw, dict):
             raise DataError("rows", "a row must be an object of column -> value", i,
@@ -341,15 +401,19 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
                 _check_range(x, name, i)
                 rec[name] = x
             for name in OPTIONAL:
+                if name == "volume_ul" and name not in present:
+                    continue    # absent: not in the row (its sha256 as before the column)
                 x = (_number(raw.get(name), name, i) * _factor(converted, name)
                      if name in present else math.nan)
                 if math.isnan(x):
-                    if name in present and name in ("time_s", "flow_ul_s"):
+                    if name in present and name in EVERY_ROW:
                         raise _cell_error(name, "missing value (the column is present, so "
                                           "every row needs one)", i)
                     x = DEFAULTS.get(name, math.nan)
                 else:
                     _check_range(x, name, i)
+                    if name == "volume_ul":
+                        written.append(x / _factor(converted, name))
                 rec[name] = x
         except DataError as exc:
             raise _as_written(exc, converted) from None
@@ -359,7 +423,16 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     parsed, warnings = _suspicious(parsed, present, strict)
     if PUMP_COLUMN in columns:
         present = present + [PUMP_COLUMN]
-    return _build(parsed, present, tuple(warnings), tuple(converted.values()))
+    step = written_step_ul(written, _factor(converted, "volume_ul")) if written else 0.0
+    try:
+        obs = _build(parsed, present, tuple(warnings), tuple(converted.values()), step)
+    except DataError as exc:     # a measured volume's run, named as the file names it
+        raise _as_written(exc, converted) from None
+    if strict and len(obs.warnings) > len(warnings):   # the pump history's check
+        raise DataError("volume_ul", obs.warnings[len(warnings)].removeprefix("volume_ul: ")
+                        + " (refused: strict)", None, "data without warnings (drop --strict "
+                        "to accept with a warning)")
+    return obs
 
 
 def _factor(converted: dict[str, Reading], column: str) -> float:
@@ -521,8 +594,8 @@ def _mixed_units(kept: list[dict[str, object]]) -> list[tuple[str, str, int | No
 
 
 def _build(parsed: list[dict[str, object]], present: list[str],
-           warnings: tuple[str, ...] = (), columns_read: tuple[Reading, ...] = ()
-           ) -> Observations:
+           warnings: tuple[str, ...] = (), columns_read: tuple[Reading, ...] = (),
+           volume_step_ul: float = 0.0) -> Observations:
     by_curve: dict[str, list[int]] = {}
     for i, rec in enumerate(parsed):
         by_curve.setdefault(str(rec["curve_id"]), []).append(i)
@@ -568,6 +641,11 @@ def _build(parsed: list[dict[str, object]], present: list[str],
                       None if flow != flow else round(float(flow), 6))  # type: ignore
         gi = groups.setdefault(gkey, len(groups))
         rows_sorted += [(ci, fi, gi, parsed[j]) for j in idx]
+        if "volume_ul" in present:
+            check_runs(cid, [float(parsed[j]["volume_ul"]) for j in idx],  # type: ignore
+                       [j + 1 for j in idx], volume_step_ul,
+                       [float(parsed[j][PUMP_COLUMN]) for j in idx]  # type: ignore
+                       if PUMP_COLUMN in present else None)
 
     def col(name: str) -> np.ndarray:
         return np.array([float(r[name]) for _, _, _, r in rows_sorted])
@@ -579,7 +657,9 @@ def _build(parsed: list[dict[str, object]], present: list[str],
         col("flow_ul_s"), col("angle_sd_deg"), col("force_mn"), _hash(parsed),
         direction=col(PUMP_COLUMN) if PUMP_COLUMN in present else None, warnings=warnings,
         pump_logged=PUMP_COLUMN in present, columns_read=columns_read,
-        specimen=np.array([specimen_of[c] for c, _, _, _ in rows_sorted], dtype=int))
+        specimen=np.array([specimen_of[c] for c, _, _, _ in rows_sorted], dtype=int),
+        measured_volume_ul=col("volume_ul") if "volume_ul" in present else None,
+        volume_step_ul=volume_step_ul)
 
 
 def _same_design_per_specimen(parsed: list[dict[str, object]],
@@ -785,3 +865,14 @@ def load_observations(path: str | Path, strict: bool = False) -> Observations:
         rows = data.get("rows") if isinstance(data, dict) else data
         return observations_from_rows(rows, strict)  # type: ignore[arg-type]
     return observations_from_rows(read_csv_rows(text), strict)
+
+
+def _without_rows(after: np.ndarray, at: np.ndarray, names: tuple[str, ...],
+                  rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """The pump switches (``_history.pump_switches``) with ``rows`` taken out (curves
+    whose measured volume is used: it holds where the pump switched) and the switches
+    left on no row dropped."""
+    after, at = np.where(rows[:, None], 0.0, after), np.where(rows[:, None], 0.0, at)
+    keep = np.any(after != 0, axis=0) | np.any(at != 0, axis=0)
+    return after[:, keep], at[:, keep], tuple(n for n, k in zip(names, keep, strict=True)
+                                              if k)

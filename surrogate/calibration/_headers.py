@@ -13,8 +13,8 @@ and every check after that (ranges, kPa-looking pressures) sees the canonical un
 Refused, naming the header: a known quantity in an unknown unit (``Angle (grad)``: the
 gradian or the German "Grad" = degree? not guessed), a unit of another dimension
 (``Pressure (s)``), a quantity named without a unit, two headers read as one column, and
-an injected-volume column (the loop computes each reading's volume from ``time_s`` and
-``flow_ul_s``; a measured one is not read). Exact canonical names are read as they are.
+and a header longer than any lab's. An injected volume (``Volume (ml)``, ``V [mm^3]``) is
+the column ``volume_ul`` (_measured_volume.py). Exact canonical names are read as they are.
 """
 
 from __future__ import annotations
@@ -35,29 +35,29 @@ UNITS: dict[str, tuple[str, float]] = {
     "degrees": ("angle", 1.0), "rad": ("angle", 180.0 / math.pi),
     "s": ("time", 1.0), "sec": ("time", 1.0), "ms": ("time", 1e-3), "min": ("time", 60.0),
     "h": ("time", 3600.0),
-    "ul": ("volume", 1.0), "ml": ("volume", 1000.0),
+    "ul": ("volume", 1.0), "ml": ("volume", 1000.0), "nl": ("volume", 1e-3),
+    "mm^3": ("volume", 1.0), "mm3": ("volume", 1.0), "mm³": ("volume", 1.0),
+    "cm^3": ("volume", 1000.0), "cm3": ("volume", 1000.0), "cm³": ("volume", 1000.0),
+    "cc": ("volume", 1000.0),
     "cmh2o": ("pressure", 98.0665),
     "mn": ("force", 1.0), "n": ("force", 1000.0), "gf": ("force", 9.80665),
 }
 
 #: canonical numeric column -> the names a lab gives its quantity besides the column's own
 #: stem (``pressure`` of pressure_pa); any case, except single letters, read as listed
-#: (``t`` is time, ``T`` a temperature or the body thickness). ``None``: a quantity no
-#: column holds.
-QUANTITY_NAMES: dict[str | None, tuple[str, ...]] = {
+#: (``t`` is time, ``T`` a temperature or the body thickness).
+QUANTITY_NAMES: dict[str, tuple[str, ...]] = {
     "pressure_pa": ("p", "P", "druck", "gauge pressure"),
     "angle_deg": ("bending angle", "bend angle", "theta", "θ", "winkel"),
     "time_s": ("t", "zeit"),
     "flow_ul_s": ("flow rate", "q", "Q", "pump rate"),
     "force_mn": ("f", "F", "tip force", "blocked force", "kraft"),
     "angle_sd_deg": ("angle sd", "angle uncertainty"),
-    None: ("volume", "v", "V", "injected volume", "vol"),
+    "volume_ul": ("v", "V", "injected volume", "vol", "dispensed volume", "pump volume"),
 }
 #: a longer header names no quantity (its every split read would take a second at 10,000
 #: characters: a stray key over HTTP)
 MAX_HEADER_CHARS = 100
-VOLUME_WORDS = ("an injected-volume column is not read: the calibration computes each "
-                "reading's volume from time_s and flow_ul_s (give those)")
 
 
 def _unit(text: str) -> tuple[str, float] | None:
@@ -122,24 +122,22 @@ def _key(name: str) -> str:
     return name if len(name) == 1 else name.lower()
 
 
-def _names(numeric: tuple[str, ...]) -> dict[str, str | None]:
-    """quantity name (``_key``) -> canonical column (None: no column holds it)."""
-    out: dict[str, str | None] = {}
+def _names(numeric: tuple[str, ...]) -> dict[str, str]:
+    """quantity name (``_key``) -> canonical column."""
+    out: dict[str, str] = {}
     for column in numeric:
         unit = canonical_unit(column)
         if unit is None:
             continue
         for name in (column, unit[0]) + QUANTITY_NAMES.get(column, ()):
             out[_key(name)] = column
-    for name in QUANTITY_NAMES[None]:
-        out[_key(name)] = None
     return out
 
 
 def read_header(header: str, numeric: tuple[str, ...]) -> Reading | None:
     """The reading of one header, None when it names no quantity (a text column, an
     unknown column: the caller says so). Raises DataError naming the header for a known
-    quantity in an unknown unit, without a unit, or an injected volume."""
+    quantity in an unknown unit or without a unit."""
     if header in numeric:
         return Reading(header, header, 1.0)
     if len(header) > MAX_HEADER_CHARS:     # no lab's header: an unknown column, said short
@@ -153,11 +151,8 @@ def read_header(header: str, numeric: tuple[str, ...]) -> Reading | None:
         if key not in names:
             continue
         column = names[key]
-        if column is not None and unit_text is None and key == _key(column):
+        if unit_text is None and key == _key(column):
             return Reading(header, column, 1.0)     # 'Angle_deg': the name in its case
-        if column is None:
-            raise DataError(header, VOLUME_WORDS, None, "the columns of docs/measured-"
-                            "data.md")
         _, dimension, own = canonical_unit(column)  # type: ignore[misc]
         unit = _unit(unit_text) if unit_text else None
         if unit is None or unit[0] != dimension:

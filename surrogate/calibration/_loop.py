@@ -51,6 +51,7 @@ from surrogate.calibration._least_squares import (
     fit,
     paired_cv,
 )
+from surrogate.calibration._measured_volume import is_absent
 from surrogate.calibration._noise import NoiseFloor, noise_floor, volume_floor
 from surrogate.calibration._residual import residual_summary, scatter_shift
 from surrogate.calibration._response import Responses, design_key
@@ -321,6 +322,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                         "h_mm"), f, strict=False)) for f in obs.families],
                  "has_time_s": obs.has_time, "has_flow_ul_s": obs.has_flow,
                  "pump_logged": obs.pump_logged,
+                 "has_volume_ul": not is_absent(obs.measured_volume_ul),
+                 "injected_volume": obs.volume_source,
+                 "volume_ul_used_for": [obs.curve_ids[c] for c in np.unique(
+                     obs.curve[obs.volume_measured])],
                  "columns_read": [r.as_dict() for r in obs.columns_read],
                  "flow_rates_ul_s": sorted({float(q) for q in np.round(
                      obs.flow_ul_s[np.isfinite(obs.flow_ul_s)], 6)}),
@@ -536,7 +541,8 @@ def pressure_channel(obs: Observations, responses: Responses, baseline: Baseline
     floor_a = volume_floor(obs, obs.angle_deg) if obs.has_volume else None
     floor_p = volume_floor(obs, obs.pressure_pa) if obs.has_volume else None
     if not obs.has_volume:
-        why = "needs time_s and flow_ul_s on every reading (the injected volume)"
+        why = ("needs time_s and flow_ul_s, or volume_ul, on every reading (the injected "
+               "volume)")
     elif baseline.open_parameters:
         why = ("the baseline leaves its pressure scale open per family, so its pressure at "
                "a volume is open too")
@@ -563,7 +569,8 @@ def _within_volume_range(obs: Observations, responses: Responses, warnings: list
     for what in ("angle_v", "pressure_v"):
         ok &= np.isfinite(responses.lookup_volume(responses.curves((), [], what), index,
                                                   obs.volume_ul))
-    return _keep_within_range(obs, ok, "time_s", "readings' injected volumes",
+    field = "volume_ul" if np.all(obs.volume_measured) else "time_s"
+    return _keep_within_range(obs, ok, field, "readings' injected volumes",
                               " of injected volume", warnings)
 
 

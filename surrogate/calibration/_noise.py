@@ -166,7 +166,8 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
     """How far a new specimen's reading ``y`` (its angle, deg, or its gauge pressure, Pa)
     scatters around its design's mean at the same injected volume: replicates (one design
     at one flow rate) compared in the same segment of their history at the same time since
-    it began -- at one flow rate, the same volume -- so what replicates share (the
+    it began -- at one flow rate, the same volume; without time_s at the same volume --
+    so what replicates share (the
     inlet's R Q, creep, a loop) is not scatter, while a specimen's own stiffness and
     geometry are. floor^2 = sum (y - mean_others)^2 / (1 + 1/k) / N as ``noise_floor``;
     ``rms_deg`` carries the floor in y's unit. None without injected volumes or
@@ -188,13 +189,13 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
                            for k in range(int(seg.max()) + 1)]
         for c, parts in cut.items():
             for k, (r, d) in enumerate(parts):
-                t = obs.time_s[r] - obs.time_s[r][0]
+                t = _along(obs, r, d)
                 others = []
                 for c2, parts2 in cut.items():
                     if spec[c2] == spec[c] or k >= len(parts2) or parts2[k][1] != d:
                         continue
                     r2 = parts2[k][0]
-                    t2 = obs.time_s[r2] - obs.time_s[r2][0]
+                    t2 = _along(obs, r2, d)
                     others.append((spec[c2], np.interp(t, t2, y[r2], left=np.nan,
                                                        right=np.nan)
                                    if t2.size > 1 else np.where(t == 0, y[r2][0], np.nan)))
@@ -218,6 +219,18 @@ def volume_floor(obs: Observations, y: np.ndarray) -> NoiseFloor | None:
            if means.size >= 2 else float("nan"))
     return NoiseFloor(float(np.sqrt(floor2)), n_used, "replicates", len(np.unique(obs.group)),
                       rel)
+
+
+def _along(obs: Observations, rows: np.ndarray, direction: float) -> np.ndarray:
+    """Where each reading of one segment of a curve's history lies, for comparing
+    replicates: the time since the segment began (s); without time_s (a measured volume,
+    _measured_volume.py) the injected volume (ul; negated while unloading, so that it
+    rises) or, in a hold, the reading's place in it."""
+    if obs.has_time:
+        return obs.time_s[rows] - obs.time_s[rows][0]
+    if direction == 0:
+        return np.arange(rows.size, dtype=float)
+    return obs.volume_ul[rows] * (1.0 if direction > 0 else -1.0)
 
 
 def _by_specimen(others: list[tuple[int, np.ndarray]]) -> np.ndarray:
