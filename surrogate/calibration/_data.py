@@ -538,11 +538,14 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
     else:
         warnings += _mixed_units(kept)
     # one curve is one flow rate: a curve timed at flow 0 injected nothing, yet bent
+    # (unless a measured volume says what was injected: its own check then warns)
     still = [c for c, recs in by_curve.items()
              if all(r.get("time_s") is not None and r.get("flow_ul_s") is not None
                     and float(r["flow_ul_s"]) == 0.0 for r in recs)  # type: ignore[arg-type]
              and max(abs(float(r["angle_deg"])) for r in recs)  # type: ignore[arg-type]
-             > KPA_MIN_ANGLE_DEG]
+             > KPA_MIN_ANGLE_DEG
+             and not any(float(r.get("volume_ul") or 0.0) > 0.0  # type: ignore[arg-type]
+                         for r in recs)]
     if still:
         warnings.append(("flow_ul_s", f"flow_ul_s is 0 on every row of curve_id "
                          f"{', '.join(map(repr, still[:3]))}{' ...' if len(still) > 3 else ''}"
