@@ -605,7 +605,8 @@ def fit_emulator(records: Iterable, name: str = "emulator", level: float = 0.95,
         hazard = np.array(rows.hazard, bool).reshape(-1, 2)
         stretch_hazard = fit_stretch_hazard(
             np.array(rows.u), np.array(rows.stretch), reached=int(hazard[:, 0].sum()),
-            failed=int((hazard[:, 0] & hazard[:, 1]).sum()), seed=seed)
+            failed=int((hazard[:, 0] & hazard[:, 1]).sum()),
+            min_designs=MIN_DESIGNS, seed=seed)
         for sign in (1.0, -1.0):
             keep = signs == sign
             key = group + ("+" if sign > 0 else "-")

@@ -27,7 +27,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from surrogate.emulator.vector_gp import VectorGP, fit_output_gps, vector_gp_from_dict
+from surrogate.emulator.vector_gp import (
+    MEANS_ONLY,
+    VectorGP,
+    fit_output_gps,
+    vector_gp_from_dict,
+)
 
 STRETCH_NODES_DEG = np.array([5.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0])
 # The stretch from which answers are flagged. On the PDMS-bodied group (shipped database
@@ -73,7 +78,7 @@ class StretchHazard:
     def onset_deg(self, u: np.ndarray) -> float:
         """The angle (deg, unsigned) at which the emulated stretch (mean) of the design at
         unit coordinates ``u`` reaches HAZARD_STRETCH; inf where it stays below to 90 deg."""
-        mean, _ = self.model.predict(np.asarray(u, float), variance_of=np.arange(0))
+        mean, _ = self.model.predict(np.asarray(u, float), MEANS_ONLY)
         stretch = 1.0 + np.exp(mean)
         above = np.flatnonzero(stretch >= HAZARD_STRETCH)
         if not above.size:
@@ -106,12 +111,13 @@ class StretchHazard:
 
 
 def fit_stretch_hazard(u: np.ndarray, nodes: np.ndarray, reached: int, failed: int,
-                       seed: int = 0) -> StretchHazard | None:
+                       min_designs: int, seed: int = 0) -> StretchHazard | None:
     """The hazard model of a group from its complete curves' unit coordinates ``u`` (n, 6)
-    and ``stretch_nodes`` (n, len(STRETCH_NODES_DEG)); None with too few curves."""
+    and ``stretch_nodes`` (n, len(STRETCH_NODES_DEG)); None with fewer than
+    ``min_designs`` curves that reach every node."""
     u, nodes = np.asarray(u, float), np.asarray(nodes, float)
     ok = np.isfinite(nodes).all(axis=1)
-    if ok.sum() < 10:
+    if ok.sum() < min_designs:
         return None
     gp = fit_output_gps(u[ok], nodes[ok], seed=seed, shared=slice(None))
     return StretchHazard(gp, int(reached), int(failed))
