@@ -51,6 +51,8 @@ from solver.design_space import (
 )
 from solver.errors import InputError
 from surrogate.band_level import z_value
+from surrogate.emulator.stretch_hazard import FLAG as STRETCH_FLAG
+from surrogate.emulator.stretch_hazard import HAZARD_STRETCH
 from surrogate.errors import stop_if_cancelled
 from surrogate.exponential.inverse_design import (
     DesignCandidate,
@@ -472,6 +474,23 @@ SCORE_MEANING = {
 }
 
 
+def stretch_hazard_note(candidates: list[DesignCandidate]) -> str:
+    """The explanation's words on the listed designs whose curve to the target carries
+    ``high_membrane_stretch`` (surrogate/emulator/stretch_hazard.py): they reach it where
+    their emulated membrane stretch has passed the hazard stretch, past which many FE
+    curves end in a Newton failure. The ranking is unchanged (a flag, not a cut); ""
+    when none does."""
+    ranks = [str(c.rank) for c in candidates
+             if STRETCH_FLAG in (c.curve.validity or {}).get("flags", ())]
+    if not ranks:
+        return ""
+    return (f"; rank{'s' if len(ranks) > 1 else ''} {', '.join(ranks)} reach"
+            f"{'' if len(ranks) > 1 else 'es'} it past where the emulated membrane stretch "
+            f"passes {HAZARD_STRETCH:g} (flag {STRETCH_FLAG}), past which many FE curves end "
+            "in a Newton failure: an FE solve (POST /v1/solve) tells whether the design's "
+            "curve gets there")
+
+
 def _score(e: _Eval, objective: str, target: DesignTarget) -> float:
     if objective == "pressure":
         return e.needed
@@ -620,7 +639,8 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                                                        level)))
     if candidates:
         explanation = (f"{len(feasible)} of {n_evaluated} evaluated designs meet the target; "
-                       f"the {len(candidates)} best by {objective} are listed")
+                       f"the {len(candidates)} best by {objective} are listed"
+                       + stretch_hazard_note(candidates))
     else:
         what = "force" if target.kind == "force_at_pressure" else "angle"
         unit = "mN" if target.kind == "force_at_pressure" else "deg"

@@ -187,3 +187,20 @@ def test_the_flag_and_where_it_starts_reach_the_http_answer(shipped_client):
     assert v["high_stretch_from_pa"] == pytest.approx(
         inv.json()["validity"]["high_stretch_from_pa"])
     assert any("stretch passes 7" in m for m in v["messages"])
+
+
+def test_the_design_search_names_the_listed_designs_past_their_stretch_onset(emulator):
+    """A design search whose listed designs include one that reaches the target past its
+    emulated stretch onset (80 deg at 3000 Pa, thick PDMS 1:10 bodies) says which ranks
+    do, in its explanation; the ranking itself is unchanged (a flag, not a cut)."""
+    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.exponential.inverse_design import DesignTarget
+
+    res = search_designs(emulator, DesignTarget("angle_at_pressure", 3000.0, angle_deg=80.0),
+                         SearchBounds(T_mm=(1.8, 2.0), pairs=(("pdms_1_10", "ecoflex_00_30"),)),
+                         n_results=5)
+    flagged = [c.rank for c in res.candidates if FLAG in c.curve.validity["flags"]]
+    assert flagged and len(flagged) < len(res.candidates), flagged
+    said = f"rank{'s' if len(flagged) > 1 else ''} {', '.join(map(str, flagged))} reach"
+    assert said in res.explanation, res.explanation
+    assert "an FE solve (POST /v1/solve)" in res.explanation
