@@ -1,0 +1,93 @@
+"""The forty-first session's hostile-input audit: what a careless or hostile user met that
+the schema-driven fuzzers (tests/test_cli_fuzz.py, tests/test_service_fuzz.py) did not
+send -- Ctrl-C landing inside h5py, a scaled material id given a second scale, a
+directory or a dangling link where a file goes, the same flag twice in an answer.
+
+Each test failed on the code before its fix (commit messages say which).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import signal
+import sys
+from pathlib import Path
+
+import pytest
+from test_cli_fuzz import run, visible_lines
+from test_store import record_for
+
+from solver.store import CurveStore
+
+H5PY_ATTRIBUTE_CALLBACK = "iter_cb"      # h5py/_hl/attrs.py: AttributeManager.__iter__
+WEAKREF_CALLBACK = ("remove", "weakref.py")  # WeakValueDictionary's entry remover
+
+
+def _small_db(tmp_path: Path) -> Path:
+    db = tmp_path / "db.h5"
+    with CurveStore(db, mode="a") as store:
+        store.put_many([record_for(L_mm=L) for L in (4.1, 7.1, 9.1)])
+    return db
+
+
+def _interrupted_at(argv: list[str], hit) -> tuple[list[str], tuple]:
+    """``balloon argv`` with Ctrl-C's KeyboardInterrupt raised the first time a Python
+    function that ``hit(code)`` picks is entered (where a real SIGINT lands when it
+    arrives during h5py's C code calling back into Python). (where it fired, result)."""
+    fired: list[str] = []
+
+    def tracer(frame, event, arg):
+        if event == "call" and not fired and hit(frame.f_code):
+            fired.append(f"{frame.f_code.co_filename}:{frame.f_code.co_name}")
+            raise KeyboardInterrupt
+        return None
+
+    sys.settrace(tracer)
+    try:
+        result = run(argv)
+    finally:
+        sys.settrace(None)
+    return fired, result
+
+
+@pytest.mark.parametrize("action", [["seal"], ["show"], ["export", "--format", "json"]])
+def test_ctrl_c_inside_h5py_is_an_interruption_not_a_traceback(tmp_path, action):
+    """h5py turns a KeyboardInterrupt raised in its attribute callback into
+    ``SystemError: <cyfunction FastRLock.__exit__> returned a result with an exception
+    set``: `balloon db seal` interrupted at 25 s of 31 printed that traceback (with the
+    site-packages paths) and exited 1. It is the user's Ctrl-C: one line, exit 130, the
+    database as it was."""
+    db = _small_db(tmp_path)
+    before = hashlib.sha256(db.read_bytes()).hexdigest()
+    fired, (code, _, err, escaped) = _interrupted_at(
+        ["db", *action, str(db)], lambda c: c.co_name == H5PY_ATTRIBUTE_CALLBACK)
+    assert fired, "the interrupt never fired: h5py no longer calls back here"
+    assert escaped is None, f"escaped {type(escaped).__name__}: {escaped}"
+    assert (code, visible_lines(err)) == (130, ["balloon: interrupted"]), err
+    assert hashlib.sha256(db.read_bytes()).hexdigest() == before
+    with CurveStore(db) as store:
+        assert len(store) == 3
+
+
+@pytest.fixture
+def terminal_ctrl_c():
+    """SIGINT raising KeyboardInterrupt, as in a terminal (a test worker may ignore it)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_in_a_weakref_callback_still_stops_the_command(tmp_path, terminal_ctrl_c):
+    """A KeyboardInterrupt raised in a weak-reference callback (h5py's objects dying) is
+    "ignored" by Python: it printed "Exception ignored in: <function
+    WeakValueDictionary.__init__.<locals>.remove ...> Traceback ... KeyboardInterrupt",
+    then the seal went on and exited 0 as if Ctrl-C had not been pressed."""
+    db = _small_db(tmp_path)
+    fired, (code, _, err, escaped) = _interrupted_at(
+        ["db", "seal", str(db)], lambda c: (c.co_name, Path(c.co_filename).name)
+        == WEAKREF_CALLBACK)
+    assert fired, "the interrupt never fired: no weak reference died during the seal"
+    assert escaped is None, f"escaped {type(escaped).__name__}: {escaped}"
+    assert (code, visible_lines(err)) == (130, ["balloon: interrupted"]), err
+    with CurveStore(db) as store:
+        assert len(store) == 3
