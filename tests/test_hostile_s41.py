@@ -91,3 +91,21 @@ def test_ctrl_c_in_a_weakref_callback_still_stops_the_command(tmp_path, terminal
     assert (code, visible_lines(err)) == (130, ["balloon: interrupted"]), err
     with CurveStore(db) as store:
         assert len(store) == 3
+
+
+def test_an_answer_names_each_flag_once():
+    """The exponential model's inverse past both the family's FE angle (97.5 deg for the
+    standard design's family) and its volume relation's (90.3 deg) flagged
+    ``past_fe_range`` twice: ``"flags": ["angle_beyond_fe", "past_fe_range",
+    "past_fe_range"]`` (POST /v1/inverse/pressure, model "exponential", 91 and 120 deg).
+    Flags are machine-readable names: each once, its messages all kept."""
+    from service.settings import DATA_DIR
+    from solver import Design
+    from surrogate import open_surrogate
+
+    model = open_surrogate(str(DATA_DIR / "surrogate.json"))
+    answer = model.inverse(Design(L_mm=7.1, t_mm=0.5), [45, 91, 120])
+    flags = answer.validity["flags"]
+    assert sorted(flags) == sorted(set(flags)), flags
+    assert "past_fe_range" in flags
+    assert any("no volume above" in m for m in answer.validity["messages"])
