@@ -109,3 +109,26 @@ def test_an_answer_names_each_flag_once():
     assert sorted(flags) == sorted(set(flags)), flags
     assert "past_fe_range" in flags
     assert any("no volume above" in m for m in answer.validity["messages"])
+
+
+@pytest.mark.parametrize("command", [["predict", "--pressures", "1000"],
+                                     ["inverse", "--angles-deg", "30"]])
+def test_a_scaled_material_with_a_stiffness_scale_is_named_as_such(command):
+    """``--body-material pdms_1_10*2 --body-stiffness-scale 0.5`` was refused as
+    "unknown material 'pdms_1_10*2' (allowed: pdms_1_10, pdms_1_15, ecoflex_00_30)",
+    though the same id alone is taken (README: the id <preset>*<scale> wherever a preset
+    id is taken) and the list was a copy of the presets' table. The refusal says the id
+    is scaled already and how to give the scale once; the presets come from the table."""
+    from solver.materials import MATERIALS
+
+    argv = [command[0], "--L-mm", "7.1", "--t-mm", "0.5", *command[1:], "--model", "paper",
+            "--body-material", "pdms_1_10*2", "--body-stiffness-scale", "0.5"]
+    code, _, err, escaped = run(argv)
+    assert escaped is None and code == 2
+    (line,) = visible_lines(err)
+    assert line.startswith("balloon: error: --body-material: 'pdms_1_10*2' is already "
+                           "scaled"), line
+    assert "unknown" not in line and "--body-stiffness-scale" in line
+    assert all(preset in line for preset in MATERIALS)
+    code, out, err, escaped = run(argv[:-4])     # the scaled id alone: answered
+    assert (code, escaped) == (0, None), err
