@@ -221,8 +221,11 @@ def surrogate_from_args(args: argparse.Namespace) -> object:
     allowed = (", ".join(BUILT_IN_MODELS) + ", a saved calibrated model's name, or an "
                "existing model file (.json)")
     if Path(spec).suffix == ".json" or "/" in spec or os.sep in spec:   # a file's path
-        if not Path(spec).is_file():
-            raise InputError("--model", f"{spec}: file not found", allowed)
+        path = Path(spec)
+        if not path.is_file():
+            what = ("is a directory" if path.is_dir() else "is not a regular file (a device "
+                    "or a pipe)" if path.exists() else "file not found")
+            raise InputError("--model", f"{spec}: {what}", allowed)
         return open_model_file(Path(spec), getattr(args, "form", None))
     settings = get_settings()
     models_dir = getattr(args, "models_dir", None) or settings.models_dir
