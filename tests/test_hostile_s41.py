@@ -132,3 +132,52 @@ def test_a_scaled_material_with_a_stiffness_scale_is_named_as_such(command):
     assert all(preset in line for preset in MATERIALS)
     code, out, err, escaped = run(argv[:-4])     # the scaled id alone: answered
     assert (code, escaped) == (0, None), err
+
+
+@pytest.mark.parametrize("loader", ["emulator", "surrogate"])
+def test_a_model_file_is_read_within_a_bound(tmp_path, monkeypatch, loader):
+    """``balloon precompute GRID --db DB --adaptive 2 --emulator /dev/zero`` read
+    /dev/zero to the end: memory without bound, then a MemoryError traceback. A model
+    file is read like the grid and the measured data (solver/bounded_read.py): past its
+    bound (here lowered to 1 kB so the test reads little) it is refused at ``model``."""
+    import surrogate.emulator.file as emulator_file
+    import surrogate.exponential.file as surrogate_file
+    import surrogate.model_file
+    from solver.errors import InputError
+
+    monkeypatch.setattr(surrogate.model_file, "MAX_MODEL_FILE_BYTES", 1024)
+    big = tmp_path / "big.json"
+    big.write_text('{"format": "balloon-emulator", "pad": "' + "x" * 4096 + '"}')
+    load = (emulator_file.load_emulator if loader == "emulator"
+            else surrogate_file.load_surrogate)
+    with pytest.raises(InputError) as caught:
+        load(big)
+    assert caught.value.field == "model"
+    assert "big.json: larger than" in str(caught.value), str(caught.value)
+    assert str(tmp_path) not in str(caught.value)
+
+
+def test_a_directory_given_as_the_emulator_is_named_with_its_option(tmp_path):
+    """``--emulator adir.json`` (a directory) said "model: adir.json: cannot be read
+    (IsADirectoryError)": no option, no allowed form, a Python class name."""
+    (tmp_path / "adir.json").mkdir()
+    grid = Path(__file__).resolve().parents[1] / "grids" / "default.toml"
+    code, _, err, escaped = run(["precompute", str(grid), "--db", str(tmp_path / "n.h5"),
+                                 "--dry-run", "--adaptive", "2", "--emulator",
+                                 str(tmp_path / "adir.json")])
+    assert escaped is None and code == 2
+    (line,) = visible_lines(err)
+    assert line.startswith("balloon: error: --emulator: ") and "directory" in line, line
+    assert "IsADirectoryError" not in line and "allowed:" in line
+
+
+@pytest.mark.parametrize("where", ["adir.json", "adir"])
+def test_a_directory_given_as_the_model_is_called_a_directory(tmp_path, where):
+    """``balloon predict --model DIR/`` (or a directory named like a model file) said
+    "file not found" of a directory that is there."""
+    (tmp_path / where).mkdir()
+    code, _, err, escaped = run(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures",
+                                 "1000", "--model", f"{tmp_path / where}/"])
+    assert escaped is None and code == 2
+    (line,) = visible_lines(err)
+    assert line.startswith("balloon: error: --model: ") and ": is a directory" in line, line
