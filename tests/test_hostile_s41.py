@@ -181,3 +181,20 @@ def test_a_directory_given_as_the_model_is_called_a_directory(tmp_path, where):
     assert escaped is None and code == 2
     (line,) = visible_lines(err)
     assert line.startswith("balloon: error: --model: ") and ": is a directory" in line, line
+
+
+@pytest.mark.parametrize("command", [["db", "ls"], ["db", "export"], ["fit", "-o", "o.json"]])
+def test_a_dangling_link_is_named_as_given(tmp_path, monkeypatch, command):
+    """``balloon db ls dangling.h5`` (a symbolic link to a file that is gone) said "no
+    curve database at /work/.../nowhere.h5; create one with `balloon precompute GRID.toml
+    --db /work/.../nowhere.h5`": the link's absolute target, a local path the user never
+    typed. The message names the path as given."""
+    monkeypatch.chdir(tmp_path)
+    Path("dangling.h5").symlink_to("nowhere.h5")
+    argv = [*command, "dangling.h5"] if command[0] == "db" else [*command, "--db",
+                                                                   "dangling.h5"]
+    code, _, err, escaped = run(argv)
+    assert escaped is None and code == 2
+    (line,) = visible_lines(err)
+    assert "no curve database at dangling.h5" in line, line
+    assert str(tmp_path) not in line and "nowhere" not in line
