@@ -198,3 +198,40 @@ def test_a_dangling_link_is_named_as_given(tmp_path, monkeypatch, command):
     (line,) = visible_lines(err)
     assert "no curve database at dangling.h5" in line, line
     assert str(tmp_path) not in line and "nowhere" not in line
+
+
+GRID_WITH_MATERIAL = ('pairs = [["{id}", "ecoflex_00_30"]]\nL_mm = 7.1\nt_mm = 0.5\n'
+                      '[materials."{id}"]\nmu_kpa = [1.0]\nalpha = [2.0]\n')
+
+
+def test_a_grid_material_cannot_pass_for_a_scaled_preset(tmp_path):
+    """A grid's ``[materials."pdms_1_10*2"]`` with other constants was taken: its records
+    were stored under the id that everywhere else means PDMS 1:10 with every mu doubled
+    (``GET /v1/curves?body_material=pdms_1_10*2`` listed them as such), while POST
+    /v1/solve refuses the same inline material. One id, one set of parameters."""
+    from solver.errors import InputError
+    from solver.precompute.grid import load_grid
+
+    grid = tmp_path / "g.toml"
+    grid.write_text(GRID_WITH_MATERIAL.format(id="pdms_1_10*2"))
+    with pytest.raises(InputError) as caught:
+        load_grid(grid)
+    assert "reuses the scaled preset id 'pdms_1_10*2'" in str(caught.value)
+    assert caught.value.field.startswith("materials.")
+
+
+@pytest.mark.parametrize("material_id", ["\x1b[31mred", "", "../../x", "a b", "x" * 65])
+def test_a_grid_material_id_is_a_name(tmp_path, material_id):
+    """A grid's custom material id was any text -- an escape sequence (which `balloon db
+    ls` then printed raw, recolouring the terminal), an empty string, '../../x' --
+    stored in the database as the material's id, though the service takes only names
+    (service/schemas/common.py) and cannot even filter by the stored one."""
+    from solver.errors import InputError
+    from solver.precompute.grid import load_grid
+
+    grid = tmp_path / "g.toml"
+    grid.write_text(GRID_WITH_MATERIAL.format(id=material_id.replace("\x1b", "\\u001b")))
+    with pytest.raises(InputError) as caught:
+        load_grid(grid)
+    assert caught.value.field.startswith("materials"), caught.value
+    assert "letters, digits" in str(caught.value)
