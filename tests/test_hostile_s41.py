@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from test_cli_fuzz import run, visible_lines
+from test_cli_fuzz import GOOD_CSV, run, visible_lines
 from test_store import record_for
 
 from solver.store import CurveStore
@@ -235,3 +235,47 @@ def test_a_grid_material_id_is_a_name(tmp_path, material_id):
         load_grid(grid)
     assert caught.value.field.startswith("materials"), caught.value
     assert "letters, digits" in str(caught.value)
+
+
+@pytest.mark.parametrize("command", [["db", "export", "{src}", "--format", "csv", "-o"],
+                                     ["db", "export", "{src}", "--format", "json", "-o"],
+                                     ["calibrate", "{csv}", "--model", "paper", "--report"]])
+def test_an_output_never_replaces_another_curve_database(tmp_path, command):
+    """``balloon db export a.h5 -o b.h5`` with b.h5 a curve database replaced it with
+    CSV ("exported 2 records"): the check for an HDF5 file looked for the signature at
+    byte 0, where every database the store writes carries its seal (the HDF5 signature
+    follows at byte 512). Refused at the option, b.h5 unchanged."""
+    src = _small_db(tmp_path)
+    other = tmp_path / "other.h5"
+    with CurveStore(other, mode="a") as store:
+        store.put_many([record_for(L_mm=5.0)])
+    before = other.read_bytes()
+    (tmp_path / "data.csv").write_text(GOOD_CSV)
+    argv = [w.replace("{src}", str(src)).replace("{csv}", str(tmp_path / "data.csv"))
+            for w in command] + [str(other)]
+    code, _, err, escaped = run(argv)
+    assert escaped is None and code == 2, err
+    (line,) = visible_lines(err)
+    assert "HDF5 file" in line and ("--output" in line or "--report" in line), line
+    assert other.read_bytes() == before
+
+
+@pytest.mark.parametrize("suffix", [".lock", ".job.lock"])
+def test_an_output_never_replaces_a_database_lock(tmp_path, suffix):
+    """``balloon db export a.h5 -o b.h5.lock`` replaced b.h5's writer lock with a new
+    file: a writer holding the old one keeps its lock on a file no one else opens, and
+    the next writer locks the new one -- two writers at once, and one's records lost
+    when the other publishes."""
+    src = _small_db(tmp_path)
+    other = tmp_path / "other.h5"
+    with CurveStore(other, mode="a") as store:
+        store.put_many([record_for(L_mm=5.0)])
+    lock = tmp_path / f"other.h5{suffix}"
+    lock.touch()
+    before = lock.read_bytes(), lock.stat().st_ino
+    code, _, err, escaped = run(["db", "export", str(src), "--format", "csv", "-o",
+                                 str(lock)])
+    assert escaped is None and code == 2, err
+    (line,) = visible_lines(err)
+    assert "lock" in line and "other.h5" in line, line
+    assert (lock.read_bytes(), lock.stat().st_ino) == before
