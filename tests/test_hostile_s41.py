@@ -279,3 +279,32 @@ def test_an_output_never_replaces_a_database_lock(tmp_path, suffix):
     (line,) = visible_lines(err)
     assert "lock" in line and "other.h5" in line, line
     assert (lock.read_bytes(), lock.stat().st_ino) == before
+
+
+def test_a_gauge_reading_no_field_value_can_meet_names_the_flow():
+    """Pump-gauge pressures through an inlet whose drop R Q exceeds every reading
+    pressures_pa takes (at most 20 kPa) were refused with "allowed: >= 4574845.7 Pa at
+    the pump gauge" -- a range the field itself refuses. The refusal names the flow rate
+    and the largest one this inlet allows (R Q = 20 kPa)."""
+    from service.pump import AXES, PumpQuestion, predict_answer
+    from solver import Design
+    from solver.errors import InputError
+    from surrogate import paper_surrogate
+    from surrogate.hydraulics import Inlet
+
+    inlet = Inlet(viscosity_pa_s=1.0, tubing_length_mm=100.0, tubing_bore_mm=0.5)
+    top = AXES["pressures_pa"][1]
+    question = PumpQuestion(pressures_pa=[500.0, top], flow_ul_s=50.0, inlet=inlet,
+                            pressures_at="pump_gauge")
+    with pytest.raises(InputError) as caught:
+        predict_answer(paper_surrogate(), Design(), question, "paper", 0.95)
+    assert caught.value.field == "flow_ul_s", caught.value
+    q_max = top / inlet.resistance_pa_per_ul_s
+    assert f"{q_max:.4g}" in caught.value.allowed, caught.value.allowed
+    # a drop the field's range can exceed: the readings' range is stated whole
+    slow = PumpQuestion(pressures_pa=[10.0], flow_ul_s=0.5 * q_max, inlet=inlet,
+                        pressures_at="pump_gauge")
+    with pytest.raises(InputError) as caught:
+        predict_answer(paper_surrogate(), Design(), slow, "paper", 0.95)
+    assert caught.value.field == "pressures_pa"
+    assert caught.value.allowed.endswith(f"<= pressures_pa <= {top:g} Pa at the pump gauge")
