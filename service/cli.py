@@ -15,6 +15,7 @@ from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
 from typing import NoReturn
 
+from service.commands.interrupts import caused_by_interrupt, interrupts_kept
 from solver.errors import BalloonError, InputError, NotFoundError
 
 # Subcommands in the order `balloon --help` lists them.
@@ -109,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return int(args.func(args) or 0)
+        with interrupts_kept():
+            return int(args.func(args) or 0)
     except (InputError, NotFoundError) as exc:
         _error(exc)
         return 2
@@ -135,6 +137,11 @@ def main(argv: list[str] | None = None) -> int:
                 else exc.strerror or type(exc).__name__)
         _error(what)
         return 1
+    except Exception as exc:
+        if not caused_by_interrupt(exc):   # a bug: its traceback is the report
+            raise
+        print("balloon: interrupted", file=sys.stderr)   # Ctrl-C inside h5py's C code
+        return 130
 
 
 if __name__ == "__main__":

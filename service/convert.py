@@ -14,9 +14,8 @@ from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
 from service.schemas.predict import Validity
 from solver.design import LIMITS_MM, Design, design_from_dict
-from solver.design_space import named_material
+from solver.design_space import REUSED_ID_ALLOWED, reused_id
 from solver.errors import InputError
-from solver.materials import MATERIALS, OgdenMaterial
 from solver.settings import SolverSettings, settings_from_dict
 from surrogate.json_plain import plain_json as jsonable  # one JSON-plain copy
 
@@ -36,25 +35,11 @@ def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body",
         raise located(exc, loc) from None
     for role in ("body_material", "membrane_material"):
         material = getattr(resolved, role)
-        named = named_material(material.id)
-        if named is not None and not _same_parameters(material, named, material.id):
-            # one id, one set of parameters
-            what = "preset id" if material.id in MATERIALS else "scaled preset id"
+        what = reused_id(material)      # one id, one set of parameters
+        if what is not None:
             raise FieldError((*loc, role, "id"), f"inline material reuses the {what} "
-                             f"{material.id!r} with other parameters",
-                             f"a new id (presets: {', '.join(sorted(MATERIALS))}), the "
-                             "preset by its id as a string, or <preset>*<scale> with every "
-                             "mu_kpa of the preset times the scale")
+                             f"{material.id!r} with other parameters", REUSED_ID_ALLOWED)
     return resolved
-
-
-def _same_parameters(material: OgdenMaterial, named: OgdenMaterial, material_id: str
-                     ) -> bool:
-    """A preset's parameters exactly; a scaled preset's to the 6 significant digits its
-    id gives the scale with (``f"{scale:.6g}"``)."""
-    rtol = 1e-5 if "*" in material_id else 0.0
-    return (material.alpha == named.alpha and len(material.mu_kpa) == len(named.mu_kpa)
-            and bool(np.allclose(material.mu_kpa, named.mu_kpa, rtol=rtol, atol=0.0)))
 
 
 @lru_cache(maxsize=4096)

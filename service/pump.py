@@ -167,10 +167,18 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
                                  "plus R Q until long after the pump starts",
                                  '"chamber", or an inlet whose time constant is at most '
                                  f"{NEGLIGIBLE_TIME_CONSTANT_S:g} s")
+            top = AXES["pressures_pa"][1]
+            if drop >= top:      # no reading the field takes is above it
+                raise InputError("flow_ul_s", f"the inlet's drop R Q = {drop:.1f} Pa at "
+                                 f"{q:g} ul/s is above every pump-gauge reading "
+                                 f"pressures_pa takes (at most {top:g} Pa)", f"flow_ul_s < "
+                                 f"{top / inlet['resistance_pa_per_ul_s']:.4g} ul/s with "
+                                 "this inlet")
             if (p < drop).any():
                 raise InputError("pressures_pa", f"{p.min():g} Pa at the pump gauge is below "
                                  f"the inlet's drop R Q = {drop:.1f} Pa at {q:g} ul/s",
-                                 f">= {drop:.1f} Pa at the pump gauge")
+                                 f"{drop:.1f} <= pressures_pa <= {top:g} Pa at the pump "
+                                 "gauge")
             p = p - drop
         prediction = surrogate.predict(design, p, level=level)
     else:

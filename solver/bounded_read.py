@@ -14,12 +14,14 @@ from pathlib import Path
 from solver.errors import InputError
 
 
-def read_bounded(path: Path, max_bytes: int, field: str, what: str) -> bytes:
+def read_bounded(path: Path, max_bytes: int, field: str, what: str,
+                 shown: str | None = None) -> bytes:
     """The bytes of ``path``; an InputError at ``field`` when it holds more than
-    ``max_bytes`` (``what`` names the file's kind in the allowed range: "a grid file")."""
+    ``max_bytes`` (``what`` names the file's kind in the allowed range: "a grid file";
+    ``shown``, how the message names the file: by default the path as given)."""
     with path.open("rb") as file:
         data = file.read(max_bytes + 1)
     if len(data) > max_bytes:
         size = f"{max_bytes / 2**20:g} MiB"
-        raise InputError(field, f"{path}: larger than {size}", f"{what} of at most {size}")
+        raise InputError(field, f"{shown or path}: larger than {size}", f"{what} of at most {size}")
     return data

@@ -120,6 +120,27 @@ def named_material(material_id: str) -> OgdenMaterial | None:
     return scaled_material(preset_id, scale)
 
 
+REUSED_ID_ALLOWED = (f"a new id (presets: {', '.join(sorted(MATERIALS))}), the preset by "
+                     "its id as a string, or <preset>*<scale> with every mu_kpa of the "
+                     "preset times the scale")
+
+
+def reused_id(material: OgdenMaterial) -> str | None:
+    """What a custom material's id already names when its parameters are other ones:
+    "preset id" or "scaled preset id" (one id, one set of parameters: a record stored
+    under ``pdms_1_10*2`` is PDMS 1:10 with every mu doubled, wherever it is read); None
+    when the id names no preset or names these parameters (a scaled preset's to the 6
+    significant digits its id gives the scale with, ``f"{scale:.6g}"``)."""
+    named = named_material(material.id)
+    if named is None:
+        return None
+    rtol = 1e-5 if "*" in material.id else 0.0
+    if (material.alpha == named.alpha and len(material.mu_kpa) == len(named.mu_kpa)
+            and bool(np.allclose(material.mu_kpa, named.mu_kpa, rtol=rtol, atol=0.0))):
+        return None
+    return "preset id" if material.id in MATERIALS else "scaled preset id"
+
+
 @lru_cache(maxsize=1024)
 def recognise(material: OgdenMaterial) -> tuple[str, float] | None:
     """(preset id, s) when ``material`` is a preset with mu scaled by s (alpha equal,

@@ -21,6 +21,13 @@ from dataclasses import dataclass
 
 from solver.errors import InputError, NotFoundError
 
+# A material's id: a name, or a preset scaled as solver.design_space.scaled_material names
+# it (``ecoflex_00_30*1.5``); never a path, never a control character. The service's
+# schemas take ids by it, and a grid's custom materials are held to it.
+MATERIAL_ID_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}(\*[0-9][0-9.eE+\-]{0,15})?$"
+MATERIAL_ID_WORDS = ("1-64 letters, digits, '_', '.', '-', not starting with '.' or '-' "
+                     "(a scaled preset: <preset>*<scale>)")
+
 
 @dataclass(frozen=True)
 class OgdenMaterial:

@@ -41,7 +41,7 @@ def fitted():
 def test_public_names_are_complete() -> None:
     public = {n for n in dir(surrogate) if not n.startswith("_")} - {
         "annotations", "band_level", "dataset", "errors", "exponential", "json_plain",
-        "json_repeats", "fit_provenance",
+        "json_repeats", "fit_provenance", "model_file",
         "calibration", "emulator", "predictor", "design_search", "hydraulics",
         "volume_control", "file_seal"}
     assert public <= set(surrogate.__all__) | {"inverse_design"}

@@ -8,7 +8,9 @@ with a temporary file there, which root's permissions do not fake), or has a suf
 writer cannot produce; and when it is the file the command reads (by any name: a
 symlink or a hard link too) or an existing HDF5 file, which no command writes by these
 options (`db export C.h5 -o C.h5` replaced the curve database with its CSV and said
-"exported 2404 records")."""
+"exported 2404 records"; `-o other.h5` did the same to another database, whose sealed
+header hid its HDF5 signature from a check at byte 0), or a curve database's lock file
+(replaced, it lets a second writer in beside the one that holds the old one)."""
 
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ import tempfile
 from pathlib import Path
 
 from solver.errors import InputError
+from solver.store.locking import JOB_SUFFIX, WRITER_SUFFIX
 
 # what matplotlib writes (Figure.savefig by suffix) and meshio writes for --vtk
 PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".eps", ".ps", ".tif", ".tiff",
@@ -25,6 +28,30 @@ VTK_SUFFIXES = (".vtu", ".vtk")
 
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+# HDF5 looks for its signature at byte 0 and after a user block of 512 bytes or a larger
+# power of two; the store's files carry their seal in a user block of 512
+# (solver/store/integrity.py), so the signature of every database it writes is at 512.
+SIGNATURE_OFFSETS = (0, *(2**k for k in range(9, 17)))
+
+
+def is_hdf5(path: Path) -> bool:
+    """Whether the regular file ``path`` is an HDF5 file (a curve database, sealed or
+    not): its signature where HDF5 looks for it."""
+    with open(path, "rb") as f:
+        head = f.read(SIGNATURE_OFFSETS[-1] + len(HDF5_SIGNATURE))
+    return any(head[at:at + len(HDF5_SIGNATURE)] == HDF5_SIGNATURE
+               for at in SIGNATURE_OFFSETS)
+
+
+def locked_database(path: Path) -> str | None:
+    """The name of the HDF5 file whose writer or job lock ``path`` is (``<db>.lock``,
+    ``<db>.job.lock``: solver/store/locking.py), else None."""
+    for suffix in (JOB_SUFFIX, WRITER_SUFFIX):
+        if path.name.endswith(suffix):
+            database = path.with_name(path.name[:-len(suffix)])
+            if database.is_file() and is_hdf5(database):
+                return database.name
+    return None
 
 
 def check_output(path: str | os.PathLike | None, option: str,
@@ -48,10 +75,14 @@ def check_output(path: str | os.PathLike | None, option: str,
                 raise InputError(option, f"{path} is the file this command reads ({name}): "
                                  "writing it would destroy it",
                                  f"a path other than {name}'s")
-        with open(target, "rb") as f:
-            if f.read(len(HDF5_SIGNATURE)) == HDF5_SIGNATURE:
-                raise InputError(option, f"{path} is an HDF5 file (a curve database?): "
-                                 "this would replace it", "a path that is not an HDF5 file")
+        if is_hdf5(target):
+            raise InputError(option, f"{path} is an HDF5 file (a curve database?): "
+                             "this would replace it", "a path that is not an HDF5 file")
+    database = locked_database(target)
+    if database is not None:
+        raise InputError(option, f"{path} is the lock file of the curve database "
+                         f"{database}: replacing it would let two writers in at once",
+                         "a path that is not a database's lock file")
     parent = target.parent
     if not parent.is_dir():
         raise InputError(option, f"directory {parent} does not exist",

@@ -169,8 +169,9 @@ def inlet_from_args(args: argparse.Namespace) -> object:
 
 def design_from_args(args: argparse.Namespace) -> object:
     from solver.design import design_from_dict
-    from solver.design_space import REDUCED_RATIO_RANGE, scaled_material
+    from solver.design_space import REDUCED_RATIO_RANGE, named_material, scaled_material
     from solver.errors import InputError
+    from solver.materials import MATERIALS
 
     data: dict[str, object] = {k: getattr(args, k) for k in (
         "L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm", "chamber_offset_mm")
@@ -187,11 +188,14 @@ def design_from_args(args: argparse.Namespace) -> object:
                              f"{lo:g} <= S <= {hi:g} (the emulator's box: body S / "
                              f"membrane S {REDUCED_RATIO_RANGE[0]:g}.."
                              f"{REDUCED_RATIO_RANGE[1]:g})")
-        try:
-            data[f"{layer}_material"] = scaled_material(preset, scale)
-        except KeyError:
-            raise InputError(f"--{layer}-material", f"unknown material {preset!r}",
-                             "pdms_1_10, pdms_1_15, ecoflex_00_30") from None
+        if preset not in MATERIALS:    # a scaled id (pdms_1_10*2) would be scaled twice
+            said = (f"{preset!r} is already scaled: --{layer}-stiffness-scale {scale:g} "
+                    "would scale it twice" if named_material(preset)
+                    else f"unknown material {preset!r}")
+            raise InputError(f"--{layer}-material", said,
+                             f"a preset ({', '.join(sorted(MATERIALS))}) with "
+                             f"--{layer}-stiffness-scale, or <preset>*<scale> alone")
+        data[f"{layer}_material"] = scaled_material(preset, scale)
     return design_from_dict(data)
 
 
@@ -217,8 +221,11 @@ def surrogate_from_args(args: argparse.Namespace) -> object:
     allowed = (", ".join(BUILT_IN_MODELS) + ", a saved calibrated model's name, or an "
                "existing model file (.json)")
     if Path(spec).suffix == ".json" or "/" in spec or os.sep in spec:   # a file's path
-        if not Path(spec).is_file():
-            raise InputError("--model", f"{spec}: file not found", allowed)
+        path = Path(spec)
+        if not path.is_file():
+            what = ("is a directory" if path.is_dir() else "is not a regular file (a device "
+                    "or a pipe)" if path.exists() else "file not found")
+            raise InputError("--model", f"{spec}: {what}", allowed)
         return open_model_file(Path(spec), getattr(args, "form", None))
     settings = get_settings()
     models_dir = getattr(args, "models_dir", None) or settings.models_dir

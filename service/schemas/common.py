@@ -7,13 +7,14 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from solver.design import LIMITS_MM
+from solver.materials import MATERIAL_ID_PATTERN
 from solver.settings import MAX_MESH_LEVEL, MESH_DIVISIONS, SolverSettings
 
 MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
 # An inline material's id: a name, or a preset scaled as the store and the design search
 # name it (``ecoflex_00_30*1.5``: solver.design_space.scaled_material), so that a design
 # /v1/inverse answers is taken back by /v1/predict.
-INLINE_MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}(\*[0-9][0-9.eE+\-]{0,15})?$"
+INLINE_MATERIAL_ID = MATERIAL_ID_PATTERN
 # The patterns in words (a validation error states these instead of the pattern).
 NAME_WORDS = "1-64 letters, digits, '_', '.', '-', not starting with '.' or '-'"
 

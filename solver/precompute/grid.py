@@ -31,14 +31,22 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
+import re
 import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from solver.bounded_read import read_bounded
 from solver.design import LIMITS_MM, Design
+from solver.design_space import REUSED_ID_ALLOWED, reused_id
 from solver.errors import InputError
-from solver.materials import MATERIALS, OgdenMaterial, make_material
+from solver.materials import (
+    MATERIAL_ID_PATTERN,
+    MATERIAL_ID_WORDS,
+    MATERIALS,
+    OgdenMaterial,
+    make_material,
+)
 from solver.precompute.lines import deepest, key_lines, line_of
 from solver.settings import SolverSettings, settings_from_dict
 from solver.store.keys import canonical_number, record_key
@@ -168,6 +176,9 @@ class _Reader:
                 raise self.fail(where, f"materials.{material_id}",
                                 "redefines a built-in material",
                                 f"a new id (built-in: {', '.join(sorted(MATERIALS))})")
+            if not re.fullmatch(MATERIAL_ID_PATTERN, material_id):  # stored as its id
+                raise self.fail(where, "materials", f"{material_id!r} is not a material id",
+                                MATERIAL_ID_WORDS)
             if not isinstance(spec, dict):
                 raise self.fail(where, material_id, "must be a table", "mu_kpa, alpha")
             self.check_keys(spec, where, ("mu_kpa", "alpha"))
@@ -179,6 +190,10 @@ class _Reader:
                 raise self.fail((*where, field), f"materials.{material_id}.{field}",
                                 getattr(exc, "detail", str(exc)),
                                 getattr(exc, "allowed", None)) from None
+            what = reused_id(known[material_id])    # one id, one set of parameters
+            if what is not None:
+                raise self.fail(where, f"materials.{material_id}", f"reuses the {what} "
+                                f"{material_id!r} with other parameters", REUSED_ID_ALLOWED)
         return known
 
     def pairs(self, value: object, path: tuple,

@@ -146,9 +146,9 @@ class CurveStore:
                     self._remove_orphans()  # before the first put, ``_file`` reads
                     if not self.path.exists():
                         self._publish(lambda f: None, create=True)
-            elif not self.path.is_file():
-                raise no_database(self.path, "; create one with `balloon precompute "
-                                  f"GRID.toml --db {self.path}`")
+            elif not self.path.is_file():   # named as given: a link's target is no input
+                raise no_database(path, f"; create one with `balloon precompute GRID.toml "
+                                  f"--db {path}`")
             self._file()
         except BaseException:
             self.close()

@@ -56,6 +56,7 @@ from surrogate.emulator.vector_gp import MEANS_ONLY, vector_gp_from_dict
 from surrogate.errors import SurrogateFileError
 from surrogate.file_seal import canonical_text, check_header, check_seal, seal
 from surrogate.json_plain import plain_json
+from surrogate.model_file import read_model_file
 
 FORMAT_NAME = "balloon-emulator"
 FORMAT_VERSION = 16  # 16: stretch_hazard, the emulated membrane stretch and the flag
@@ -437,8 +438,8 @@ def load_emulator(path: str | os.PathLike) -> Emulator:
     never its directory); the same object again while the file's content is unchanged."""
     path = Path(path)
     try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
+        raw = read_model_file(path)
+    except (FileNotFoundError, IsADirectoryError):
         raise
     except OSError as exc:
         raise SurrogateFileError(path.name, f"cannot be read ({type(exc).__name__})"

@@ -33,6 +33,7 @@ from surrogate.exponential.family import family_from_dict
 from surrogate.exponential.surrogate import Surrogate
 from surrogate.file_seal import check_header, check_seal, seal
 from surrogate.json_plain import plain_json
+from surrogate.model_file import read_model_file
 
 FORMAT_NAME = "balloon-surrogate"
 FORMAT_VERSION = 3  # 3: families may carry "volume"; 2: covariances in log10 b_t
@@ -121,8 +122,9 @@ def load_surrogate(path: str | os.PathLike) -> Surrogate:
     if not path.is_file():
         raise NotFoundError(f"surrogate file {path} does not exist (make one with "
                             "`balloon fit --db DB -o FILE`, or use the model `paper`)")
+    raw = read_model_file(path)
     try:  # ValueError: JSONDecodeError, UnicodeDecodeError, an integer of > 4300 digits
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(raw.decode("utf-8"))
     except (ValueError, RecursionError) as exc:
         raise SurrogateFileError(str(path), f"not valid JSON ({exc})") from None
     return surrogate_from_dict(data, str(path))

@@ -261,7 +261,8 @@ class Surrogate:
             volumes = tuple(np.where(past | out, np.nan, np.interp(a, nodes, vv))
                             for vv in (vm, vlo, vhi))
             if out.any():
-                flags.append("past_fe_range")
+                if "past_fe_range" not in flags:   # an angle past the family's FE range
+                    flags.append("past_fe_range")
                 messages.append(
                     f"no volume above {nodes[-1]:.1f} deg, the smallest largest angle of the "
                     "family's FE curves")
