@@ -1,0 +1,45 @@
+"""The explorer's fixes from the forty-first session's syringe-pump audit, in real headless
+Chromium on one live server (the shipped emulator and database): the time axis of a
+narrow screen is labelled with its ticks' own values.
+Screenshots: test-artifacts/explorer/s41-*.png.
+"""
+
+from __future__ import annotations
+
+import pytest
+from explorer_browser import LiveServer, Watched, screenshot
+
+pytestmark = pytest.mark.timeout(300)
+
+# the x axis's tick labels (the plot's labels group, centred under each tick)
+X_TICKS = ("Array.from(document.querySelectorAll('#plot text[text-anchor=middle]'))"
+           ".filter((t) => t.parentNode.getAttribute('fill') === '#374151')"
+           ".map((t) => [t.textContent, Number(t.getAttribute('x'))])")
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    with LiveServer(tmp_path_factory.mktemp("explorer-s41")) as live:
+        yield live
+
+
+def test_a_narrow_time_axis_labels_each_tick_with_its_own_value(browser, server):
+    # at 400 px the plot takes four ticks: 0-10 s in steps of 2.5 s, labelled 0 3 5 8 10
+    narrow = Watched(browser, server.url, width=400)
+    try:
+        page = narrow.page
+        page.goto(server.url + "/#ask=time_s&max=10&flow=2.5")
+        page.wait_for_selector("body[data-ready=true]")
+        page.wait_for_function("window.explorer.prediction"
+                               " && window.explorer.prediction.asked === 'times_s'")
+        ticks = page.evaluate(X_TICKS)
+        screenshot(page, "s41-narrow-time-axis")
+        assert narrow.errors == [] and narrow.foreign_requests() == []
+    finally:
+        narrow.close()
+    labels = [float(text) for text, _ in ticks]
+    assert labels[0] == 0 and labels[-1] == 10 and len(labels) >= 3
+    # each label is the value at its place: evenly spaced ticks, evenly spaced values
+    xs = [x for _, x in ticks]
+    for (text, x) in ticks:
+        assert float(text) == pytest.approx(10 * (x - xs[0]) / (xs[-1] - xs[0]), abs=1e-9)
