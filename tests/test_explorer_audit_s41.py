@@ -1,13 +1,14 @@
 """The explorer's fixes from the forty-first session's syringe-pump audit, in real headless
 Chromium on one live server (the shipped emulator and database): the time axis of a
-narrow screen is labelled with its ticks' own values.
+narrow screen is labelled with its ticks' own values, and the flow rate takes what the
+API takes (its limits from the server's schema).
 Screenshots: test-artifacts/explorer/s41-*.png.
 """
 
 from __future__ import annotations
 
 import pytest
-from explorer_browser import LiveServer, Watched, screenshot
+from explorer_browser import LiveServer, Watched, change, open_explorer, screenshot
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -43,3 +44,28 @@ def test_a_narrow_time_axis_labels_each_tick_with_its_own_value(browser, server)
     xs = [x for _, x in ticks]
     for (text, x) in ticks:
         assert float(text) == pytest.approx(10 * (x - xs[0]) / (xs[-1] - xs[0]), abs=1e-9)
+
+
+def test_the_flow_rate_takes_the_apis_range(watched, server):
+    # the page refused 0.001 ul/s ("allowed: from 0.01 to 1000"), which POST /v1/predict
+    # takes (1e-06 <= flow_ul_s <= 1000); its own comment said the schema set it
+    page = open_explorer(watched, server.url)
+    page.wait_for_function("document.getElementById('flow').min === '0.000001'")
+    page.select_option("#ask_axis", "time_s")
+    page.wait_for_function("window.explorer.prediction"
+                           " && window.explorer.prediction.asked === 'times_s'")
+    change(page, "#flow", "0.001")
+    page.wait_for_function("window.explorer.prediction"
+                           " && window.explorer.prediction.flow_ul_s === 0.001")
+    assert page.is_hidden("#err-flow_ul_s")
+    change(page, "#flow", "0")
+    page.wait_for_selector("#err-flow_ul_s:not([hidden])")
+    error = page.inner_text("#err-flow_ul_s")
+    assert "from 0.000001 to 1000 ul/s" in error
+    # a pump's rate stepped by the keyboard moves by a whole step, from the value shown
+    change(page, "#flow", "2.5")
+    page.focus("#flow")
+    page.keyboard.press("ArrowUp")
+    assert page.input_value("#flow") == "3.5"
+    screenshot(page, "s41-flow-range")
+    assert watched.errors == [] and watched.foreign_requests() == []

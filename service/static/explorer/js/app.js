@@ -574,6 +574,8 @@ async function applySchemaLimits() {
   set("p_max", items(predict.pressures_pa), { min: false });
   set("v_max", items(predict.volumes_ul), { min: false });
   set("t_max", items(predict.times_s), { min: false });
+  // the flow rate: a number or null (the page refused 0.001 ul/s, which the API takes)
+  set("flow", (predict.flow_ul_s?.anyOf || []).find((a) => a.type === "number") || predict.flow_ul_s);
   const inlet = schemas.InletIn?.properties || {};
   set("tubing_length", inlet.tubing_length_mm);
   set("tubing_bore", inlet.tubing_bore_mm?.anyOf?.find((a) => a.type === "number") || inlet.tubing_bore_mm);
