@@ -372,6 +372,20 @@ def test_plot_against_time_is_a_png_and_its_errors_name_the_field(shipped_client
     assert bad.status_code == 422 and bad.json()["errors"][0]["field"] == "t_max_s"
 
 
+def test_plot_refuses_an_axis_end_given_for_the_other_axis(shipped_client):
+    # ?t_max_s=30 without a flow rate drew the pressure plot to 2000 Pa, and p_max_pa
+    # beside flow_ul_s was dropped: each is refused at its own field, with what it takes
+    bad = shipped_client.get("/v1/predict/plot", params={"t_max_s": 30})
+    assert_problem(bad, 422, "t_max_s")
+    assert "flow_ul_s" in bad.json()["errors"][0]["allowed"]
+    bad = shipped_client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "p_max_pa": 5000})
+    assert_problem(bad, 422, "p_max_pa")
+    assert "t_max_s" in bad.json()["errors"][0]["allowed"]
+    for params in ({"p_max_pa": 5000, "nearby": 0},
+                   {"flow_ul_s": 2.5, "t_max_s": 30, "nearby": 0}):
+        assert shipped_client.get("/v1/predict/plot", params=params).status_code == 200
+
+
 def test_cli_by_volume_and_time_and_its_one_line_errors(capsys, monkeypatch):
     monkeypatch.setenv("BALLOON_EMULATOR_PATH", str(EMULATOR))
     assert main(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--times", "2", "4",
