@@ -1,7 +1,7 @@
 """The explorer's fixes from the forty-first session's syringe-pump audit, in real headless
 Chromium on one live server (the shipped emulator and database): the time axis of a
-narrow screen is labelled with its ticks' own values, and the flow rate takes what the
-API takes (its limits from the server's schema).
+narrow screen is labelled with its ticks' own values, the flow rate takes what the API
+takes (its limits from the server's schema), and the legend lists only what is drawn.
 Screenshots: test-artifacts/explorer/s41-*.png.
 """
 
@@ -22,6 +22,16 @@ X_TICKS = ("Array.from(document.querySelectorAll('#plot text[text-anchor=middle]
 def server(tmp_path_factory):
     with LiveServer(tmp_path_factory.mktemp("explorer-s41")) as live:
         yield live
+
+
+def switched(watched, server, ready: str, select: str, value: str, done: str):
+    """The explorer once ``ready`` holds, with ``select`` set to ``value`` and ``done``
+    holding after it (JavaScript conditions)."""
+    page = open_explorer(watched, server.url)
+    page.wait_for_function(ready)
+    page.select_option(select, value)
+    page.wait_for_function(done)
+    return page
 
 
 def test_a_narrow_time_axis_labels_each_tick_with_its_own_value(browser, server):
@@ -49,11 +59,9 @@ def test_a_narrow_time_axis_labels_each_tick_with_its_own_value(browser, server)
 def test_the_flow_rate_takes_the_apis_range(watched, server):
     # the page refused 0.001 ul/s ("allowed: from 0.01 to 1000"), which POST /v1/predict
     # takes (1e-06 <= flow_ul_s <= 1000); its own comment said the schema set it
-    page = open_explorer(watched, server.url)
-    page.wait_for_function("document.getElementById('flow').min === '0.000001'")
-    page.select_option("#ask_axis", "time_s")
-    page.wait_for_function("window.explorer.prediction"
-                           " && window.explorer.prediction.asked === 'times_s'")
+    page = switched(watched, server, "document.getElementById('flow').min === '0.000001'",
+                    "#ask_axis", "time_s", "window.explorer.prediction"
+                    " && window.explorer.prediction.asked === 'times_s'")
     change(page, "#flow", "0.001")
     page.wait_for_function("window.explorer.prediction"
                            " && window.explorer.prediction.flow_ul_s === 0.001")
@@ -68,4 +76,19 @@ def test_the_flow_rate_takes_the_apis_range(watched, server):
     page.keyboard.press("ArrowUp")
     assert page.input_value("#flow") == "3.5"
     screenshot(page, "s41-flow-range")
+    assert watched.errors == [] and watched.foreign_requests() == []
+
+
+def test_the_force_view_lists_only_curves_it_draws(watched, server):
+    # by force the legend listed the three nearest free-tip FE curves, whose force is
+    # null: three entries with no line
+    page = switched(watched, server,
+                    "document.querySelectorAll('#plot g[data-series^=fe-]').length > 0",
+                    "#y_axis", "force",
+                    "document.getElementById('curve-h').textContent.includes('force')"
+                    " && document.querySelector('#plot g[data-series=prediction]')")
+    series = page.evaluate("Array.from(document.querySelectorAll('#plot g[data-series]'))"
+                           ".map((g) => [g.dataset.series, g.querySelectorAll('path').length])")
+    screenshot(page, "s41-force-legend")
+    assert series and all(drawn > 0 for _, drawn in series), series
     assert watched.errors == [] and watched.foreign_requests() == []
