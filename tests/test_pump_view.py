@@ -336,6 +336,28 @@ def test_the_emulator_by_volume_keeps_a_falling_pressure_and_flags_it(emulator, 
     assert np.isfinite(by_p.angle_deg).all()
 
 
+def test_a_database_curve_past_its_pressure_maximum_is_said_to_go_on_not_to_end_early(emulator):
+    """Database design 031e5d18 (PDMS 1:15 x1.44 / Ecoflex): its FE curve has a pressure
+    maximum (3327 Pa at 24.7 ul, 45.6 deg) and goes on under volume control to the FE's
+    90 deg stop. The emulator reads curves up to their maximum only; its answer by volume
+    ended there saying the curve ended early "(the volume stop ... or a Newton failure)"
+    (the audit of the forty-first session): it must say the curve passes a maximum."""
+    with CurveStore(DB) as db:
+        key = next(k for k in db.keys() if k.startswith("031e5d18c989"))
+        record = db.get(key)
+    c = record.curve
+    assert c.status == "complete" and c.angle_deg.max() >= 90     # the FE went on
+    k = pressure_maximum_index(c.pressure_pa)
+    assert 45 < c.angle_deg[k] < 46 and c.pressure_pa[-1] > c.pressure_pa[k]
+    for answer in (emulator.predict_volume(record.design, c.volume_ul[c.angle_deg <= 90]),
+                   emulator.predict(record.design, [1000.0])):
+        v = answer.validity
+        assert v["fe_limit_angle_deg"] == pytest.approx(c.angle_deg[k], abs=0.5)
+        reason = v["fe_stop_reason"]
+        assert "pressure maximum" in reason and f"{c.angle_deg[k]:.1f} deg" in reason
+        assert "Newton failure" not in reason and "ended there" not in reason
+
+
 # -- plot and CLI ---------------------------------------------------------------------
 
 def test_plot_against_time_is_a_png_and_its_errors_name_the_field(shipped_client):
@@ -348,6 +370,20 @@ def test_plot_against_time_is_a_png_and_its_errors_name_the_field(shipped_client
     assert bad.status_code == 422 and bad.json()["errors"][0]["field"] == "flow_ul_s"
     bad = shipped_client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "t_max_s": -1})
     assert bad.status_code == 422 and bad.json()["errors"][0]["field"] == "t_max_s"
+
+
+def test_plot_refuses_an_axis_end_given_for_the_other_axis(shipped_client):
+    # ?t_max_s=30 without a flow rate drew the pressure plot to 2000 Pa, and p_max_pa
+    # beside flow_ul_s was dropped: each is refused at its own field, with what it takes
+    bad = shipped_client.get("/v1/predict/plot", params={"t_max_s": 30})
+    assert_problem(bad, 422, "t_max_s")
+    assert "flow_ul_s" in bad.json()["errors"][0]["allowed"]
+    bad = shipped_client.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "p_max_pa": 5000})
+    assert_problem(bad, 422, "p_max_pa")
+    assert "t_max_s" in bad.json()["errors"][0]["allowed"]
+    for params in ({"p_max_pa": 5000, "nearby": 0},
+                   {"flow_ul_s": 2.5, "t_max_s": 30, "nearby": 0}):
+        assert shipped_client.get("/v1/predict/plot", params=params).status_code == 200
 
 
 def test_cli_by_volume_and_time_and_its_one_line_errors(capsys, monkeypatch):

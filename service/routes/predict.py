@@ -74,6 +74,15 @@ def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
     if query.inlet and query.flow_ul_s is None:
         raise FieldError(("query", "flow_ul_s"), "the inlet's pressure drop R Q needs the "
                          "flow rate", f"{FLOW_RANGE} with inlet")
+    # an axis's end given for the other axis is refused, not ignored: ?t_max_s=30 alone
+    # drew the pressure plot to 2000 Pa (the audit of the forty-first session)
+    given = query.model_fields_set
+    if "t_max_s" in given and query.flow_ul_s is None:
+        raise FieldError(("query", "t_max_s"), "the time axis needs the pump's flow rate",
+                         f"{FLOW_RANGE} with t_max_s; p_max_pa for the pressure axis")
+    if "p_max_pa" in given and query.flow_ul_s is not None:
+        raise FieldError(("query", "p_max_pa"), "with flow_ul_s the plot is against time",
+                         "t_max_s with flow_ul_s; p_max_pa without it")
     design = to_design(query.model_dump(include={"L_mm", "t_mm", "T_mm", "b_mm", "h_mm",
                                                  "W_mm", "body_material",
                                                  "membrane_material"}),

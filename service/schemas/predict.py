@@ -176,7 +176,7 @@ class PlotQuery(Schema):
     model: str = MODEL
     level: float = LEVEL
     p_max_pa: float = Field(2000.0, gt=0.0, le=MAX_PRESSURE_PA,
-                            description="largest pressure plotted, Pa")
+                            description="largest pressure plotted, Pa (without flow_ul_s)")
     nearby: int = Field(3, ge=0, le=10, description="FE curves of the family to overlay")
     flow_ul_s: float | None = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S, description="the "
                                     "pump's flow rate, ul/s: plot angle against time, with "

@@ -36,6 +36,11 @@ RANGE_Z = 1.0
 # that was false. Of the 64 early-ended ones (range model means 19-81 deg, 5-95 %), none
 # changes its cut at 85 (benchmarks/RESULTS.md, thirty-sixth session).
 RANGE_COMPLETE_DEG = 85.0
+# A database curve that passed a pressure maximum (``passed_pressure_maximum``) within
+# FAILED_RADIUS names the range's end when its maximum is at most this far above the end
+# found otherwise (deg): at the database design itself the range model's end, 1 sd short
+# of the emulated one, lies a few hundredths of a degree below its maximum.
+MAXIMUM_MATCH_DEG = 1.0
 
 
 def end_volume_reason(volume_ul: float) -> str:
@@ -105,10 +110,34 @@ def fe_range(pe: PairEmulator, u: np.ndarray, volume_red_ul: np.ndarray, length_
         near = failed_distances < FAILED_RADIUS
         for i in np.flatnonzero(near):
             _, angle, why = pe.failed[i]
-            if angle < limit:
+            if passed_pressure_maximum(why) and angle < limit + MAXIMUM_MATCH_DEG:
+                limit = min(limit, float(angle))
+                reason = pressure_maximum_reason(angle, why)
+            elif angle < limit:
                 limit = float(angle)
                 reason = f"the FE curve of a nearby database design ended there: {why}"
     return limit, reason
+
+
+def passed_pressure_maximum(reason: str) -> bool:
+    """Whether a database curve counted among those that ended early (its rising
+    branch, ``features.rising_branch``, ended before the FE's angle stop) went on to one
+    of the FE's own angle or pressure stops: then its rising branch ended at a pressure
+    maximum (a limit point), past which the FE, under volume control, continued."""
+    return reason.startswith(("reached max_angle_deg", "reached max_pressure_pa"))
+
+
+def pressure_maximum_reason(angle_deg: float, stop: str) -> str:
+    """Why a range ends at the pressure maximum of a nearby database curve that went on
+    past it (``passed_pressure_maximum``): database design 031e5d18, whose FE curve has
+    its maximum at 45.6 deg and goes on to 90 deg, was told its curve ends early "(the
+    volume stop ... or a Newton failure)", or that it "ended there: reached
+    max_angle_deg = 90.0" (the audit of the forty-first session)."""
+    return (f"the FE curve of a nearby database design has a pressure maximum (a limit "
+            f"point) at {angle_deg:.1f} deg and goes on past it under volume control "
+            f"({stop}); the emulator reads every FE curve up to its pressure maximum "
+            "only, so it gives no number past it: an FE solve (POST /v1/solve) gives "
+            "this design's own curve there")
 
 
 def pressure_stop_angle(limit_deg: float, angles_deg: np.ndarray,

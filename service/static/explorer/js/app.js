@@ -574,6 +574,8 @@ async function applySchemaLimits() {
   set("p_max", items(predict.pressures_pa), { min: false });
   set("v_max", items(predict.volumes_ul), { min: false });
   set("t_max", items(predict.times_s), { min: false });
+  // the flow rate: a number or null (the page refused 0.001 ul/s, which the API takes)
+  set("flow", (predict.flow_ul_s?.anyOf || []).find((a) => a.type === "number") || predict.flow_ul_s);
   const inlet = schemas.InletIn?.properties || {};
   set("tubing_length", inlet.tubing_length_mm);
   set("tubing_bore", inlet.tubing_bore_mm?.anyOf?.find((a) => a.type === "number") || inlet.tubing_bore_mm);
@@ -732,9 +734,11 @@ function curveSeries() {
   const { y } = axisKeys();
   const keys = y === "force" ? ["force_mn", "force_lower_mn", "force_upper_mn"] : ["angle_deg", "lower_deg", "upper_deg"];
   const out = [];
+  // a series with no number to draw is left out, its legend entry too: by force, the
+  // nearest free-tip FE curves (force null) were listed and never drawn
   const add = (id, label, data, color, extra = {}) => {
     const x = xOf(data);
-    if (!x || !data[keys[0]]) return;
+    if (!x || !data[keys[0]] || !data[keys[0]].some((v) => Number.isFinite(v))) return;
     out.push({ id, label, color, x, y: data[keys[0]], lower: data[keys[1]], upper: data[keys[2]], ...extra });
   };
   const kw = widthScale(app.state);

@@ -27,9 +27,17 @@ export function niceTicks(lo, hi, count = 6) {
   return { ticks, lo: start, hi: end, step };
 }
 
+// A tick's label with as many decimals as its step needs (up to 6): a step of 2.5 (the
+// narrow plot's four ticks over 0-10 s) keeps one, where the step's order of magnitude
+// alone labelled 2.5 and 7.5 "3" and "8" (the audit of the forty-first session).
 function fmtTick(v, step) {
-  const digits = Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
-  return v.toFixed(Math.min(digits, 6));
+  let digits = 0;
+  while (digits < 6) {
+    const scaled = step * 10 ** digits;
+    if (Math.abs(scaled - Math.round(scaled)) <= 1e-6 * scaled) break;
+    digits += 1;
+  }
+  return v.toFixed(digits);
 }
 
 // A label in lines of at most ``n`` characters, broken after a space (each line but the
