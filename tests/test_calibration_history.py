@@ -145,3 +145,22 @@ def test_a_kink_in_the_tubing_is_not_read_as_an_inlet_resistance():
     assert not gauge_read & set(report["selected_effects"])
     assert report["gauge_left_after"]["left"]
     assert "no catalogued effect explains" in report["interpretation"]
+
+
+def test_a_clean_lab_at_two_flow_rates_is_not_read_as_a_slow_relaxation():
+    """flat_top_two_flows has no effect: 3 specimens (their stiffness x 1.024, 1.058,
+    1.023: on average 3.5 % stiffer than the preset, as three specimens of a 7 % scatter
+    may be), each loaded at 2.5 and 5 ul/s. Until 2026-12-07 the loop selected a pressure
+    relaxation of g 0.044 +/- 0.019 with tau 17.9 +/- 16.8 s -- a relaxation slower than
+    the 10 s runs, i.e. the specimens' common pressure scale -- tested at z 8.7 with its
+    time held; a pressure gain of the same size had z 1.5. A size whose time lies beyond
+    the data's longest time since the pump's start is now tested with its own sd."""
+    from calibration_lab import emulator
+
+    from surrogate.calibration import run_calibration
+
+    rows, _ = lab_rows("flat_top_two_flows")
+    report = run_calibration(rows, emulator()).report
+    assert report["selected_effects"] == []
+    relax = next(c for c in report["candidates"] if c["effects"] == ["pressure_relaxation"])
+    assert not relax["significant"]
