@@ -1,6 +1,6 @@
 """Lab data sets made as a lab makes them, from FE solves (``solver.solve``, default
 settings), never from the calibration's forms: the forty-first session's audit of
-`balloon calibrate` (benchmarks/RESULTS.md) and two files of tests/data.
+`balloon calibrate` (benchmarks/RESULTS.md) and three files of tests/data.
 
 Seven designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
@@ -20,7 +20,7 @@ catalogue), a gauge reading 60 Pa high.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 solves of 15-90 s; run alone) and writes each
-set as CSV (and the API's JSON rows); ``--test-data`` writes the two sets with the pump's
+set as CSV (and the API's JSON rows); ``--test-data`` writes the three sets with the pump's
 log that tests/test_calibration_history.py reads (tests/data/lab_gauge_noise_*.csv).
 """
 
@@ -75,7 +75,8 @@ SETS = {
                       {"fmt": "comma"}),
 }
 # the sets tests/test_calibration_history.py reads, with the pump's log
-TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2"}
+TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
+             "leak_in_a_hold": "L6-leak-D6"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -219,7 +220,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's two sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's three sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

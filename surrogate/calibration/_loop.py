@@ -1239,6 +1239,16 @@ def interpret(report: dict, left: dict) -> str:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
                      f"{c['measure']}.")
+    data = report["data"]
+    if ("viscoelastic_creep" in report["selected_effects"] and not data.get("pump_logged")
+            and data["readings"]["unloading"] and "measured" not in data["injected_volume"]):
+        s.append(f"The creep is read from a history taken off the readings "
+                 f"({data['readings']['loading']} loading, {data['readings']['hold']} hold, "
+                 f"{data['readings']['unloading']} unloading): a hold in which a leak lets "
+                 "the bend fall reads as unloading too, and creep then stands in for the "
+                 "leak. If the pump held where this history has it withdraw, give its log "
+                 "(the pump column: load, hold or unload before each reading, "
+                 "docs/measured-data.md).")
     if left["structured"] and u is not None:
         size = left["unexplained_rms_deg"]
         s.append("What is left" + (f" ({size:.2f} deg RMS beyond the floor)" if size else "")
