@@ -79,9 +79,10 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
     read off running intervals that bend beyond the camera's noise, so that a hold whose
     noisy gauge read some of its intervals as running is not its own reference). Where
     that rate is well above the camera's noise, an interval bending by at least
-    MOVING_SHARE of it, the way its pressure goes (beyond HOLD_MIN_PA) or with its
-    pressure within the hold tolerance (near a pressure maximum the gauge cannot tell:
-    until 2026-12-07 such a loading reading at 80 deg was a hold), ran: at the top of a
+    MOVING_SHARE of it, the way its pressure goes (beyond HOLD_MIN_PA) or, bending beyond
+    the camera's noise, with its pressure within the hold tolerance (near a pressure
+    maximum the gauge cannot tell: until 2026-12-07 such a loading reading at 80 deg was a
+    hold; a precise gauge's flat hold keeps its noisy bend), ran: at the top of a
     stiff curve the pressure rises by < 1 % of its range per reading while the angle
     still moves by 5-8 % of the bend. So did one whose gauge says the pump ran the other way:
     a pump withdrawing cannot bend the actuator on at half its loading rate (creep of
@@ -116,7 +117,7 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
             continue
         agrees = np.sign(da[i]) == np.sign(dp[i]) and abs(dp[i]) > HOLD_MIN_PA
         against = d[i] == -np.sign(da[i])  # the gauge read the pump running backwards
-        flat = d[i] == 0                   # or could not tell (a flat top: p max)
+        flat = d[i] == 0 and abs(da[i]) > floor   # or could not tell (a flat top: p max)
         if abs(da[i]) >= MOVING_SHARE * expected and (agrees or against or flat):
             out[i] = np.sign(da[i])
         elif (abs(da[i]) <= STILL_SHARE * expected and expected > 2 * floor
