@@ -50,6 +50,9 @@ HEADERS = [
     ("Flow (ul/s)", "flow_ul_s", 1.0), ("Flow rate [µl/s]", "flow_ul_s", 1.0),
     ("Flow (ml/min)", "flow_ul_s", 1000.0 / 60.0), ("Q [ml/h]", "flow_ul_s", 1000.0 / 3600.0),
     ("Flow_ul_min", "flow_ul_s", 1.0 / 60.0),
+    # a German lab's export beside Druck, Zeit and Winkel (until 2026-12-07 "unknown column")
+    ("Fluss [µl/min]", "flow_ul_s", 1.0 / 60.0),
+    ("Durchfluss (ml/h)", "flow_ul_s", 1000.0 / 3600.0),
 ]
 
 
@@ -118,7 +121,8 @@ def test_two_headers_of_one_quantity_are_refused_naming_both():
 
 @pytest.mark.parametrize("header, factor", [("Volume (uL)", 1.0), ("V [ml]", 1000.0),
                                             ("volume_mm^3", 1.0), ("Injected volume (nl)",
-                                                                   1e-3), ("vol / cc", 1000.0)])
+                                                                   1e-3), ("vol / cc", 1000.0),
+                                            ("Volumen (ml)", 1000.0)])
 def test_an_injected_volume_column_is_read_in_its_unit(header, factor):
     """A pump's dispensed volume (until 2026-12-07 refused: "an injected-volume column is
     not read") is volume_ul, converted once (docs/measured-data.md)."""

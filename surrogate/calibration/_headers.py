@@ -50,10 +50,12 @@ QUANTITY_NAMES: dict[str, tuple[str, ...]] = {
     "pressure_pa": ("p", "P", "druck", "gauge pressure"),
     "angle_deg": ("bending angle", "bend angle", "theta", "θ", "winkel"),
     "time_s": ("t", "zeit"),
-    "flow_ul_s": ("flow rate", "q", "Q", "pump rate"),
+    "flow_ul_s": ("flow rate", "q", "Q", "pump rate", "fluss", "durchfluss", "flussrate",
+                  "förderrate"),
     "force_mn": ("f", "F", "tip force", "blocked force", "kraft"),
     "angle_sd_deg": ("angle sd", "angle uncertainty"),
-    "volume_ul": ("v", "V", "injected volume", "vol", "dispensed volume", "pump volume"),
+    "volume_ul": ("v", "V", "injected volume", "vol", "dispensed volume", "pump volume",
+                  "volumen"),
 }
 #: a longer header names no quantity (its every split read would take a second at 10,000
 #: characters: a stray key over HTTP)

@@ -75,11 +75,16 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
     that the curve bends positive: a camera offset may take it below 0). The chamber's
     bend follows its volume, so a pump running at a constant rate bends it at about the
     rate its other running intervals show at the same bend (loading and unloading
-    alike; not near the bottom, where an emptied actuator may stay straight). Where that
-    rate is well above the camera's noise, an interval bending by at least MOVING_SHARE
-    of it, the way its pressure goes (beyond HOLD_MIN_PA), ran: at the top of a stiff
-    curve the pressure rises by < 1 % of its range per reading while the angle still
-    moves by 5-8 % of the bend. So did one whose gauge says the pump ran the other way:
+    alike; not near the bottom, where an emptied actuator may stay straight; the rate is
+    read off running intervals that bend beyond the camera's noise, so that a hold whose
+    noisy gauge read some of its intervals as running is not its own reference). Where
+    that rate is well above the camera's noise, an interval bending by at least
+    MOVING_SHARE of it, the way its pressure goes (beyond HOLD_MIN_PA) or, bending beyond
+    the camera's noise, with its pressure within the hold tolerance (near a pressure
+    maximum the gauge cannot tell: until 2026-12-07 such a loading reading at 80 deg was a
+    hold; a precise gauge's flat hold keeps its noisy bend), ran: at the top of a
+    stiff curve the pressure rises by < 1 % of its range per reading while the angle
+    still moves by 5-8 % of the bend. So did one whose gauge says the pump ran the other way:
     a pump withdrawing cannot bend the actuator on at half its loading rate (creep of
     g < 0.75 makes unloading's bend fall or rise at most (2g - 1) x the rate), while a
     gauge read to 1-2 % falls by its noise where a curve's pressure flattens near its
@@ -103,14 +108,17 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
         ran = np.flatnonzero((d != 0) & (np.arange(d.size) != i))
         if ran.size < 2:
             return d
-        near = ran[np.argsort(np.abs(level[ran] - level[i]))[:3]]
+        moving = ran[np.abs(da[ran]) > floor]     # a hold's gauge noise is no pump rate
+        near = (moving if moving.size >= 2 else ran)
+        near = near[np.argsort(np.abs(level[near] - level[i]))[:3]]
         expected = float(np.median(rate[near])) * dt[i]
         pumped_pa = float(np.median(np.abs(dp[near] / dt[near]))) * dt[i]
         if expected <= floor or level[i] < BEND_LOW * float(np.max(bend)):
             continue
         agrees = np.sign(da[i]) == np.sign(dp[i]) and abs(dp[i]) > HOLD_MIN_PA
         against = d[i] == -np.sign(da[i])  # the gauge read the pump running backwards
-        if abs(da[i]) >= MOVING_SHARE * expected and (agrees or against):
+        flat = d[i] == 0 and abs(da[i]) > floor   # or could not tell (a flat top: p max)
+        if abs(da[i]) >= MOVING_SHARE * expected and (agrees or against or flat):
             out[i] = np.sign(da[i])
         elif (abs(da[i]) <= STILL_SHARE * expected and expected > 2 * floor
               and (abs(dp[i]) <= max(2 * tol_p, MOVING_SHARE * pumped_pa) or dp[i] < 0)):

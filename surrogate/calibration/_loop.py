@@ -754,6 +754,17 @@ def _gauge_gain(report: dict) -> str:
             f"not tell the two apart) and the gauge's {after:.0f} Pa, {before:.0f} Pa before")
 
 
+def _shape_seen(f: FitResult, shape: tuple[str, ...]) -> bool:
+    """Whether the data see the shape the size is tested at: a relaxation or retardation
+    time within the longest time since a pump's start. Slower, the effect never decays in
+    the data and is a static scale there (a pressure relaxation slower than the runs is
+    the specimens' common stiffness), so its size is tested with its own sd, not with the
+    time held."""
+    t = f.model.obs.time_s
+    span = float(np.nanmax(t)) if np.any(np.isfinite(t)) else 0.0
+    return all(f.values[n] <= span for n in shape)
+
+
 def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_joint: float,
            responses: Responses, weight: float) -> dict:
     f = get_fit(effects)
@@ -767,7 +778,8 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
         shape = tuple(p.name for p in EFFECTS[eid].parameters if not p.tested)
         for p in EFFECTS[eid].parameters:
             if p.tested:
-                s = f.conditional_sd(p.name, shape) if shape else sd[p.name]
+                s = (f.conditional_sd(p.name, shape) if shape and _shape_seen(f, shape)
+                     else sd[p.name])
                 z[p.name] = abs(values[p.name] - p.null) / s if s > 0 else math.inf
                 s_data = math.sqrt(max(s**2 - sd_b[p.name] ** 2, 0.0))
                 z_data[p.name] = (abs(values[p.name] - p.null) / s_data if s_data > 0
@@ -1227,6 +1239,16 @@ def interpret(report: dict, left: dict) -> str:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
                      f"{c['measure']}.")
+    data = report["data"]
+    if ("viscoelastic_creep" in report["selected_effects"] and not data.get("pump_logged")
+            and data["readings"]["unloading"] and "measured" not in data["injected_volume"]):
+        s.append(f"The creep is read from a history taken off the readings "
+                 f"({data['readings']['loading']} loading, {data['readings']['hold']} hold, "
+                 f"{data['readings']['unloading']} unloading): a hold in which a leak lets "
+                 "the bend fall reads as unloading too, and creep then stands in for the "
+                 "leak. If the pump held where this history has it withdraw, give its log "
+                 "(the pump column: load, hold or unload before each reading, "
+                 "docs/measured-data.md).")
     if left["structured"] and u is not None:
         size = left["unexplained_rms_deg"]
         s.append("What is left" + (f" ({size:.2f} deg RMS beyond the floor)" if size else "")

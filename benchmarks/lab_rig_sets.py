@@ -1,0 +1,237 @@
+"""Lab data sets made as a lab makes them, from FE solves (``solver.solve``, default
+settings), never from the calibration's forms: the forty-first session's audit of
+`balloon calibrate` (benchmarks/RESULTS.md) and three files of tests/data.
+
+Seven designs inside the emulator's box and not in service/data/curves.h5 (the four
+material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
+solves of the membrane thickness x 0.96, 1 and 1.045 (scatter), and each specimen has its
+own stiffness (both layers' mu x s, s ~ N(1, 0.07) within +-10 %: the pressure axis x s,
+the shape at a volume unchanged). A syringe pump (load, hold, unload, switching at
+readings), the camera read every dt to 0.1 deg with 0.7 deg noise, the gauge at the pump
+with a zero within +-3 Pa and 1.5 % + 2 Pa noise, written to 1 Pa in kPa, headers with
+units, a run column, German Excel's ';' and decimal commas. Effects applied physically:
+a membrane 10 % stiffer (its FE solves), the mount tilted (angle + offset), air in the
+line (V_pump = V_chamber + C p), a laminar leak (dV_lost/dt = G p, integrated on a
+2 ms grid), a standard linear solid relaxing the pressure at a held volume, a camera
+whose view is tilted phi to the bending plane (tan a' = cos phi tan a: outside the
+catalogue), a gauge reading 60 Pa high.
+
+    .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
+    .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
+
+The first solves what the cache lacks (27 solves of 15-90 s; run alone) and writes each
+set as CSV (and the API's JSON rows); ``--test-data`` writes the three sets with the pump's
+log that tests/test_calibration_history.py reads (tests/data/lab_gauge_noise_*.csv).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+
+DESIGNS = {
+    "D1": dict(L_mm=9.3, t_mm=0.63, T_mm=1.27, b_mm=1.55, h_mm=0.17,
+               body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
+    "D2": dict(L_mm=12.4, t_mm=0.82, T_mm=0.85, b_mm=2.1, h_mm=0.22,
+               body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
+    "D3": dict(L_mm=6.2, t_mm=0.71, T_mm=1.62, b_mm=1.35, h_mm=0.13,
+               body_material="ecoflex_00_30", membrane_material="ecoflex_00_30"),
+    "D4": dict(L_mm=14.6, t_mm=0.58, T_mm=0.74, b_mm=1.9, h_mm=0.26,
+               body_material="ecoflex_00_30", membrane_material="pdms_1_15"),
+    "D5": dict(L_mm=16.3, t_mm=1.06, T_mm=1.85, b_mm=2.25, h_mm=0.28,
+               body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
+    "D6": dict(L_mm=5.4, t_mm=0.61, T_mm=1.12, b_mm=1.15, h_mm=0.11,
+               body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
+    "D7": dict(L_mm=10.8, t_mm=0.95, T_mm=0.68, b_mm=2.0, h_mm=0.19,
+               body_material="ecoflex_00_30", membrane_material="ecoflex_00_30"),
+}
+T_FACTORS = {"a": 0.96, "b": 1.0, "c": 1.045}   # the specimens' membrane thickness
+SPECIMENS = ["a", "b", "c"]
+STATE = {1: "load", 0: "hold", -1: "unload"}
+H_S = 0.002                                     # the integration grid of the effects
+
+# name: design, flow rates (None: the nominal specimen to angle_target in the loading),
+# reading interval (s), readings loading / holding / unloading, effect, seed, options
+SETS = {
+    "L1-clean-D1": ("D1", [2.5, 5.0], 1.0, 10, 0, 0, {}, 1, {}),
+    "L2-clean-D2-hold": ("D2", [None], 2.0, 7, 3, 4, {}, 2, {}),
+    "L3-membrane1.1-D3": ("D3", [None], 2.0, 7, 3, 4, {"kind": "membrane_x1.1"}, 3,
+                          {"fe_suffix": "_m1.1"}),
+    "L4-offset3-D4": ("D4", [None], 1.0, 10, 0, 0, {"kind": "angle_offset", "deg": 3.0}, 4, {}),
+    "L5-air-D5": ("D5", [None], 3.0, 7, 3, 4, {"kind": "compliance", "C_ul_per_kpa": 3.0}, 5, {}),
+    "L6-leak-D6": ("D6", [None], 1.0, 8, 6, 0, {"kind": "leak", "G_ul_s_per_kpa": 0.2}, 6, {}),
+    "L7-relax-D7": ("D7", [None], 2.0, 6, 4, 4, {"kind": "relaxation", "g": 0.2, "tau_s": 3.0},
+                    7, {"angle_target": 40}),
+    "L8-tilt40-D2": ("D2", [None], 2.0, 7, 3, 4, {"kind": "tilted_camera", "phi_deg": 40}, 18, {}),
+    "L8b-tilt40-soft-D2": ("D2", [None], 2.0, 7, 3, 4, {"kind": "tilted_camera", "phi_deg": 40},
+                           8, {}),
+    "L9-gauge60-D1": ("D1", [None], 2.0, 7, 3, 4, {"kind": "gauge_offset", "pa": 60}, 9,
+                      {"fmt": "comma"}),
+}
+# the sets tests/test_calibration_history.py reads, with the pump's log
+TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
+             "leak_in_a_hold": "L6-leak-D6"}
+
+
+def solve_missing(cache: Path) -> None:
+    """FE-solve every specimen the sets use that ``cache`` lacks (one .npz a solve)."""
+    from solver import Design, SolverSettings, solve
+
+    cache.mkdir(parents=True, exist_ok=True)
+    jobs = [(d, k, "") for d in DESIGNS for k in T_FACTORS]
+    jobs += [("D3", k, "*1.1") for k in T_FACTORS]          # a membrane 10 % stiffer
+    for d, k, scale in jobs:
+        path = cache / f"{d}{k}{'_m1.1' if scale else ''}.npz"
+        if path.exists():
+            continue
+        kw = dict(DESIGNS[d], t_mm=round(DESIGNS[d]["t_mm"] * T_FACTORS[k], 4))
+        kw["membrane_material"] += scale
+        c = solve(Design(**kw), SolverSettings())
+        np.savez(path, pressure_pa=c.pressure_pa, volume_ul=c.volume_ul,
+                 angle_deg=c.angle_deg, status=c.status, design=json.dumps(kw))
+        print(path.name, c.status, f"{c.angle_deg[-1]:.1f} deg at {c.volume_ul[-1]:.1f} ul",
+              flush=True)
+
+
+def fe_curve(cache: Path, name: str) -> dict:
+    """The FE curve's pressure and angle as smooth functions of the injected volume."""
+    z = np.load(cache / f"{name}.npz")
+    v, p, a = z["volume_ul"], z["pressure_pa"], z["angle_deg"]
+    keep = np.concatenate([[True], np.diff(v) > 1e-9])
+    return dict(p=PchipInterpolator(v[keep], p[keep]), a=PchipInterpolator(v[keep], a[keep]),
+                vmax=float(v[keep][-1]))
+
+
+def volume_at_angle(c: dict, angle_deg: float) -> float:
+    vv = np.linspace(0, c["vmax"], 4000)
+    aa = np.abs(c["a"](vv))
+    return float(vv[np.argmax(aa >= angle_deg)]) if aa[-1] >= angle_deg else c["vmax"]
+
+
+def pump_volume(t: np.ndarray, q: float, dt: float, n_load: int, n_hold: int) -> np.ndarray:
+    """The syringe's volume (ul) at times t: in at q, stopped, withdrawn at q."""
+    t_load, t_hold = n_load * dt, (n_load + n_hold) * dt
+    return np.where(t <= t_load, q * t, np.where(
+        t <= t_hold, q * t_load, np.maximum(q * t_load - q * (t - t_hold), 0.0)))
+
+
+def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The chamber's volume and pressure on the 2 ms grid for the pump's volume vp."""
+    def p_of(v):
+        return s * c["p"](np.clip(v, 0, c["vmax"]))
+    vch = vp.copy()
+    if effect.get("kind") == "compliance":       # air in the line: V_pump = V_ch + C p_ch
+        for i, v in enumerate(vp):
+            lo, hi = 0.0, v
+            for _ in range(50):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if mid + effect["C_ul_per_kpa"] * p_of(mid) / 1000 > v \
+                    else (mid, hi)
+            vch[i] = 0.5 * (lo + hi)
+    if effect.get("kind") == "leak":             # a laminar pinhole: dV_lost/dt = G p_ch
+        g, lost = effect["G_ul_s_per_kpa"], 0.0
+        for i in range(1, vp.size):
+            k1 = g * p_of(vp[i - 1] - lost) / 1000
+            k2 = g * p_of(vp[i] - lost - H_S * k1) / 1000
+            lost = min(lost + 0.5 * H_S * (k1 + k2), vp[i])
+            vch[i] = vp[i] - lost
+    p = p_of(vch)
+    if effect.get("kind") == "relaxation":       # a standard linear solid at a held volume
+        y = np.zeros_like(p)
+        for i in range(1, p.size):
+            y[i] = y[i - 1] + H_S * (p[i - 1] - y[i - 1]) / effect["tau_s"]
+        p = (1 + effect["g"]) * p - effect["g"] * y
+    return vch, p
+
+
+def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
+             rng: np.random.Generator, effect: dict) -> dict:
+    """One curve as the camera and the gauge read it, from rest at t = 0."""
+    states = [1] * n[0] + [0] * n[1] + [-1] * n[2]
+    t = dt * np.arange(len(states) + 1)
+    fine = np.arange(0, t[-1] + H_S / 2, H_S)
+    vch, p = chamber(c, s, pump_volume(fine, q, dt, n[0], n[1]), effect)
+    idx = np.round(t / H_S).astype(int)
+    p, a = p[idx], c["a"](np.clip(vch[idx], 0, c["vmax"]))
+    if effect.get("kind") == "angle_offset":     # the mount tilted
+        a = a + effect["deg"]
+    if effect.get("kind") == "tilted_camera":    # the bending plane seen at phi
+        phi = math.radians(effect["phi_deg"])
+        a = np.degrees(np.arctan2(np.sin(np.radians(a)) * math.cos(phi), np.cos(np.radians(a))))
+    if effect.get("kind") == "gauge_offset":
+        p = p + effect["pa"]
+    zero = rng.normal(0, 3)
+    p = p + zero + rng.normal(0, 1, t.size) * (0.015 * np.abs(p) + 2.0)
+    a = a + rng.normal(0, 0.7, t.size)
+    return dict(t=t, state=[1, *states], p=p, a=a, q=q)
+
+
+def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
+              with_pump: bool = False, note: str = "") -> Path:
+    d, flows, dt, n_load, n_hold, n_unload, effect, seed, kw = SETS[name]
+    rng = np.random.default_rng(seed)
+    nominal = DESIGNS[d]
+    suffix = kw.get("fe_suffix", "")
+    stiff = {sp: float(np.clip(rng.normal(1, 0.07), 0.9, 1.1)) for sp in SPECIMENS}
+    v_top = volume_at_angle(fe_curve(cache, f"{d}b{suffix}"), kw.get("angle_target", 75))
+    rows = []
+    for run, q in enumerate(flows, 1):
+        for k, sp in enumerate(SPECIMENS):
+            qq = v_top / (n_load * dt) if q is None else q
+            r = readings(fe_curve(cache, f"{d}{sp}{suffix}"), stiff[sp], qq, dt,
+                         (n_load, n_hold, n_unload), rng, effect)
+            rows += [(f"S{k + 1}", run, r["t"][i], qq, r["p"][i] / 1000, r["a"][i],
+                      STATE[r["state"][i]]) for i in range(r["t"].size)]
+    sep, dec = (";", ",") if kw.get("fmt", "semicolon") == "semicolon" else (",", ".")
+    geometry = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
+    header = ["curve_id", "run", *geometry, "body_material", "membrane_material", "Time (s)",
+              "Flow (ul/s)", "Pressure (kPa)", "Angle (deg)"] + (["pump"] if with_pump else [])
+
+    def num(x: float, nd: int) -> str:
+        return f"{x:.{nd}f}".replace(".", dec)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"{file_name or name}.csv"
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        fh.write(f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
+                 f"benchmarks/lab_rig_sets.py from FE solves{note}\n")
+        w = csv.writer(fh, delimiter=sep)
+        w.writerow(header)
+        for cid, run, t, q, p_kpa, a, state in rows:
+            w.writerow([cid, run, *(num(nominal[g], 2) for g in geometry),
+                        nominal["body_material"], nominal["membrane_material"], num(t, 1),
+                        num(q, 2), num(p_kpa, 3), num(a, 1)] + ([state] if with_pump else []))
+    if not with_pump:      # the API's body: the same rows, numbers as JSON numbers
+        body = [dict(zip(header, [cid, run, *(nominal[g] for g in geometry),
+                                  nominal["body_material"], nominal["membrane_material"],
+                                  round(t, 1), round(q, 2), round(p_kpa, 3), round(a, 1)],
+                         strict=True)) for cid, run, t, q, p_kpa, a, _ in rows]
+        (out / f"{name}.json").write_text(json.dumps({"rows": body}))
+    return path
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
+    ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
+    ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's three sets")
+    args = ap.parse_args()
+    solve_missing(args.cache)
+    if args.test_data:
+        data = Path(__file__).resolve().parents[1] / "tests" / "data"
+        for file_name, name in TEST_DATA.items():
+            print(write_set(args.cache, data, name, f"lab_gauge_noise_{file_name}", True,
+                            ", the pump column its program"))
+        return
+    for name in args.sets or SETS:
+        print(write_set(args.cache, args.out, name))
+
+
+if __name__ == "__main__":
+    main()
