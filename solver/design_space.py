@@ -115,8 +115,12 @@ def named_material(material_id: str) -> OgdenMaterial | None:
         scale = float(scale_text)
     except ValueError:
         return None
-    if preset_id not in MATERIALS or not (math.isfinite(scale) and scale > 0):
+    if preset_id not in MATERIALS:
         return None
+    if not (math.isfinite(scale) and scale > 0):     # a preset's, with a scale no silicone has
+        lo, hi = STIFFNESS_SCALE_LIMITS
+        raise InputError("material", f"stiffness scale {scale_text.strip()} is not a "
+                         "finite number > 0", f"<preset>*<scale>, {lo:g} <= scale <= {hi:g}")
     return scaled_material(preset_id, scale)
 
 
@@ -131,7 +135,10 @@ def reused_id(material: OgdenMaterial) -> str | None:
     under ``pdms_1_10*2`` is PDMS 1:10 with every mu doubled, wherever it is read); None
     when the id names no preset or names these parameters (a scaled preset's to the 6
     significant digits its id gives the scale with, ``f"{scale:.6g}"``)."""
-    named = named_material(material.id)
+    try:
+        named = named_material(material.id)
+    except InputError:          # a preset's id with a scale no material has (x0, xinf)
+        return "scaled preset id"
     if named is None:
         return None
     rtol = 1e-5 if "*" in material.id else 0.0

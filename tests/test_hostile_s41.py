@@ -308,3 +308,40 @@ def test_a_gauge_reading_no_field_value_can_meet_names_the_flow():
         predict_answer(paper_surrogate(), Design(), slow, "paper", 0.95)
     assert caught.value.field == "pressures_pa"
     assert caught.value.allowed.endswith(f"<= pressures_pa <= {top:g} Pa at the pump gauge")
+
+
+@pytest.mark.parametrize("scale", ["0", "-2", "1e400", "nan"])
+def test_a_preset_scaled_by_no_positive_number_states_the_scales_range(scale, shipped_client):
+    """``pdms_1_10*0`` (or x1e400, x-2, xnan) was refused as "unknown material
+    'pdms_1_10*0' (did you mean 'pdms_1_10'?)": the preset is known, the scale is what is
+    wrong. The refusal names the field and the scales a layer may have (0.01-100,
+    ``STIFFNESS_SCALE_LIMITS``), on the CLI (with a stiffness scale given too: scaled
+    twice, as above) and over HTTP; an inline material with such an id poses as a scaled
+    preset and is refused as one."""
+    material = f"pdms_1_10*{scale}"
+    code, _, err, escaped = run(["predict", "--L-mm", "7.1", "--t-mm", "0.5",
+                                 "--pressures", "1000", "--body-material", material])
+    assert escaped is None and code == 2
+    (line,) = visible_lines(err)
+    assert line.startswith("balloon: error: --body-material: "), line
+    assert "unknown" not in line and "0.01 <= scale <= 100" in line, line
+    code, _, err, escaped = run(["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures",
+                                 "1000", "--body-material", material,
+                                 "--body-stiffness-scale", "1.2"])
+    (line,) = visible_lines(err)
+    assert escaped is None and code == 2 and "would scale it twice" in line, line
+    r = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5, "body_material": material},
+        "pressures_pa": [1000]})
+    assert r.status_code == 422, r.text
+    (error,) = r.json()["errors"]
+    # (the schema's own pattern takes no sign or NaN: "is not of this form", at the field)
+    assert error["field"] == "design.body_material" and "unknown" not in error["message"]
+    assert "0.01 <= scale <= 100" in error["allowed"] or "not of this form" in \
+        error["message"], error
+    r = shipped_client.post("/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5,
+                   "body_material": {"id": material, "mu_kpa": [20.0], "alpha": [3.0]}},
+        "pressures_pa": [1000]})
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == \
+        "design.body_material.id", r.text

@@ -189,9 +189,12 @@ def design_from_args(args: argparse.Namespace) -> object:
                              f"membrane S {REDUCED_RATIO_RANGE[0]:g}.."
                              f"{REDUCED_RATIO_RANGE[1]:g})")
         if preset not in MATERIALS:    # a scaled id (pdms_1_10*2) would be scaled twice
+            try:
+                scaled = named_material(preset) is not None
+            except InputError:         # a preset's id with a scale no material has (x0)
+                scaled = True
             said = (f"{preset!r} is already scaled: --{layer}-stiffness-scale {scale:g} "
-                    "would scale it twice" if named_material(preset)
-                    else f"unknown material {preset!r}")
+                    "would scale it twice" if scaled else f"unknown material {preset!r}")
             raise InputError(f"--{layer}-material", said,
                              f"a preset ({', '.join(sorted(MATERIALS))}) with "
                              f"--{layer}-stiffness-scale, or <preset>*<scale> alone")
