@@ -345,3 +345,18 @@ def test_a_preset_scaled_by_no_positive_number_states_the_scales_range(scale, sh
         "pressures_pa": [1000]})
     assert r.status_code == 422 and r.json()["errors"][0]["field"] == \
         "design.body_material.id", r.text
+
+
+def test_a_cli_refusal_names_the_options_not_the_request_fields():
+    """``balloon predict --model paper --volumes 10`` was refused "(allowed: pressures_pa;
+    ...)", the HTTP request's field, where the CLI's option is ``--pressures``; ``--times``
+    without a flow rate said "times_s needs the pump's flow rate". Both now name the
+    options (``PUMP_FLAGS``)."""
+    for argv, flag, said in (
+            (["--model", "paper", "--volumes", "10", "20"], "--volumes", "allowed: --pressures"),
+            (["--times", "1", "2"], "--flow-ul-s", "--times needs the pump's flow rate")):
+        code, _, err, escaped = run(["predict", "--L-mm", "7.1", "--t-mm", "0.5", *argv])
+        assert escaped is None and code == 2
+        (line,) = visible_lines(err)
+        assert line.startswith(f"balloon: error: {flag}: ") and said in line, line
+        assert "pressures_pa" not in line and "times_s" not in line, line

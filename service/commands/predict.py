@@ -15,6 +15,7 @@ import argparse
 import json
 import math
 import os
+import re
 from pathlib import Path
 
 from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges
@@ -138,8 +139,20 @@ def as_flag(exc: Exception) -> Exception:
     if isinstance(exc, OutOfBoxError):
         return exc.renamed(names)
     if isinstance(exc, InputError) and exc.field in names:
-        return InputError(names[exc.field], exc.detail, exc.allowed)
+        # the request fields its words name are the CLI's options too ("allowed:
+        # pressures_pa" for a model that answers by pressure only is --pressures here)
+        return InputError(names[exc.field], _as_flags(exc.detail), _as_flags(exc.allowed))
     return exc
+
+
+def _as_flags(text: str | None) -> str | None:
+    """``text`` with each request field it names (``PUMP_FLAGS``; those with a unit in
+    their name, not a word such as "level") as its CLI option."""
+    if not text:
+        return text
+    fields = "|".join(re.escape(f) for f in PUMP_FLAGS if "_" in f)
+    return re.sub(rf"(?<![\w.-])({fields})(?![\w.])", lambda m: PUMP_FLAGS[m.group(1)],
+                  text)
 
 
 def inlet_from_args(args: argparse.Namespace) -> object:
