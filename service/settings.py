@@ -41,7 +41,7 @@ class ServiceSettings(BaseSettings):
         None, description="key for mutating endpoints (X-API-Key); unset disables them")
     workers: int = Field(1, ge=1, le=64, description="FE solve worker processes")
     queue_size: int = Field(8, ge=0, le=10_000, description="solve jobs waiting for a worker")
-    job_time_limit_s: float = Field(900.0, gt=0, le=86_400,
+    job_time_limit_s: float = Field(900.0, gt=0, le=86_400, allow_inf_nan=False,
                                     description="wall-time limit of one solve job, s")
     max_solve_dofs: int = Field(
         500_000, ge=1_000, le=100_000_000,

@@ -144,3 +144,23 @@ def test_require_api_key_can_be_called_directly(tmp_path):
     with pytest.raises(AuthError) as wrong:
         require_api_key(settings, "nope")
     assert wrong.value.status == 403
+
+
+@pytest.mark.parametrize("value", ["nan", "inf"])
+def test_a_time_limit_that_is_no_number_is_called_so(monkeypatch, capsys, value):
+    """``BALLOON_JOB_TIME_LIMIT_S=nan`` was refused as "Input should be less than or equal
+    to 86400": the limit is not a number at all (the hostile-input audit of the forty-first
+    session), and the refusal says so, with the range."""
+    import uvicorn
+
+    from service.cli import main
+
+    monkeypatch.setattr(uvicorn, "run", lambda *a, **k: pytest.fail("the server started"))
+    monkeypatch.setenv("BALLOON_JOB_TIME_LIMIT_S", value)
+    get_settings.cache_clear()
+    try:
+        assert main(["serve", "--port", "8011"]) == 2
+    finally:
+        get_settings.cache_clear()
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "finite number" in line and "0 < job_time_limit_s <= 86400" in line, line
