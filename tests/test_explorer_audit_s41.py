@@ -92,3 +92,20 @@ def test_the_force_view_lists_only_curves_it_draws(watched, server):
     screenshot(page, "s41-force-legend")
     assert series and all(drawn > 0 for _, drawn in series), series
     assert watched.errors == [] and watched.foreign_requests() == []
+
+
+def test_a_tubing_length_and_bore_both_in_error_are_both_named(watched, server):
+    # with the tubing's length in error the bore's error was hidden until the length was
+    # mended (the pump audit of the forty-first session); both are named at once
+    page = switched(watched, server, "document.body.dataset.ready === 'true'",
+                    "#ask_axis", "time_s", "window.explorer.prediction"
+                    " && window.explorer.prediction.asked === 'times_s'")
+    page.check("#inlet")
+    change(page, "#tubing_length", "-5")
+    change(page, "#tubing_bore", "0")
+    page.wait_for_selector("#err-tubing_length:not([hidden])")
+    page.wait_for_selector("#err-tubing_bore:not([hidden])")
+    assert "0.05" in page.inner_text("#err-tubing_bore")
+    change(page, "#tubing_length", "0")          # no tubing: its bore does not count
+    page.wait_for_selector("#err-tubing_bore", state="hidden")
+    assert watched.errors == [] and watched.foreign_requests() == []

@@ -277,7 +277,9 @@ function pageErrors() {
     const length = checkNumber($("tubing_length"), { unit: "mm" });
     if (length.error) out.push([$("err-tubing_length"), length.error]);
     const bore = checkNumber($("tubing_bore"), { unit: "mm" });
-    if (length.value > 0 && bore.error) out.push([$("err-tubing_bore"), bore.error]);
+    // the bore counts with tubing (length > 0) or where the length is itself in error:
+    // both are named at once, not the bore only once the length is mended
+    if ((length.error || length.value > 0) && bore.error) out.push([$("err-tubing_bore"), bore.error]);
   }
   return out;
 }
