@@ -19,6 +19,7 @@ import tempfile
 from pathlib import Path
 
 from solver.errors import InputError
+from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from solver.store.locking import JOB_SUFFIX, WRITER_SUFFIX
 
 # what matplotlib writes (Figure.savefig by suffix) and meshio writes for --vtk
@@ -27,20 +28,11 @@ PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".eps", ".ps", ".tif",
 VTK_SUFFIXES = (".vtu", ".vtk")
 
 
-HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
-# HDF5 looks for its signature at byte 0 and after a user block of 512 bytes or a larger
-# power of two; the store's files carry their seal in a user block of 512
-# (solver/store/integrity.py), so the signature of every database it writes is at 512.
-SIGNATURE_OFFSETS = (0, *(2**k for k in range(9, 17)))
-
-
 def is_hdf5(path: Path) -> bool:
     """Whether the regular file ``path`` is an HDF5 file (a curve database, sealed or
-    not): its signature where HDF5 looks for it."""
+    not: solver/store/integrity.py)."""
     with open(path, "rb") as f:
-        head = f.read(SIGNATURE_OFFSETS[-1] + len(HDF5_SIGNATURE))
-    return any(head[at:at + len(HDF5_SIGNATURE)] == HDF5_SIGNATURE
-               for at in SIGNATURE_OFFSETS)
+        return looks_like_hdf5(f.read(HDF5_HEAD_BYTES))
 
 
 def locked_database(path: Path) -> str | None:

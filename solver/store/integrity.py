@@ -38,6 +38,11 @@ from pathlib import Path
 from solver.store.errors import READ_ERRORS, DamagedStoreError
 
 USERBLOCK_BYTES = 512  # HDF5: a power of two >= 512
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+# HDF5 looks for its signature at byte 0 and after a user block of 512 bytes or a larger
+# power of two: every file this store publishes has it at USERBLOCK_BYTES, after its seal
+HDF5_SIGNATURE_OFFSETS = (0, *(2**k for k in range(9, 17)))
+HDF5_HEAD_BYTES = HDF5_SIGNATURE_OFFSETS[-1] + len(HDF5_SIGNATURE)
 MAGIC = b"balloon-curves-seal blake2b-256 "
 DIGEST_HEX = 64
 START_S = 120.0  # the child's imports (slow on a loaded machine)
@@ -55,6 +60,13 @@ def _digest(chunks) -> bytes:
     for chunk in chunks:
         h.update(chunk)
     return h.hexdigest().encode()
+
+
+def looks_like_hdf5(head: bytes) -> bool:
+    """Whether a file whose first bytes are ``head`` (HDF5_HEAD_BYTES of them, or the
+    whole file) is an HDF5 file, sealed or not: its signature where HDF5 looks for it."""
+    return any(head[at:at + len(HDF5_SIGNATURE)] == HDF5_SIGNATURE
+               for at in HDF5_SIGNATURE_OFFSETS)
 
 
 def seal(image: memoryview) -> None:
