@@ -445,3 +445,20 @@ def test_a_required_column_named_by_its_unit_is_named_in_the_error(tmp_path, hea
     assert err.value.column == column
     assert f"found {header!r}" in str(err.value) and "\n" not in str(err.value)
     assert "(unit)" in str(err.value)
+
+
+def test_a_sealed_curve_database_given_as_data_is_named_for_what_it_is(tmp_path):
+    """A curve database as the store writes it carries its seal in the first 512 bytes and
+    HDF5's signature after it (solver/store/integrity.py): given as lab data it was read as
+    "UTF-16 without a byte-order mark"; it is named as the HDF5 file it is."""
+    from test_store import record_for
+
+    from solver.store import CurveStore
+
+    db = tmp_path / "curves.h5"
+    with CurveStore(db, mode="a") as store:
+        store.put(record_for())
+    assert not db.read_bytes().startswith(b"\x89HDF")          # the seal comes first
+    with pytest.raises(DataError) as err:
+        load_observations(db)
+    assert "HDF5" in str(err.value) and "UTF-16" not in str(err.value)

@@ -22,6 +22,7 @@ import numpy as np
 
 from solver.bounded_read import read_bounded
 from solver.materials import MATERIALS
+from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._headers import (
@@ -802,9 +803,8 @@ BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe\x00\x00", "utf-32"),
 
 
 # what a lab's data file is when it is not text: told by its first bytes (all of these
-# were read as "UTF-16 without a byte-order mark")
-FILE_SIGNATURES = ((b"\x89HDF\r\n\x1a\n", "an HDF5 file (a curve database?)"),
-                   (b"PK\x03\x04", "a zip archive (an Excel .xlsx or .ods workbook?)"),
+# were read as "UTF-16 without a byte-order mark"; an HDF5 file: looks_like_hdf5)
+FILE_SIGNATURES = ((b"PK\x03\x04", "a zip archive (an Excel .xlsx or .ods workbook?)"),
                    (b"\xd0\xcf\x11\xe0", "an old Excel .xls workbook"),
                    (b"\x89PNG", "a PNG image"), (b"%PDF", "a PDF document"),
                    (b"\x1f\x8b", "a gzip-compressed file (unpack it first: gunzip)"),
@@ -824,11 +824,15 @@ def decode_text(data: bytes, name: str) -> str:
                                               "\n".encode(encoding)[2:]) + 1
                 raise DataError("file", f"{name}: line {line}: not valid {encoding} after "
                                 "its byte-order mark", None, "UTF-8 text") from None
-    for signature, what in FILE_SIGNATURES:
-        if data.startswith(signature):
-            raise DataError("file", f"{name}: this is {what}, not text", None,
-                            "a CSV file (UTF-8, comma-separated; a spreadsheet's 'Save as: "
-                            "CSV UTF-8') or JSON rows")
+    # an HDF5 file where HDF5 looks for its signature (a sealed curve database has it
+    # after its seal, solver/store/integrity.py), or another kind by its first bytes
+    what = ("an HDF5 file (a curve database?)" if looks_like_hdf5(data[:HDF5_HEAD_BYTES])
+            else next((w for signature, w in FILE_SIGNATURES if data.startswith(signature)),
+                      None))
+    if what is not None:
+        raise DataError("file", f"{name}: this is {what}, not text", None,
+                        "a CSV file (UTF-8, comma-separated; a spreadsheet's 'Save as: "
+                        "CSV UTF-8') or JSON rows")
     if b"\x00" in data[:4096]:
         line = data[:data.index(b"\x00")].count(b"\n") + 1
         raise DataError("file", f"{name}: line {line}: it looks like UTF-16 without a "
