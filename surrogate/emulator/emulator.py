@@ -132,6 +132,8 @@ class Emulator:
         for pe in self.pairs.values():
             u = pe.curves.gp.gps[0].x[0]
             pe.curve_nodes(u, variance_of=which if pe.curves.per_output else None)
+            if pe.range_model is not None:      # its sd, asked for near early ends only
+                pe.emulated_end_deg(u)
             if pe.force is not None:
                 pe.force.predict(pe.force.gps[0].x[0])
         for model in self.balance_models.values():

@@ -53,13 +53,14 @@ def end_volume_reason(volume_ul: float) -> str:
 
 
 def fe_range(pe: PairEmulator, u: np.ndarray, volume_red_ul: np.ndarray, length_scale: float,
-             emulated_end: tuple[float, float] | None = None,
+             emulated_end: tuple[float, float | None] | None = None,
              failed_distances: np.ndarray | None = None) -> tuple[float, str]:
     """The FE's range for the design at unit coordinates ``u`` (deg) and why it ends
     there: the FE's angle stop; the angle at which the emulated injected volume
     ``volume_red_ul`` (reduced, on FINE_ANGLES_DEG) reaches the FE's volume stop; the
     emulated end of the design's FE curve less RANGE_Z sd (``pe.range_model``; pass
-    ``pe.emulated_end_deg(u)`` as ``emulated_end`` when it is already known) where that
+    ``pe.emulated_end_deg(u)`` as ``emulated_end`` when it is already known, its sd None
+    when not: it is asked for here where it counts) where that
     end is below RANGE_COMPLETE_DEG or an early-ended database curve lies within
     NEAR_FAILED_RADIUS; the end of an early-ended database curve within FAILED_RADIUS
     (``pe.failed_distances(u)`` when already known); the angle at which the emulated
@@ -73,9 +74,11 @@ def fe_range(pe: PairEmulator, u: np.ndarray, volume_red_ul: np.ndarray, length_
     if pe.range_model is not None:
         mean_deg, sd_deg = (pe.emulated_end_deg(u) if emulated_end is None
                             else emulated_end)
-        end = max(mean_deg - RANGE_Z * sd_deg, 0.0)
         ends_early = mean_deg < RANGE_COMPLETE_DEG
         near = bool((failed_distances < NEAR_FAILED_RADIUS).any())
+        if (ends_early or near) and sd_deg is None:
+            mean_deg, sd_deg = pe.emulated_end_deg(u)
+        end = float("inf") if sd_deg is None else max(mean_deg - RANGE_Z * sd_deg, 0.0)
         if (ends_early or near) and end < limit - 1.0:
             limit = end
             why = ("this design's FE curve is emulated to end early too, at "

@@ -29,7 +29,7 @@ from surrogate.emulator.features import (
     per_kpa_from_feature,
 )
 from surrogate.emulator.stretch_hazard import StretchHazard
-from surrogate.emulator.vector_gp import VectorGP
+from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
 
 # Unit-cube distance within which a database curve that ended early (volume stop, Newton
 # failure) marks the emulator as least reliable (flag near_early_ended_fe_curves): on the
@@ -181,12 +181,16 @@ class PairEmulator:
         """Unit-cube distance from ``u`` to the nearest of them (inf when none)."""
         return float(self.nearest_failed(u)[0])
 
-    def emulated_end_deg(self, u: np.ndarray) -> tuple[float, float]:
+    def emulated_end_deg(self, u: np.ndarray, with_sd: bool = True
+                         ) -> tuple[float, float | None]:
         """Where the FE curve of the design at unit coordinates ``u`` is emulated to end
-        (deg) and its sd (``range_model``; needs one)."""
-        m, var = self.range_model.predict(u)  # type: ignore[union-attr]
+        (deg) and its sd (``range_model``; needs one). ``with_sd=False``: the mean alone,
+        sd None (a query needs the sd only where the end is early or near an early-ended
+        curve, ``fe_range``; its variance is most of the range model's cost)."""
+        m, var = self.range_model.predict(  # type: ignore[union-attr]
+            u, None if with_sd else MEANS_ONLY)
         mean_deg, sd_deg = _end_deg(m[0], var[0])
-        return float(mean_deg), float(sd_deg)
+        return float(mean_deg), (float(sd_deg) if with_sd else None)
 
     def emulated_ends_deg(self, u: np.ndarray) -> list[tuple[float, float]]:
         """``emulated_end_deg`` at every row of ``u``, in one batch."""
@@ -195,16 +199,17 @@ class PairEmulator:
         return list(zip(mean_deg.tolist(), sd_deg.tolist(), strict=True))
 
     def curve_nodes(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None
-                    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None,
+                    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float | None] | None,
                                tuple[np.ndarray, np.ndarray] | None]:
         """Node outputs and variances of the design at unit coordinates ``u``
         (``CurveGPs.predict``), the means conditioned on the early-ended database curves
         too as far as the design is emulated to end early or lies at one of them
         (``blend_weights``), that
-        emulated end (deg, with its sd; None without a range model), and the pressure
+        emulated end (deg, its sd None: ``fe_range`` asks for it where it is needed; None
+        without a range model), and the pressure
         nodes' means and variances without that blend (the force model's angle and its
         band; None where nothing was blended)."""
-        end = None if self.range_model is None else self.emulated_end_deg(u)
+        end = None if self.range_model is None else self.emulated_end_deg(u, with_sd=False)
         weight = 0.0 if end is None else float(self.blend_weights(u[None, :], [end[0]])[0])
         mean, var, plain = self.curves.predict_with_plain(u, variance_of, weight)
         return mean, var, end, plain
