@@ -211,15 +211,16 @@ def _direction(target: DesignTarget) -> float:
     return -1.0 if float(raw) < 0 else 1.0  # type: ignore[arg-type]
 
 
-def _screen(model: object, designs: list[Design], target: DesignTarget, level: float
-            ) -> dict[str, np.ndarray]:
+def _screen(model: object, designs: list[Design], target: DesignTarget, level: float,
+            band: bool = True) -> dict[str, np.ndarray]:
     """|value| at the target pressure with its band, the pressure needed for the
     target angle with its band, and the design's bending direction (``sign``, +1 / -1,
     0 unknown), for every design (NaN where the model has no answer). Uses the model's
     batch ``evaluate_designs`` when it has one (the emulator), else its ``predict`` and
-    ``inverse`` per design."""
+    ``inverse`` per design. ``band=False``: a pump's target's bands may be NaN (the
+    emulator's batch then reads the means alone: a bisection step's)."""
     if target.by_volume:
-        return screen_by_volume(model, designs, target, level)
+        return screen_by_volume(model, designs, target, level, band)
     angle = None if target.kind == "force_at_pressure" else target.value
     batch = getattr(model, "evaluate_designs", None)
     if batch is not None:
@@ -313,9 +314,9 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
     lo = np.full(len(evals), bounds[0])
     hi = np.full(len(evals), bounds[1])
 
-    def f(x: np.ndarray) -> tuple[np.ndarray, list[Design], dict]:
+    def f(x: np.ndarray, band: bool = False) -> tuple[np.ndarray, list[Design], dict]:
         designs = [_design(e.pair, {**e.values, name: float(v)}) for e, v in zip(evals, x)]
-        r = _screen(model, designs, target, level)
+        r = _screen(model, designs, target, level, band)
         other_way = _keep_direction(r, _direction(target))     # no hit there
         v = np.where(np.isfinite(r["value"]), r["value"] - target.value, np.inf)
         return np.where(other_way, -np.inf, v), designs, r
@@ -331,7 +332,7 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
         lo, f_lo = np.where(same, mid, lo), np.where(same, f_mid, f_lo)
         hi = np.where(same, hi, mid)
     mid = np.sqrt(lo * hi)
-    f_mid, designs, r = f(mid)
+    f_mid, designs, r = f(mid, band=True)     # the bands of the designs solved
     out = []
     for i, e in enumerate(evals):
         if ok[i] and np.isfinite(f_mid[i]) and abs(f_mid[i]) <= 0.01 * target.value:

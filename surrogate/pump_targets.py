@@ -52,15 +52,16 @@ def no_volume_error(model: object, target: DesignTarget) -> InputError:
 
 
 def screen_by_volume(model: object, designs: list[Design], target: DesignTarget,
-                     level: float) -> dict[str, np.ndarray]:
+                     level: float, band: bool = True) -> dict[str, np.ndarray]:
     """For every design: |angle| (deg) with its band at the target volume (``value``),
     the injected volume (ul) needed for the target angle with its band (``needed``) and
     the bending direction (``sign``), NaN where the model has no answer (past the FE's
     range); the keys of ``design_search._screen``, and ``no_volume`` where the model
-    gives no volume for the design (the paper's families)."""
+    gives no volume for the design (the paper's families). ``band=False``: the batch
+    reads the means alone (bands NaN), for a bisection step."""
     batch = getattr(model, "evaluate_designs_by_volume", None)
     if batch is not None:
-        out = batch(designs, target.at, target.value, level)
+        out = batch(designs, target.at, target.value, level, band)
         return {"value": np.abs(out["angle"]), "value_lo": np.fmin(out["angle_lo"],
                                                                    out["angle_hi"]),
                 "value_hi": np.fmax(out["angle_lo"], out["angle_hi"]),

@@ -178,6 +178,11 @@ def test_the_batch_screen_reads_as_one_design_at_a_time(emulator):
                                                        nan_ok=True)
         assert out["needed_hi"][i] == pytest.approx(inv.volume_upper_ul[0], rel=1e-3,
                                                     nan_ok=True)
+    # a bisection step's screen: the means alone, the same; no band
+    means = emulator.evaluate_designs_by_volume(designs, 15.0, 40.0, band=False)
+    for key in ("angle", "pressure", "needed", "needed_pressure", "sign"):
+        np.testing.assert_allclose(means[key], out[key], rtol=1e-9)
+    assert np.isnan(means["angle_lo"]).all() and np.isnan(means["needed_hi"]).all()
 
 
 @pytest.mark.parametrize("target, field", [

@@ -423,12 +423,12 @@ class Emulator:
         return many_designs.evaluate_designs(self, designs, pressure_pa, angle_deg, level)
 
     def evaluate_designs_by_volume(self, designs: list[Design], volume_ul: float,
-                                   angle_deg: float, level: float = 0.95
+                                   angle_deg: float, level: float = 0.95, band: bool = True
                                    ) -> dict[str, np.ndarray]:
         """Many designs at once by injected volume (a syringe pump's design target):
         ``many_designs.evaluate_designs_by_volume``."""
         return many_designs.evaluate_designs_by_volume(self, designs, volume_ul, angle_deg,
-                                                       level)
+                                                       level, band)
 
     def nearest_records(self, design: Design, count: int = 3) -> list[str]:
         """Keys of the database curves nearest to ``design`` in the unit box."""

@@ -21,6 +21,7 @@ from surrogate.emulator.fe_range import fe_range, pressure_stop_angle
 from surrogate.emulator.features import N_NODES
 from surrogate.emulator.force_answer import force_backed
 from surrogate.emulator.node_curves import ANGLES0, _with_origin, node_curves
+from surrogate.emulator.vector_gp import MEANS_ONLY
 from surrogate.emulator.volume_answer import at_volumes, volumes_at_angles
 from surrogate.emulator.volume_curve import emulated_volume_ul
 from surrogate.predictor import one_signed
@@ -30,12 +31,13 @@ if TYPE_CHECKING:
 
 
 def _pair_batches(emulator: Emulator, designs: list[Design], z: float,
-                  volume_band: bool = False) -> Iterator[tuple]:
+                  volume_band: bool = False, means_only: bool = False) -> Iterator[tuple]:
     """Per pair emulator: (pe, idx, points, u, mean, var, ends, plain, scales, curves,
     p_raw) of its designs (``idx``: their places in ``designs``), the variance as a
     single query reads it (exact at the variance nodes, spread; with ``volume_band`` at
-    the volume nodes too); ``curves``: p(theta) mean, lower and upper made monotone,
-    ``p_raw`` the mean before."""
+    the volume nodes too; with ``means_only`` none: ``var`` and the band's curves NaN);
+    ``curves``: p(theta) mean, lower and upper made monotone, ``p_raw`` the mean
+    before."""
     points = [locate(d, reduced=True) for d in designs]
     coords = np.array([pt.coordinates() for pt in points])
     for key, idx in emulator._signed_groups(points, coords).items():
@@ -46,11 +48,15 @@ def _pair_batches(emulator: Emulator, designs: list[Design], z: float,
         which = emulator.variance_nodes
         if volume_band:
             which = np.concatenate((np.arange(N_NODES)[which], np.arange(N_NODES, 2 * N_NODES)))
-        mean, var, ends, plain = (
-            pe.curve_nodes_many(u, variance_of=which)
-            if pe.curves.per_output else pe.curve_nodes_many(u))
-        if pe.curves.per_output:
-            var = np.array([emulator.spread_variance(row) for row in var])
+        if means_only:
+            mean, _, ends, plain = pe.curve_nodes_many(u, variance_of=MEANS_ONLY)
+            var = np.full_like(mean, np.nan)
+        else:
+            mean, var, ends, plain = (
+                pe.curve_nodes_many(u, variance_of=which)
+                if pe.curves.per_output else pe.curve_nodes_many(u))
+            if pe.curves.per_output:
+                var = np.array([emulator.spread_variance(row) for row in var])
         scales = pe.band_scales(pe.nearest_failed(u))
         y, sd = mean[:, :N_NODES], np.sqrt(var[:, :N_NODES]) * scales[:, :N_NODES]
         raw = node_curves(y, sd, z)
@@ -131,7 +137,7 @@ def evaluate_designs(emulator: Emulator, designs: list[Design], pressure_pa: flo
 
 
 def evaluate_designs_by_volume(emulator: Emulator, designs: list[Design], volume_ul: float,
-                               angle_deg: float, level: float = 0.95
+                               angle_deg: float, level: float = 0.95, band: bool = True
                                ) -> dict[str, np.ndarray]:
     """Many designs at once, for a syringe pump's target: |angle| (deg) with its band and
     the chamber pressure (Pa) at the injected volume ``volume_ul`` (ul, whole actuator),
@@ -139,7 +145,8 @@ def evaluate_designs_by_volume(emulator: Emulator, designs: list[Design], volume
     there (Pa), NaN past each design's FE range; ``sign`` as ``evaluate_designs``. The
     same readings as ``Emulator.predict_volume`` and ``Emulator.inverse``
     (``volume_answer``), for each pair's designs in one batch of GP predictions with the
-    volume nodes' variance."""
+    volume nodes' variance; ``band=False``: the means alone (the bands NaN), half the cost
+    or less (the search's bisection steps)."""
     z = z_value(level)
     out = {k: np.full(len(designs), np.nan) for k in (
         "angle", "angle_lo", "angle_hi", "pressure", "needed", "needed_lo", "needed_hi",
@@ -147,7 +154,7 @@ def evaluate_designs_by_volume(emulator: Emulator, designs: list[Design], volume
     out["sign"] = np.zeros(len(designs))
     a = abs(float(angle_deg))
     for pe, idx, points, u, mean, var, ends, _, scales, curves, p_raw in _pair_batches(
-            emulator, designs, z, volume_band=True):
+            emulator, designs, z, volume_band=True, means_only=not band):
         out["sign"][idx] = pe.sign
         v_sd = np.sqrt(var[:, N_NODES:]) * scales[:, N_NODES:]
         volumes = emulated_volume_ul(mean[:, N_NODES:])
@@ -155,14 +162,14 @@ def evaluate_designs_by_volume(emulator: Emulator, designs: list[Design], volume
             pt = points[i]
             pm = _with_origin(curves[0][row])
             limit = _row_limit(pe, pt, u[row], volumes[row], ends[row], pm)
-            band = volume_band_ul(mean[row, N_NODES:], v_sd[row], z)
+            curves_v = volume_band_ul(mean[row, N_NODES:], v_sd[row], z)
             ls3 = pt.length_scale**3
-            read = at_volumes(np.array([volume_ul / ls3]), band, _with_origin(p_raw[row]),
-                              limit)
+            read = at_volumes(np.array([volume_ul / ls3]), curves_v,
+                              _with_origin(p_raw[row]), limit, band)
             out["angle"][i] = read.angle_deg[0]
             out["angle_lo"][i], out["angle_hi"][i] = read.lower_deg[0], read.upper_deg[0]
             out["pressure"][i] = read.pressure_red_pa[0] * pt.pressure_scale
-            need = volumes_at_angles(np.array([a]), band, limit)
+            need = volumes_at_angles(np.array([a]), curves_v, limit)
             out["needed"][i], out["needed_lo"][i], out["needed_hi"][i] = (
                 float(c[0]) * ls3 for c in need)
             if a <= limit:
