@@ -185,24 +185,28 @@ def test_the_batch_screen_reads_as_one_design_at_a_time(emulator):
     assert np.isnan(means["angle_lo"]).all() and np.isnan(means["needed_hi"]).all()
 
 
-@pytest.mark.parametrize("target, field", [
-    ({"kind": "angle_at_volume", "volume_ul": 600, "angle_deg": 45}, "target.volume_ul"),
-    ({"kind": "angle_at_volume", "angle_deg": 45}, "target.volume_ul"),
+@pytest.mark.parametrize("target, field, allowed", [
+    ({"kind": "angle_at_volume", "volume_ul": 600, "angle_deg": 45}, "target.volume_ul",
+     "500"),
+    ({"kind": "angle_at_volume", "angle_deg": 45}, "target.volume_ul", "0 < volume_ul <= 500"),
     ({"kind": "angle_at_volume", "volume_ul": 20, "angle_deg": 45, "pressure_pa": 1500},
-     "target.pressure_pa"),
-    ({"kind": "angle_at_time", "time_s": 8, "angle_deg": 45}, "target.flow_ul_s"),
+     "target.pressure_pa", "takes volume_ul"),
+    ({"kind": "angle_at_time", "time_s": 8, "angle_deg": 45}, "target.flow_ul_s",
+     "1e-06 <= flow_ul_s <= 1000 ul/s"),
     ({"kind": "angle_at_time", "time_s": 8, "flow_ul_s": 5000, "angle_deg": 45},
-     "target.flow_ul_s"),
+     "target.flow_ul_s", "1000"),
     ({"kind": "time_budget", "time_s": 800, "flow_ul_s": 2.5, "angle_deg": 45},
-     "target.time_s"),
+     "target.time_s", "time_s <= 200 s at 2.5 ul/s"),
     ({"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 45, "flow_ul_s": 2.5},
-     "target.flow_ul_s"),
-    ({"kind": "volume_budget", "volume_ul": 20}, "target.angle_deg"),
+     "target.flow_ul_s", "takes pressure_pa"),
+    ({"kind": "volume_budget", "volume_ul": 20}, "target.angle_deg", "0 < |angle_deg|"),
 ])
 def test_a_pump_target_out_of_range_is_a_problem_naming_the_field(shipped_client, target,
-                                                                   field):
+                                                                   field, allowed):
     r = shipped_client.post("/v1/inverse", json={"target": target})
-    assert_problem(r, 422, field)
+    body = assert_problem(r, 422, field)
+    said = [e["allowed"] for e in body["errors"] if e["field"] == field]
+    assert any(allowed in a for a in said), said
     assert "/work" not in r.text and "Traceback" not in r.text
 
 
