@@ -101,6 +101,7 @@ class InverseRequest(Schema):
         {"target": {"kind": "volume_budget", "volume_ul": 20, "angle_deg": 45},
          "n_results": 3},
         {"target": {"kind": "angle_at_time", "time_s": 8, "flow_ul_s": 2.5, "angle_deg": 45},
+         "L_bounds_mm": [10, 14], "material_pairs": ["pdms_1_10/ecoflex_00_30"],
          "n_results": 3}]})
 
     target: TargetIn
