@@ -11,6 +11,10 @@ With an ``Inlet`` (surrogate/hydraulics.py) and a flow rate the answer also give
 pressure a gauge at the pump reads, p_pump = p_chamber + R Q (steady flow); every answer
 says which site each of its pressure fields reports (``pressure_sites``).
 
+The pump's flow limits (MIN_FLOW_UL_S, MAX_FLOW_UL_S, FLOW_RANGE) are
+``surrogate.volume_control``'s, re-exported here: the design search's time targets read
+the same table.
+
 Errors are ``InputError`` naming the request field (``volumes_ul``, ``flow_ul_s``, ...);
 the route locates them in the body, the CLI names its flag.
 """
@@ -27,6 +31,7 @@ import numpy as np
 from solver.errors import InputError
 from surrogate.hydraulics import NEGLIGIBLE_TIME_CONSTANT_S, STEADY_TIME_CONSTANTS, Inlet
 from surrogate.predictor import FE_PRESSURE_STOP_PA, pressure_stop_reason
+from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 
 # request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
 # schema's Field limits and the CLI's checks)
@@ -35,10 +40,6 @@ AXES: dict[str, tuple[float, float, str]] = {
     "volumes_ul": (0.0, 10000.0, "ul"),
     "times_s": (0.0, 1e5, "s"),
 }
-MIN_FLOW_UL_S = 1e-6       # MIN <= flow_ul_s <= MAX: a slower pump is no pump (a flow of
-MAX_FLOW_UL_S = 1000.0     # 1e-320 ul/s made every time volume / flow infinite); the
-                           # solver's own lower limit (SolverSettings.flow_ul_s)
-FLOW_RANGE = f"{MIN_FLOW_UL_S:g} <= flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s"
 PRESSURE_SITES = ("chamber", "pump_gauge")
 MAX_ANGLE_DEG = 360.0      # |target angle| <= this (a full turn), degrees
 

@@ -11,16 +11,20 @@ family) lists them with ``covered_slices()``; the search then pins those values.
 
 Method: 512 scrambled Sobol candidates per pair (log-uniform in every bound), each
 evaluated by the model's own inverse (the pressure that gives the target angle) or
-forward prediction (force); for targets hit exactly (angle or force at a pressure), the
+forward prediction (force); a syringe pump's target (angle_at_volume, volume_budget,
+angle_at_time, time_budget: surrogate/pump_targets.py) by the model's answers by injected
+volume instead (the volume that gives the target angle, the angle at the target volume;
+time = volume / flow). For targets hit exactly (at a pressure, volume or time), the
 best candidates are then solved by bisection so that the target is met to 1 %: along the
 chamber length, or, where the user pins it (a fixed mould), along the first free one of
 t, the membrane's stiffness scale, h, b, T and the body's stiffness scale (KNOBS).
 Ranking (lower score first):
 
     pressure    pressure needed (pressure_budget)
-    margin      the band's upper end of the pressure needed
+    volume      injected volume needed (volume_budget, time_budget)
+    margin      the band's upper end of the pressure (or volume) needed
     compact     chamber length L
-    certainty   the band's width relative to the value at the target pressure
+    certainty   the band's width relative to the value at the target pressure (volume)
 
 Candidates closer than MIN_SPACING (unit-cube distance) to a better one are dropped.
 
@@ -59,6 +63,13 @@ from surrogate.exponential.inverse_design import (
     DesignTarget,
     InverseDesignResult,
     resolve_objective,
+)
+from surrogate.pump_targets import (
+    ask,
+    no_volume_error,
+    require_volumes,
+    screen_by_volume,
+    volume_report,
 )
 
 CANDIDATES_PER_PAIR = 512
@@ -181,10 +192,11 @@ class _Eval:
     pair: tuple[str, str]
     values: dict[str, float]
     design: Design
-    needed: float = np.nan       # pressure needed for the angle (Pa)
+    needed: float = np.nan       # pressure (Pa; a pump's target: volume, ul) for the angle
     needed_lo: float = np.nan
     needed_hi: float = np.nan
     value: float = np.nan        # |angle| (deg) or |force| (mN) at the target pressure
+                                 # (a pump's target: |angle| at the target volume)
     value_lo: float = np.nan
     value_hi: float = np.nan
 
@@ -199,13 +211,16 @@ def _direction(target: DesignTarget) -> float:
     return -1.0 if float(raw) < 0 else 1.0  # type: ignore[arg-type]
 
 
-def _screen(model: object, designs: list[Design], target: DesignTarget, level: float
-            ) -> dict[str, np.ndarray]:
+def _screen(model: object, designs: list[Design], target: DesignTarget, level: float,
+            band: bool = True) -> dict[str, np.ndarray]:
     """|value| at the target pressure with its band, the pressure needed for the
     target angle with its band, and the design's bending direction (``sign``, +1 / -1,
     0 unknown), for every design (NaN where the model has no answer). Uses the model's
     batch ``evaluate_designs`` when it has one (the emulator), else its ``predict`` and
-    ``inverse`` per design."""
+    ``inverse`` per design. ``band=False``: a pump's target's bands may be NaN (the
+    emulator's batch then reads the means alone: a bisection step's)."""
+    if target.by_volume:
+        return screen_by_volume(model, designs, target, level, band)
     angle = None if target.kind == "force_at_pressure" else target.value
     batch = getattr(model, "evaluate_designs", None)
     if batch is not None:
@@ -299,9 +314,9 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
     lo = np.full(len(evals), bounds[0])
     hi = np.full(len(evals), bounds[1])
 
-    def f(x: np.ndarray) -> tuple[np.ndarray, list[Design], dict]:
+    def f(x: np.ndarray, band: bool = False) -> tuple[np.ndarray, list[Design], dict]:
         designs = [_design(e.pair, {**e.values, name: float(v)}) for e, v in zip(evals, x)]
-        r = _screen(model, designs, target, level)
+        r = _screen(model, designs, target, level, band)
         other_way = _keep_direction(r, _direction(target))     # no hit there
         v = np.where(np.isfinite(r["value"]), r["value"] - target.value, np.inf)
         return np.where(other_way, -np.inf, v), designs, r
@@ -317,7 +332,7 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
         lo, f_lo = np.where(same, mid, lo), np.where(same, f_mid, f_lo)
         hi = np.where(same, hi, mid)
     mid = np.sqrt(lo * hi)
-    f_mid, designs, r = f(mid)
+    f_mid, designs, r = f(mid, band=True)     # the bands of the designs solved
     out = []
     for i, e in enumerate(evals):
         if ok[i] and np.isfinite(f_mid[i]) and abs(f_mid[i]) <= 0.01 * target.value:
@@ -330,16 +345,17 @@ def _solve_along(model: object, evals: list[_Eval], target: DesignTarget, level:
 def _answers_as_screened(model: object, e: _Eval, target: DesignTarget, level: float
                          ) -> bool:
     """A candidate asked as a user asks it (``predict``, at the target pressure or, for
-    a budget, at the pressure it needs): within 1 % of the target. The batch screen and
+    a budget, at the pressure it needs; ``predict_volume`` at the volume for a pump's
+    target): within 1 % of the target. The batch screen and
     ``predict`` take different paths near the stiffness balance (the balance model's
     answer is predict's only): a candidate listed at 60 deg read 62.8 when predicted back
     (an audit of the thirty-fifth session)."""
-    budget = target.kind == "pressure_budget"
-    at = e.needed if budget else target.pressure_pa
+    budget = target.budget
+    at = e.needed if budget else target.at
     if budget and not np.isfinite(at):
         return True
     try:
-        p = model.predict(e.design, [at], level=level)  # type: ignore
+        p = ask(model, e.design, target, [at], level)
     except InputError:
         return False
     got = (p.force_mn[0] if target.kind == "force_at_pressure" and p.force_mn is not None
@@ -352,16 +368,17 @@ def _answers_as_screened(model: object, e: _Eval, target: DesignTarget, level: f
 TOLERANCE_MM = 0.01
 
 
-def _tolerance(model: object, design: Design, target: DesignTarget, pressure_pa: float,
+def _tolerance(model: object, design: Design, target: DesignTarget, at: float,
                level: float) -> dict[str, float] | None:
-    """The value at ``pressure_pa`` (signed angle, deg, or force, mN) changed by making
+    """The value at ``at`` (the pressure, Pa, or for a pump's target the injected
+    volume, ul; signed angle, deg, or force, mN) changed by making
     each length TOLERANCE_MM larger, the others kept (central differences; one-sided at
     the box's faces): what a mould's tolerance does to the answer. A candidate at 45.0 deg
     read 46.4 with its t rounded to 0.01 mm, 5x its band (an audit of the thirty-fifth
     session). None where the model has no number there."""
     def value(d: Design) -> float:
         try:
-            p = model.predict(d, [pressure_pa], level=level)  # type: ignore[attr-defined]
+            p = ask(model, d, target, [at], level)
         except InputError:
             return float("nan")
         if target.kind == "force_at_pressure":
@@ -384,13 +401,13 @@ def _tolerance(model: object, design: Design, target: DesignTarget, pressure_pa:
     return out
 
 
-def fe_angle_end(model: object, design: Design, pressure_pa: float, level: float
+def fe_angle_end(model: object, design: Design, target: DesignTarget, level: float
                  ) -> float | None:
-    """|angle| (deg) at which ``design``'s FE range ends, as the model's prediction at
-    ``pressure_pa`` states it (``validity["fe_limit_angle_deg"]``: the emulator's, 90 deg
-    at the FE's angle stop); None where the model states none."""
+    """|angle| (deg) at which ``design``'s FE range ends, as the model's answer where
+    ``target`` is met states it (``validity["fe_limit_angle_deg"]``: the emulator's, 90
+    deg at the FE's angle stop); None where the model states none."""
     try:
-        end = model.predict(design, [pressure_pa], level=level).validity.get(  # type: ignore
+        end = ask(model, design, target, [target.at], level).validity.get(
             "fe_limit_angle_deg")
     except InputError:
         return None
@@ -434,20 +451,20 @@ def past_range_explanation(model: object, past_range: list[list[Design]],
     """Why no design inside the bounds answers an exact target where each one is past its
     FE range at the target pressure (a soft design that bends past the FE curve's end
     before it, a force asked past the blocked-tip curves' range), with what is possible:
-    the highest of LOWER_PRESSURE_FRACTIONS x the target pressure (Pa) at which designs of
-    ``past_range`` (each pair's candidates with no number at the target pressure) are
-    answered, and the largest |value| there, and the pressures (Pa) at which they reach
-    the target angle (``needed_pa``); None when no design is answered at any of them (no
-    FE range to name).
+    the highest of LOWER_PRESSURE_FRACTIONS x the target pressure (Pa; a pump's target:
+    volume or time) at which designs of ``past_range`` (each pair's candidates with no
+    number there) are answered, and the largest |value| there, and the pressures (Pa;
+    volumes, ul) at which they reach the target angle (``needed_pa``); None when no design
+    is answered at any of them (no FE range to name).
     Until 2026-12-06 this said "not reachable ...: widen the bounds (longer chamber,
     thinner membrane, softer membrane) or raise the pressure" -- the wrong way."""
     what, unit = (("force", "mN") if target.kind == "force_at_pressure" else ("angle", "deg"))
-    text = (f"the target {what} {direction * target.value:g} {unit} at "
-            f"{target.pressure_pa:g} Pa has no answer: every design bending "
-            f"{_WAY[direction]} inside the bounds is past its FE range at "
-            f"{target.pressure_pa:g} Pa (no number the FE supports there)")
+    where = target.at_text()
+    text = (f"the target {what} {direction * target.value:g} {unit} {where} has no answer: "
+            f"every design bending {_WAY[direction]} inside the bounds is past its FE range "
+            f"{where} (no number the FE supports there)")
     for fraction in LOWER_PRESSURE_FRACTIONS:
-        lower = replace(target, pressure_pa=fraction * target.pressure_pa)
+        lower = target.with_at(fraction * target.at)
         largest = 0.0
         for designs in past_range:
             stop_if_cancelled(cancel)
@@ -456,20 +473,31 @@ def past_range_explanation(model: object, past_range: list[list[Design]],
             if np.any(np.isfinite(r["value"])):
                 largest = max(largest, float(np.nanmax(r["value"])))
         if largest > 0:
+            axis = "ul" if target.by_volume else "Pa"
             reached = (f" (they reach {direction * target.value:g} deg at "
-                       f"{min(needed_pa):.4g}-{max(needed_pa):.4g} Pa)" if needed_pa else "")
-            return (text + f"; at {lower.pressure_pa:.4g} Pa designs there reach up to "
-                    f"{direction * largest:.3g} {unit}{reached}: lower the pressure "
-                    "(pressure_pa)" + ("" if target.kind == "force_at_pressure" else
-                                       ", or ask for a pressure_budget target"))
+                       f"{min(needed_pa):.4g}-{max(needed_pa):.4g} {axis})" if needed_pa
+                       else "")
+            return (text + f"; {lower.at_text()} designs there reach up to "
+                    f"{direction * largest:.3g} {unit}{reached}: "
+                    f"{MORE_LESS[target.at_field][1]}"
+                    + ("" if target.kind == "force_at_pressure" else
+                       f", or ask for a {BUDGET_OF[target.kind]} target"))
     return None
+
+
+#: the budget target of each exact angle target (past_range_explanation)
+BUDGET_OF = {"angle_at_pressure": "pressure_budget", "angle_at_volume": "volume_budget",
+             "angle_at_time": "time_budget"}
 
 
 # what a candidate's score is, per objective (lower ranks first)
 SCORE_MEANING = {
-    "certainty": "the band's width over the value at the target pressure (lower: surer)",
+    "certainty": "the band's width over the value at the target pressure or volume "
+                 "(lower: surer)",
     "pressure": "the pressure needed for the target, Pa",
-    "margin": "the band's upper end of the pressure needed, Pa",
+    "volume": "the injected volume needed for the target, ul (time = volume / flow)",
+    "margin": "the band's upper end of the pressure needed, Pa (a pump's budget: of the "
+              "volume needed, ul)",
     "compact": "the chamber length L, mm",
 }
 
@@ -491,8 +519,26 @@ def stretch_hazard_note(candidates: list[DesignCandidate]) -> str:
             "curve gets there")
 
 
+#: how to ask for more and for less of a target's axis (the explanations of a target out
+#: of reach, and of one past every design's FE range)
+MORE_LESS = {"pressure_pa": ("raise the pressure", "lower the pressure (pressure_pa)"),
+             "volume_ul": ("inject more (volume_ul)", "inject less (volume_ul)"),
+             "time_s": ("pump for longer (time_s)", "pump for less time (time_s)")}
+
+
+def _where(target: DesignTarget) -> dict[str, float]:
+    """Where ``best_reachable`` was read: at the target pressure (Pa), or at the pump's
+    volume (ul) and time (s)."""
+    if not target.by_volume:
+        return {"at_pressure_pa": float(target.at)}
+    out = {"at_volume_ul": float(target.at)}
+    if target.time_s is not None:
+        out["at_time_s"] = float(target.time_s)
+    return out
+
+
 def _score(e: _Eval, objective: str, target: DesignTarget) -> float:
-    if objective == "pressure":
+    if objective in ("pressure", "volume"):      # what the budget is in
         return e.needed
     if objective == "margin":
         return e.needed_hi
@@ -519,6 +565,8 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     bisection step, a candidate asked back) with ``surrogate.errors.Cancelled``."""
     z_value(level)   # a level outside 0.5..1 (NaN) is refused, not searched as "unreachable"
     target = target.validated()
+    if target.by_volume:
+        require_volumes(model, target)
     objective = resolve_objective(target, objective)
     ranges = bounds.ranges()
     slices_fn = getattr(model, "covered_slices", None)
@@ -533,6 +581,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     best_design: Design | None = None   # the design of best_reach
     other_way = 0.0          # the largest |value| of designs bending against the target
     no_force = 0             # designs the model answers with no force (force targets)
+    no_volume = 0            # designs the model answers with no volume (a pump's targets)
     for pair in bounds.allowed_pairs():
         stop_if_cancelled(cancel)
         slices = slices_fn(pair) if slices_fn is not None else None
@@ -557,6 +606,7 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             past_range.append([d for d, past in zip(designs, is_past, strict=True) if past])
             past_needed += [float(v) for v in r["needed"][is_past] if np.isfinite(v)]
         no_force += int(np.sum(r.get("no_force", False)))
+        no_volume += int(np.sum(r.get("no_volume", False)))
         against = r["value"][r["sign"] == -direction]
         if np.any(np.isfinite(against)):
             other_way = max(other_way, float(np.nanmax(against)))
@@ -574,11 +624,10 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                 # signed: the way the target asks (the search matched magnitudes)
                 best_design = top.design
                 best_reach = {"largest_value": direction * top.value,
-                              "design": top.design.as_dict(),
-                              "pair": "/".join(pair), "at_pressure_pa": target.pressure_pa}
-        if target.kind == "pressure_budget":
-            feasible += [e for e in evals if np.isfinite(e.needed)
-                         and e.needed <= target.pressure_pa]
+                              "design": top.design.as_dict(), "pair": "/".join(pair),
+                              **_where(target)}
+        if target.budget:
+            feasible += [e for e in evals if np.isfinite(e.needed) and e.needed <= target.at]
             continue
         # exact targets: the candidates nearest the target, then solved along a variable
         near = sorted(reachable, key=lambda e: abs(np.log(max(e.value, 1e-12) / target.value)))
@@ -598,6 +647,8 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                          "angle_at_pressure or pressure_budget with this model, or "
                          "force_at_pressure with a model fitted with force curves (the "
                          "emulator)")
+    if no_volume and not best_reach and not feasible:
+        raise no_volume_error(model, target)
     feasible = [e for e in feasible if np.isfinite(_score(e, objective, target))]
     feasible.sort(key=lambda e: _score(e, objective, target))
     chosen: list[_Eval] = []
@@ -612,13 +663,12 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     candidates = []
     for rank, e in enumerate(chosen, 1):
         stop_if_cancelled(cancel)
-        # the curve from 0 Pa to the target pressure (a budget's: to where the design meets
-        # the angle -- drawn to the budget it reached past the FE's range, and every
-        # recommended design was flagged past_fe_range)
-        p_max = (e.needed if target.kind == "pressure_budget" and np.isfinite(e.needed)
-                 else max(target.pressure_pa, e.needed if np.isfinite(e.needed) else 0.0))
-        curve = model.predict(e.design, np.linspace(0.0, p_max, CURVE_POINTS),  # type: ignore
-                              level=level)
+        # the curve from 0 Pa (0 ul) to the target pressure (volume; a budget's: to where
+        # the design meets the angle -- drawn to the budget it reached past the FE's
+        # range, and every recommended design was flagged past_fe_range)
+        top = (e.needed if target.budget and np.isfinite(e.needed)
+               else max(target.at, e.needed if np.isfinite(e.needed) else 0.0))
+        curve = ask(model, e.design, target, np.linspace(0.0, top, CURVE_POINTS), level)
         value, value_lo, value_hi = e.value, e.value_lo, e.value_hi
         if target.kind == "pressure_budget":
             # the angle where the design meets the target, at the pressure needed (at the
@@ -629,14 +679,26 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                                                  (at.lower_deg, at.upper_deg)))
         # the search matched magnitudes of the direction asked: the sign put back
         lo, hi = (value_lo, value_hi) if direction > 0 else (-value_hi, -value_lo)
-        at_pa = e.needed if target.kind == "pressure_budget" else target.pressure_pa
+        at_where = e.needed if target.budget else target.at
+        needed = (e.needed, e.needed_lo, e.needed_hi)
+        pump = {}
+        if target.by_volume:
+            # a pump's target: the volume needed is reported as such (volume_report), the
+            # pressure needed for the angle by the model's inverse; no target pressure
+            pump = volume_report(model, e.design, target, direction, level,
+                                 curve.validity)
+            inv = model.inverse(e.design, [direction * target.value],  # type: ignore
+                                level=level)
+            needed = (float(inv.pressure_pa[0]), float(inv.lower_pa[0]),
+                      float(inv.upper_pa[0]))
+            value = lo = hi = np.nan
         candidates.append(DesignCandidate(
             rank=rank, design=e.design, family="/".join(e.pair),
-            score=float(_score(e, objective, target)), pressure_needed_pa=e.needed,
-            pressure_lower_pa=e.needed_lo, pressure_upper_pa=e.needed_hi,
+            score=float(_score(e, objective, target)), pressure_needed_pa=needed[0],
+            pressure_lower_pa=needed[1], pressure_upper_pa=needed[2],
             value_at_pressure=direction * value, value_lower=lo, value_upper=hi,
-            curve=curve, change_per_0_01_mm=_tolerance(model, e.design, target, at_pa,
-                                                       level)))
+            curve=curve, change_per_0_01_mm=_tolerance(model, e.design, target, at_where,
+                                                       level), **pump))
     if candidates:
         explanation = (f"{len(feasible)} of {n_evaluated} evaluated designs meet the target; "
                        f"the {len(candidates)} best by {objective} are listed"
@@ -646,17 +708,16 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         unit = "mN" if target.kind == "force_at_pressure" else "deg"
         reach = (abs(best_reach["largest_value"])  # type: ignore[arg-type]
                  if best_reach else None)
-        if (target.kind != "pressure_budget" and reach is not None
-                and reach >= abs(target.value)):
+        if not target.budget and reach is not None and reach >= abs(target.value):
             knob = solve_variable(ranges)
             explanation = (
                 f"no design inside the bounds was solved to the target {what} "
-                f"{direction * target.value:g} {unit} at {target.pressure_pa:g} Pa within 1 %, "
+                f"{direction * target.value:g} {unit} {target.at_text()} within 1 %, "
                 f"although designs there reach {direction * reach:.3g} {unit}: "
                 + (f"the value does not cross the target along {knob} within its bounds"
                    if knob else "every variable is pinned")
                 + "; widen the bounds of the chamber length or the membrane thickness")
-        elif reach is None and target.kind != "pressure_budget" and (
+        elif reach is None and not target.budget and (
                 lower := past_range_explanation(model, past_range, target, level,
                                                 direction, past_needed, cancel)) is not None:
             # no design has a number at the target pressure, and some have one below it:
@@ -664,18 +725,17 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             # range), so "raise the pressure" would be the wrong way
             explanation = lower
         elif what == "angle" and reach is not None and best_design is not None and (
-                end := fe_angle_end(model, best_design, target.pressure_pa, level)
+                end := fe_angle_end(model, best_design, target, level)
                 ) is not None and reach >= end - 1.0 and target.value > end:
             # the best design reaches the end of the FE's range: past it no design's angle
             # is known, so neither wider bounds nor more pressure gives a number there
             explanation = (f"the target angle {direction * target.value:g} deg lies past "
                            f"the FE's range, which ends at {direction * end:g} deg for the "
                            f"designs inside the bounds that reach it (up to "
-                           f"{direction * reach:.3g} deg at {target.pressure_pa:g} Pa): no "
+                           f"{direction * reach:.3g} deg {target.at_text()}): no "
                            f"angle past it is known; ask for at most {end:g} deg in size "
                            "(angle_deg)")
         else:
-            where = ("within" if target.kind == "pressure_budget" else "at")
             # a force target: more pressure helps only as far as the best design's force
             # is given (its blocked-tip FE curve ends at a pressure maximum, or its free
             # range ends)
@@ -686,17 +746,17 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
                      "every variable is pinned to one design: free a bound (L, t, T, b, h "
                      "or a stiffness scale)")
             if end is None or end[1] >= target.value:
-                widen += " or raise the pressure"
+                widen += " or " + MORE_LESS[target.at_field][0]
             else:
                 widen += (f"; for the design that reaches the most at "
                           f"{target.pressure_pa:g} Pa raising the pressure does not get "
                           f"there: its force is given only to {end[0]:.0f} Pa, up to "
                           f"{direction * end[1]:.3g} {unit} (past it the FE's blocked-tip "
                           "or free curve ends: /v1/predict says which)")
-            explanation = (f"the target {what} {direction * target.value:g} {unit} {where} "
-                           f"{target.pressure_pa:g} Pa is not reachable by any design "
+            explanation = (f"the target {what} {direction * target.value:g} {unit} "
+                           f"{target.at_text()} is not reachable by any design "
                            f"bending {_WAY[direction]} inside the bounds"
-                           + (f"; the largest reachable at {target.pressure_pa:g} Pa is "
+                           + (f"; the largest reachable {target.at_text(exact=True)} is "
                               f"{direction * reach:.3g} {unit}" if reach else "")
                            + f": {widen}")
         if other_way >= target.value:

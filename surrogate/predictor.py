@@ -69,6 +69,9 @@ def band_within_fe(lower: np.ndarray, upper: np.ndarray, limit_deg: float,
 
 
 FE_PRESSURE_STOP_PA = SolverSettings().max_pressure_pa   # the default FE's last pressure
+#: the default FE's volume stop (whole actuator, ul), where the database's curves end at
+#: the latest: no design is answered past it
+FE_VOLUME_STOP_UL = SolverSettings().max_volume_ul
 
 
 def pressure_stop_reason(end_pa: float) -> str:

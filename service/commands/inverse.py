@@ -7,6 +7,10 @@
     balloon inverse --kind angle_at_pressure --angle-deg 30 --pressure-pa 1200 \\
         --L-range 4 12 --t-range 0.5 1 --pair pdms_1_10/ecoflex_00_30 --objective compact
     balloon inverse --kind force_at_pressure --force-mn 0.5 --pressure-pa 1500
+    balloon inverse --angle-deg 45 --volume-ul 20                   # a pump: 45 deg at 20 ul
+    balloon inverse --kind volume_budget --angle-deg 45 --volume-ul 20   # with <= 20 ul
+    balloon inverse --angle-deg 45 --time-s 8 --flow-ul-s 2.5       # after 8 s at 2.5 ul/s
+    balloon inverse --kind time_budget --angle-deg 45 --time-s 8 --flow-ul-s 2.5
 
 Targets, objectives and defaults: docs/surrogate.md (``surrogate.design_search``: the
 same search as POST /v1/inverse).
@@ -33,7 +37,8 @@ from service.commands.predict import (
 )
 from solver.errors import InputError
 from surrogate.design_search import N_RESULTS_MAX
-from surrogate.exponential.inverse_design import DEFAULT_KIND
+from surrogate.exponential.inverse_design import DEFAULT_KIND, KINDS, OBJECTIVES
+from surrogate.predictor import FE_VOLUME_STOP_UL
 
 # The search's bounds (surrogate.design_search.SearchBounds field -> flag, what it bounds);
 # a pinned range (LO = HI) fixes that variable (one mould: --L-range 10 10). Each range
@@ -87,25 +92,31 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_design_arguments(parser, required=False)
     add_number_list(parser, "--angles-deg", "DEG",
                     "one design (--L-mm, --t-mm): the pressures for these angles")
-    parser.add_argument("--kind", choices=("pressure_budget", "angle_at_pressure",
-                                           "force_at_pressure"), default=None,
-                        help=f"design target (default {DEFAULT_KIND}, or force_at_pressure "
-                             "with --force-mn)")
+    parser.add_argument("--kind", choices=KINDS, default=None,
+                        help=f"design target (default {DEFAULT_KIND}; force_at_pressure "
+                             "with --force-mn, angle_at_volume with --volume-ul, "
+                             "angle_at_time with --time-s)")
     parser.add_argument("--angle-deg", type=float, help="target angle, deg: positive bends "
                         "away from the membrane, negative towards it (the reversed pair)")
     parser.add_argument("--force-mn", type=float, help="target blocked-tip force, mN (signed "
                         "as the angle)")
     parser.add_argument("--pressure-pa", type=float, help="target pressure or budget, Pa")
+    parser.add_argument("--volume-ul", type=float, help="a pump's target: injected volume "
+                        f"or budget, ul (0 < V <= {FE_VOLUME_STOP_UL:g}, the FE's volume stop)")
+    parser.add_argument("--time-s", type=float, help="a pump's target: time or budget at "
+                        "--flow-ul-s from the undeformed state, s (volume = flow x time)")
     for name, (flag, what) in RANGE_FLAGS.items():
         lo, hi, unit = search_box(name)
         number_action(parser.add_argument(flag, type=float, nargs=2, metavar=("LO", "HI"),
                                           help=_range_help(name, what)), lo, hi, unit)
     parser.add_argument("--pair", action="append", metavar="BODY/MEMBRANE",
                         help="allowed material pair (repeatable; default: every family)")
-    parser.add_argument("--objective", choices=("pressure", "margin", "compact", "certainty"),
-                        help="ranking (default: pressure for budgets, certainty otherwise)")
+    parser.add_argument("--objective", choices=OBJECTIVES,
+                        help="ranking (default: pressure for pressure_budget, volume for "
+                             "volume_budget and time_budget, certainty otherwise)")
     parser.add_argument("-n", "--n-results", type=int, default=5, help="designs to list (5)")
-    add_pump_arguments(parser)  # with --angles-deg: the volume, time and pump-gauge pressure
+    add_pump_arguments(parser)  # with --angles-deg: the volume, time and pump-gauge pressure;
+    # a design search reads --flow-ul-s with --time-s
     add_model_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -176,10 +187,14 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
         if getattr(args, dest, None) is not None:
             raise InputError("--" + dest.replace("_", "-"), "sets one design (with "
                              "--angles-deg); a design search does not read it", allowed)
+    if args.inlet or args.channel_mm or args.tubing_mm or args.viscosity_pa_s is not None:
+        raise InputError("--inlet", "the pump-gauge pressure is given for one design (with "
+                         "--angles-deg); a design search does not read the inlet",
+                         "leave out --inlet, --channel-mm, --tubing-mm, --viscosity-pa-s")
     kind = args.kind or ("force_at_pressure" if args.force_mn is not None
+                         else "angle_at_time" if args.time_s is not None
+                         else "angle_at_volume" if args.volume_ul is not None
                          else DEFAULT_KIND)
-    if args.pressure_pa is None:
-        raise InputError("--pressure-pa", "a design target needs a pressure (or budget), Pa")
     pairs: tuple[tuple[str, str], ...] | None = None
     if args.pair:
         found = []
@@ -192,7 +207,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     if not 1 <= args.n_results <= N_RESULTS_MAX:
         raise InputError("-n", f"got {args.n_results}", f"1 <= n <= {N_RESULTS_MAX} designs")
     target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
-                          force_mn=args.force_mn)
+                          force_mn=args.force_mn, volume_ul=args.volume_ul,
+                          time_s=args.time_s, flow_ul_s=args.flow_ul_s)
     ranges = {name: (tuple(v) if (v := getattr(args, flag[2:].replace("-", "_"))) else None)
               for name, (flag, _) in RANGE_FLAGS.items()}
     for name, (flag, _) in RANGE_FLAGS.items():
@@ -205,7 +221,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
         flag = {**{n: f for n, (f, _) in RANGE_FLAGS.items()}, "material_pairs": "--pair",
                 "angle_deg": "--angle-deg", "force_mn": "--force-mn",
                 "pressure_pa": "--pressure-pa", "objective": "--objective",
-                "level": "--level"}.get(exc.field)
+                "volume_ul": "--volume-ul", "time_s": "--time-s", "flow_ul_s": "--flow-ul-s",
+                "kind": "--kind", "level": "--level"}.get(exc.field)
         raise (InputError(flag, exc.detail, exc.allowed) if flag else exc) from None
     res = replace(res, model=args.model or "emulator")
     if args.json:
@@ -214,6 +231,9 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     print(f"model {res.model}: {kind}, objective {res.objective}: {res.explanation}")
     if not res.feasible:
         return 1
+    if target.by_volume:
+        _print_pump_candidates(res, target)
+        return 0
     unit = "mN" if kind == "force_at_pressure" else "deg"
     print(f"{'rank':>4s} {'L_mm':>7s} {'t_mm':>6s} {'T_mm':>6s} {'b_mm':>6s} {'h_mm':>6s} "
           f"{'body/membrane':36s} {'score':>9s} "
@@ -231,12 +251,51 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                  f"{c.value_upper:<7.2f} " if math.isfinite(c.value_at_pressure)
                  else f"{'--':>8s} {'--':>16s} ")
               + flags)
+    _print_score_and_tolerances(res, unit)
+    return 0
+
+
+def _print_score_and_tolerances(res: object, unit: str) -> None:
+    """What the score means, and what a mould's tolerance does to each answer."""
     from surrogate.design_search import SCORE_MEANING
 
-    print(f"score ({res.objective}): {SCORE_MEANING.get(res.objective, 'lower ranks first')}")
-    for c in res.candidates:        # what a mould's tolerance does to each answer
+    objective = res.objective  # type: ignore[attr-defined]
+    print(f"score ({objective}): {SCORE_MEANING.get(objective, 'lower ranks first')}")
+    for c in res.candidates:  # type: ignore[attr-defined]
         if c.change_per_0_01_mm:
             changes = ", ".join(f"{n.removesuffix('_mm')} {v:+.3g}"
                                 for n, v in c.change_per_0_01_mm.items())
             print(f"rank {c.rank}, each length 0.01 mm larger: {changes} {unit}")
-    return 0
+
+
+def _print_pump_candidates(res: object, target: object) -> None:
+    """The table of a pump's target: the volume (and time) needed with its band, and at
+    the target volume the angle with its band and the chamber pressure."""
+    timed = target.time_s is not None  # type: ignore[attr-defined]
+
+    def band(x: float | None, lo: float | None, hi: float | None, width: int) -> str:
+        if x is None:
+            return f"{'--':>{width}s} {'--':>15s}"
+        return f"{x:{width}.2f} {lo:7.2f}..{hi:<6.2f}"
+
+    print(f"{'rank':>4s} {'L_mm':>7s} {'t_mm':>6s} {'T_mm':>6s} {'b_mm':>6s} {'h_mm':>6s} "
+          f"{'body/membrane':36s} {'score':>9s} {'v_need_ul':>9s} {'v_band_ul':>15s} "
+          + (f"{'t_need_s':>8s} {'t_band_s':>15s} " if timed else "")
+          + f"{'at_v_deg':>8s} {'band':>15s} {'p_at_v_pa':>9s} flags")
+    for c in res.candidates:  # type: ignore[attr-defined]
+        d = c.design
+        materials = f"{d.body_material.id}/{d.membrane_material.id}"
+        p = c.pressure_at_volume_pa
+        print(f"{c.rank:4d} {d.L_mm:7.3f} {d.t_mm:6.3f} {d.T_mm:6.3f} {d.b_mm:6.3f} "
+              f"{d.h_mm:6.3f} {materials:36s} {c.score:9.3g} "
+              + band(c.volume_needed_ul, c.volume_lower_ul, c.volume_upper_ul, 9) + " "
+              + (band(c.time_needed_s, c.time_lower_s, c.time_upper_s, 8) + " "
+                 if timed else "")
+              + band(c.angle_at_volume_deg, c.angle_at_volume_lower_deg,
+                     c.angle_at_volume_upper_deg, 8) + " "
+              + (f"{p:9.0f} " if p is not None else f"{'--':>9s} ")
+              + (",".join(c.curve.validity["flags"]) or "-"))
+    # a budget's design is read where it meets the angle (design_search._tolerance)
+    where = ("the volume it needs" if target.budget  # type: ignore[attr-defined]
+             else f"{target.at:.4g} ul")  # type: ignore[attr-defined]
+    _print_score_and_tolerances(res, f"deg at {where}")

@@ -22,6 +22,8 @@ router = APIRouter(prefix="/v1", tags=["inverse"])
 DESIGN_FIELDS: dict[str, tuple[str | int, ...]] = {
     "pressure_pa": ("target", "pressure_pa"), "angle_deg": ("target", "angle_deg"),
     "force_mn": ("target", "force_mn"), "kind": ("target", "kind"),
+    "volume_ul": ("target", "volume_ul"), "time_s": ("target", "time_s"),
+    "flow_ul_s": ("target", "flow_ul_s"),
     "L_mm": ("L_bounds_mm",), "t_mm": ("t_bounds_mm",), "T_mm": ("T_bounds_mm",),
     "b_mm": ("b_bounds_mm",), "h_mm": ("h_bounds_mm",), "target": ("target",),
     "body_stiffness_scale": ("body_stiffness_scale_bounds",),
@@ -57,7 +59,8 @@ def _search(request: InverseRequest, models: Any, cancel: threading.Event) -> In
              if request.material_pairs else None)
     try:
         result = search_designs(
-            model, DesignTarget(t.kind, t.pressure_pa, t.angle_deg, t.force_mn),
+            model, DesignTarget(t.kind, t.pressure_pa, t.angle_deg, t.force_mn, t.volume_ul,
+                                t.time_s, t.flow_ul_s),
             SearchBounds(L_mm=_pair(request.L_bounds_mm), t_mm=_pair(request.t_bounds_mm),
                          T_mm=_pair(request.T_bounds_mm), b_mm=_pair(request.b_bounds_mm),
                          h_mm=_pair(request.h_bounds_mm),

@@ -13,7 +13,14 @@ from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletI
 from solver.design import LIMITS_MM
 from solver.design_space import BOX_MM, STIFFNESS_SCALE_LIMITS, STIFFNESS_SCALE_RANGE
 from surrogate.design_search import N_RESULTS_MAX, SCORE_MEANING
-from surrogate.exponential.inverse_design import DEFAULT_KIND, MAX_TARGET
+from surrogate.exponential.inverse_design import (
+    DEFAULT_KIND,
+    KINDS,
+    MAX_TARGET,
+    MAX_TIME_S,
+    OBJECTIVES,
+)
+from surrogate.predictor import FE_VOLUME_STOP_UL
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
 OptFloats = list[float | None] | None
@@ -22,10 +29,22 @@ OptFloats = list[float | None] | None
 class TargetIn(Schema):
     """What the design must do: ``angle_at_pressure`` (reach angle_deg at pressure_pa),
     ``pressure_budget`` (reach angle_deg at no more than pressure_pa) or
-    ``force_at_pressure`` (force_mn at pressure_pa; needs force curves)."""
+    ``force_at_pressure`` (force_mn at pressure_pa; needs force curves); a syringe pump's:
+    ``angle_at_volume`` (reach angle_deg at volume_ul injected), ``volume_budget`` (with
+    no more than volume_ul), ``angle_at_time`` (after time_s at flow_ul_s, from the
+    undeformed state: volume = flow x time) or ``time_budget`` (within time_s at
+    flow_ul_s). Each kind takes its own fields and refuses the others."""
 
-    kind: Literal["angle_at_pressure", "pressure_budget", "force_at_pressure"] = DEFAULT_KIND
-    pressure_pa: float = Field(gt=0.0, le=MAX_PRESSURE_PA, description="pressure, Pa")
+    kind: Literal[KINDS] = DEFAULT_KIND  # type: ignore[valid-type]
+    pressure_pa: float | None = Field(None, gt=0.0, le=MAX_PRESSURE_PA,
+                                      description="pressure, Pa (the targets by pressure)")
+    volume_ul: float | None = Field(
+        None, gt=0.0, le=FE_VOLUME_STOP_UL, description="injected volume, ul, whole "
+        "actuator (angle_at_volume, volume_budget); at most the FE's volume stop")
+    time_s: float | None = Field(None, gt=0.0, le=MAX_TIME_S, description="time at flow_ul_s "
+                                 "from the undeformed state, s (angle_at_time, time_budget)")
+    flow_ul_s: float | None = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S,
+                                    description="the pump's flow rate, ul/s (with time_s)")
     angle_deg: float | None = Field(
         None, ge=-MAX_TARGET["angle_deg"], le=MAX_TARGET["angle_deg"],
         description="target angle, degrees; its sign is the way the design bends: positive "
@@ -78,7 +97,12 @@ def _box_field(name: str, what: str) -> Any:
 class InverseRequest(Schema):
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"target": {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 45},
-         "L_bounds_mm": [4.1, 15.1], "t_bounds_mm": [0.5, 1.0], "n_results": 3}]})
+         "L_bounds_mm": [4.1, 15.1], "t_bounds_mm": [0.5, 1.0], "n_results": 3},
+        {"target": {"kind": "volume_budget", "volume_ul": 20, "angle_deg": 45},
+         "n_results": 3},
+        {"target": {"kind": "angle_at_time", "time_s": 8, "flow_ul_s": 2.5, "angle_deg": 45},
+         "L_bounds_mm": [10, 14], "material_pairs": ["pdms_1_10/ecoflex_00_30"],
+         "n_results": 3}]})
 
     target: TargetIn
     L_bounds_mm: L_BOUNDS = _box_field("L_mm", "chamber length")
@@ -95,8 +119,9 @@ class InverseRequest(Schema):
         "preset mu (default [1, 1])")
     material_pairs: list[MaterialPair] | None = Field(
         None, min_length=1, max_length=20, description="allowed pairs (default: all fitted)")
-    objective: Literal["pressure", "margin", "compact", "certainty"] | None = Field(
-        None, description="ranking (default: certainty; pressure for pressure_budget)")
+    objective: Literal[OBJECTIVES] | None = Field(  # type: ignore[valid-type]
+        None, description="ranking (default: certainty; pressure for pressure_budget, "
+        "volume for volume_budget and time_budget)")
     n_results: int = Field(5, ge=1, le=N_RESULTS_MAX, description="designs returned at most")
     model: str = MODEL
     level: float = LEVEL
@@ -123,15 +148,34 @@ class Candidate(BaseModel):
     pressure_lower_pa: float | None = Field(description="its band's lower edge, Pa")
     pressure_upper_pa: float | None = Field(description="its band's upper edge, Pa")
     value_at_pressure: float | None = Field(
-        description="predicted angle (deg) or force (mN) at the target pressure")
+        description="predicted angle (deg) or force (mN) at the target pressure (null for "
+                    "a pump's target: angle_at_volume_deg)")
     value_lower: float | None = Field(description="band's lower edge (deg or mN)")
     value_upper: float | None = Field(description="band's upper edge (deg or mN)")
+    volume_needed_ul: float | None = Field(None, description="a pump's target: injected "
+                                           "volume that gives the target angle, ul")
+    volume_lower_ul: float | None = Field(None, description="its band's lower edge, ul")
+    volume_upper_ul: float | None = Field(None, description="its band's upper edge, ul")
+    time_needed_s: float | None = Field(None, description="a time target: time to the "
+                                        "target angle at flow_ul_s, s")
+    time_lower_s: float | None = Field(None, description="its band's lower edge, s")
+    time_upper_s: float | None = Field(None, description="its band's upper edge, s")
+    angle_at_volume_deg: float | None = Field(None, description="a pump's target: angle at "
+                                              "the target volume, deg (null past the FE's "
+                                              "range)")
+    angle_at_volume_lower_deg: float | None = Field(None, description="its band's lower "
+                                                    "edge, deg")
+    angle_at_volume_upper_deg: float | None = Field(None, description="its band's upper "
+                                                    "edge, deg")
+    pressure_at_volume_pa: float | None = Field(None, description="a pump's target: chamber "
+                                                "pressure at the target volume, Pa")
     change_per_0_01_mm: dict[str, float] | None = Field(
         None, description="the value's change (deg or mN) when one length (L_mm, t_mm, "
         "T_mm, b_mm, h_mm) is made 0.01 mm larger, the others kept: what a mould's "
         "tolerance does to the answer (design-space search; null otherwise)")
     validity: dict[str, Any] = Field(description="in_domain, flags, messages")
-    curve: dict[str, Any] = Field(description="predicted curve from 0 Pa with its band")
+    curve: dict[str, Any] = Field(description="predicted curve from 0 Pa (a pump's target: "
+                                  "from 0 ul, by injected volume) with its band")
 
 
 class InverseResponse(BaseModel):

@@ -103,5 +103,13 @@ def design_curve_band(emulator: Emulator, pe: PairEmulator, point: BoxPoint,
 
 def volume_curves(cb: CurveBand, z: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """V(theta) on ANGLES0 (reduced, ul): mean and the band's low and high curves."""
+    return volume_band_ul(cb.volume_log_mean, cb.volume_log_sd, z)
+
+
+def volume_band_ul(log_mean: np.ndarray, log_sd: np.ndarray, z: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """V(theta) on ANGLES0 (reduced, ul) of one design from its volume nodes' emulated
+    log(V / theta) and sd (band scale included): mean and the band's low and high curves
+    at -+ ``z`` sd, each made to rise as the FE's volumes do (``volume_shape``)."""
     return tuple(_with_origin(volume_shape(c))  # type: ignore[return-value]
-                 for c in node_curves(cb.volume_log_mean, cb.volume_log_sd, z))
+                 for c in node_curves(log_mean, log_sd, z))

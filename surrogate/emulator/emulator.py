@@ -68,6 +68,7 @@ from surrogate.emulator.validity import (
 )
 from surrogate.emulator.variance_nodes import FORMAT_7_NODES, spline, spread_variance
 from surrogate.emulator.vector_gp import MEANS_ONLY, VectorGP
+from surrogate.emulator.volume_answer import at_volumes, volumes_at_angles
 from surrogate.emulator.volume_curve import (
     VOLUME_EXPONENT_FLOOR,
     VOLUME_FLOOR_FROM_DEG,
@@ -83,7 +84,6 @@ from surrogate.predictor import (
     one_signed,
     pressure_stop_reason,
 )
-from surrogate.volume_control import by_volume
 
 # Emulator, and the names that tests and benchmarks import from here (defined in the
 # modules above since this module was split, 2026-12-06)
@@ -91,11 +91,6 @@ __all__ = ["FAILED_RADIUS", "FINE_ANGLES_DEG", "N_NODES", "NEAR_FAILED_RADIUS",
            "UNDERCOVER_LEVEL", "UNDERCOVER_MIN_POINTS", "VOLUME_EXPONENT_FLOOR",
            "VOLUME_FLOOR_FROM_DEG", "Emulator", "angle_at_volume_deg", "emulated_volume_ul",
            "ended_at_newton_failure", "volume_shape"]
-
-# A fall of the emulated p(theta) below its running maximum counts as a pressure maximum
-# from this relative size on: smaller wiggles (the shipped fit's largest is 2.5e-4) are far
-# inside the band (a few per cent) and say nothing about the physics.
-EMULATED_PRESSURE_DROP = 1e-3
 
 
 @dataclass(frozen=True)
@@ -330,24 +325,13 @@ class Emulator:
         if self.balance_model_for(point) is not None:
             return balance_answer(self, design, point, "volume", v, level)
         pe, cb = self.curve_band(point, z, volume_band=band)   # serves both axes
-        vm, vl, vh = volume_curves(cb, z)
         ls3 = point.length_scale**3
-        v_red = v / ls3
-        v_lim = float(np.interp(cb.limit_angle_deg, ANGLES0, vm))
-        past = v_red > v_lim * (1 + 1e-12)
-        answer = by_volume(v_red, vm, _with_origin(cb.pressure_raw_pa), ANGLES0,
-                           rel_drop=EMULATED_PRESSURE_DROP)
-        angle = answer.angle_deg
-        if band:
-            upper = np.interp(v_red, vl, ANGLES0)
-            lower = np.interp(v_red, vh, ANGLES0)
-            lower, upper = floored_band(angle, lower, upper)
-        else:
-            lower, upper = np.full_like(angle, np.nan), np.full_like(angle, np.nan)
-        p_red = answer.pressure_pa
+        read = at_volumes(v / ls3, volume_curves(cb, z), _with_origin(cb.pressure_raw_pa),
+                          cb.limit_angle_deg, band)
+        v_lim, past, answer = read.limit_volume_ul, read.past, read.curve
+        angle, lower, upper = read.angle_deg, read.lower_deg, read.upper_deg
+        p_red = read.pressure_red_pa
         pressure = p_red * point.pressure_scale
-        for a in (angle, upper, lower, pressure, p_red):
-            a[past] = np.nan
         if pe.sign < 0:
             angle, lower, upper = -angle, -upper, -lower
         angle, lower, upper = one_signed(angle, lower, upper, pe.sign)
@@ -424,18 +408,29 @@ class Emulator:
         def answered(x: np.ndarray) -> np.ndarray:
             return np.where(past, np.nan, x)
 
+        # past the range: NaN (the same limit as ``past``, the volumes' own reading)
+        volume, volume_lo, volume_hi = volumes_at_angles(np.abs(signed), (vm, vl, vh),
+                                                         cb.limit_angle_deg)
+
         return InversePrediction(design=design, angle_deg=ang, pressure_pa=answered(p),
                                  lower_pa=answered(lo), upper_pa=answered(hi), level=level,
                                  validity=validity, model=self.name, form="emulator",
                                  provenance=dict(self.provenance),
-                                 volume_ul=answered(np.interp(signed, ANGLES0, vm) * ls3),
-                                 volume_lower_ul=answered(np.interp(signed, ANGLES0, vl) * ls3),
-                                 volume_upper_ul=answered(np.interp(signed, ANGLES0, vh) * ls3))
+                                 volume_ul=volume * ls3, volume_lower_ul=volume_lo * ls3,
+                                 volume_upper_ul=volume_hi * ls3)
 
     def evaluate_designs(self, designs: list[Design], pressure_pa: float,
                          angle_deg: float | None, level: float = 0.95) -> dict[str, np.ndarray]:
         """Many designs at once (inverse design): ``many_designs.evaluate_designs``."""
         return many_designs.evaluate_designs(self, designs, pressure_pa, angle_deg, level)
+
+    def evaluate_designs_by_volume(self, designs: list[Design], volume_ul: float,
+                                   angle_deg: float, level: float = 0.95, band: bool = True
+                                   ) -> dict[str, np.ndarray]:
+        """Many designs at once by injected volume (a syringe pump's design target):
+        ``many_designs.evaluate_designs_by_volume``."""
+        return many_designs.evaluate_designs_by_volume(self, designs, volume_ul, angle_deg,
+                                                       level, band)
 
     def nearest_records(self, design: Design, count: int = 3) -> list[str]:
         """Keys of the database curves nearest to ``design`` in the unit box."""
