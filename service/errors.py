@@ -336,12 +336,17 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
             allowed = _allowed_by_kind(err, request, loc)
             if err.get("type") in ("literal_error", "enum"):    # the words: in allowed
                 item["message"] = f"{_short(err.get('input'))} is not one of these"
+        if err.get("type") == QUERY_BOOL_ERROR:
+            item["message"] = f"{_short(err.get('input'))} is not one of these"
         if allowed:
             item["allowed"] = allowed
         out.append(item)
     return out
 
 
+# the error type of a query parameter's bool that is not true or false
+# (service.schemas.common.QueryBool)
+QUERY_BOOL_ERROR = "query_bool"
 BODY_ALLOWED = "a UTF-8 JSON document of the documented shape"
 # pydantic's error types of a value that is not the object asked for; with "missing",
 # those of an object (or the JSON document) asked for and not there

@@ -12,7 +12,7 @@ import gzip
 
 import pytest
 from fastapi.testclient import TestClient
-from service_fakes import assert_problem, settings_for
+from service_fakes import PROBLEM, assert_problem, settings_for
 
 from service.app import create_app
 
@@ -46,3 +46,25 @@ def test_an_identity_coding_or_a_bodyless_request_passes(client):
         "Content-Type": "application/json", "Content-Encoding": "identity"})
     assert_problem(r, 422, "pressures_pa.0")
     assert client.get("/v1/health", headers={"Content-Encoding": "gzip"}).status_code == 200
+
+
+@pytest.mark.parametrize("word", ["yes", "on", "1", "0", "True", "off", "f", ""])
+def test_a_query_bool_is_true_or_false_as_json_spells_them(client, word):
+    """``/v1/predict/plot?inlet=yes`` (or on, 1, True, off, f) was read as a bool in
+    pydantic's lax mode. A query's bool is spelt as a JSON body's is: exactly ``true`` or
+    ``false``; anything else is a 422 naming the field and those two words."""
+    r = client.get("/v1/predict/plot", params={"inlet": word, "flow_ul_s": 2.5,
+                                               "model": "paper"})
+    problem = assert_problem(r, 422, "inlet")
+    (error,) = problem["errors"]
+    assert error["allowed"] == "true or false" and repr(word) in error["message"], error
+    assert r.headers["content-type"] == PROBLEM
+
+
+@pytest.mark.parametrize("word", ["true", "false"])
+def test_a_query_bool_takes_true_and_false(client, word):
+    """Taken: the request reaches the model (the paper's, which answers by pressure only,
+    refuses the flow rate: the plot's time axis)."""
+    r = client.get("/v1/predict/plot", params={"inlet": word, "flow_ul_s": 2.5,
+                                               "model": "paper"})
+    assert [e["field"] for e in assert_problem(r, 422)["errors"]] == ["flow_ul_s"]
