@@ -9,12 +9,21 @@ Each test failed on the code before its fix (commit messages say which).
 from __future__ import annotations
 
 import gzip
+import os
+import signal
+import socket
+import subprocess
+import sys
 
 import pytest
 from fastapi.testclient import TestClient
 from service_fakes import PROBLEM, assert_problem, settings_for
+from test_precompute_job import ENV
+from test_store import record_for
 
 from service.app import create_app
+from solver.store import CurveStore, StoreBusyError
+from solver.store.locking import WriterLock
 
 
 @pytest.fixture
@@ -68,3 +77,122 @@ def test_a_query_bool_takes_true_and_false(client, word):
     r = client.get("/v1/predict/plot", params={"inlet": word, "flow_ul_s": 2.5,
                                                "model": "paper"})
     assert [e["field"] for e in assert_problem(r, 422)["errors"]] == ["flow_ul_s"]
+
+
+# -- 3. lock files: removed by their holder, a dead holder's recognised, a live one's kept --
+
+def test_a_writer_removes_its_lock_file_when_it_lets_go(tmp_path):
+    """Every command left ``<db>.lock`` (and precompute ``<db>.job.lock``) behind, so a
+    user saw a "stale lock" after each interrupted run and was tempted to delete one that
+    a live writer held. The holder removes it as it lets go; only a process killed
+    outright leaves one, which blocks nothing."""
+    db = tmp_path / "c.h5"
+    with CurveStore(db, mode="a") as store:
+        store.put(record_for(L_mm=7.1))
+        assert (tmp_path / "c.h5.lock").exists()
+    with CurveStore(db, mode="a", hold_lock=False) as store:
+        store.put(record_for(L_mm=4.1))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.h5"]
+
+
+LOCK_AND_DIE = """
+import os, signal, sys
+from solver.store.locking import WriterLock
+lock = WriterLock(sys.argv[1])
+lock.acquire()
+os.kill(os.getpid(), signal.SIGKILL)
+"""
+
+
+def test_a_lock_left_by_a_killed_writer_blocks_nothing(tmp_path):
+    """kill -9 leaves the lock file (with the dead writer's pid and host); the kernel has
+    dropped its flock, so the next writer takes it at once and removes it after."""
+    lock = tmp_path / "c.h5.lock"
+    done = subprocess.run([sys.executable, "-c", LOCK_AND_DIE, str(lock)], env=ENV)
+    assert done.returncode == -signal.SIGKILL
+    assert lock.read_text().endswith(f"@{socket.gethostname()}")
+    taker = WriterLock(lock)
+    taker.acquire()          # no wait: the holder is dead
+    assert lock.read_text() == f"{os.getpid()}@{socket.gethostname()}"
+    taker.release()
+    assert not lock.exists()
+
+
+@pytest.fixture
+def held_lock(tmp_path):
+    """``c.h5.lock`` held by a live writer (this process, through a lock of its own)."""
+    holder = WriterLock(tmp_path / "c.h5.lock")
+    holder.acquire()
+    yield holder
+    holder.release()
+
+
+def _refusal(held: WriterLock, stamp: str) -> str:
+    held.path.write_text(stamp)      # what that holder's file says
+    with pytest.raises(StoreBusyError) as caught:
+        WriterLock(held.path).acquire()
+    return str(caught.value)
+
+
+def test_a_live_holder_on_another_host_is_named_with_its_host(held_lock):
+    """The file held the pid alone: a writer on another host sharing the directory was
+    told "pid 4242" of a process this host has not got. Now the pid and the host, what to
+    do, and not to delete the file (its holder would write on beside the next)."""
+    said = _refusal(held_lock, "4242@lab-node-7")
+    assert "(pid 4242 on host lab-node-7): wait for it to finish or stop it there" in said
+    assert "do not delete c.h5.lock" in said
+    assert held_lock.held and held_lock.path.exists()   # never stolen
+
+
+def test_a_holder_whose_pid_has_ended_is_said_to_have_ended(held_lock):
+    """A pid of this host that has ended while its lock is held: a process it started
+    holds the lock (a fork kept the descriptor); "wait for pid N" could never end."""
+    ended = subprocess.Popen(["true"])
+    ended.wait()
+    said = _refusal(held_lock, f"{ended.pid}@{socket.gethostname()}")
+    assert f"(pid {ended.pid}): it has ended, but a process it started holds" in said
+    assert held_lock.held
+
+
+def test_a_waiter_never_shares_the_lock_with_the_next_writer(tmp_path):
+    """The holder removes its file as it lets go: a waiter that had opened that file
+    then locks a file no longer at the path, while a third writer creates and locks a new
+    one. The waiter checks that its file is still the lock's and, if not, locks the one
+    there (busy, here), never holding a lock beside another writer's."""
+    path = tmp_path / "c.h5.lock"
+    first = WriterLock(path)
+    first.acquire()
+    stale = os.open(path, os.O_RDWR)           # the waiter's open, before the release
+    first.release()
+    third = WriterLock(path)
+    third.acquire()
+    waiter = WriterLock(path)
+    opened = [stale]
+    waiter._open = lambda: opened.pop() if opened else WriterLock._open(waiter)
+    with pytest.raises(StoreBusyError):
+        waiter.acquire()
+    assert not waiter.held and third.held
+    third.release()
+
+
+def test_a_solve_the_database_cannot_take_for_its_lock_is_parked_not_lost(tmp_path):
+    """A service solve whose database's writer lock stayed held past the writer's wait
+    (a user's script with ``CurveStore(db, "a")`` open) failed with "storing it failed:
+    /full/path/curves.h5 is being written by another process": the finished result lost
+    and the server's path sent to the client. It is parked, as precompute parks, named
+    by the file's name only, and written by the next put."""
+    from service.store_access import ResultParkedError, ResultWriter
+    from solver.precompute.parking import parked_files
+
+    db = tmp_path / "curves.h5"
+    writer = ResultWriter(db, busy_wait_s=0.0)
+    record = record_for(L_mm=9.1)
+    with CurveStore(db, mode="a"), pytest.raises(ResultParkedError) as caught:
+        writer(record.design, record.settings, record.curve)
+    assert str(tmp_path) not in str(caught.value) and "curves.h5" in str(caught.value)
+    assert len(parked_files(db)) == 1
+    later = record_for(L_mm=4.1)
+    writer(later.design, later.settings, later.curve)      # writes the parked one first
+    with CurveStore(db) as store:
+        assert len(store) == 2
+    assert parked_files(db) == []
