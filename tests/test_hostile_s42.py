@@ -8,16 +8,20 @@ Each test failed on the code before its fix (commit messages say which).
 
 from __future__ import annotations
 
+import contextlib
 import gzip
 import os
 import signal
 import socket
 import subprocess
 import sys
+import threading
+from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
 from service_fakes import PROBLEM, assert_problem, settings_for
+from test_cli_fuzz import run, visible_lines
 from test_precompute_job import ENV
 from test_store import record_for
 
@@ -196,3 +200,60 @@ def test_a_solve_the_database_cannot_take_for_its_lock_is_parked_not_lost(tmp_pa
     with CurveStore(db) as store:
         assert len(store) == 2
     assert parked_files(db) == []
+
+
+# -- 4. a FIFO, a device or a socket where an input file goes --------------------------
+
+@contextlib.contextmanager
+def fifo_unblocked_later(fifo: Path):
+    """A named pipe that a late writer opens (and closes) after a while, so that a command
+    which waits in ``open`` for a writer -- the code before the fix -- ends (reading an
+    empty file) and its test fails instead of hanging; a command that never opens it for
+    reading leaves the writer nothing to open."""
+    os.mkfifo(fifo)
+    stop = threading.Event()
+
+    def late_writer() -> None:
+        while not stop.wait(5.0):
+            try:
+                os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+            except OSError:     # no reader: nobody waits
+                pass
+
+    thread = threading.Thread(target=late_writer, daemon=True)
+    thread.start()
+    try:
+        yield fifo
+    finally:
+        stop.set()
+        thread.join()
+
+
+GRID_TOML = Path(__file__).resolve().parents[1] / "grids" / "default.toml"
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["calibrate", "{f}", "--model", "paper", "--report", "{tmp}/r.md"], "file"),
+    (["precompute", "{f}", "--db", "{tmp}/n.h5", "--dry-run"], "grid"),
+    (["precompute", str(GRID_TOML), "--db", "{tmp}/n.h5", "--dry-run", "--adaptive", "2",
+      "--emulator", "{f}"], "--emulator"),
+])
+def test_a_fifo_given_as_an_input_file_is_refused_at_once(tmp_path, argv, option):
+    """``balloon calibrate FIFO`` and ``balloon precompute FIFO`` waited in ``open`` for a
+    writer that never came: the command hung. A named pipe (as a device) is refused with
+    one line naming the argument, as a directory is."""
+    with fifo_unblocked_later(tmp_path / "data.fifo") as fifo:
+        code, _, err, escaped = run([a.format(f=fifo, tmp=tmp_path) for a in argv])
+    assert escaped is None and code == 2, err
+    (line,) = visible_lines(err)
+    assert line.startswith(f"balloon: error: {option}: ") and "not a regular file" in line, line
+    assert "a regular file)" in line, line       # the allowed form
+
+
+@pytest.mark.parametrize("device", ["/dev/null", "/dev/zero"])
+def test_a_device_given_as_the_data_is_named_a_device(tmp_path, device):
+    """/dev/null was "the file is empty", /dev/zero read 64 MiB of zeros first."""
+    code, _, err, escaped = run(["calibrate", device, "--model", "paper", "--report",
+                                 str(tmp_path / "r.md")])
+    (line,) = visible_lines(err)
+    assert escaped is None and code == 2 and "not a regular file" in line, line

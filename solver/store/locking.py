@@ -25,6 +25,7 @@ import socket
 import time
 from pathlib import Path
 
+from solver.bounded_read import NOT_REGULAR
 from solver.errors import InputError, NotFoundError
 from solver.store.errors import StoreBusyError, StoreWriteError
 
@@ -55,7 +56,7 @@ def no_database(path: str | os.PathLike, then: str) -> Exception:
 
 def _what_is_there(path: Path) -> str:
     """What a database path that is no regular file names, in words."""
-    return "a directory" if path.is_dir() else "not a regular file (a device or a pipe)"
+    return "a directory" if path.is_dir() else NOT_REGULAR
 
 
 def unwritable(path: str | os.PathLike) -> str | None:
