@@ -257,3 +257,16 @@ def test_a_device_given_as_the_data_is_named_a_device(tmp_path, device):
                                  str(tmp_path / "r.md")])
     (line,) = visible_lines(err)
     assert escaped is None and code == 2 and "not a regular file" in line, line
+
+
+# -- the fresh probe --------------------------------------------------------------------
+
+def test_a_row_of_thousands_of_stray_keys_is_refused_at_the_columns(client):
+    """One measured row with 200,000 stray keys (2.3 MB, inside the calibration's 4 MiB
+    body) took the server 37 s of CPU to answer "L_mm: required column is missing": every
+    key's header reading rebuilt the table of quantity names. More than 1,000 columns is
+    refused first, naming ``columns`` and the bound; the table is made once."""
+    row = {"curve_id": "a", **{f"c{i}": 1 for i in range(1001)}}   # docs/measured-data.md
+    r = client.post("/v1/calibrate", json={"rows": [row], "model": "paper"})
+    problem = assert_problem(r, 422, "rows.columns")
+    assert problem["errors"][0]["allowed"] == "at most 1000 columns"
