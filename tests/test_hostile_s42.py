@@ -270,3 +270,16 @@ def test_a_row_of_thousands_of_stray_keys_is_refused_at_the_columns(client):
     r = client.post("/v1/calibrate", json={"rows": [row], "model": "paper"})
     problem = assert_problem(r, 422, "rows.columns")
     assert problem["errors"][0]["allowed"] == "at most 1000 columns"
+
+
+@pytest.mark.parametrize("path", ["/v1/curves/{}", "/v1/jobs/{}"])
+def test_a_long_id_is_not_echoed_whole(tmp_path, path):
+    """A 100,000-character record or job id (curl) came back whole in the 404's detail
+    (with the path's own echo in ``instance``, 200 kB for a 100 kB request): a message
+    never echoes a long input (the validation errors' rule, ``service.errors.short_input``)."""
+    with CurveStore(tmp_path / "curves.h5", mode="a") as store:
+        store.put(record_for(L_mm=7.1))
+    with TestClient(create_app(settings_for(tmp_path), load_surrogate=False)) as c:
+        r = c.get(path.format("a" * 60_000))      # (httpx takes URLs to 65,536)
+    problem = assert_problem(r, 404)
+    assert len(problem["detail"]) < 200 and "aaa..." in problem["detail"], problem["detail"][:300]
