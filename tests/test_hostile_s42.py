@@ -283,3 +283,43 @@ def test_a_long_id_is_not_echoed_whole(tmp_path, path):
         r = c.get(path.format("a" * 60_000))      # (httpx takes URLs to 65,536)
     problem = assert_problem(r, 404)
     assert len(problem["detail"]) < 200 and "aaa..." in problem["detail"], problem["detail"][:300]
+
+
+EXPORT_UNDER_A_SIZE_LIMIT = """
+import resource, sys
+from service.cli import main
+resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[1]), int(sys.argv[1])))
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+def test_an_export_the_disk_cannot_take_leaves_the_former_file(tmp_path):
+    """A full disk (here a file-size limit, as ``ulimit -f``) in the middle of ``balloon
+    db export`` left a truncated CSV in place of the former export and said only "File
+    too large". The export is written beside it and renamed when whole: the former file
+    stays, no temporary is left, and the one line names the file."""
+    db = tmp_path / "c.h5"
+    with CurveStore(db, mode="a") as store:
+        store.put_many([record_for(L_mm=L) for L in (4.1, 7.1, 9.1, 11.1)])
+    former = tmp_path / "out.csv"
+    former.write_text("the former export\n")
+    done = subprocess.run([sys.executable, "-c", EXPORT_UNDER_A_SIZE_LIMIT, "2048", "db",
+                           "export", str(db), "--format", "csv", "-o", str(former)],
+                          env=ENV, capture_output=True, text=True)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip().splitlines() == [f"balloon: error: {former}: File too large"]
+    assert former.read_text() == "the former export\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.h5", "out.csv"]
+
+
+def test_an_atomic_output_that_fails_names_the_target_and_keeps_the_former(tmp_path):
+    from solver.atomic_file import atomic_output
+
+    target = tmp_path / "curve.png"
+    target.write_bytes(b"former")
+    with pytest.raises(OSError) as caught, atomic_output(target, keep_suffix=True) as tmp:
+        assert tmp.suffix == ".png" and tmp.parent == tmp_path
+        tmp.write_bytes(b"half")
+        raise OSError(27, "File too large", str(tmp))
+    assert caught.value.filename == str(target)
+    assert target.read_bytes() == b"former" and list(tmp_path.iterdir()) == [target]
