@@ -18,7 +18,12 @@ from fastapi.middleware.cors import CORSMiddleware
 from service._worker import default_solve
 from service.errors import install_error_handlers
 from service.jobs import JobManager
-from service.middleware import BodyLimitMiddleware, HeadAsGetMiddleware, ProblemOnlyMiddleware
+from service.middleware import (
+    BodyLimitMiddleware,
+    HeadAsGetMiddleware,
+    IdentityBodyMiddleware,
+    ProblemOnlyMiddleware,
+)
 from service.models import ModelRegistry
 from service.openapi import install_contract
 from service.repeated_fields import refuse_repeated_fields
@@ -82,6 +87,7 @@ def create_app(settings: ServiceSettings | None = None, *,
 
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes,
                        per_path={"/v1/calibrate": settings.max_calibration_body_bytes})
+    app.add_middleware(IdentityBodyMiddleware)  # a gzip body: 415, never decoded
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins,
                            allow_methods=["GET", "POST", "DELETE"],

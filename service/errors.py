@@ -329,19 +329,24 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
                 item["message"] += f" (did you mean {near[0]!r}?)"
         elif err.get("type") == "string_pattern_mismatch" and names and names[-1] in FIELD_FORMS:
             allowed = FIELD_FORMS[names[-1]]       # the form in words, not the pattern
-            item["message"] = f"{_short(err.get('input'))} is not of this form"
+            item["message"] = f"{short_input(err.get('input'))} is not of this form"
         elif not allowed and names:
             allowed = FIELD_FORMS.get(names[-1])   # a material that is a number, null, ...
         if not allowed:     # a choice of words, an object or the body: what it takes
             allowed = _allowed_by_kind(err, request, loc)
             if err.get("type") in ("literal_error", "enum"):    # the words: in allowed
-                item["message"] = f"{_short(err.get('input'))} is not one of these"
+                item["message"] = f"{short_input(err.get('input'))} is not one of these"
+        if err.get("type") == QUERY_BOOL_ERROR:
+            item["message"] = f"{short_input(err.get('input'))} is not one of these"
         if allowed:
             item["allowed"] = allowed
         out.append(item)
     return out
 
 
+# the error type of a query parameter's bool that is not true or false
+# (service.schemas.common.QueryBool)
+QUERY_BOOL_ERROR = "query_bool"
 BODY_ALLOWED = "a UTF-8 JSON document of the documented shape"
 # pydantic's error types of a value that is not the object asked for; with "missing",
 # those of an object (or the JSON document) asked for and not there
@@ -364,7 +369,7 @@ def _allowed_by_kind(err: dict[str, Any], request: Request | None,
     return BODY_ALLOWED if loc == ["body"] else None
 
 
-def _short(value: Any, limit: int = 40) -> str:
+def short_input(value: Any, limit: int = 40) -> str:
     """``repr(value)`` cut to ``limit`` characters: a message never echoes a long input."""
     text = repr(value)
     return text if len(text) <= limit else text[:limit - 3] + "..."
@@ -383,7 +388,7 @@ def _not_json_body(request: Request, errors: list[dict[str, Any]]) -> list[dict[
     media_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if media_type == "application/json" or media_type.endswith("+json"):
         return errors
-    sent = f"Content-Type {_short(media_type, 60)}" if media_type else "no Content-Type"
+    sent = f"Content-Type {short_input(media_type, 60)}" if media_type else "no Content-Type"
     return [{**e, "message": f"the body is not read as JSON: it came with {sent}",
              "allowed": "Content-Type: application/json"}
             if e.get("loc") == ["body"] else e for e in errors]

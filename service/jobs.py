@@ -32,7 +32,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from service._worker import child_main
-from service.errors import ConflictError, QueueFullError
+from service.errors import ConflictError, QueueFullError, short_input
 from service.store_access import ResultParkedError
 from solver.errors import NotFoundError
 
@@ -138,8 +138,8 @@ class JobManager:
             try:
                 return self._jobs[job_id]
             except KeyError:
-                raise NotFoundError(f"no job {job_id!r} (jobs are kept in memory until "
-                                    "the server restarts)") from None
+                raise NotFoundError(f"no job {short_input(job_id)} (jobs are kept in "
+                                    "memory until the server restarts)") from None
 
     def cancel(self, job_id: str, wait_s: float = 10.0) -> JobState:
         """Cancel a queued or running job; a running one is terminated (waits for it)."""

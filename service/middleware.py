@@ -1,5 +1,6 @@
-"""ASGI middleware: the request body size limit (413 as a problem document), every error
-a problem document, HEAD answered as GET without its body."""
+"""ASGI middleware: the request body size limit (413 as a problem document), a body in a
+content coding refused (415), every error a problem document, HEAD answered as GET without
+its body."""
 
 from __future__ import annotations
 
@@ -55,21 +56,15 @@ class BodyLimitMiddleware:
         await self.app(scope, limited, send)
 
     async def _refuse(self, scope: Scope, send: Send, limit: int) -> None:
-        body = json.dumps({"type": "urn:balloon:problem:payload-too-large",
-                           "title": "Request body too large", "status": 413,
-                           "detail": self._message(limit), "instance": scope.get("path", "")}
-                          ).encode()
-        await send({"type": "http.response.start", "status": 413,
-                    "headers": [(b"content-type", PROBLEM_JSON.encode()),
-                                (b"content-length", str(len(body)).encode()),
-                                (b"connection", b"close")]})
-        await send({"type": "http.response.body", "body": body})
+        await _send_json(send, 413, {"type": "urn:balloon:problem:payload-too-large",
+                                     "title": "Request body too large", "status": 413,
+                                     "detail": self._message(limit),
+                                     "instance": scope.get("path", "")},
+                         [(b"connection", b"close")])
 
 
-class ProblemOnlyMiddleware:
-    """Every error answer a problem document: the few that Starlette writes itself in
-    text/plain (a file's Range header it cannot serve: 400, 416 with Content-Range) are
-    rewritten as ``application/problem+json`` with their status and words."""
+class _HttpMiddleware:
+    """An ASGI middleware that acts on HTTP requests only (``http``); the rest pass."""
 
     def __init__(self, app: ASGIApp) -> None:
         self.app = app
@@ -78,6 +73,69 @@ class ProblemOnlyMiddleware:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        await self.http(scope, receive, send)
+
+    async def http(self, scope: Scope, receive: Receive, send: Send) -> None:
+        raise NotImplementedError
+
+
+ACCEPTED_ENCODING = "identity"
+
+
+class IdentityBodyMiddleware(_HttpMiddleware):
+    """Refuse a request whose body comes in a content coding (``Content-Encoding: gzip``,
+    ``deflate``, ``br``...) with 415 and ``Accept-Encoding: identity`` (RFC 9110 15.5.16):
+    the bodies are small JSON (64 KiB; a lab's data set 4 MiB), so compression saves the
+    client little, and decoding one would let a few KiB expand past the body limit before
+    any check could count it (a decompression bomb). Read as JSON it was a 422 "cannot be
+    parsed as JSON", which never said why."""
+
+    async def http(self, scope: Scope, receive: Receive, send: Send) -> None:
+        headers = scope.get("headers") or []
+        codings = [value.decode("latin-1").strip().lower()
+                   for name, value in headers if name == b"content-encoding"]
+        sent = [c.strip() for value in codings for c in value.split(",") if c.strip()]
+        if all(c == ACCEPTED_ENCODING for c in sent) or not _has_body(headers):
+            await self.app(scope, receive, send)
+            return
+        shown = ", ".join(sent)[:60]
+        detail = (f"the request body came with Content-Encoding {shown!r}; send it "
+                  f"uncompressed (Content-Encoding absent or {ACCEPTED_ENCODING})")
+        await _send_json(send, 415, {
+            "type": "urn:balloon:problem:unsupported-media-type",
+            "title": "Unsupported Media Type", "status": 415, "detail": detail,
+            "instance": scope.get("path", ""),
+            "errors": [{"loc": ["header", "content-encoding"], "field": "Content-Encoding",
+                        "message": f"{shown!r} is not accepted",
+                        "allowed": ACCEPTED_ENCODING}]},
+            [(b"accept-encoding", ACCEPTED_ENCODING.encode())])
+
+
+def _has_body(headers: list[tuple[bytes, bytes]]) -> bool:
+    """The request carries a body: a Content-Length above 0, or a Transfer-Encoding."""
+    for name, value in headers:
+        if name == b"transfer-encoding" or (name == b"content-length"
+                                            and value.strip() not in (b"", b"0")):
+            return True
+    return False
+
+
+async def _send_json(send: Send, status: int, problem: dict,
+                     headers: list[tuple[bytes, bytes]]) -> None:
+    """Send ``problem`` as the whole answer, ``application/problem+json``."""
+    body = json.dumps(problem).encode()
+    await send({"type": "http.response.start", "status": status,
+                "headers": [*headers, (b"content-type", PROBLEM_JSON.encode()),
+                            (b"content-length", str(len(body)).encode())]})
+    await send({"type": "http.response.body", "body": body})
+
+
+class ProblemOnlyMiddleware(_HttpMiddleware):
+    """Every error answer a problem document: the few that Starlette writes itself in
+    text/plain (a file's Range header it cannot serve: 400, 416 with Content-Range) are
+    rewritten as ``application/problem+json`` with their status and words."""
+
+    async def http(self, scope: Scope, receive: Receive, send: Send) -> None:
         held: dict[str, Message] = {}
         chunks: list[bytes] = []
 
@@ -108,27 +166,20 @@ async def _send_problem(send: Send, start: Message, text: bytes, scope: Scope) -
     status = start["status"]
     phrase = HTTPStatus(status).phrase if status in HTTPStatus._value2member_map_ else "Error"
     detail = text.decode("utf-8", "replace").strip()[:200] or phrase
-    body = json.dumps({"type": f"urn:balloon:problem:http-{status}", "title": phrase,
-                       "status": status, "detail": detail,
-                       "instance": scope.get("path", "")}).encode()
     kept = [(k, v) for k, v in start.get("headers") or []
             if k.lower() not in (b"content-type", b"content-length")]
-    await send({"type": "http.response.start", "status": status,
-                "headers": [*kept, (b"content-type", PROBLEM_JSON.encode()),
-                            (b"content-length", str(len(body)).encode())]})
-    await send({"type": "http.response.body", "body": body})
+    await _send_json(send, status, {"type": f"urn:balloon:problem:http-{status}",
+                                    "title": phrase, "status": status, "detail": detail,
+                                    "instance": scope.get("path", "")}, kept)
 
 
-class HeadAsGetMiddleware:
+class HeadAsGetMiddleware(_HttpMiddleware):
     """``HEAD`` answered as ``GET`` without its body (RFC 9110 9.3.2: the same status and
     headers, Content-Length included): FastAPI's GET routes do not take HEAD, and a
     monitor probing ``HEAD /v1/health`` got 405. A path without GET still answers 405."""
 
-    def __init__(self, app: ASGIApp) -> None:
-        self.app = app
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http" or scope["method"] != "HEAD":
+    async def http(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["method"] != "HEAD":
             await self.app(scope, receive, send)
             return
 

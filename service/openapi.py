@@ -6,7 +6,7 @@
   ``application/json``) is replaced: the server never sends it.
 - ``POST /v1/calibrate`` needs the API key only to ``save``: its security is optional
   (``[{}, {"APIKeyHeader": []}]``), as it behaves.
-- 401 documents ``WWW-Authenticate``, 503 ``Retry-After``.
+- 401 documents ``WWW-Authenticate``, 415 ``Accept-Encoding``, 503 ``Retry-After``.
 """
 
 from __future__ import annotations
@@ -46,13 +46,15 @@ class Problem(BaseModel):
 STATUS_WORDS = {
     401: "no API key in X-API-Key", 403: "wrong API key, or the server has none",
     404: "not found (record, job, model)", 409: "conflicts with stored state",
-    413: "request body over the limit", 422: "invalid input: the fields and allowed ranges",
+    413: "request body over the limit",
+    415: "request body in a content coding (gzip): send it uncompressed",
+    422: "invalid input: the fields and allowed ranges",
     503: "a server resource is unavailable (no or damaged database, no fitted surrogate, a "
          "damaged saved model, a full job queue); Retry-After when worth retrying",
 }
 
 # Error statuses per operation, as the server answers them (tests/test_service_contract.py).
-BODY = (413, 422)
+BODY = (413, 415, 422)
 OPERATION_ERRORS: dict[tuple[str, str], tuple[int, ...]] = {
     ("get", "/v1/health"): (),
     ("get", "/v1/materials"): (),
@@ -70,6 +72,8 @@ OPERATION_ERRORS: dict[tuple[str, str], tuple[int, ...]] = {
 }
 HEADERS = {
     401: {"WWW-Authenticate": {"description": "APIKey header=\"X-API-Key\"",
+                               "schema": {"type": "string"}}},
+    415: {"Accept-Encoding": {"description": "identity: the only content coding taken",
                                "schema": {"type": "string"}}},
     503: {"Retry-After": {"description": "seconds to wait before retrying (when known)",
                           "schema": {"type": "integer"}}},

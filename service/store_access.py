@@ -172,8 +172,12 @@ class ResultWriter:
                         db.put(record)
                     return record.key
                 except StoreBusyError:
-                    if time.monotonic() > deadline:
-                        raise
+                    if time.monotonic() > deadline:  # parked, as precompute's past its wait
+                        self._park(record, None)
+                        raise ResultParkedError(
+                            record.key, self.path.name, "its writer lock was held by "
+                            f"another writer for the whole wait of {self.busy_wait_s:g} s"
+                            ) from None
                     time.sleep(1.0)
                 except StoreWriteError as exc:
                     self._park(record, exc)
@@ -185,7 +189,7 @@ class ResultWriter:
                     raise ResultParkedError(record.key, self.path.name,
                                             _public(self.path, exc), then) from None
 
-    def _park(self, record: Any, exc: BaseException) -> None:
+    def _park(self, record: Any, exc: BaseException | None) -> None:
         """Park ``record`` beside the database; ResultLostError when no parking directory
         takes it either (then it is lost, and the job says so)."""
         from solver.precompute.parking import park

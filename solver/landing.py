@@ -10,6 +10,15 @@ inside the bracket (a state below the stop, one past it) while the landed value 
 of the stop or more than ``landing_tolerance`` past it. The volume stop needs no search: the
 stepping caps the volume load at it (the injected volume is affine in the cavity volume),
 as pressure control caps the pressure load.
+
+Those two corrections are a regula falsi: on a convex curve (the angle rises as about the
+cube of the volume near rest) every one lands short and the end past the stop never
+moves, so a user's stop of 0.1 deg ended at 0.19 deg and the curve said "reached". A stop
+other than the defaults (``SolverSettings``: 90 deg, 20 kPa; the database's curves end
+there, and their landing is left exactly as it was) gets up to ``USER_STOP_CORRECTIONS``
+more, by the Illinois rule (the end kept twice in a row has its distance to the aim
+halved in the interpolation: superlinear on a convex curve too, and never outside the
+bracket). A curve that still ends off its stop says where it ended (``stop_reason``).
 """
 
 from __future__ import annotations
@@ -23,6 +32,7 @@ STOPS = ("max_angle_deg", "max_pressure_pa", "max_volume_ul")
 LANDING_RELATIVE_TOL = 1e-3     # a landing within 0.1 % of the stop ...
 LANDING_ANGLE_TOL_DEG = 0.01    # ... and, for the angle, within 0.01 deg, is on it
 LANDING_CORRECTIONS = 2         # secant corrections after the interpolated landing
+USER_STOP_CORRECTIONS = 10      # Illinois corrections after those, for a user's stop
 
 
 def stop_values(angle_deg: float, pressure_pa: float, volume_ul: float) -> dict[str, float]:
@@ -69,12 +79,13 @@ def interpolated_load(limit: float, below: Point, above: Point) -> float:
 
 def land(limit: float, tolerance: float, below: Point, above: Point,
          converge: Callable[[float], Point | None],
-         corrections: int = LANDING_CORRECTIONS) -> Point | None:
+         corrections: int = LANDING_CORRECTIONS, further: int = 0) -> Point | None:
     """The converged state at the load interpolated to the middle of the landing window
     [limit, limit + tolerance], then at most ``corrections`` more at secant loads inside
-    the bracket, until one lands in the window. Returns the state nearest the stop at or
-    past it (which may still lie past the window), or None if none converged at or past
-    the stop. None also when ``above`` is already in the window.
+    the bracket, then at most ``further`` more at Illinois loads, until one lands in the
+    window. Returns the state nearest the stop at or past it (which may still lie past
+    the window), or None if none converged at or past the stop. None also when ``above``
+    is already in the window.
 
     ``converge(load)``: the converged state at that load (a Point), or None. ``below``
     (value < limit) and ``above`` (value >= limit) bracket the window's middle; a landed
@@ -86,19 +97,57 @@ def land(limit: float, tolerance: float, below: Point, above: Point,
         return None
     aim = limit + 0.5 * tolerance
     best = None
-    for _ in range(1 + corrections):
-        point = converge(interpolated_load(aim, below, above))
+    # the Illinois weights of the two ends' distances to the aim (1: the secant's)
+    weight = {"below": 1.0, "above": 1.0}
+    kept = ""                   # the end the last step kept
+    for attempt in range(1 + corrections + further):
+        illinois = attempt > corrections
+        point = converge(_weighted_load(aim, below, above, weight) if illinois
+                         else interpolated_load(aim, below, above))
         if point is None:
             break
         if point.value >= limit and (best is None or point.value < best.value):
             best = point
         if limit <= point.value <= limit + tolerance:
             break
-        if point.value < aim:
+        side = "below" if point.value < aim else "above"
+        if side == "below":
             below = point
         else:
             above = point
+        # an end kept twice in a row has its weight halved (read by the Illinois steps)
+        other = "above" if side == "below" else "below"
+        weight[side], weight[other] = 1.0, (0.5 * weight[other] if kept == other else 1.0)
+        kept = other
     return best
+
+
+def _weighted_load(aim: float, below: Point, above: Point, weight: dict[str, float]) -> float:
+    """The secant load between the ends with their distances to ``aim`` weighted (the
+    Illinois rule's halving): always strictly inside the bracket."""
+    f_below = weight["below"] * (below.value - aim)
+    f_above = weight["above"] * (above.value - aim)
+    share = -f_below / (f_above - f_below)
+    return below.load + share * (above.load - below.load)
+
+
+def on_stop(name: str, limit: float, value: float) -> bool:
+    """Whether the stop's quantity ``value`` at a curve's last point is on the stop:
+    at or past it by at most ``landing_tolerance``."""
+    return limit <= value <= limit + landing_tolerance(name, limit)
+
+
+def stop_reason(name: str, limit: float, value: float, user_stop: bool) -> str:
+    """A curve's reason for ending at the stop ``name``: "reached <name> = <limit>", and
+    for a user's stop not landed on (``on_stop``), where the curve ended (in the stop's
+    unit) -- it still begins "reached <name>", as the database's readers take it. The
+    defaults' words are left as they were (their curves are the database's)."""
+    reason = f"reached {name} = {limit}"
+    if user_stop and not on_stop(name, limit, value):
+        unit = {"max_angle_deg": "deg", "max_pressure_pa": "Pa", "max_volume_ul": "ul"}[name]
+        reason += (f", ended at {value:.6g} {unit}: past it by more than the landing's "
+                   f"{landing_tolerance(name, limit):.3g} {unit}")
+    return reason
 
 
 def volume_load_at(injected_ul: float, injected_volume_ul: Callable[[float], float],

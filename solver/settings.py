@@ -39,7 +39,9 @@ class SolverSettings:
     max_volume_ul     stop once the injected volume (whole actuator) reaches this
                       (the curve's last point lands on the stop: at or past it by at most
                       0.1 % of it and 0.01 deg; volume control, solver/landing.py; under
-                      pressure control the pressure stop only, the others one step past)
+                      pressure control the pressure stop only, the others one step past;
+                      a curve ending off a stop other than these defaults says where in
+                      its reason)
     flow_ul_s         injection rate used to report time = volume / flow (the paper: 2.5)
     bulk_ratio        bulk modulus over initial shear modulus, K / mu0, per material
     newton_tol        relative residual ||R|| / ||p dV/du|| (a stall at the rounding floor

@@ -41,10 +41,11 @@ The curve ends on its stop, not one step past it. Under pressure control the las
 pressure is capped at max_pressure_pa, under volume control its volume at max_volume_ul;
 and a volume step that converged past max_angle_deg or max_pressure_pa is replaced by one
 from the previous converged state to the volume at which the stop is met (solver/
-landing.py: interpolated, then up to two secant corrections; the landed state at or past
-the stop by at most 0.1 % of it and 0.01 deg). Only the curve's last point moves; where
-no landing converges nearer the stop, or the step switched branch, the step past the
-stop ends the curve, as before the landing.
+landing.py: interpolated, then up to two secant corrections, and for a stop other than
+the defaults' up to ten Illinois corrections; the landed state at or past the stop by at
+most 0.1 % of it and 0.01 deg). Only the curve's last point moves; where no landing
+converges nearer the stop, or the step switched branch, the step past the stop ends the
+curve, as before the landing (a user's stop's reason then says where it ended).
 """
 
 from __future__ import annotations
@@ -62,10 +63,12 @@ from solver.design import Design
 from solver.discrete import ActuatorModel, Evaluation
 from solver.landing import (
     STOPS,
+    USER_STOP_CORRECTIONS,
     Point,
     interpolated_load,
     land,
     landing_tolerance,
+    stop_reason,
     stop_values,
     stops_reached,
     volume_load_at,
@@ -88,6 +91,7 @@ DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, no
 PREDICTOR_POINTS = 3        # converged states (with their tangents) the predictor passes through
 CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated without tangent
 CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
+DEFAULT_SETTINGS = SolverSettings()   # its stops are the database's (solver/landing.py)
 FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one converged state
                              # (extrapolated and plain, each size; the step cut to 1/4) before
                              # the branch switch is tried at the last failed volume
@@ -545,7 +549,8 @@ def inflate_model(model, settings: SolverSettings,
 
         limit = limits[stop]
         best = land(limit, landing_tolerance(stop, limit), Point(before_load, was[stop]),
-                    Point(after_load, now[stop]), converge)
+                    Point(after_load, now[stop]), converge,
+                    further=USER_STOP_CORRECTIONS if user_stop[stop] else 0)
         if best is None or abs(best.value - limit) >= abs(now[stop] - limit):
             return None
         return stop, best.state, solves
@@ -564,6 +569,9 @@ def inflate_model(model, settings: SolverSettings,
     extrapolate = True
     switch_index = -1
     limits = {name: getattr(settings, name) for name in STOPS}
+    # a stop the user chose (not the default's, where the database's curves end): landed
+    # with the Illinois corrections too, and its reason says where a curve ended off it
+    user_stop = {name: limits[name] != getattr(DEFAULT_SETTINGS, name) for name in STOPS}
     # The cavity volume at max_volume_ul, and past it by the Newton tolerance on the
     # volume (so that the state converged there is at or past the stop): the last volume
     # step is capped at it.
@@ -672,7 +680,9 @@ def inflate_model(model, settings: SolverSettings,
                     u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
                     record(u, p, its + landing_solves, out.residual, out.negative_pivots,
                            last, out.g_kinv_g)
-            status, reason = "complete", f"reached {stop} = {limits[stop]}"
+            ended = stop_values(rows["a"][-1], rows["p"][-1], rows["v"][-1])[stop]
+            status, reason = "complete", stop_reason(stop, limits[stop], ended,
+                                                     user_stop[stop])
             break
 
     pressure = np.array(rows["p"])

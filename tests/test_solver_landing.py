@@ -10,7 +10,14 @@ import numpy as np
 import pytest
 
 from solver import Design, SolverSettings, stepping
-from solver.landing import Point, land, landing_tolerance, volume_load_at
+from solver.landing import (
+    USER_STOP_CORRECTIONS,
+    Point,
+    land,
+    landing_tolerance,
+    stop_reason,
+    volume_load_at,
+)
 from solver.materials import MATERIALS
 from solver.stepping import solve
 
@@ -39,7 +46,9 @@ def assert_only_the_last_point_moved(landed, former) -> None:
     assert former.volume_ul[-2] < landed.volume_ul[-1] < former.volume_ul[-1]
     assert landed.time_s[-1] == landed.volume_ul[-1] / SolverSettings().flow_ul_s
     assert landed.status == former.status == "complete"
-    assert landed.reason == former.reason
+    # the former ended off its (user's) stop and says so, with where it ended
+    assert former.reason == (f"{landed.reason}, ended at {former.angle_deg[-1]:.6g} deg: "
+                             "past it by more than the landing's 0.0005 deg")
 
 
 def test_a_half_degree_curve_ends_at_half_a_degree(monkeypatch):
@@ -100,7 +109,8 @@ def test_a_landing_that_does_not_converge_keeps_the_step_past_the_stop(monkeypat
     monkeypatch.setattr(stepping, "land", land_failing)
     infos: list[dict] = []
     curve = solve(SHORT, HALF_DEGREE, on_step=infos.append)
-    assert curve.status == "complete" and curve.reason == "reached max_angle_deg = 0.5"
+    assert curve.status == "complete"
+    assert curve.reason.startswith("reached max_angle_deg = 0.5, ended at 0.7")
     for name in curve.ARRAY_FIELDS:
         assert np.array_equal(getattr(curve, name), getattr(former, name), equal_nan=True), name
     assert curve.timings_s["landing_steps"] == 1
@@ -153,12 +163,62 @@ def test_the_cavity_volume_at_the_volume_stop():
 
 def test_pressure_control_is_unchanged():
     # Its last step's pressure was already capped at max_pressure_pa; its angle stop is
-    # still met one step past (no landing under pressure control).
+    # still met one step past (no landing under pressure control), which the reason of
+    # this user's stop says (the forty-second session).
     by_pressure = SolverSettings(element="hex1", control="pressure", max_angle_deg=0.5)
     curve = solve(SHORT, by_pressure)
-    assert curve.reason == "reached max_angle_deg = 0.5" and curve.angle_deg[-1] > 0.55
+    assert curve.angle_deg[-1] > 0.55
+    assert curve.reason == (f"reached max_angle_deg = 0.5, ended at {curve.angle_deg[-1]:.6g}"
+                            " deg: past it by more than the landing's 0.0005 deg")
     assert "landing_steps" not in curve.timings_s
     capped = solve(SHORT, SolverSettings(element="hex1", control="pressure",
                                          max_pressure_pa=300.0))
     assert capped.reason == "reached max_pressure_pa = 300.0"
     assert capped.pressure_pa[-1] == 300.0
+
+
+# -- the forty-second session: a user's stop on a convex curve ---------------------------
+
+def cubic_angle(load: float) -> float:
+    """The angle's rise near rest, about the cube of the volume: a convex curve."""
+    return load ** 3
+
+
+def test_a_users_stop_lands_on_a_convex_curve_by_the_illinois_corrections():
+    """The interpolation and its two secant corrections (a regula falsi) all land short
+    on a convex curve, the end past the stop never moves, and no state is kept: the curve
+    ended at the step past the stop. The Illinois corrections a user's stop gets land in
+    the window [0.1, 0.1001]; the defaults' landing (``further=0``) is left as it was."""
+    def converge(load):
+        tried.append(load)
+        return Point(load, cubic_angle(load))
+
+    window = landing_tolerance("max_angle_deg", 0.1)
+    below, above = Point(0.0, 0.0), Point(0.58, cubic_angle(0.58))     # 0.195 deg
+    tried: list[float] = []
+    assert land(0.1, window, below, above, converge) is None          # the former landing
+    assert len(tried) == 3 and all(cubic_angle(x) < 0.1 for x in tried)
+    tried = []
+    best = land(0.1, window, below, above, converge, further=USER_STOP_CORRECTIONS)
+    assert 0.1 <= best.value <= 0.1 + window
+    assert all(0.0 < x < 0.58 for x in tried) and len(tried) <= 3 + USER_STOP_CORRECTIONS
+
+
+def test_a_tenth_of_a_degree_is_landed_on():
+    """``balloon solve --max-angle-deg 0.1`` ended at 0.19 deg (here 0.183, hex1) and said
+    "reached max_angle_deg = 0.1"."""
+    curve = solve(SHORT, SolverSettings(element="hex1", max_angle_deg=0.1))
+    assert 0.1 <= curve.angle_deg[-1] <= 0.1 + landing_tolerance("max_angle_deg", 0.1)
+    assert curve.reason == "reached max_angle_deg = 0.1"
+
+
+def test_a_default_stop_keeps_its_words_off_the_window():
+    """The defaults' stops (90 deg, 20 kPa: the database's curves) keep their reason as it
+    was; a user's says where the curve ended when it is off the stop."""
+    assert stop_reason("max_angle_deg", 90.0, 90.4, user_stop=False) == \
+        "reached max_angle_deg = 90.0"
+    assert stop_reason("max_angle_deg", 0.1, 0.10005, user_stop=True) == \
+        "reached max_angle_deg = 0.1"
+    assert stop_reason("max_pressure_pa", 2500.0, 2600.0, user_stop=True) == (
+        "reached max_pressure_pa = 2500.0, ended at 2600 Pa: past it by more than the "
+        "landing's 2.5 Pa")

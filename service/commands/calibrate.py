@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from service.commands.outputs import PLOT_SUFFIXES, check_output
+    from solver.atomic_file import atomic_output, write_text_atomic
     from solver.errors import InputError
     from surrogate.calibration import (
         jsonable,
@@ -110,10 +111,10 @@ def run(args: argparse.Namespace) -> int:
     with tqdm(desc="calibrating", unit="fit", file=sys.stderr, leave=False) as bar:
         cal = run_calibration(obs, model, folds=args.folds, progress=lambda: bar.update())
     report = jsonable(cal.report)
-    args.report.parent.mkdir(parents=True, exist_ok=True)
-    args.report.write_text(json.dumps(report, indent=1) + "\n")
+    write_text_atomic(args.report, json.dumps(report, indent=1) + "\n")  # whole or not
     if args.plot:
-        plot_calibration(cal, args.plot)
+        with atomic_output(args.plot, keep_suffix=True) as tmp:
+            plot_calibration(cal, tmp)
 
     def deg(x: float | None) -> str:
         return "n/a" if x is None else f"{x:.2f}"

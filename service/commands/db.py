@@ -232,19 +232,25 @@ def run_export(args: argparse.Namespace) -> int:
     check_output(args.output, "--output", inputs=(("the database", args.db),))
     with CurveStore(args.db) as db:
         records = selected(db, args)
-    out = sys.stdout if args.output == "-" else open(args.output, "w", newline="",
-                                                     encoding="utf-8")
-    try:
-        if args.format == "json":
-            json.dump([jsonable(r.as_dict()) for r in records], out, indent=1)
-            out.write("\n")
-        else:
-            writer = csv.writer(out)
-            writer.writerow(["key", "status", *CSV_DESIGN, *CSV_CURVE])
-            for record in records:
-                writer.writerows(curve_rows(record))
-    finally:
-        if out is not sys.stdout:
-            out.close()
+    if args.output == "-":
+        _export(records, args.format, sys.stdout)
+    else:   # a full disk leaves the former file, not half of the new one
+        from solver.atomic_file import atomic_output
+
+        with atomic_output(args.output) as tmp, open(tmp, "w", newline="",
+                                                     encoding="utf-8") as out:
+            _export(records, args.format, out)
     print(f"exported {len(records)} records", file=sys.stderr)
     return 0
+
+
+def _export(records: list[Any], form: str, out: Any) -> None:
+    """The records as JSON or CSV (one row per curve point) on the text stream ``out``."""
+    if form == "json":
+        json.dump([jsonable(r.as_dict()) for r in records], out, indent=1)
+        out.write("\n")
+    else:
+        writer = csv.writer(out)
+        writer.writerow(["key", "status", *CSV_DESIGN, *CSV_CURVE])
+        for record in records:
+            writer.writerows(curve_rows(record))

@@ -80,7 +80,12 @@ def _adaptive_grid(grid: object, args: argparse.Namespace) -> object:
     from surrogate.emulator.adaptive import next_designs
 
     if args.emulator:
-        emulator = load_emulator(args.emulator)
+        try:
+            emulator = load_emulator(args.emulator)
+        except InputError as exc:   # the file itself (too large, a pipe): named by option
+            if exc.field != "model":
+                raise
+            raise InputError("--emulator", exc.detail, exc.allowed) from None
     else:
         if not Path(args.db).is_file():
             raise InputError("--adaptive", f"{args.db} does not exist yet",

@@ -155,6 +155,7 @@ def progress_bar(settings: SolverSettings, quiet: bool) -> tuple[object, object]
 
 def run(args: argparse.Namespace) -> int:
     from service.commands.predict import DESIGN_FLAGS
+    from solver.atomic_file import atomic_output
     from solver.errors import InputError
     from solver.io import curve_to_csv, plot_curve
     from solver.stepping import inflate
@@ -173,20 +174,25 @@ def run(args: argparse.Namespace) -> int:
     for note in curve.stability_notes():
         print(f"stability: {note}")
     print(table(curve, with_force=settings.tip != "free"))
+    # each output whole or not at all (a full disk leaves the former file in place)
     if args.json:
         from surrogate.json_plain import plain_json
 
-        with open(args.json, "w") as fh:    # strict JSON: a free tip's NaN force is null
-            json.dump(plain_json({"design": design.as_dict(), "settings": settings.as_dict(),
+        with atomic_output(args.json) as tmp, open(tmp, "w") as fh:  # strict JSON: a free
+            json.dump(plain_json({"design": design.as_dict(),         # tip's NaN force is
+                                  "settings": settings.as_dict(),     # null
                                   "curve": curve.as_dict()}), fh, indent=1, allow_nan=False)
     if args.csv:
-        curve_to_csv(curve, args.csv)
+        with atomic_output(args.csv) as tmp:
+            curve_to_csv(curve, str(tmp))
     if args.plot:
-        plot_curve(curve, args.plot, title=f"L = {design.L_mm} mm, t = {design.t_mm} mm")
+        with atomic_output(args.plot, keep_suffix=True) as tmp:
+            plot_curve(curve, str(tmp), title=f"L = {design.L_mm} mm, t = {design.t_mm} mm")
     if args.vtk:
         from solver.export import write_vtu
 
-        write_vtu(args.vtk, model, u)
+        with atomic_output(args.vtk, keep_suffix=True) as tmp:
+            write_vtu(str(tmp), model, u)
     return 0 if curve.status != "failed" else 1
 
 

@@ -12,6 +12,7 @@ from fastapi import APIRouter, Path, Query
 
 from service.convert import jsonable
 from service.deps import SettingsDep
+from service.errors import short_input
 from service.schemas import CurveDetail, CurvePage, CurvesQuery, CurveSummary
 from service.store_access import file_version, open_store, summary_rows
 from solver.errors import NotFoundError
@@ -119,7 +120,8 @@ def get_curve(curve_id: Annotated[str, KEY], settings: SettingsDep) -> CurveDeta
     """Design, settings, every per-step array of the curve (NaN as null), provenance."""
     with open_store(settings.db_path) as db:
         if not KEY_PATTERN.fullmatch(curve_id) or curve_id not in db:
-            raise NotFoundError(f"no curve {curve_id!r}: GET /v1/curves lists them")
+            raise NotFoundError(f"no curve {short_input(curve_id)}: GET /v1/curves lists "
+                                "them")
         record = db.get(curve_id)
     return CurveDetail(id=record.key, design=record.design.as_dict(),
                        settings=record.settings.as_dict(),

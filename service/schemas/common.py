@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic_core import PydanticCustomError
 
+from service.errors import QUERY_BOOL_ERROR
 from solver.design import LIMITS_MM
 from solver.materials import MATERIAL_ID_PATTERN
 from solver.settings import MAX_MESH_LEVEL, MESH_DIVISIONS, SolverSettings
@@ -41,6 +43,24 @@ class Schema(BaseModel):
     models (whose values arrive as text) relax ``strict``."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
+
+
+QUERY_BOOL_WORDS = {"true": True, "false": False}
+
+
+def _query_bool(value: object) -> object:
+    """A query parameter's yes or no, spelt as JSON spells it (``true``, ``false``): in
+    lax mode pydantic read ``yes``, ``on``, ``1``, ``True``, ``f`` too, so a typo such as
+    ``inlet=no-thanks`` was refused but ``inlet=off`` quietly meant false."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value in QUERY_BOOL_WORDS:
+        return QUERY_BOOL_WORDS[value]
+    raise PydanticCustomError(QUERY_BOOL_ERROR, "Input should be true or false")
+
+
+# a bool query parameter: exactly true or false (a JSON body's bools are strict already)
+QueryBool = Annotated[bool, BeforeValidator(_query_bool)]
 
 
 def mm(name: str, description: str, default: float | None = None) -> object:

@@ -8,7 +8,14 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from service.pump import AXES, MAX_FLOW_UL_S, MIN_FLOW_UL_S
-from service.schemas.common import INLINE_MATERIAL_ID, MATERIAL_ID, DesignIn, Schema, mm
+from service.schemas.common import (
+    INLINE_MATERIAL_ID,
+    MATERIAL_ID,
+    DesignIn,
+    QueryBool,
+    Schema,
+    mm,
+)
 from surrogate import hydraulics
 
 MAX_PRESSURE_PA = AXES["pressures_pa"][1]
@@ -183,7 +190,7 @@ class PlotQuery(Schema):
                                     "the pressure on a second axis (the paper's protocol)")
     t_max_s: float = Field(10.0, gt=0.0, le=AXES["times_s"][1], description="largest time "
                            "plotted, s (with flow_ul_s)")
-    inlet: bool = Field(False, description="with flow_ul_s: also the pump-gauge pressure "
+    inlet: QueryBool = Field(False, description="with flow_ul_s: also the pump-gauge pressure "
                         "through the paper's inlet channel (water), chamber + R Q")
     measured_pressure_pa: list[Pressure] = Field(
         [], max_length=200, description="measured points to overlay: pressures, Pa")

@@ -2,7 +2,14 @@
 (and the precompute job's ``<db>.job.lock``).
 
 The kernel drops the lock when its process ends, however it ends (kill -9 included),
-so a crashed writer never leaves the database locked. Readers never take it.
+so a crashed writer never leaves the database locked: a lock file whose holder has ended
+is taken by the next writer at once, whatever it holds. Readers never take it. The
+holder removes its lock file when it lets go (an interrupted command too: Ctrl-C, and
+SIGTERM to ``balloon precompute``, end through the release); only a process killed
+outright leaves one behind, and that one blocks nothing. The file holds ``<pid>@<host>``
+of its holder, which a refused writer is told. Deleting a held lock file would let a
+second writer in beside the live one: the refusal says not to, and a writer that locked
+a file which has since been removed (its holder let go) locks the file at the path again.
 
 Locks belong to the real file: a database named through a symbolic link is opened at
 the link's target (``database_path``), so its writes replace the target (not the link)
@@ -14,9 +21,11 @@ from __future__ import annotations
 import errno
 import fcntl
 import os
+import socket
 import time
 from pathlib import Path
 
+from solver.bounded_read import NOT_REGULAR
 from solver.errors import InputError, NotFoundError
 from solver.store.errors import StoreBusyError, StoreWriteError
 
@@ -47,7 +56,7 @@ def no_database(path: str | os.PathLike, then: str) -> Exception:
 
 def _what_is_there(path: Path) -> str:
     """What a database path that is no regular file names, in words."""
-    return "a directory" if path.is_dir() else "not a regular file (a device or a pipe)"
+    return "a directory" if path.is_dir() else NOT_REGULAR
 
 
 def unwritable(path: str | os.PathLike) -> str | None:
@@ -107,10 +116,35 @@ def _database_of(lock: Path) -> Path:
     return lock
 
 
+def holder_stamp() -> str:
+    """What a lock file holds: this process's ``<pid>@<host>``."""
+    return f"{os.getpid()}@{socket.gethostname()}"
+
+
+def _holder(stamp: str) -> tuple[str, str]:
+    """A lock file's ``<pid>@<host>`` in words, and what to do about its holder: wait for
+    it or stop it; a pid of this host that has ended holds the lock through a process it
+    started (which ``fuser`` names)."""
+    pid_text, _, host = stamp.partition("@")
+    if not pid_text.isdigit():
+        return "pid ?", "wait for it to finish or stop it"
+    pid = int(pid_text)
+    if host and host != socket.gethostname():
+        return f"pid {pid} on host {host}", "wait for it to finish or stop it there"
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return f"pid {pid}", ("it has ended, but a process it started holds the lock "
+                              "(`fuser -v` on the lock file names it): stop that")
+    except PermissionError:
+        pass
+    return f"pid {pid}", f"wait for it to finish or stop it (kill {pid})"
+
+
 class WriterLock:
     """Exclusive lock; ``acquire`` waits up to ``timeout_s`` (default: not at all), then
-    raises StoreBusyError naming the database and the holder's pid. ``what`` words the
-    message."""
+    raises StoreBusyError naming the database and the holder (pid, and host if not this
+    one). ``what`` words the message. ``release`` removes the lock file."""
 
     def __init__(self, path: Path, what: str = "being written by another process") -> None:
         self.path = Path(path)
@@ -123,31 +157,52 @@ class WriterLock:
         return self._fd is not None
 
     def acquire(self, timeout_s: float = 0.0) -> None:
-        try:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as exc:  # read-only file system, no permission, disk full
-            raise StoreWriteError(self.path, exc) from None
         deadline = time.monotonic() + timeout_s
         while True:
+            fd = self._open()
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                break
             except BlockingIOError:
                 if time.monotonic() < deadline:
+                    os.close(fd)
                     time.sleep(0.02)
                     continue
-                holder = os.read(fd, 64).decode("ascii", "replace").strip() or "?"
+                who, advice = _holder(os.read(fd, 256).decode("ascii", "replace").strip())
                 os.close(fd)
                 raise StoreBusyError(
-                    f"{self.database} is {self.what} (pid {holder}); a database "
-                    f"has a single writer and one precompute job at a time: wait for it to "
-                    f"finish or stop it") from None
+                    f"{self.database} is {self.what} ({who}): {advice}; a database has a "
+                    f"single writer and one precompute job at a time (do not delete "
+                    f"{self.path.name}: its holder would write on beside the next)") from None
+            if self._still_at_path(fd):
+                break
+            os.close(fd)  # its holder let go and removed it: lock the file there now
         os.ftruncate(fd, 0)
-        os.write(fd, str(os.getpid()).encode("ascii"))
+        os.write(fd, holder_stamp().encode("ascii", "replace"))
         self._fd = fd
+
+    def _open(self) -> int:
+        try:
+            return os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:  # read-only file system, no permission, disk full
+            raise StoreWriteError(self.path, exc) from None
+
+    def _still_at_path(self, fd: int) -> bool:
+        """The locked file is the one at the lock's path (not one its last holder
+        removed as it let go, between this writer's open and lock)."""
+        try:
+            here = os.stat(self.path)
+        except FileNotFoundError:
+            return False
+        mine = os.fstat(fd)
+        return (here.st_dev, here.st_ino) == (mine.st_dev, mine.st_ino)
 
     def release(self) -> None:
         if self._fd is not None:
+            if self._still_at_path(self._fd):  # not another writer's (ours was deleted)
+                try:  # removed while held, so that no writer locks it after
+                    os.unlink(self.path)
+                except OSError:  # a directory that takes no change: it blocks nothing
+                    pass
             fcntl.flock(self._fd, fcntl.LOCK_UN)
             os.close(self._fd)
             self._fd = None

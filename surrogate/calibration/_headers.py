@@ -19,6 +19,7 @@ the column ``volume_ul`` (_measured_volume.py). Exact canonical names are read a
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass
@@ -60,6 +61,9 @@ QUANTITY_NAMES: dict[str, tuple[str, ...]] = {
 #: a longer header names no quantity (its every split read would take a second at 10,000
 #: characters: a stray key over HTTP)
 MAX_HEADER_CHARS = 100
+#: a lab's file has some 20 columns (a logger's, some 100); more is no table of readings
+#: (a JSON row of 200,000 stray keys: a server's CPU for seconds before any other check)
+MAX_COLUMNS = 1000
 
 
 def _unit(text: str) -> tuple[str, float] | None:
@@ -124,8 +128,11 @@ def _key(name: str) -> str:
     return name if len(name) == 1 else name.lower()
 
 
+@functools.lru_cache(maxsize=8)
 def _names(numeric: tuple[str, ...]) -> dict[str, str]:
-    """quantity name (``_key``) -> canonical column."""
+    """quantity name (``_key``) -> canonical column (made once per set of columns: made
+    per header, a row of 200,000 stray keys took 37 s of a server's CPU to refuse).
+    Read only."""
     out: dict[str, str] = {}
     for column in numeric:
         unit = canonical_unit(column)
@@ -183,7 +190,11 @@ def header_form(column: str) -> str:
 def read_headers(headers: list[str], numeric: tuple[str, ...]) -> dict[str, Reading]:
     """header -> Reading for every header naming a numeric quantity (exact canonical
     names included, factor 1). Raises DataError for a header that cannot be read
-    (``read_header``) and for two headers read as one column, naming both."""
+    (``read_header``), for two headers read as one column, naming both, and for more
+    than ``MAX_COLUMNS`` headers."""
+    if len(headers) > MAX_COLUMNS:
+        raise DataError("columns", f"{len(headers)} distinct column names", None,
+                        f"at most {MAX_COLUMNS} columns")
     out: dict[str, Reading] = {}
     by_column: dict[str, str] = {}
     for header in headers:
