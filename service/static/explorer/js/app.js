@@ -206,27 +206,29 @@ function onWidth(W) {
 }
 
 // ``values``: any of the state's keys; a design without a width is at W = 3 mm (the
-// design search's box, the stored records). ``pressurePa``: the readout's pressure (an
-// inverse design's target): the curve's range grows to show it, with the readout on it.
-export function loadDesign(values, { pressurePa } = {}) {
+// design search's box, the stored records). ``at``: the readout's point on the asked axis
+// (an inverse design's target pressure, injected volume or time): the curve's range grows
+// to show it, with the readout on it.
+export function loadDesign(values, { at } = {}) {
   Object.assign(app.state, { W_mm: W_MM }, values);
   for (const f of [W_FIELD, ...FIELDS]) app.inputErrors.delete(`err-${f.name}`);
   showRanges();
   showValues();
-  if (Number.isFinite(pressurePa) && pressurePa > 0 && askAxis() === "pressure_pa") showPressure(pressurePa);
+  if (Number.isFinite(at) && at > 0) showAt(at);
   app.inputMark = performance.now();
   schedule(0);
 }
 
-// The pressure grid (0 .. Largest pressure, N_POINTS points) made to hold ``p`` on one of
-// its points: kept when it does, else the largest pressure is raised (to 1.25 p at least,
-// within the input's limit) to one that does; the readout is put on it.
-function showPressure(p) {
-  const input = $("p_max");
+// The asked axis's grid (0 .. its largest value, N_POINTS points: Pa, ul or s) made to hold
+// ``p`` on one of its points: kept when it does, else the largest value is raised (to
+// 1.25 p at least, within the input's limit) to one that does; the readout is put on it.
+function showAt(p) {
+  const a = ASK[askAxis()];
+  const input = $(a.input);
   const limit = Number(input.max) || Infinity;
   const n = N_POINTS - 1;
   const check = checkNumber(input);
-  let max = check.value ?? ASK.pressure_pa.fallback;
+  let max = check.value ?? a.fallback;
   const onGrid = (m) => p <= m && Math.abs((p * n) / m - Math.round((p * n) / m)) < 1e-9;
   if (!onGrid(max)) {
     const want = Math.min(limit, Math.max(max, 1.25 * p));
@@ -235,8 +237,11 @@ function showPressure(p) {
     const before = max;
     max = (p * n) / i;
     input.value = shown(max);
-    clearMessage($("err-pressures_pa"));
-    if (max > before) $("view-note").textContent = `Largest pressure raised from ${fmt(before, 0)} to ${fmt(max, 0)} Pa to show the loaded design at ${fmt(p, 0)} Pa.`;
+    clearMessage($(`err-${a.field}`));
+    if (max > before) {
+      const v = (x) => `${fmt(x, a.digits)} ${a.unit}`;
+      $("view-note").textContent = `Largest ${a.label} raised from ${v(before)} to ${v(max)} to show the loaded design at ${v(p)}.`;
+    }
   }
   app.opFraction = p / max;
 }
@@ -375,7 +380,10 @@ function applyLink(hash, reset = false) {
   const v = link.view;
   if (v.ask) $("ask_axis").value = v.ask;
   if (v.max) $(ASK[askAxis()].input).value = String(v.max);
-  if (v.flow !== undefined) $("flow").value = v.flow === null ? "" : String(v.flow);
+  if (v.flow !== undefined) {
+    $("flow").value = v.flow === null ? "" : String(v.flow);
+    $("flow").dispatchEvent(new Event("input"));  // the time targets' flow box shows it too
+  }
   if (v.inlet !== undefined) $("inlet").checked = v.inlet;
   if (v.tubing !== undefined) $("tubing_length").value = String(v.tubing);
   if (v.bore !== undefined) $("tubing_bore").value = String(v.bore);
@@ -581,6 +589,12 @@ async function applySchemaLimits() {
   const inlet = schemas.InletIn?.properties || {};
   set("tubing_length", inlet.tubing_length_mm);
   set("tubing_bore", inlet.tubing_bore_mm?.anyOf?.find((a) => a.type === "number") || inlet.tubing_bore_mm);
+  // the design search's target (TargetIn): each field a number or null; an exclusive
+  // minimum (volume_ul, time_s: more than 0) is left to the server, which names it
+  const target = schemas.TargetIn?.properties || {};
+  const number = (p) => (p?.anyOf || []).find((a) => a.type === "number") || p;
+  for (const [id, name] of [["inv-pressure", "pressure_pa"], ["inv-volume", "volume_ul"], ["inv-time", "time_s"],
+    ["inv-flow", "flow_ul_s"], ["inv-angle", "angle_deg"], ["inv-force", "force_mn"]]) set(id, number(target[name]));
 }
 
 async function offersSolve(err, body) {

@@ -1,18 +1,29 @@
-// Inverse design: a target (angle at a pressure, angle within a pressure budget, force at
-// a pressure), bounds on L and t and the allowed material pairs -> POST /v1/inverse ->
-// ranked designs; "Load" puts one in the design panel.
+// Inverse design: a target (by chamber pressure: angle at a pressure, angle within a
+// pressure budget, force at a pressure; by a syringe pump: angle at or within an injected
+// volume, or a time at the flow rate: js/targets.js), bounds on L and t and the allowed
+// material pairs -> POST /v1/inverse -> ranked designs; "Load" puts one in the design
+// panel, its curve asked on the target's axis (pressure, injected volume or time).
 
 import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
 import { FIELDS, PAIRS, pairLabel } from "./design.js";
+import { ASK_AXIS, OBJECTIVES, TARGET_BY, TARGET_INPUTS, changeUnit, readoutAt, targetColumns } from "./targets.js";
 import { $, fmt, fmtSig, numberOrNull } from "./util.js";
 
-// The rankings each target kind takes (the server refuses the others, saying which it
-// allows: a refusal's "allowed" list replaces this one for that kind).
-const OBJECTIVES = {
-  angle_at_pressure: ["certainty", "compact"],
-  force_at_pressure: ["certainty", "compact"],
-  pressure_budget: ["certainty", "pressure", "margin", "compact"],
-};
+// The pump's flow rate is one value on the page: the Curve panel's "Pump flow rate"
+// (#flow, which the "Ask by" switch's time axis uses) and the time targets' flow box
+// (#inv-flow) show it, and typing in either changes the other.
+function shareFlowRate() {
+  const page = $("flow"), form = $("inv-flow");
+  form.value = page.value;
+  page.addEventListener("input", () => { form.value = page.value; });
+  page.addEventListener("change", () => { form.value = page.value; });
+  form.addEventListener("input", () => { page.value = form.value; });
+  form.addEventListener("change", () => { page.value = form.value; page.dispatchEvent(new Event("change")); });
+}
+
+// The result table's first columns, whatever the target.
+const FIXED_HEADS = ["rank", "body / membrane", "stiffness scales (body, membrane)", "L (mm)", "t (mm)",
+  "T (mm)", "b (mm)", "h (mm)"];
 
 // "pdms_1_15/ecoflex_00_30 T=1 b=1.8 h=0.15" -> {T_mm: 1, b_mm: 1.8, h_mm: 0.15}
 export function familyGeometry(candidate) {
@@ -45,11 +56,16 @@ export function setupInverse({ loadDesign }) {
     pairs.appendChild(label);
   });
   const kind = $("inv-kind");
+  shareFlowRate();
   const showKind = () => {
     const force = kind.value === "force_at_pressure";
     $("inv-angle-field").hidden = force;
     $("inv-force-field").hidden = !force;
-    $("inv-value-h").textContent = force ? "force at the pressure (mN)" : "angle at the pressure (deg)";
+    // the fields of what the target is given by: a pressure, a volume, a time and flow rate
+    for (const el of form.querySelectorAll("[data-by]")) el.hidden = el.dataset.by !== TARGET_BY[kind.value];
+    const budget = kind.value.endsWith("_budget");
+    $("inv-volume-label").textContent = budget ? "Volume budget, at most (ul)" : "Injected volume (ul)";
+    $("inv-time-label").textContent = budget ? "Time budget from empty, at most (s)" : "Time from empty (s)";
     // only the rankings the server takes for this target are offered
     const allowed = OBJECTIVES[kind.value];
     const select = $("inv-objective");
@@ -59,13 +75,14 @@ export function setupInverse({ loadDesign }) {
   kind.addEventListener("change", showKind);
   showKind();
   let candidates = [];
-  let searched = null;  // the target of the candidates shown
+  let searched = null;  // the target of the candidates shown: {kind, pressure_pa, ...}
   $("inv-pairs").addEventListener("change", () => { $("err-inv-pairs").hidden = true; });
 
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
     clearProblems(form);
-    const target = { kind: kind.value, pressure_pa: numberOrNull($("inv-pressure")) };
+    const target = { kind: kind.value };
+    for (const [id, name] of TARGET_INPUTS[TARGET_BY[kind.value]]) target[name] = numberOrNull($(id));
     if (kind.value === "force_at_pressure") target.force_mn = numberOrNull($("inv-force"));
     else target.angle_deg = numberOrNull($("inv-angle"));
     const body = { target, n_results: numberOrNull($("inv-n")) ?? 5 };
@@ -81,6 +98,8 @@ export function setupInverse({ loadDesign }) {
     if ($("inv-objective").value) body.objective = $("inv-objective").value;
     const slots = {
       "target.kind": $("err-inv-kind"), "target.pressure_pa": $("err-inv-pressure"),
+      "target.volume_ul": $("err-inv-volume"), "target.time_s": $("err-inv-time"),
+      "target.flow_ul_s": $("err-inv-flow"),
       "target.angle_deg": $("err-inv-angle"), "target.force_mn": $("err-inv-force"),
       L_bounds_mm: $("err-inv-L"), t_bounds_mm: $("err-inv-t"), material_pairs: $("err-inv-pairs"),
       objective: $("err-inv-objective"), n_results: $("err-inv-n"), target: $("err-inv-kind"),
@@ -90,7 +109,7 @@ export function setupInverse({ loadDesign }) {
     try {
       const res = await api("/v1/inverse", { method: "POST", body });
       candidates = res.candidates || [];
-      searched = { kind: target.kind, pressure_pa: target.pressure_pa };
+      searched = { ...target };
       render(res);
     } catch (err) {
       $("inv-explanation").textContent = "";
@@ -122,19 +141,24 @@ export function setupInverse({ loadDesign }) {
       : [];
     if (common.length) text += ` Every design listed: ${common.join(" ")}`;
     $("inv-explanation").textContent = text;
+    // the target kind's columns (a column no listed design has a number for left out)
+    const columns = targetColumns(searched).filter((col) => candidates.some((c) => typeof c[col.key] === "number"));
+    const head = $("inv-table").querySelector("thead tr");
+    head.innerHTML = "";
+    for (const text of [...FIXED_HEADS, ...columns.map((col) => col.head), "notes", ""]) {
+      const th = document.createElement("th");
+      th.scope = "col";
+      th.textContent = text;
+      head.appendChild(th);
+    }
     const tbody = $("inv-table").querySelector("tbody");
     tbody.innerHTML = "";
     $("inv-table").hidden = candidates.length === 0;
     candidates.forEach((c, k) => {
       const tr = document.createElement("tr");
-      // angles to 0.1 deg; forces (a fraction of a mN at these sizes) to 3 significant digits
-      const value = searched && searched.kind === "force_at_pressure" ? (v) => fmtSig(v) : (v) => fmt(v, 1);
-      const band = c.value_lower !== null && c.value_upper !== null ? ` [${value(c.value_lower)}, ${value(c.value_upper)}]` : "";
-      const pband = c.pressure_lower_pa !== null && c.pressure_upper_pa !== null && c.pressure_lower_pa !== c.pressure_upper_pa
-        ? ` [${fmt(c.pressure_lower_pa, 0)}, ${fmt(c.pressure_upper_pa, 0)}]` : "";
       // what a mould's tolerance does: the length whose 0.01 mm moves the value most
       const tol = Object.entries(c.change_per_0_01_mm || {}).sort((a, b) => Math.abs(b[1]) - Math.abs(a[1]))[0];
-      const tolNote = tol ? `0.01 mm more ${tol[0].replace(/_mm$/, "")}: ${tol[1] >= 0 ? "+" : ""}${fmtSig(tol[1], 2)} ${searched && searched.kind === "force_at_pressure" ? "mN" : "deg"}.` : "";
+      const tolNote = tol ? `0.01 mm more ${tol[0].replace(/_mm$/, "")}: ${tol[1] >= 0 ? "+" : ""}${fmtSig(tol[1], 2)} ${changeUnit(searched.kind)}.` : "";
       const notes = [tolNote, ...messagesOf(c).filter((m) => !common.includes(m))].filter(Boolean).join(" ");
       const geometry = familyGeometry(c);
       const scale = (s) => (typeof s === "number" ? `x${fmtSig(s)}` : "x1");
@@ -142,7 +166,7 @@ export function setupInverse({ loadDesign }) {
         `${scale(c.body_stiffness_scale)}, ${scale(c.membrane_stiffness_scale)}`,
         fmt(c.L_mm, 2), fmt(c.t_mm, 3),
         ...["T_mm", "b_mm", "h_mm"].map((k) => (typeof geometry[k] === "number" ? fmt(geometry[k], 3) : "")),
-        `${value(c.value_at_pressure)}${band}`, `${fmt(c.pressure_needed_pa, 0)}${pband}`, notes || (c.validity?.in_domain === false ? "outside the fitted domain" : "")];
+        ...columns.map((col) => col.cell(c)), notes || (c.validity?.in_domain === false ? "outside the fitted domain" : "")];
       tr.innerHTML = cells.map(() => "<td></td>").join("") + `<td><button type="button" data-candidate="${k}">Load</button></td>`;
       tr.querySelector("button").setAttribute("aria-label", `Load rank ${c.rank}: L ${fmt(c.L_mm, 2)} mm, t ${fmt(c.t_mm, 3)} mm, ${pairLabel(c.body_material, c.membrane_material)}`);
       cells.forEach((v, i) => { tr.children[i].textContent = String(v); });
@@ -162,15 +186,21 @@ export function setupInverse({ loadDesign }) {
     const values = { L_mm: round(c.L_mm), t_mm: round(c.t_mm), ...geometry,
       body_scale: c.body_stiffness_scale ?? 1, membrane_scale: c.membrane_stiffness_scale ?? 1 };
     if (pair >= 0) values.pair = pair;
-    if ($("ask_axis").value !== "pressure_pa") {  // the candidate's numbers are pressures
-      $("ask_axis").value = "pressure_pa";
+    // the curve on the target's axis: by pressure, by injected volume, or by time at the
+    // flow rate searched (the page's flow rate set to it)
+    const by = TARGET_BY[searched.kind];
+    if (by === "time" && Number($("flow").value) !== searched.flow_ul_s) {
+      $("flow").value = String(searched.flow_ul_s);
+      $("flow").dispatchEvent(new Event("input"));
+    }
+    if ($("ask_axis").value !== ASK_AXIS[by]) {
+      $("ask_axis").value = ASK_AXIS[by];
       $("ask_axis").dispatchEvent(new Event("change"));
     }
-    // the readout at the target's pressure (a budget's: the pressure needed), the curve's
-    // range grown to show it
-    const target = searched && searched.kind !== "pressure_budget" ? searched.pressure_pa : null;
-    const at = target ?? c.pressure_needed_pa ?? c.target_pressure_pa;
-    loadDesign(values, { pressurePa: typeof at === "number" ? at : undefined });
+    // the readout at the target's pressure, volume or time (a budget's: what the design
+    // needs), the curve's range grown to show it
+    const at = readoutAt(searched, c);
+    loadDesign(values, { at: typeof at === "number" ? at : undefined });
     $("explore").scrollIntoView({ behavior: "instant", block: "start" });
   });
 }
