@@ -110,6 +110,8 @@ class ModelRegistry:
                     "restart")
             return self.emulator
         if name in ("fitted", "exponential"):
+            if self.fitted is None and self.fitted_error is None:
+                self.load_exponential()    # an app built without start-up loading
             if self.fitted is None:
                 raise UnavailableError(
                     f'model "{name}": no fitted surrogate is loaded ({self.fitted_error}); '

@@ -323,3 +323,25 @@ def test_an_atomic_output_that_fails_names_the_target_and_keeps_the_former(tmp_p
         raise OSError(27, "File too large", str(tmp))
     assert caught.value.filename == str(target)
     assert target.read_bytes() == b"former" and list(tmp_path.iterdir()) == [target]
+
+
+def test_the_plots_refusal_of_a_pressure_only_model_offers_the_plots_own_terms():
+    """`GET /v1/predict/plot?flow_ul_s=2.5&model=paper` was told "(allowed: pressures_pa;
+    ...)", /v1/predict's field, which the plot's query does not have; it is offered the
+    plot against pressure (p_max_pa, without flow_ul_s)."""
+    with TestClient(create_app()) as c:
+        r = c.get("/v1/predict/plot", params={"flow_ul_s": 2.5, "model": "paper"})
+    assert_problem(r, 422)
+    (err,) = r.json()["errors"]
+    assert err["loc"] == ["query", "flow_ul_s"]
+    assert "pressures_pa" not in err["allowed"] and "p_max_pa" in err["allowed"]
+
+
+def test_an_app_built_without_start_up_loading_answers_by_the_exponential_model():
+    """An app used in-process without its lifespan (a batch job's TestClient, no `with`)
+    loaded the emulator on first use but answered model "exponential" with a 503 "no
+    fitted surrogate is loaded (None)"; it is loaded on first use too."""
+    c = TestClient(create_app())
+    r = c.post("/v1/predict", json={"pressures_pa": [500, 1000], "model": "exponential"})
+    assert r.status_code == 200, r.text
+    assert all(a > 0 for a in r.json()["angle_deg"])

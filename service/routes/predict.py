@@ -98,7 +98,13 @@ def predict_plot(query: Annotated[PlotQuery, Query()], models: ModelsDep,
         prediction = predict_answer(surrogate, design, question, query.model, query.level)
     except InputError as exc:
         # the plot asks its own pressures or times: a refusal of those names the query's
-        # parameter that chose them (p_max_pa; flow_ul_s for the time axis)
+        # parameter that chose them (p_max_pa; flow_ul_s for the time axis), and what it
+        # allows in the plot's terms: a model that answers by pressure only is offered
+        # the pressure plot, not /v1/predict's pressures_pa
+        if exc.allowed and exc.allowed.startswith("pressures_pa"):
+            exc = InputError(exc.field, exc.detail, "the plot against pressure (p_max_pa, "
+                             "without flow_ul_s)" + exc.allowed[len("pressures_pa"):],
+                             allowed_said=exc.allowed_said)
         raise located(exc, ("query",), {"pressures_pa": ("p_max_pa",),
                                         "times_s": ("flow_ul_s",)}) from None
     if query.flow_ul_s is None:
