@@ -796,7 +796,7 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
         if unbacked:
             own = (f"its band at the fitted design ({f.baseline_sd_deg:.2f} deg), the "
                    "nominal dimensions' last written decimal and "
-                   if f.baseline_sd_deg is not None else "")
+                   if f.baseline_sd_deg is not None else "its band at the nominal design, ")
             reasons.append(f"not significant (z <= 3) once the baseline's own uncertainty "
                            f"({own}its pressure scale, known to "
                            f"{100 * PRESSURE_SCALE_SD:g} %) is counted: the baseline "
@@ -1231,7 +1231,9 @@ def interpret(report: dict, left: dict) -> str:
                  + (f"its own uncertainty at the fitted design is "
                     f"{u['baseline_sd_at_fit_deg']:.2f} deg RMS"
                     if u["baseline_sd_at_fit_deg"] is not None else
-                    f"its pressure scale is known to {100 * PRESSURE_SCALE_SD:g} % only")
+                    f"its band at the nominal design is {report['baseline_sd_deg']:.2f} deg "
+                    f"RMS and its pressure scale is known to {100 * PRESSURE_SCALE_SD:g} % "
+                    "only")
                  + ", so its better fit may be the baseline's own error there. An FE solve "
                  "of the design (`balloon solve`) or a baseline with more FE data there "
                  "would decide.")
