@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate.calibration._gauge_zero import LEVEL, gauge_at_rest, sentence
+from surrogate.calibration._gauge_zero import LEVEL, MIN_SD_PA, gauge_at_rest, sentence
 
 
 def _curves(zero_pa: list[float]) -> tuple[np.ndarray, ...]:
@@ -44,10 +44,16 @@ def test_the_readings_at_rest_read_the_gauges_zero_against_the_models():
 
 
 def test_a_zeroed_gauge_and_too_few_curves_say_nothing():
-    """Zeros of +-3 Pa (a gauge zeroed before each run) are not off; two curves give no
-    spread worth a test."""
+    """Zeros of +-3 Pa (a gauge zeroed before each run) are not off; nor three curves
+    that agree to the gauge's last digit at 2 Pa (sd 0: t was infinite, written as
+    Infinity, no JSON number, and the zero said to be off); two curves give no spread
+    worth a test."""
     curve, t, v, gauge = _curves([-2.0, 3.0, 1.0])
     assert not gauge_at_rest(curve, t, v, gauge, 400.0 * v)["off"]
+    curve, t, v, gauge = _curves([2.0, 2.0, 2.0])
+    agree = gauge_at_rest(curve, t, v, gauge, 400.0 * v)
+    assert np.isfinite(agree["t"]) and not agree["off"]
+    assert np.isclose(agree["se_pa"], MIN_SD_PA / np.sqrt(3.0))
     two = curve < 2
     assert gauge_at_rest(curve[two], t[two], v[two], gauge[two], 400.0 * v[two]) is None
 

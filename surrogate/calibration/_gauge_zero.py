@@ -30,6 +30,10 @@ from scipy.stats import t as student_t
 
 LEVEL = 0.01          # two-sided: a clean lab's zero is said to be off in 1 set of 100
 MIN_CURVES = 3        # a mean and a spread from at least two degrees of freedom
+# the curves' spread at rest is taken at least this (Pa): a gauge written in kPa to three
+# decimals reads to 1 Pa, and three curves that happen to agree to the digit (sd 0) must
+# not make a 2 Pa zero "off" at an infinite t
+MIN_SD_PA = 1.0
 
 
 def gauge_at_rest(curve: np.ndarray, time_s: np.ndarray, volume_ul: np.ndarray,
@@ -50,9 +54,9 @@ def gauge_at_rest(curve: np.ndarray, time_s: np.ndarray, volume_ul: np.ndarray,
     if n < MIN_CURVES:
         return None
     mean = float(np.mean(per_curve))
-    se = float(np.std(per_curve, ddof=1) / np.sqrt(n))
+    se = float(max(np.std(per_curve, ddof=1), MIN_SD_PA) / np.sqrt(n))
     critical = float(student_t.ppf(1.0 - LEVEL / 2.0, n - 1))
-    t = mean / se if se > 0.0 else (0.0 if mean == 0.0 else np.inf)
+    t = mean / se
     return {"curves": n, "mean_pa": mean, "se_pa": se, "t": float(t),
             "critical_t": critical, "off": bool(abs(t) > critical)}
 
