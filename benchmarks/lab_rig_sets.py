@@ -1,8 +1,10 @@
 """Lab data sets made as a lab makes them, from FE solves (``solver.solve``, default
 settings), never from the calibration's forms: the forty-first session's audit of
-`balloon calibrate` (benchmarks/RESULTS.md) and three files of tests/data.
+`balloon calibrate` (benchmarks/RESULTS.md) and four files of tests/data; the
+forty-second session's sets N1-N5 on three more designs (D8-D10), to check its changes on
+designs they were not made on.
 
-Seven designs inside the emulator's box and not in service/data/curves.h5 (the four
+Ten designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
 solves of the membrane thickness x 0.96, 1 and 1.045 (scatter), and each specimen has its
 own stiffness (both layers' mu x s, s ~ N(1, 0.07) within +-10 %: the pressure axis x s,
@@ -19,9 +21,10 @@ catalogue), a gauge reading 60 Pa high.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
-The first solves what the cache lacks (27 solves of 15-90 s; run alone) and writes each
-set as CSV (and the API's JSON rows); ``--test-data`` writes the three sets with the pump's
-log that tests/test_calibration_history.py reads (tests/data/lab_gauge_noise_*.csv).
+The first solves what the cache lacks (27 + 12 solves of 15-90 s; run alone) and writes each
+set as CSV (and the API's JSON rows); ``--test-data`` writes the four sets with the pump's
+log that tests/test_calibration_history.py and tests/test_calibration_gauge_zero.py read
+(tests/data/lab_gauge_noise_*.csv).
 """
 
 from __future__ import annotations
@@ -50,6 +53,13 @@ DESIGNS = {
                body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
     "D7": dict(L_mm=10.8, t_mm=0.95, T_mm=0.68, b_mm=2.0, h_mm=0.19,
                body_material="ecoflex_00_30", membrane_material="ecoflex_00_30"),
+    # the forty-second session's designs, solved for the sets N1-N5 only
+    "D8": dict(L_mm=7.1, t_mm=0.9, T_mm=0.95, b_mm=1.75, h_mm=0.24,
+               body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
+    "D9": dict(L_mm=11.3, t_mm=0.74, T_mm=1.45, b_mm=1.6, h_mm=0.15,
+               body_material="ecoflex_00_30", membrane_material="pdms_1_15"),
+    "D10": dict(L_mm=15.2, t_mm=0.55, T_mm=1.05, b_mm=1.25, h_mm=0.12,
+                body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
 }
 T_FACTORS = {"a": 0.96, "b": 1.0, "c": 1.045}   # the specimens' membrane thickness
 SPECIMENS = ["a", "b", "c"]
@@ -73,10 +83,19 @@ SETS = {
                            8, {}),
     "L9-gauge60-D1": ("D1", [None], 2.0, 7, 3, 4, {"kind": "gauge_offset", "pa": 60}, 9,
                       {"fmt": "comma"}),
+    # the forty-second session's sets, on designs the fixes were not made on
+    "N1-clean-D8": ("D8", [None], 2.0, 7, 3, 4, {}, 21, {}),
+    "N2-gauge60-D9": ("D9", [None], 2.0, 7, 3, 4, {"kind": "gauge_offset", "pa": 60}, 22, {}),
+    "N3-membrane1.1-D10": ("D10", [None], 2.0, 7, 3, 4, {"kind": "membrane_x1.1"}, 23,
+                           {"fe_suffix": "_m1.1"}),
+    "N4-air-D8": ("D8", [None], 2.0, 7, 3, 4, {"kind": "compliance", "C_ul_per_kpa": 2.0},
+                  24, {}),
+    "N5-clean-D10": ("D10", [3.0], 1.5, 9, 0, 0, {}, 25, {"fmt": "comma"}),
 }
-# the sets tests/test_calibration_history.py reads, with the pump's log
+# the sets tests/test_calibration_history.py and test_calibration_gauge_zero.py read,
+# with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
-             "leak_in_a_hold": "L6-leak-D6"}
+             "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -85,7 +104,8 @@ def solve_missing(cache: Path) -> None:
 
     cache.mkdir(parents=True, exist_ok=True)
     jobs = [(d, k, "") for d in DESIGNS for k in T_FACTORS]
-    jobs += [("D3", k, "*1.1") for k in T_FACTORS]          # a membrane 10 % stiffer
+    stiffer = sorted({v[0] for v in SETS.values() if v[8].get("fe_suffix") == "_m1.1"})
+    jobs += [(d, k, "*1.1") for d in stiffer for k in T_FACTORS]  # a membrane 10 % stiffer
     for d, k, scale in jobs:
         path = cache / f"{d}{k}{'_m1.1' if scale else ''}.npz"
         if path.exists():
@@ -220,7 +240,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's three sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's four sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

@@ -170,3 +170,40 @@ def test_a_dimension_is_known_to_its_last_written_decimal_at_most_to_0_01_mm():
     assert resolution_mm(0.15) == 0.01
     assert resolution_mm(1.0) == resolution_mm(1) == resolution_mm(4.1) == 0.01
     assert abs(resolution_mm(0.164552) - 1e-6) < 1e-18
+
+
+def test_a_camera_gain_carries_the_baselines_band_at_the_nominal_design():
+    """A camera gain is the data's bend over the baseline's at the nominal design, so the
+    baseline's band there leaves the gain uncertain as it leaves a physical change
+    uncertain at its fitted design (_backing.py). For the one-parameter model angle =
+    k a(V) least squares moves k by sum(a s) / sum(a^2) when the baseline is off by s at
+    every reading, coherently within the design; by injected volume the pressure scale
+    does not move the angle (nor, then, k), so that is the whole baseline part of the
+    sd. Until 2026-12-07 a gain carried the pressure scale only (sd_baseline ~0 here): on
+    a lab's three Ecoflex specimens of a membrane 10 % stiffer (benchmarks/lab_rig_sets.py
+    L3) a gain of 0.919 +/- 0.027 was selected at z 3.04, the baseline's band 1.9 deg
+    RMS at the design. The data: one PDMS 1:15 / Ecoflex design's lab loop from FE solves
+    (tests/data/lab_gauge_noise_hold_at_a_flat_top.csv), angle and gauge by volume."""
+    from calibration_lab import emulator
+    from test_calibration_history import lab_rows
+
+    from surrogate.calibration import observations_from_rows
+    from surrogate.calibration._augmented_model import AugmentedModel
+    from surrogate.calibration._backing import with_baseline_uncertainty
+    from surrogate.calibration._least_squares import fit
+    from surrogate.calibration._response import Responses, design_key
+    from surrogate.calibration.effects import EFFECTS
+
+    obs = observations_from_rows(lab_rows("hold_at_a_flat_top")[0])
+    designs = {design_key(obs.design(c)): obs.design(c) for c in range(obs.n_curves)}
+    assert len(designs) == 1
+    responses = Responses(emulator(), designs, 1.6 * float(obs.pressure_pa.max()) + 200.0,
+                          1.25 * float(obs.volume_ul.max()) + 1.0)
+    m = AugmentedModel(obs, responses, (EFFECTS["camera_gain"],), (), pressure_weight=0.01)
+    f = with_baseline_uncertainty(fit(m), responses)
+    a = f.angles() / f.values["k_angle"]                  # the baseline's angle (deg)
+    s = responses.lookup(responses.nominal_sd(), m.design_index, m.reading_pressure(f.x))
+    ok = np.isfinite(a) & np.isfinite(s)
+    shift_band = float(a[ok] @ s[ok] / (a[ok] @ a[ok]))
+    assert shift_band > 0.005                     # a band of ~1 % of the bend at least
+    assert np.isclose(f.sd_baseline()["k_angle"], shift_band, rtol=0.03)

@@ -1,9 +1,15 @@
 """The baseline's own uncertainty, carried into the fitted parameters' standard errors:
-its band at a fitted physical change, and its pressure scale at every fit.
+its band where the fit reads the baseline, and its pressure scale at every fit.
 
 A physical effect is read off the baseline at a changed design (a stiffer membrane, a
 longer chamber). Where the baseline is uncertain there (an emulator's band at the changed
-design), the size it gives is uncertain too, whatever the data say. The baseline's error
+design), the size it gives is uncertain too, whatever the data say. Every other effect is
+read off the baseline at the nominal designs, and its band there counts the same way: a
+camera gain k x angle(V) is the data's bend over the baseline's, so an emulator whose
+angle at the design is uncertain by 3 % leaves that gain uncertain by 3 % too (until
+2026-12-07 only a physical change carried the band: on a lab's three Ecoflex specimens of
+a membrane 10 % stiffer, the baseline's band 1.9 deg RMS at the nominal design, a camera
+gain of 0.919 +/- 0.027 was selected at z 3.04, its sd without the band). The baseline's error
 at one design is systematic: every specimen, flow rate and reading of that design shares
 it (the emulator's band moves the whole curve: every node at +-z sd), so within a design it
 shifts the fitted parameters coherently. Distinct nominal designs of the data are separate
@@ -88,22 +94,22 @@ def dimension_rows(f: FitResult, responses: Responses) -> list[np.ndarray]:
     return out
 
 
-def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray | None:
-    """The baseline's sd (deg) at every reading, at the fitted physical change; None when
-    the fit changes no design."""
+def baseline_sd_rows(f: FitResult, responses: Responses) -> np.ndarray:
+    """The baseline's sd (deg) at every reading where the fit reads the baseline: at the
+    fitted physical change, or at the nominal designs when the fit changes none."""
     m = f.model
-    if not m.physical:
-        return None
     values = f.values
-    table = responses.sd_at(m.physical, [values[e.parameters[0].name] for e in m.physical])
+    table = (responses.sd_at(m.physical, [values[e.parameters[0].name] for e in m.physical])
+             if m.physical else responses.nominal_sd())
     sd = responses.lookup(table, m.design_index, m.reading_pressure(f.x))
     return np.nan_to_num(sd, nan=0.0)
 
 
 def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
-    """``f`` with the baseline's own uncertainty in its covariance: its band at the
-    fitted design and the nominal dimensions' resolution (a physical change), and its
-    pressure scale (every fit)."""
+    """``f`` with the baseline's own uncertainty in its covariance: its band where the
+    fit reads it (every fit), the nominal dimensions' resolution (a physical change), and
+    its pressure scale (every fit). ``baseline_sd_deg``: the band's RMS at a fitted
+    physical change (None without one)."""
     if f.jac is None or not f.k:
         return f
     design = f.model.design_index
@@ -112,13 +118,11 @@ def with_baseline_uncertainty(f: FitResult, responses: Responses) -> FitResult:
     m = f.model   # f.jac is of the weighted residuals (_specimens.py): so are the shifts
     cov = baseline_covariance(
         f.jac, m.whiten(PRESSURE_SCALE_SD * m.pressure_scale_direction(f.x)), design)
-    band_sd = None
     s = baseline_sd_rows(f, responses)
-    if s is not None:
-        if f.jac.shape[0] > s.size:  # the pressure channel: no band for V(p) (0 there)
-            s = np.concatenate([s, np.zeros(f.jac.shape[0] - s.size)])
-        cov = cov + baseline_covariance(f.jac, m.whiten(s), design)
-        band_sd = float(np.sqrt(np.mean(s[:f.model.obs.n] ** 2)))   # the angle rows
+    band_sd = float(np.sqrt(np.mean(s**2))) if m.physical else None   # the angle rows
+    if f.jac.shape[0] > s.size:  # the pressure channel: no band for V(p) (0 there)
+        s = np.concatenate([s, np.zeros(f.jac.shape[0] - s.size)])
+    cov = cov + baseline_covariance(f.jac, m.whiten(s), design)
     for g in dimension_rows(f, responses):
         if f.jac.shape[0] > g.size:  # the pressure channel: none (as the band)
             g = np.concatenate([g, np.zeros(f.jac.shape[0] - g.size)])

@@ -42,6 +42,8 @@ from surrogate.calibration._augmented_model import SWITCH_BOUND, AugmentedModel
 from surrogate.calibration._backing import PRESSURE_SCALE_SD, with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
+from surrogate.calibration._gauge_zero import gauge_at_rest
+from surrogate.calibration._gauge_zero import sentence as gauge_zero_sentence
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._least_squares import (
     R_CAP_DEG,
@@ -303,6 +305,9 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     unbacked = _better_unbacked(candidates, chosen, base_joint)
     after = get_fit(chosen)
     rmse_after, resid_after = get_cv(chosen)
+    rest = (gauge_at_rest(obs.curve, obs.time_s, obs.volume_ul, obs.pressure_pa,
+                          after.model.gauge_pressures(after.x))
+            if channel["used"] and "hydraulic_resistance" not in chosen else None)
     nuisance = _nuisance(after)
     structure = structure_test(obs.curve, after.residual, nuisance)
     left = residual_summary(obs, resid_after, rmse_after, noise, structure,
@@ -343,6 +348,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "pressure_channel": channel,
         "rmse_pressure_before_pa": _pressure_rms(get_xv(()), channel),
         "rmse_pressure_after_pa": _pressure_rms(get_xv(chosen), channel),
+        "gauge_at_rest": rest,
         "gauge_left_after": _gauge_left(_pressure_rms(get_xv(chosen), channel), channel,
                                         left["excess_allowance"]),
         "cross_validation": {"method": "grouped K-fold by curve" if obs.n_specimens ==
@@ -796,7 +802,7 @@ def _judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_j
         if unbacked:
             own = (f"its band at the fitted design ({f.baseline_sd_deg:.2f} deg), the "
                    "nominal dimensions' last written decimal and "
-                   if f.baseline_sd_deg is not None else "")
+                   if f.baseline_sd_deg is not None else "its band at the nominal design, ")
             reasons.append(f"not significant (z <= 3) once the baseline's own uncertainty "
                            f"({own}its pressure scale, known to "
                            f"{100 * PRESSURE_SCALE_SD:g} %) is counted: the baseline "
@@ -1231,10 +1237,15 @@ def interpret(report: dict, left: dict) -> str:
                  + (f"its own uncertainty at the fitted design is "
                     f"{u['baseline_sd_at_fit_deg']:.2f} deg RMS"
                     if u["baseline_sd_at_fit_deg"] is not None else
-                    f"its pressure scale is known to {100 * PRESSURE_SCALE_SD:g} % only")
+                    f"its band at the nominal design is {report['baseline_sd_deg']:.2f} deg "
+                    f"RMS and its pressure scale is known to {100 * PRESSURE_SCALE_SD:g} % "
+                    "only")
                  + ", so its better fit may be the baseline's own error there. An FE solve "
                  "of the design (`balloon solve`) or a baseline with more FE data there "
                  "would decide.")
+    said = gauge_zero_sentence(report.get("gauge_at_rest"), report["selected_effects"])
+    if said:
+        s.append(said)
     for c in report["not_identifiable"]:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
