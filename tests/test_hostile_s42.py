@@ -345,3 +345,20 @@ def test_an_app_built_without_start_up_loading_answers_by_the_exponential_model(
     r = c.post("/v1/predict", json={"pressures_pa": [500, 1000], "model": "exponential"})
     assert r.status_code == 200, r.text
     assert all(a > 0 for a in r.json()["angle_deg"])
+
+
+@pytest.mark.parametrize("word", ["1,,2", ",,500", "500,,", "100,200 300,,400"])
+def test_an_empty_place_between_commas_is_refused_not_skipped(word):
+    """`--pressures 1,,2` (a spreadsheet's empty cell) was read as 1, 2: the numbers after
+    the gap moved up by one, silently. It is refused in one line naming the option."""
+    code, _, err, escaped = run(["predict", "--model", "paper", "--L-mm", "7", "--t-mm",
+                                 "0.6", "--pressures", *word.split()])
+    assert escaped is None and code == 2
+    (line,) = visible_lines(err)
+    assert "--pressures" in line and "empty place between two commas" in line
+
+
+def test_a_trailing_comma_is_still_read():
+    code, out, _, _ = run(["predict", "--model", "paper", "--L-mm", "7", "--t-mm", "0.6",
+                           "--pressures", "100,200,", "300"])
+    assert code == 0 and "300.000" in out

@@ -25,7 +25,14 @@ DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.js
 
 def number_list(text: str) -> list[float]:
     """One command-line word of numbers: ``1000`` or ``500,1000,1500`` (commas, as
-    people paste them from a spreadsheet, or spaces between words)."""
+    people paste them from a spreadsheet, or spaces between words). An empty place
+    between two commas (``1,,2``: a spreadsheet's empty cell) is refused, not skipped:
+    the numbers after it would move up by one."""
+    for word in text.split():
+        if ",," in word:
+            raise argparse.ArgumentTypeError(
+                f"{text!r} has an empty place between two commas (a missing value?): "
+                "give a number in each place")
     words = text.replace(",", " ").split()
     try:
         return [float(w) for w in words] if words else [float("nan")]

@@ -139,7 +139,8 @@ export function setupInverse({ loadDesign }) {
     const common = candidates.length > 1
       ? messagesOf(candidates[0]).filter((m) => candidates.every((c) => messagesOf(c).includes(m)))
       : [];
-    if (common.length) text += ` Every design listed: ${common.join(" ")}`;
+    // a sentence of its own: the server's explanation may end without a full stop
+    if (common.length) text += `${/[.!?]$/.test(text) ? "" : "."} Every design listed: ${common.join(" ")}`;
     $("inv-explanation").textContent = text;
     // the target kind's columns (a column no listed design has a number for left out)
     const columns = targetColumns(searched).filter((col) => candidates.some((c) => typeof c[col.key] === "number"));
