@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema, model_validator
 
 from service.pump import MAX_ANGLE_DEG, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
@@ -73,6 +73,15 @@ class MaterialPair(Schema):
         return value
 
 
+_ID = INLINE_MATERIAL_ID.removeprefix("^").removesuffix("$")
+# the published schema admits both forms the validator reads: a schema-checking client
+# sending the text "body/membrane" (the CLI's --pair, the examples) is not told it is wrong
+PairIn = Annotated[MaterialPair, WithJsonSchema({"anyOf": [
+    MaterialPair.model_json_schema(),
+    {"type": "string", "pattern": rf"^\s*{_ID}\s*/\s*{_ID}\s*$",
+     "description": 'the text "body/membrane", e.g. "pdms_1_10/ecoflex_00_30"'}]})]
+
+
 def _bound_list(lo: float, hi: float) -> Any:
     """[low, high] within (lo, hi), or None: a search bound's type."""
     return list[Annotated[float, Field(ge=lo, le=hi)]] | None
@@ -117,7 +126,7 @@ class InverseRequest(Schema):
     membrane_stiffness_scale_bounds: SCALE_BOUNDS = Field(
         None, min_length=2, max_length=2, description="[low, high] membrane mu / "
         "preset mu (default [1, 1])")
-    material_pairs: list[MaterialPair] | None = Field(
+    material_pairs: list[PairIn] | None = Field(
         None, min_length=1, max_length=20, description="allowed pairs (default: all fitted)")
     objective: Literal[OBJECTIVES] | None = Field(  # type: ignore[valid-type]
         None, description="ranking (default: certainty; pressure for pressure_budget, "
