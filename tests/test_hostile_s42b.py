@@ -10,13 +10,19 @@ Each test failed on the code before its fix (commit messages say which).
 from __future__ import annotations
 
 import os
+import threading
+import time
 
 import pytest
 from fastapi.testclient import TestClient
-from service_fakes import assert_problem, settings_for
+from service_fakes import assert_problem, fast_solve, settings_for, slow_solve
 from test_cli_fuzz import run, visible_lines
 
 from service.app import create_app
+from service.errors import ConflictError
+from service.jobs import JobManager
+from solver.design import Design
+from solver.settings import SolverSettings
 
 DESIGN = {"L_mm": 9.1, "t_mm": 0.6}
 
@@ -76,3 +82,75 @@ def test_the_cli_says_a_fifo_under_a_models_name_is_one(tmp_path, monkeypatch):
     assert escaped is None and code not in (0, None)
     lines = visible_lines(err)
     assert len(lines) == 1 and "not a regular file" in lines[0], err
+
+
+# -- 2. cancels of one running job ---------------------------------------------------------
+
+def _running(jobs: JobManager, job_id: str) -> None:
+    deadline = time.monotonic() + 60
+    while jobs.get(job_id).progress.get("step", 0) < 1 and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert jobs.get(job_id).status == "running"
+
+
+def test_of_three_concurrent_cancels_one_cancels_and_two_are_told_it_is_cancelled():
+    """Three DELETEs of one running job all answered 200 (each waited and returned the
+    cancelled job), while a DELETE after them answered 409 "already cancelled": the
+    answer depended on timing. RFC 9110 9.2.2: DELETE is idempotent in its effect (the
+    job ends cancelled, once), not in its answers; the one that cancelled it gets 200 with
+    the job, the others 409 naming the status, as a later DELETE does."""
+    jobs = JobManager(slow_solve, lambda *a: "c" * 32, workers=1, queue_size=1)
+    jobs.start()
+    try:
+        job = jobs.submit(Design(), SolverSettings(), "k")
+        _running(jobs, job.id)
+        answers: list[object] = []
+
+        def cancel() -> None:
+            try:
+                answers.append(jobs.cancel(job.id).status)
+            except ConflictError as exc:
+                answers.append(str(exc))
+
+        threads = [threading.Thread(target=cancel) for _ in range(3)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join(30)
+        assert sorted(answers, key=str) == ["cancelled"] + [
+            f"job {job.id} is already cancelled"] * 2, answers
+        assert jobs.get(job.id).status == "cancelled"
+    finally:
+        jobs.shutdown()
+
+
+def test_a_cancel_while_the_curve_is_stored_is_refused_and_the_curve_kept():
+    """A DELETE that arrived while a finished solve's curve was being written waited for
+    the write and answered 200 with the job "finished": a cancel that did not cancel. It
+    is a 409 at once, the write goes on, and the job ends finished with its curve."""
+    writing, release, written = threading.Event(), threading.Event(), []
+
+    def slow_write(design, settings, curve):
+        writing.set()
+        release.wait(30)
+        written.append(curve)
+        return "c" * 32
+
+    jobs = JobManager(fast_solve, slow_write, workers=1, queue_size=1)
+    jobs.start()
+    try:
+        job = jobs.submit(Design(), SolverSettings(), "k")
+        assert writing.wait(60)
+        with pytest.raises(ConflictError, match="being stored"):
+            jobs.cancel(job.id, wait_s=2.0)
+        release.set()
+        deadline = time.monotonic() + 30
+        while jobs.get(job.id).active and time.monotonic() < deadline:
+            time.sleep(0.02)
+        done = jobs.get(job.id)
+        assert done.status == "finished" and done.curve_id == "c" * 32 and len(written) == 1
+        with pytest.raises(ConflictError, match="already finished"):
+            jobs.cancel(job.id)
+    finally:
+        release.set()
+        jobs.shutdown()
