@@ -24,6 +24,7 @@ from service.jobs import JobManager
 from solver.design import Design
 from solver.settings import SolverSettings
 
+SHIPPED_DB = "service/data/curves.h5"
 DESIGN = {"L_mm": 9.1, "t_mm": 0.6}
 
 
@@ -154,3 +155,22 @@ def test_a_cancel_while_the_curve_is_stored_is_refused_and_the_curve_kept():
     finally:
         release.set()
         jobs.shutdown()
+
+
+# -- 3. `balloon db ls --where` names the option -------------------------------------------
+
+@pytest.mark.parametrize(("argv", "field"), [
+    (["--where", "L_mm=nan"], "--where L_mm: "),
+    (["--where", "status=bogus"], "--where status: "),
+    (["--where", "nope=3"], "--where nope: "),
+    (["--where", "L_mm=7.1", "L_mm=8"], "--where L_mm: given twice"),
+    (["--status", "failed", "--where", "status=complete"], "--status: "),
+])
+@pytest.mark.parametrize("command", ["ls", "export"])
+def test_a_bad_filter_is_named_by_the_option_typed(command, argv, field):
+    """``--where L_mm=nan`` was refused as ``L_mm: ...`` (the store's name); a field
+    given twice, or a status by both options, was read as its last value."""
+    code, out, err, escaped = run(["db", command, SHIPPED_DB, *argv])
+    assert escaped is None and code in (1, 2), (code, err)
+    lines = visible_lines(err)
+    assert len(lines) == 1 and f"balloon: error: {field}" in lines[0], err
