@@ -174,3 +174,23 @@ def test_a_bad_filter_is_named_by_the_option_typed(command, argv, field):
     assert escaped is None and code in (1, 2), (code, err)
     lines = visible_lines(err)
     assert len(lines) == 1 and f"balloon: error: {field}" in lines[0], err
+
+
+# -- the fresh probe ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("extra", [
+    ["--volume-ul", "20"], ["--time-s", "3"], ["--kind", "angle_at_volume"],
+    ["--angle-deg", "40"], ["--pressure-pa", "1000"], ["--force-mn", "2"],
+    ["--L-range", "5", "9"], ["--membrane-stiffness-range", "1", "1.2"],
+    ["--pair", "pdms_1_10/ecoflex_00_30"], ["--objective", "compact"], ["-n", "3"]])
+def test_one_designs_pressures_refuse_a_searchs_options(extra):
+    """``balloon inverse --L-mm 9 --t-mm 0.6 --angles-deg 30 --volume-ul 20`` printed the
+    pressures for 30 deg and dropped --volume-ul (and every other option of a design
+    search: --time-s, --kind, the ranges, --pair, -n), though the search refuses one
+    design's --L-mm the other way round."""
+    code, out, err, escaped = run(["inverse", "--L-mm", "9", "--t-mm", "0.6",
+                                   "--angles-deg", "30", "--model", "paper", *extra])
+    assert escaped is None and code in (1, 2) and not out, (code, out)
+    lines = visible_lines(err)
+    flag = extra[0]
+    assert len(lines) == 1 and lines[0].startswith(f"balloon: error: {flag}: "), err
