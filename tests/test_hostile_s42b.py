@@ -14,6 +14,7 @@ import threading
 import time
 
 import pytest
+from explorer_browser import LiveServer, open_explorer
 from fastapi.testclient import TestClient
 from service_fakes import assert_problem, fast_solve, settings_for, slow_solve
 from test_cli_fuzz import run, visible_lines
@@ -194,3 +195,39 @@ def test_one_designs_pressures_refuse_a_searchs_options(extra):
     lines = visible_lines(err)
     flag = extra[0]
     assert len(lines) == 1 and lines[0].startswith(f"balloon: error: {flag}: "), err
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """The app with the shipped models, served for the browser test (the ``watched``
+    fixture's page opens on it)."""
+    with LiveServer(tmp_path_factory.mktemp("explorer-s42b")) as live:
+        yield live
+
+
+@pytest.mark.timeout(300)
+def test_the_search_form_never_reads_an_unreadable_number_as_empty(watched, server):
+    """A number box the browser cannot read ("1e999": badInput) reads as "": the form sent
+    the volume target as null (answered "got none" beside a filled box), a bound as the
+    box's edge and the number of designs as 5, each silently. The text goes to the server,
+    which refuses it at its field."""
+    page = open_explorer(watched, server.url)
+    bodies: list = []
+    page.on("request", lambda r: bodies.append(r.post_data_json)
+            if r.url.endswith("/v1/inverse") and r.method == "POST" else None)
+    page.select_option("#inv-kind", "angle_at_volume")
+    for box, field, error in [("#inv-volume", "volume_ul", "#err-inv-volume"),
+                              ("#inv-L-lo", "L_bounds_mm", "#err-inv-L"),
+                              ("#inv-n", "n_results", "#err-inv-n")]:
+        page.fill("#inv-volume", "20")
+        page.fill("#inv-L-lo", "")
+        page.fill("#inv-n", "3")
+        page.fill(box, "1e999")
+        assert page.evaluate(f"document.querySelector('{box}').validity.badInput")
+        count = len(bodies)
+        page.click("#inv-run")
+        page.wait_for_selector(f"{error}:not([hidden])")
+        assert len(bodies) == count + 1
+        sent = bodies[-1].get(field, bodies[-1]["target"].get(field))
+        assert sent == "not a number" or sent[0] == "not a number", bodies[-1]
+        assert "Input should be a valid" in page.inner_text(error)
