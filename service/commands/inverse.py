@@ -184,6 +184,7 @@ def _one_design(s: object, args: argparse.Namespace) -> int:
 
 def _design_search(s: object, args: argparse.Namespace) -> int:
     """Designs for a target over the box: the same search as POST /v1/inverse."""
+    from service.convert import jsonable
     from surrogate import DesignTarget
     from surrogate.design_search import SearchBounds, search_designs
 
@@ -240,8 +241,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                 "kind": "--kind", "level": "--level"}.get(exc.field)
         raise (InputError(flag, exc.detail, exc.allowed) if flag else exc) from None
     res = replace(res, model=args.model or "emulator")
-    if args.json:
-        print(json.dumps(res.as_dict(), indent=1))
+    if args.json:   # JSON has no NaN: a quantity a pump's target has none of is null
+        print(json.dumps(jsonable(res.as_dict()), indent=1, allow_nan=False))
         return 0 if res.feasible else 1
     print(f"model {res.model}: {kind}, objective {res.objective}: {res.explanation}")
     if not res.feasible:
