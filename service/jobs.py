@@ -174,6 +174,9 @@ class JobManager:
             while self._jobs[job_id].active and time.monotonic() < deadline:
                 self._cond.wait(deadline - time.monotonic())
             job = self._jobs[job_id]
+            if another and job.active:      # the first cancel's process still stopping
+                raise ConflictError(f"job {job_id} is already being cancelled",
+                                    job_status=job.status)
             if another or job.status not in ("cancelled", "running"):
                 raise _ended(job)
             return job
