@@ -42,6 +42,11 @@ WriteFn = Callable[[Any, Any, Any], str]
 ACTIVE = ("queued", "running")
 
 
+def _ended(job: JobState) -> ConflictError:
+    """A cancel of a job that has ended (or that another cancel ended): 409."""
+    return ConflictError(f"job {job.id} is already {job.status}", job_status=job.status)
+
+
 def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
@@ -88,6 +93,7 @@ class JobManager:
         self._jobs: OrderedDict[str, JobState] = OrderedDict()
         self._pending: deque[str] = deque()
         self._cancel: set[str] = set()
+        self._storing: set[str] = set()     # solves finished, their curves being written
         self._threads: list[threading.Thread] = []
         self._stopping = False
 
@@ -142,20 +148,38 @@ class JobManager:
                                     "memory until the server restarts)") from None
 
     def cancel(self, job_id: str, wait_s: float = 10.0) -> JobState:
-        """Cancel a queued or running job; a running one is terminated (waits for it)."""
+        """Cancel a queued or running job; a running one is terminated (waits for it).
+
+        Idempotent as RFC 9110 9.2.2 means it: the job ends cancelled however many
+        cancels arrive, and exactly one of them is the one that cancelled it. The others
+        -- after it, or beside it while its worker process is being stopped -- raise
+        ConflictError (409: the job's state conflicts with the request, as for a job that
+        already ended), once the job has ended, naming its status. A job whose solve has
+        finished is no longer cancelled: its curve is being stored (ConflictError at once)
+        or stored (its status), never half written nor dropped."""
         deadline = time.monotonic() + wait_s
         with self._cond:
             job = self.get(job_id)
             if not job.active:
-                raise ConflictError(f"job {job_id} is already {job.status}",
-                                    job_status=job.status)
+                raise _ended(job)
             if job.status == "queued":
                 self._pending.remove(job_id)
                 return self._update(job_id, status="cancelled", finished_utc=_now())
+            if job_id in self._storing:
+                raise ConflictError(f"job {job_id}'s solve has finished and its curve is "
+                                    "being stored; it can no longer be cancelled",
+                                    job_status=job.status)
+            another = job_id in self._cancel
             self._cancel.add(job_id)
             while self._jobs[job_id].active and time.monotonic() < deadline:
                 self._cond.wait(deadline - time.monotonic())
-            return self._jobs[job_id]
+            job = self._jobs[job_id]
+            if another and job.active:      # the first cancel's process still stopping
+                raise ConflictError(f"job {job_id} is already being cancelled",
+                                    job_status=job.status)
+            if another or job.status not in ("cancelled", "running"):
+                raise _ended(job)
+            return job
 
     def stats(self) -> dict[str, int]:
         with self._cond:
@@ -189,6 +213,8 @@ class JobManager:
                 self._run(job)
             except Exception as exc:  # noqa: BLE001 - a job never kills its worker thread
                 with self._cond:
+                    self._cancel.discard(job.id)
+                    self._storing.discard(job.id)
                     self._update(job.id, status="failed", finished_utc=_now(),
                                  error=f"internal error: {type(exc).__name__}: {exc}")
 
@@ -219,6 +245,8 @@ class JobManager:
             receiver.close()
         curve = outcome.pop("curve", None)
         if curve is not None:
+            with self._cond:    # from here on a cancel is refused: the result is kept
+                self._storing.add(job.id)
             try:
                 curve_id = self._write_fn(job.design, job.settings, curve)
                 outcome = {"status": "finished", "curve_id": curve_id,
@@ -233,6 +261,7 @@ class JobManager:
                            "error": f"the solve finished but storing it failed: {exc}"}
         with self._cond:
             self._cancel.discard(job.id)
+            self._storing.discard(job.id)
             self._update(job.id, finished_utc=_now(), **outcome)
 
     def _receive(self, job: JobState, receiver: Any, proc: Any) -> dict[str, Any]:

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from service.errors import FieldError, UnavailableError
+from service.saved_model_file import saved_file_fault
 from solver.errors import BalloonError, ExistsError, InputError, NotFoundError
 
 # the built-in models by their current names, as errors list them ("fitted", the older
@@ -150,7 +151,12 @@ def load_calibrated(name: str, models_dir: Path, design_space: Any = None) -> An
     through. The answers name the model only: never the models directory, never the other
     saved models (another user's)."""
     from surrogate.calibration import load_model
+    from surrogate.calibration._saved import NAME_PATTERN
 
+    fault = saved_file_fault(models_dir, name) if NAME_PATTERN.fullmatch(name) else None
+    if fault is not None:
+        raise UnavailableError(f"the saved model {name!r} cannot be read: its entry in the "
+                               f"server's models directory is {fault}")
     try:
         return load_model(name, models_dir, design_space)
     except (NotFoundError, FileNotFoundError, IsADirectoryError):

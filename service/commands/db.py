@@ -79,18 +79,35 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     salvage.set_defaults(func=run_salvage)
 
 
-def parse_where(items: list[str]) -> dict[str, object]:
+def query_filters(args: argparse.Namespace) -> dict[str, object]:
+    """The records' filter from ``--where FIELD=VALUE ...`` and ``--status``, each checked
+    before the database is opened (``solver.store.hdf5.check_filter``) and refused naming
+    the option as typed (``--where L_mm``, not the store's ``L_mm``); a field given twice,
+    or a status by both options, is refused rather than read as its last value."""
     from solver.errors import InputError
+    from solver.store.hdf5 import check_filter
 
     filters: dict[str, object] = {}
-    for item in items:
+    for item in args.where:
         name, sep, text = item.partition("=")
         if not sep or not name:
             raise InputError("--where", f"got {item!r}", "FIELD=VALUE, e.g. L_mm=7.1")
+        option = f"--where {name}"
+        if name in filters:
+            raise InputError(option, "given twice", "each field once")
         try:
-            filters[name] = int(text) if text.lstrip("-").isdigit() else float(text)
+            value: object = int(text) if text.lstrip("-").isdigit() else float(text)
         except ValueError:
-            filters[name] = text
+            value = text
+        try:
+            check_filter(name, value)
+        except InputError as exc:
+            raise InputError(option, exc.detail, exc.allowed) from None
+        filters[name] = value
+    if args.status:
+        if "status" in filters:
+            raise InputError("--status", "given with --where status=... too", "one of them")
+        filters["status"] = args.status
     return filters
 
 
@@ -107,9 +124,7 @@ def resolve(db: Any, prefix: str) -> str:
 
 
 def selected(db: Any, args: argparse.Namespace) -> list[Any]:
-    filters = parse_where(args.where)
-    if args.status:
-        filters["status"] = args.status
+    filters = query_filters(args)
     if getattr(args, "keys", None):
         records = [db.get(resolve(db, k)) for k in args.keys]
         if filters:
@@ -133,9 +148,7 @@ def jsonable(value: Any) -> Any:
 def run_ls(args: argparse.Namespace) -> int:
     from solver.store import CurveStore
 
-    filters = parse_where(args.where)
-    if args.status:
-        filters["status"] = args.status
+    filters = query_filters(args)
     with CurveStore(args.db) as db:
         rows = db.summaries(**filters)
     rows.sort(key=lambda r: (r["design"]["body_material"], r["design"]["membrane_material"],

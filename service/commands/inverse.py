@@ -114,7 +114,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--objective", choices=OBJECTIVES,
                         help="ranking (default: pressure for pressure_budget, volume for "
                              "volume_budget and time_budget, certainty otherwise)")
-    parser.add_argument("-n", "--n-results", type=int, default=5, help="designs to list (5)")
+    parser.add_argument("-n", "--n-results", type=int, help="designs to list (5)")
     add_pump_arguments(parser)  # with --angles-deg: the volume, time and pump-gauge pressure;
     # a design search reads --flow-ul-s with --time-s
     add_model_arguments(parser)
@@ -142,9 +142,22 @@ def run(args: argparse.Namespace) -> int:
     return _design_search(s, args)
 
 
+#: a design search's own options, by argparse dest, which one design's answer does not read
+SEARCH_ONLY = {"kind": "--kind", "angle_deg": "--angle-deg", "force_mn": "--force-mn",
+               "pressure_pa": "--pressure-pa", "volume_ul": "--volume-ul",
+               "time_s": "--time-s", "pair": "--pair", "objective": "--objective",
+               "n_results": "-n", **{flag[2:].replace("-", "_"): flag
+                                     for flag, _ in RANGE_FLAGS.values()}}
+
+
 def _one_design(s: object, args: argparse.Namespace) -> int:
     from service.pump import inverse_answer
 
+    for dest, flag in SEARCH_ONLY.items():  # given, never silently dropped
+        if getattr(args, dest, None) is not None:
+            raise InputError(flag, "sets a design search's target or bounds; the pressures "
+                             "for --angles-deg of one design do not read it",
+                             f"leave {flag} out, or --angles-deg out for a design search")
     design = design_from_args(args)
     try:
         body = inverse_answer(s, design, args.angles_deg, args.model or "emulator", args.level,
@@ -171,6 +184,7 @@ def _one_design(s: object, args: argparse.Namespace) -> int:
 
 def _design_search(s: object, args: argparse.Namespace) -> int:
     """Designs for a target over the box: the same search as POST /v1/inverse."""
+    from service.convert import jsonable
     from surrogate import DesignTarget
     from surrogate.design_search import SearchBounds, search_designs
 
@@ -204,6 +218,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                 raise InputError("--pair", f"got {text!r}", "BODY/MEMBRANE material ids")
             found.append((body, membrane))
         pairs = tuple(found)
+    if args.n_results is None:
+        args.n_results = 5
     if not 1 <= args.n_results <= N_RESULTS_MAX:
         raise InputError("-n", f"got {args.n_results}", f"1 <= n <= {N_RESULTS_MAX} designs")
     target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
@@ -225,8 +241,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                 "kind": "--kind", "level": "--level"}.get(exc.field)
         raise (InputError(flag, exc.detail, exc.allowed) if flag else exc) from None
     res = replace(res, model=args.model or "emulator")
-    if args.json:
-        print(json.dumps(res.as_dict(), indent=1))
+    if args.json:   # JSON has no NaN: a quantity a pump's target has none of is null
+        print(json.dumps(jsonable(res.as_dict()), indent=1, allow_nan=False))
         return 0 if res.feasible else 1
     print(f"model {res.model}: {kind}, objective {res.objective}: {res.explanation}")
     if not res.feasible:

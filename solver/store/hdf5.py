@@ -86,7 +86,7 @@ def _fsync_path(path: Path, directory: bool = False) -> None:
         os.close(fd)
 
 
-def _check_filter(name: str, value: object) -> None:
+def check_filter(name: str, value: object) -> None:
     """InputError for a filter no record can meet for want of sense: an unknown field, a
     length that is not a finite number (``balloon db ls --where L_mm=nan`` listed "0
     records"), a status that is none."""
@@ -283,7 +283,7 @@ class CurveStore:
         """Per record: key, status, reason, design (flat, material ids), settings, n_steps,
         provenance -- without loading the curves; ``filters`` as for ``query``."""
         for name, value in filters.items():
-            _check_filter(name, value)
+            check_filter(name, value)
         with self._mutex, self._reading():
             f = self._file()       # once: the records and the index of the same version
             group = f[schema.RECORDS]

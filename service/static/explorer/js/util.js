@@ -26,9 +26,13 @@ export function download(name, blobOrText, type = "text/plain") {
   setTimeout(() => URL.revokeObjectURL(url), 1000);
 }
 
+// A number box's value, null when empty; a box holding text the browser could not read as
+// a number ("1e999", "1e") reads as empty (validity.badInput): sent as text, which the
+// server refuses naming the field, never as null (a missing value, a default, a bound at
+// the box's edge)
 export function numberOrNull(input) {
   const text = String(input.value).trim();
-  if (text === "") return null;
+  if (text === "") return input.validity && input.validity.badInput ? "not a number" : null;
   const v = Number(text);
   return Number.isFinite(v) ? v : text;  // a non-number goes to the server, which names it
 }
