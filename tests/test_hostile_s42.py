@@ -362,3 +362,15 @@ def test_a_trailing_comma_is_still_read():
     code, out, _, _ = run(["predict", "--model", "paper", "--L-mm", "7", "--t-mm", "0.6",
                            "--pressures", "100,200,", "300"])
     assert code == 0 and "300.000" in out
+
+
+def test_a_design_search_refusal_speaks_in_options():
+    """`balloon inverse --kind angle_at_volume ... --pressure-pa 1500` said "leave
+    pressure_pa out (the angle_at_volume target takes volume_ul)", the HTTP schema's
+    names, under the label --pressure-pa; its words are the options now."""
+    code, _, err, escaped = run(["inverse", "--kind", "angle_at_volume", "--volume-ul", "20",
+                                 "--angle-deg", "45", "--pressure-pa", "1500"])
+    assert escaped is None and code == 2
+    (line,) = visible_lines(err)
+    assert "leave --pressure-pa out" in line and "takes --volume-ul" in line
+    assert "pressure_pa" not in line and "volume_ul" not in line

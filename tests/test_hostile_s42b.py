@@ -76,12 +76,14 @@ def test_a_link_to_a_model_inside_the_directory_is_read_through(tmp_path):
     assert "not a calibrated model" in assert_problem(r, 503)["detail"]
 
 
-def test_the_cli_says_a_fifo_under_a_models_name_is_one(tmp_path, monkeypatch):
+def test_the_cli_says_a_fifo_under_a_models_name_is_one(tmp_path):
     """``balloon predict --model pipe`` with a FIFO there: one line, not "no saved model"."""
     _odd_entries(tmp_path / "models")
-    monkeypatch.setenv("BALLOON_MODELS_DIR", str(tmp_path / "models"))
+    # the option, not BALLOON_MODELS_DIR: the process's settings are read once and kept
+    # (get_settings), so an earlier test in the same worker would hide the variable
     code, out, err, escaped = run(["predict", "--L-mm", "9.1", "--t-mm", "0.6",
-                                   "--pressures", "1000", "--model", "pipe"])
+                                   "--pressures", "1000", "--model", "pipe",
+                                   "--models-dir", str(tmp_path / "models")])
     assert escaped is None and code not in (0, None)
     lines = visible_lines(err)
     assert len(lines) == 1 and "not a regular file" in lines[0], err

@@ -228,12 +228,12 @@ def test_the_openapi_page_has_a_volume_target_example(shipped_client):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--angle-deg", "45", "--volume-ul", "600"], ("--volume-ul", "0 < volume_ul <= 500 ul")),
-    (["--angle-deg", "45", "--time-s", "8"], ("--flow-ul-s", "1e-06 <= flow_ul_s <= 1000")),
+    (["--angle-deg", "45", "--volume-ul", "600"], ("--volume-ul", "0 < --volume-ul <= 500 ul")),
+    (["--angle-deg", "45", "--time-s", "8"], ("--flow-ul-s", "1e-06 <= --flow-ul-s <= 1000")),
     (["--angle-deg", "45", "--time-s", "800", "--flow-ul-s", "2.5"],
-     ("--time-s", "time_s <= 200 s at 2.5 ul/s")),
+     ("--time-s", "--time-s <= 200 s at 2.5 ul/s")),
     (["--angle-deg", "45", "--pressure-pa", "1500", "--flow-ul-s", "2.5"],
-     ("--flow-ul-s", "does not use flow_ul_s")),
+     ("--flow-ul-s", "does not use --flow-ul-s")),
     (["--angle-deg", "45", "--volume-ul", "20", "--inlet"], ("--inlet", "leave out")),
     (["--kind", "volume_budget", "--angle-deg", "45", "--volume-ul", "20", "--objective",
       "pressure"], ("--objective", "volume | margin")),

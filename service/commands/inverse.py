@@ -33,6 +33,7 @@ from service.commands.predict import (
     design_from_args,
     inlet_from_args,
     print_validity,
+    renamed_as_options,
     surrogate_from_args,
 )
 from solver.errors import InputError
@@ -52,6 +53,12 @@ RANGE_FLAGS = {
     "body_stiffness_scale": ("--body-stiffness-range", "body mu / preset mu bounds"),
     "membrane_stiffness_scale": ("--membrane-stiffness-range", "membrane mu / preset mu bounds"),
 }
+# a design search's request fields -> the options that set them (a refusal names these)
+SEARCH_FLAGS = {**{name: flag for name, (flag, _) in RANGE_FLAGS.items()},
+                "material_pairs": "--pair", "angle_deg": "--angle-deg",
+                "force_mn": "--force-mn", "pressure_pa": "--pressure-pa",
+                "objective": "--objective", "volume_ul": "--volume-ul", "time_s": "--time-s",
+                "flow_ul_s": "--flow-ul-s", "kind": "--kind", "level": "--level"}
 
 
 def search_box(name: str) -> tuple[float, float, str]:
@@ -222,9 +229,12 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
         args.n_results = 5
     if not 1 <= args.n_results <= N_RESULTS_MAX:
         raise InputError("-n", f"got {args.n_results}", f"1 <= n <= {N_RESULTS_MAX} designs")
-    target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
-                          force_mn=args.force_mn, volume_ul=args.volume_ul,
-                          time_s=args.time_s, flow_ul_s=args.flow_ul_s)
+    try:
+        target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
+                              force_mn=args.force_mn, volume_ul=args.volume_ul,
+                              time_s=args.time_s, flow_ul_s=args.flow_ul_s)
+    except InputError as exc:
+        raise renamed_as_options(exc, SEARCH_FLAGS) from None
     ranges = {name: (tuple(v) if (v := getattr(args, flag[2:].replace("-", "_"))) else None)
               for name, (flag, _) in RANGE_FLAGS.items()}
     for name, (flag, _) in RANGE_FLAGS.items():
@@ -234,12 +244,7 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                              objective=args.objective, n_results=args.n_results,
                              level=args.level)
     except InputError as exc:
-        flag = {**{n: f for n, (f, _) in RANGE_FLAGS.items()}, "material_pairs": "--pair",
-                "angle_deg": "--angle-deg", "force_mn": "--force-mn",
-                "pressure_pa": "--pressure-pa", "objective": "--objective",
-                "volume_ul": "--volume-ul", "time_s": "--time-s", "flow_ul_s": "--flow-ul-s",
-                "kind": "--kind", "level": "--level"}.get(exc.field)
-        raise (InputError(flag, exc.detail, exc.allowed) if flag else exc) from None
+        raise renamed_as_options(exc, SEARCH_FLAGS) from None
     res = replace(res, model=args.model or "emulator")
     if args.json:   # JSON has no NaN: a quantity a pump's target has none of is null
         print(json.dumps(jsonable(res.as_dict()), indent=1, allow_nan=False))

@@ -152,14 +152,26 @@ def as_flag(exc: Exception) -> Exception:
     return exc
 
 
-def _as_flags(text: str | None) -> str | None:
-    """``text`` with each request field it names (``PUMP_FLAGS``; those with a unit in
-    their name, not a word such as "level") as its CLI option."""
+def _as_flags(text: str | None, flags: dict[str, str] = PUMP_FLAGS) -> str | None:
+    """``text`` with each request field it names (``flags``' keys, ``PUMP_FLAGS`` by
+    default; those with a unit in their name, not a word such as "level") as its CLI
+    option."""
     if not text:
         return text
-    fields = "|".join(re.escape(f) for f in PUMP_FLAGS if "_" in f)
-    return re.sub(rf"(?<![\w.-])({fields})(?![\w.])", lambda m: PUMP_FLAGS[m.group(1)],
-                  text)
+    fields = "|".join(re.escape(f) for f in flags if "_" in f)
+    return re.sub(rf"(?<![\w.-])({fields})(?![\w.])", lambda m: flags[m.group(1)], text)
+
+
+def renamed_as_options(exc: Exception, flags: dict[str, str]) -> Exception:
+    """An InputError whose field is one of ``flags``' keys as the CLI option that sets
+    it, its words too ("leave pressure_pa out" is "leave --pressure-pa out" on the
+    command line); any other exception as it is."""
+    from solver.errors import InputError
+
+    if isinstance(exc, InputError) and exc.field in flags:
+        return InputError(flags[exc.field], _as_flags(exc.detail, flags),
+                          _as_flags(exc.allowed, flags), allowed_said=exc.allowed_said)
+    return exc
 
 
 def inlet_from_args(args: argparse.Namespace) -> object:
