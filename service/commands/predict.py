@@ -140,16 +140,13 @@ def as_flag(exc: Exception) -> Exception:
     sets it (``t_mm`` -> ``--t-mm``; a refusal outside the box renames every field it
     names)."""
     from solver.design_space import OutOfBoxError
-    from solver.errors import InputError
 
     names = {**PUMP_FLAGS, **DESIGN_FLAGS}
     if isinstance(exc, OutOfBoxError):
         return exc.renamed(names)
-    if isinstance(exc, InputError) and exc.field in names:
-        # the request fields its words name are the CLI's options too ("allowed:
-        # pressures_pa" for a model that answers by pressure only is --pressures here)
-        return InputError(names[exc.field], _as_flags(exc.detail), _as_flags(exc.allowed))
-    return exc
+    # the request fields its words name are the CLI's options too ("allowed: pressures_pa"
+    # for a model that answers by pressure only is --pressures here)
+    return renamed_as_options(exc, names, PUMP_FLAGS)
 
 
 def _as_flags(text: str | None, flags: dict[str, str] = PUMP_FLAGS) -> str | None:
@@ -162,15 +159,18 @@ def _as_flags(text: str | None, flags: dict[str, str] = PUMP_FLAGS) -> str | Non
     return re.sub(rf"(?<![\w.-])({fields})(?![\w.])", lambda m: flags[m.group(1)], text)
 
 
-def renamed_as_options(exc: Exception, flags: dict[str, str]) -> Exception:
+def renamed_as_options(exc: Exception, flags: dict[str, str],
+                       words: dict[str, str] | None = None) -> Exception:
     """An InputError whose field is one of ``flags``' keys as the CLI option that sets
-    it, its words too ("leave pressure_pa out" is "leave --pressure-pa out" on the
-    command line); any other exception as it is."""
+    it, and the fields its words name (``words``' keys, ``flags``' by default) too
+    ("leave pressure_pa out" is "leave --pressure-pa out" on the command line); any
+    other exception as it is."""
     from solver.errors import InputError
 
     if isinstance(exc, InputError) and exc.field in flags:
-        return InputError(flags[exc.field], _as_flags(exc.detail, flags),
-                          _as_flags(exc.allowed, flags), allowed_said=exc.allowed_said)
+        words = flags if words is None else words
+        return InputError(flags[exc.field], _as_flags(exc.detail, words),
+                          _as_flags(exc.allowed, words), allowed_said=exc.allowed_said)
     return exc
 
 
