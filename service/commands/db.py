@@ -17,11 +17,11 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import math
 import sys
 from typing import Any
 
 from solver.io import CSV_COLUMNS
+from surrogate.json_plain import plain_json as jsonable  # NaN and inf as null
 
 CSV_DESIGN = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm",
               "chamber_offset_mm", "body_material", "membrane_material")
@@ -132,17 +132,6 @@ def selected(db: Any, args: argparse.Namespace) -> list[Any]:
             records = [r for r in records if r.key in wanted]
         return records
     return db.query(**filters) if filters else list(db.records())
-
-
-def jsonable(value: Any) -> Any:
-    """NaN and infinities become null (JSON has no such numbers)."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    return value
 
 
 def run_ls(args: argparse.Namespace) -> int:
