@@ -33,7 +33,7 @@ from __future__ import annotations
 import itertools
 import math
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -42,7 +42,9 @@ from surrogate.calibration._augmented_model import SWITCH_BOUND, AugmentedModel
 from surrogate.calibration._backing import PRESSURE_SCALE_SD, with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._gauge_zero import gauge_at_rest
+from surrogate.calibration._exact_alike import exact_alikes
+from surrogate.calibration._exact_alike import sentence as exact_alike_sentence
+from surrogate.calibration._gauge_zero import gauge_at_rest, wants_zeroed_pass, zeroed_summary
 from surrogate.calibration._gauge_zero import sentence as gauge_zero_sentence
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._least_squares import (
@@ -108,10 +110,11 @@ def _num(x: float) -> float | None:
 
 
 def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=None,
-              cancel: threading.Event | None = None) -> Calibration:
+              cancel: threading.Event | None = None, zeroed: bool = False) -> Calibration:
     """Run the loop on validated observations against ``baseline``. ``cancel``: checked
     before the baseline is tabulated and at every fit and cross-validation (where
-    ``progress`` ticks); once set, the loop ends with ``Cancelled``."""
+    ``progress`` ticks); once set, the loop ends with ``Cancelled``. ``zeroed``: the
+    gauge's readings already have their zero at rest taken off (no second pass)."""
     stop_if_cancelled(cancel)
     if obs.n_curves < MIN_CURVES:
         ids = ", ".join(repr(c) for c in obs.curve_ids)
@@ -300,6 +303,15 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                               xv_chosen.joint,
                                               xv_chosen.curves(obs.specimen)))
     alike = _indistinguishable(candidates, chosen)
+    if chosen:
+        ref = next(c for c in candidates if tuple(c["effects"]) == chosen)
+        for a in exact_alikes(chosen, _params(get_fit(chosen)), ref["rmse_cv_deg"],
+                              ref["rmse_cv_pressure_pa"]):
+            same = [b for b in alike if set(b["effects"]) == set(a["effects"])]
+            if same:  # fitted as a candidate too: its own sizes, said to be exact
+                same[0].update(exact=True, why=a["why"], measure=a["measure"])
+            else:
+                alike.insert(0, a)
     # a set the data prefer that fails only for want of the baseline's backing: reported
     # beside the selection (its CV advantage may be the baseline's own error there)
     unbacked = _better_unbacked(candidates, chosen, base_joint)
@@ -308,6 +320,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     rest = (gauge_at_rest(obs.curve, obs.time_s, obs.volume_ul, obs.pressure_pa,
                           after.model.gauge_pressures(after.x))
             if channel["used"] and "hydraulic_resistance" not in chosen else None)
+    if not zeroed and wants_zeroed_pass(rest, chosen):
+        again = calibrate(replace(all_obs, pressure_pa=all_obs.pressure_pa - rest["mean_pa"]),
+                          baseline, folds, progress, cancel, zeroed=True)
+        rest = {**rest, "zeroed": zeroed_summary(again.report)}
     nuisance = _nuisance(after)
     structure = structure_test(obs.curve, after.residual, nuisance)
     left = residual_summary(obs, resid_after, rmse_after, noise, structure,
@@ -1198,7 +1214,11 @@ def interpret(report: dict, left: dict) -> str:
         s.append("No catalogued effect is warranted: none lowers the cross-validated error "
                  "and the BIC with physically plausible, significant values and leaves "
                  "only replicate scatter.")
-    alike = report.get("indistinguishable") or []
+    exact = exact_alike_sentence(report["selected_effects"],
+                                 report.get("indistinguishable") or [])
+    if exact:
+        s.append(exact)
+    alike = [a for a in report.get("indistinguishable") or [] if not a.get("exact")]
     if alike:
         sets = "; ".join(
             " and ".join(a["effects"]) + " (" + ", ".join(
