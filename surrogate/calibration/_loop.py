@@ -46,6 +46,9 @@ from surrogate.calibration._exact_alike import exact_alikes
 from surrogate.calibration._exact_alike import sentence as exact_alike_sentence
 from surrogate.calibration._gauge_zero import gauge_at_rest, wants_zeroed_pass, zeroed_summary
 from surrogate.calibration._gauge_zero import sentence as gauge_zero_sentence
+from surrogate.calibration._held_reading import held_instead, reads_better, wants_held_reading
+from surrogate.calibration._held_reading import sentence as held_sentence
+from surrogate.calibration._held_reading import summary as held_summary
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._least_squares import (
     R_CAP_DEG,
@@ -110,11 +113,14 @@ def _num(x: float) -> float | None:
 
 
 def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=None,
-              cancel: threading.Event | None = None, zeroed: bool = False) -> Calibration:
+              cancel: threading.Event | None = None, zeroed: bool = False,
+              unloading_read: dict | None = None) -> Calibration:
     """Run the loop on validated observations against ``baseline``. ``cancel``: checked
     before the baseline is tabulated and at every fit and cross-validation (where
     ``progress`` ticks); once set, the loop ends with ``Cancelled``. ``zeroed``: the
-    gauge's readings already have their zero at rest taken off (no second pass)."""
+    gauge's readings already have their zero at rest taken off (no second pass).
+    ``unloading_read``: this is the pass with the falling readings read as a hold, and
+    that was the first reading's summary (_held_reading.py)."""
     stop_if_cancelled(cancel)
     if obs.n_curves < MIN_CURVES:
         ids = ", ".join(repr(c) for c in obs.curve_ids)
@@ -401,6 +407,18 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     }
     report["left_out"], left_rows = _left_out_check(all_obs, kept, make(chosen), after)
     report["predictions"] = _predictions(obs, base, after) + left_rows
+    report["history_read_as_hold"] = None
+    if unloading_read is not None:
+        report["history_read_as_hold"] = {"taken": True, "unloading": unloading_read,
+                                          "hold": held_summary(report)}
+    elif not zeroed and wants_held_reading(report):
+        first = held_summary(report)
+        held = calibrate(held_instead(all_obs), baseline, folds, progress, cancel,
+                         unloading_read=first)
+        if reads_better(held.report["history_read_as_hold"]["hold"], first):
+            return held
+        report["history_read_as_hold"] = {**held.report["history_read_as_hold"],
+                                          "taken": False}
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
 
@@ -1271,6 +1289,9 @@ def interpret(report: dict, left: dict) -> str:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
                      f"{c['measure']}.")
     data = report["data"]
+    held = held_sentence(report.get("history_read_as_hold"))
+    if held:
+        s.append(held)
     if ("viscoelastic_creep" in report["selected_effects"] and not data.get("pump_logged")
             and data["readings"]["unloading"] and "measured" not in data["injected_volume"]):
         s.append(f"The creep is read from a history taken off the readings "
