@@ -1,6 +1,6 @@
 """Lab data sets made as a lab makes them, from FE solves (``solver.solve``, default
 settings), never from the calibration's forms: the forty-first session's audit of
-`balloon calibrate` (benchmarks/RESULTS.md) and four files of tests/data; the
+`balloon calibrate` (benchmarks/RESULTS.md) and five files of tests/data; the
 forty-second session's sets N1-N5 on three more designs (D8-D10), to check its changes on
 designs they were not made on.
 
@@ -22,9 +22,9 @@ catalogue), a gauge reading 60 Pa high.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 12 solves of 15-90 s; run alone) and writes each
-set as CSV (and the API's JSON rows); ``--test-data`` writes the four sets with the pump's
+set as CSV (and the API's JSON rows); ``--test-data`` writes the five sets with the pump's
 log that tests/test_calibration_history.py and tests/test_calibration_gauge_zero.py read
-(tests/data/lab_gauge_noise_*.csv).
+(tests/data/lab_gauge_noise_*.csv; N2's too, for test_calibration_exact_alike.py).
 """
 
 from __future__ import annotations
@@ -92,10 +92,11 @@ SETS = {
                   24, {}),
     "N5-clean-D10": ("D10", [3.0], 1.5, 9, 0, 0, {}, 25, {"fmt": "comma"}),
 }
-# the sets tests/test_calibration_history.py and test_calibration_gauge_zero.py read,
-# with the pump's log
+# the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py and
+# test_calibration_exact_alike.py read, with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
-             "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1"}
+             "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
+             "gauge_zero_off_soft_batch": "N2-gauge60-D9"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -240,7 +241,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's four sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's five sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

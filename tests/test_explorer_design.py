@@ -201,6 +201,15 @@ def test_the_report_names_the_explanations_the_data_cannot_tell_apart(watched, s
     assert "angle offset" in text and "rule 3: not backed" in text
     assert page.evaluate("async () => (await import('/static/explorer/js/calibration.js'))"
                          ".alternativeLines({}).length") == 0
+    # the same readings exactly (_exact_alike.py): said so, not as "equally consistent"
+    exact = {"effects": ["membrane_stiffness", "body_stiffness"], "rmse_cv_deg": 0.8,
+             "paired_z": 0.0, "backed": True, "exact": True, "why": "both layers' mu x k",
+             "params": {"body_mu_scale": {"value": 0.936, "sd": 0.012, "unit": "-"}},
+             "measure": ["check the gauge against a reference gauge at two pressures"]}
+    lines = page.evaluate("async (r) => (await import('/static/explorer/js/calibration.js'))"
+                          ".alternativeLines(r)", {"indistinguishable": [exact]})
+    assert lines[0]["text"].startswith("The same readings exactly: membrane stiffness")
+    assert "both layers' mu x k" in lines[0]["text"] and "reference gauge" in lines[0]["text"]
 
 
 def test_a_refused_design_offers_the_fe_solve_and_plots_the_stored_curve(watched, server):

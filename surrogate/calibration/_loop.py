@@ -33,7 +33,7 @@ from __future__ import annotations
 import itertools
 import math
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -42,8 +42,13 @@ from surrogate.calibration._augmented_model import SWITCH_BOUND, AugmentedModel
 from surrogate.calibration._backing import PRESSURE_SCALE_SD, with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._gauge_zero import gauge_at_rest
+from surrogate.calibration._exact_alike import exact_alikes
+from surrogate.calibration._exact_alike import sentence as exact_alike_sentence
+from surrogate.calibration._gauge_zero import gauge_at_rest, wants_zeroed_pass, zeroed_summary
 from surrogate.calibration._gauge_zero import sentence as gauge_zero_sentence
+from surrogate.calibration._held_reading import held_instead, reads_better, wants_held_reading
+from surrogate.calibration._held_reading import sentence as held_sentence
+from surrogate.calibration._held_reading import summary as held_summary
 from surrogate.calibration._history import history_traits
 from surrogate.calibration._least_squares import (
     R_CAP_DEG,
@@ -108,10 +113,14 @@ def _num(x: float) -> float | None:
 
 
 def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=None,
-              cancel: threading.Event | None = None) -> Calibration:
+              cancel: threading.Event | None = None, zeroed: bool = False,
+              unloading_read: dict | None = None) -> Calibration:
     """Run the loop on validated observations against ``baseline``. ``cancel``: checked
     before the baseline is tabulated and at every fit and cross-validation (where
-    ``progress`` ticks); once set, the loop ends with ``Cancelled``."""
+    ``progress`` ticks); once set, the loop ends with ``Cancelled``. ``zeroed``: the
+    gauge's readings already have their zero at rest taken off (no second pass).
+    ``unloading_read``: this is the pass with the falling readings read as a hold, and
+    that was the first reading's summary (_held_reading.py)."""
     stop_if_cancelled(cancel)
     if obs.n_curves < MIN_CURVES:
         ids = ", ".join(repr(c) for c in obs.curve_ids)
@@ -300,6 +309,15 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                               xv_chosen.joint,
                                               xv_chosen.curves(obs.specimen)))
     alike = _indistinguishable(candidates, chosen)
+    if chosen:
+        ref = next(c for c in candidates if tuple(c["effects"]) == chosen)
+        for a in exact_alikes(chosen, _params(get_fit(chosen)), ref["rmse_cv_deg"],
+                              ref["rmse_cv_pressure_pa"]):
+            same = [b for b in alike if set(b["effects"]) == set(a["effects"])]
+            if same:  # fitted as a candidate too: its own sizes, said to be exact
+                same[0].update(exact=True, why=a["why"], measure=a["measure"])
+            else:
+                alike.insert(0, a)
     # a set the data prefer that fails only for want of the baseline's backing: reported
     # beside the selection (its CV advantage may be the baseline's own error there)
     unbacked = _better_unbacked(candidates, chosen, base_joint)
@@ -308,6 +326,10 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     rest = (gauge_at_rest(obs.curve, obs.time_s, obs.volume_ul, obs.pressure_pa,
                           after.model.gauge_pressures(after.x))
             if channel["used"] and "hydraulic_resistance" not in chosen else None)
+    if not zeroed and wants_zeroed_pass(rest, chosen):
+        again = calibrate(replace(all_obs, pressure_pa=all_obs.pressure_pa - rest["mean_pa"]),
+                          baseline, folds, progress, cancel, zeroed=True)
+        rest = {**rest, "zeroed": zeroed_summary(again.report)}
     nuisance = _nuisance(after)
     structure = structure_test(obs.curve, after.residual, nuisance)
     left = residual_summary(obs, resid_after, rmse_after, noise, structure,
@@ -385,6 +407,18 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     }
     report["left_out"], left_rows = _left_out_check(all_obs, kept, make(chosen), after)
     report["predictions"] = _predictions(obs, base, after) + left_rows
+    report["history_read_as_hold"] = None
+    if unloading_read is not None:
+        report["history_read_as_hold"] = {"taken": True, "unloading": unloading_read,
+                                          "hold": held_summary(report)}
+    elif not zeroed and wants_held_reading(report):
+        first = held_summary(report)
+        held = calibrate(held_instead(all_obs), baseline, folds, progress, cancel,
+                         unloading_read=first)
+        if reads_better(held.report["history_read_as_hold"]["hold"], first):
+            return held
+        report["history_read_as_hold"] = {**held.report["history_read_as_hold"],
+                                          "taken": False}
     report["interpretation"] = interpret(report, left)
     return Calibration(report, obs, baseline, base, after, resid_before, resid_after)
 
@@ -1198,7 +1232,11 @@ def interpret(report: dict, left: dict) -> str:
         s.append("No catalogued effect is warranted: none lowers the cross-validated error "
                  "and the BIC with physically plausible, significant values and leaves "
                  "only replicate scatter.")
-    alike = report.get("indistinguishable") or []
+    exact = exact_alike_sentence(report["selected_effects"],
+                                 report.get("indistinguishable") or [])
+    if exact:
+        s.append(exact)
+    alike = [a for a in report.get("indistinguishable") or [] if not a.get("exact")]
     if alike:
         sets = "; ".join(
             " and ".join(a["effects"]) + " (" + ", ".join(
@@ -1251,6 +1289,9 @@ def interpret(report: dict, left: dict) -> str:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
                      f"{c['measure']}.")
     data = report["data"]
+    held = held_sentence(report.get("history_read_as_hold"))
+    if held:
+        s.append(held)
     if ("viscoelastic_creep" in report["selected_effects"] and not data.get("pump_logged")
             and data["readings"]["unloading"] and "measured" not in data["injected_volume"]):
         s.append(f"The creep is read from a history taken off the readings "

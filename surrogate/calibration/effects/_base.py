@@ -91,6 +91,12 @@ class Effect:
     measure_directly: str = ""
     #: open baseline parameters this effect is exactly (then it is not fitted)
     same_as_open: tuple[str, ...] = ()
+    #: catalogue effects that together make exactly the readings this effect makes,
+    #: whatever the data (the physics says so, not a fit), their sizes from this effect's
+    #: by ``exactly_as_params`` and why in ``exactly_as_why``: named beside a selection of
+    #: this effect with what tells them apart (``_exact_alike``)
+    exactly_as: tuple[str, ...] = ()
+    exactly_as_why: str = ""
     #: a time effect's ``lag`` acts on the bend ("angle") or, by injected volume, on the
     #: chamber pressure the gauge reads ("gauge"); or its ``delivered_volume`` on the
     #: volume the pump put in ("volume": a leak)
@@ -144,6 +150,11 @@ class Effect:
 
     def observed(self, angle_deg: np.ndarray, values: dict[str, float]) -> np.ndarray:
         return angle_deg
+
+    def exactly_as_params(self, params: dict[str, dict]) -> dict[str, dict]:
+        """The sizes of ``exactly_as``'s parameters ({name: {value, sd, unit}}) that make
+        the readings this effect makes with ``params``."""
+        return {}
 
     # ---- words ----------------------------------------------------------------------
     def interpret(self, params: dict[str, dict], data: dict) -> str:

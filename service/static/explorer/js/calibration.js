@@ -88,6 +88,12 @@ export function alternativeLines(report) {
   const out = [];
   for (const a of report.indistinguishable || []) {
     const measure = (Array.isArray(a.measure) ? a.measure : [a.measure]).filter(Boolean).join("; ");
+    if (a.exact) {  // the same readings by the physics (a gauge gain, a uniformly stiffer batch)
+      out.push({ warn: true, text: `The same readings exactly: ${effectNames(a.effects)} (${paramText(a.params)})`
+        + `${a.why ? ": " + a.why : ""}. No reading of bend or gauge tells them apart`
+        + `${measure ? "; to tell them apart: " + measure : ""}.` });
+      continue;
+    }
     out.push({ warn: true, text: `Equally consistent with the data: ${effectNames(a.effects)} (${paramText(a.params)}; `
       + `CV error ${fmt(a.rmse_cv_deg, 2)} deg, paired z ${fmt(a.paired_z, 2)}${a.backed === false ? ", not backed by the baseline" : ""}). `
       + `The selection is the lowest BIC, not evidence against it${measure ? "; to tell them apart: " + measure : ""}.` });
