@@ -10,7 +10,7 @@ set are two models of the same readings, so the data can choose: the loop is run
 with every reading read as unloading read as a hold instead, and that reading is kept
 only where it explains the data better -- something selected, no structure left, and a
 lower cross-validated error of the angle and of both channels together than the first
-reading's. On L6 it is (chamber_leak 0.212 +/- 0.011, 1.93 against 2.14 deg; 1.68 against
+reading's. On L6 it is (chamber_leak 0.221 +/- 0.025, 1.93 against 2.14 deg; 1.68 against
 1.80 both channels); on the lab sets whose pump did withdraw (L2, L7, N1) the hold reading
 leaves 10-16 deg flagged, and the unloading stays.
 
