@@ -374,3 +374,17 @@ def test_a_design_search_refusal_speaks_in_options():
     (line,) = visible_lines(err)
     assert "leave --pressure-pa out" in line and "takes --volume-ul" in line
     assert "pressure_pa" not in line and "volume_ul" not in line
+
+
+def test_a_saved_model_file_is_read_within_the_model_files_bound(tmp_path):
+    """A saved calibrated model was read whole, however large (``Path.read_text``): a
+    257 MiB file under a model's name was read into memory before it failed as "not valid
+    JSON". It is refused at the model files' bound, by name, before it is read."""
+    from surrogate.calibration._saved import SavedModelError, load_model
+    from surrogate.model_file import MAX_MODEL_FILE_BYTES
+
+    with open(tmp_path / "huge.json", "wb") as f:   # sparse: no disk is written
+        f.truncate(MAX_MODEL_FILE_BYTES + 1)
+    with pytest.raises(SavedModelError, match="larger than 256 MiB") as info:
+        load_model("huge", tmp_path)
+    assert str(tmp_path) not in str(info.value)

@@ -59,6 +59,7 @@ from surrogate.calibration._saved_design import (
 from surrogate.exponential.equations import TAU_FORM
 from surrogate.file_seal import KEY as SEAL_KEY
 from surrogate.file_seal import seal, seal_broken
+from surrogate.model_file import read_model_file
 from surrogate.predictor import band_within_fe
 
 FORMAT = "balloon.calibrated-model/1"
@@ -390,8 +391,12 @@ def load_model(name: str, models_dir: str | Path,
         known = sorted(p.stem for p in models_dir.glob("*.json")) if models_dir.is_dir() else []
         raise ModelNotFoundError(f"no model {name!r} in {models_dir}; known: "
                                  + ", ".join(list(RESERVED) + known))
+    try:  # read within the model files' bound: never a huge or endless file read whole
+        raw = read_model_file(path)
+    except InputError as exc:
+        raise SavedModelError(name, exc.detail) from None
     try:  # ValueError: JSONDecodeError, UnicodeDecodeError, an integer of > 4300 digits
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        doc = json.loads(raw.decode("utf-8"))
     except (ValueError, RecursionError) as exc:
         raise SavedModelError(name, f"not valid JSON ({type(exc).__name__})") from None
     return _checked(doc, name, design_space, _seal_checked(doc, name))
