@@ -31,14 +31,14 @@ import numpy as np
 from solver.errors import InputError
 from surrogate.hydraulics import NEGLIGIBLE_TIME_CONSTANT_S, STEADY_TIME_CONSTANTS, Inlet
 from surrogate.predictor import FE_PRESSURE_STOP_PA, pressure_stop_reason
-from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MIN_FLOW_UL_S
+from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
 # request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
 # schema's Field limits and the CLI's checks)
 AXES: dict[str, tuple[float, float, str]] = {
     "pressures_pa": (0.0, FE_PRESSURE_STOP_PA, "Pa"),   # the default FE's pressure stop
     "volumes_ul": (0.0, 10000.0, "ul"),
-    "times_s": (0.0, 1e5, "s"),
+    "times_s": (0.0, MAX_TIME_S, "s"),
 }
 PRESSURE_SITES = ("chamber", "pump_gauge")
 MAX_ANGLE_DEG = 360.0      # |target angle| <= this (a full turn), degrees

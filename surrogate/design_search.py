@@ -685,10 +685,9 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
         if target.by_volume:
             # a pump's target: the volume needed is reported as such (volume_report), the
             # pressure needed for the angle by the model's inverse; no target pressure
-            pump = volume_report(model, e.design, target, direction, level,
-                                 curve.validity)
             inv = model.inverse(e.design, [direction * target.value],  # type: ignore
                                 level=level)
+            pump = volume_report(model, e.design, target, inv, level, curve.validity)
             needed = (float(inv.pressure_pa[0]), float(inv.lower_pa[0]),
                       float(inv.upper_pa[0]))
             value = lo = hi = np.nan

@@ -19,7 +19,7 @@ import numpy as np
 from solver.design import Design
 from solver.errors import InputError
 from surrogate.exponential.inverse_design import DesignTarget
-from surrogate.predictor import Prediction
+from surrogate.predictor import InversePrediction, Prediction
 
 #: volumes tried below the target's, as fractions of it, for a design's bending direction
 #: where the target volume is past its FE range
@@ -108,17 +108,18 @@ def _sign(model: object, design: Design, target: DesignTarget, pred: Prediction,
     return float(np.sign(found[0])) if found else 0.0
 
 
-def volume_report(model: object, design: Design, target: DesignTarget, direction: float,
-                  level: float, validity: dict) -> dict[str, float | None]:
+def volume_report(model: object, design: Design, target: DesignTarget,
+                  inv: InversePrediction, level: float, validity: dict
+                  ) -> dict[str, float | None]:
     """What a listed design gives a pump user: the injected volume needed for the target
-    angle with its band (ul; the model's inverse), at the flow rate the time (s), and at
+    angle with its band (ul; ``inv``, the model's inverse at the signed target angle, which
+    the caller reads the pressure needed off too), at the flow rate the time (s), and at
     the target volume the signed angle with its band (deg) and the chamber pressure (Pa);
     None where the model has no number (past the design's FE range: a budget's design
     may get there before the budget; said in ``validity``'s messages, in place)."""
     def number(x: object) -> float | None:
         return float(x) if x is not None and np.isfinite(x) else None  # type: ignore
 
-    inv = model.inverse(design, [direction * target.value], level=level)  # type: ignore
     v = [None if a is None else number(a[0])
          for a in (inv.volume_ul, inv.volume_lower_ul, inv.volume_upper_ul)]
     at = ask(model, design, target, [target.at], level)

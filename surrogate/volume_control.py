@@ -22,6 +22,7 @@ MIN_FLOW_UL_S = 1e-6       # MIN <= flow_ul_s <= MAX: a slower pump is no pump (
 MAX_FLOW_UL_S = 1000.0     # 1e-320 ul/s made every time volume / flow infinite); the
                            # solver's own lower limit (SolverSettings.flow_ul_s)
 FLOW_RANGE = f"{MIN_FLOW_UL_S:g} <= flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s"
+MAX_TIME_S = 1e5           # the longest pump time asked (times_s, a search's time_s), s
 
 
 @dataclass(frozen=True)

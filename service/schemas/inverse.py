@@ -17,10 +17,10 @@ from surrogate.exponential.inverse_design import (
     DEFAULT_KIND,
     KINDS,
     MAX_TARGET,
-    MAX_TIME_S,
     OBJECTIVES,
 )
 from surrogate.predictor import FE_VOLUME_STOP_UL
+from surrogate.volume_control import MAX_TIME_S
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
 OptFloats = list[float | None] | None

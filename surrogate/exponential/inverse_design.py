@@ -49,7 +49,7 @@ from surrogate.exponential.paper_tables import TWO_BALLOON_BELOW_t_MM
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.surrogate import Surrogate
 from surrogate.predictor import FE_VOLUME_STOP_UL, Prediction
-from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MIN_FLOW_UL_S
+from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
 KINDS = ("angle_at_pressure", "pressure_budget", "force_at_pressure", "angle_at_volume",
          "volume_budget", "angle_at_time", "time_budget")
@@ -62,8 +62,6 @@ BUDGET_KINDS = ("pressure_budget", "volume_budget", "time_budget")
 DEFAULT_KIND = "angle_at_pressure"
 #: the largest target magnitudes taken: |angle| in deg, |force| in mN
 MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4}
-#: the longest time target, s (the pump view's times_s)
-MAX_TIME_S = 1e5
 OBJECTIVES = ("pressure", "volume", "margin", "compact", "certainty")
 DEFAULT_OBJECTIVE = {"angle_at_pressure": "certainty", "pressure_budget": "pressure",
                      "force_at_pressure": "certainty", "angle_at_volume": "certainty",
