@@ -161,12 +161,15 @@ def run_ls(args: argparse.Namespace) -> int:
 def run_seal(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from service.commands.interrupts import interrupts_kept
     from solver.store import CurveStore
     from solver.store.locking import no_database
 
     if not Path(args.db).is_file():  # writing mode would create an empty database
         raise no_database(args.db, ": nothing to seal")
-    with CurveStore(args.db, mode="a") as db:
+    # a Ctrl-C that landed in an h5py callback during the seal stops here, at the latest,
+    # not after "sealed" is printed (its redelivery from a thread may come later)
+    with interrupts_kept(), CurveStore(args.db, mode="a") as db:
         db.seal()
         n = len(db)
     print(f"{args.db}: sealed ({n} records)", file=sys.stderr)
