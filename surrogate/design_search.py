@@ -365,6 +365,22 @@ def _answers_as_screened(model: object, e: _Eval, target: DesignTarget, level: f
     return bool(np.isfinite(got) and abs(abs(got) - target.value) <= 0.01 * target.value)
 
 
+def passed_over_note(n_listed: int, n_results: int, near_copies: int,
+                     not_as_screened: int) -> str:
+    """Why fewer designs are listed than asked for although more meet the target: the
+    others are near-copies of a listed design (closer than MIN_SPACING in the bounds' unit
+    cube, the same pair) or did not meet the target within 1 % when asked back."""
+    if n_listed >= n_results or not (near_copies or not_as_screened):
+        return ""
+    why = []
+    if near_copies:
+        why.append(f"{near_copies} {'is a near-copy' if near_copies == 1 else 'are near-copies'}"
+                   f" of a listed design, within {MIN_SPACING:g} of the bounds' span")
+    if not_as_screened:
+        why.append(f"{not_as_screened} missed the target by more than 1 % when asked back")
+    return f"; {n_results} were asked for: of the others, {' and '.join(why)}"
+
+
 TOLERANCE_MM = 0.01
 
 
@@ -652,12 +668,17 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     feasible = [e for e in feasible if np.isfinite(_score(e, objective, target))]
     feasible.sort(key=lambda e: _score(e, objective, target))
     chosen: list[_Eval] = []
+    near_copies = not_as_screened = 0   # the feasible designs passed over, and why
     for e in feasible:
         stop_if_cancelled(cancel)
         u = _unit(e, ranges)
-        if all(e.pair != c.pair or np.linalg.norm(u - _unit(c, ranges)) >= MIN_SPACING
-               for c in chosen) and _answers_as_screened(model, e, target, level):
+        if any(e.pair == c.pair and np.linalg.norm(u - _unit(c, ranges)) < MIN_SPACING
+               for c in chosen):
+            near_copies += 1
+        elif _answers_as_screened(model, e, target, level):
             chosen.append(e)
+        else:
+            not_as_screened += 1
         if len(chosen) == n_results:
             break
     candidates = []
@@ -701,6 +722,8 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
     if candidates:
         explanation = (f"{len(feasible)} of {n_evaluated} evaluated designs meet the target; "
                        f"the {len(candidates)} best by {objective} are listed"
+                       + passed_over_note(len(candidates), n_results, near_copies,
+                                          not_as_screened)
                        + stretch_hazard_note(candidates))
     else:
         what = "force" if target.kind == "force_at_pressure" else "angle"
