@@ -194,3 +194,34 @@ def test_nesting_a_grid_needs_is_fine():
     grid = parse_grid('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = [4.1]\n'
                       '[[sweep]]\nt_mm = {start = 0.5, stop = 1.0, num = 2}\n', "ok.toml")
     assert len(grid) == 2
+
+
+def test_a_faces_sample_puts_each_design_on_a_face_of_the_box_in_turn():
+    """``faces = true``: the Sobol designs moved onto the box's faces, every face in turn
+    (coordinate i mod 6 at its low end for even i // 6, else its high end), the other
+    coordinates as the plain sample's; a continued sequence (``skip``) goes on in turn."""
+    import numpy as np
+
+    from solver.design_space import locate, unit_coordinates
+
+    def units(text: str) -> np.ndarray:
+        grid = parse_grid(text)
+        return np.array([unit_coordinates(locate(p.design, reduced=True).geometry_mm,
+                                          locate(p.design, reduced=True).stiffness_ratio)
+                         for p in grid.points])
+
+    base = '[[sample]]\npairs = [["pdms_1_10", "ecoflex_00_30"]]\nn = 14\nseed = 11\n'
+    plain, faces = units(base), units(base + "faces = true\n")
+    d = plain.shape[1]
+    for i in range(14):
+        j, side = i % d, float((i // d) % 2)
+        assert faces[i, j] == pytest.approx(side, abs=1e-6)
+        others = np.arange(d) != j
+        np.testing.assert_allclose(faces[i, others], plain[i, others], atol=1e-6)
+    later = units(base.replace("n = 14", "n = 4") + "skip = 14\nfaces = true\n")
+    assert later[0, 14 % d] == pytest.approx(float((14 // d) % 2), abs=1e-6)
+
+
+def test_a_faces_sample_that_is_not_a_boolean_is_refused():
+    with pytest.raises(GridError, match="faces"):
+        parse_grid('[[sample]]\nn = 2\nfaces = "yes"\n')

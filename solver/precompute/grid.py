@@ -53,7 +53,8 @@ from solver.store.keys import canonical_number, record_key
 
 PARAMETERS = tuple(LIMITS_MM)
 SWEEP_KEYS = ("pairs", "name", *PARAMETERS)
-SAMPLE_KEYS = ("pairs", "name", "n", "seed", "skip", "tips", "blocked_max_pressure_pa")
+SAMPLE_KEYS = ("pairs", "name", "n", "seed", "skip", "faces", "tips",
+               "blocked_max_pressure_pa")
 TOP_KEYS = ("description", "materials", "settings", "sweep", "sample", *SWEEP_KEYS)
 BLOCKED_MAX_PRESSURE_PA = 3000.0   # blocked-tip force curves: to this chamber pressure
 #                                    (past the emulator's force range, 2500 Pa)
@@ -334,7 +335,8 @@ def _expand(reader: _Reader, where: tuple, merged: dict, own: dict,
 def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
             ) -> list[GridPoint]:
     """A [[sample]] table: ``n`` scrambled Sobol designs of the emulator's box
-    (solver/design_space.py) per pair, each solved with every tip in ``tips``
+    (solver/design_space.py) per pair (``faces = true``: moved onto the box's faces in
+    turn, ``design_space.on_faces``), each solved with every tip in ``tips``
     ("free": the settings as given; "blocked": the tip held, to
     ``blocked_max_pressure_pa``, for the force curve)."""
     from solver.design_space import PAIRS, sample_designs
@@ -361,10 +363,13 @@ def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
     if isinstance(p_max, bool) or not isinstance(p_max, (int, float)) or not 1 <= p_max <= 1e6:
         raise reader.fail((*where, "blocked_max_pressure_pa"), "blocked_max_pressure_pa",
                           f"{p_max!r}", "a number 1 <= p <= 1e6 (Pa)")
+    faces = table.get("faces", False)
+    if not isinstance(faces, bool):
+        raise reader.fail((*where, "faces"), "faces", f"{faces!r}", "true or false")
     variants = {"free": settings,
                 "blocked": replace(settings, tip="blocked", max_pressure_pa=float(p_max))}
-    per_pair = [sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"], ints["skip"])
-                for pair in pairs]
+    per_pair = [sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"], ints["skip"],
+                               faces) for pair in pairs]
     out = []
     for i in range(ints["n"]):      # point-major: an interrupted job leaves every pair even
         for designs in per_pair:
