@@ -62,9 +62,26 @@ def to_settings(settings: SolveSettingsIn, loc: tuple[str, ...] = ("body", "sett
         raise located(exc, loc) from None
 
 
+# The smallest normal double (2.2e-308): a magnitude below it is subnormal, held to fewer
+# significant digits than any answer states (1e-310 Pa was answered 7.27e-314 deg, and 5e-324
+# ul 6.1e-322 Pa, one significant bit), and is no measurable pressure, volume, time or angle.
+SMALLEST_NORMAL = float(np.finfo(float).tiny)
+
+
+def normal_or_zero(values: Any) -> np.ndarray:
+    """A float array with every subnormal magnitude (below SMALLEST_NORMAL) and -0.0 read
+    as 0.0: what an asked pressure, volume, time or angle is taken as, and what an answer
+    states (``finite_list``); NaN and infinity are kept."""
+    a = np.array(values, float)
+    a[np.abs(a) < SMALLEST_NORMAL] = 0.0
+    return a
+
+
 def finite_list(values: Any) -> list[float | None]:
-    """Floats for JSON: NaN and infinity become null."""
-    return [v if math.isfinite(v) else None for v in np.asarray(values, float).ravel().tolist()]
+    """Floats for an answer (HTTP and CLI alike): NaN and infinity become null, a subnormal
+    magnitude and -0.0 become 0.0 (``normal_or_zero``)."""
+    return [v if math.isfinite(v) else None
+            for v in normal_or_zero(values).ravel().tolist()]
 
 
 # the validity fields a Prediction may carry beyond in_domain, flags and messages: the

@@ -1,0 +1,119 @@
+"""The forty-third session's hostile-input audit, round four (after tests/test_hostile_s41.py,
+tests/test_hostile_s42.py and tests/test_hostile_s42b.py): times past the longest pump time
+the service answers, subnormal numbers asked and answered, negative zeros in the CLI's
+tables, and the explorer's design search with a bad shared flow rate and pump targets.
+
+Each test failed on the code before its fix (commit messages say which).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from test_cli_fuzz import run
+
+from surrogate.volume_control import MAX_TIME_S
+
+DESIGN = {"L_mm": 7.1, "t_mm": 0.5}
+CLI_DESIGN = ["--L-mm", "7.1", "--t-mm", "0.5"]
+SMALLEST_NORMAL = float(np.finfo(float).tiny)    # 2.2e-308
+
+
+def numbers(body: dict, *names: str) -> list[float]:
+    return [v for n in names for v in (body.get(n) or []) if v is not None]
+
+
+# -- 1. no time past the longest pump time ---------------------------------------------------
+
+@pytest.mark.parametrize("model", ["emulator", "exponential"])
+def test_the_inverse_answers_no_time_the_forward_refuses(shipped_client, model):
+    """``POST /v1/inverse/pressure`` at 1e-6 ul/s answered 45 deg after 2.36e7 s, while
+    ``/v1/predict`` refuses ``times_s`` above MAX_TIME_S (1e5 s). The time (each bound
+    too) is withheld past it, flagged, the limit named; the volume is kept."""
+    r = shipped_client.post("/v1/inverse/pressure", json={
+        "design": DESIGN, "angles_deg": [45], "flow_ul_s": 1e-6, "model": model})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["time_s"] == body["time_lower_s"] == body["time_upper_s"] == [None]
+    assert body["volume_ul"][0] > 20        # the fluid needed is still answered
+    assert "past_longest_pump_time" in body["validity"]["flags"]
+    assert any(f"{MAX_TIME_S:g} s" in m for m in body["validity"]["messages"])
+    # the forward answer refuses such a time
+    r = shipped_client.post("/v1/predict", json={"design": DESIGN, "flow_ul_s": 1e-6,
+                                                 "times_s": [2 * MAX_TIME_S]})
+    assert r.status_code == 422
+
+
+def test_a_time_within_the_limit_is_kept(shipped_client):
+    body = shipped_client.post("/v1/inverse/pressure", json={
+        "design": DESIGN, "angles_deg": [45], "flow_ul_s": 2.5}).json()
+    assert body["time_s"][0] == pytest.approx(body["volume_ul"][0] / 2.5)
+    assert "past_longest_pump_time" not in body["validity"]["flags"]
+
+
+def test_a_forward_answer_by_volume_gives_no_time_past_the_limit(shipped_client):
+    """``volumes_ul: [1, 20]`` at 1e-6 ul/s answered ``time_s`` 2e7 s for 20 ul."""
+    body = shipped_client.post("/v1/predict", json={
+        "design": DESIGN, "volumes_ul": [0.05, 20], "flow_ul_s": 1e-6}).json()
+    assert body["time_s"] == [pytest.approx(0.05 / 1e-6), None]
+    assert body["angle_deg"][1] is not None
+    assert "past_longest_pump_time" in body["validity"]["flags"]
+
+
+def test_the_cli_inverse_prints_no_time_past_the_limit():
+    code, out, err, escaped = run(["inverse", *CLI_DESIGN, "--angles-deg", "45",
+                                   "--flow-ul-s", "1e-6"])
+    assert (code, escaped) == (0, None), err
+    row = out.splitlines()[2].split()
+    assert row[-3:] == ["--", "--", "--"], out          # time_s and its band
+    assert "past_longest_pump_time" in out and f"{MAX_TIME_S:g} s" in out
+
+
+# -- 2. subnormal numbers --------------------------------------------------------------------
+
+def assert_no_subnormal_or_negative_zero(values: list[float]) -> None:
+    for v in values:
+        assert v == 0.0 and math.copysign(1.0, v) > 0 or abs(v) >= SMALLEST_NORMAL, values
+
+
+def test_a_subnormal_pressure_is_zero_pa(shipped_client):
+    """1e-310 Pa was answered 7.27e-314 deg, 8.1e-313 ul, 1.0e-316 mN (and flagged as
+    pressures that look like kPa); 5e-324 ul was answered 6.1e-322 Pa: numbers of one or
+    a few significant bits. A subnormal magnitude is 0, asked and answered."""
+    body = shipped_client.post("/v1/predict", json={
+        "design": DESIGN, "pressures_pa": [1e-310, 5e-324, -0.0]}).json()
+    for name in ("pressure_pa", "angle_deg", "volume_ul", "force_mn"):
+        assert body[name] == [0.0, 0.0, 0.0], (name, body[name])
+        assert_no_subnormal_or_negative_zero(body[name])
+    assert "pressures_look_like_kpa" not in body["validity"]["flags"]
+    body = shipped_client.post("/v1/predict", json={
+        "design": DESIGN, "volumes_ul": [5e-324, 1e-310, -0.0]}).json()
+    assert body["pressure_pa"] == body["angle_deg"] == body["volume_ul"] == [0.0] * 3
+    body = shipped_client.post("/v1/predict", json={
+        "design": DESIGN, "times_s": [1e-310], "flow_ul_s": 2.5}).json()
+    assert body["time_s"] == body["volume_ul"] == [0.0]
+
+
+def test_a_subnormal_angle_needs_zero_pressure(shipped_client):
+    """1e-310 deg was answered 1.4e-307 Pa and 1.1e-309 ul, echoed as 1e-310 deg."""
+    body = shipped_client.post("/v1/inverse/pressure", json={
+        "design": DESIGN, "angles_deg": [1e-310, -0.0], "flow_ul_s": 2.5}).json()
+    for name in ("angle_deg", "pressure_pa", "lower_pa", "upper_pa", "volume_ul",
+                 "volume_lower_ul", "time_s"):
+        assert body[name] == [0.0, 0.0], (name, body[name])
+        assert_no_subnormal_or_negative_zero(body[name])
+
+
+def test_the_cli_answers_a_subnormal_as_http_does(shipped_client):
+    code, out, err, _ = run(["predict", *CLI_DESIGN, "--pressures", "1e-310", "1000",
+                             "--json"])
+    assert code == 0, err
+    cli = json.loads(out)
+    http = shipped_client.post("/v1/predict", json={
+        "design": DESIGN, "pressures_pa": [1e-310, 1000]}).json()
+    for name in ("pressure_pa", "angle_deg", "volume_ul", "force_mn"):
+        assert cli[name] == http[name]
+        assert cli[name][0] == 0.0
