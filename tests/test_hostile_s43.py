@@ -8,17 +8,23 @@ Each test failed on the code before its fix (commit messages say which).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
 import numpy as np
 import pytest
+from service_solves import make_curve
 from test_cli_fuzz import run
 
+from service.commands.solve import table
 from surrogate.volume_control import MAX_TIME_S
 
 DESIGN = {"L_mm": 7.1, "t_mm": 0.5}
 CLI_DESIGN = ["--L-mm", "7.1", "--t-mm", "0.5"]
+# the reversed pair (bends towards the membrane: every angle negative)
+REVERSED = ["--L-mm", "11.1", "--t-mm", "0.75", "--body-material", "ecoflex_00_30",
+            "--membrane-material", "pdms_1_15"]
 SMALLEST_NORMAL = float(np.finfo(float).tiny)    # 2.2e-308
 
 
@@ -117,3 +123,33 @@ def test_the_cli_answers_a_subnormal_as_http_does(shipped_client):
     for name in ("pressure_pa", "angle_deg", "volume_ul", "force_mn"):
         assert cli[name] == http[name]
         assert cli[name][0] == 0.0
+
+
+# -- 3. no "-0.00" in a table ----------------------------------------------------------------
+
+def negative_zeros(text: str) -> list[str]:
+    return [w for w in text.split() if w[:2] == "-0" and set(w[1:]) <= set("0.")]
+
+
+@pytest.mark.parametrize("argv", [
+    ["inverse", *CLI_DESIGN, "--angles-deg", "0", "-0", "--flow-ul-s", "2.5"],
+    ["predict", *CLI_DESIGN, "--pressures", "0", "-0"],
+    ["predict", *REVERSED, "--pressures", "0", "-0", "1"],
+    ["inverse", *REVERSED, "--angles-deg", "-0.001", "-5"]])
+def test_a_table_prints_zero_without_a_sign(argv):
+    """``balloon inverse --angles-deg -0`` printed -0.00, ``predict --pressures -0``
+    -0.000, and a reversed pair's -0.001 deg -0.00."""
+    code, out, err, _ = run(argv)
+    assert code == 0, err
+    assert negative_zeros(out) == [], out
+
+
+def test_the_solve_table_prints_zero_without_a_sign():
+    """``balloon solve``'s table: the reversed pair's first steps (-0.004 deg) printed
+    -0.00."""
+    c = make_curve(3)
+    c = dataclasses.replace(c, angle_deg=np.array([-0.0, -0.004, -1.0]),
+                            pressure_pa=np.array([-0.0, 100.0, 200.0]))
+    text = table(c, with_force=False)
+    assert negative_zeros(text) == [], text
+    assert "-1.00" in text

@@ -357,7 +357,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _cell(value: float | None) -> str:
-    return f"{'--':>14s}" if value is None else f"{value:14.3f}"
+    return f"{'--':>14s}" if value is None else f"{value:z14.3f}"
 
 
 def print_validity(validity: dict) -> None:
