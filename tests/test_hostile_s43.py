@@ -12,8 +12,10 @@ import dataclasses
 import json
 import math
 
+import httpx
 import numpy as np
 import pytest
+from explorer_browser import LiveServer, change, open_explorer
 from service_solves import make_curve
 from test_cli_fuzz import run
 
@@ -153,3 +155,85 @@ def test_the_solve_table_prints_zero_without_a_sign():
     text = table(c, with_force=False)
     assert negative_zeros(text) == [], text
     assert "-1.00" in text
+
+
+# -- 4. the explorer's design search by a pump's targets -------------------------------------
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """The app with the shipped models, served for the browser tests."""
+    with LiveServer(tmp_path_factory.mktemp("explorer-s43")) as live:
+        yield live
+
+
+def posted_searches(page) -> list:
+    bodies: list = []
+    page.on("request", lambda r: bodies.append(r.post_data_json)
+            if r.url.endswith("/v1/inverse") and r.method == "POST" else None)
+    return bodies
+
+
+def shown_errors(page) -> dict[str, str]:
+    return page.evaluate("""Object.fromEntries([...document.querySelectorAll('[id^=err-]')]
+        .filter((e) => !e.hidden && e.textContent.trim()).map((e) => [e.id, e.textContent]))""")
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("kind", ["angle_at_time", "time_budget"])
+def test_a_bad_shared_flow_rate_is_one_error_in_one_wording(watched, server, kind):
+    """A time target with the page's flow rate at 0 ul/s: the Curve panel named it in the
+    page's words ("0 is outside the allowed range (allowed: from 0.000001 to 1000 ul/s)")
+    and the search sent it, to be named again in the server's ("Input should be greater
+    than or equal to 0.000001 (allowed: 1e-06 <= flow_ul_s <= 1000)"). One value, one
+    check: the same words beside both boxes, and no search sent."""
+    page = open_explorer(watched, server.url)
+    bodies = posted_searches(page)
+    page.select_option("#inv-kind", kind)
+    change(page, "#inv-flow", "0")
+    page.fill("#inv-time", "6")
+    page.fill("#inv-angle", "40")
+    page.click("#inv-run")
+    page.wait_for_selector("#err-inv-flow:not([hidden])")
+    page.wait_for_selector("#err-flow_ul_s:not([hidden])")
+    errors = shown_errors(page)
+    assert errors["err-inv-flow"] == errors["err-flow_ul_s"], errors
+    assert "0 is outside the allowed range" in errors["err-inv-flow"]
+    assert "1000 ul/s" in errors["err-inv-flow"]
+    assert bodies == []
+    assert page.get_attribute("#inv-flow", "aria-invalid") == "true"
+    assert watched.foreign_requests() == [] and watched.errors == []
+    # mended in the form's box: the search goes, and neither box names it any more
+    change(page, "#inv-flow", "2.5")
+    page.click("#inv-run")
+    page.wait_for_function("document.getElementById('inv-run').disabled === false"
+                           " && document.getElementById('inv-explanation').textContent"
+                           " !== 'Searching...'", timeout=180_000)
+    assert len(bodies) == 1 and bodies[0]["target"]["flow_ul_s"] == 2.5
+    assert "err-inv-flow" not in shown_errors(page)
+
+
+@pytest.mark.timeout(300)
+def test_a_pump_targets_notes_leave_out_the_curves_force(watched, server):
+    """A time target's listed designs carried their curve's force flags ("force is given
+    up to 2500 Pa, the end of the blocked-tip FE curves") in the notes column, row after
+    row, though the table shows no force."""
+    page = open_explorer(watched, server.url)
+    bodies = posted_searches(page)
+    page.select_option("#inv-kind", "angle_at_time")
+    change(page, "#inv-flow", "2.5")
+    page.fill("#inv-time", "6")
+    page.fill("#inv-angle", "40")
+    page.fill("#inv-n", "3")
+    for k in range(1, page.locator("#inv-pairs input").count()):
+        page.uncheck(f"#inv-pair-{k}")
+    page.click("#inv-run")
+    page.wait_for_selector("#inv-table tbody tr", timeout=180_000)
+    api = httpx.post(server.url + "/v1/inverse", json=bodies[-1], timeout=180).json()
+    force_said = [m for c in api["candidates"] for m in c["validity"]["messages"]
+                  if m.startswith("force ")]
+    assert force_said, "the server's answer no longer carries a force message to leave out"
+    notes = [row.locator("td").all_inner_texts()[-2]
+             for row in page.locator("#inv-table tbody tr").all()]
+    assert notes and not any("force" in n for n in notes), notes
+    assert "force" not in page.locator("#inv-explanation").inner_text()
+    assert watched.foreign_requests() == [] and watched.errors == []
