@@ -237,3 +237,19 @@ def test_a_pump_targets_notes_leave_out_the_curves_force(watched, server):
     assert notes and not any("force" in n for n in notes), notes
     assert "force" not in page.locator("#inv-explanation").inner_text()
     assert watched.foreign_requests() == [] and watched.errors == []
+
+
+# -- 5. an FE solve of a material with a subnormal modulus -----------------------------------
+
+def test_a_tangent_at_rest_that_cannot_be_solved_ends_the_curve_failed():
+    """An inline membrane of mu = 5e-324 kPa (``POST /v1/solve`` takes it: mu0 > 0) made
+    PARDISO's first solve non-finite, and StepFailed escaped ``solve`` (the job failed
+    with "StepFailed: ...", no curve). The curve ends at rest, failed, saying why."""
+    from solver import Design, SolverSettings, solve
+    from solver.materials import make_material
+
+    curve = solve(Design(membrane_material=make_material("soft", [5e-324], [2.0])),
+                  SolverSettings())
+    assert curve.status == "failed"
+    assert "tangent at rest" in curve.reason
+    assert len(curve) == 1 and curve.pressure_pa[0] == 0.0
