@@ -8,8 +8,6 @@ from functools import lru_cache
 from pathlib import PurePath
 from typing import Any
 
-import numpy as np
-
 from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
 from service.schemas.predict import Validity
@@ -18,6 +16,7 @@ from solver.design_space import REUSED_ID_ALLOWED, reused_id
 from solver.errors import InputError
 from solver.settings import SolverSettings, settings_from_dict
 from surrogate.json_plain import plain_json as jsonable  # one JSON-plain copy
+from surrogate.predictor import normal_or_zero
 
 # a design's own field names (a model's refusal: outside the box, out of family) -> their
 # place in a request body that holds the design under "design"
@@ -60,21 +59,6 @@ def to_settings(settings: SolveSettingsIn, loc: tuple[str, ...] = ("body", "sett
         return settings_from_dict(settings.model_dump(exclude_unset=True))
     except InputError as exc:
         raise located(exc, loc) from None
-
-
-# The smallest normal double (2.2e-308): a magnitude below it is subnormal, held to fewer
-# significant digits than any answer states (1e-310 Pa was answered 7.27e-314 deg, and 5e-324
-# ul 6.1e-322 Pa, one significant bit), and is no measurable pressure, volume, time or angle.
-SMALLEST_NORMAL = float(np.finfo(float).tiny)
-
-
-def normal_or_zero(values: Any) -> np.ndarray:
-    """A float array with every subnormal magnitude (below SMALLEST_NORMAL) and -0.0 read
-    as 0.0: what an asked pressure, volume, time or angle is taken as, and what an answer
-    states (``finite_list``); NaN and infinity are kept."""
-    a = np.array(values, float)
-    a[np.abs(a) < SMALLEST_NORMAL] = 0.0
-    return a
 
 
 def finite_list(values: Any) -> list[float | None]:

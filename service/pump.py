@@ -30,7 +30,7 @@ import numpy as np
 
 from solver.errors import InputError
 from surrogate.hydraulics import NEGLIGIBLE_TIME_CONSTANT_S, STEADY_TIME_CONSTANTS, Inlet
-from surrogate.predictor import FE_PRESSURE_STOP_PA, pressure_stop_reason
+from surrogate.predictor import FE_PRESSURE_STOP_PA, normal_or_zero, pressure_stop_reason
 from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
 # request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
@@ -154,7 +154,6 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
     """The plain-data answer of /v1/predict and ``balloon predict`` (PredictResponse)."""
     from service.convert import (  # service.schemas imports AXES from here
         finite_list,
-        normal_or_zero,
         prediction_body,
     )
 
@@ -340,7 +339,7 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
                    ) -> dict[str, Any]:
     """Pressure, injected volume and (at ``flow_ul_s``) time for each target angle, with
     bands (PressureResponse of /v1/inverse/pressure, ``balloon inverse --angles-deg``)."""
-    from service.convert import finite_list, jsonable, normal_or_zero
+    from service.convert import finite_list, jsonable
 
     angles = np.asarray(angles_deg, float)
     if angles.size == 0 or not np.all(np.isfinite(angles) & (np.abs(angles) <= MAX_ANGLE_DEG)):

@@ -253,3 +253,22 @@ def test_a_tangent_at_rest_that_cannot_be_solved_ends_the_curve_failed():
     assert curve.status == "failed"
     assert "tangent at rest" in curve.reason
     assert len(curve) == 1 and curve.pressure_pa[0] == 0.0
+
+
+# -- 6. a design search's subnormal target ---------------------------------------------------
+
+@pytest.mark.parametrize(("target", "field"), [
+    ({"kind": "angle_at_volume", "volume_ul": 5e-324, "angle_deg": 45}, "volume_ul"),
+    ({"kind": "angle_at_time", "time_s": 1e-310, "flow_ul_s": 2.5, "angle_deg": 45},
+     "time_s"),
+    ({"kind": "angle_at_pressure", "pressure_pa": 1e-310, "angle_deg": 45}, "pressure_pa"),
+    ({"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": -1e-310}, "angle_deg")])
+def test_a_subnormal_target_is_zero_and_refused(shipped_client, target, field):
+    """``balloon inverse --kind angle_at_volume --volume-ul 5e-324`` searched the box and
+    answered "45 deg at 4.941e-324 ul injected is not reachable" (1e-310 deg: "no design
+    was solved to the target angle 1e-310 deg"): a subnormal target is 0, which the
+    targets refuse, naming the field and its range."""
+    r = shipped_client.post("/v1/inverse", json={"target": target})
+    assert r.status_code == 422, r.text
+    assert r.json()["errors"][0]["field"] == f"target.{field}"
+    assert "0 <" in r.json()["errors"][0]["allowed"]
