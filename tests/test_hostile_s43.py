@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from explorer_browser import LiveServer, change, open_explorer
 from service_solves import make_curve
-from test_cli_fuzz import run
+from test_cli_fuzz import run, visible_lines
 
 from service.commands.solve import table
 from surrogate.volume_control import MAX_TIME_S
@@ -272,3 +272,19 @@ def test_a_subnormal_target_is_zero_and_refused(shipped_client, target, field):
     assert r.status_code == 422, r.text
     assert r.json()["errors"][0]["field"] == f"target.{field}"
     assert "0 <" in r.json()["errors"][0]["allowed"]
+
+
+# -- 7. an empty --model ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("command", [
+    ["predict", *CLI_DESIGN, "--pressures", "1000"],
+    ["inverse", *CLI_DESIGN, "--angles-deg", "45"]])
+@pytest.mark.parametrize("name", ["", "  "])
+def test_an_empty_model_name_is_refused_not_read_as_the_default(command, name):
+    """``--model ""`` (an unset shell variable, ``--model "$MODEL"``) answered by the
+    emulator as if no model had been named; a blank one said "no saved model '  '"."""
+    code, out, err, escaped = run([*command, "--model", name])
+    lines = visible_lines(err)
+    assert (code, escaped, out) == (2, None, ""), (code, out, err)
+    assert len(lines) == 1 and lines[0].startswith("balloon: error: --model: "), err
+    assert "emulator, exponential, paper" in lines[0]
