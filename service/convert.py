@@ -8,8 +8,6 @@ from functools import lru_cache
 from pathlib import PurePath
 from typing import Any
 
-import numpy as np
-
 from service.errors import FieldError, located
 from service.schemas import DesignIn, SolveSettingsIn
 from service.schemas.predict import Validity
@@ -18,6 +16,7 @@ from solver.design_space import REUSED_ID_ALLOWED, reused_id
 from solver.errors import InputError
 from solver.settings import SolverSettings, settings_from_dict
 from surrogate.json_plain import plain_json as jsonable  # one JSON-plain copy
+from surrogate.predictor import normal_or_zero
 
 # a design's own field names (a model's refusal: outside the box, out of family) -> their
 # place in a request body that holds the design under "design"
@@ -63,8 +62,10 @@ def to_settings(settings: SolveSettingsIn, loc: tuple[str, ...] = ("body", "sett
 
 
 def finite_list(values: Any) -> list[float | None]:
-    """Floats for JSON: NaN and infinity become null."""
-    return [v if math.isfinite(v) else None for v in np.asarray(values, float).ravel().tolist()]
+    """Floats for an answer (HTTP and CLI alike): NaN and infinity become null, a subnormal
+    magnitude and -0.0 become 0.0 (``normal_or_zero``)."""
+    return [v if math.isfinite(v) else None
+            for v in normal_or_zero(values).ravel().tolist()]
 
 
 # the validity fields a Prediction may carry beyond in_domain, flags and messages: the

@@ -30,7 +30,7 @@ import numpy as np
 
 from solver.errors import InputError
 from surrogate.hydraulics import NEGLIGIBLE_TIME_CONSTANT_S, STEADY_TIME_CONSTANTS, Inlet
-from surrogate.predictor import FE_PRESSURE_STOP_PA, pressure_stop_reason
+from surrogate.predictor import FE_PRESSURE_STOP_PA, normal_or_zero, pressure_stop_reason
 from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
 # request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
@@ -152,13 +152,16 @@ KPA_LOOKALIKE_PA = 20.0
 def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: str,
                    level: float) -> dict[str, Any]:
     """The plain-data answer of /v1/predict and ``balloon predict`` (PredictResponse)."""
-    from service.convert import prediction_body  # service.schemas imports AXES from here
+    from service.convert import (  # service.schemas imports AXES from here
+        finite_list,
+        prediction_body,
+    )
 
     axis = question.axis()
     q = question.flow_ul_s
     inlet = inlet_drop(question.inlet, q)
     if axis == "pressures_pa":
-        p = np.asarray(question.pressures_pa, float)
+        p = normal_or_zero(question.pressures_pa)    # 1e-310 Pa is 0 Pa
         if question.pressures_at == "pump_gauge" and inlet is not None:
             drop = inlet["pressure_drop_pa"]
             tau = inlet["time_constant_s"]
@@ -187,8 +190,8 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         if by_volume is None:
             raise InputError(axis, f"model {model!r} answers by pressure only",
                              'model "emulator" for volumes and times')
-        v = (np.asarray(question.volumes_ul, float) if axis == "volumes_ul"
-             else np.asarray(question.times_s, float) * float(q or 0))
+        v = normal_or_zero(normal_or_zero(question.volumes_ul) if axis == "volumes_ul"
+                           else normal_or_zero(question.times_s) * float(q or 0))
         try:
             prediction = by_volume(design, v, level=level)
         except InputError as exc:   # volumes derived from times: name the field asked
@@ -201,7 +204,8 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
     _range_within_pressure_stop(body, surrogate, design, level)
     if axis != "pressures_pa":
         _say_what_force_by_volume_is(body)
-    if axis == "pressures_pa" and 0.0 < float(np.max(question.pressures_pa)) <= KPA_LOOKALIKE_PA:
+    if axis == "pressures_pa" and 0.0 < float(np.max(normal_or_zero(question.pressures_pa))) \
+            <= KPA_LOOKALIKE_PA:
         body["validity"]["flags"].append("pressures_look_like_kpa")
         body["validity"]["messages"].append(
             f"every pressure asked is at most {KPA_LOOKALIKE_PA:g} Pa, where the box's "
@@ -212,7 +216,7 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         raise _no_volume(model)
     if q is not None:
         body["flow_ul_s"] = q
-        body["time_s"] = ([float(t) for t in question.times_s or ()] if axis == "times_s"
+        body["time_s"] = (finite_list(question.times_s) if axis == "times_s"
                           else _over(body.get("volume_ul"), q))
         v_lim = body["validity"].get("fe_limit_volume_ul")
         if axis == "times_s" and v_lim is not None and "past_fe_range" in body["validity"]["flags"]:
@@ -221,6 +225,8 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
     if inlet is not None:
         body["inlet"] = inlet
         _pump_gauge(body, inlet)
+    if q is not None:
+        _cut_past_longest_time(body, ("time_s",), q)
     return body
 
 
@@ -253,6 +259,32 @@ def _cut_at_pressure_stop(body: dict[str, Any], fields: tuple[str, ...] = ANSWER
         f"{int(over.sum())} {what} need a chamber pressure above {p_stop:g} Pa, where the "
         "FE stops (SolverSettings.max_pressure_pa) and the largest pressure the service "
         "answers: no number is given there")
+
+
+TIME_FIELDS = ("time_s", "time_lower_s", "time_upper_s")
+
+
+def _cut_past_longest_time(body: dict[str, Any], fields: tuple[str, ...], flow_ul_s: float,
+                           what: str = "point(s)") -> None:
+    """In place: no time (s) in ``fields`` above MAX_TIME_S, the longest pump time the
+    service takes (``times_s``), flag ``past_longest_pump_time``: at 1e-6 ul/s the inverse
+    answered 45 deg after 2.4e7 s, a time the forward answer by time refuses. The volume
+    (and the pump gauge, read before this) are kept; each bound of a band is cut alone."""
+    cut = 0
+    for name in fields:
+        values = body.get(name)
+        if values is None:
+            continue
+        over = [v is not None and v > MAX_TIME_S for v in values]
+        body[name] = [None if o else v for v, o in zip(values, over, strict=True)]
+        cut = max(cut, sum(over))
+    if not cut:
+        return
+    body["validity"]["flags"].append("past_longest_pump_time")
+    body["validity"]["messages"].append(
+        f"{cut} {what} take longer than {MAX_TIME_S:g} s at {flow_ul_s:g} ul/s, the longest "
+        f"pump time the service answers (times_s <= {MAX_TIME_S:g} s): no time is given "
+        "there; volume_ul is the fluid needed")
 
 
 def _say_what_force_by_volume_is(body: dict[str, Any]) -> None:
@@ -315,13 +347,14 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
                          f"each -{MAX_ANGLE_DEG:g} <= angles_deg <= {MAX_ANGLE_DEG:g}")
     check_flow(flow_ul_s, inlet)
     drop = inlet_drop(inlet, flow_ul_s)
-    result = surrogate.inverse(design, angles_deg, level=level)
+    angles = normal_or_zero(angles)     # 1e-310 deg is 0 deg
+    result = surrogate.inverse(design, angles, level=level)
     volume = getattr(result, "volume_ul", None)
     if flow_ul_s is not None and volume is None:    # asked for, never silently dropped
         raise _no_volume(model)
     body: dict[str, Any] = {
         "model": model, "level": level, "design": design.as_dict(),
-        "angle_deg": [float(a) for a in angles_deg],
+        "angle_deg": finite_list(angles),
         "pressure_pa": finite_list(result.pressure_pa), "lower_pa": finite_list(result.lower_pa),
         "upper_pa": finite_list(result.upper_pa),
         "volume_ul": None if volume is None else finite_list(volume),
@@ -338,4 +371,6 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
     if drop is not None:
         body["inlet"] = drop
         _pump_gauge(body, drop, "angle(s)")
+    if flow_ul_s is not None:
+        _cut_past_longest_time(body, TIME_FIELDS, flow_ul_s, "angle(s)")
     return body

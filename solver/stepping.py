@@ -563,9 +563,17 @@ def inflate_model(model, settings: SolverSettings,
     status, reason = "stopped", f"reached max_steps = {settings.max_steps}"
     # The path's tangent at the undeformed state: the first step starts from the Euler
     # predictor along it.
-    b0 = counted_solve(model, counted_factorisation(model, last.K, backend), last.g)
-    history = [State(model.volume0_mm3 if volume_control else 0.0, u, q, p,
-                     path_rate(model, last, b0, float(last.g @ b0), volume_control))]
+    # A tangent at rest that cannot be solved (an inline material of mu = 5e-324 kPa: a
+    # stiffness of subnormal numbers, PARDISO's solution not finite) ends the curve there,
+    # failed, as a step that does not converge does: it escaped solve() as StepFailed.
+    try:
+        b0 = counted_solve(model, counted_factorisation(model, last.K, backend), last.g)
+        history = [State(model.volume0_mm3 if volume_control else 0.0, u, q, p,
+                         path_rate(model, last, b0, float(last.g @ b0), volume_control))]
+        steps = settings.max_steps
+    except (StepFailed, FloatingPointError) as exc:
+        status, reason = "failed", f"the tangent at rest cannot be solved: {exc}"
+        steps = 0
     extrapolate = True
     switch_index = -1
     limits = {name: getattr(settings, name) for name in STOPS}
@@ -581,7 +589,7 @@ def inflate_model(model, settings: SolverSettings,
     fold_attempted = False       # the switch at a failed step is tried once per curve (its
                                  # arc length costs minutes on the actuator)
     failures_here = 0            # failed attempts from the current converged state
-    for _ in range(settings.max_steps):
+    for _ in range(steps):
         # The last step lands on max_volume_ul under volume control and on max_pressure_pa
         # under pressure control, not beyond it (the other stops: ``land_on_stop``).
         load = min(last.volume_mm3 + step, volume_stop_mm3) if volume_control else (

@@ -34,6 +34,20 @@ from solver.settings import SolverSettings
 
 MAX_POINTS = 10_000_000  # the most numbers one request may ask for
 
+# The smallest normal double (2.2e-308): a magnitude below it is subnormal, held to fewer
+# significant digits than any answer states (1e-310 Pa was answered 7.27e-314 deg, and 5e-324
+# ul 6.1e-322 Pa, one significant bit), and is no measurable pressure, volume, time or angle.
+SMALLEST_NORMAL = float(np.finfo(float).tiny)
+
+
+def normal_or_zero(values: object) -> np.ndarray:
+    """A float array with every subnormal magnitude (below SMALLEST_NORMAL) and -0.0 read
+    as 0.0: what an asked pressure, volume, time or angle is taken as, and what an answer
+    states (``finite_list``); NaN and infinity are kept."""
+    a = np.array(values, float)
+    a[np.abs(a) < SMALLEST_NORMAL] = 0.0
+    return a
+
 
 def number_array(values: object, field_name: str, unit: str) -> np.ndarray:
     """A request's list of numbers as a 1-D float array; InputError naming the field."""

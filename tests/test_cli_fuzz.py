@@ -274,7 +274,7 @@ def _cases() -> list[tuple[str, list[str]]]:
              *PAPER])
     for value in (TINY, "0", "-1", "nan"):
         add(["inverse", *DESIGN, "--angles-deg", "45", "--flow-ul-s", value])
-    for value in ("0", "-1", "nan", "1e7"):
+    for value in ("0", TINY, "-1", "nan", "1e7"):   # a denormal is 0 (hostile round four)
         add(["inverse", "--pressure-pa", value, "--angle-deg", "45", *PAPER])
     for extra in (["--L-range", "5", "4"], ["--L-range", "-1", "5"],
                   ["--t-range", "1e308", "1e308"], ["--body-stiffness-range", "0", "0"],
@@ -395,8 +395,6 @@ GOOD = [  # (id, argv, exit code): answers, some of them past the model's range 
                                    *PAPER, "--json"], 0),
     ("search past the FE range", ["inverse", "--kind", "pressure_budget", "--pressure-pa",
                                   "20001", "--angle-deg", "45", *PAPER], 0),
-    ("search at a denormal pressure: infeasible", ["inverse", "--pressure-pa", TINY,
-                                                   "--angle-deg", "45", *PAPER], 1),
     *[(f"calibrate {name!r}", ["calibrate", "{tmp}/" + name, "--report", "{tmp}/r.json",
                                *PAPER], 0) for name in GOOD_FILES],
     ("db ls as JSON lines", ["db", "ls", "{tmp}/db.h5", "--json"], 0),

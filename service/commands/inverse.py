@@ -183,7 +183,7 @@ def _one_design(s: object, args: argparse.Namespace) -> int:
                if body.get(c) is not None]
     print(" ".join(f"{c:>12s}" for c in columns))
     for i in range(len(body["angle_deg"])):
-        print(" ".join("--".rjust(12) if body[c][i] is None else f"{body[c][i]:12.2f}"
+        print(" ".join("--".rjust(12) if body[c][i] is None else f"{body[c][i]:z12.2f}"
                        for c in columns))
     print_validity(body["validity"])
     return 0
@@ -268,8 +268,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
               + (f"{c.pressure_needed_pa:10.1f} {c.pressure_lower_pa:7.0f}.."
                  f"{c.pressure_upper_pa:<7.0f} " if math.isfinite(c.pressure_needed_pa)
                  else f"{'--':>10s} {'--':>16s} ")
-              + (f"{c.value_at_pressure:8.2f} {c.value_lower:7.2f}.."
-                 f"{c.value_upper:<7.2f} " if math.isfinite(c.value_at_pressure)
+              + (f"{c.value_at_pressure:z8.2f} {c.value_lower:z7.2f}.."
+                 f"{c.value_upper:<z7.2f} " if math.isfinite(c.value_at_pressure)
                  else f"{'--':>8s} {'--':>16s} ")
               + flags)
     _print_score_and_tolerances(res, unit)
@@ -297,7 +297,7 @@ def _print_pump_candidates(res: object, target: object) -> None:
     def band(x: float | None, lo: float | None, hi: float | None, width: int) -> str:
         if x is None:
             return f"{'--':>{width}s} {'--':>15s}"
-        return f"{x:{width}.2f} {lo:7.2f}..{hi:<6.2f}"
+        return f"{x:z{width}.2f} {lo:z7.2f}..{hi:<z6.2f}"
 
     print(f"{'rank':>4s} {'L_mm':>7s} {'t_mm':>6s} {'T_mm':>6s} {'b_mm':>6s} {'h_mm':>6s} "
           f"{'body/membrane':36s} {'score':>9s} {'v_need_ul':>9s} {'v_band_ul':>15s} "

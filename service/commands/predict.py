@@ -252,9 +252,11 @@ def surrogate_from_args(args: argparse.Namespace) -> object:
     from solver.errors import InputError, NotFoundError
     from surrogate import open_surrogate
 
-    spec = args.model or "emulator"
     allowed = (", ".join(BUILT_IN_MODELS) + ", a saved calibrated model's name, or an "
                "existing model file (.json)")
+    if args.model is not None and not args.model.strip():   # never read as the default
+        raise InputError("--model", f"{args.model!r} names no model", allowed)
+    spec = args.model or "emulator"
     if Path(spec).suffix == ".json" or "/" in spec or os.sep in spec:   # a file's path
         path = Path(spec)
         if not path.is_file():
@@ -357,7 +359,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _cell(value: float | None) -> str:
-    return f"{'--':>14s}" if value is None else f"{value:14.3f}"
+    return f"{'--':>14s}" if value is None else f"{value:z14.3f}"
 
 
 def print_validity(validity: dict) -> None:

@@ -203,7 +203,8 @@ def table(c: Curve, with_force: bool) -> str:
     rows = [f"{'pressure_pa':>12} {'volume_ul':>10} {'time_s':>8} {'angle_deg':>10} "
             f"{'stretch':>8}" + (f" {'force_mn':>10}" if with_force else "")]
     for i in range(len(c)):
-        rows.append(f"{c.pressure_pa[i]:12.1f} {c.volume_ul[i]:10.3f} {c.time_s[i]:8.2f} "
-                    f"{c.angle_deg[i]:10.2f} {c.max_membrane_stretch[i]:8.3f}"
-                    + (f" {c.force_mn[i]:10.4f}" if with_force else ""))
+        # "z": a value that rounds to zero is printed 0.00, never -0.00
+        rows.append(f"{c.pressure_pa[i]:z12.1f} {c.volume_ul[i]:z10.3f} {c.time_s[i]:z8.2f} "
+                    f"{c.angle_deg[i]:z10.2f} {c.max_membrane_stretch[i]:8.3f}"
+                    + (f" {c.force_mn[i]:z10.4f}" if with_force else ""))
     return "\n".join(rows)

@@ -48,7 +48,7 @@ from surrogate.exponential.family import Family
 from surrogate.exponential.paper_tables import TWO_BALLOON_BELOW_t_MM
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.surrogate import Surrogate
-from surrogate.predictor import FE_VOLUME_STOP_UL, Prediction
+from surrogate.predictor import FE_VOLUME_STOP_UL, SMALLEST_NORMAL, Prediction
 from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
 KINDS = ("angle_at_pressure", "pressure_budget", "force_at_pressure", "angle_at_volume",
@@ -117,18 +117,21 @@ class DesignTarget:
         if self.kind in TIME_KINDS:
             self._check_time()
         elif self.kind in VOLUME_KINDS:
-            if not _finite(self.volume_ul) or not 0 < self.volume_ul <= FE_VOLUME_STOP_UL:
+            if not _finite(self.volume_ul) or not (_positive(self.volume_ul)
+                                                   and self.volume_ul <= FE_VOLUME_STOP_UL):
                 raise InputError("volume_ul", f"the {self.kind} target needs an injected "
                                  "volume within the FE's volume stop, got "
                                  + ("none" if self.volume_ul is None else repr(self.volume_ul)),
                                  f"0 < volume_ul <= {FE_VOLUME_STOP_UL:g} ul")
-        elif not _finite(self.pressure_pa) or not 0 < self.pressure_pa <= 1e6:
+        elif not _finite(self.pressure_pa) or not (_positive(self.pressure_pa)
+                                                         and self.pressure_pa <= 1e6):
             raise InputError("pressure_pa", f"the {self.kind} target needs a pressure, got "
                              + ("none" if self.pressure_pa is None else repr(self.pressure_pa)),
                              "0 < pressure_pa <= 1e6 Pa")
         name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
         value = getattr(self, name)
-        if value is None or not _finite(value) or value == 0 or abs(value) > MAX_TARGET[name]:
+        if value is None or not _finite(value) or not (_positive(abs(value))
+                                                            and abs(value) <= MAX_TARGET[name]):
             unit = "mN" if name == "force_mn" else "deg"
             raise InputError(name, f"the {self.kind} target needs a non-zero {name} of "
                              f"at most {MAX_TARGET[name]:g} {unit}, got "
@@ -155,7 +158,7 @@ class DesignTarget:
             raise InputError("flow_ul_s", f"the {self.kind} target needs the pump's flow "
                              "rate, got " + ("none" if self.flow_ul_s is None
                                              else repr(self.flow_ul_s)), FLOW_RANGE)
-        if not _finite(self.time_s) or not 0 < self.time_s <= MAX_TIME_S:
+        if not _finite(self.time_s) or not (_positive(self.time_s) and self.time_s <= MAX_TIME_S):
             raise InputError("time_s", f"the {self.kind} target needs a time, got "
                              + ("none" if self.time_s is None else repr(self.time_s)),
                              f"0 < time_s <= {MAX_TIME_S:g} s")
@@ -328,6 +331,11 @@ class InverseDesignResult:
 
 def _finite(v: object) -> bool:
     return isinstance(v, (int, float)) and np.isfinite(v)
+
+
+def _positive(v: float) -> bool:
+    """More than 0, a subnormal magnitude (5e-324 ul, 1e-310 deg) counting as 0."""
+    return v >= SMALLEST_NORMAL
 
 
 def _families(s: Surrogate, bounds: DesignBounds) -> list[Family]:

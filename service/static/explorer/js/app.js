@@ -50,6 +50,7 @@ const FLAG_WORDS = {
   force_at_free_tip_pressure: "force: blocked tip at the free actuator's pressure",
   band_capped_at_fe_range: "band capped at the FE range",
   past_fe_pressure_stop: "past the FE's 20 kPa pressure stop",
+  past_longest_pump_time: "past the longest pump time",
   pressures_look_like_kpa: "pressures look like kPa",
   near_stiffness_balance: "near the stiffness balance",
   high_membrane_stretch: "membrane stretch where FE curves often fail",

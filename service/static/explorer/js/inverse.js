@@ -6,12 +6,16 @@
 
 import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
 import { FIELDS, PAIRS, pairLabel } from "./design.js";
-import { ASK_AXIS, OBJECTIVES, TARGET_BY, TARGET_INPUTS, changeUnit, readoutAt, targetColumns } from "./targets.js";
+import { checkNumber } from "./fields.js";
+import { ASK_AXIS, OBJECTIVES, TARGET_BY, TARGET_INPUTS, changeUnit, readoutAt, targetColumns, targetNotes } from "./targets.js";
 import { $, fmt, fmtSig, numberOrNull } from "./util.js";
 
 // The pump's flow rate is one value on the page: the Curve panel's "Pump flow rate"
 // (#flow, which the "Ask by" switch's time axis uses) and the time targets' flow box
-// (#inv-flow) show it, and typing in either changes the other.
+// (#inv-flow) show it, and typing in either changes the other. Being the page's value, it
+// is checked by the page's one check (fields.js), as the Curve panel checks it: a bad
+// flow rate is named in the same words beside both boxes, and no search is sent with it
+// (the server's refusal was a second wording of the same error).
 function shareFlowRate() {
   const page = $("flow"), form = $("inv-flow");
   form.value = page.value;
@@ -89,6 +93,13 @@ export function setupInverse({ loadDesign }) {
     const L = bounds("inv-L-lo", "inv-L-hi", "L_mm"), t = bounds("inv-t-lo", "inv-t-hi", "t_mm");
     if (L) body.L_bounds_mm = L;
     if (t) body.t_bounds_mm = t;
+    if (TARGET_BY[kind.value] === "time") {
+      const flow = checkNumber($("inv-flow"), { unit: "ul/s" });
+      if (flow.error) {
+        showMessage($("err-inv-flow"), flow.error);
+        return;
+      }
+    }
     const chosen = [...pairs.querySelectorAll("input:checked")].map((i) => PAIRS[Number(i.value)]);
     if (!chosen.length) {
       showMessage($("err-inv-pairs"), "Material pairs: tick at least one pair to search.");
@@ -135,7 +146,7 @@ export function setupInverse({ loadDesign }) {
     // the count, unless the explanation already gives it
     if (typeof res.n_evaluated === "number" && !text.includes(String(res.n_evaluated))) text += ` (${res.n_evaluated} designs evaluated)`;
     // a message every candidate carries is said once, under the explanation, not in each row
-    const messagesOf = (c) => (c.validity && c.validity.messages) ? c.validity.messages : [];
+    const messagesOf = (c) => targetNotes(searched, (c.validity && c.validity.messages) || []);
     const common = candidates.length > 1
       ? messagesOf(candidates[0]).filter((m) => candidates.every((c) => messagesOf(c).includes(m)))
       : [];

@@ -106,3 +106,12 @@ export function readoutAt(searched, c) {
     default: return searched.pressure_pa ?? c.pressure_needed_pa ?? c.target_pressure_pa;
   }
 }
+
+// A listed design's messages that are about its target: an angle target's designs leave
+// out the force's (force_past_fe_range "force is given up to ...", force_band_too_wide "no
+// force at ..."): its curve's blocked-tip force, which no column of the table shows (the
+// design loaded shows it with its own flags).
+export function targetNotes(searched, messages) {
+  if (searched.kind === "force_at_pressure") return messages;
+  return messages.filter((m) => !/^(no )?force\b/.test(m));
+}
