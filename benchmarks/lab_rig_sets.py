@@ -1,6 +1,6 @@
 """Lab data sets made as a lab makes them, from FE solves (``solver.solve``, default
 settings), never from the calibration's forms: the forty-first session's audit of
-`balloon calibrate` (benchmarks/RESULTS.md) and seven files of tests/data; the
+`balloon calibrate` (benchmarks/RESULTS.md) and nine files of tests/data; the
 forty-second session's sets N1-N5 on three more designs (D8-D10), to check its changes on
 designs they were not made on; the forty-third session's fresh sets N6-N13 on three more
 (D11-D13: a stiffness-scaled body, the reversed pair, PDMS 1:15), their truths and seeds
@@ -30,10 +30,10 @@ unit in the header).
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 12 + 12 solves of 15-90 s; run alone) and writes each
-set as CSV (and the API's JSON rows); ``--test-data`` writes the seven sets with the pump's
+set as CSV (and the API's JSON rows); ``--test-data`` writes the nine sets with the pump's
 log that tests/test_calibration_history.py and tests/test_calibration_gauge_zero.py read
-(tests/data/lab_gauge_noise_*.csv; N2's too, for test_calibration_exact_alike.py; N9's
-and N13's for test_calibration_lab_fresh.py).
+(tests/data/lab_gauge_noise_*.csv; N2's too, for test_calibration_exact_alike.py; N8's,
+N9's, N11's and N13's for test_calibration_lab_fresh.py).
 """
 
 from __future__ import annotations
@@ -143,7 +143,8 @@ TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0)}
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
              "gauge_zero_off_soft_batch": "N2-gauge60-D9",
-             "inlet_fast_unload": "N9-inlet-fast-D13", "camera_late": "N13-camera-lag-D12"}
+             "inlet_fast_unload": "N9-inlet-fast-D13", "camera_late": "N13-camera-lag-D12",
+             "body_stiffer": "N8-body1.12-D11", "leak_slow_pump": "N11-leak-slow-D11"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -306,7 +307,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's seven sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's nine sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:
