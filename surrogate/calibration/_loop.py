@@ -275,8 +275,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                         "an effect read off the gauge that does not explain the gauge is "
                         "not its explanation" if _reads_gauge(effects) else
                         f"worse than the baseline's {base_gauge_pa:.0f} Pa, it moves the "
-                        "gauge where the data do not (a lag of the bend alone is no line's "
-                        "or chamber's)"))
+                        "gauge where the data do not"))
             elif not cand["unbacked"] and get_fit(effects).baseline_sd_deg is not None:
                 # what it leaves is within the baseline's band at the fitted design, but
                 # would not be within its band at the nominal designs
