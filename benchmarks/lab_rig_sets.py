@@ -1,8 +1,10 @@
 """Lab data sets made as a lab makes them, from FE solves (``solver.solve``, default
 settings), never from the calibration's forms: the forty-first session's audit of
-`balloon calibrate` (benchmarks/RESULTS.md) and five files of tests/data; the
+`balloon calibrate` (benchmarks/RESULTS.md) and nine files of tests/data; the
 forty-second session's sets N1-N5 on three more designs (D8-D10), to check its changes on
-designs they were not made on.
+designs they were not made on; the forty-third session's fresh sets N6-N13 on three more
+(D11-D13: a stiffness-scaled body, the reversed pair, PDMS 1:15), their truths and seeds
+written here before any was calibrated.
 
 Ten designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
@@ -16,15 +18,22 @@ a membrane 10 % stiffer (its FE solves), the mount tilted (angle + offset), air 
 line (V_pump = V_chamber + C p), a laminar leak (dV_lost/dt = G p, integrated on a
 2 ms grid), a standard linear solid relaxing the pressure at a held volume, a camera
 whose view is tilted phi to the bending plane (tan a' = cos phi tan a: outside the
-catalogue), a gauge reading 60 Pa high.
+catalogue), a gauge reading 60 Pa high; for N6-N13 also a batch whose both layers are
+8 % stiffer (the pressure axis x 1.08), a body 12 % stiffer (its FE solves), a narrow
+long inlet (the gauge at the pump reads R x the flow just before each stamp above the
+chamber), air in the line with the gauge's zero off, and a camera whose time stamps are
+0.5 s late (outside the catalogue); lab habits: two specimens, fewer readings, an unload
+without a hold, a fast and a slow pump, pressures in mbar or psi and times in ms (the
+unit in the header).
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
-The first solves what the cache lacks (27 + 12 solves of 15-90 s; run alone) and writes each
-set as CSV (and the API's JSON rows); ``--test-data`` writes the five sets with the pump's
+The first solves what the cache lacks (27 + 12 + 12 solves of 15-90 s; run alone) and writes each
+set as CSV (and the API's JSON rows); ``--test-data`` writes the nine sets with the pump's
 log that tests/test_calibration_history.py and tests/test_calibration_gauge_zero.py read
-(tests/data/lab_gauge_noise_*.csv; N2's too, for test_calibration_exact_alike.py).
+(tests/data/lab_gauge_noise_*.csv; N2's too, for test_calibration_exact_alike.py; N8's,
+N9's, N11's and N13's for test_calibration_lab_fresh.py).
 """
 
 from __future__ import annotations
@@ -60,7 +69,16 @@ DESIGNS = {
                body_material="ecoflex_00_30", membrane_material="pdms_1_15"),
     "D10": dict(L_mm=15.2, t_mm=0.55, T_mm=1.05, b_mm=1.25, h_mm=0.12,
                 body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
+    # the forty-third session's designs, solved for the fresh sets N6-N13 only
+    "D11": dict(L_mm=8.4, t_mm=0.78, T_mm=1.33, b_mm=1.45, h_mm=0.21,
+                body_material="pdms_1_10*1.3", membrane_material="ecoflex_00_30"),
+    "D12": dict(L_mm=13.7, t_mm=0.67, T_mm=1.18, b_mm=2.05, h_mm=0.16,
+                body_material="ecoflex_00_30", membrane_material="pdms_1_15"),
+    "D13": dict(L_mm=10.2, t_mm=1.1, T_mm=1.7, b_mm=1.8, h_mm=0.27,
+                body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
 }
+# a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
+VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12)}
 T_FACTORS = {"a": 0.96, "b": 1.0, "c": 1.045}   # the specimens' membrane thickness
 SPECIMENS = ["a", "b", "c"]
 STATE = {1: "load", 0: "hold", -1: "unload"}
@@ -91,12 +109,42 @@ SETS = {
     "N4-air-D8": ("D8", [None], 2.0, 7, 3, 4, {"kind": "compliance", "C_ul_per_kpa": 2.0},
                   24, {}),
     "N5-clean-D10": ("D10", [3.0], 1.5, 9, 0, 0, {}, 25, {"fmt": "comma"}),
+    # the forty-third session's fresh sets, truths and seeds fixed before any calibration:
+    # new lab habits (two specimens, fewer readings, an unload without a hold, mbar, psi,
+    # ms, a fast and a slow pump)
+    "N6-clean-D11": ("D11", [None], 2.0, 7, 3, 4, {}, 31,
+                     {"specimens": 2, "p_unit": "mbar", "t_unit": "ms"}),
+    "N7-batch1.08-D12": ("D12", [None], 2.0, 5, 0, 3, {"kind": "batch", "scale": 1.08}, 32,
+                         {"p_unit": "psi"}),
+    "N8-body1.12-D11": ("D11", [None], 2.0, 7, 3, 4, {"kind": "body_x1.12"}, 33,
+                        {"fe_suffix": "_b1.12"}),
+    # 0.25 m of 0.5 mm bore tubing, water (1 mPa s): R = 128 mu l / (pi d^4), 163 Pa per
+    # ul/s; the loading in 3 s (a fast pump), then the unloading without a hold
+    "N9-inlet-fast-D13": ("D13", [None], 0.5, 6, 0, 4,
+                          {"kind": "inlet", "R_pa_per_ul_s": 163.0}, 34, {"t_unit": "ms"}),
+    "N10-air+zero-D12": ("D12", [None], 2.0, 7, 3, 4,
+                         {"kind": "compliance+gauge_offset", "C_ul_per_kpa": 2.5, "pa": 40},
+                         35, {"p_unit": "mbar"}),
+    "N11-leak-slow-D11": ("D11", [None], 4.0, 12, 4, 3, {"kind": "leak", "G_ul_s_per_kpa": 0.08},
+                          36, {"p_unit": "psi"}),
+    "N12-relax-D13": ("D13", [None], 2.0, 7, 4, 4, {"kind": "relaxation", "g": 0.25,
+                                                    "tau_s": 4.0}, 37, {}),
+    # outside the catalogue: the camera's time stamps 0.5 s late against the pump's log
+    # (each frame shows the actuator 0.5 s before its stamp)
+    "N13-camera-lag-D12": ("D12", [None], 1.0, 10, 4, 6, {"kind": "camera_lag", "s": 0.5}, 38,
+                           {"fmt": "comma"}),
 }
-# the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py and
-# test_calibration_exact_alike.py read, with the pump's log
+# the pressure and time units a lab writes: unit -> (per Pa or per s, decimals)
+PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4)}
+TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0)}
+# the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
+# test_calibration_exact_alike.py and test_calibration_lab_fresh.py read, with the
+# pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
-             "gauge_zero_off_soft_batch": "N2-gauge60-D9"}
+             "gauge_zero_off_soft_batch": "N2-gauge60-D9",
+             "inlet_fast_unload": "N9-inlet-fast-D13", "camera_late": "N13-camera-lag-D12",
+             "body_stiffer": "N8-body1.12-D11", "leak_slow_pump": "N11-leak-slow-D11"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -105,14 +153,17 @@ def solve_missing(cache: Path) -> None:
 
     cache.mkdir(parents=True, exist_ok=True)
     jobs = [(d, k, "") for d in DESIGNS for k in T_FACTORS]
-    stiffer = sorted({v[0] for v in SETS.values() if v[8].get("fe_suffix") == "_m1.1"})
-    jobs += [(d, k, "*1.1") for d in stiffer for k in T_FACTORS]  # a membrane 10 % stiffer
-    for d, k, scale in jobs:
-        path = cache / f"{d}{k}{'_m1.1' if scale else ''}.npz"
+    jobs += sorted({(v[0], k, v[8]["fe_suffix"]) for v in SETS.values()
+                    if v[8].get("fe_suffix") for k in T_FACTORS})  # one layer stiffer
+    for d, k, suffix in jobs:
+        path = cache / f"{d}{k}{suffix}.npz"
         if path.exists():
             continue
         kw = dict(DESIGNS[d], t_mm=round(DESIGNS[d]["t_mm"] * T_FACTORS[k], 4))
-        kw["membrane_material"] += scale
+        if suffix:
+            layer, factor = VARIANTS[suffix]
+            preset, _, scale = kw[layer].partition("*")
+            kw[layer] = f"{preset}*{round(float(scale or 1) * factor, 6):g}"
         c = solve(Design(**kw), SolverSettings())
         np.savez(path, pressure_pa=c.pressure_pa, volume_ul=c.volume_ul,
                  angle_deg=c.angle_deg, status=c.status, design=json.dumps(kw))
@@ -146,8 +197,9 @@ def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray
     """The chamber's volume and pressure on the 2 ms grid for the pump's volume vp."""
     def p_of(v):
         return s * c["p"](np.clip(v, 0, c["vmax"]))
+    kinds = effect.get("kind", "").split("+")
     vch = vp.copy()
-    if effect.get("kind") == "compliance":       # air in the line: V_pump = V_ch + C p_ch
+    if "compliance" in kinds:       # air in the line: V_pump = V_ch + C p_ch
         for i, v in enumerate(vp):
             lo, hi = 0.0, v
             for _ in range(50):
@@ -155,7 +207,7 @@ def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray
                 lo, hi = (lo, mid) if mid + effect["C_ul_per_kpa"] * p_of(mid) / 1000 > v \
                     else (mid, hi)
             vch[i] = 0.5 * (lo + hi)
-    if effect.get("kind") == "leak":             # a laminar pinhole: dV_lost/dt = G p_ch
+    if "leak" in kinds:                          # a laminar pinhole: dV_lost/dt = G p_ch
         g, lost = effect["G_ul_s_per_kpa"], 0.0
         for i in range(1, vp.size):
             k1 = g * p_of(vp[i - 1] - lost) / 1000
@@ -163,7 +215,7 @@ def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray
             lost = min(lost + 0.5 * H_S * (k1 + k2), vp[i])
             vch[i] = vp[i] - lost
     p = p_of(vch)
-    if effect.get("kind") == "relaxation":       # a standard linear solid at a held volume
+    if "relaxation" in kinds:                    # a standard linear solid at a held volume
         y = np.zeros_like(p)
         for i in range(1, p.size):
             y[i] = y[i - 1] + H_S * (p[i - 1] - y[i - 1]) / effect["tau_s"]
@@ -177,15 +229,23 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
     states = [1] * n[0] + [0] * n[1] + [-1] * n[2]
     t = dt * np.arange(len(states) + 1)
     fine = np.arange(0, t[-1] + H_S / 2, H_S)
-    vch, p = chamber(c, s, pump_volume(fine, q, dt, n[0], n[1]), effect)
+    kinds = effect.get("kind", "").split("+")
+    vp = pump_volume(fine, q, dt, n[0], n[1])
+    vch, p = chamber(c, s, vp, effect)
+    a = c["a"](np.clip(vch, 0, c["vmax"]))
+    if "inlet" in kinds:                         # the gauge at the pump: R times the flow
+        flow = np.concatenate([[0.0], np.diff(vp) / H_S])    # just before each stamp
+        p = p + effect["R_pa_per_ul_s"] * flow
+    if "camera_lag" in kinds:                    # each frame shows the bend s earlier
+        a = np.concatenate([np.zeros(round(effect["s"] / H_S)), a])[:a.size]
     idx = np.round(t / H_S).astype(int)
-    p, a = p[idx], c["a"](np.clip(vch[idx], 0, c["vmax"]))
-    if effect.get("kind") == "angle_offset":     # the mount tilted
+    p, a = p[idx], a[idx]
+    if "angle_offset" in kinds:                  # the mount tilted
         a = a + effect["deg"]
-    if effect.get("kind") == "tilted_camera":    # the bending plane seen at phi
+    if "tilted_camera" in kinds:                 # the bending plane seen at phi
         phi = math.radians(effect["phi_deg"])
         a = np.degrees(np.arctan2(np.sin(np.radians(a)) * math.cos(phi), np.cos(np.radians(a))))
-    if effect.get("kind") == "gauge_offset":
+    if "gauge_offset" in kinds:
         p = p + effect["pa"]
     zero = rng.normal(0, 3)
     p = p + zero + rng.normal(0, 1, t.size) * (0.015 * np.abs(p) + 2.0)
@@ -200,19 +260,24 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     nominal = DESIGNS[d]
     suffix = kw.get("fe_suffix", "")
     stiff = {sp: float(np.clip(rng.normal(1, 0.07), 0.9, 1.1)) for sp in SPECIMENS}
+    if effect.get("kind") == "batch":             # both layers' moduli x scale
+        stiff = {sp: v * effect["scale"] for sp, v in stiff.items()}
     v_top = volume_at_angle(fe_curve(cache, f"{d}b{suffix}"), kw.get("angle_target", 75))
+    p_unit, t_unit = kw.get("p_unit", "kPa"), kw.get("t_unit", "s")
+    (p_per_pa, p_nd), (t_per_s, t_nd) = PRESSURE_UNITS[p_unit], TIME_UNITS[t_unit]
     rows = []
     for run, q in enumerate(flows, 1):
-        for k, sp in enumerate(SPECIMENS):
+        for k, sp in enumerate(SPECIMENS[:kw.get("specimens", len(SPECIMENS))]):
             qq = v_top / (n_load * dt) if q is None else q
             r = readings(fe_curve(cache, f"{d}{sp}{suffix}"), stiff[sp], qq, dt,
                          (n_load, n_hold, n_unload), rng, effect)
-            rows += [(f"S{k + 1}", run, r["t"][i], qq, r["p"][i] / 1000, r["a"][i],
-                      STATE[r["state"][i]]) for i in range(r["t"].size)]
+            rows += [(f"S{k + 1}", run, r["t"][i] * t_per_s, qq, r["p"][i] * p_per_pa,
+                      r["a"][i], STATE[r["state"][i]]) for i in range(r["t"].size)]
     sep, dec = (";", ",") if kw.get("fmt", "semicolon") == "semicolon" else (",", ".")
     geometry = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
-    header = ["curve_id", "run", *geometry, "body_material", "membrane_material", "Time (s)",
-              "Flow (ul/s)", "Pressure (kPa)", "Angle (deg)"] + (["pump"] if with_pump else [])
+    header = ["curve_id", "run", *geometry, "body_material", "membrane_material",
+              f"Time ({t_unit})", "Flow (ul/s)", f"Pressure ({p_unit})",
+              "Angle (deg)"] + (["pump"] if with_pump else [])
 
     def num(x: float, nd: int) -> str:
         return f"{x:.{nd}f}".replace(".", dec)
@@ -223,15 +288,16 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
                  f"benchmarks/lab_rig_sets.py from FE solves{note}\n")
         w = csv.writer(fh, delimiter=sep)
         w.writerow(header)
-        for cid, run, t, q, p_kpa, a, state in rows:
+        for cid, run, t, q, p_read, a, state in rows:
             w.writerow([cid, run, *(num(nominal[g], 2) for g in geometry),
-                        nominal["body_material"], nominal["membrane_material"], num(t, 1),
-                        num(q, 2), num(p_kpa, 3), num(a, 1)] + ([state] if with_pump else []))
+                        nominal["body_material"], nominal["membrane_material"], num(t, t_nd),
+                        num(q, 2), num(p_read, p_nd), num(a, 1)] + ([state] if with_pump else []))
     if not with_pump:      # the API's body: the same rows, numbers as JSON numbers
         body = [dict(zip(header, [cid, run, *(nominal[g] for g in geometry),
                                   nominal["body_material"], nominal["membrane_material"],
-                                  round(t, 1), round(q, 2), round(p_kpa, 3), round(a, 1)],
-                         strict=True)) for cid, run, t, q, p_kpa, a, _ in rows]
+                                  round(t, t_nd), round(q, 2), round(p_read, p_nd),
+                                  round(a, 1)],
+                         strict=True)) for cid, run, t, q, p_read, a, _ in rows]
         (out / f"{name}.json").write_text(json.dumps({"rows": body}))
     return path
 
@@ -241,7 +307,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's five sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's nine sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate.calibration._data import Observations
+from surrogate.calibration._history import line_direction
 from surrogate.calibration._response import Responses, design_key
 from surrogate.calibration._specimens import SpecimenScatter
 from surrogate.calibration.effects import Effect
@@ -79,6 +80,8 @@ class AugmentedModel:
         scale as a random effect, the residuals weighted by it (``whiten``,
         _specimens.py); None: ordinary least squares."""
         self.obs = obs
+        # the pressure effects' flow direction: none yet at a reading at the pump's start
+        self.flow_direction = line_direction(obs.time_s, obs.direction)
         self.scatter = scatter
         self._scale_direction: np.ndarray | None = None
         self.pressure_weight = float(pressure_weight)
@@ -179,7 +182,7 @@ class AugmentedModel:
             p = self._chamber_at_volume(values, self.design_index, self.volumes(x))
         q = np.nan_to_num(o.flow_ul_s)
         for e in reversed(self.pressure):
-            p = e.gauge_pressure(p, q, o.direction, values)
+            p = e.gauge_pressure(p, q, self.flow_direction, values)
         return p
 
     def _by_volume(self, what, values, design_index, v_ul):
@@ -269,7 +272,7 @@ class AugmentedModel:
         o = self.obs
         if not (self._leaks or any(e.lags == "angle" for e in self.time)):
             out = self._static(values, self.design_index, o.pressure_pa, o.flow_ul_s,
-                               o.direction, k_a, k_p, self.volumes(x))
+                               self.flow_direction, k_a, k_p, self.volumes(x))
         else:
             s = self._sub
             static = self._static(values, self.design_index[s["rows"]], s["p"], s["q"],
@@ -390,7 +393,7 @@ class AugmentedModel:
                     v.append(v0 + w * (o.volume_ul[r] - v0) if np.isfinite(v0)
                              else o.volume_ul[r])
                     q.append(o.flow_ul_s[r])
-                    d.append(o.direction[r])
+                    d.append(self.flow_direction[r])
                     prev_rows.append(prev)
                     weights.append(w)
                 sample_rows.append(r)

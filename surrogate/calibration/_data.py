@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from solver.bounded_read import read_bounded
-from solver.materials import MATERIALS
+from solver.design import material_from_input
+from solver.errors import InputError
 from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
@@ -282,12 +283,12 @@ class Observations:
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
         from solver.design import Design
-        from solver.materials import get_material
+        from solver.design_space import named_material
 
         d = self.curve_design(i)
         return Design(L_mm=d["L_mm"], t_mm=d["t_mm"], T_mm=d["T_mm"], b_mm=d["b_mm"],
-                      h_mm=d["h_mm"], body_material=get_material(d["body_material"]),
-                      membrane_material=get_material(d["membrane_material"]))
+                      h_mm=d["h_mm"], body_material=named_material(d["body_material"]),
+                      membrane_material=named_material(d["membrane_material"]))
 
     def padded_order(self) -> np.ndarray:
         """(n_curves, max points) row indices in curve order, -1 padded (rows are sorted)."""
@@ -390,10 +391,10 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             rec["curve_id"] = f"{rec['curve_id']} run {_run_label(raw.get(RUN_COLUMN), i)}"
         for name in ("body_material", "membrane_material"):
             value = str(raw.get(name, "") or "").strip()
-            if value not in MATERIALS:
-                raise DataError(name, f"unknown material {value!r}", i,
-                                ", ".join(sorted(MATERIALS)))
-            rec[name] = value
+            try:    # a preset, or one with every mu scaled (pdms_1_10*1.3), as a design's
+                rec[name] = material_from_input(value, name).id
+            except InputError as exc:
+                raise DataError(name, exc.detail, i, exc.allowed) from None
         try:
             for name in ("L_mm", "t_mm", "pressure_pa", "angle_deg"):
                 x = _number(raw.get(name), name, i) * _factor(converted, name)

@@ -131,7 +131,12 @@ def _vote(out: np.ndarray, curve: np.ndarray, time_s: np.ndarray, group: np.ndar
     reading interval) ran the same pump program; at each reading the direction most of
     them show (a strict majority) is every one's. One specimen's noisy hold or a flat
     step at the top of its curve then does not cut its history differently from the
-    others' (the noise floor compares replicates segment by segment)."""
+    others' (the noise floor compares replicates segment by segment). Where no state has
+    a majority and some replicates show the pump running in, others out, one program
+    did neither there: it stood (a hold's first reading whose bend still moves, read as
+    loading on one specimen, unloading on another and a hold on the third, cut the three
+    histories apart and the floor from them rose 4.7 x: a camera 0.5 s late,
+    benchmarks/lab_rig_sets.py N13)."""
     for g in np.unique(group):
         curves = np.unique(curve[group == g])
         if curves.size < 3:
@@ -151,6 +156,8 @@ def _vote(out: np.ndarray, curve: np.ndarray, time_s: np.ndarray, group: np.ndar
                 values, counts = np.unique(d[:, k], return_counts=True)
                 if counts.max() * 2 > len(same):
                     d[:, k] = values[np.argmax(counts)]
+                elif values[0] < 0 < values[-1]:
+                    d[:, k] = 0.0
             for r, dk in zip(same, d, strict=True):
                 out[r] = dk
 
@@ -163,6 +170,16 @@ def history_traits(curve: np.ndarray, pressure_pa: np.ndarray, direction: np.nda
     hold = (direction == 0) & (pressure_pa > REST_FRACTION * top[curve])
     return {"loading": int(np.sum(direction > 0)), "unloading": int(np.sum(direction < 0)),
             "hold": int(np.sum(hold))}
+
+
+def line_direction(time_s: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """The pump's state over the interval that ends at each reading, as the fluid in the
+    inlet line moves (the inlet's R Q x direction): ``direction``, but 0 at a reading
+    taken at the pump's start (``time_s`` 0, the chamber at rest): no fluid has flowed
+    through the line before it, so the gauge there reads the chamber, not R Q above it
+    (``directions`` gives such a reading the next interval's state). Without time_s the
+    readings cannot say when the pump started: ``direction``."""
+    return np.where(time_s == 0.0, 0.0, direction)
 
 
 def injected_volume_ul(curve: np.ndarray, time_s: np.ndarray, flow_ul_s: np.ndarray,

@@ -64,7 +64,9 @@ def design_document(cal: Any, name: str) -> dict[str, Any]:
         table[effect_id] = {p.name: {k: params[p.name][k] for k in ("value", "sd", "unit")}
                             for p in effect.parameters}
     designs = [obs.curve_design(c) for c in range(obs.n_curves)]
-    pairs = sorted({(d["body_material"], d["membrane_material"]) for d in designs})
+    # by preset, as ``changed`` asks: a lab's pdms_1_10*1.3 body is a pdms_1_10 actuator
+    pairs = sorted({(_preset(d.body_material)[0], _preset(d.membrane_material)[0])
+                    for d in (obs.design(c) for c in range(obs.n_curves))})
 
     def span(name: str) -> list[float]:
         values = [float(d[name]) for d in designs]
