@@ -54,6 +54,7 @@ from solver.design_space import (
     scaled_material,
 )
 from solver.errors import InputError
+from solver.settings import SolverSettings
 from surrogate.band_level import z_value
 from surrogate.emulator.stretch_hazard import FLAG as STRETCH_FLAG
 from surrogate.emulator.stretch_hazard import HAZARD_STRETCH
@@ -380,6 +381,10 @@ def passed_over_note(n_listed: int, n_results: int, near_copies: int,
         why.append(f"{not_as_screened} missed the target by more than 1 % when asked back")
     return f"; {n_results} were asked for: of the others, {' and '.join(why)}"
 
+
+# the angle every database curve is solved to (the default solve's angle stop): no
+# model fitted from them knows an angle past it
+DATABASE_ANGLE_STOP_DEG = SolverSettings().max_angle_deg
 
 TOLERANCE_MM = 0.01
 
@@ -748,14 +753,20 @@ def search_designs(model: object, target: DesignTarget, bounds: SearchBounds,
             explanation = lower
         elif what == "angle" and reach is not None and best_design is not None and (
                 end := fe_angle_end(model, best_design, target, level)
-                ) is not None and reach >= end - 1.0 and target.value > end:
-            # the best design reaches the end of the FE's range: past it no design's angle
-            # is known, so neither wider bounds nor more pressure gives a number there
+                ) is not None and target.value > end and (
+                reach >= end - 1.0 or target.value > DATABASE_ANGLE_STOP_DEG):
+            # the best design reaches the end of the FE's range, or the target lies past
+            # the angle every database curve is solved to: past it no design's angle is
+            # known, so neither wider bounds nor more pressure gives a number there (120
+            # deg at 1000 Pa, the designs reaching 11.6 deg, said "widen the bounds ... or
+            # raise the pressure")
+            reaching = ("designs inside the bounds that reach it (up to "
+                        if reach >= end - 1.0 else
+                        "design inside the bounds that reaches the most (it reaches ")
             explanation = (f"the target angle {direction * target.value:g} deg lies past "
-                           f"the FE's range, which ends at {direction * end:g} deg for the "
-                           f"designs inside the bounds that reach it (up to "
-                           f"{direction * reach:.3g} deg {target.at_text()}): no "
-                           f"angle past it is known; ask for at most {end:g} deg in size "
+                           f"the FE's range, which ends at {direction * end:.4g} deg for the "
+                           f"{reaching}{direction * reach:.3g} deg {target.at_text()}): no "
+                           f"angle past it is known; ask for at most {end:.4g} deg in size "
                            "(angle_deg)")
         else:
             # a force target: more pressure helps only as far as the best design's force

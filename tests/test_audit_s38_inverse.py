@@ -119,3 +119,23 @@ def test_angle_search_answers_against_the_fe(shipped_client, case):
     body = r.json()
     lo, hi = sorted((body["lower_deg"][0], body["upper_deg"][0]))
     assert lo <= case["fe_angle_deg"] <= hi, (case["fe_angle_deg"], lo, hi)
+
+
+def test_an_angle_past_every_curves_end_is_named_where_no_design_comes_near(shipped_client):
+    """120 deg at 1000 Pa with short chambers (L 4-6 mm): the designs reach 11.6 deg
+    there, and the answer said "widen the bounds ... or raise the pressure" -- but every
+    database curve ends at 90 deg (the default solve's angle stop): no bound or pressure
+    gives a known angle of 120 deg."""
+    r = shipped_client.post("/v1/inverse", json={
+        "target": {"kind": "angle_at_pressure", "angle_deg": 120, "pressure_pa": 1000},
+        "material_pairs": PAIR, "L_bounds_mm": [4, 6]})
+    assert r.status_code == 200, r.text
+    text = r.json()["explanation"]
+    assert "raise the pressure" not in text and "widen the bounds" not in text, text
+    assert "past the FE's range, which ends at 90 deg" in text, text
+    assert "ask for at most 90 deg in size (angle_deg)" in text, text
+    # below the stop the way on is still more pressure or wider bounds
+    r = shipped_client.post("/v1/inverse", json={
+        "target": {"kind": "angle_at_pressure", "angle_deg": 85, "pressure_pa": 1000},
+        "material_pairs": PAIR, "L_bounds_mm": [4, 6]})
+    assert "raise the pressure" in r.json()["explanation"]
