@@ -207,7 +207,9 @@ def test_inverse_design_explains_an_unreachable_target(client):
                                          "L_bounds_mm": [4, 5]})
     body = r.json()
     assert r.status_code == 200 and body["feasible"] is False and body["candidates"] == []
-    assert "not reachable" in body["explanation"]
+    # past every curve's end (90 deg): no bound or pressure reaches it, and it says so
+    assert "lies past the FE's range" in body["explanation"]
+    assert "raise the pressure" not in body["explanation"]
 
 
 def test_inverse_design_errors(client):

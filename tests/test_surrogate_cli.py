@@ -133,7 +133,8 @@ def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys) -> None:
                      "--model", str(tmp_path / "none.json")]) == 2
     assert cli.main(["inverse", "--angle-deg", "300", "--pressure-pa", "900",
                      "--model", "paper"]) == 1  # infeasible: explained, not an error
-    assert "not reachable" in capsys.readouterr().out
+    # 300 deg lies past every curve's end (90 deg): said so, not "raise the pressure"
+    assert "lies past the FE's range" in capsys.readouterr().out
 
 
 def test_a_file_that_cannot_be_opened_is_named_with_the_reason(tmp_path, capsys,
