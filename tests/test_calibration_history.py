@@ -33,6 +33,18 @@ def lab_rows(name: str) -> tuple[list[dict], dict[str, list[float]]]:
     return rows, log
 
 
+def histories_against_the_log(name: str) -> tuple[object, dict]:
+    """The observations read from lab file ``name``, and each curve whose history read
+    from its readings (loading, hold, unloading at every reading) differs from the pump's
+    log: {curve id: (read, logged)}."""
+    rows, log = lab_rows(name)
+    obs = observations_from_rows(rows)
+    wrong = {cid: (obs.direction[obs.curve == c].tolist(), log[cid])
+             for c, cid in enumerate(obs.curve_ids)
+             if obs.direction[obs.curve == c].tolist() != log[cid]}
+    return obs, wrong
+
+
 @pytest.mark.parametrize("name", ["loading_two_flows", "loop_stiff_membrane",
                                   "flat_top_two_flows", "hold_at_a_flat_top"])
 def test_a_noisy_gauge_near_the_top_reads_as_the_pump_ran(name):
@@ -46,11 +58,7 @@ def test_a_noisy_gauge_near_the_top_reads_as_the_pump_ran(name):
     8 Pa); hold_at_a_flat_top read a hold at the top as loading in two specimens (its
     running reference was the hold's own neighbours, which the gauge's noise had read as
     running: now only intervals that bend beyond the camera's noise set the rate)."""
-    rows, log = lab_rows(name)
-    obs = observations_from_rows(rows)
-    wrong = {cid: (obs.direction[obs.curve == c].tolist(), log[cid])
-             for c, cid in enumerate(obs.curve_ids)
-             if obs.direction[obs.curve == c].tolist() != log[cid]}
+    obs, wrong = histories_against_the_log(name)
     assert not wrong, wrong
     assert np.all(np.isfinite(obs.volume_ul))
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_calibration_history import lab_rows
+from test_calibration_history import histories_against_the_log, lab_rows
 
 from solver.materials import MATERIALS
 from surrogate.calibration import DataError, observations_from_rows
@@ -53,11 +53,7 @@ def test_replicates_that_read_the_pump_running_in_and_out_read_it_stood(name):
     (N13 at two readings, its floor 3.3 deg; N11's leak was then left 4.4 deg of shared
     residual and nothing selected); now a shared program that one replicate reads running
     in and another out stood there, as the pump's log says."""
-    rows, log = lab_rows(name)
-    obs = observations_from_rows(rows)
-    wrong = {cid: (obs.direction[obs.curve == c].tolist(), log[cid])
-             for c, cid in enumerate(obs.curve_ids)
-             if obs.direction[obs.curve == c].tolist() != log[cid]}
+    _, wrong = histories_against_the_log(name)
     assert not wrong, wrong
 
 
