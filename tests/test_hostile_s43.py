@@ -15,7 +15,7 @@ import math
 import httpx
 import numpy as np
 import pytest
-from explorer_browser import LiveServer, change, open_explorer
+from explorer_browser import LiveServer, change, open_explorer, screenshot
 from service_solves import make_curve
 from test_cli_fuzz import run, visible_lines
 
@@ -202,6 +202,7 @@ def test_a_bad_shared_flow_rate_is_one_error_in_one_wording(watched, server, kin
     assert bodies == []
     assert page.get_attribute("#inv-flow", "aria-invalid") == "true"
     assert watched.foreign_requests() == [] and watched.errors == []
+    screenshot(page, f"explorer-bad-shared-flow-{kind}")
     # mended in the form's box: the search goes, and neither box names it any more
     change(page, "#inv-flow", "2.5")
     page.click("#inv-run")
@@ -237,6 +238,7 @@ def test_a_pump_targets_notes_leave_out_the_curves_force(watched, server):
     assert notes and not any("force" in n for n in notes), notes
     assert "force" not in page.locator("#inv-explanation").inner_text()
     assert watched.foreign_requests() == [] and watched.errors == []
+    screenshot(page, "explorer-pump-target-notes")
 
 
 # -- 5. an FE solve of a material with a subnormal modulus -----------------------------------
