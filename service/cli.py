@@ -17,6 +17,7 @@ from typing import NoReturn
 
 from service.commands.interrupts import caused_by_interrupt, interrupts_kept
 from solver.errors import BalloonError, InputError, NotFoundError
+from solver.number_text import INTEGER_FORM, NUMBER_FORM, ascii_float, ascii_int
 
 # Subcommands in the order `balloon --help` lists them.
 COMMAND_MODULES = (
@@ -41,23 +42,34 @@ def package_version() -> str:
 class Parser(argparse.ArgumentParser):
     """argparse with its usage errors on one line, like every other error of the
     command: ``balloon predict: error: MESSAGE (see `balloon predict --help`)``.
-    Subcommand parsers are of the same class (argparse's default)."""
+    Subcommand parsers are of the same class (argparse's default). A ``float`` or
+    ``int`` option reads its word by the service's one rule for numbers written as text
+    (``solver.number_text``: ASCII decimal digits; ``1_000`` and ``١٠٠٠`` are refused, as
+    a query parameter refuses them)."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.register("type", float, ascii_float)
+        self.register("type", int, ascii_int)
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {self._with_range(message)} "
                      f"(see `{self.prog} --help`)\n")
 
     def _with_range(self, message: str) -> str:
-        """argparse's "argument --L-mm: invalid float value: 'abc'" with the option's
-        allowed range, when the option carries one (service.commands.numbers)."""
-        match = re.fullmatch(r"argument (\S+): invalid (?:float|int) value: (.*)", message)
+        """argparse's "argument --L-mm: invalid float value: 'abc'" as "'abc' is not a
+        number", with the form numbers are written in and the option's allowed range when
+        it carries one (service.commands.numbers)."""
+        match = re.fullmatch(r"argument (\S+): invalid (float|int) value: (.*)", message)
         if match is None:
             return message
-        for action in self._actions:
-            allowed = getattr(action, "allowed", None)
-            if allowed and "/".join(action.option_strings) == match[1]:
-                return f"argument {match[1]}: {match[2]} is not a number (allowed: {allowed})"
-        return message
+        form = NUMBER_FORM if match[2] == "float" else INTEGER_FORM
+        what = "a number" if match[2] == "float" else "a whole number"
+        allowed = next((a.allowed for a in self._actions   # type: ignore[attr-defined]
+                        if getattr(a, "allowed", None)
+                        and "/".join(a.option_strings) == match[1]), None)
+        return (f"argument {match[1]}: {match[3]} is not {what} ({form}"
+                + (f"; allowed: {allowed})" if allowed else ")"))
 
 
 def build_parser() -> argparse.ArgumentParser:

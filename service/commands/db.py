@@ -85,6 +85,7 @@ def query_filters(args: argparse.Namespace) -> dict[str, object]:
     the option as typed (``--where L_mm``, not the store's ``L_mm``); a field given twice,
     or a status by both options, is refused rather than read as its last value."""
     from solver.errors import InputError
+    from solver.number_text import ascii_float, ascii_int
     from solver.store.hdf5 import check_filter
 
     filters: dict[str, object] = {}
@@ -95,10 +96,13 @@ def query_filters(args: argparse.Namespace) -> dict[str, object]:
         option = f"--where {name}"
         if name in filters:
             raise InputError(option, "given twice", "each field once")
-        try:
-            value: object = int(text) if text.lstrip("-").isdigit() else float(text)
-        except ValueError:
-            value = text
+        value: object = text    # a number only as the command line writes numbers
+        for read in (ascii_int, ascii_float):
+            try:
+                value = read(text)
+                break
+            except ValueError:
+                continue
         try:
             check_filter(name, value)
         except InputError as exc:

@@ -3,7 +3,8 @@
 design option carries its allowed range (``number_action``), and the parser's error states
 it too:
 
-    balloon predict: error: argument --L-mm: 'abc' is not a number (allowed: 0.5 to 60 mm)
+    balloon predict: error: argument --L-mm: 'abc' is not a number (ASCII decimal
+    digits, as 1000, 2.5 or 1e-3; allowed: 0.5 to 60 mm)
 
 The ranges come from the tables that check the values afterwards
 (``solver.design.LIMITS_MM``, ``solver.design_space.BOX_MM``, the stiffness scales'):

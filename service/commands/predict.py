@@ -19,6 +19,7 @@ import re
 from pathlib import Path
 
 from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges
+from solver.number_text import NUMBER_FORM, ascii_float
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
@@ -35,11 +36,11 @@ def number_list(text: str) -> list[float]:
                 "give a number in each place")
     words = text.replace(",", " ").split()
     try:
-        return [float(w) for w in words] if words else [float("nan")]
+        return [ascii_float(w) for w in words] if words else [float("nan")]
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"{text!r} is not a list of numbers (numbers separated by spaces or commas)"
-        ) from None
+            f"{text!r} is not a list of numbers (numbers in {NUMBER_FORM}, separated by "
+            "spaces or commas)") from None
 
 
 class NumberListAction(argparse.Action):

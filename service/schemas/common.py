@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Literal, get_args
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationInfo, field_validator
 from pydantic_core import PydanticCustomError
 
 from service.errors import QUERY_BOOL_ERROR
 from solver.design import LIMITS_MM
 from solver.materials import MATERIAL_ID_PATTERN
+from solver.number_text import NUMBER_FORM, is_number_text
 from solver.settings import MAX_MESH_LEVEL, MESH_DIVISIONS, SolverSettings
 
 MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
@@ -43,6 +44,40 @@ class Schema(BaseModel):
     models (whose values arrive as text) relax ``strict``."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
+
+
+class QuerySchema(Schema):
+    """Base of a query model: its values arrive as text, so ``strict`` is relaxed, and a
+    number field's text is read by the one rule of numbers written as text
+    (``solver.number_text``: ASCII decimal digits), as the command line reads it; in
+    lax mode pydantic read ``L_mm=7_1`` as 71 mm."""
+
+    model_config = ConfigDict(strict=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _numbers_as_text(cls, value: object, info: ValidationInfo) -> object:
+        if info.field_name is None or not _numeric(cls.model_fields[info.field_name].annotation):
+            return value
+        if isinstance(value, list):
+            return [query_number(v) for v in value]
+        return query_number(value)
+
+
+def query_number(value: object) -> object:
+    """A query model's number field: text not in NUMBER_FORM is refused (pydantic's lax
+    mode read ``1_000`` as 1000); anything else goes on to the field's own checks (its
+    type, finiteness and range)."""
+    if isinstance(value, str) and not is_number_text(value):
+        raise PydanticCustomError("number_text", f"Input should be a number in {NUMBER_FORM}")
+    return value
+
+
+def _numeric(annotation: object) -> bool:
+    """Whether a field's type holds a float or an int (a bool is neither)."""
+    if annotation in (float, int):
+        return True
+    return any(_numeric(a) for a in get_args(annotation))
 
 
 QUERY_BOOL_WORDS = {"true": True, "false": False}

@@ -4,15 +4,13 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
-from service.schemas.common import INLINE_MATERIAL_ID, Schema, mm
+from service.schemas.common import INLINE_MATERIAL_ID, QuerySchema, mm
 
 
-class CurvesQuery(Schema):
+class CurvesQuery(QuerySchema):
     """Filters (exact values, compared to 1e-6 mm) and the page."""
-
-    model_config = ConfigDict(strict=False)  # query values arrive as text
 
     L_mm: float | None = mm("L_mm", "chamber length")
     t_mm: float | None = mm("t_mm", "membrane thickness")

@@ -13,6 +13,7 @@ from service.schemas.common import (
     MATERIAL_ID,
     DesignIn,
     QueryBool,
+    QuerySchema,
     Schema,
     mm,
 )
@@ -166,10 +167,8 @@ class PredictResponse(BaseModel):
                                        "their name)")
 
 
-class PlotQuery(Schema):
+class PlotQuery(QuerySchema):
     """Query of GET /v1/predict/plot (a design with preset materials, and optional data)."""
-
-    model_config = ConfigDict(strict=False)  # query values arrive as text
 
     L_mm: float = mm("L_mm", "chamber length", 7.1)  # type: ignore[assignment]
     t_mm: float = mm("t_mm", "membrane thickness", 0.5)  # type: ignore[assignment]

@@ -23,6 +23,7 @@ import numpy as np
 from solver.bounded_read import read_bounded
 from solver.design import material_from_input
 from solver.errors import InputError
+from solver.number_text import NUMBER_FORM, is_number_text
 from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
@@ -311,6 +312,9 @@ def _number(value: object, column: str, row: int) -> float:
         raise _cell_error(column, "number too large: " + _short(value), row) from None
     except (TypeError, ValueError):
         raise _cell_error(column, "not a number: " + _short(value), row) from None
+    if isinstance(value, str) and not is_number_text(value):   # '1_0' (10), '٧' (7)
+        raise _cell_error(column, f"not a number: {_short(value)} (numbers in {NUMBER_FORM})",
+                          row)
     if not math.isfinite(x):
         raise _cell_error(column, "not a finite number: " + _short(value), row)
     return x

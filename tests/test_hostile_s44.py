@@ -1,0 +1,108 @@
+"""The forty-fourth session's hostile-input audit, round five (after tests/test_hostile_s43.py):
+a flow rate of 0 in measured data and the flow range's one table, a NUL byte in a data
+file, numbers written in other digits or with underscores, the time band of a design
+listed for a time target near the longest pump time, unphysically soft materials, and the
+explorer's flow-rate box holding "1e999".
+
+Each test failed on the code before its fix (commit messages say which).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from service_fakes import assert_problem
+from test_cli_fuzz import run, visible_lines
+
+DESIGN = {"L_mm": 7.1, "t_mm": 0.5}
+CLI_DESIGN = ["--L-mm", "7.1", "--t-mm", "0.5"]
+EXAMPLE = Path(__file__).resolve().parents[1] / "surrogate/calibration/data/example_lab.csv"
+HEADER = "curve_id,L_mm,t_mm,body_material,membrane_material,pressure_pa,angle_deg,time_s,flow_ul_s"
+
+
+def lab_rows(flow: float = 2.5) -> list[dict]:
+    """Two timed curves of the standard design at one flow rate (4 readings each)."""
+    return [{"curve_id": c, **DESIGN, "body_material": "pdms_1_10",
+             "membrane_material": "ecoflex_00_30", "pressure_pa": p, "angle_deg": a,
+             "time_s": float(i), "flow_ul_s": flow}
+            for c in ("s1", "s2")
+            for i, (p, a) in enumerate(((0, 0.1), (400, 1.6), (800, 4.8), (1200, 12.0)))]
+
+
+def lab_csv(tmp_path: Path, flow: str) -> Path:
+    path = tmp_path / "lab.csv"
+    path.write_text(HEADER + "\n" + "".join(
+        f"{r['curve_id']},7.1,0.5,pdms_1_10,ecoflex_00_30,{r['pressure_pa']},{r['angle_deg']},"
+        f"{r['time_s']},{flow}\n" for r in lab_rows()))
+    return path
+
+
+def one_line_error(argv: list[str]) -> str:
+    """The one stderr line of ``balloon argv`` refusing it (exit 2, nothing escaped)."""
+    code, out, err, escaped = run(argv)
+    lines = visible_lines(err)
+    assert (code, escaped) == (2, None), (code, err)
+    assert len(lines) == 1 and lines[0].startswith("balloon"), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+# -- 3. numbers: ASCII decimal digits only, on the command line and in a query ---------------
+
+@pytest.mark.parametrize(("argv", "option"), [
+    (["predict", *CLI_DESIGN, "--pressures", "١٠٠٠"], "--pressures"),
+    (["predict", *CLI_DESIGN, "--pressures", "500,1_000"], "--pressures"),
+    (["predict", "--L-mm", "7_1", "--t-mm", "0.5", "--pressures", "1000"], "--L-mm"),
+    (["predict", *CLI_DESIGN, "--times", "2", "--flow-ul-s", "２.5"], "--flow-ul-s"),
+    (["inverse", *CLI_DESIGN, "--angles-deg", "٤٥"], "--angles-deg"),
+    (["inverse", *CLI_DESIGN, "--angles-deg", "45", "--level", "0.9_5"], "--level"),
+    (["calibrate", str(EXAMPLE), "--report", "/nonexistent-dir/r.json", "--folds", "٥"],
+     "--folds"),
+    (["db", "ls", "service/data/curves.h5", "--where", "L_mm=7_1"], "--where L_mm")])
+def test_the_cli_reads_numbers_as_http_does(argv, option):
+    """``--pressures ١٠٠٠`` answered 1000 Pa and ``--L-mm 7_1`` a design of L = 71 mm
+    (Python's float reads any script's digits and underscores), numbers a JSON body never
+    carries: refused naming the option and the form numbers are written in."""
+    line = one_line_error(argv)
+    assert option in line, line
+    assert "ASCII decimal digits" in line or "not a finite number" in line, line
+
+
+@pytest.mark.parametrize(("path", "field"), [
+    ("/v1/curves?L_mm=7_1", "L_mm"), ("/v1/curves?limit=1_0", "limit"),
+    ("/v1/predict/plot?L_mm=%D9%A7", "L_mm"),
+    ("/v1/predict/plot?flow_ul_s=1_000", "flow_ul_s"),
+    ("/v1/predict/plot?measured_pressure_pa=1_0&measured_angle_deg=1", "measured_pressure_pa")])
+def test_a_query_reads_numbers_as_the_cli_does(shipped_client, path, field):
+    """A query parameter in pydantic's lax mode read ``L_mm=7_1`` as 71 mm (refused as
+    past 60 mm) and ``flow_ul_s=1_000`` as 1000 ul/s (a plot): the one rule."""
+    problem = assert_problem(shipped_client.get(path), 422, field)
+    assert "ASCII decimal digits" in problem["errors"][0]["message"]
+
+
+@pytest.mark.parametrize("cell", ["7_1", "٧", "７"])
+def test_a_data_cell_reads_numbers_as_json_does(shipped_client, tmp_path, cell):
+    """A measured-data cell written as text went through Python's float: over HTTP
+    ``"L_mm": "7_1"`` was refused as "out of range: 71" and ``"٧"`` read as 7 mm; in a CSV
+    file ``1_0`` was 10 mm. Refused naming the cell and the form."""
+    rows = lab_rows()
+    rows[2]["L_mm"] = cell
+    problem = assert_problem(shipped_client.post("/v1/calibrate", json={
+        "rows": rows, "model": "paper"}), 422, "rows.2.L_mm")
+    assert "ASCII decimal digits" in problem["errors"][0]["message"], problem
+    path = lab_csv(tmp_path, "2.5")
+    text = path.read_text().splitlines()
+    text[3] = text[3].replace(",7.1,", f",{cell},", 1)
+    path.write_text("\n".join(text) + "\n")
+    line = one_line_error(["calibrate", str(path), "--report", str(tmp_path / "r.json"),
+                           "--model", "paper"])
+    assert "L_mm: row 3" in line and "ASCII decimal digits" in line, line
+
+
+def test_the_usual_forms_are_still_numbers(shipped_client):
+    r = shipped_client.get("/v1/curves?L_mm=7.1&limit=2&t_mm=+.5")
+    assert r.status_code == 200, r.text
+    code, out, err, _ = run(["predict", "--L-mm", "+7.1", "--t-mm", ".5", "--pressures",
+                             "1e3,1500", "--model", "paper"])
+    assert code == 0, err
