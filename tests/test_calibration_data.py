@@ -207,18 +207,17 @@ def test_kpa_looking_pressures_warn_naming_column_and_factor():
     assert err.value.column == "pressure_pa" and "strict" in str(err.value)
 
 
-def test_a_flow_of_zero_on_every_row_warns_that_nothing_was_injected():
-    """One curve is one flow rate: a timed curve at flow 0 that bends says no fluid was
-    injected (over HTTP a data set so sent gave a cross-validated error of 11.6 deg
-    against 1.8 with the pump's real rate): the user is told, not left to find it."""
+def test_a_flow_of_zero_is_refused_naming_the_pumps_range():
+    """One curve is one flow rate: a timed curve at flow 0 says no fluid was injected
+    (over HTTP a data set so sent gave a cross-validated error of 11.6 deg against 1.8
+    with the pump's real rate). It was taken with a warning until 2026-12-07; it is now
+    refused, with the syringe pump's range (surrogate.volume_control), the one
+    /v1/predict's flow_ul_s is held to."""
     timed = [{**r, "time_s": str(i), "flow_ul_s": "0"} for i, r in enumerate(rows())]
-    assert any(w.startswith("flow_ul_s:") and "no fluid was injected" in w
-               for w in observations_from_rows(timed).warnings)
-    with pytest.raises(DataError, match="strict"):
-        observations_from_rows(timed, strict=True)
-    warning = next(w for w in observations_from_rows(timed).warnings
-                   if w.startswith("flow_ul_s:"))
-    assert "'s0', 's1'" in warning
+    with pytest.raises(DataError) as err:
+        observations_from_rows(timed)
+    assert err.value.column == "flow_ul_s" and err.value.row == 1
+    assert "1e-06 <= flow_ul_s <= 1000" in str(err.value)
     pumped = [{**r, "flow_ul_s": "2.5"} for r in timed]
     assert not any(w.startswith("flow_ul_s:") for w in observations_from_rows(pumped).warnings)
 

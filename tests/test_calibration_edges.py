@@ -142,11 +142,11 @@ def test_unpredictable_held_out_curve_is_null_not_500(client):
     ps = [-254.8, 1366.6, 3210.8, 4675.8, 5818.2, 8355.4, 11641.1, 17353.6]
     rows = [{"curve_id": "c0", "L_mm": 0.01, "t_mm": 5.0, "body_material": "pdms_1_10",
              "membrane_material": "ecoflex_00_30", "pressure_pa": p, "angle_deg": a,
-             "time_s": float(i), "flow_ul_s": 0.0}
+             "time_s": float(i), "flow_ul_s": 2.5}
             for i, (p, a) in enumerate(zip(ps, noise, strict=True))]
     rows += [{"curve_id": "c1", "L_mm": 7.1, "t_mm": 0.5, "body_material": "pdms_1_10",
               "membrane_material": "ecoflex_00_30", "pressure_pa": p, "angle_deg": 0.0,
-              "time_s": float(i), "flow_ul_s": 1e4}
+              "time_s": float(i), "flow_ul_s": 1000.0}
              for i, p in enumerate([-1566.3, 1088.3, 12630.6, 19073.1])]
     r = client.post("/v1/calibrate", json={"rows": rows, "model": "paper", "folds": 20})
     assert r.status_code in (200, 422), r.text

@@ -195,14 +195,13 @@ def test_http_refuses_a_bad_volume_column_as_a_problem_and_reads_a_good_one(tmp_
     assert ok.json()["data"]["injected_volume"] == "pump history"
 
 
-def test_a_flow_of_zero_beside_a_measured_volume_is_not_called_no_injection():
-    """A curve timed at flow 0 but with a rising measured volume: the volume says what
-    was injected, so the data are not told "its injected volume is 0 throughout" (the
-    measured volume's own check says the two disagree and that the measured one is
-    used)."""
+def test_a_flow_of_zero_beside_a_measured_volume_is_refused():
+    """A curve timed at flow 0 but with a rising measured volume: taken until 2026-12-07
+    (the volume said what was injected, the two said to disagree); a flow of 0 is now
+    refused wherever it stands, with the pump's range: leave the column out, and the
+    measured volume places the readings."""
     rows = [{**r, "time_s": float(i), "flow_ul_s": 0.0}
             for i, r in enumerate(small_rows()[:4])]
-    warnings = observations_from_rows(rows).warnings
-    assert not any("0 throughout" in w for w in warnings), warnings
-    assert any(w.startswith("volume_ul") and "measured volume is used" in w
-               for w in warnings), warnings
+    with pytest.raises(DataError) as err:
+        observations_from_rows(rows)
+    assert err.value.column == "flow_ul_s" and "1e-06 <= flow_ul_s" in str(err.value)

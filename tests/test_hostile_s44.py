@@ -15,6 +15,9 @@ import pytest
 from service_fakes import assert_problem
 from test_cli_fuzz import run, visible_lines
 
+from surrogate.calibration._data import RANGES
+from surrogate.volume_control import MAX_FLOW_UL_S, MIN_FLOW_UL_S
+
 DESIGN = {"L_mm": 7.1, "t_mm": 0.5}
 CLI_DESIGN = ["--L-mm", "7.1", "--t-mm", "0.5"]
 EXAMPLE = Path(__file__).resolve().parents[1] / "surrogate/calibration/data/example_lab.csv"
@@ -46,6 +49,31 @@ def one_line_error(argv: list[str]) -> str:
     assert len(lines) == 1 and lines[0].startswith("balloon"), err
     assert "Traceback" not in err
     return lines[0]
+
+
+# -- 1. a flow rate of 0, and the flow range's one table -------------------------------------
+
+def test_the_measured_flow_range_is_the_pumps_one():
+    """The measured data kept their own flow range (0 <= flow_ul_s <= 1e4) beside the
+    syringe pump's (1e-6 to 1000 ul/s, /v1/predict's): one fact, one table."""
+    lo, hi, inclusive = RANGES["flow_ul_s"]
+    assert (lo, hi, inclusive) == (MIN_FLOW_UL_S, MAX_FLOW_UL_S, True)
+
+
+@pytest.mark.parametrize("flow", [0.0, 2000.0])
+def test_a_calibration_refuses_a_flow_outside_the_pumps_range(shipped_client, flow):
+    """``POST /v1/calibrate`` took flow_ul_s 0 (a curve that injected nothing, volume
+    0 throughout) with a warning, and 2000 ul/s, which /v1/predict refuses."""
+    r = shipped_client.post("/v1/calibrate", json={"rows": lab_rows(flow), "model": "paper"})
+    problem = assert_problem(r, 422, "rows.0.flow_ul_s")
+    assert "1e-06 <= flow_ul_s <= 1000" in problem["errors"][0]["allowed"]
+
+
+def test_the_cli_calibration_refuses_a_flow_of_zero(tmp_path):
+    line = one_line_error(["calibrate", str(lab_csv(tmp_path, "0")), "--report",
+                           str(tmp_path / "r.json"), "--model", "paper"])
+    assert "flow_ul_s" in line and "1e-06 <= flow_ul_s <= 1000" in line, line
+    assert not (tmp_path / "r.json").exists()
 
 
 # -- 3. numbers: ASCII decimal digits only, on the command line and in a query ---------------

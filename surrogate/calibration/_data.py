@@ -45,6 +45,7 @@ from surrogate.calibration._measured_volume import (
 )
 from surrogate.calibration._pump_clock import clock_warning
 from surrogate.json_repeats import loads_with_repeats
+from surrogate.volume_control import MAX_FLOW_UL_S, MIN_FLOW_UL_S
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
             "pressure_pa", "angle_deg")
@@ -71,12 +72,14 @@ MAX_ROWS = 200_000
 #: one byte past it, so /dev/zero or a stray 10 GB file is refused without filling memory
 MAX_FILE_BYTES = 64 * 2**20
 
-# column -> (lowest, highest, inclusive lower bound?) for numeric checks
+# column -> (lowest, highest, inclusive lower bound?) for numeric checks; a curve's flow
+# rate is the syringe pump's, whose range is one table (surrogate.volume_control): a flow
+# of 0 injects nothing (a curve without a pump leaves the column out)
 RANGES: dict[str, tuple[float, float, bool]] = {
     "L_mm": (0.0, 60.0, False), "t_mm": (0.0, 5.0, False), "T_mm": (0.0, 10.0, False),
     "b_mm": (0.0, 20.0, False), "h_mm": (0.0, 5.0, False),
     "pressure_pa": (-1e5, 1e6, True), "angle_deg": (-720.0, 720.0, True),
-    "time_s": (0.0, 1e6, True), "flow_ul_s": (0.0, 1e4, True),
+    "time_s": (0.0, 1e6, True), "flow_ul_s": (MIN_FLOW_UL_S, MAX_FLOW_UL_S, True),
     "angle_sd_deg": (0.0, 360.0, False), "force_mn": (-1e6, 1e6, True),
     "volume_ul": (0.0, 1e6, True),
 }
@@ -543,20 +546,6 @@ def _suspicious(parsed: list[dict[str, object]], present: list[str], strict: boo
                          f"{1000 * p_max:g} Pa); convert pressure_pa to Pa", None))
     else:
         warnings += _mixed_units(kept)
-    # one curve is one flow rate: a curve timed at flow 0 injected nothing, yet bent
-    # (unless a measured volume says what was injected: its own check then warns)
-    still = [c for c, recs in by_curve.items()
-             if all(r.get("time_s") is not None and r.get("flow_ul_s") is not None
-                    and float(r["flow_ul_s"]) == 0.0 for r in recs)  # type: ignore[arg-type]
-             and max(abs(float(r["angle_deg"])) for r in recs)  # type: ignore[arg-type]
-             > KPA_MIN_ANGLE_DEG
-             and not any(float(r.get("volume_ul") or 0.0) > 0.0  # type: ignore[arg-type]
-                         for r in recs)]
-    if still:
-        warnings.append(("flow_ul_s", f"flow_ul_s is 0 on every row of curve_id "
-                         f"{', '.join(map(repr, still[:3]))}{' ...' if len(still) > 3 else ''}"
-                         ", which bends: the data say no fluid was injected there, so its "
-                         "injected volume is 0 throughout; give the pump's rate", None))
     clock = clock_warning(by_curve) if "time_s" in present and "flow_ul_s" in present \
         else None
     if clock:
