@@ -76,6 +76,35 @@ def test_the_cli_calibration_refuses_a_flow_of_zero(tmp_path):
     assert not (tmp_path / "r.json").exists()
 
 
+# -- 2. a NUL byte in a data file ------------------------------------------------------------
+
+def with_nul(at_line: int, at_column: int) -> bytes:
+    lines = EXAMPLE.read_bytes().split(b"\n")
+    text = lines[at_line - 1]
+    lines[at_line - 1] = text[:at_column - 1] + b"\x00" + text[at_column - 1:]
+    return b"\n".join(lines)
+
+
+@pytest.mark.parametrize(("line", "column"), [(3, 11), (200, 5)])
+def test_a_nul_byte_is_named_where_it_is(tmp_path, line, column):
+    """A stray NUL byte in the first 4 kB was "line 3: it looks like UTF-16 without a
+    byte-order mark"; past them the file was read, the NUL a row of its own ("body_material:
+    row 289: unknown material ''"). Either way: the NUL, its line and column."""
+    path = tmp_path / "lab.csv"
+    path.write_bytes(with_nul(line, column))
+    error = one_line_error(["calibrate", str(path), "--report", str(tmp_path / "r.json"),
+                            "--model", "paper"])
+    assert f"line {line}, column {column}: a NUL byte" in error, error
+    assert "UTF-16" not in error and "material" not in error
+
+
+def test_utf16_without_its_byte_order_mark_is_still_said_so(tmp_path):
+    path = tmp_path / "lab.csv"
+    path.write_bytes(EXAMPLE.read_text().encode("utf-16-le"))
+    error = one_line_error(["calibrate", str(path), "--report", str(tmp_path / "r.json")])
+    assert "UTF-16 without a byte-order mark" in error and "NUL" not in error
+
+
 # -- 3. numbers: ASCII decimal digits only, on the command line and in a query ---------------
 
 @pytest.mark.parametrize(("argv", "option"), [

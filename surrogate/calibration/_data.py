@@ -812,12 +812,15 @@ def decode_text(data: bytes, name: str) -> str:
     for bom, encoding in BOMS:
         if data.startswith(bom):
             try:
-                return data.decode(encoding)
+                text = data.decode(encoding)
             except UnicodeDecodeError as exc:
                 line = data[:exc.start].count(b"\n" if encoding == "utf-8-sig" else
                                               "\n".encode(encoding)[2:]) + 1
                 raise DataError("file", f"{name}: line {line}: not valid {encoding} after "
                                 "its byte-order mark", None, "UTF-8 text") from None
+            if "\x00" in text:
+                raise _stray_nul(text, name)
+            return text
     # an HDF5 file where HDF5 looks for its signature (a sealed curve database has it
     # after its seal, solver/store/integrity.py), or another kind by its first bytes
     what = ("an HDF5 file (a curve database?)" if looks_like_hdf5(data[:HDF5_HEAD_BYTES])
@@ -827,21 +830,41 @@ def decode_text(data: bytes, name: str) -> str:
         raise DataError("file", f"{name}: this is {what}, not text", None,
                         "a CSV file (UTF-8, comma-separated; a spreadsheet's 'Save as: "
                         "CSV UTF-8') or JSON rows")
-    if b"\x00" in data[:4096]:
-        line = data[:data.index(b"\x00")].count(b"\n") + 1
-        raise DataError("file", f"{name}: line {line}: it looks like UTF-16 without a "
-                        "byte-order mark", None, "UTF-8 text (or UTF-16 with a byte-order "
-                        "mark): save the file as CSV UTF-8")
+    if b"\x00" in data:
+        raise _nul_error(data, name)
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = data[:exc.start].count(b"\n") + 1
-        hint = ("it looks like UTF-16 without a byte-order mark" if b"\x00" in data[:200]
-                else f"byte 0x{data[exc.start]:02x} is not UTF-8 (latin-1 or Windows-1252 "
-                "from a spreadsheet?)")
-        raise DataError("file", f"{name}: line {line} (data row {line - 1}): {hint}", None,
-                        "UTF-8 text (or UTF-16 with a byte-order mark): save the file as "
-                        "CSV UTF-8") from None
+        raise DataError("file", f"{name}: line {line} (data row {line - 1}): byte "
+                        f"0x{data[exc.start]:02x} is not UTF-8 (latin-1 or Windows-1252 from "
+                        "a spreadsheet?)", None, "UTF-8 text (or UTF-16 with a byte-order "
+                        "mark): save the file as CSV UTF-8") from None
+
+
+def _nul_error(data: bytes, name: str) -> DataError:
+    """A file with a NUL byte (no text file holds one): UTF-16 without its byte-order mark
+    when NULs fill every other byte of its start (the high bytes of ASCII text), else a
+    stray NUL at its line and column, which once read as "UTF-16 without a byte-order
+    mark" in the first 4 kB and, past them, as a row of empty cells ("unknown material
+    ''")."""
+    head = data[:200]
+    if len(head) >= 4 and max(head[0::2].count(0), head[1::2].count(0)) >= 0.4 * (
+            len(head) // 2):
+        line = data[:data.index(b"\x00")].count(b"\n") + 1
+        return DataError("file", f"{name}: line {line}: it looks like UTF-16 without a "
+                         "byte-order mark", None, "UTF-8 text (or UTF-16 with a byte-order "
+                         "mark): save the file as CSV UTF-8")
+    return _stray_nul(data.decode("utf-8", "replace"), name)
+
+
+def _stray_nul(text: str, name: str) -> DataError:
+    """The first NUL of ``text`` (a file's decoded text) by its line and column."""
+    at = text.index("\x00")
+    line, column = text.count("\n", 0, at) + 1, at - text.rfind("\n", 0, at)
+    return DataError("file", f"{name}: line {line}, column {column}: a NUL byte (0x00), which "
+                     "no text file holds: not a text file, or a damaged one?", None,
+                     "UTF-8 text without NUL bytes (a spreadsheet's 'Save as: CSV UTF-8')")
 
 
 def load_observations(path: str | Path, strict: bool = False) -> Observations:
