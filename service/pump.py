@@ -31,7 +31,13 @@ import numpy as np
 from solver.errors import InputError
 from surrogate.hydraulics import NEGLIGIBLE_TIME_CONSTANT_S, STEADY_TIME_CONSTANTS, Inlet
 from surrogate.predictor import FE_PRESSURE_STOP_PA, normal_or_zero, pressure_stop_reason
-from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
+from surrogate.volume_control import (
+    FLOW_RANGE,
+    MAX_FLOW_UL_S,
+    MAX_TIME_S,
+    MIN_FLOW_UL_S,
+    cut_past_longest_time,
+)
 
 # request field -> (lowest, highest, unit): the one table of the axes' limits (the HTTP
 # schema's Field limits and the CLI's checks)
@@ -226,7 +232,7 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         body["inlet"] = inlet
         _pump_gauge(body, inlet)
     if q is not None:
-        _cut_past_longest_time(body, ("time_s",), q)
+        cut_past_longest_time(body, body["validity"], ("time_s",), q)
     return body
 
 
@@ -262,29 +268,6 @@ def _cut_at_pressure_stop(body: dict[str, Any], fields: tuple[str, ...] = ANSWER
 
 
 TIME_FIELDS = ("time_s", "time_lower_s", "time_upper_s")
-
-
-def _cut_past_longest_time(body: dict[str, Any], fields: tuple[str, ...], flow_ul_s: float,
-                           what: str = "point(s)") -> None:
-    """In place: no time (s) in ``fields`` above MAX_TIME_S, the longest pump time the
-    service takes (``times_s``), flag ``past_longest_pump_time``: at 1e-6 ul/s the inverse
-    answered 45 deg after 2.4e7 s, a time the forward answer by time refuses. The volume
-    (and the pump gauge, read before this) are kept; each bound of a band is cut alone."""
-    cut = 0
-    for name in fields:
-        values = body.get(name)
-        if values is None:
-            continue
-        over = [v is not None and v > MAX_TIME_S for v in values]
-        body[name] = [None if o else v for v, o in zip(values, over, strict=True)]
-        cut = max(cut, sum(over))
-    if not cut:
-        return
-    body["validity"]["flags"].append("past_longest_pump_time")
-    body["validity"]["messages"].append(
-        f"{cut} {what} take longer than {MAX_TIME_S:g} s at {flow_ul_s:g} ul/s, the longest "
-        f"pump time the service answers (times_s <= {MAX_TIME_S:g} s): no time is given "
-        "there; volume_ul is the fluid needed")
 
 
 def _say_what_force_by_volume_is(body: dict[str, Any]) -> None:
@@ -372,5 +355,5 @@ def inverse_answer(surrogate: Any, design: Any, angles_deg: Sequence[float], mod
         body["inlet"] = drop
         _pump_gauge(body, drop, "angle(s)")
     if flow_ul_s is not None:
-        _cut_past_longest_time(body, TIME_FIELDS, flow_ul_s, "angle(s)")
+        cut_past_longest_time(body, body["validity"], TIME_FIELDS, flow_ul_s, "angle(s)")
     return body

@@ -20,6 +20,7 @@ from solver.design import Design
 from solver.errors import InputError
 from surrogate.exponential.inverse_design import DesignTarget
 from surrogate.predictor import InversePrediction, Prediction
+from surrogate.volume_control import cut_past_longest_time
 
 #: volumes tried below the target's, as fractions of it, for a design's bending direction
 #: where the target volume is past its FE range
@@ -135,7 +136,10 @@ def volume_report(model: object, design: Design, target: DesignTarget,
             f"no angle at {target.at:.4g} ul: the design's FE range ends "
             + (f"at {end:.4g} ul" if end is not None else "before it")
             + " (the target is met before it: volume_needed_ul)")
-    if target.flow_ul_s is not None:
-        for name, x in zip(("time_needed_s", "time_lower_s", "time_upper_s"), v, strict=True):
-            out[name] = None if x is None else x / target.flow_ul_s
+    if target.flow_ul_s is not None:   # no time past the longest pump time, as by time
+        times = {name: [None if x is None else x / target.flow_ul_s] for name, x in
+                 zip(("time_needed_s", "time_lower_s", "time_upper_s"), v, strict=True)}
+        cut_past_longest_time(times, validity, tuple(times), target.flow_ul_s, "time(s)",
+                              "volume_needed_ul and its band are the fluid needed")
+        out.update({name: t[0] for name, t in times.items()})
     return out

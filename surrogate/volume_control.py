@@ -23,6 +23,33 @@ MAX_FLOW_UL_S = 1000.0     # 1e-320 ul/s made every time volume / flow infinite)
                            # solver's own lower limit (SolverSettings.flow_ul_s)
 FLOW_RANGE = f"{MIN_FLOW_UL_S:g} <= flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s"
 MAX_TIME_S = 1e5           # the longest pump time asked (times_s, a search's time_s), s
+LONGEST_TIME_FLAG = "past_longest_pump_time"
+
+
+def cut_past_longest_time(values: dict, validity: dict, fields: tuple[str, ...],
+                          flow_ul_s: float, what: str = "point(s)",
+                          kept: str = "volume_ul is the fluid needed") -> None:
+    """In place: no time (s) in ``values[field]`` (lists) above MAX_TIME_S, the longest
+    pump time the service takes (``times_s``), flag ``past_longest_pump_time`` in
+    ``validity`` (its ``flags`` and ``messages``): at 1e-6 ul/s the inverse answered 45 deg
+    after 2.4e7 s, a time the forward answer by time refuses. The volume is kept (``kept``
+    says where); each bound of a band is cut alone. The one cut of the forward and inverse
+    answers (service/pump.py) and of the design search's pump targets (pump_targets.py)."""
+    cut = 0
+    for name in fields:
+        times = values.get(name)
+        if times is None:
+            continue
+        over = [t is not None and t > MAX_TIME_S for t in times]
+        values[name] = [None if o else t for t, o in zip(times, over, strict=True)]
+        cut = max(cut, sum(over))
+    if not cut:
+        return
+    validity["flags"].append(LONGEST_TIME_FLAG)
+    validity["messages"].append(
+        f"{cut} {what} take longer than {MAX_TIME_S:g} s at {flow_ul_s:g} ul/s, the longest "
+        f"pump time the service answers (times_s <= {MAX_TIME_S:g} s): no time is given "
+        f"there; {kept}")
 
 
 @dataclass(frozen=True)

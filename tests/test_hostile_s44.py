@@ -16,7 +16,7 @@ from service_fakes import assert_problem
 from test_cli_fuzz import run, visible_lines
 
 from surrogate.calibration._data import RANGES
-from surrogate.volume_control import MAX_FLOW_UL_S, MIN_FLOW_UL_S
+from surrogate.volume_control import MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
 DESIGN = {"L_mm": 7.1, "t_mm": 0.5}
 CLI_DESIGN = ["--L-mm", "7.1", "--t-mm", "0.5"]
@@ -163,3 +163,27 @@ def test_the_usual_forms_are_still_numbers(shipped_client):
     code, out, err, _ = run(["predict", "--L-mm", "+7.1", "--t-mm", ".5", "--pressures",
                              "1e3,1500", "--model", "paper"])
     assert code == 0, err
+
+
+# -- 4. a listed design's time band past the longest pump time -------------------------------
+
+def test_a_listed_designs_time_band_is_cut_at_the_longest_pump_time(shipped_client):
+    """A time target of 99000 s at 3e-4 ul/s listed designs with ``time_upper_s``
+    100611 s, past MAX_TIME_S (1e5 s), which /v1/predict's times_s refuses and the inverse
+    by pressure withholds. Each edge past it is withheld, flagged, the volume kept."""
+    r = shipped_client.post("/v1/inverse", json={
+        "target": {"kind": "angle_at_time", "time_s": 99000, "flow_ul_s": 3e-4,
+                   "angle_deg": 45}, "n_results": 3,
+        "material_pairs": [{"body_material": "pdms_1_10",
+                            "membrane_material": "ecoflex_00_30"}]})
+    assert r.status_code == 200, r.text
+    candidates = r.json()["candidates"]
+    assert candidates
+    for c in candidates:
+        times = [c[n] for n in ("time_needed_s", "time_lower_s", "time_upper_s")]
+        assert all(t is None or t <= MAX_TIME_S for t in times), times
+        assert c["volume_upper_ul"] is not None
+        if c["time_upper_s"] is None:
+            assert "past_longest_pump_time" in c["validity"]["flags"]
+            assert any(f"{MAX_TIME_S:g} s" in m for m in c["validity"]["messages"])
+    assert any(c["time_upper_s"] is None for c in candidates)
