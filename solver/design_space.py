@@ -35,7 +35,7 @@ import numpy as np
 
 from solver.design import PAPER_WIDTH_MM, Design
 from solver.errors import InputError
-from solver.materials import MATERIALS, OgdenMaterial, make_material
+from solver.materials import MATERIALS, MIN_MU0_KPA, OgdenMaterial, make_material
 
 BOX_WIDTH_MM = PAPER_WIDTH_MM        # the box is at the standard design's width
 BOX_MM: dict[str, tuple[float, float]] = {
@@ -121,6 +121,14 @@ def named_material(material_id: str) -> OgdenMaterial | None:
         lo, hi = STIFFNESS_SCALE_LIMITS
         raise InputError("material", f"stiffness scale {scale_text.strip()} is not a "
                          "finite number > 0", f"<preset>*<scale>, {lo:g} <= scale <= {hi:g}")
+    mu0_kpa = MATERIALS[preset_id].mu0_kpa
+    if scale * mu0_kpa < MIN_MU0_KPA:   # refused by the scale, not by make_material's mu0
+        lo, hi = STIFFNESS_SCALE_LIMITS
+        raise InputError("material", f"stiffness scale {scale_text.strip()} makes mu0 "
+                         f"{scale * mu0_kpa:.4g} kPa, softer than any material the FE is "
+                         f"meant for", f"scale >= {MIN_MU0_KPA / mu0_kpa:.3g} for {preset_id} "
+                         f"(mu0 >= {MIN_MU0_KPA:g} kPa); the emulator's box: {lo:g} <= s <= "
+                         f"{hi:g}")
     return scaled_material(preset_id, scale)
 
 

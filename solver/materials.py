@@ -29,6 +29,15 @@ MATERIAL_ID_WORDS = ("1-64 letters, digits, '_', '.', '-', not starting with '.'
                      "(a scaled preset: <preset>*<scale>)")
 
 
+# The softest initial shear modulus mu0 a material may have, kPa: the softest layer the
+# box allows is Ecoflex 00-30 (mu0 = 1.88 kPa, Table 1 below) scaled by the smallest
+# stiffness scale 0.01 (solver.design_space.STIFFNESS_SCALE_LIMITS), 0.019 kPa; 1e-3 kPa
+# (1 Pa, a gel far softer than any silicone) leaves a margin of 19 below it. A membrane of
+# mu = 1e-300 kPa was solved for 32 s to a curve that failed at rest
+# (tests/test_hostile_s44.py checks the floor against the box).
+MIN_MU0_KPA = 1e-3
+
+
 @dataclass(frozen=True)
 class OgdenMaterial:
     """An N-term Ogden material. ``mu_kpa`` and ``alpha`` have equal length >= 1."""
@@ -55,8 +64,8 @@ def make_material(material_id: str, mu_kpa: list[float] | tuple[float, ...],
     """Validate Ogden parameters and drop the terms that carry no energy.
 
     Raises InputError when the lists differ in length, hold non-finite values,
-    or when the initial shear modulus is not positive (the material would have
-    no stiffness in the undeformed state).
+    or when the initial shear modulus is below MIN_MU0_KPA (not positive: the material
+    would have no stiffness in the undeformed state).
     """
     mu = [float(m) for m in mu_kpa]
     al = [float(a) for a in alpha]
@@ -78,9 +87,12 @@ def make_material(material_id: str, mu_kpa: list[float] | tuple[float, ...],
         raise InputError("mu_kpa", "every Ogden term has mu = 0 or alpha = 0",
                          "at least one term with mu != 0 and alpha != 0")
     material = OgdenMaterial(material_id, tuple(m for m, _ in kept), tuple(a for _, a in kept))
-    if not material.mu0_kpa > 0.0:
+    if not material.mu0_kpa >= MIN_MU0_KPA:
         raise InputError("mu_kpa", f"initial shear modulus sum(mu*alpha)/2 = "
-                         f"{material.mu0_kpa:.4g} kPa is not positive", "mu0 > 0 kPa")
+                         f"{material.mu0_kpa:.4g} kPa is "
+                         + ("not positive" if material.mu0_kpa <= 0 else
+                            "softer than any material the FE is meant for"),
+                         f"mu0 = sum(mu*alpha)/2 >= {MIN_MU0_KPA:g} kPa")
     return material
 
 

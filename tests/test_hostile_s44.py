@@ -15,6 +15,8 @@ import pytest
 from service_fakes import assert_problem
 from test_cli_fuzz import run, visible_lines
 
+from solver.design_space import STIFFNESS_SCALE_LIMITS
+from solver.materials import MATERIALS, MIN_MU0_KPA, make_material
 from surrogate.calibration._data import RANGES
 from surrogate.volume_control import MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
@@ -187,3 +189,48 @@ def test_a_listed_designs_time_band_is_cut_at_the_longest_pump_time(shipped_clie
             assert "past_longest_pump_time" in c["validity"]["flags"]
             assert any(f"{MAX_TIME_S:g} s" in m for m in c["validity"]["messages"])
     assert any(c["time_upper_s"] is None for c in candidates)
+
+
+# -- 5. unphysically soft materials ----------------------------------------------------------
+
+def test_the_modulus_floor_lies_below_every_material_the_box_allows():
+    softest = min(m.mu0_kpa for m in MATERIALS.values()) * STIFFNESS_SCALE_LIMITS[0]
+    assert MIN_MU0_KPA < softest / 10
+    make_material("softest", [m * STIFFNESS_SCALE_LIMITS[0] for m in
+                              MATERIALS["ecoflex_00_30"].mu_kpa],
+                  MATERIALS["ecoflex_00_30"].alpha)
+
+
+SOFT = {"id": "soft", "mu_kpa": [1e-300], "alpha": [2.0]}
+
+
+def test_an_fe_solve_of_an_unphysically_soft_material_is_refused_up_front(tmp_path):
+    """``POST /v1/solve`` queued a membrane of mu 1e-300 kPa (mu0 > 0 was the only floor),
+    which failed cleanly only after a 32 s solve. (A database of its own: the former code
+    queued the job, and its record was written to the app's database.)"""
+    from fastapi.testclient import TestClient
+    from service_fakes import settings_for
+
+    from service.app import create_app
+
+    with TestClient(create_app(settings_for(tmp_path))) as client:
+        r = client.post("/v1/solve", headers={"X-API-Key": "test-key"},
+                        json={"design": {**DESIGN, "membrane_material": SOFT}})
+        problem = assert_problem(r, 422, "design.membrane_material.mu_kpa")
+        assert f">= {MIN_MU0_KPA:g} kPa" in problem["errors"][0]["allowed"]
+        r = client.post("/v1/solve", headers={"X-API-Key": "test-key"},
+                        json={"design": {**DESIGN, "body_material": "pdms_1_10*1e-5"}})
+        problem = assert_problem(r, 422, "design.body_material")
+        assert "scale >= " in problem["errors"][0]["allowed"]
+
+
+def test_a_prediction_of_an_unphysically_soft_material_names_its_modulus(shipped_client):
+    r = shipped_client.post("/v1/predict", json={
+        "design": {**DESIGN, "membrane_material": SOFT}, "pressures_pa": [1000]})
+    problem = assert_problem(r, 422, "design.membrane_material.mu_kpa")
+    assert f">= {MIN_MU0_KPA:g} kPa" in problem["errors"][0]["allowed"]
+
+
+def test_the_cli_solve_refuses_an_unphysically_soft_material():
+    line = one_line_error(["solve", "--membrane-material", "ecoflex_00_30*1e-4"])
+    assert "--membrane-material" in line and "mu0 >= 0.001 kPa" in line, line
