@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from explorer_browser import LiveServer, change, open_explorer, screenshot
 from service_fakes import assert_problem
 from test_cli_fuzz import run, visible_lines
 
@@ -234,3 +235,55 @@ def test_a_prediction_of_an_unphysically_soft_material_names_its_modulus(shipped
 def test_the_cli_solve_refuses_an_unphysically_soft_material():
     line = one_line_error(["solve", "--membrane-material", "ecoflex_00_30*1e-4"])
     assert "--membrane-material" in line and "mu0 >= 0.001 kPa" in line, line
+
+
+# -- 6. the explorer's flow-rate box holding "1e999" -----------------------------------------
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """The app with the shipped models, served for the browser test."""
+    with LiveServer(tmp_path_factory.mktemp("explorer-s44")) as live:
+        yield live
+
+
+def shown_errors(page) -> dict[str, str]:
+    return page.evaluate("""Object.fromEntries([...document.querySelectorAll('[id^=err-]')]
+        .filter((e) => !e.hidden && e.textContent.trim()).map((e) => [e.id, e.textContent]))""")
+
+
+@pytest.mark.timeout(300)
+def test_a_flow_rate_too_large_for_a_double_is_out_of_range_and_kept(watched, server):
+    """"1e999" typed in the time target's flow box: a number box reads it as "" (badInput),
+    and the shared Curve panel's box was wiped with it; both said "not a number". The
+    text stays in both boxes, each named out of range, and no search is sent."""
+    page = open_explorer(watched, server.url)
+    bodies: list = []
+    page.on("request", lambda r: bodies.append(r.post_data_json)
+            if r.url.endswith("/v1/inverse") and r.method == "POST" else None)
+    page.select_option("#inv-kind", "angle_at_time")
+    page.fill("#inv-time", "6")
+    page.fill("#inv-angle", "40")
+    page.click("#inv-flow")
+    page.keyboard.press("Control+A")
+    page.keyboard.type("1e999")
+    page.keyboard.press("Tab")
+    page.click("#inv-run")
+    page.wait_for_selector("#err-inv-flow:not([hidden])")
+    page.wait_for_selector("#err-flow_ul_s:not([hidden])")
+    assert page.input_value("#inv-flow") == page.input_value("#flow") == "1e999"
+    errors = shown_errors(page)
+    for slot in ("err-inv-flow", "err-flow_ul_s"):
+        assert "1e999 is outside the allowed range" in errors[slot], errors
+        assert "from 0.000001 to 1000 ul/s" in errors[slot]
+    assert bodies == []
+    screenshot(page, "explorer-flow-1e999")
+    # text that is no number in the service's form is named so (JavaScript reads 0x10 as 16)
+    change(page, "#flow", "0x10")
+    page.wait_for_function("document.getElementById('err-flow_ul_s').textContent"
+                           ".includes('\"0x10\" is not a number')")
+    # still stepped by the arrow keys, as a number box is
+    change(page, "#flow", "2.5")
+    page.focus("#flow")
+    page.keyboard.press("ArrowUp")
+    assert page.input_value("#flow") == page.input_value("#inv-flow") == "3.5"
+    assert watched.foreign_requests() == [] and watched.errors == []

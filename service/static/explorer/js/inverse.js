@@ -6,7 +6,7 @@
 
 import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
 import { FIELDS, PAIRS, pairLabel } from "./design.js";
-import { checkNumber } from "./fields.js";
+import { checkNumber, stepByArrows } from "./fields.js";
 import { ASK_AXIS, OBJECTIVES, TARGET_BY, TARGET_INPUTS, changeUnit, readoutAt, targetColumns, targetNotes } from "./targets.js";
 import { $, fmt, fmtSig, numberOrNull } from "./util.js";
 
@@ -16,8 +16,11 @@ import { $, fmt, fmtSig, numberOrNull } from "./util.js";
 // is checked by the page's one check (fields.js), as the Curve panel checks it: a bad
 // flow rate is named in the same words beside both boxes, and no search is sent with it
 // (the server's refusal was a second wording of the same error).
+// Both are text boxes (index.html): a number box read "1e999" as "" and the other box
+// was wiped with it; the text is now one value in both, named out of range beside both.
 function shareFlowRate() {
   const page = $("flow"), form = $("inv-flow");
+  for (const box of [page, form]) stepByArrows(box);
   form.value = page.value;
   page.addEventListener("input", () => { form.value = page.value; });
   page.addEventListener("change", () => { form.value = page.value; });

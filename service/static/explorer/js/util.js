@@ -1,5 +1,7 @@
 // Small helpers shared by the page's modules: numbers as a person reads them, downloads.
 
+import { NUMBER_TEXT } from "./fields.js";
+
 export const $ = (id) => document.getElementById(id);
 
 export function fmt(v, digits = 1) {
@@ -34,7 +36,8 @@ export function numberOrNull(input) {
   const text = String(input.value).trim();
   if (text === "") return input.validity && input.validity.badInput ? "not a number" : null;
   const v = Number(text);
-  return Number.isFinite(v) ? v : text;  // a non-number goes to the server, which names it
+  // a non-number ("0x10", which Number reads) goes to the server, which names it
+  return NUMBER_TEXT.test(text) && Number.isFinite(v) ? v : text;
 }
 
 // One CSV cell: quoted when it holds a comma, a quote or a line break.
