@@ -36,6 +36,7 @@ import numpy as np
 from solver.design import PAPER_WIDTH_MM, Design
 from solver.errors import InputError
 from solver.materials import MATERIALS, MIN_MU0_KPA, OgdenMaterial, make_material
+from solver.number_text import ascii_float
 
 BOX_WIDTH_MM = PAPER_WIDTH_MM        # the box is at the standard design's width
 BOX_MM: dict[str, tuple[float, float]] = {
@@ -111,8 +112,8 @@ def named_material(material_id: str) -> OgdenMaterial | None:
     preset_id, star, scale_text = material_id.partition("*")
     if not star:
         return MATERIALS.get(material_id)
-    try:
-        scale = float(scale_text)
+    try:     # the one rule of numbers as text: float read '*1_0' as 10, '*１' as 1
+        scale = ascii_float(scale_text)
     except ValueError:
         return None
     if preset_id not in MATERIALS:

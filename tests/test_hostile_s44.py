@@ -287,3 +287,14 @@ def test_a_flow_rate_too_large_for_a_double_is_out_of_range_and_kept(watched, se
     page.keyboard.press("ArrowUp")
     assert page.input_value("#flow") == page.input_value("#inv-flow") == "3.5"
     assert watched.foreign_requests() == [] and watched.errors == []
+
+
+# -- 7. probed: a scaled preset's scale in other digits -------------------------------------
+
+@pytest.mark.parametrize("scale", ["1_0", "１"])
+def test_a_scaled_presets_scale_is_read_as_numbers_are(scale):
+    """``--body-material 'pdms_1_10*1_0'`` was PDMS 1:10 ten times stiffer, and ``*１`` the
+    preset (Python's float read the scale); HTTP's id pattern refuses both."""
+    line = one_line_error(["predict", *CLI_DESIGN, "--pressures", "1000", "--body-material",
+                           f"pdms_1_10*{scale}"])
+    assert "--body-material: unknown material" in line, line
