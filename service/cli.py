@@ -53,7 +53,7 @@ class Parser(argparse.ArgumentParser):
         self.register("type", int, ascii_int)
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {self._with_range(message)} "
+        self.exit(2, f"{self.prog}: error: {shown(self._with_range(message))} "
                      f"(see `{self.prog} --help`)\n")
 
     def _with_range(self, message: str) -> str:
@@ -108,11 +108,25 @@ def _file_error(args: argparse.Namespace, exc: OSError) -> str:
     return what
 
 
-def _error(what: object) -> None:
-    """One line on stderr, whatever the message holds: a control character from the
-    user's own input (a CR of a CR-only file, an escape) is shown escaped, not obeyed."""
+LONGEST_WORD = 100    # characters of one word an error line shows whole
+
+
+def shown(what: object) -> str:
+    """An error message as one readable line, whatever it quotes of the user's input: a
+    control character (a CR of a CR-only file, an escape) shown escaped, not obeyed, and
+    a word longer than LONGEST_WORD cut with its length said (``--model`` or a material
+    of 100,000 characters was echoed whole, a 100 kB line)."""
     text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(what))
-    print(f"balloon: error: {text}", file=sys.stderr)
+    def cut(word: str) -> str:     # its closing quote and punctuation kept
+        end = re.search(r"\W{0,3}$", word)[0]  # type: ignore[index]
+        return f"{word[:60]}...{end} ({len(word)} characters)"
+
+    return re.sub(rf"\S{{{LONGEST_WORD + 1},}}", lambda m: cut(m[0]), text)
+
+
+def _error(what: object) -> None:
+    """One line on stderr (``shown``)."""
+    print(f"balloon: error: {shown(what)}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -299,7 +299,7 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
                                       f"{(err.get('ctx') or {}).get('error', 'invalid')} at "
                                       f"character {err.get('loc', ('', '?'))[-1]})"))
             continue
-        loc = [p for p in err.get("loc", ()) if isinstance(p, str | int)]
+        loc = [short_name(p) for p in err.get("loc", ()) if isinstance(p, str | int)]
         names = [p for p in loc[1:] if isinstance(p, str)]
         item: dict[str, Any] = {"loc": loc,
                                 "field": ".".join(str(p) for p in loc[1:]) or str(loc[0]),
@@ -367,6 +367,15 @@ def _allowed_by_kind(err: dict[str, Any], request: Request | None,
     if fields:
         return "a JSON object of " + ", ".join(fields) + " (the schema at /docs)"
     return BODY_ALLOWED if loc == ["body"] else None
+
+
+def short_name(part: str | int, limit: int = 80) -> str | int:
+    """A location's name cut to ``limit`` characters with its length said: a field no
+    schema has, of 50,000 characters, was echoed whole in loc, field and detail (a 150 kB
+    problem); every field the service takes is far shorter."""
+    if not isinstance(part, str) or len(part) <= limit:
+        return part
+    return f"{part[:limit - 20]}... ({len(part)} characters)"
 
 
 def short_input(value: Any, limit: int = 40) -> str:

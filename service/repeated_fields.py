@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from fastapi import Request
 
-from service.errors import FieldError
+from service.errors import FieldError, short_name
 from surrogate.json_repeats import loads_with_repeats
 
 BODY_ALLOWED = "each field once per JSON object"
@@ -66,7 +66,8 @@ async def refuse_repeated_fields(request: Request) -> None:
         body = await request.body()
         if body:
             loc = repeated_body_field(body)
-            if loc is not None:
+            if loc is not None:      # a name no schema has, of 30,000 characters: cut
+                loc = tuple(short_name(p) for p in loc)
                 where = ".".join(str(p) for p in loc[1:-1])
                 raise FieldError(loc, f"is given more than once in "
                                  f"{'the object ' + where if where else 'the body'}; which "

@@ -298,3 +298,29 @@ def test_a_scaled_presets_scale_is_read_as_numbers_are(scale):
     line = one_line_error(["predict", *CLI_DESIGN, "--pressures", "1000", "--body-material",
                            f"pdms_1_10*{scale}"])
     assert "--body-material: unknown material" in line, line
+
+
+# -- 8. probed: very long names --------------------------------------------------------------
+
+@pytest.mark.parametrize("argv", [
+    ["predict", *CLI_DESIGN, "--pressures", "1000", "--model", "m" * 100_000],
+    ["solve", "--body-material", "m" * 100_000],
+    ["predict", *CLI_DESIGN, "--pressures", "1," + "x" * 5000]])
+def test_the_cli_never_echoes_a_huge_word_whole(argv):
+    """A model or material name of 100,000 characters was echoed whole: a 100 kB error
+    line. A word past 100 characters is cut, its length said."""
+    line = one_line_error(argv)
+    assert len(line) < 600 and " characters)" in line, line[:300]
+
+
+@pytest.mark.parametrize("body", [
+    '{"design": {"L_mm": 7.1}, "pressures_pa": [1], "' + "k" * 50_000 + '": 1}',
+    '{"design": {"L_mm": 7.1, "' + "k" * 20_000 + '": 1}, "pressures_pa": [1]}',
+    '{"pressures_pa": [1], "' + "k" * 30_000 + '": 1, "' + "k" * 30_000 + '": 2}'])
+def test_a_problem_never_echoes_a_huge_field_name_whole(shipped_client, body):
+    """A field no schema has, named by 50,000 characters (or given twice), was echoed
+    whole in the problem's detail, field and loc: 150 kB answering 50 kB."""
+    r = shipped_client.post("/v1/predict", content=body,
+                            headers={"content-type": "application/json"})
+    problem = assert_problem(r, 422)
+    assert len(r.content) < 2000 and " characters)" in problem["errors"][0]["field"]
