@@ -28,6 +28,11 @@ def is_number_text(text: str) -> bool:
     return bool(_FLOAT.fullmatch(text.strip()))
 
 
+def is_integer_text(text: str) -> bool:
+    """Whether ``text`` is a whole number written in INTEGER_FORM."""
+    return bool(_INT.fullmatch(text.strip()))
+
+
 def ascii_float(text: str) -> float:
     """``text`` as a float, if it is written in NUMBER_FORM; ValueError otherwise (its
     message says the form)."""
@@ -38,6 +43,6 @@ def ascii_float(text: str) -> float:
 
 def ascii_int(text: str) -> int:
     """``text`` as an int, if it is written in INTEGER_FORM; ValueError otherwise."""
-    if not _INT.fullmatch(text.strip()):
+    if not is_integer_text(text):
         raise ValueError(f"{text!r} is not a whole number ({INTEGER_FORM})")
     return int(text)

@@ -119,6 +119,7 @@ def test_utf16_without_its_byte_order_mark_is_still_said_so(tmp_path):
     (["inverse", *CLI_DESIGN, "--angles-deg", "45", "--level", "0.9_5"], "--level"),
     (["calibrate", str(EXAMPLE), "--report", "/nonexistent-dir/r.json", "--folds", "٥"],
      "--folds"),
+    (["inverse", "--angle-deg", "30", "--pressure-pa", "1200", "-n", "2.0"], "-n"),
     (["db", "ls", "service/data/curves.h5", "--where", "L_mm=7_1"], "--where L_mm")])
 def test_the_cli_reads_numbers_as_http_does(argv, option):
     """``--pressures ١٠٠٠`` answered 1000 Pa and ``--L-mm 7_1`` a design of L = 71 mm
@@ -131,12 +132,14 @@ def test_the_cli_reads_numbers_as_http_does(argv, option):
 
 @pytest.mark.parametrize(("path", "field"), [
     ("/v1/curves?L_mm=7_1", "L_mm"), ("/v1/curves?limit=1_0", "limit"),
+    ("/v1/curves?limit=1.0", "limit"), ("/v1/predict/plot?nearby=2.0", "nearby"),
     ("/v1/predict/plot?L_mm=%D9%A7", "L_mm"),
     ("/v1/predict/plot?flow_ul_s=1_000", "flow_ul_s"),
     ("/v1/predict/plot?measured_pressure_pa=1_0&measured_angle_deg=1", "measured_pressure_pa")])
 def test_a_query_reads_numbers_as_the_cli_does(shipped_client, path, field):
     """A query parameter in pydantic's lax mode read ``L_mm=7_1`` as 71 mm (refused as
-    past 60 mm) and ``flow_ul_s=1_000`` as 1000 ul/s (a plot): the one rule."""
+    past 60 mm), ``flow_ul_s=1_000`` as 1000 ul/s (a plot) and ``limit=1.0`` as 1 (which
+    ``-n 1.0`` refuses): the one rule, whole numbers for an integer field."""
     problem = assert_problem(shipped_client.get(path), 422, field)
     assert "ASCII decimal digits" in problem["errors"][0]["message"]
 

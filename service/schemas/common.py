@@ -10,7 +10,7 @@ from pydantic_core import PydanticCustomError
 from service.errors import QUERY_BOOL_ERROR
 from solver.design import LIMITS_MM
 from solver.materials import MATERIAL_ID_PATTERN
-from solver.number_text import NUMBER_FORM, is_number_text
+from solver.number_text import INTEGER_FORM, NUMBER_FORM, is_integer_text, is_number_text
 from solver.settings import MAX_MESH_LEVEL, MESH_DIVISIONS, SolverSettings
 
 MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
@@ -57,27 +57,35 @@ class QuerySchema(Schema):
     @field_validator("*", mode="before")
     @classmethod
     def _numbers_as_text(cls, value: object, info: ValidationInfo) -> object:
-        if info.field_name is None or not _numeric(cls.model_fields[info.field_name].annotation):
+        kind = None if info.field_name is None else _number_kind(
+            cls.model_fields[info.field_name].annotation)
+        if kind is None:
             return value
         if isinstance(value, list):
-            return [query_number(v) for v in value]
-        return query_number(value)
+            return [query_number(v, kind) for v in value]
+        return query_number(value, kind)
 
 
-def query_number(value: object) -> object:
-    """A query model's number field: text not in NUMBER_FORM is refused (pydantic's lax
-    mode read ``1_000`` as 1000); anything else goes on to the field's own checks (its
-    type, finiteness and range)."""
-    if isinstance(value, str) and not is_number_text(value):
+def query_number(value: object, kind: type = float) -> object:
+    """A query model's number field (``kind`` float or int): text not written as the
+    command line writes such a number (NUMBER_FORM; INTEGER_FORM: pydantic read
+    ``limit=1.0`` as 1, which ``-n 1.0`` refuses) is refused; anything else goes on to the
+    field's own checks (its type, finiteness and range)."""
+    if not isinstance(value, str):
+        return value
+    if kind is int and not is_integer_text(value):
+        raise PydanticCustomError("number_text",
+                                  f"Input should be a whole number in {INTEGER_FORM}")
+    if not is_number_text(value):
         raise PydanticCustomError("number_text", f"Input should be a number in {NUMBER_FORM}")
     return value
 
 
-def _numeric(annotation: object) -> bool:
-    """Whether a field's type holds a float or an int (a bool is neither)."""
+def _number_kind(annotation: object) -> type | None:
+    """float or int: the number a field's type holds (a bool is neither); None if none."""
     if annotation in (float, int):
-        return True
-    return any(_numeric(a) for a in get_args(annotation))
+        return annotation  # type: ignore[return-value]
+    return next((k for k in map(_number_kind, get_args(annotation)) if k), None)
 
 
 QUERY_BOOL_WORDS = {"true": True, "false": False}
