@@ -106,8 +106,10 @@ def test_the_shipped_fit_covers_every_group_and_widens_ecoflex_bending_towards_i
     # by volume none since the volume GPs read the pressure curve's shape: its GP bands
     # cover its random designs as they are, 1.0 in every bin, twenty-sixth session; by
     # pressure at 60-90 deg 1.0 since the thirty-sixth: with the range no longer cut at
-    # ~84 deg those bins hold points enough of their own, and cover them unwidened)
-    assert min(towards["pressure"]["far"][:4]) > 1.05 and min(towards["volume"]["far"]) >= 1.0
+    # ~84 deg those bins hold points enough of their own, and cover them unwidened; at
+    # 0-20 deg 1.0-1.02 since the designs on the box's faces, forty-fourth session)
+    assert min(towards["pressure"]["far"][2:4]) > 1.05 and min(towards["pressure"]["far"]) >= 1.0
+    assert min(towards["volume"]["far"]) >= 1.0
     # a soft body on Ecoflex bends towards the membrane: not flagged, a wide band
     d = Design(body_material="ecoflex_00_30*0.5", membrane_material="ecoflex_00_30*2",
                L_mm=12.0).validated()

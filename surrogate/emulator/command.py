@@ -59,6 +59,9 @@ def fit_and_save(db_path: str | Path, output: str | Path, level: float = 0.95,
     cal = emulator.report.get("random_design_calibration")
     if cal:
         lines.append(random_calibration_lines(cal))
+    force_cal = emulator.report.get("random_design_force_calibration")
+    if force_cal:
+        lines.append(force_calibration_line(force_cal))
     lines.append(f"emulator fitted in {fit_s:.1f} s; wrote {path}")
     return emulator, lines
 
@@ -85,13 +88,16 @@ def fit_provenance(db_path: str | Path, n_records: int, generator: str, command:
 def _calibrate(emulator: Emulator, calibration_db: str | Path, level: float) -> Emulator:
     """``calibrate_on_random_designs`` on the curves of ``calibration_db``; its records
     must not be in the fit's database (``read_calibration_db``)."""
+    from surrogate.emulator.force_calibration import calibrate_force_on_random_designs
     from surrogate.emulator.random_calibration import calibrate_on_random_designs
 
     fitted = {k for pe in emulator.pairs.values() for k in pe.keys}
     records, commands = read_calibration_db(calibration_db, fitted)
-    return calibrate_on_random_designs(emulator, records, level, source={
-        "database_name": Path(calibration_db).name, "database_records": len(records),
-        "database_commands": commands})
+    source = {"database_name": Path(calibration_db).name, "database_records": len(records),
+              "database_commands": commands}
+    # the angle bands first: the force band is carried through the free tip's angle band
+    emulator = calibrate_on_random_designs(emulator, records, level, source=source)
+    return calibrate_force_on_random_designs(emulator, records, level, source=source)
 
 
 def read_calibration_db(path: str | Path, fitted_keys: set[str]
@@ -143,6 +149,18 @@ def random_calibration_lines(cal: dict) -> str:
                 f"{axis} {side} {' '.join(f'{x:.2f}' for x in g[axis][side])}"
                 for axis, side in (o.split() for o in own)))
     return "\n".join(out)
+
+
+def force_calibration_line(cal: dict) -> str:
+    """The force band's calibration on random blocked-tip designs in one line."""
+    if not cal.get("curves"):
+        return f"force bands not calibrated on random designs: {cal.get('note', '')}"
+    before, after = cal["coverage_before"]["all"], cal["coverage_after"]["all"]
+    factors = ", ".join(f"{k} {v:.2f} ({cal['factor_source'][k]})"
+                        for k, v in cal["factors"].items())
+    return (f"force bands calibrated on {cal['curves']} random blocked-tip FE curves, "
+            f"half-widths x {factors}; coverage {_fmt(before['coverage'])} -> "
+            f"{_fmt(after['coverage'])} of {after['points']} points")
 
 
 def _fmt(x: float | None) -> str:

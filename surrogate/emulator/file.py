@@ -59,7 +59,10 @@ from surrogate.json_plain import plain_json
 from surrogate.model_file import read_model_file
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 16  # 16: stretch_hazard, the emulated membrane stretch and the flag
+FORMAT_VERSION = 17  # 17: force_band_factor, the force band's half-widths' multiplier
+                     # from FE curves of random blocked-tip designs (force_calibration.py;
+                     # 16 read: 1, not calibrated);
+                     # 16: stretch_hazard, the emulated membrane stretch and the flag
                      # high_membrane_stretch (stretch_hazard.py; 15 read: none, no flag);
                      # 15: blocked_range, where each design's blocked-tip FE curve ends
                      # (blocked_range.py; 14 read: none, the group's force range); the
@@ -105,7 +108,8 @@ def emulator_to_dict(e: Emulator) -> dict:
             "top_pressure_gps": None if pe.curves.top_pressure is None
             else pe.curves.top_pressure.as_dict(),
             "force": None if pe.force is None else pe.force.as_dict(),
-            "force_band_scale": pe.force_band_scale, "force_limit_pa": pe.force_limit_pa,
+            "force_band_scale": pe.force_band_scale, "force_band_factor": pe.force_band_factor,
+            "force_limit_pa": pe.force_limit_pa,
             "force_form": pe.force_form, "fe_max_volume_ul": pe.fe_max_volume_ul,
             "range_model": None if pe.range_model is None else pe.range_model.as_dict(),
             "near_failed_band_scale": None if pe.near_failed_band_scale is None
@@ -158,6 +162,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
                 keys=tuple(str(k) for k in p["keys"]),
                 force=None if p["force"] is None else force_gps_from_dict(p["force"]),
                 force_band_scale=float(p["force_band_scale"]),
+                force_band_factor=float(p.get("force_band_factor", 1.0)),
                 force_limit_pa=float(p["force_limit_pa"]),
                 failed=tuple((np.array(u, float), float(a), str(r)) for u, a, r in p["failed"]),
                 force_form=str(p.get("force_form", FORCE_FORMS[0])),
@@ -230,9 +235,10 @@ def _precheck_pair(p: dict) -> None:
             raise ValueError(f"pair {p['pair']}: curves {name} must be finite numbers")
     scalars = {name: float(p[name]) for name in (
         "fe_limit_angle_deg", "force_band_scale", "force_limit_pa")}
+    scalars["force_band_factor"] = float(p.get("force_band_factor", 1.0))  # 17 and later
     if not all(math.isfinite(v) and v > 0 for v in scalars.values()):
-        raise ValueError(f"pair {p['pair']}: FE limit, force band scale and force limit "
-                         "must be positive numbers")
+        raise ValueError(f"pair {p['pair']}: FE limit, force band scale and factor and "
+                         "force limit must be positive numbers")
     form = str(p.get("force_form", FORCE_FORMS[0]))
     if form not in FORCE_FORMS:
         raise ValueError(f"pair {p['pair']}: force_form {form!r} is not one of "

@@ -90,7 +90,11 @@ class PairEmulator:
                          NEAR_FAILED_RADIUS of an early-ended database curve, calibrated
                          on FE curves of random designs of the box (random_calibration;
                          None: no widening, as in files before format 7)
-    force_band_scale     as band_scale, for force
+    force_band_scale     as band_scale, for force (the force GP's sd multiplier, from
+                         cross-validation over the database)
+    force_band_factor    the force band's half-widths' multiplier from FE curves of random
+                         blocked-tip designs of the box (force_calibration; 1: not
+                         calibrated, as in files before format 17)
     coordinates          (n, 6) unit-cube coordinates of the database designs
     keys                 their record keys (nearest FE curves)
     """
@@ -105,6 +109,7 @@ class PairEmulator:
     keys: tuple[str, ...]
     force: VectorGP | None = None
     force_band_scale: float = 1.0
+    force_band_factor: float = 1.0
     force_limit_pa: float = float(FORCE_PRESSURE_NODES_PA[-1])
     failed: tuple = ()      # (unit coordinates, end angle deg, reason) of curves ended early
     force_form: str = "per_kpa"
@@ -250,14 +255,23 @@ class PairEmulator:
             per_kpa = self.force_per_kpa(np.stack((mean, mean - z * sd, mean + z * sd)),
                                          node_mean)
             f, a, b = (force_at(y, p_red) for y in per_kpa)
-            return f, np.fmin(a, b), np.fmax(a, b)
+            return self._calibrated(f, np.fmin(a, b), np.fmax(a, b))
         q = FORCE_PRESSURE_NODES_PA[:len(mean)]
         y, s = np.interp(p_red, q, mean), np.interp(p_red, q, sd)
         ratio, lo, hi = (angle_ratio_from_feature(v) for v in (y, y - z * s, y + z * s))
-        f, f_lo, f_hi = force_from_angle_ratio(angle, angle_lo, angle_hi, ratio, lo, hi)
+        f, f_lo, f_hi = self._calibrated(*force_from_angle_ratio(angle, angle_lo, angle_hi,
+                                                                 ratio, lo, hi))
         if self.sign < 0:       # the ratio is F / theta with theta signed
             return -f, -f_hi, -f_lo
         return f, f_lo, f_hi
+
+    def _calibrated(self, f: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The force and its band with each half-width times ``force_band_factor``."""
+        k = self.force_band_factor
+        if k == 1.0:
+            return f, lo, hi
+        return f, f - k * (f - lo), f + k * (hi - f)
 
     def force_end_pa(self, free_end_pa: float, blocked_end_pa: float = float("inf")
                      ) -> float:
