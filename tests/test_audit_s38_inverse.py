@@ -68,10 +68,14 @@ FE_CASES = json.loads((Path(__file__).parent / "data" / "fe_inverse_search_s38.j
 # FE curves end at 2175, 2150 and 1909 Pa); and each force node is conditioned on every
 # design that reaches it (surrogate/emulator/force_gps.py): rank 3 is answered 0.88 mN, its
 # band covering the FE's 0.848 (1.000 before), and no design reaches 1 mN at 2000 Pa
-# (0.93 mN the most). Left: the two Q4c designs, a few % outside narrow bands.
+# (0.93 mN the most). Left: the two Q4c designs, a few % outside narrow bands, and since
+# the force bands' calibration on random blocked-tip designs (forty-fourth session: every
+# half-width x 0.72-0.76, the held-out force3040 points covered 0.993 -> 0.966) a third,
+# 0.6 % outside: one of the 5 % a 95 % band leaves out.
 FORCE_OPEN = {
     "Q4c-rank1": "FE 0.318 mN above the band 0.287-0.314 (answer 0.300)",
     "Q4c-rank2": "FE 0.315 mN above the band 0.287-0.314 (answer 0.300)",
+    "Q4c-rank3": "FE 0.302 mN above the band 0.287-0.300 (answer 0.294)",
 }
 NEAR_END = 1.15    # an FE curve failing within this x the asked pressure: near its end
 

@@ -295,7 +295,11 @@ def test_the_other_way_is_offered_only_where_it_reaches_the_target(emulator):
 def test_each_candidate_says_what_0_01_mm_of_each_length_does(emulator):
     """A mould's tolerance read on the answer: the candidates' bands are +-0.3 deg, and
     rounding a candidate's t to 0.01 mm moved it 1.4 deg (an audit of the thirty-fifth
-    session). The change is checked against the emulator asked afresh."""
+    session). The change is checked against the emulator asked afresh. A taller chamber
+    does not always bend more: at the candidate PDMS 1:10 / Ecoflex, L 10, t 0.521, T
+    0.765, b 1.86 mm, the default FE reads 46.42 deg at 1500 Pa with h = 0.184 mm and 44.12
+    with h = 0.284 (forty-fourth session; the emulator 46.14 and 44.17), so h's sign is
+    not asserted."""
     from dataclasses import replace
 
     from surrogate.design_search import SearchBounds, search_designs
@@ -305,11 +309,15 @@ def test_each_candidate_says_what_0_01_mm_of_each_length_does(emulator):
     for c in res.candidates:
         change = c.change_per_0_01_mm
         assert set(change) == {"L_mm", "t_mm", "T_mm", "b_mm", "h_mm"}
-        assert change["t_mm"] < 0 < change["h_mm"]        # thicker membrane: less bend
+        assert change["t_mm"] < 0                         # thicker membrane: less bend
         thicker = replace(c.design, t_mm=c.design.t_mm + 0.01, body_length_mm=None,
                           chamber_offset_mm=None).validated()
         moved = emulator.predict(thicker, [1500.0]).angle_deg[0] - c.value_at_pressure
         assert moved == pytest.approx(change["t_mm"], rel=0.15)
+        taller = replace(c.design, h_mm=c.design.h_mm + 0.01, body_length_mm=None,
+                         chamber_offset_mm=None).validated()
+        moved = emulator.predict(taller, [1500.0]).angle_deg[0] - c.value_at_pressure
+        assert moved == pytest.approx(change["h_mm"], rel=0.15, abs=0.02)
         assert abs(change["t_mm"]) > c.value_upper - c.value_lower   # the point of saying it
         assert c.as_dict()["change_per_0_01_mm"] == change
 
