@@ -200,3 +200,37 @@ def test_a_listed_design_loaded_is_drawn_on_the_volume_axis_then_the_time_axis(w
     assert page.input_value("#flow") == "2.5"
     assert page.locator("#p_op-out").inner_text().startswith("8.0 s: angle ")
     no_stray_requests_or_errors(watched)
+
+
+def test_the_last_search_rows_are_hidden_while_the_next_search_runs(watched, server):
+    """While a search runs, the former target's rows are hidden: a row clicked then loaded
+    a design listed for another target (forty-fourth session: the test above, run with
+    the default suite on a loaded machine, clicked the volume search's first row while
+    the time search was still answering, and waited 120 s for a time axis). The second
+    search's answer is held back (page.route) while the table is checked."""
+    page = open_explorer(watched, server.url)
+    bodies = sent_bodies(page)
+    choose(page, "volume_budget")
+    page.fill("#inv-volume", "30")
+    page.fill("#inv-angle", "40")
+    page.fill("#inv-n", "2")
+    one_pair(page)
+    search(page, server, bodies)
+    assert page.locator("#inv-table").is_visible()
+    held: list = []
+    page.route("**/v1/inverse", lambda route: held.append(route))
+    page.fill("#inv-angle", "35")
+    page.click("#inv-run")
+    page.wait_for_function("document.getElementById('inv-explanation').textContent"
+                           " === 'Searching...'")
+    assert page.locator("#inv-table").is_hidden()
+    assert page.locator('#inv-table button[data-candidate="0"]').is_hidden()
+    for _ in range(200):                # until the held request reaches the route
+        if held:
+            break
+        page.wait_for_timeout(50)
+    assert len(held) == 1
+    held[0].continue_()
+    page.wait_for_selector("#inv-table tbody tr", timeout=180_000)
+    assert page.locator("#inv-table").is_visible()
+    no_stray_requests_or_errors(watched)

@@ -119,6 +119,9 @@ export function setupInverse({ loadDesign }) {
       objective: $("err-inv-objective"), n_results: $("err-inv-n"), target: $("err-inv-kind"),
     };
     $("inv-explanation").textContent = "Searching...";
+    // the last search's rows are not this target's: hidden until the answer, so a row
+    // clicked while searching cannot load a design listed for another target
+    $("inv-table").hidden = true;
     $("inv-run").disabled = true;
     try {
       const res = await api("/v1/inverse", { method: "POST", body });
