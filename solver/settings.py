@@ -21,6 +21,16 @@ MAX_MESH_LEVEL = 2   # level 2: every division x 3, ~500k dofs at the standard d
                      # study level: many GB of memory)
 
 
+# A syringe pump's flow rate, ul/s: MIN <= flow_ul_s <= MAX, one table for the solver's
+# reported times, the service's pump view, the design search's time targets and measured
+# data (surrogate.volume_control re-exports it). A slower pump is no pump (1e-320 ul/s made
+# every time volume / flow infinite); 1000 ul/s fills the largest chamber of the box in
+# well under a second, past what a quasi-static answer describes. (Until 2026-12-07 the
+# solver's own upper limit was 1e6.)
+MIN_FLOW_UL_S = 1e-6
+MAX_FLOW_UL_S = 1000.0
+
+
 @dataclass(frozen=True)
 class SolverSettings:
     """How a design is solved.
@@ -71,7 +81,7 @@ class SolverSettings:
         checks: list[tuple[str, float, float]] = [
             ("mesh_level", 0, MAX_MESH_LEVEL), ("max_angle_deg", 0.1, 360.0),
             ("max_pressure_pa", 1.0, 1e7), ("max_volume_ul", 1e-3, 1e4),
-            ("flow_ul_s", 1e-6, 1e6), ("bulk_ratio", 10.0, 1e6),
+            ("flow_ul_s", MIN_FLOW_UL_S, MAX_FLOW_UL_S), ("bulk_ratio", 10.0, 1e6),
             ("newton_tol", 1e-14, 1e-2), ("max_newton_iter", 3, 200), ("max_steps", 1, 10000),
             ("spring_k_n_per_m", 0.0, 1e6),
         ]

@@ -6,8 +6,9 @@ maximum (a limit point: past it the pressure falls while the volume still rises;
 pressure control the actuator would snap through there). ``by_volume`` interpolates the
 curve's own angle and pressure columns linearly in volume, and says where the asked
 volumes lie past the curve's pressure maximum or past its end. The pump's flow limits
-(``MIN_FLOW_UL_S``..``MAX_FLOW_UL_S``; time = volume / flow from the undeformed state) are
-the one table the service's pump view and the design search's time targets read.
+(``MIN_FLOW_UL_S``..``MAX_FLOW_UL_S``, defined in solver/settings.py with the solver's
+own; time = volume / flow from the undeformed state) are the one table the service's pump
+view, the design search's time targets and measured data read.
 """
 
 from __future__ import annotations
@@ -17,10 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from solver.errors import InputError
+from solver.settings import MAX_FLOW_UL_S, MIN_FLOW_UL_S  # the one table (re-exported)
 
-MIN_FLOW_UL_S = 1e-6       # MIN <= flow_ul_s <= MAX: a slower pump is no pump (a flow of
-MAX_FLOW_UL_S = 1000.0     # 1e-320 ul/s made every time volume / flow infinite); the
-                           # solver's own lower limit (SolverSettings.flow_ul_s)
 FLOW_RANGE = f"{MIN_FLOW_UL_S:g} <= flow_ul_s <= {MAX_FLOW_UL_S:g} ul/s"
 MAX_TIME_S = 1e5           # the longest pump time asked (times_s, a search's time_s), s
 LONGEST_TIME_FLAG = "past_longest_pump_time"
