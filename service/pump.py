@@ -196,7 +196,8 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
         if by_volume is None:
             raise InputError(axis, f"model {model!r} answers by pressure only",
                              'model "emulator" for volumes and times')
-        v = normal_or_zero(normal_or_zero(question.volumes_ul) if axis == "volumes_ul"
+        # subnormal inputs, and products of times and flow, are read as 0
+        v = normal_or_zero(question.volumes_ul if axis == "volumes_ul"
                            else normal_or_zero(question.times_s) * float(q or 0))
         try:
             prediction = by_volume(design, v, level=level)

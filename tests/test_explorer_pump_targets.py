@@ -63,6 +63,14 @@ def search(page, server, bodies: list) -> dict:
     return httpx.post(server.url + "/v1/inverse", json=bodies[-1], timeout=180).json()
 
 
+def fill_volume_budget(page) -> None:
+    """The form set for 40 deg within 30 ul, two designs listed."""
+    choose(page, "volume_budget")
+    page.fill("#inv-volume", "30")
+    page.fill("#inv-angle", "40")
+    page.fill("#inv-n", "2")
+
+
 def heads(page) -> list[str]:
     return page.locator("#inv-table thead th").all_inner_texts()
 
@@ -157,10 +165,7 @@ def test_a_refused_pump_target_is_shown_beside_its_field(watched, server):
 def test_a_listed_design_loaded_is_drawn_on_the_volume_axis_then_the_time_axis(watched, server):
     page = open_explorer(watched, server.url)
     bodies = sent_bodies(page)
-    choose(page, "volume_budget")
-    page.fill("#inv-volume", "30")
-    page.fill("#inv-angle", "40")
-    page.fill("#inv-n", "2")
+    fill_volume_budget(page)
     page.select_option("#inv-objective", "volume")  # a budget's own ranking is offered
     one_pair(page)
     api = search(page, server, bodies)
@@ -210,10 +215,7 @@ def test_the_last_search_rows_are_hidden_while_the_next_search_runs(watched, ser
     search's answer is held back (page.route) while the table is checked."""
     page = open_explorer(watched, server.url)
     bodies = sent_bodies(page)
-    choose(page, "volume_budget")
-    page.fill("#inv-volume", "30")
-    page.fill("#inv-angle", "40")
-    page.fill("#inv-n", "2")
+    fill_volume_budget(page)
     one_pair(page)
     search(page, server, bodies)
     assert page.locator("#inv-table").is_visible()
