@@ -1,5 +1,10 @@
-"""Surrogate layer: the paper's exponential bending model fitted from the FE curve
-database, with prediction bands, validity flags and inverse design.
+"""Surrogate layer: the models fitted from the FE curve database, with prediction bands,
+validity flags and inverse design -- the design-space emulator (the default,
+``surrogate.emulator``), the paper's exponential model (``surrogate.exponential``, named
+``exponential``; its published constants as ``paper``) and the calibration loop against
+measured data (``surrogate.calibration``); every model implements
+``surrogate.predictor.Predictor``. This package's top level re-exports the exponential
+model's names:
 
     from surrogate import paper_surrogate, load_surrogate, fit_surrogate, inverse_design
     s = paper_surrogate()                        # the paper's constants, name "paper"

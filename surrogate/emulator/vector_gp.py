@@ -1,4 +1,4 @@
-"""A vector-valued emulator: principal components of the outputs, one GP per component.
+"""Many outputs over one input set: one GP per output, or one per principal component.
 
 Rows of Y (n designs x c outputs) are standardised per column, decomposed by SVD, and
 the leading m component scores are each interpolated over the inputs by a GP
