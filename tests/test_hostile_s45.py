@@ -9,8 +9,10 @@ Each test failed on the code before its fix (commit messages say which).
 from __future__ import annotations
 
 import pytest
+from service_fakes import assert_problem
 from test_cli_fuzz import run, visible_lines
 
+from solver.errors import InputError
 from surrogate.predictor import MAX_ASKED_VALUES
 
 DESIGN = {"L_mm": 7.1, "t_mm": 0.5}
@@ -56,3 +58,117 @@ def test_the_schemas_lists_read_the_same_limit(shipped_client):
         prop = schemas[schema]["properties"][name]
         lists = [p for p in prop.get("anyOf", [prop]) if p.get("type") == "array"]
         assert lists[0]["maxItems"] == MAX_ASKED_VALUES, (schema, name)
+
+
+# -- 2. Ogden materials that nearly cancel: unstable ones refused up front --------------------
+
+UNSTABLE = {"id": "nearly_cancel", "mu_kpa": [10.0, -5.0], "alpha": [2.0, 3.99]}
+
+
+@pytest.mark.parametrize(("mu", "alpha"), [
+    ([10.0, -5.0], [2.0, 3.99]),       # mu0 0.025 kPa, the stress falls from stretch 1
+    ([1.0, 0.5], [2.0, -2.0]),         # mu0 0.5 kPa, equibiaxial stress falls at 1.19
+    ([1.0, -0.02], [2.0, 8.0])])       # mu0 0.92 kPa, equibiaxial stress falls in compression
+def test_an_unstable_material_is_refused_naming_its_moduli(mu, alpha):
+    from solver.materials import make_material
+
+    with pytest.raises(InputError) as exc:
+        make_material("m", mu, alpha)
+    assert exc.value.field == "mu_kpa"
+    assert "unstable" in exc.value.detail and "stretch" in exc.value.detail
+    assert "up to a stretch of 4" in exc.value.allowed
+
+
+@pytest.mark.parametrize(("mu", "alpha"), [
+    ([0.63, 0.0012, -0.01], [1.3, 5.0, -2.0]),   # Ogden's 1972 rubber: every mu*alpha > 0
+    ([10.0, -9.99], [2.0, 2.0]),                 # a neo-Hookean of 0.01 kPa: soft, stable
+    ([1.0, -0.5], [2.0, -2.0])])
+def test_a_stable_material_is_taken(mu, alpha):
+    from solver.materials import make_material
+
+    make_material("m", mu, alpha)
+
+
+def test_every_material_the_box_allows_is_stable():
+    from solver.design_space import STIFFNESS_SCALE_LIMITS, scaled_material
+    from solver.materials import MATERIALS
+    from solver.ogden_paths import unstable_at
+
+    for preset in MATERIALS:
+        for scale in (*STIFFNESS_SCALE_LIMITS, 1.0):
+            m = scaled_material(preset, scale)
+            assert unstable_at(m.mu_kpa, m.alpha) is None, (preset, scale)
+
+
+def test_the_path_stresses_are_the_energys_derivatives():
+    """dW/dl and d2W/dl2 along each path against central differences of W_iso itself
+    (solver.materials' form), at stretches in compression and tension."""
+    from solver.ogden_paths import PATHS, path_stiffness_kpa, path_stress_kpa
+
+    mu, alpha = [1.3, 0.2, -0.05], [2.5, 6.0, -3.0]
+
+    def energy(lam, k):
+        return sum(m / a * (lam ** a + lam ** (k * a) + lam ** (-(1 + k) * a) - 3)
+                   for m, a in zip(mu, alpha))
+
+    for k in PATHS.values():
+        for lam in (0.5, 1.0, 2.7):
+            h = 1e-4 * lam
+            d1 = (energy(lam + h, k) - energy(lam - h, k)) / (2 * h)
+            d2 = (energy(lam + h, k) - 2 * energy(lam, k) + energy(lam - h, k)) / h ** 2
+            assert path_stress_kpa(mu, alpha, lam, k) == pytest.approx(d1, rel=1e-6, abs=1e-6)
+            assert path_stiffness_kpa(mu, alpha, lam, k) == pytest.approx(d2, rel=1e-5)
+
+
+def test_an_fe_solve_of_an_unstable_material_is_refused_up_front(tmp_path):
+    """``POST /v1/solve`` queued a membrane of mu [10, -5] kPa, alpha [2, 3.99] (mu0
+    0.025 kPa passes the floor), whose FE solve failed at rest after 21 s."""
+    from fastapi.testclient import TestClient
+    from service_fakes import settings_for
+
+    from service.app import create_app
+
+    with TestClient(create_app(settings_for(tmp_path))) as client:
+        r = client.post("/v1/solve", headers={"X-API-Key": "test-key"},
+                        json={"design": {**DESIGN, "membrane_material": UNSTABLE}})
+        problem = assert_problem(r, 422, "design.membrane_material.mu_kpa")
+        assert "unstable" in problem["detail"]
+
+
+def test_a_grid_with_an_unstable_material_is_refused_naming_it(tmp_path):
+    from solver.precompute.grid import GridError, load_grid
+
+    grid = tmp_path / "grid.toml"
+    grid.write_text('pairs = [["pdms_1_10", "bad"]]\nL_mm = 7.1\n\n'
+                    '[materials.bad]\nmu_kpa = [10.0, -5.0]\nalpha = [2.0, 3.99]\n')
+    with pytest.raises((GridError, InputError)) as exc:
+        load_grid(grid)
+    assert "unstable" in str(exc.value) and "mu_kpa" in str(exc.value)
+
+
+def test_a_stored_material_the_checks_now_refuse_stays_readable(tmp_path):
+    """A record stored before the mu0 floor (tests/test_hostile_s44.py: the app's own
+    database took a membrane of mu 1e-300 kPa) read back through the input checks: "record
+    ... is damaged", ``db export`` refused the whole file and a precompute would refuse
+    to write to it. A stored material is read as written."""
+    from test_precompute_fakes import fake_curve
+
+    from solver.design import Design
+    from solver.materials import OgdenMaterial
+    from solver.settings import SolverSettings
+    from solver.store import CurveStore, make_record
+
+    path = tmp_path / "old.h5"
+    settings = SolverSettings(mesh_level=0, element="hex1")
+    stored = [OgdenMaterial("soft", (1e-300,), (2.0,)),
+              OgdenMaterial("nearly_cancel", (10.0, -5.0), (2.0, 3.99))]
+    with CurveStore(path, mode="a") as db:
+        for material in stored:
+            design = Design(L_mm=7.1, t_mm=0.5, membrane_material=material)
+            db.put(make_record(design, settings, fake_curve(design, status="failed",
+                                                           reason="fake")))
+    with CurveStore(path) as db:
+        got = [db.get(key).design.membrane_material for key in db.keys()]
+    assert sorted(got, key=lambda m: m.id) == sorted(stored, key=lambda m: m.id)
+    code, out, err, escaped = run(["db", "export", str(path), "-o", str(tmp_path / "o.csv")])
+    assert (code, escaped) == (0, None), err
