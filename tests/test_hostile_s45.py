@@ -8,6 +8,8 @@ Each test failed on the code before its fix (commit messages say which).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from service_fakes import assert_problem
 from test_cli_fuzz import run, visible_lines
@@ -172,3 +174,109 @@ def test_a_stored_material_the_checks_now_refuse_stays_readable(tmp_path):
     assert sorted(got, key=lambda m: m.id) == sorted(stored, key=lambda m: m.id)
     code, out, err, escaped = run(["db", "export", str(path), "-o", str(tmp_path / "o.csv")])
     assert (code, escaped) == (0, None), err
+
+
+# -- 3. free-text labels with control, bidi-override or zero-width characters -----------------
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "surrogate/calibration/data/example_lab.csv"
+FIRST_CURVE = "L7.1-t0.75-q1.25-s1"
+# an ANSI colour and a screen clear (ESC [ 2 J), a bidi override, a zero-width space, the
+# C1 control CSI (U+009B), a bell
+HOSTILE = ["\x1b[31mred\x1b[0m", "ok\x1b[2J", "s1\u202e2s", "s\u200b1", "s\x9b2J", "s\x07"]
+RAW = ("\x1b", "\u202e", "\u200b", "\x9b", "\x07")
+
+
+def lab_rows(curve_id: str = "s1") -> list[dict]:
+    return [{"curve_id": c, **DESIGN, "body_material": "pdms_1_10",
+             "membrane_material": "ecoflex_00_30", "pressure_pa": p, "angle_deg": a}
+            for c in (curve_id, "s2")
+            for p, a in ((0, 0.1), (400, 1.6), (800, 4.8), (1200, 12.0))]
+
+
+@pytest.mark.parametrize("label", HOSTILE)
+def test_a_curve_id_that_a_terminal_would_obey_is_refused_on_the_cli(tmp_path, label):
+    """``balloon calibrate`` took a curve_id holding ESC [ 31 m, U+202E or U+200B, and
+    its report (--report) and the HTTP answer carried it raw into every reader's terminal
+    or page. Refused naming the column, the row and the character, shown escaped."""
+    path = tmp_path / "lab.csv"
+    path.write_text(EXAMPLE.read_text().replace(FIRST_CURVE, label))
+    report = tmp_path / "r.json"
+    line = one_line_error(["calibrate", str(path), "--report", str(report), "--model",
+                           "paper"])
+    assert "curve_id: row 1: a control or invisible character U+" in line, line
+    assert "printable text" in line
+    assert not any(c in line for c in RAW), ascii(line)
+    assert not report.exists()
+
+
+@pytest.mark.parametrize("label", HOSTILE)
+def test_a_curve_id_that_a_page_would_obey_is_refused_over_http(shipped_client, label):
+    r = shipped_client.post("/v1/calibrate", json={"rows": lab_rows(label), "model": "paper"})
+    problem = assert_problem(r, 422, "rows.0.curve_id")
+    assert "U+" in problem["detail"] and not any(c in r.text for c in RAW), ascii(r.text)
+
+
+def test_a_run_label_is_held_to_the_same_rule(shipped_client):
+    rows = [{**row, "run": "1\u200b"} for row in lab_rows()]
+    problem = assert_problem(shipped_client.post("/v1/calibrate", json={
+        "rows": rows, "model": "paper"}), 422, "rows.0.run")
+    assert "U+200B (ZERO WIDTH SPACE)" in problem["detail"]
+
+
+@pytest.mark.parametrize("key", ["x\u202eevil", "k\x9b2J", "zero\u200bwidth", "b\x07ell"])
+def test_a_problem_never_carries_a_made_up_names_hidden_characters(shipped_client, key):
+    """A column (or field) name the request made up was echoed in the problem's detail,
+    loc and field as sent: JSON escapes only U+0000-U+001F, so a bidi override, a zero-width
+    space and the C1 CSI reached the reader raw. Every text of a problem is shown escaped."""
+    rows = lab_rows()
+    rows[0][key] = 1
+    r = shipped_client.post("/v1/calibrate", json={"rows": rows, "model": "paper"})
+    problem = assert_problem(r, 422)
+    assert not any(c in r.content.decode() for c in RAW), ascii(r.text)
+    assert "unknown column" in problem["detail"]
+    r = shipped_client.post("/v1/predict", json={"design": {**DESIGN, key: 1},
+                                                 "pressures_pa": [1000]})
+    assert_problem(r, 422)
+    assert not any(c in r.content.decode() for c in RAW), ascii(r.text)
+
+
+# -- 3 and 4 in the explorer: a hostile name shown escaped, "1e999" in every number box ------
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """The app with the shipped models, served for the browser tests."""
+    from explorer_browser import LiveServer
+
+    with LiveServer(tmp_path_factory.mktemp("explorer-s45")) as live:
+        yield live
+
+
+@pytest.mark.timeout(300)
+def test_the_page_shows_a_hostile_column_name_escaped(watched, server, tmp_path):
+    """A CSV whose extra column is named with a bidi override and a zero-width space: the
+    server's problem echoed the name raw and the page showed it so (text after U+202E is
+    drawn right to left); now escaped. A curve_id holding U+202E is refused, named."""
+    from explorer_browser import open_explorer, screenshot
+
+    page = open_explorer(watched, server.url)
+    lines = [x for x in EXAMPLE.read_text().splitlines() if x.strip() and not x.startswith("#")]
+
+    def refusal(name: str, rows: list[str], words: str) -> str:
+        path = tmp_path / name
+        path.write_text("\n".join(rows) + "\n")
+        page.set_input_files("#cal-file", str(path))
+        page.click("#cal-run")
+        page.wait_for_function("document.getElementById('err-cal-rows').textContent"
+                               f".includes('{words}')")
+        text = page.locator("#err-cal-rows").inner_text()
+        assert not any(c in text for c in RAW), ascii(text)
+        return text
+
+    text = refusal("hostile-header.csv", [lines[0] + ",note\u202etxt.exe\u200b"]
+                   + [x + ",1" for x in lines[1:21]], "unknown column")
+    assert "\\u202e" in text
+    screenshot(page, "explorer-hostile-column-name")
+    text = refusal("hostile-id.csv", [lines[0]] + [x.replace(FIRST_CURVE, "s1\u202e2s")
+                                                   for x in lines[1:40]], "U+202E")
+    assert "curve_id" in text
+    assert all("status of 422" in e for e in watched.errors), watched.errors
