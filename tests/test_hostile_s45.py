@@ -280,3 +280,62 @@ def test_the_page_shows_a_hostile_column_name_escaped(watched, server, tmp_path)
                                                    for x in lines[1:40]], "U+202E")
     assert "curve_id" in text
     assert all("status of 422" in e for e in watched.errors), watched.errors
+
+
+def shown_error(page, slot: str) -> str:
+    page.wait_for_selector(f"{slot}:not([hidden])")
+    return page.inner_text(slot)
+
+
+@pytest.mark.timeout(300)
+def test_every_number_box_names_1e999_out_of_range_with_its_range(watched, server):
+    """Every number box but the flow rate's read "1e999" as "" (badInput): a design field
+    said "not a number", the grid's largest pressure "not a number", the search's target
+    was sent as "not a number" and refused by the server as "Input should be a valid
+    number", the calibration's folds were read as 5. Every box is now a text box read by
+    fields.js' one reading: out of range, with its range, the text kept, nothing sent."""
+    from explorer_browser import change, open_explorer, screenshot
+
+    page = open_explorer(watched, server.url)
+    searches: list = []
+    page.on("request", lambda r: searches.append(r.url)
+            if r.url.endswith(("/v1/inverse", "/v1/calibrate")) and r.method == "POST" else None)
+    change(page, "#L_mm", "1e999")
+    assert shown_error(page, "#err-L_mm") == ("Chamber length L (mm): 1e999 is outside the "
+                                              "allowed range (allowed: 4 to 18 mm)")
+    assert page.input_value("#L_mm") == "1e999"
+    change(page, "#L_mm", "7.1")
+    change(page, "#p_max", "1e999")
+    error = shown_error(page, "#err-pressures_pa")
+    assert "1e999 is outside the allowed range (allowed: from 100 to 20000 Pa)" in error, error
+    change(page, "#p_max", "2000")
+    change(page, "#nearby", "-1e999")
+    assert "-1e999 is outside the allowed range (allowed: a whole number from 0 to 6" in \
+        shown_error(page, "#err-nearby")
+    change(page, "#nearby", "3")
+    # the design search: each box's text checked on the page, nothing sent
+    page.select_option("#inv-kind", "angle_at_volume")
+    page.fill("#inv-volume", "1e999")
+    page.fill("#inv-angle", "1e400")
+    page.click("#inv-run")
+    assert "1e999 is outside the allowed range (allowed: to 500 ul)" in \
+        shown_error(page, "#err-inv-volume")
+    assert "1e400 is outside the allowed range (allowed: from -360 to 360 deg)" in \
+        shown_error(page, "#err-inv-angle")
+    screenshot(page, "explorer-number-boxes-1e999")
+    # the calibration's folds
+    page.set_input_files("#cal-file", str(EXAMPLE))
+    page.fill("#cal-folds", "abc")
+    page.click("#cal-run")
+    assert '"abc" is not a number (allowed: a whole number from 2 to 50)' in \
+        shown_error(page, "#err-cal-folds")
+    assert searches == []
+    # still stepped by the arrow keys by the box's step, as a number box was
+    change(page, "#L_mm", "7.1")
+    page.focus("#L_mm")
+    page.keyboard.press("ArrowUp")
+    assert page.input_value("#L_mm") == "7.2"
+    page.focus("#p_max")
+    page.keyboard.press("ArrowDown")
+    assert page.input_value("#p_max") == "1900"
+    assert watched.foreign_requests() == [] and watched.errors == []
