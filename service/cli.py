@@ -17,7 +17,13 @@ from typing import NoReturn
 
 from service.commands.interrupts import caused_by_interrupt, interrupts_kept
 from solver.errors import BalloonError, InputError, NotFoundError
-from solver.number_text import INTEGER_FORM, NUMBER_FORM, ascii_float, ascii_int
+from solver.number_text import (
+    INTEGER_FORM,
+    NEGATIVE_NUMBER,
+    NUMBER_FORM,
+    ascii_float,
+    ascii_int,
+)
 from solver.plain_text import escaped
 
 # Subcommands in the order `balloon --help` lists them.
@@ -50,6 +56,7 @@ class Parser(argparse.ArgumentParser):
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self._negative_number_matcher = NEGATIVE_NUMBER    # -1e3 a value, as -5 is
         self.register("type", float, ascii_float)
         self.register("type", int, ascii_int)
 

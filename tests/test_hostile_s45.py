@@ -339,3 +339,28 @@ def test_every_number_box_names_1e999_out_of_range_with_its_range(watched, serve
     page.keyboard.press("ArrowDown")
     assert page.input_value("#p_max") == "1900"
     assert watched.foreign_requests() == [] and watched.errors == []
+
+
+# -- 5. probed: a negative number in exponent form on the command line -----------------------
+
+REVERSED = ["--L-mm", "11.1", "--t-mm", "0.5", "--body-material", "ecoflex_00_30",
+            "--membrane-material", "pdms_1_15"]
+
+
+def test_a_negative_angle_in_exponent_form_is_a_value():
+    """argparse reads -5 and -2.5 as values but -1.5e1 as an unknown option: a reversed
+    pair's ``--angles-deg -1.5e1`` said "expected at least one argument" (-15 answered)."""
+    code, out, err, escaped = run(["inverse", *REVERSED, "--angles-deg", "-1.5e1", "-2E1"])
+    assert (code, escaped) == (0, None), err
+    assert "-15.00" in out and "-20.00" in out
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["predict", "--L-mm", "-1e3", "--t-mm", "0.5", "--pressures", "1000"],
+     "--L-mm: got -1000.0 (allowed: 0.5 <= L_mm <= 60.0)"),
+    (["predict", *CLI_DESIGN, "--pressures", "1000", "-1e3"],
+     "--pressures: -1000 Pa is out of range (allowed: 0..20000 Pa)")])
+def test_a_negative_number_in_exponent_form_is_named_with_its_range(argv, words):
+    """``--L-mm -1e3`` said "argument --L-mm: expected one argument" and ``--pressures
+    1000 -1e3`` "unrecognized arguments: -1e3": neither the option's range."""
+    assert words in one_line_error(argv)
