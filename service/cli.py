@@ -17,7 +17,14 @@ from typing import NoReturn
 
 from service.commands.interrupts import caused_by_interrupt, interrupts_kept
 from solver.errors import BalloonError, InputError, NotFoundError
-from solver.number_text import INTEGER_FORM, NUMBER_FORM, ascii_float, ascii_int
+from solver.number_text import (
+    INTEGER_FORM,
+    NEGATIVE_NUMBER,
+    NUMBER_FORM,
+    ascii_float,
+    ascii_int,
+)
+from solver.plain_text import escaped
 
 # Subcommands in the order `balloon --help` lists them.
 COMMAND_MODULES = (
@@ -49,6 +56,7 @@ class Parser(argparse.ArgumentParser):
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self._negative_number_matcher = NEGATIVE_NUMBER    # -1e3 a value, as -5 is
         self.register("type", float, ascii_float)
         self.register("type", int, ascii_int)
 
@@ -116,7 +124,7 @@ def shown(what: object) -> str:
     control character (a CR of a CR-only file, an escape) shown escaped, not obeyed, and
     a word longer than LONGEST_WORD cut with its length said (``--model`` or a material
     of 100,000 characters was echoed whole, a 100 kB line)."""
-    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(what))
+    text = escaped(what)
     def cut(word: str) -> str:     # its closing quote and punctuation kept
         end = re.search(r"\W{0,3}$", word)[0]  # type: ignore[index]
         return f"{word[:60]}...{end} ({len(word)} characters)"

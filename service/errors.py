@@ -34,6 +34,7 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from solver.errors import BalloonError, ExistsError, InputError, NotFoundError, SolverError
+from solver.plain_text import escaped
 from surrogate.errors import Cancelled
 
 log = logging.getLogger("balloon.service")
@@ -129,8 +130,22 @@ class Problem:
         if self.errors:
             body["errors"] = self.errors
         body.update(self.extra)
-        return JSONResponse(body, status_code=self.status, headers=self.headers,
+        return JSONResponse(_shown(body), status_code=self.status, headers=self.headers,
                             media_type=PROBLEM_JSON)
+
+
+def _shown(value: Any) -> Any:
+    """A problem's every text with the characters a terminal or a page would obey
+    escaped (``solver.plain_text.escaped``): a JSON key the request made up, echoed in
+    detail, loc and field, held a bidi override or a C1 control raw (JSON escapes only
+    U+0000-U+001F)."""
+    if isinstance(value, str):
+        return escaped(value)
+    if isinstance(value, dict):
+        return {_shown(k): _shown(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_shown(v) for v in value]
+    return value
 
 
 def problem_for(exc: BaseException) -> Problem:

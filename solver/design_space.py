@@ -37,6 +37,7 @@ from solver.design import PAPER_WIDTH_MM, Design
 from solver.errors import InputError
 from solver.materials import MATERIALS, MIN_MU0_KPA, OgdenMaterial, make_material
 from solver.number_text import ascii_float
+from solver.ogden_paths import PATHS, STABLE_STRETCH_MAX, path_stress_kpa
 
 BOX_WIDTH_MM = PAPER_WIDTH_MM        # the box is at the standard design's width
 BOX_MM: dict[str, tuple[float, float]] = {
@@ -77,7 +78,7 @@ REDUCED_RATIO_RANGE = (STIFFNESS_SCALE_RANGE[0] / STIFFNESS_SCALE_RANGE[1],
 # 2026-12-06 when each mu was held to 1e-3 of its own).
 SCALE_TOLERANCE = 1e-3
 # Up to 4: the stretches of the FE's range (a membrane ballooned to 90 deg of bending)
-RECOGNITION_STRETCHES = np.linspace(1.05, 4.0, 60)
+RECOGNITION_STRETCHES = np.linspace(1.05, STABLE_STRETCH_MAX, 60)
 SAMPLED = (*GEOMETRY, "stiffness_ratio")   # coordinates of the reduced box, in order
 
 
@@ -186,10 +187,8 @@ def uniaxial_stress_kpa(material: OgdenMaterial,
                         stretch: np.ndarray = RECOGNITION_STRETCHES) -> np.ndarray:
     """Nominal stress (kPa) of the incompressible Ogden material in uniaxial tension at
     each ``stretch``: sum_p mu_p (l^(alpha_p - 1) - l^(-alpha_p / 2 - 1)), the derivative
-    of solver.materials' W_iso along the uniaxial path."""
-    lam = np.asarray(stretch, float)
-    return sum(m * (lam ** (a - 1.0) - lam ** (-a / 2.0 - 1.0))
-               for m, a in zip(material.mu_kpa, material.alpha))
+    of solver.materials' W_iso along the uniaxial path (solver.ogden_paths)."""
+    return path_stress_kpa(material.mu_kpa, material.alpha, stretch, PATHS["uniaxial"])
 
 
 @dataclass(frozen=True)

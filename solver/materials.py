@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from solver.errors import InputError, NotFoundError
+from solver.ogden_paths import STABLE_STRETCH_MAX, unstable_at
 
 # A material's id: a name, or a preset scaled as solver.design_space.scaled_material names
 # it (``ecoflex_00_30*1.5``); never a path, never a control character. The service's
@@ -64,8 +65,10 @@ def make_material(material_id: str, mu_kpa: list[float] | tuple[float, ...],
     """Validate Ogden parameters and drop the terms that carry no energy.
 
     Raises InputError when the lists differ in length, hold non-finite values,
-    or when the initial shear modulus is below MIN_MU0_KPA (not positive: the material
-    would have no stiffness in the undeformed state).
+    when the initial shear modulus is below MIN_MU0_KPA (not positive: the material
+    would have no stiffness in the undeformed state), or when the material is unstable
+    within the FE's stretches (solver.ogden_paths: the stress falls with stretch).
+    A material read back from a database is not checked again (``stored_material``).
     """
     mu = [float(m) for m in mu_kpa]
     al = [float(a) for a in alpha]
@@ -93,7 +96,24 @@ def make_material(material_id: str, mu_kpa: list[float] | tuple[float, ...],
                          + ("not positive" if material.mu0_kpa <= 0 else
                             "softer than any material the FE is meant for"),
                          f"mu0 = sum(mu*alpha)/2 >= {MIN_MU0_KPA:g} kPa")
+    unstable = unstable_at(material.mu_kpa, material.alpha)
+    if unstable is not None:
+        path, stretch = unstable
+        raise InputError("mu_kpa", f"the Ogden terms make an unstable material: its "
+                         f"{path} stress falls with stretch at a stretch of {stretch:.3g} "
+                         f"({'tension' if stretch > 1 else 'compression'})",
+                         f"a stable material: stress rising with stretch in uniaxial, planar "
+                         f"and equibiaxial tension and compression up to a stretch of "
+                         f"{STABLE_STRETCH_MAX:g} (every term with mu*alpha > 0 is)")
     return material
+
+
+def stored_material(material_id: str, mu_kpa: object, alpha: object) -> OgdenMaterial:
+    """A material as a database record stores it, read as written: ``make_material``'s
+    checks are for new input, and a record stored before one of them existed (the mu0
+    floor and the stability check, 2026-12-07) stays readable, not "damaged"."""
+    return OgdenMaterial(str(material_id), tuple(float(m) for m in mu_kpa),  # type: ignore[attr-defined]
+                         tuple(float(a) for a in alpha))  # type: ignore[attr-defined]
 
 
 # Table 1 of the paper, as printed (kPa). make_material drops the alpha = 0 term of

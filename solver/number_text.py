@@ -14,9 +14,14 @@ from __future__ import annotations
 
 import re
 
-_DECIMAL = r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+_UNSIGNED = r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+_DECIMAL = rf"[+-]?{_UNSIGNED}"
 _FLOAT = re.compile(rf"(?:{_DECIMAL}|[+-]?(?:nan|inf|infinity))", re.IGNORECASE)
 _INT = re.compile(r"[+-]?[0-9]+")
+#: a command-line word that is a negative number, not an option: argparse's own matcher
+#: takes -5 and -2.5 only, so ``--angles-deg -1.5e1`` said "expected at least one argument"
+#: and ``--L-mm -1e3`` "expected one argument", never the option's range
+NEGATIVE_NUMBER = re.compile(rf"^-(?:{_UNSIGNED}|nan|inf|infinity)$", re.IGNORECASE)
 
 #: the allowed forms, in words (every refusal states them)
 NUMBER_FORM = "ASCII decimal digits, as 1000, 2.5 or 1e-3"

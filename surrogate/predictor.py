@@ -32,7 +32,12 @@ from solver.design import Design
 from solver.errors import InputError
 from solver.settings import SolverSettings
 
-MAX_POINTS = 10_000_000  # the most numbers one request may ask for
+MAX_POINTS = 10_000_000  # the most numbers one call of a predictor takes (a guard)
+# The most values one question asks, in one list: an HTTP request's pressures_pa,
+# volumes_ul, times_s or angles_deg (the schemas' max_length) and the CLI's --pressures,
+# --volumes, --times or --angles-deg alike. The CLI took up to MAX_POINTS (100,000
+# pressures answered in 6 s, a 16 MB --json) where HTTP refused 1001.
+MAX_ASKED_VALUES = 1000
 
 # The smallest normal double (2.2e-308): a magnitude below it is subnormal, held to fewer
 # significant digits than any answer states (1e-310 Pa was answered 7.27e-314 deg, and 5e-324

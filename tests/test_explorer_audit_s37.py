@@ -144,14 +144,15 @@ def test_a_stiffness_scale_at_or_below_zero_is_named_beside_it_and_offers_no_sol
 
 
 def test_text_that_is_no_number_in_a_design_field_is_called_so(watched, server):
-    # "1e" typed into L was named "empty" (a number box reads such text as "")
+    # "1e" typed into L was named "empty" (a number box reads such text as ""); the box
+    # is a text box since the forty-fifth session, and the text is quoted
     page = open_explorer(watched, server.url)
     page.focus("#L_mm")
     page.keyboard.press("Control+A")
     page.keyboard.type("1e")
     page.wait_for_selector("#err-L_mm:not([hidden])")
     error = page.inner_text("#err-L_mm")
-    assert error == "Chamber length L (mm): not a number (allowed: 4 to 18 mm)"
+    assert error == 'Chamber length L (mm): "1e" is not a number (allowed: 4 to 18 mm)'
     page.fill("#L_mm", "")
     page.wait_for_function("document.getElementById('err-L_mm').textContent.includes('empty')")
 

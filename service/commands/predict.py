@@ -20,6 +20,7 @@ from pathlib import Path
 
 from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges
 from solver.number_text import NUMBER_FORM, ascii_float
+from surrogate.predictor import MAX_ASKED_VALUES
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
@@ -44,11 +45,16 @@ def number_list(text: str) -> list[float]:
 
 
 class NumberListAction(argparse.Action):
-    """``nargs="+"`` of ``number_list`` words, flattened into one list of floats."""
+    """``nargs="+"`` of ``number_list`` words, flattened into one list of floats: at most
+    MAX_ASKED_VALUES of them, the limit of the same list in an HTTP request."""
 
     def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
                  values: object, option_string: str | None = None) -> None:
-        setattr(namespace, self.dest, [v for word in values for v in word])  # type: ignore
+        numbers = [v for word in values for v in word]  # type: ignore[attr-defined]
+        if len(numbers) > MAX_ASKED_VALUES:
+            parser.error(f"argument {option_string}: {len(numbers)} values (allowed: 1 to "
+                         f"{MAX_ASKED_VALUES} values, as an HTTP request's list)")
+        setattr(namespace, self.dest, numbers)
 
 
 def add_number_list(parser: argparse._ActionsContainer, flag: str, metavar: str,

@@ -19,7 +19,7 @@ from surrogate.exponential.inverse_design import (
     MAX_TARGET,
     OBJECTIVES,
 )
-from surrogate.predictor import FE_VOLUME_STOP_UL
+from surrogate.predictor import FE_VOLUME_STOP_UL, MAX_ASKED_VALUES
 from surrogate.volume_control import MAX_TIME_S
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
@@ -206,7 +206,7 @@ class PressureRequest(Schema):
          "inlet": {}}]})
 
     design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
-    angles_deg: list[Angle] = Field(min_length=1, max_length=1000,
+    angles_deg: list[Angle] = Field(min_length=1, max_length=MAX_ASKED_VALUES,
                                     description="target angles, degrees")
     flow_ul_s: float | None = Field(None, ge=MIN_FLOW_UL_S, le=MAX_FLOW_UL_S,
                                     description="the pump's flow rate, ul/s: adds the time "

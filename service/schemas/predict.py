@@ -18,6 +18,7 @@ from service.schemas.common import (
     mm,
 )
 from surrogate import hydraulics
+from surrogate.predictor import MAX_ASKED_VALUES
 
 MAX_PRESSURE_PA = AXES["pressures_pa"][1]
 Pressure = Annotated[float, Field(ge=0.0, le=MAX_PRESSURE_PA)]
@@ -83,14 +84,14 @@ class PredictRequest(Schema):
 
     design: DesignIn = Field(default_factory=lambda: DesignIn.model_validate({}))
     pressures_pa: list[_axis("pressures_pa")] | None = Field(  # type: ignore[valid-type]
-        None, min_length=1, max_length=1000, description="pressures, Pa, at the chamber "
-        "(or the pump gauge: pressures_at) (give exactly one of pressures_pa, volumes_ul, "
-        "or times_s with flow_ul_s)")
+        None, min_length=1, max_length=MAX_ASKED_VALUES, description="pressures, Pa, at the "
+        "chamber (or the pump gauge: pressures_at) (give exactly one of pressures_pa, "
+        "volumes_ul, or times_s with flow_ul_s)")
     volumes_ul: list[_axis("volumes_ul")] | None = Field(  # type: ignore[valid-type]
-        None, min_length=1, max_length=1000, description="injected volumes, ul, whole "
+        None, min_length=1, max_length=MAX_ASKED_VALUES, description="injected volumes, ul, whole "
         "actuator (the syringe pump's view; the emulator)")
     times_s: list[_axis("times_s")] | None = Field(  # type: ignore[valid-type]
-        None, min_length=1, max_length=1000, description="times since the pump started "
+        None, min_length=1, max_length=MAX_ASKED_VALUES, description="times since the pump started "
         "from the undeformed actuator, s (with flow_ul_s; volume = flow x time)")
     flow_ul_s: float | None = FLOW
     inlet: InletIn | None = INLET

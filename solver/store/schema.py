@@ -41,6 +41,7 @@ import numpy as np
 from solver.curve import STATUSES, Curve
 from solver.design import LIMITS_MM, Design, design_from_dict
 from solver.errors import InputError
+from solver.materials import stored_material
 from solver.settings import LEGACY_MESH_DIVISIONS, SolverSettings, settings_from_dict
 from solver.store.errors import NotACurveStoreError, SchemaVersionError
 from solver.store.keys import ADDED_SETTINGS, record_key
@@ -198,8 +199,8 @@ def read_design(group: h5py.Group) -> Design:
     attrs = read_attrs(group["design"])
     data: dict[str, object] = {name: attrs[name] for name in LIMITS_MM}
     for role in MATERIAL_ROLES:
-        data[role] = {"id": attrs[f"{role}_id"], "mu_kpa": attrs[f"{role}_mu_kpa"],
-                      "alpha": attrs[f"{role}_alpha"]}
+        data[role] = stored_material(attrs[f"{role}_id"], attrs[f"{role}_mu_kpa"],
+                                     attrs[f"{role}_alpha"])
     return design_from_dict(data)
 
 

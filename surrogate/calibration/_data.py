@@ -24,6 +24,7 @@ from solver.bounded_read import read_bounded
 from solver.design import material_from_input
 from solver.errors import InputError
 from solver.number_text import NUMBER_FORM, is_number_text
+from solver.plain_text import PRINTABLE_WORDS, hidden_character
 from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
@@ -327,7 +328,8 @@ def range_words(column: str) -> str:
     """What a cell of ``column`` may hold, in words: its range (``RANGES``; units in the
     column's name), or for ``curve_id`` any text naming the curve."""
     if column == "curve_id":
-        return "any non-empty text naming the curve (one specimen at one flow rate)"
+        return ("any non-empty text naming the curve (one specimen at one flow rate): "
+                + PRINTABLE_WORDS)
     lo, hi, inclusive = RANGES[column]
     return f"{lo:g} {'<=' if inclusive else '<'} {column} <= {hi:g}"
 
@@ -392,7 +394,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         cid = raw.get("curve_id")
         if cid is None or str(cid).strip() == "":
             raise _cell_error("curve_id", "empty curve id", i)
-        rec["curve_id"] = str(cid).strip()
+        rec["curve_id"] = _label(cid, "curve_id", i)
         if RUN_COLUMN in columns:        # one run of the specimen curve_id
             rec["specimen"] = rec["curve_id"]
             rec["curve_id"] = f"{rec['curve_id']} run {_run_label(raw.get(RUN_COLUMN), i)}"
@@ -472,6 +474,18 @@ def _run_named(rows: list, headers: list) -> list:
             if isinstance(r, dict) else r for r in rows]
 
 
+def _label(value: object, column: str, row: int) -> str:
+    """A free-text cell (a curve's id, a run's label) stripped, refused when it holds a
+    character a terminal or a page would obey or hide (``solver.plain_text``): the
+    label is echoed in every report and error."""
+    text = str(value).strip()
+    hidden = hidden_character(text)
+    if hidden is not None:
+        raise DataError(column, f"a control or invisible character {hidden} in "
+                        f"{_short(text)}", row, PRINTABLE_WORDS)
+    return text
+
+
 def _run_label(value: object, row: int) -> str:
     """A run's label as text ('2' of 2, 2.0 or ' 2 '); an empty one is a DataError."""
     if isinstance(value, float) and value.is_integer():
@@ -479,6 +493,8 @@ def _run_label(value: object, row: int) -> str:
     text = "" if value is None or isinstance(value, bool) else str(value).strip()
     if text.replace(".", "", 1).isdecimal() and float(text).is_integer():
         text = str(int(float(text)))
+    if text:
+        text = _label(text, RUN_COLUMN, row)
     if not text or len(text) > 40:
         raise DataError(RUN_COLUMN, "missing run" if not text else "run label of "
                         f"{len(text)} characters", row, "a run label (1, 2, 3 or any short "

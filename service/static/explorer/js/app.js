@@ -11,7 +11,7 @@ import {
   FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
   materialLabel, pairLabel, scaledLengths, shown, stateOfDesign, takeScaleLimits,
 } from "./design.js";
-import { checkNumber } from "./fields.js";
+import { checkNumber, numberBoxes, readNumber } from "./fields.js";
 import { setupInverse } from "./inverse.js";
 import { curveEnd, jobText, nearestStep } from "./job.js";
 import { readLink, writeLink } from "./link.js";
@@ -95,7 +95,7 @@ function addField(box, f, onValue) {
     <div class="pair">
       <input type="range" id="${f.name}-range" step="${f.step}"
         value="${f.value}" aria-label="${f.label} slider" tabindex="-1">
-      <input type="number" id="${f.name}" name="${f.name}" step="${f.step}"
+      <input type="text" inputmode="decimal" id="${f.name}" name="${f.name}" step="${f.step}"
         value="${f.value}" required aria-describedby="${f.name}-range-text">
     </div>
     <span class="muted small" id="${f.name}-range-text"></span>
@@ -112,11 +112,12 @@ function addField(box, f, onValue) {
     // A width or a stiffness scale <= 0 is no design at all: named here (a scale of -1 was
     // sent as a material of negative moduli and offered an FE solve the server refused)
     const text = num.value.trim();
-    const v = Number(text);
-    if (text === "" || !Number.isFinite(v) || ((f === W_FIELD || f.unit === "x") && !(v > 0))) {
-      // a number box holding text that is no number ("1e", "--1") reads as empty: badInput
-      const what = text !== "" ? `${text} is not a usable value` : (num.validity.badInput ? "not a number" : "empty");
-      app.inputErrors.set(`err-${f.name}`, `${what} (allowed: ${allowedText(f, fieldRange(f, app.state.W_mm))})`);
+    const allowed = `allowed: ${allowedText(f, fieldRange(f, app.state.W_mm))}`;
+    const read = text === "" ? { error: `empty (${allowed})` } : readNumber(text, allowed);
+    const v = read.value;
+    if (read.error || ((f === W_FIELD || f.unit === "x") && !(v > 0))) {
+      // text that is no number ("1e", "0x10") or too large for a double ("1e999")
+      app.inputErrors.set(`err-${f.name}`, read.error || `${text} is not a usable value (${allowed})`);
       app.inputMark = performance.now();
       schedule(DEBOUNCE_MS);
       return;
@@ -1178,6 +1179,7 @@ async function start() {
   applySchemaLimits();
   setupInverse({ loadDesign, presets: app.presets });
   setupCalibration({ presets: app.presets });
+  numberBoxes();
   applyLink(location.hash);
   // a link pasted into this open page (the browser does not reload for a new fragment)
   window.addEventListener("hashchange", () => {

@@ -6,8 +6,9 @@
 // The report format may grow (docs/calibration.md): every field is read defensively and
 // a missing one is left out, never invented.
 
-import { ApiError, api, clearProblems, showProblem } from "./api.js";
+import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
 import { asRead, parseMeasured } from "./csv.js";
+import { checkNumber } from "./fields.js";
 import { COLORS, renderPlot } from "./plot.js";
 import { $, download, fmt, fmtSig } from "./util.js";
 
@@ -170,7 +171,10 @@ export function setupCalibration() {
     $("cal-report").hidden = true;
     report = null;
     lastBody = null;
-    const body = { rows, model: $("cal-model").value.trim() || "emulator", folds: Number($("cal-folds").value) || 5 };
+    // the folds' box as every number box: "abc" or "1e999" named beside it, never read as 5
+    const folds = checkNumber($("cal-folds"), { integer: true, optional: true });
+    if (folds.error) { showMessage($("err-cal-folds"), folds.error); return; }
+    const body = { rows, model: $("cal-model").value.trim() || "emulator", folds: folds.value ?? 5 };
     if (await run(body, form, { rows: $("err-cal-rows"), model: $("err-cal-model"), folds: $("err-cal-folds") }, $("err-calibrate"))) lastBody = body;
     showSaveability();
   });

@@ -8,41 +8,63 @@
 // decimal digits, as 1000, 2.5 or 1e-3 (JavaScript's Number also reads "0x10" and " ").
 export const NUMBER_TEXT = /^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?$/;
 
-// {value} or {error}: `optional` takes an empty field as null, `integer` whole numbers only.
-// A decimal too large for a double ("1e999") is out of range, not "not a number": a text
-// box (the flow rate's) keeps its text, where a number box only says badInput.
-export function checkNumber(input, { integer = false, optional = false, unit = "" } = {}) {
-  const text = String(input.value).trim();
+// A box's text as a number ({value}), or why it is none in the page's words ({error}):
+// text not in the service's form is "not a number"; a decimal too large for a double
+// ("1e999") is out of range, with the box's allowed range. Every number box of the page
+// is a text box (numberBoxes): a number box read such text as "" (badInput) and said
+// "not a number", or sent the search's target as "not a number".
+export function readNumber(text, allowed) {
+  const shown = text.slice(0, 20);
+  if (!NUMBER_TEXT.test(text)) return { error: `"${shown}" is not a number (${allowed})` };
+  const v = Number(text);
+  if (!Number.isFinite(v)) return { error: `${shown} is outside the allowed range (${allowed})` };
+  return { value: v };
+}
+
+// "allowed: a whole number from 1 to 20 ul": the box's min and max in words, in the
+// unit given or the box's own (its data-unit).
+export function allowedWords(input, { integer = false, unit = input.dataset?.unit || "" } = {}) {
   const min = input.min === "" ? -Infinity : Number(input.min);
   const max = input.max === "" ? Infinity : Number(input.max);
   const bounds = [Number.isFinite(min) ? `from ${min}` : "", Number.isFinite(max) ? `to ${max}` : ""].filter(Boolean).join(" ");
-  const allowed = `allowed: ${integer ? "a whole number " : ""}${bounds}${unit ? " " + unit : ""}`.trim();
-  if (text === "") {
-    // a number box holding text that is no number reads as empty (validity.badInput)
-    if (input.validity && input.validity.badInput) return { error: `not a number (${allowed})` };
-    return optional ? { value: null } : { error: `empty (${allowed})` };
-  }
-  const v = Number(text);
-  if (!NUMBER_TEXT.test(text)) return { error: `"${text.slice(0, 20)}" is not a number (${allowed})` };
-  if (!Number.isFinite(v)) return { error: `${text.slice(0, 20)} is outside the allowed range (${allowed})` };
+  return `allowed: ${integer ? "a whole number " : ""}${bounds}${unit ? " " + unit : ""}`.trim();
+}
+
+// {value} or {error}: `optional` takes an empty field as null, `integer` whole numbers only.
+export function checkNumber(input, { integer = false, optional = false, unit = input.dataset?.unit || "" } = {}) {
+  const text = String(input.value).trim();
+  const min = input.min === "" ? -Infinity : Number(input.min);
+  const max = input.max === "" ? Infinity : Number(input.max);
+  const allowed = allowedWords(input, { integer, unit });
+  if (text === "") return optional ? { value: null } : { error: `empty (${allowed})` };
+  const read = readNumber(text, allowed);
+  if (read.error) return read;
+  const v = read.value;
   if (integer && !Number.isInteger(v)) return { error: `${v} is not a whole number (${allowed})` };
   if (v < min || v > max) return { error: `${v} is outside the allowed range (${allowed})` };
   return { value: v };
 }
 
-// A text box holding a number (the flow rate's: a number box reads "1e999" as empty, and
-// copied that emptiness into the box sharing its value) stepped by the arrow keys, as a
-// number box is: by 1 from the value shown, within the box's min and max.
-export function stepByArrows(input) {
-  input.addEventListener("keydown", (event) => {
-    const dir = { ArrowUp: 1, ArrowDown: -1 }[event.key];
-    const text = input.value.trim();
-    if (!dir || !NUMBER_TEXT.test(text) || !Number.isFinite(Number(text))) return;
-    event.preventDefault();
-    const lo = input.min === "" ? -Infinity : Number(input.min);
-    const hi = input.max === "" ? Infinity : Number(input.max);
-    input.value = String(Math.min(hi, Math.max(lo, Number(text) + dir)));
-    input.dispatchEvent(new Event("input"));
-    input.dispatchEvent(new Event("change"));
-  });
+// Every number box of the page (index.html's and the design fields': text boxes with
+// inputmode "decimal", so that their text stays readable) stepped by the arrow keys, as
+// a number box is: by its step (1 without one) from the value shown, within its min and
+// max. Called once, when the page's boxes exist.
+export function numberBoxes(root = document) {
+  for (const input of root.querySelectorAll("input[inputmode=decimal]")) {
+    input.addEventListener("keydown", (event) => {
+      const dir = { ArrowUp: 1, ArrowDown: -1 }[event.key];
+      const text = input.value.trim();
+      if (!dir || !NUMBER_TEXT.test(text) || !Number.isFinite(Number(text))) return;
+      event.preventDefault();
+      const step = Number(input.step) > 0 ? Number(input.step) : 1;
+      const lo = input.min === "" ? -Infinity : Number(input.min);
+      const hi = input.max === "" ? Infinity : Number(input.max);
+      // to the step's digits: 0.1 + 0.2 shows 0.3
+      const digits = Math.max(0, -Math.floor(Math.log10(step)) + 1);
+      const next = Number((Number(text) + dir * step).toFixed(Math.min(digits + 6, 15)));
+      input.value = String(Math.min(hi, Math.max(lo, next)));
+      input.dispatchEvent(new Event("input"));
+      input.dispatchEvent(new Event("change"));
+    });
+  }
 }

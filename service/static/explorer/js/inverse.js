@@ -6,7 +6,7 @@
 
 import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
 import { FIELDS, PAIRS, pairLabel } from "./design.js";
-import { checkNumber, stepByArrows } from "./fields.js";
+import { allowedWords, checkNumber, readNumber } from "./fields.js";
 import { ASK_AXIS, OBJECTIVES, TARGET_BY, TARGET_INPUTS, changeUnit, readoutAt, targetColumns, targetNotes } from "./targets.js";
 import { $, fmt, fmtSig, numberOrNull } from "./util.js";
 
@@ -20,7 +20,6 @@ import { $, fmt, fmtSig, numberOrNull } from "./util.js";
 // was wiped with it; the text is now one value in both, named out of range beside both.
 function shareFlowRate() {
   const page = $("flow"), form = $("inv-flow");
-  for (const box of [page, form]) stepByArrows(box);
   form.value = page.value;
   page.addEventListener("input", () => { form.value = page.value; });
   page.addEventListener("change", () => { form.value = page.value; });
@@ -50,6 +49,26 @@ function bounds(lo, hi, name) {
   if (a === null && b === null) return undefined;
   const f = FIELDS.find((x) => x.name === name);
   return [a ?? f.min, b ?? f.max];
+}
+
+// The form's shown boxes hold numbers or nothing: text that is none ("0x10") or too
+// large for a double ("1e999") is named beside its box with the box's range, and no
+// search is sent (a number box read "1e999" as "", which was sent as "not a number" and
+// refused by the server as "Input should be a valid number"). The ranges stay the
+// server's to check.
+function numbersReadable(form) {
+  let readable = true;
+  for (const box of form.querySelectorAll("input[inputmode=decimal]")) {
+    const text = box.value.trim();
+    if (!text || box.closest("[hidden]")) continue;
+    const read = readNumber(text, allowedWords(box));
+    if (!read.error) continue;
+    const slot = form.querySelector(`.field-error[data-for="${box.id}"]`)
+      || form.querySelector(`.field-error[data-for="${box.id.replace(/-hi$/, "-lo")}"]`);
+    showMessage(slot, read.error);
+    readable = false;
+  }
+  return readable;
 }
 
 export function setupInverse({ loadDesign }) {
@@ -88,6 +107,7 @@ export function setupInverse({ loadDesign }) {
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
     clearProblems(form);
+    if (!numbersReadable(form)) return;
     const target = { kind: kind.value };
     for (const [id, name] of TARGET_INPUTS[TARGET_BY[kind.value]]) target[name] = numberOrNull($(id));
     if (kind.value === "force_at_pressure") target.force_mn = numberOrNull($("inv-force"));

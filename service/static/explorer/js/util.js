@@ -28,13 +28,13 @@ export function download(name, blobOrText, type = "text/plain") {
   setTimeout(() => URL.revokeObjectURL(url), 1000);
 }
 
-// A number box's value, null when empty; a box holding text the browser could not read as
-// a number ("1e999", "1e") reads as empty (validity.badInput): sent as text, which the
-// server refuses naming the field, never as null (a missing value, a default, a bound at
-// the box's edge)
+// A number box's value, null when empty; text that is no number in the service's form
+// ("0x10", which Number reads; "1e999", too large for a double) is sent as text, which
+// the server refuses naming the field, never as null (a missing value, a default, a
+// bound at the box's edge). The page names such text itself first (fields.js).
 export function numberOrNull(input) {
   const text = String(input.value).trim();
-  if (text === "") return input.validity && input.validity.badInput ? "not a number" : null;
+  if (text === "") return null;
   const v = Number(text);
   // a non-number ("0x10", which Number reads) goes to the server, which names it
   return NUMBER_TEXT.test(text) && Number.isFinite(v) ? v : text;
