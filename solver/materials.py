@@ -104,7 +104,8 @@ def make_material(material_id: str, mu_kpa: list[float] | tuple[float, ...],
                          f"({'tension' if stretch > 1 else 'compression'})",
                          f"a stable material: stress rising with stretch in uniaxial, planar "
                          f"and equibiaxial tension and compression up to a stretch of "
-                         f"{STABLE_STRETCH_MAX:g} (every term with mu*alpha > 0 is)")
+                         f"{STABLE_STRETCH_MAX:g} (every term with mu*alpha > 0 and alpha >= 1 or "
+                         f"alpha <= -2 is)")
     return material
 
 
