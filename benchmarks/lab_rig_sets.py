@@ -34,10 +34,11 @@ one specimen run four times, a loading without an unloading and a hold of 30 s.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 12 + 12 + 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the nine sets with
-the pump's log that tests/test_calibration_history.py and tests/test_calibration_gauge_zero.py read
-(tests/data/lab_gauge_noise_*.csv; N2's too, for test_calibration_exact_alike.py; N8's,
-N9's, N11's and N13's for test_calibration_lab_fresh.py).
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the eleven sets
+with the pump's log that tests/test_calibration_history.py and
+tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
+test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
+test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py).
 """
 
 from __future__ import annotations
@@ -177,13 +178,15 @@ PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.75729316
                   "hPa": (1e-2, 2), "inH2O": (1 / 249.08891, 3)}
 TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0)}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
-# test_calibration_exact_alike.py and test_calibration_lab_fresh.py read, with the
-# pump's log
+# test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
+# test_calibration_lab_s45.py read, with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
              "gauge_zero_off_soft_batch": "N2-gauge60-D9",
              "inlet_fast_unload": "N9-inlet-fast-D13", "camera_late": "N13-camera-lag-D12",
-             "body_stiffer": "N8-body1.12-D11", "leak_slow_pump": "N11-leak-slow-D11"}
+             "body_stiffer": "N8-body1.12-D11", "leak_slow_pump": "N11-leak-slow-D11",
+             "membrane_softer_inh2o": "N15-membrane0.9-D14",
+             "inlet_tilted_fast": "N21-inlet+offset-fast-D16"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -348,7 +351,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's nine sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's eleven sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:
