@@ -405,6 +405,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "fitted": {"open": _open_table(obs, base, after), "effects": _params(after),
                    **_family_constants(obs, baseline, base, after)},
         "residual_structured_after": left["structured"],
+        "residual_within_baseline_band": left["within_baseline_band"],
         "unexplained_rms_deg": left["unexplained_rms_deg"],
         "unexplained_where": left["where"],
         "systematic_residual": left["systematic"],
@@ -1356,7 +1357,14 @@ def interpret(report: dict, left: dict) -> str:
                      "docs/measured-data.md).")
     elif noise is not None:
         at_fit = report["baseline_sd_after_deg"]
-        if at_fit > 1.5 * report["baseline_sd_deg"] and at_fit > 0.25 * noise:
+        if report["residual_within_baseline_band"]:
+            s.append(f"What remains ({report['rmse_after_deg']:.2f} deg RMS, cross-validated) "
+                     f"is more than replicate scatter (floor {noise:.2f} deg) but within the "
+                     f"baseline's own uncertainty at this design (its band, {at_fit:.2f} deg "
+                     "RMS): these data cannot tell an effect the selection lacks from the "
+                     "baseline's own error here. An FE solve of the design (`balloon "
+                     "solve`) would decide.")
+        elif at_fit > 1.5 * report["baseline_sd_deg"] and at_fit > 0.25 * noise:
             s.append("What remains is consistent with replicate scatter and the baseline's "
                      f"own uncertainty at the fitted design ({at_fit:.2f} deg RMS): an FE "
                      "solve of that design (`balloon solve`) would sharpen the size.")
