@@ -4,7 +4,9 @@ settings), never from the calibration's forms: the forty-first session's audit o
 forty-second session's sets N1-N5 on three more designs (D8-D10), to check its changes on
 designs they were not made on; the forty-third session's fresh sets N6-N13 on three more
 (D11-D13: a stiffness-scaled body, the reversed pair, PDMS 1:15), their truths and seeds
-written here before any was calibrated.
+written here before any was calibrated; the forty-fifth session's fresh sets N14-N21 on
+three more (D14-D16: Ecoflex/Ecoflex, a membrane-scaled Ecoflex x 0.8, a short PDMS 1:10
+body), likewise.
 
 Ten designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
@@ -24,16 +26,19 @@ long inlet (the gauge at the pump reads R x the flow just before each stamp abov
 chamber), air in the line with the gauge's zero off, and a camera whose time stamps are
 0.5 s late (outside the catalogue); lab habits: two specimens, fewer readings, an unload
 without a hold, a fast and a slow pump, pressures in mbar or psi and times in ms (the
-unit in the header).
+unit in the header); for N14-N21 also a membrane 10 % softer (its FE solves), Mullins
+softening on the unloading (outside the catalogue), and readings every 0.5 s, hPa, inH2O,
+one specimen run four times, a loading without an unloading and a hold of 30 s.
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
-The first solves what the cache lacks (27 + 12 + 12 solves of 15-90 s; run alone) and writes each
-set as CSV (and the API's JSON rows); ``--test-data`` writes the nine sets with the pump's
-log that tests/test_calibration_history.py and tests/test_calibration_gauge_zero.py read
-(tests/data/lab_gauge_noise_*.csv; N2's too, for test_calibration_exact_alike.py; N8's,
-N9's, N11's and N13's for test_calibration_lab_fresh.py).
+The first solves what the cache lacks (27 + 12 + 12 + 12 solves of 15-90 s; run alone) and
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the eleven sets
+with the pump's log that tests/test_calibration_history.py and
+tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
+test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
+test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py).
 """
 
 from __future__ import annotations
@@ -76,9 +81,17 @@ DESIGNS = {
                 body_material="ecoflex_00_30", membrane_material="pdms_1_15"),
     "D13": dict(L_mm=10.2, t_mm=1.1, T_mm=1.7, b_mm=1.8, h_mm=0.27,
                 body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
+    # the forty-fifth session's designs, solved for the fresh sets N14-N21 only
+    "D14": dict(L_mm=6.8, t_mm=0.55, T_mm=1.9, b_mm=1.1, h_mm=0.24,
+                body_material="ecoflex_00_30", membrane_material="ecoflex_00_30"),
+    "D15": dict(L_mm=9.6, t_mm=0.62, T_mm=1.52, b_mm=1.7, h_mm=0.19,
+                body_material="pdms_1_15", membrane_material="ecoflex_00_30*0.8"),
+    "D16": dict(L_mm=5.1, t_mm=0.55, T_mm=0.8, b_mm=1.25, h_mm=0.28,
+                body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
 }
 # a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
-VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12)}
+VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12),
+            "_m0.9": ("membrane_material", 0.9)}
 T_FACTORS = {"a": 0.96, "b": 1.0, "c": 1.045}   # the specimens' membrane thickness
 SPECIMENS = ["a", "b", "c"]
 STATE = {1: "load", 0: "hold", -1: "unload"}
@@ -133,18 +146,47 @@ SETS = {
     # (each frame shows the actuator 0.5 s before its stamp)
     "N13-camera-lag-D12": ("D12", [None], 1.0, 10, 4, 6, {"kind": "camera_lag", "s": 0.5}, 38,
                            {"fmt": "comma"}),
+    # the forty-fifth session's fresh sets, truths and seeds fixed before any calibration:
+    # new lab habits (readings every 0.5 s, hPa, inH2O, one specimen run four times, a
+    # loading without an unloading, a hold of 30 s)
+    "N14-clean-D15": ("D15", [None], 0.5, 20, 6, 12, {}, 41, {"p_unit": "hPa"}),
+    "N15-membrane0.9-D14": ("D14", [None], 2.0, 7, 3, 4, {"kind": "membrane_x0.9"}, 42,
+                            {"fe_suffix": "_m0.9", "p_unit": "inH2O"}),
+    # the loading in 4 s, then a hold of 30 s read every second, then the unloading
+    "N16-leak-fast-hold30-D16": ("D16", [None], 1.0, 4, 30, 4,
+                                 {"kind": "leak", "G_ul_s_per_kpa": 0.1}, 43, {}),
+    # one specimen run four times (a `run` column 1-4), its gauge's zero 45 Pa low
+    "N17-zero-one-specimen-D15": ("D15", [None] * 4, 2.0, 7, 3, 4,
+                                  {"kind": "gauge_offset", "pa": -45}, 44, {"specimens": 1}),
+    # a slow pump (the loading in 50 s) read every 5 s, loading only
+    "N18-air-slow-load-only-D14": ("D14", [None], 5.0, 10, 0, 0,
+                                   {"kind": "compliance", "C_ul_per_kpa": 3.0}, 45, {}),
+    "N19-membrane0.9+offset-D14": ("D14", [None], 2.0, 7, 3, 4,
+                                   {"kind": "membrane_x0.9+angle_offset", "deg": 2.0}, 46,
+                                   {"fe_suffix": "_m0.9", "fmt": "comma"}),
+    # outside the catalogue: Mullins softening, the pressure below the loading curve's by
+    # m (1 - V / V_max so far) wherever the chamber holds less than it held before (the
+    # unloading); the shape at a volume unchanged (both layers alike)
+    "N20-mullins-D15": ("D15", [None], 2.0, 7, 3, 4, {"kind": "mullins", "m": 0.3}, 47, {}),
+    # an inlet of 120 Pa per ul/s and the mount tilted -2 deg, a fast pump read every 0.5 s
+    "N21-inlet+offset-fast-D16": ("D16", [None], 0.5, 8, 2, 6,
+                                  {"kind": "inlet+angle_offset", "R_pa_per_ul_s": 120.0,
+                                   "deg": -2.0}, 48, {"p_unit": "hPa"}),
 }
 # the pressure and time units a lab writes: unit -> (per Pa or per s, decimals)
-PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4)}
+PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4),
+                  "hPa": (1e-2, 2), "inH2O": (1 / 249.08891, 3)}
 TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0)}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
-# test_calibration_exact_alike.py and test_calibration_lab_fresh.py read, with the
-# pump's log
+# test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
+# test_calibration_lab_s45.py read, with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
              "gauge_zero_off_soft_batch": "N2-gauge60-D9",
              "inlet_fast_unload": "N9-inlet-fast-D13", "camera_late": "N13-camera-lag-D12",
-             "body_stiffer": "N8-body1.12-D11", "leak_slow_pump": "N11-leak-slow-D11"}
+             "body_stiffer": "N8-body1.12-D11", "leak_slow_pump": "N11-leak-slow-D11",
+             "membrane_softer_inh2o": "N15-membrane0.9-D14",
+             "inlet_tilted_fast": "N21-inlet+offset-fast-D16"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -215,6 +257,8 @@ def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray
             lost = min(lost + 0.5 * H_S * (k1 + k2), vp[i])
             vch[i] = vp[i] - lost
     p = p_of(vch)
+    if "mullins" in kinds:                       # softer below the volume held before
+        p = p * (1 - effect["m"] * (1 - vch / np.maximum(np.maximum.accumulate(vch), 1e-12)))
     if "relaxation" in kinds:                    # a standard linear solid at a held volume
         y = np.zeros_like(p)
         for i in range(1, p.size):
@@ -307,7 +351,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's nine sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's eleven sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

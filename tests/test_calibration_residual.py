@@ -157,3 +157,28 @@ def test_read_against_the_gauge_the_allowance_counts_the_specimens_it_rests_on()
     assert math.isclose(excess_limit(tight, 0.05), 1.0 + 2.0 * math.hypot(0.05, 0.05))  # by volume
     loose = NoiseFloor(1.0, 100, "replicates", 3, rel_se=0.5)
     assert math.isclose(excess_limit(loose, 0.4, (6, 9)), 1.0 + 2.0 * math.hypot(0.5, 0.4))
+
+
+def test_the_gauge_is_judged_against_the_plain_errors_allowance_not_the_angles_net_one():
+    """The angle's allowance divides the cross-validated error's spread by what the
+    baseline's band leaves of it (sqrt(rmse^2 - band^2)); where the band takes nearly all,
+    it grows without bound (4.41 on the lab set N20, Mullins softening read as a gauge
+    drift). The gauge's error is plain (no band netted), so it is judged against the plain
+    error's allowance: before, a gauge left at 2 x its floor passed such a set."""
+    from surrogate.calibration._loop import _gauge_left
+    from surrogate.calibration._residual import residual_summary
+
+    rng = np.random.default_rng(4)
+    obs = _replicates(1, 3, 16)
+    obs.pressure_pa = np.tile(np.linspace(100.0, 2000.0, 16), obs.n_curves)
+    obs.direction = np.ones(obs.curve.size)
+    resid = _specimen_residuals(rng, obs, 16)
+    rmse = float(np.sqrt(np.mean(resid**2)))
+    floor = NoiseFloor(rmse, 100, "replicates", 3, rel_se=0.1)
+    calm = {"structured": False, "z_lag1": 0.0, "z_runs": 0.0}
+    left = residual_summary(obs, resid, rmse, floor, calm, baseline_var=0.97 * rmse**2)
+    assert left["excess_allowance"] > 3.0                      # the angle's, net of the band
+    assert left["plain_allowance"] == excess_limit(floor, cv_rel_se(obs, resid))
+    assert left["plain_allowance"] < 1.6
+    channel = {"pressure_floor_pa": 80.0}
+    assert _gauge_left(160.0, channel, left["plain_allowance"])["left"]

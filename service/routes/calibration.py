@@ -125,6 +125,10 @@ class CalibrationReport(BaseModel):
     selected_effects: list[str]
     candidates: list[Candidate]
     residual_structured_after: bool
+    residual_within_baseline_band: bool = Field(
+        False, description="what is left is more than replicate scatter but within the "
+        "baseline's own band at the design: not structured, and not replicate scatter either "
+        "(an FE solve of the design decides)")
     interpretation: str
     saveable: dict[str, Any] | None = Field(
         None, description="whether this calibration can be saved as a model (`ok`) and, "

@@ -40,7 +40,9 @@ UNITS: dict[str, tuple[str, float]] = {
     "mm^3": ("volume", 1.0), "mm3": ("volume", 1.0), "mm³": ("volume", 1.0),
     "cm^3": ("volume", 1000.0), "cm3": ("volume", 1000.0), "cm³": ("volume", 1000.0),
     "cc": ("volume", 1000.0),
-    "cmh2o": ("pressure", 98.0665),
+    "cmh2o": ("pressure", 98.0665), "mmh2o": ("pressure", 9.80665),
+    # inches of water (a differential gauge's, a Magnehelic's): 25.4 mm of water
+    "inh2o": ("pressure", 249.08891), "inwc": ("pressure", 249.08891),
     "mn": ("force", 1.0), "n": ("force", 1000.0), "gf": ("force", 9.80665),
 }
 

@@ -144,7 +144,8 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
     replicates = noise.source == "replicates" and math.isfinite(floor)
     sys_ = systematic_residual(obs, resid_cv) if replicates else None
     why = []
-    limit = None
+    limit = plain = None
+    within_band = False
     if replicates and math.isfinite(rmse_after):
         model_part2 = max(rmse_after**2 - baseline_var, 0.0)
         unexplained = math.sqrt(max(model_part2 - floor**2, 0.0))
@@ -172,6 +173,10 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
                        f"scale (lag-1 z = {structure['z_lag1']:.1f}, runs z = "
                        f"{structure['z_runs']:.1f})")
         structured = excess or shared or along
+        plain = excess_limit(noise, cv_rel_se(obs, resid_cv),
+                             specimen_units(obs) if by_gauge else None)
+        within_band = bool(baseline_var > 0.0 and not structured
+                           and _beyond_floor(rmse_after, floor, plain, sys_))
     else:
         has_floor = math.isfinite(floor) and math.isfinite(rmse_after)
         unexplained = math.sqrt(max(rmse_after**2 - floor**2, 0.0)) if has_floor else None
@@ -197,7 +202,23 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
                     "trusting the model.")
     return {"structured": structured, "unexplained_rms_deg": unexplained, "where": bins,
             "systematic": sys_, "sentence": sentence, "excess_allowance": limit if replicates
-            and math.isfinite(rmse_after) else None}
+            and math.isfinite(rmse_after) else None, "plain_allowance": plain,
+            "within_baseline_band": within_band}
+
+
+def _beyond_floor(rmse_after: float, floor: float, plain_limit: float, sys_: dict | None
+                  ) -> bool:
+    """Whether the residual would count as structured were the baseline's own uncertainty (its
+    band) not netted out: the same two replicate tests on the plain cross-validated error (its
+    allowance ``plain_limit``) and S^2. When only the band keeps what is left from counting, the
+    residual is not replicate scatter; the data cannot tell a missing effect from the baseline's own
+    error there (an inlet resistance and an angle offset of -2 deg on a design whose band is 1.8
+    deg: 1.99 deg left against a floor of 0.81 deg, S^2 3.21 +/- 0.02 deg^2, had been called
+    "consistent with replicate scatter")."""
+    excess = floor > 0 and rmse_after / floor > plain_limit
+    shared = bool(sys_ is not None and sys_["s2_deg2"] > Z_SYSTEMATIC * sys_["se_deg2"]
+                  and sys_["s2_deg2"] >= (MIN_SIZE_FRACTION * floor) ** 2)
+    return bool(excess or shared)
 
 
 def scatter_shift(angles, tau: float) -> np.ndarray:
