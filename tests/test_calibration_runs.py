@@ -104,10 +104,22 @@ def test_two_specimens_leave_the_replicate_shared_residual_untested():
     assert s is not None and s["pairs"] == 3 and s["curves"] == 3
 
 
-def test_runs_of_one_specimen_alone_are_refused_for_cross_validation():
-    with pytest.raises(DataError) as err:
-        run_calibration(observations_from_rows(fe_runs(1, specimens=1)), "paper")
-    assert "runs of one specimen" in str(err.value) and "\n" not in str(err.value)
+def test_runs_of_one_specimen_alone_are_calibrated_as_replicates_and_said_so():
+    """A lab that loads its one actuator three times is answered (until 2026-12-07 it was
+    refused: "cross-validation by specimen needs a second specimen"): its runs are taken
+    as replicates of each other, as if the file named them as curves, and the report says
+    what that means."""
+    one = run_calibration(observations_from_rows(fe_runs(1, specimens=1)), "paper").report
+    named = run_calibration(observations_from_rows(fe_runs(1, specimens=1,
+                                                           run_column=False)), "paper").report
+    assert one["data"]["n_specimens"] == 1 and one["data"]["n_curves"] == 3
+    assert one["data"]["runs_as_replicates"] and not named["data"]["runs_as_replicates"]
+    assert one["cross_validation"]["method"].startswith("grouped K-fold by run")
+    said = [w for w in one["warnings"] if "runs of one specimen" in w]
+    assert len(said) == 1 and "describes this specimen, not its batch" in said[0]
+    assert "\n" not in said[0]
+    for key in ("selected_effects", "rmse_before_deg", "rmse_after_deg", "noise_floor_deg"):
+        assert one[key] == named[key], key
 
 
 def test_a_specimen_whose_runs_change_its_design_is_refused():
@@ -136,10 +148,11 @@ def test_a_missing_run_label_names_its_row():
 
 
 def test_http_reads_runs_as_the_cli_does(tmp_path):
-    """POST /v1/calibrate: runs of one specimen alone are a 422 on rows.curve_id (not a
-    500 from a cross-validation with one fold); two specimens' runs answer by specimen."""
+    """POST /v1/calibrate: runs of one specimen alone are answered as replicates, said in
+    the report (until 2026-12-07 a 422 on rows.curve_id; before that a 500 from a
+    cross-validation with one fold); two specimens' runs answer by specimen."""
     from fastapi.testclient import TestClient
-    from service_fakes import assert_problem, settings_for
+    from service_fakes import settings_for
 
     from service.app import create_app
 
@@ -147,9 +160,11 @@ def test_http_reads_runs_as_the_cli_does(tmp_path):
     with TestClient(app) as client:
         r = client.post("/v1/calibrate", json={"rows": fe_runs(1, specimens=1),
                                                "model": "paper"})
-        body = assert_problem(r, 422)
-        assert body["errors"][0]["field"] == "rows.curve_id"
-        assert "runs of one specimen" in body["detail"]
+        assert r.status_code == 200, r.text
+        one = r.json()
+        assert one["data"]["runs_as_replicates"] and one["data"]["n_specimens"] == 1
+        assert "cross-validated by run" in one["interpretation"]
+        assert any("runs of one specimen" in w for w in one["warnings"])
         r = client.post("/v1/calibrate", json={"rows": fe_runs(1), "model": "paper"})
     assert r.status_code == 200, r.text
     report = r.json()

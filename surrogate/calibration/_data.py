@@ -15,7 +15,7 @@ import hashlib
 import io
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -137,6 +137,9 @@ class Observations:
     measured_volume_ul: np.ndarray = None  # type: ignore[assignment]
     volume_step_ul: float = 0.0
     volume_measured: np.ndarray = None  # type: ignore[assignment]
+    #: the runs of one specimen, the data's only one, taken as replicates of each other
+    #: (``as_replicates``): each run is then a unit of its own
+    runs_as_replicates: bool = False
 
     def __post_init__(self) -> None:
         if self.specimen is None:
@@ -220,6 +223,21 @@ class Observations:
     def n_specimens(self) -> int:
         return int(np.unique(self.specimen).size)
 
+    def as_replicates(self) -> Observations:
+        """The runs of the data's one specimen taken as replicates of each other: each run
+        a unit of its own (the held-out folds, the noise floor, the replicate-shared
+        residual), as if the file named them as curves without the ``run`` column. A lab
+        that loads its one actuator several times is answered, not refused: the floor is
+        then the runs' repeatability, and what is fitted describes this specimen, not its
+        batch (a warning says so)."""
+        specimen_id = self.curve_ids[0].rsplit(" run ", 1)[0]
+        said = (f"curve_id: the {self.n_curves} curves are runs of one specimen "
+                f"({specimen_id!r}), taken as replicates of each other: the noise floor is "
+                "the runs' repeatability, and what is fitted describes this specimen, not "
+                "its batch (a second specimen tells them apart)")
+        return replace(self, specimen=np.asarray(self.curve).copy(),
+                       warnings=self.warnings + (said,), runs_as_replicates=True)
+
     def curve_specimen(self) -> np.ndarray:
         """Specimen index of each curve."""
         out = np.zeros(self.n_curves, dtype=int)
@@ -283,7 +301,8 @@ class Observations:
             self.direction[keep], self.warnings, self.volume_ul[keep],
             self.switch_after[keep], self.switch_at[keep], self.switch_names,
             self.pump_logged, self.columns_read, specimen.ravel(),
-            self.measured_volume_ul[keep], self.volume_step_ul, self.volume_measured[keep])
+            self.measured_volume_ul[keep], self.volume_step_ul, self.volume_measured[keep],
+            self.runs_as_replicates)
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""

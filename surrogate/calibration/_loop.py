@@ -128,7 +128,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                         "curve needs a second curve to predict", None,
                         f"at least {MIN_CURVES} curves (distinct curve_id); replicate "
                         "specimens of one design also give the noise floor")
-    _check_specimens(obs, "curve_id", "")
+    if obs.n_specimens < MIN_CURVES:     # one actuator loaded again: its runs compared
+        obs = obs.as_replicates()
     folds_requested = folds
     k = folds_used(folds, obs.n_specimens)
     def tick() -> None:
@@ -363,7 +364,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "model": {"name": baseline.name},
         "baseline": baseline.as_dict(),
         "data": {"sha256": obs.sha256, "n_rows": obs.n, "n_curves": obs.n_curves,
-                 "n_specimens": obs.n_specimens,
+                 "n_specimens": 1 if obs.runs_as_replicates else obs.n_specimens,
+                 "runs_as_replicates": obs.runs_as_replicates,
                  "families": [dict(zip(("body_material", "membrane_material", "T_mm", "b_mm",
                                         "h_mm"), f, strict=False)) for f in obs.families],
                  "has_time_s": obs.has_time, "has_flow_ul_s": obs.has_flow,
@@ -392,9 +394,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "gauge_at_rest": rest,
         "gauge_left_after": _gauge_left(_pressure_rms(get_xv(chosen), channel), channel,
                                         left["plain_allowance"]),
-        "cross_validation": {"method": "grouped K-fold by curve" if obs.n_specimens ==
-                             obs.n_curves else "grouped K-fold by specimen (its runs held "
-                             "out together)", "folds": k,
+        "cross_validation": {"method": _cv_method(obs), "folds": k,
                              "folds_requested": folds_requested},
         "selected_effects": list(chosen),
         "candidates": candidates,
@@ -656,19 +656,18 @@ def _keep_within_range(obs: Observations, ok: np.ndarray, field: str, what: str,
                         f"range){hint}", None,
                         "at least 2 curves with 4 readings each below the end of the FE's "
                         "range")
-    _check_specimens(out, field, f" keep 4 readings within the baseline's range{axis}")
+    if out.n_specimens < MIN_CURVES:   # the runs of one specimen are left: as replicates
+        out = out.as_replicates()
     return out, kept
 
 
-def _check_specimens(obs: Observations, field: str, where: str) -> None:
-    """Runs of one specimen are no second specimen: cross-validation holds a specimen
-    out with all its runs, so it needs two (a DataError on ``field`` otherwise)."""
-    if obs.n_specimens < MIN_CURVES:
-        raise DataError(field, f"the curves that{where or ' are given'} are runs of one "
-                        f"specimen ({obs.n_curves} runs): cross-validation by specimen "
-                        "needs a second specimen to predict", None,
-                        f"at least {MIN_CURVES} specimens (distinct curve_id beside the "
-                        "run column)")
+def _cv_method(obs: Observations) -> str:
+    """How the cross-validation holds curves out, as the report says it."""
+    if obs.runs_as_replicates:
+        return "grouped K-fold by run (the runs of one specimen taken as replicates)"
+    if obs.n_specimens == obs.n_curves:
+        return "grouped K-fold by curve"
+    return "grouped K-fold by specimen (its runs held out together)"
 
 
 GAUGE_LEFT_RATIO = 1.3   # the gauge's cross-validated error over its replicate floor
@@ -1249,7 +1248,8 @@ def interpret(report: dict, left: dict) -> str:
                 "selected or saved. Calibrate against the emulator (the default, whose "
                 "range is each design's own), or leave out the readings past the model's "
                 "range.")
-    unit = "specimen" if "specimen" in report["cross_validation"]["method"] else "curve"
+    unit = ("run" if report["data"]["runs_as_replicates"] else
+            "specimen" if "specimen" in report["cross_validation"]["method"] else "curve")
     s = [f"The baseline {b['name']!r} as is misses the data by "
          f"{report['rmse_model_deg']:.2f} deg RMS"
          + (" (the angle read at the gauge's pressure)" if by_volume else "")
