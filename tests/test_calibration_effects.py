@@ -243,6 +243,21 @@ def test_gauge_drift_grows_with_the_runs_time_and_needs_a_hold_or_the_unloading(
     assert "injected volume" in e.not_identifiable(TRAITS)[0]
 
 
+def test_a_falling_gauge_in_a_run_that_unloads_names_the_softening_on_unloading():
+    """Mullins softening (the unloading's pressure below the loading's at one volume,
+    outside the catalogue) was read as a gauge drift of -8.4 Pa/s on the fresh set N20
+    with nothing said of it (benchmarks/RESULTS.md, forty-fifth session): a falling
+    gauge in a run that unloads now names it and how to tell the two apart."""
+    e = EFFECTS["gauge_drift"]
+    falling = {"drift_pa_per_s": {"value": -8.36, "sd": 2.6}}
+    unloads = {"unloading": True, "holds": True, "has_time_s": True}   # the report's data
+    said = e.interpret(falling, unloads)
+    assert "Mullins" in said and "at rest after the run" in said
+    assert "Mullins" not in e.interpret(falling, {**unloads, "unloading": False})
+    assert "Mullins" not in e.interpret({"drift_pa_per_s": {"value": 5.0, "sd": 1.0}},
+                                        unloads)
+
+
 def test_pressure_relaxation_needs_the_volume_channel_and_a_change_of_the_pump():
     e = EFFECTS["pressure_relaxation"]
     assert "injected volume" in e.not_identifiable(TRAITS)[0]

@@ -158,7 +158,8 @@ class Effect:
 
     # ---- words ----------------------------------------------------------------------
     def interpret(self, params: dict[str, dict], data: dict) -> str:
-        """One or two sentences a lab can act on; ``params`` {name: {value, sd, unit}}."""
+        """One or two sentences a lab can act on; ``params`` {name: {value, sd, unit}},
+        ``data`` the report's ``data`` (``unloading``, ``holds``, ``has_time_s``, ...)."""
         return self.title + ": " + ", ".join(
             f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}" for n, p in params.items())
 

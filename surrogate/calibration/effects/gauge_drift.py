@@ -51,10 +51,18 @@ class GaugeDrift(Effect):
     def interpret(self, params, data):
         v = params["drift_pa_per_s"]
         r = v["value"]
-        return (f"The gauge drifts: its reading runs {'above' if r >= 0 else 'below'} the "
+        said = (f"The gauge drifts: its reading runs {'above' if r >= 0 else 'below'} the "
                 f"chamber by {abs(r):.2g} +/- {v['sd']:.2g} Pa per second of the run "
                 f"({abs(r) * 30:.0f} Pa after 30 s). Let the sensor warm up before zeroing "
                 "it, zero it just before each run, and keep it out of the lamp's heat.")
+        if r < 0 and data.get("unloading"):      # the report's data: readings unloading
+            said += (" A gauge falling below the chamber late in a run that unloads is "
+                     "also what the silicone's softening on unloading shows (the Mullins "
+                     "effect, a hysteresis the catalogue does not hold: the unloading's "
+                     "pressure below the loading's at the same volume): a drift leaves the "
+                     "gauge off at rest after the run, softening does not, so read the "
+                     "gauge at rest for a few seconds after each run to tell them apart.")
+        return said
 
 
 EFFECT = GaugeDrift()
