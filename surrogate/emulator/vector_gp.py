@@ -114,7 +114,7 @@ class VectorGP:
         row per distinct kernel (unit signal variance, no nugget)."""
         st = self._stack  # type: ignore[attr-defined]
         d2 = (st["x"] - np.asarray(u, float).ravel()) ** 2       # (n, d)
-        return matern52_in_place(st["inv_l2_rep"] @ d2.T)
+        return matern52_in_place(st["inv_l2_rep"] @ d2.T, nonnegative=True)
 
     def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
                 rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -225,7 +225,7 @@ class VectorGP:
         n_rows, (n, d) = len(u), st["x"].shape
         d2 = (u.T[:, :, None] - st["x"].T[:, None, :]) ** 2             # (d, N, n)
         r2 = (st["inv_l2_rep"] @ d2.reshape(d, -1)).reshape(-1, n_rows, n)
-        k = matern52_in_place(r2)                             # (K, N, n): one per kernel
+        k = matern52_in_place(r2, nonnegative=True)           # (K, N, n): one per kernel
         h = np.column_stack((np.ones(len(u)), u[:, st["varying"]]))     # (N, p)
         means = h @ st["beta"].T
         for q, (cols, alpha) in enumerate(zip(st["outputs_of"], st["alpha_of"], strict=True)):
@@ -310,10 +310,14 @@ def _shifted_variance(ks: np.ndarray, nugget: np.ndarray, grams: tuple[np.ndarra
     (benchmarks/RESULTS.md, fifteenth session)."""
     n = ks.shape[1]
     i = int(np.argmax(ks[0] if len(ks) == 1 else ks.sum(0)))     # one row for all kernels
-    delta = np.array([k - gram[i] for k, gram in zip(ks, grams, strict=True)],
-                     dtype=np.float32)                                 # k - K e_i
-    v = np.array([stpmv(n, ap, dj, lower=0, trans=1)                   # L^-1 delta
-                  for ap, dj in zip(packed_linv, delta, strict=True)], dtype=float)
+    if len(ks) == 1:    # one kernel (a query's usual): the same numbers without the lists
+        delta = (ks[0] - grams[0][i]).astype(np.float32)
+        v = stpmv(n, packed_linv[0], delta, lower=0, trans=1).astype(float)[None, :]
+    else:
+        delta = np.array([k - gram[i] for k, gram in zip(ks, grams, strict=True)],
+                         dtype=np.float32)                             # k - K e_i
+        v = np.array([stpmv(n, ap, dj, lower=0, trans=1)               # L^-1 delta
+                      for ap, dj in zip(packed_linv, delta, strict=True)], dtype=float)
     return 2.0 * (1.0 - ks[:, i]) + nugget - (v * v).sum(1)
 
 
