@@ -102,7 +102,7 @@ class ForceGPs:
                     np.concatenate([v for _, v in parts]))
         st = self._lean  # type: ignore[attr-defined]
         u = np.asarray(u, float).ravel()
-        k = matern52_in_place(((st["x"] - u) ** 2) @ st["inv_l2"])
+        k = matern52_in_place(((st["x"] - u) ** 2) @ st["inv_l2"], nonnegative=True)
         h = np.concatenate(([1.0], u[st["varying"]]))
         v = st["linv"] @ k                                           # (segments, n)
         rr = h - k @ st["kinv_h"]                                    # (segments, p)

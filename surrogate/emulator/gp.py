@@ -44,16 +44,20 @@ def matern52(xa: np.ndarray, xb: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     return matern52_in_place(r2)
 
 
-def matern52_in_place(r2: np.ndarray) -> np.ndarray:
+def matern52_in_place(r2: np.ndarray, nonnegative: bool = False) -> np.ndarray:
     """The Matern 5/2 kernel (1 + sqrt5 r + 5 r^2 / 3) exp(-sqrt5 r) from the scaled squared
-    distances ``r2``, overwritten (no temporaries but one; ~0.1 of a query's time)."""
-    t = np.sqrt(np.maximum(r2, 0.0, out=r2), out=r2)
-    t *= SQRT5                                  # t = sqrt5 r; 5 r^2 / 3 = t^2 / 3
+    distances ``r2``, overwritten (no temporaries but one; ~0.1 of a query's time).
+    ``nonnegative``: ``r2`` cannot be below 0 (sums of products of non-negative numbers),
+    so the clamp against rounding is skipped (it changes no number there; 8 us of the 32
+    volume kernels' rows)."""
+    t = np.sqrt(r2 if nonnegative else np.maximum(r2, 0.0, out=r2), out=r2)
+    # t = -sqrt5 r: the sign folded into the scaling, one pass fewer and the same numbers
+    # (5 r^2 / 3 = t^2 / 3, and adding sqrt5 r is subtracting t, both exactly)
+    t *= -SQRT5
     poly = t * t
     poly *= 1.0 / 3.0
-    poly += t
+    poly -= t
     poly += 1.0
-    np.negative(t, out=t)
     np.exp(t, out=t)
     poly *= t
     return poly

@@ -77,15 +77,20 @@ class VectorGP:
                                             + np.float64(gp.nugget).tobytes(), len(first))
                            for gp in self.gps])
         rep = np.array([int(np.flatnonzero(kernel == q)[0]) for q in range(len(first))])
+        inv_l2 = np.array([1.0 / gp.lengths**2 for gp in self.gps])             # (m, d)
+        alpha = np.array([gp.alpha for gp in self.gps])                         # (m, n)
+        outputs_of = [np.flatnonzero(kernel == q) for q in range(len(rep))]
         stack = {
-            "inv_l2": np.array([1.0 / gp.lengths**2 for gp in self.gps]),      # (m, d)
-            "alpha": np.array([gp.alpha for gp in self.gps]),                   # (m, n)
+            "inv_l2": inv_l2, "alpha": alpha,
+            # per kernel, gathered once (a query read them by fancy indexing: copies)
+            "inv_l2_rep": np.ascontiguousarray(inv_l2[rep]),                    # (K, d)
+            "alpha_of": tuple(np.ascontiguousarray(alpha[c]) for c in outputs_of),
             "linv_t": {},                                  # kernel -> (n, n), on first use
             "gram": {},                        # kernel -> K (n, n) above SMALL_N, likewise
             "kinv_h": np.array([_kinv_h(self.gps[i]) for i in rep]),            # (K, n, p)
             "a_inv": np.array([_a_inv(self.gps[i]) for i in rep]),              # (K, p, p)
             "kernel": kernel, "rep": rep,                                       # (m,), (K,)
-            "outputs_of": [np.flatnonzero(kernel == q) for q in range(len(rep))],
+            "outputs_of": outputs_of,
             "beta": np.array([gp.beta for gp in self.gps]),                     # (m, p)
             "s2": np.array([gp.signal_var for gp in self.gps]),
             "nugget": np.array([gp.nugget for gp in self.gps]),
@@ -109,7 +114,7 @@ class VectorGP:
         row per distinct kernel (unit signal variance, no nugget)."""
         st = self._stack  # type: ignore[attr-defined]
         d2 = (st["x"] - np.asarray(u, float).ravel()) ** 2       # (n, d)
-        return matern52_in_place(st["inv_l2"][st["rep"]] @ d2.T)
+        return matern52_in_place(st["inv_l2_rep"] @ d2.T, nonnegative=True)
 
     def predict(self, u: np.ndarray, variance_of: slice | np.ndarray | None = None,
                 rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -123,13 +128,15 @@ class VectorGP:
         k = self.kernel_rows(u) if rows is None else rows        # (K, n): one per kernel
         h = np.concatenate(([1.0], u[st["varying"]]))            # (p,)
         means = st["beta"] @ h + _kernel_dot(k, st)
-        mean = self.center + self.scale * (means @ self.components)
+        # the identity's product changes no number (x 1 + 0s): skipped, as below
+        mean = self.center + self.scale * (means if st["identity"] else means @ self.components)
         sel = slice(None) if variance_of is None else variance_of
-        if variance_of is not None and len(np.arange(len(mean))[sel]) == 0:
+        if variance_of is not None and _asks_none(variance_of, len(mean)):
             return mean, np.full(len(mean), np.nan)              # the means only
         if variance_of is not None and not self.per_output:
             raise ValueError("variance_of needs one GP per output (identity components)")
-        rows, kernels, inverse, linv, kinv_h, a_inv, s2 = self._variance_stack(sel)
+        rows, kernels, inverse, linv, kinv_h, a_inv, s2, scale2, residual = \
+            self._variance_stack(sel)
         outs = st["rep"][kernels]       # one product per distinct kernel, not per output
         ks = k[kernels]
         if ks.shape[1] <= SMALL_N:      # one batched product beats a BLAS call per output
@@ -141,10 +148,11 @@ class VectorGP:
         shared = np.maximum(left + np.einsum("mp,mpq,mq->m", rr, a_inv, rr), 0.0)
         variances = s2 * shared[inverse]
         if variance_of is None:
-            var = self.scale**2 * (variances @ self.components**2) + self.residual_var
+            var = scale2 * (variances if st["identity"] else variances @ self.components**2
+                            ) + residual
         else:
             var = np.full(len(mean), np.nan)
-            var[sel] = self.scale[sel] ** 2 * variances + self.residual_var[sel]
+            var[sel] = scale2 * variances + residual
         return mean, var
 
     def _linv_t(self, q: int) -> np.ndarray:
@@ -176,8 +184,9 @@ class VectorGP:
         single precision (its lower triangle row by row, n (n + 1) / 2 numbers: BLAS stpmv
         reads exactly that) and K (``_shifted_variance`` reads both; up to SMALL_N designs
         instead the (K, n, n) stack of (L^-1)^T in double precision, for one batched
-        product), K^-1 H and A^-1, and the outputs' signal variances; gathered once per
-        distinct ``sel`` (a query asks for the same few)."""
+        product), K^-1 H and A^-1, the outputs' signal variances, and their squared scales
+        and residual variances (all outputs' with ``sel`` all: ``predict``'s two forms);
+        gathered once per distinct ``sel`` (a query asks for the same few)."""
         st = self._stack  # type: ignore[attr-defined]
         rows = np.arange(len(st["s2"]))[sel]
         key = rows.tobytes()
@@ -193,7 +202,10 @@ class VectorGP:
                            .astype(np.float32) for q in kernels)))
             hit = (rows, kernels, inverse.ravel(), linv,
                    np.ascontiguousarray(st["kinv_h"][kernels]),
-                   np.ascontiguousarray(st["a_inv"][kernels]), st["s2"][rows].copy())
+                   np.ascontiguousarray(st["a_inv"][kernels]), st["s2"][rows].copy(),
+                   *((self.scale**2, self.residual_var) if isinstance(sel, slice)
+                     and sel == slice(None) else (self.scale[sel] ** 2,
+                                                  self.residual_var[sel])))
             if len(cache) < 8:
                 cache[key] = hit
         return hit
@@ -212,12 +224,12 @@ class VectorGP:
                     np.concatenate([v for _, v in parts]))
         n_rows, (n, d) = len(u), st["x"].shape
         d2 = (u.T[:, :, None] - st["x"].T[:, None, :]) ** 2             # (d, N, n)
-        r2 = (st["inv_l2"][st["rep"]] @ d2.reshape(d, -1)).reshape(-1, n_rows, n)
-        k = matern52_in_place(r2)                             # (K, N, n): one per kernel
+        r2 = (st["inv_l2_rep"] @ d2.reshape(d, -1)).reshape(-1, n_rows, n)
+        k = matern52_in_place(r2, nonnegative=True)           # (K, N, n): one per kernel
         h = np.column_stack((np.ones(len(u)), u[:, st["varying"]]))     # (N, p)
         means = h @ st["beta"].T
-        for q, cols in enumerate(st["outputs_of"]):
-            means[:, cols] += k[q] @ st["alpha"][cols].T
+        for q, (cols, alpha) in enumerate(zip(st["outputs_of"], st["alpha_of"], strict=True)):
+            means[:, cols] += k[q] @ alpha.T
         mean = self.center + self.scale * (means @ self.components)
         rows = np.arange(len(st["s2"]))[slice(None) if variance_of is None else variance_of]
         if variance_of is not None and len(rows) and not self.per_output:
@@ -260,14 +272,22 @@ class VectorGP:
                 "gps": [gp.as_dict() for gp in self.gps]}
 
 
+def _asks_none(variance_of: slice | np.ndarray, outputs: int) -> bool:
+    """Whether ``variance_of`` selects no output of ``outputs`` (the means only): an empty
+    index array (MEANS_ONLY) read without making the outputs' indices (a mask: made)."""
+    if isinstance(variance_of, np.ndarray) and variance_of.dtype != bool:
+        return variance_of.size == 0
+    return len(np.arange(outputs)[variance_of]) == 0
+
+
 def _kernel_dot(k: np.ndarray, st: dict) -> np.ndarray:
     """k_q(output) . alpha_output for every output (m,), from the correlations ``k``
     (K, n) of the distinct kernels: one product per kernel."""
     if len(k) == len(st["kernel"]):         # a kernel per output, in output order
         return np.einsum("mn,mn->m", st["alpha"], k)
     out = np.empty(len(st["kernel"]))
-    for q, cols in enumerate(st["outputs_of"]):
-        out[cols] = st["alpha"][cols] @ k[q]
+    for q, (cols, alpha) in enumerate(zip(st["outputs_of"], st["alpha_of"], strict=True)):
+        out[cols] = alpha @ k[q]
     return out
 
 
@@ -290,10 +310,14 @@ def _shifted_variance(ks: np.ndarray, nugget: np.ndarray, grams: tuple[np.ndarra
     (benchmarks/RESULTS.md, fifteenth session)."""
     n = ks.shape[1]
     i = int(np.argmax(ks[0] if len(ks) == 1 else ks.sum(0)))     # one row for all kernels
-    delta = np.array([k - gram[i] for k, gram in zip(ks, grams, strict=True)],
-                     dtype=np.float32)                                 # k - K e_i
-    v = np.array([stpmv(n, ap, dj, lower=0, trans=1)                   # L^-1 delta
-                  for ap, dj in zip(packed_linv, delta, strict=True)], dtype=float)
+    if len(ks) == 1:    # one kernel (a query's usual): the same numbers without the lists
+        delta = (ks[0] - grams[0][i]).astype(np.float32)
+        v = stpmv(n, packed_linv[0], delta, lower=0, trans=1).astype(float)[None, :]
+    else:
+        delta = np.array([k - gram[i] for k, gram in zip(ks, grams, strict=True)],
+                         dtype=np.float32)                             # k - K e_i
+        v = np.array([stpmv(n, ap, dj, lower=0, trans=1)               # L^-1 delta
+                      for ap, dj in zip(packed_linv, delta, strict=True)], dtype=float)
     return 2.0 * (1.0 - ks[:, i]) + nugget - (v * v).sum(1)
 
 
