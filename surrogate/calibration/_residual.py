@@ -160,9 +160,7 @@ def residual_summary(obs: Observations, resid_cv: np.ndarray, rmse_after: float,
             why.append(f"the cross-validated error is {ratio:.2f} x the replicate floor, "
                        f"beyond its {limit:.2f} x allowance"
                        + (" net of the baseline's own uncertainty" if baseline_var else ""))
-        shared = bool(sys_ is not None and sys_["s2_deg2"] - baseline_var
-                      > Z_SYSTEMATIC * sys_["se_deg2"]
-                      and sys_["s2_deg2"] - baseline_var >= (MIN_SIZE_FRACTION * floor) ** 2)
+        shared = _shares_residual(sys_, floor, baseline_var)
         if shared:
             why.append(f"replicates share a residual of "
                        f"{math.sqrt(sys_['s2_deg2'] - baseline_var):.2f} deg RMS")
@@ -216,9 +214,17 @@ def _beyond_floor(rmse_after: float, floor: float, plain_limit: float, sys_: dic
     deg: 1.99 deg left against a floor of 0.81 deg, S^2 3.21 +/- 0.02 deg^2, had been called
     "consistent with replicate scatter")."""
     excess = floor > 0 and rmse_after / floor > plain_limit
-    shared = bool(sys_ is not None and sys_["s2_deg2"] > Z_SYSTEMATIC * sys_["se_deg2"]
-                  and sys_["s2_deg2"] >= (MIN_SIZE_FRACTION * floor) ** 2)
-    return bool(excess or shared)
+    return bool(excess or _shares_residual(sys_, floor))
+
+
+def _shares_residual(sys_: dict | None, floor: float, baseline_var: float = 0.0) -> bool:
+    """Whether replicates share a residual (S^2, less ``baseline_var`` when the baseline's
+    own uncertainty is netted out) beyond Z_SYSTEMATIC standard errors and at least
+    MIN_SIZE_FRACTION of the floor."""
+    if sys_ is None:
+        return False
+    s2 = sys_["s2_deg2"] - baseline_var
+    return bool(s2 > Z_SYSTEMATIC * sys_["se_deg2"] and s2 >= (MIN_SIZE_FRACTION * floor) ** 2)
 
 
 def scatter_shift(angles, tau: float) -> np.ndarray:
