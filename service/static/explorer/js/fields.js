@@ -21,11 +21,16 @@ export function readNumber(text, allowed) {
   return { value: v };
 }
 
+// A box's min and max as numbers (-Infinity and Infinity where it has none).
+function boxRange(input) {
+  return [input.min === "" ? -Infinity : Number(input.min),
+          input.max === "" ? Infinity : Number(input.max)];
+}
+
 // "allowed: a whole number from 1 to 20 ul": the box's min and max in words, in the
 // unit given or the box's own (its data-unit).
 export function allowedWords(input, { integer = false, unit = input.dataset?.unit || "" } = {}) {
-  const min = input.min === "" ? -Infinity : Number(input.min);
-  const max = input.max === "" ? Infinity : Number(input.max);
+  const [min, max] = boxRange(input);
   const bounds = [Number.isFinite(min) ? `from ${min}` : "", Number.isFinite(max) ? `to ${max}` : ""].filter(Boolean).join(" ");
   return `allowed: ${integer ? "a whole number " : ""}${bounds}${unit ? " " + unit : ""}`.trim();
 }
@@ -33,8 +38,7 @@ export function allowedWords(input, { integer = false, unit = input.dataset?.uni
 // {value} or {error}: `optional` takes an empty field as null, `integer` whole numbers only.
 export function checkNumber(input, { integer = false, optional = false, unit = input.dataset?.unit || "" } = {}) {
   const text = String(input.value).trim();
-  const min = input.min === "" ? -Infinity : Number(input.min);
-  const max = input.max === "" ? Infinity : Number(input.max);
+  const [min, max] = boxRange(input);
   const allowed = allowedWords(input, { integer, unit });
   if (text === "") return optional ? { value: null } : { error: `empty (${allowed})` };
   const read = readNumber(text, allowed);
@@ -57,8 +61,7 @@ export function numberBoxes(root = document) {
       if (!dir || !NUMBER_TEXT.test(text) || !Number.isFinite(Number(text))) return;
       event.preventDefault();
       const step = Number(input.step) > 0 ? Number(input.step) : 1;
-      const lo = input.min === "" ? -Infinity : Number(input.min);
-      const hi = input.max === "" ? Infinity : Number(input.max);
+      const [lo, hi] = boxRange(input);
       // to the step's digits: 0.1 + 0.2 shows 0.3
       const digits = Math.max(0, -Math.floor(Math.log10(step)) + 1);
       const next = Number((Number(text) + dir * step).toFixed(Math.min(digits + 6, 15)));
