@@ -165,7 +165,7 @@ def test_the_gauge_is_judged_against_the_plain_errors_allowance_not_the_angles_n
     it grows without bound (4.41 on the lab set N20, Mullins softening read as a gauge
     drift). The gauge's error is plain (no band netted), so it is judged against the plain
     error's allowance: before, a gauge left at 2 x its floor passed such a set."""
-    from surrogate.calibration._loop import _gauge_left
+    from surrogate.calibration._gauge_check import gauge_left
     from surrogate.calibration._residual import residual_summary
 
     rng = np.random.default_rng(4)
@@ -181,4 +181,4 @@ def test_the_gauge_is_judged_against_the_plain_errors_allowance_not_the_angles_n
     assert left["plain_allowance"] == excess_limit(floor, cv_rel_se(obs, resid))
     assert left["plain_allowance"] < 1.6
     channel = {"pressure_floor_pa": 80.0}
-    assert _gauge_left(160.0, channel, left["plain_allowance"])["left"]
+    assert gauge_left(160.0, channel, left["plain_allowance"])["left"]

@@ -110,7 +110,7 @@ def test_a_set_is_outdone_by_one_containing_it_only_through_significant_members(
     # rule 8: the 1.5 x stiffer body of the loop's test cases was outdone by itself plus a
     # pressure offset of 28 +/- 23 Pa (z 1.2): an added free parameter always lowers the
     # residual a little, so it is no better explanation
-    from surrogate.calibration._loop import _adds_evidence, _explains_better
+    from surrogate.calibration._selection import adds_evidence, explains_better
 
     def cand(effects, bic, cv, z):
         return {"effects": effects, "effect": "+".join(effects), "plausible": True,
@@ -119,12 +119,12 @@ def test_a_set_is_outdone_by_one_containing_it_only_through_significant_members(
     body = cand(["body_stiffness"], -439.0, 1.22, {"body_mu_scale": 3.6})
     with_offset = cand(["body_stiffness", "pressure_offset"], -451.0, 1.21,
                        {"body_mu_scale": 2.9, "p0_pa": 1.2})
-    assert not _adds_evidence(with_offset, body)
-    assert _explains_better(body, [body, with_offset]) is None
+    assert not adds_evidence(with_offset, body)
+    assert explains_better(body, [body, with_offset]) is None
     significant = dict(with_offset, z={"body_mu_scale": 2.9, "p0_pa": 4.0})
-    assert _explains_better(body, [body, significant]) is significant
+    assert explains_better(body, [body, significant]) is significant
     other = cand(["camera_gain"], -460.0, 1.1, {"k_angle": 1.0})  # not a superset
-    assert _adds_evidence(other, body)
+    assert adds_evidence(other, body)
 
 
 def test_readings_without_an_answer_do_not_enter_the_scatter():
@@ -149,7 +149,7 @@ def test_an_unbacked_measurement_effect_is_interpreted_without_a_band():
     gauge gain is put into it; that of a cheap unseen case (a calibration of 4-28 s)."""
     from test_calibration_unseen import CASES, run_case
 
-    from surrogate.calibration._loop import interpret
+    from surrogate.calibration._interpretation import interpret
 
     report, error, _ = run_case(next(c for c in CASES if c.id == "clean-past-fe-range"))
     assert error is None

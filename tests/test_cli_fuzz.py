@@ -150,7 +150,7 @@ FILES: dict[str, bytes | str | None] = {   # None: a directory
 
 
 # one reading of 1e6 Pa among good ones is dropped with a warning (the baseline's table
-# ends near the readings it answers, surrogate/calibration/_loop.py: _table_end_pa)
+# ends near the readings it answers, surrogate/calibration/_reading_checks.py: table_end_pa)
 GOOD_FILES = ("utf16.csv", UNDECODABLE + ".csv", "1e6-pa.csv")
 
 

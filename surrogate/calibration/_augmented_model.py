@@ -30,7 +30,7 @@ at a volume or a time does, every later reading's injected volume is off
 intervals, within +-SWITCH_BOUND; 0 = at the reading the data put it at), shared by the
 replicates of one design and flow rate (one pump program), fitted with the baseline and
 with every candidate set alike. The loop frees them only where they explain the data
-(_loop.py, ``_pump_switches_open``).
+(_pump_switches.py, ``pump_switches_open``).
 """
 
 from __future__ import annotations
