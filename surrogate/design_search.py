@@ -52,13 +52,9 @@ import numpy as np
 
 from solver.errors import InputError
 from surrogate.band_level import z_value
+from surrogate.design_result import DesignCandidate, InverseDesignResult
+from surrogate.design_target import DesignTarget, resolve_objective
 from surrogate.errors import stop_if_cancelled
-from surrogate.exponential.inverse_design import (
-    DesignCandidate,
-    DesignTarget,
-    InverseDesignResult,
-    resolve_objective,
-)
 from surrogate.mould_tolerance import change_per_tolerance
 from surrogate.pump_targets import (
     ask,

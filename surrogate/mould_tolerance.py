@@ -14,7 +14,7 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate.exponential.inverse_design import DesignTarget
+from surrogate.design_target import DesignTarget
 from surrogate.pump_targets import ask
 
 #: the length step of the sensitivity, mm (a mould's usual tolerance)

@@ -18,7 +18,7 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate.exponential.inverse_design import DesignTarget
+from surrogate.design_target import DesignTarget
 from surrogate.predictor import InversePrediction, Prediction
 from surrogate.volume_control import cut_past_longest_time
 

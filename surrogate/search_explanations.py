@@ -21,10 +21,11 @@ import numpy as np
 from solver.design import Design
 from solver.errors import InputError
 from solver.settings import SolverSettings
+from surrogate.design_result import DesignCandidate
+from surrogate.design_target import DesignTarget
 from surrogate.emulator.stretch_hazard import FLAG as STRETCH_FLAG
 from surrogate.emulator.stretch_hazard import HAZARD_STRETCH
 from surrogate.errors import stop_if_cancelled
-from surrogate.exponential.inverse_design import DesignCandidate, DesignTarget
 from surrogate.pump_targets import ask
 from surrogate.search_ranking import MIN_SPACING
 from surrogate.search_screen import Screened, keep_direction, screen

@@ -14,8 +14,8 @@ import threading
 import numpy as np
 
 from solver.errors import InputError
+from surrogate.design_target import DesignTarget
 from surrogate.errors import stop_if_cancelled
-from surrogate.exponential.inverse_design import DesignTarget
 from surrogate.pump_targets import ask
 from surrogate.search_screen import Screened
 from surrogate.search_space import unit_coordinates

@@ -17,7 +17,7 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate.exponential.inverse_design import DesignTarget
+from surrogate.design_target import DesignTarget
 from surrogate.pump_targets import screen_by_volume
 
 #: the screen's numbers of a design, in the order ``Screened`` holds them

@@ -15,8 +15,8 @@ import threading
 import numpy as np
 
 from solver.design import Design
+from surrogate.design_target import DesignTarget
 from surrogate.errors import stop_if_cancelled
-from surrogate.exponential.inverse_design import DesignTarget
 from surrogate.search_screen import Screened, keep_direction, screen, target_direction
 from surrogate.search_space import candidate_design
 

@@ -38,7 +38,7 @@ from service.commands.predict import (
 )
 from solver.errors import InputError
 from surrogate.design_search import N_RESULTS_MAX
-from surrogate.exponential.inverse_design import DEFAULT_KIND, KINDS, OBJECTIVES
+from surrogate.design_target import DEFAULT_KIND, KINDS, OBJECTIVES
 from surrogate.predictor import FE_VOLUME_STOP_UL
 
 # The search's bounds (surrogate.design_search.SearchBounds field -> flag, what it bounds);

@@ -13,7 +13,7 @@ from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletI
 from solver.design import LIMITS_MM
 from solver.design_space import BOX_MM, STIFFNESS_SCALE_LIMITS, STIFFNESS_SCALE_RANGE
 from surrogate.design_search import N_RESULTS_MAX
-from surrogate.exponential.inverse_design import (
+from surrogate.design_target import (
     DEFAULT_KIND,
     KINDS,
     MAX_TARGET,
