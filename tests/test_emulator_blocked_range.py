@@ -13,7 +13,7 @@ import pytest
 from service.settings import DATA_DIR
 from solver.design_space import locate
 from solver.errors import InputError
-from surrogate.emulator import build, load_emulator
+from surrogate.emulator import database_rows, load_emulator
 from surrogate.emulator.blocked_range import (
     BLOCKED_END_SHARE,
     ended_at_pressure_stop,
@@ -34,7 +34,7 @@ def _early_blocked(records, emulator) -> list:
     force range of their group's emulator."""
     out = []
     for rec in records:
-        if rec.curve is None or not build.is_force_record(rec.settings):
+        if rec.curve is None or not database_rows.is_force_record(rec.settings):
             continue
         if ended_at_pressure_stop(rec.curve.reason):
             continue
