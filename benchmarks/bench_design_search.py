@@ -39,7 +39,7 @@ CHILD = """
 import json, sys, time
 from surrogate.emulator import load_emulator
 from surrogate.design_search import SearchBounds, search_designs
-from surrogate.exponential.inverse_design import DesignTarget
+from surrogate.design_target import DesignTarget
 e = load_emulator(sys.argv[1])
 out = []
 for kind, p, kw in json.loads(sys.argv[2]):

@@ -28,7 +28,7 @@ from solver.store import CurveStore
 from surrogate import load_surrogate
 from surrogate.emulator import force_answer as force_answer_module
 from surrogate.emulator import load_emulator
-from surrogate.emulator.build import ANGLE_BINS_DEG, angle_bin
+from surrogate.emulator.band_scales import ANGLE_BINS_DEG, angle_bin
 
 
 @dataclass

@@ -26,7 +26,7 @@ import numpy as np
 
 from solver.errors import InputError
 from solver.store import CurveStore
-from surrogate.emulator import build, load_emulator
+from surrogate.emulator import database_rows, load_emulator
 from surrogate.emulator.blocked_range import ended_at_pressure_stop
 
 FACTORS = (1.02, 1.05, 1.2, 1.5)
@@ -39,7 +39,7 @@ def blocked_curves(db_path: str, sets: list[str]) -> list[tuple[str, object]]:
     out = []
     with CurveStore(db_path) as db:
         out += [("database, ended early", r) for r in db.records()
-                if r.curve is not None and build.is_force_record(r.settings)
+                if r.curve is not None and database_rows.is_force_record(r.settings)
                 and not ended_at_pressure_stop(r.curve.reason)]
     for path in sets:
         with CurveStore(path) as db:

@@ -5,7 +5,7 @@
 
 The emulator's curve GPs are fitted on the complete curves of a group (0 to 90 deg); a
 curve that ended early (the FE's volume stop, a Newton failure) only bounds the FE range
-(``build._collect``). This check fits, node by node, one GP of log(p_k / theta_k) on the
+(``database_rows.collect_rows``). This check fits, node by node, one GP of log(p_k / theta_k) on the
 complete curves and one on those plus every early-ended curve that reaches the node
 (node angle <= ``fraction`` x the curve's end, nodes up to ``max_angle``), and compares
 both on the FE curves of random designs that are not in the database (the band

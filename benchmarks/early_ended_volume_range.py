@@ -47,12 +47,12 @@ PAST_VOLUME = (1.05, 1.1, 1.2, 1.5)
 
 def with_end_volumes(emulator, db_path: str):
     """``emulator`` with each pair's ``failed_end_volume_ul`` as a refit on the database
-    at ``db_path`` would store it (``build._collect``; for measurement only, the shipped
+    at ``db_path`` would store it (``database_rows.collect_rows``; for measurement only, the shipped
     path is the fit); ValueError when an early-ended curve of the file is not in it."""
-    from surrogate.emulator.build import _collect
+    from surrogate.emulator.database_rows import collect_rows
 
     with CurveStore(db_path) as db:
-        free, _ = _collect(db.records())
+        free, _ = collect_rows(db.records())
     pairs = {}
     for key, pe in emulator.pairs.items():
         rows = free[key[:-1]]

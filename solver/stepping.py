@@ -4,13 +4,9 @@ Two controls:
 
 * pressure: each step prescribes p; Newton solves K du = -R.
 * volume (a fluid cavity, as in Abaqus or FEBio): each step prescribes the
-  injected volume; the pressure is an extra unknown. Newton on the bordered system
-
-      [ K    -g ] [du]   [ -R       ]
-      [ -g^T  0 ] [dp] = [ V - V_t  ]
-
-  solved with one factorisation of K and two back-substitutions. It passes
-  pressure plateaus and maxima, as the syringe-pump experiment does.
+  injected volume; the pressure is an extra unknown of a bordered Newton system
+  (solver/newton.py). It passes pressure plateaus and maxima, as the syringe-pump
+  experiment does.
 
 The Newton iterate is the mixed u-q pair (element pressures q as unknowns, condensed
 per element; solver/assembly.py): with the penalty form, the spurious second-order
@@ -18,17 +14,11 @@ dilatation of a large rotating predictor step, times the bulk modulus, made the
 tangent indefinite and forced ~2.5 degree steps; the mixed iterate takes the full
 target step (benchmarks/RESULTS.md).
 
-Predictor: each step starts from the Hermite polynomial through the last three converged
-states (u, q, p) and the path's tangent at each (``Rate``: du/dV = K^-1 g / g^T K^-1 g from
-the second right-hand side of the state's last linear solve, so it costs no extra
-factorisation), extrapolated to the new load: a quintic once three states are known, the
-Euler predictor along the undeformed state's tangent for the first step. On the standard
-curve it starts ~10x closer to the converged state than the parabola through the states
-alone, and most steps converge after two Newton solves (benchmarks/RESULTS.md, issue 12).
-Near the solution the iterate is evaluated without its tangent first and corrected with the
-last factorisation (chord updates) while that converges fast (``mixed_newton_step``).
-Neither changes the converged states beyond the Newton tolerance (CHORD_SWITCH and
-CHORD_RATE tuned by counts, benchmarks/RESULTS.md). A step whose extrapolated start fails
+Each step is converged by Newton on that iterate, with chord updates near the solution
+(solver/newton.py: ``mixed_newton_step``), from the Hermite predictor through the last
+three converged states and their path tangents (solver/hermite_predictor.py; the Euler
+predictor along the undeformed state's tangent for the first step).
+A step whose extrapolated start fails
 is retried from the converged state before it is cut back; a failed step is cut back by
 half; the step grows when Newton converges quickly and shrinks when the angle increment
 is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
@@ -52,7 +42,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
@@ -61,6 +51,7 @@ from solver.branching import lowest_volume_neutral_mode, pass_fold, switch_branc
 from solver.curve import Curve
 from solver.design import Design
 from solver.discrete import ActuatorModel, Evaluation
+from solver.hermite_predictor import PREDICTOR_POINTS, State, path_rate, predictor
 from solver.landing import (
     STOPS,
     USER_STOP_CORRECTIONS,
@@ -73,8 +64,14 @@ from solver.landing import (
     stops_reached,
     volume_load_at,
 )
-from solver.linear import factorize
 from solver.mesh import MeshDivisions
+from solver.newton import (
+    Converged,
+    StepFailed,
+    counted_factorisation,
+    counted_solve,
+    mixed_newton_step,
+)
 from solver.settings import SolverSettings
 from solver.stability import volume_control_index
 
@@ -87,10 +84,6 @@ HOLD_SOLVES = 7     # in at most this many keeps it, otherwise shrinks it to 0.6
                     # Hermite predictor takes ~2 solves where the parabola took 3-4: these
                     # were 6 and 9 with the parabola)
 MIN_CUTBACK = 1.0 / 1024.0
-DIVERGENCE_FLOOR = 1e-3   # below this relative residual a rise is round-off, not divergence
-PREDICTOR_POINTS = 3        # converged states (with their tangents) the predictor passes through
-CHORD_SWITCH = 0.1        # error below which the next iterate is evaluated without tangent
-CHORD_RATE = 0.1          # a chord update must shrink the error by this factor
 DEFAULT_SETTINGS = SolverSettings()   # its stops are the database's (solver/landing.py)
 FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one converged state
                              # (extrapolated and plain, each size; the step cut to 1/4) before
@@ -98,263 +91,6 @@ FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one co
 SWITCH_NEWTON_ITER = 12      # Newton iterations allowed when the mode's amplitude is released
 BIFURCATION_OVERSHOOT = 0.25  # the switch is made this share of the way from the located
                               # bifurcation to the unstable state that revealed it
-
-
-class StepFailed(Exception):
-    """A load step did not converge; the caller cuts the step back."""
-
-
-
-def newton_step(model: ActuatorModel, u: np.ndarray, p: float, settings: SolverSettings,
-                target_volume: float | None, target_pressure: float | None, backend: str):
-    """Converge one load step from (u, p); returns (u, p, iterations, residual, negative
-    pivots). The element pressures start consistent with u (see ``mixed_newton_step``)."""
-    out = mixed_newton_step(model, u, model.consistent_pressures(u), p, settings,
-                            target_volume, target_pressure, backend)
-    return out.u, out.pressure_pa, out.iterations, out.residual, out.negative_pivots
-
-
-@dataclass
-class Rate:
-    """The tangent of the equilibrium path at a state, per unit of the load parameter
-    (cavity volume in mm^3 under volume control, pressure in Pa under pressure control):
-    displacement (mm), element pressures (Pa) and cavity pressure (Pa)."""
-
-    du: np.ndarray
-    dq: list[np.ndarray]
-    dp: float
-
-
-@dataclass
-class State:
-    """A converged state on the path at load parameter ``load`` (see ``Rate``), with its
-    rate when known: what the predictor extrapolates from."""
-
-    load: float
-    u: np.ndarray
-    q: list[np.ndarray]
-    pressure_pa: float
-    rate: Rate | None = None
-
-
-@dataclass
-class Converged:
-    """A converged load step: the state, how it was reached, and its evaluation
-    (residual and tangent at the state, reused by the next volume step)."""
-
-    u: np.ndarray
-    q: list[np.ndarray]
-    pressure_pa: float
-    iterations: int
-    residual: float
-    negative_pivots: int
-    evaluation: Evaluation
-    g_kinv_g: float = float("nan")   # g^T K^-1 g at the last factorisation (= dV/dp)
-    rate: Rate | None = None         # the path's tangent, from the last linear solve
-
-
-def counted_factorisation(model: ActuatorModel, K, backend: str):
-    """``factorize`` timed and counted in ``model.timings``; StepFailed if singular."""
-    t0 = time.perf_counter()
-    try:
-        fac = factorize(K, backend)
-    except (np.linalg.LinAlgError, RuntimeError) as exc:
-        raise StepFailed(f"linear solve failed: {exc}") from None
-    finally:
-        model.timings["linear_solve_s"] += time.perf_counter() - t0
-    model.timings["factorisations"] = model.timings.get("factorisations", 0) + 1
-    return fac
-
-
-def counted_solve(model: ActuatorModel, fac, rhs: np.ndarray) -> np.ndarray:
-    """``fac.solve(rhs)`` timed in ``model.timings``; StepFailed if it fails."""
-    t0 = time.perf_counter()
-    try:
-        return fac.solve(rhs)
-    except (np.linalg.LinAlgError, RuntimeError) as exc:
-        raise StepFailed(f"linear solve failed: {exc}") from None
-    finally:
-        model.timings["linear_solve_s"] += time.perf_counter() - t0
-
-
-def mixed_newton_step(model: ActuatorModel, u: np.ndarray, q: list[np.ndarray], p: float,
-                      settings: SolverSettings, target_volume: float | None,
-                      target_pressure: float | None, backend: str,
-                      start: Evaluation | None = None, patient: bool = False) -> Converged:
-    """Converge one load step of the mixed u-q form (q: element pressures per block).
-
-    ``start``: the evaluation at (u, q, p) when known (a volume step starting from the
-    last converged state, with its tangent). Converged when the condensed residual, the
-    cavity volume and the dilatation constraint are all below ``settings.newton_tol``
-    (relative to the pressure load, the chamber volume, and absolute strain).
-
-    Full Newton while the iterate is far; once the error measure is below
-    ``CHORD_SWITCH`` the next iterate is evaluated without its tangent (a third of the
-    cost): converged, or a chord update with the last factorisation while that
-    contracts the error by ``CHORD_RATE`` per update (near the solution the chord
-    update is nearly as good as Newton's: the tangent changes by O(|du|)); otherwise
-    the tangent is assembled again. ``iterations`` counts linear solves.
-
-    ``patient``: no cut-off when the residual rises above the first iterate's (a start
-    perturbed off an equilibrium branch may climb before it converges).
-    """
-    tol = settings.newton_tol
-    force_floor = model.mu0_min_pa * 1e-6
-    volume_scale = max(model.volume0_mm3, 1e-9)
-    neg = -1
-    first_res = None
-    predictor_res = np.inf
-    previous_res = np.inf
-    previous_err = np.inf
-    du, dp = None, 0.0
-    dq: list[np.ndarray] = []
-    fac = None
-    want_tangent = True
-    chord = False                   # the last update reused an older factorisation
-    solves = 0
-    res = np.inf
-    gb = float("nan")
-    b = ev_solved = None
-    for it in range(1, settings.max_newton_iter + 1):
-        if target_pressure is not None:
-            p = target_pressure
-        ev = None
-        if du is None:
-            ev = start if start is not None and target_pressure is None else (
-                model.evaluate(u, p, pressures=q))
-        else:
-            # Damped update: halve it while it would invert an element.
-            scale = 1.0
-            for _ in range(6):
-                try:
-                    q_try = [qb + scale * d for qb, d in zip(q, dq)]
-                    ev = model.evaluate(u + scale * du, p + scale * dp, tangent=want_tangent,
-                                        pressures=q_try)
-                    break
-                except FloatingPointError:
-                    scale *= 0.5
-            if ev is None:
-                raise StepFailed(f"every damped Newton update inverts an element (iteration {it},"
-                                 f" |du|max = {np.abs(du).max():.3g} mm, dp = {dp:.3g} Pa)")
-            u, p, q = u + scale * du, p + scale * dp, q_try
-        res = float(np.linalg.norm(ev.R)) / max(ev.load_norm, force_floor)
-        vres = 0.0 if target_volume is None else abs(ev.volume_mm3 - target_volume) / volume_scale
-        err = max(res, vres, ev.constraint_error)
-        if not np.isfinite(res):
-            raise StepFailed("non-finite residual")
-        if first_res is None:
-            first_res = max(res, vres)
-        elif max(res, vres) > 1e6 * max(first_res, 1.0):
-            raise StepFailed("Newton diverged")
-        if it == 2:
-            predictor_res = res
-        elif (it > 2 and res > predictor_res and res > DIVERGENCE_FLOOR and not patient
-              and not chord):
-            # Worse than right after the predictor: this step is leaving the basin of
-            # convergence; cutting back now is cheaper than iterating on. (A chord update
-            # that made it worse is followed by a fresh tangent instead, below.)
-            raise StepFailed(f"Newton diverging at iteration {it} (residual {res:.2e})")
-        # Converged below the tolerance, or stalled at the rounding floor (which grows
-        # with the bulk modulus) within 100 x the tolerance.
-        # (Not after a chord update: its slower, linear convergence is no stall.)
-        floor = it > 2 and res < 100 * tol and res > 0.3 * previous_res and not chord
-        if it > 1 and vres < tol and ev.constraint_error < tol and (res < tol or floor):
-            return Converged(u, q, p, solves, res, neg, ev, gb,
-                             path_rate(model, ev_solved, b, gb, target_volume is not None))
-        if ev.K is None and (fac is None or err > CHORD_RATE * previous_err):
-            # The chord update would contract too slowly: assemble the tangent here.
-            ev = model.evaluate(u, p, pressures=q)
-            fac = None
-        previous_res = res
-        previous_err = err
-        chord = ev.K is None
-        if not chord:
-            fac = counted_factorisation(model, ev.K, backend)
-            neg = fac.negative_pivots
-        # Both right-hand sides in one pass (b also gives the volume-control stability
-        # under pressure control, solver/stability.py, and the path's tangent).
-        a, b = counted_solve(model, fac, np.column_stack((-ev.R, ev.g))).T
-        solves += 1
-        gb = float(ev.g @ b)
-        ev_solved = ev
-        if target_volume is None:
-            du, dp = a, 0.0
-        else:
-            if gb == 0.0 or not np.isfinite(gb):
-                raise StepFailed("bordered system singular (g^T K^-1 g = 0)")
-            dp = -(ev.volume_mm3 - target_volume + float(ev.g @ a)) / gb
-            du = a + b * dp
-        dq = model.pressure_update(ev, du)
-        # (An update from a converged start is a whole load step: never a chord.)
-        want_tangent = err >= CHORD_SWITCH or (it == 1 and start is not None)
-    raise StepFailed(f"no convergence in {settings.max_newton_iter} Newton iterations "
-                      f"(residual {res:.2e})")
-
-
-def path_rate(model: ActuatorModel, ev: Evaluation, b: np.ndarray, g_kinv_g: float,
-              volume_control: bool) -> Rate | None:
-    """The equilibrium path's tangent from b = K^-1 g (the second right-hand side of the
-    last linear solve, at an iterate next to the converged state): under pressure
-    control du/dp = b; under volume control, where K du = g dp and g . du = dV,
-    du/dV = b / (g . b) and dp/dV = 1 / (g . b). None if g . b is not usable."""
-    if not np.isfinite(g_kinv_g) or g_kinv_g == 0.0:
-        return None
-    scale = 1.0 / g_kinv_g if volume_control else 1.0
-    du = b * scale
-    return Rate(du, model.pressure_update(ev, du, constraint=False), scale)
-
-
-def extrapolation_weights(loads: np.ndarray, has_rate: np.ndarray, load: float
-                          ) -> tuple[np.ndarray, np.ndarray]:
-    """Weights (w, w') of the Hermite polynomial through values at ``loads`` and, where
-    ``has_rate``, their first derivatives, evaluated at ``load``: value = sum w f +
-    sum w' f'. Its degree is the number of conditions less one (a confluent
-    Vandermonde system in the load scaled to the points' spread)."""
-    origin = float(loads[-1])
-    scale = max(float(np.abs(loads - origin).max()), abs(load - origin), 1e-300)
-    x = (loads - origin) / scale
-    rows, kinds = [], []
-    degree = len(loads) + int(has_rate.sum())
-    k = np.arange(degree)
-    for i, xi in enumerate(x):
-        rows.append(xi ** k)
-        kinds.append((i, False))
-        if has_rate[i]:
-            rows.append(k * xi ** np.maximum(k - 1, 0) / scale)   # d/d(load) of x^k
-            kinds.append((i, True))
-    target = ((load - origin) / scale) ** k
-    w = np.linalg.solve(np.array(rows).T, target)
-    values, rates = np.zeros(len(loads)), np.zeros(len(loads))
-    for weight, (i, is_rate) in zip(w, kinds):
-        (rates if is_rate else values)[i] = weight
-    return values, rates
-
-
-def predictor(history: list[State], load: float
-              ) -> tuple[np.ndarray, list[np.ndarray], float] | None:
-    """Extrapolated start (u, q, p) for the next step at load parameter ``load`` (the
-    cavity volume under volume control, the pressure under pressure control): the
-    Hermite polynomial through the last converged states and their path tangents
-    (``Rate``; quintic through three states with tangents: ~10x closer to the
-    converged state than the parabola through the states alone, benchmarks/RESULTS.md),
-    or None with a single state that has no tangent (the step then starts from the
-    converged state with its tangent: an Euler predictor)."""
-    has_rate = np.array([h.rate is not None for h in history])
-    if len(history) + int(has_rate.sum()) < 2:
-        return None
-    w, wr = extrapolation_weights(np.array([h.load for h in history]), has_rate, load)
-
-    rates = [h.rate for h in history]
-
-    def combine(values: list, rate_values: list):
-        out = sum(wi * v for wi, v in zip(w, values))
-        return out + sum(wi * r for wi, r in zip(wr, rate_values) if r is not None)
-
-    u = combine([h.u for h in history], [r and r.du for r in rates])
-    q = [combine([h.q[b] for h in history], [r and r.dq[b] for r in rates])
-         for b in range(len(history[0].q))]
-    p = float(combine([h.pressure_pa for h in history], [r and r.dp for r in rates]))
-    return u, q, p
 
 
 def solve(design: Design, settings: SolverSettings | None = None,

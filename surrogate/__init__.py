@@ -18,6 +18,8 @@ Errors: OutOfFamilyError and SurrogateFileError (both InputError, see surrogate.
 """
 
 from surrogate.dataset import CurveData, curves_from_store
+from surrogate.design_result import DesignCandidate, InverseDesignResult
+from surrogate.design_target import DesignTarget
 from surrogate.errors import OutOfFamilyError, SurrogateFileError
 from surrogate.exponential.file import (
     FORMAT_VERSION,
@@ -26,13 +28,7 @@ from surrogate.exponential.file import (
     save_surrogate,
 )
 from surrogate.exponential.fit_from_curves import fit_surrogate
-from surrogate.exponential.inverse_design import (
-    DesignBounds,
-    DesignCandidate,
-    DesignTarget,
-    InverseDesignResult,
-    inverse_design,
-)
+from surrogate.exponential.inverse_design import DesignBounds, inverse_design
 from surrogate.exponential.paper_preset import paper_surrogate
 from surrogate.exponential.surrogate import Surrogate
 from surrogate.predictor import InversePrediction, Prediction, Predictor

@@ -512,7 +512,7 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(
     nothing is given past the range (the group's, the free curve's end, or 90 % of where
     the design's blocked-tip curve is emulated to end)."""
     import surrogate.emulator.force_answer as force_answer_module
-    from surrogate.emulator.build import is_force_record
+    from surrogate.emulator.database_rows import is_force_record
 
     assert all(pe.force is not None and pe.force_form == "angle_ratio"
                for pe in emulator.pairs.values())
@@ -552,8 +552,8 @@ def test_force_is_predicted_with_its_band_and_reproduces_blocked_tip_records(
 def test_force_range_keeps_the_nodes_most_blocked_tip_curves_reach():
     """A soft pair's blocked-tip FE curves stop early (the 500 ul volume stop): the group's
     force range ends at the last node that 60 % of them, and at least 10, reach."""
-    from surrogate.emulator.build import force_range
     from surrogate.emulator.features import FORCE_PRESSURE_NODES_PA, force_at
+    from surrogate.emulator.force_fit import force_range
 
     n_nodes = len(FORCE_PRESSURE_NODES_PA)
     y = np.ones((20, n_nodes))
@@ -657,23 +657,24 @@ def test_bands_are_calibrated_per_angle_bin_on_cross_validated_curves(shipped_re
     pressure and by injected volume, and not every point (not needlessly wide), with no
     multiplier near its cap."""
     from surrogate.band_level import z_value
-    from surrogate.emulator.build import (
+    from surrogate.emulator.band_scales import (
         ANGLE_BINS_DEG,
-        _collect,
         angle_bin,
         cross_validated,
         held_out_curves,
         node_band_scales,
     )
+    from surrogate.emulator.build import fit_curve_gps
+    from surrogate.emulator.database_rows import collect_rows
 
-    free, *_ = _collect(shipped_records)
+    free, *_ = collect_rows(shipped_records)
     rows = free["ecoflex_00_30/pdms_1_15"]
     keep = np.array(rows.signs) < 0
     # the first 50 of the pair's curves (151 in the shipped database): the calibration is
     # the same procedure on any set, and 5 refits of 64 per-node GPs on 40 curves take seconds
     u, y = np.array(rows.u)[keep][:50], np.array(rows.y)[keep][:50]
     curves = [c for c, k in zip(rows.curves, keep) if k][:50]
-    mean, var = cross_validated(u, y)
+    mean, var = cross_validated(u, y, fit=fit_curve_gps)
     scales = node_band_scales(curves, mean, var, 0.95)
     for axis in ("pressure", "volume"):
         held = held_out_curves(curves, mean, var, scales, z_value(0.95), axis)
@@ -740,7 +741,7 @@ def test_bands_are_calibrated_on_random_designs_fe_curves(emulator, shipped_reco
     for key, pe in same.pairs.items():
         np.testing.assert_allclose(pe.band_scale, emulator.pairs[key].band_scale)
     # the mask of the fit's report is the query's flag: within NEAR_FAILED_RADIUS
-    from surrogate.emulator.build import near_failed_mask
+    from surrogate.emulator.accuracy_report import near_failed_mask
 
     u = np.random.default_rng(0).uniform(size=(50, 6))
     mask = near_failed_mask(u, [(u[0] + 0.1, 40.0, "x")])
@@ -785,7 +786,8 @@ def test_a_fit_from_part_of_the_database_predicts_force_and_survives_its_file(
     """The fit end to end on a slice of the shipped database (the PDMS group's first 16
     complete free-tip curves and its blocked-tip curves): the force model is the angle-ratio
     form, reproduces its blocked-tip designs, and a saved file answers identically."""
-    from surrogate.emulator.build import LIMIT_ANGLE_DEG, fit_emulator, is_force_record
+    from surrogate.emulator.build import fit_emulator
+    from surrogate.emulator.database_rows import LIMIT_ANGLE_DEG, is_force_record
     from surrogate.emulator.features import curve_features
     from surrogate.emulator.file import load_emulator as load
     from surrogate.emulator.file import save_emulator
@@ -1035,27 +1037,28 @@ def test_where_nearby_fe_curves_end_early_the_answer_stops_too(emulator):
 
 def test_force_bands_calibrated_by_cross_validation_cover_designs_left_out(emulator,
                                                                         shipped_records):
-    """build.force_band_scale on two thirds of each group's blocked-tip database designs;
+    """force_fit.force_band_scale on two thirds of each group's blocked-tip database designs;
     the bands of the GP fitted to them, read at the other third: pooled over the four
     groups and two splits they cover >= 0.9 of the force variable's values. The closed-form
     leave-one-out it replaces put every multiplier at 1, and those bands covered
     them (0.33-0.98 by split: 0.70 pooled)."""
     from surrogate.band_level import z_value
-    from surrogate.emulator import build
+    from surrogate.emulator import database_rows, force_fit
     from surrogate.emulator.force_gps import fit_force_nodewise
 
-    _, force, *_ = build._collect(r for r in shipped_records if build.is_force_record(r.settings))
+    _, force, *_ = database_rows.collect_rows(r for r in shipped_records
+                                              if database_rows.is_force_record(r.settings))
     inside = []
     for key, pe in emulator.pairs.items():
         fu, per_kpa = (np.array(a) for a in force[key[:-1]])
-        _, fu, fy = build.force_range(*build.force_angle_rows(fu, per_kpa, pe.curves,
-                                                              pe.sign))
-        if 2 * len(fu) // 3 < build.MIN_DESIGNS:
+        _, fu, fy = force_fit.force_range(*force_fit.force_angle_rows(fu, per_kpa, pe.curves,
+                                                                      pe.sign))
+        if 2 * len(fu) // 3 < database_rows.MIN_DESIGNS:
             continue                    # too few to fit on two thirds
         for seed in (0, 1):
             order = np.random.default_rng(seed).permutation(len(fu))
             train, test = order[: 2 * len(fu) // 3], order[2 * len(fu) // 3:]
-            scale, _ = build.force_band_scale(fu[train], fy[train], 0.95)
+            scale, _ = force_fit.force_band_scale(fu[train], fy[train], 0.95)
             m, v = fit_force_nodewise(fu[train], fy[train]).predict_many(fu[test])
             inside.append((np.abs(m - fy[test]) <= z_value(0.95) * scale * np.sqrt(v)).ravel())
     coverage = np.concatenate(inside).mean()

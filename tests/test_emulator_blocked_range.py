@@ -13,7 +13,7 @@ import pytest
 from service.settings import DATA_DIR
 from solver.design_space import locate
 from solver.errors import InputError
-from surrogate.emulator import build, load_emulator
+from surrogate.emulator import database_rows, load_emulator
 from surrogate.emulator.blocked_range import (
     BLOCKED_END_SHARE,
     ended_at_pressure_stop,
@@ -34,7 +34,7 @@ def _early_blocked(records, emulator) -> list:
     force range of their group's emulator."""
     out = []
     for rec in records:
-        if rec.curve is None or not build.is_force_record(rec.settings):
+        if rec.curve is None or not database_rows.is_force_record(rec.settings):
             continue
         if ended_at_pressure_stop(rec.curve.reason):
             continue
@@ -97,7 +97,7 @@ def test_the_inverse_search_lists_no_design_past_its_blocked_tip_end(emulator):
     design's blocked range reaches the target pressure (its force was given there), as
     the predict path says."""
     from surrogate.design_search import SearchBounds, search_designs
-    from surrogate.exponential.inverse_design import DesignTarget
+    from surrogate.design_target import DesignTarget
 
     result = search_designs(emulator, DesignTarget("force_at_pressure", 2000.0, force_mn=0.8),
                             SearchBounds(), n_results=3)
@@ -153,7 +153,7 @@ def test_a_force_past_what_the_box_reaches_is_not_told_to_raise_the_pressure(emu
     reaches the most has its force only a little further (its blocked-tip FE curve ends
     soon past 2000 Pa): "or raise the pressure" was the wrong advice."""
     from surrogate.design_search import SearchBounds, search_designs
-    from surrogate.exponential.inverse_design import DesignTarget
+    from surrogate.design_target import DesignTarget
 
     result = search_designs(emulator, DesignTarget("force_at_pressure", 2000.0, force_mn=1.0),
                             SearchBounds(), n_results=3)

@@ -145,12 +145,12 @@ def test_the_balance_model_stops_where_its_newton_failed_database_curve_ended(
     own) it ends at
     332 ul and says why."""
     from surrogate.emulator import load_emulator
-    from surrogate.emulator.build import _collect
+    from surrogate.emulator.database_rows import collect_rows
 
     shipped = _without_end_volumes(load_emulator(DATA_DIR / "emulator.json"))
     target = _record(shipped_records, AT_THE_BALANCE)
     group = locate(target.design, reduced=True).group
-    rows = _collect(r for r in shipped_records
+    rows = collect_rows(r for r in shipped_records
                     if locate(r.design, reduced=True).group == group)[0][group]
     volumes = np.array(rows.failed_end_volume, float)
     pairs = dict(shipped.pairs)

@@ -194,7 +194,7 @@ def test_the_design_search_names_the_listed_designs_past_their_stretch_onset(emu
     emulated stretch onset (80 deg at 3000 Pa, thick PDMS 1:10 bodies) says which ranks
     do, in its explanation; the ranking itself is unchanged (a flag, not a cut)."""
     from surrogate.design_search import SearchBounds, search_designs
-    from surrogate.exponential.inverse_design import DesignTarget
+    from surrogate.design_target import DesignTarget
 
     res = search_designs(emulator, DesignTarget("angle_at_pressure", 3000.0, angle_deg=80.0),
                          SearchBounds(T_mm=(1.8, 2.0), pairs=(("pdms_1_10", "ecoflex_00_30"),)),

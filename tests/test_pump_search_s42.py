@@ -172,10 +172,10 @@ def test_the_batch_screen_reads_as_one_design_at_a_time(emulator):
     what predict_volume and inverse give each design: the means to 1e-6, the bands to
     1e-3 (their variances are computed by different products)."""
     from solver.design_space import PAIRS
-    from surrogate.design_search import _candidates, _design
+    from surrogate.search_space import candidate_design, sobol_candidates
 
     ranges = SearchBounds().ranges()
-    designs = [_design(PAIRS[0], v) for v in _candidates(ranges, None, 3, 16)]
+    designs = [candidate_design(PAIRS[0], v) for v in sobol_candidates(ranges, None, 3, 16)]
     out = emulator.evaluate_designs_by_volume(designs, 15.0, 40.0)
     for i, d in enumerate(designs):
         at = emulator.predict_volume(d, [15.0])

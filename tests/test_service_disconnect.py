@@ -97,7 +97,7 @@ def test_a_calibration_stops_soon_after_its_client_disconnects(server, monkeypat
 def test_a_design_search_stops_soon_after_its_client_disconnects(server, monkeypatch):
     import surrogate.design_search as search
 
-    starts = slowed(monkeypatch, search, "_screen")
+    starts = slowed(monkeypatch, search, "screen")
     body = {"model": "paper", "target": {"kind": "angle_at_pressure", "pressure_pa": 1500,
                                          "angle_deg": 45}}
     left = send_and_leave(server, "/v1/inverse", body, after_s=2 * UNIT_S)

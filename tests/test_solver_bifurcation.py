@@ -19,9 +19,10 @@ import pytest
 
 from solver.branching import potential
 from solver.materials import OgdenMaterial
+from solver.newton import mixed_newton_step
 from solver.settings import SolverSettings
 from solver.stability import classify, volume_control_index
-from solver.stepping import inflate_model, mixed_newton_step
+from solver.stepping import inflate_model
 from solver.verification.sphere import exact_pressure_pa
 from solver.verification.two_balloons import TwoBalloonModel
 

@@ -8,9 +8,9 @@ import scipy.sparse as sp
 from solver.discrete import SolidModel
 from solver.linear import factorize
 from solver.materials import OgdenMaterial
+from solver.newton import mixed_newton_step
 from solver.settings import SolverSettings
 from solver.stability import classify, constrained_modes, volume_control_index
-from solver.stepping import mixed_newton_step
 from solver.verification.sphere import octant_shell_mesh, symmetry_mask
 
 

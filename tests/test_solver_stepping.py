@@ -5,8 +5,9 @@ Newton tolerance, with fewer factorisations."""
 import numpy as np
 import pytest
 
-from solver import Design, SolverSettings, stepping
-from solver.stepping import Rate, State, predictor, solve
+from solver import Design, SolverSettings, newton, stepping
+from solver.hermite_predictor import Rate, State, predictor
+from solver.stepping import solve
 
 SMALL = SolverSettings(element="hex1", max_angle_deg=25)
 
@@ -36,7 +37,7 @@ def test_predictor_is_exact_on_a_quintic_through_three_states_and_their_tangents
 
 def test_speed_ups_leave_the_converged_curve_unchanged(monkeypatch):
     fast = solve(Design(L_mm=4.1), SMALL)
-    monkeypatch.setattr(stepping, "CHORD_SWITCH", 0.0)      # full Newton every iteration
+    monkeypatch.setattr(newton, "CHORD_SWITCH", 0.0)      # full Newton every iteration
     monkeypatch.setattr(stepping, "predictor", lambda history, load: None)   # restart from
                                                                              # the last state
     plain = solve(Design(L_mm=4.1), SMALL)

@@ -9,13 +9,13 @@
 import numpy as np
 import pytest
 
-from solver import Design, SolverSettings, stepping
+from solver import Design, SolverSettings, newton
 from solver.assembly import make_basis
 from solver.discrete import ActuatorModel, SolidModel
 from solver.linear import available_backends, factorize
 from solver.materials import MATERIALS, OgdenMaterial
 from solver.mesh import xz_family
-from solver.stepping import StepFailed, newton_step
+from solver.newton import StepFailed, newton_step
 from solver.verification.cantilever import (
     bar_mesh,
     beam_tip_deflection,
@@ -224,7 +224,7 @@ def test_newton_converges_quadratically_on_the_actuator(monkeypatch):
     # volume step goes 2.3e2 -> 0.42 -> 8.5e-6 -> 2e-10 (the rounding floor at
     # K = 1000 mu0, ~1e-10); a linear rate would keep r_{k+1} / r_k fixed instead.
     # Full Newton throughout (no chord updates near the solution) to test the tangent.
-    monkeypatch.setattr(stepping, "CHORD_SWITCH", 0.0)
+    monkeypatch.setattr(newton, "CHORD_SWITCH", 0.0)
     settings = SolverSettings(mesh_level=0, element="hex2", newton_tol=1e-12,
                               max_newton_iter=6)
     model = ActuatorModel(Design(), settings, xz_family(1))

@@ -38,7 +38,7 @@ from service.commands.predict import (
 )
 from solver.errors import InputError
 from surrogate.design_search import N_RESULTS_MAX
-from surrogate.exponential.inverse_design import DEFAULT_KIND, KINDS, OBJECTIVES
+from surrogate.design_target import DEFAULT_KIND, KINDS, OBJECTIVES
 from surrogate.predictor import FE_VOLUME_STOP_UL
 
 # The search's bounds (surrogate.design_search.SearchBounds field -> flag, what it bounds);
@@ -278,7 +278,7 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
 
 def _print_score_and_tolerances(res: object, unit: str) -> None:
     """What the score means, and what a mould's tolerance does to each answer."""
-    from surrogate.design_search import SCORE_MEANING
+    from surrogate.search_ranking import SCORE_MEANING
 
     objective = res.objective  # type: ignore[attr-defined]
     print(f"score ({objective}): {SCORE_MEANING.get(objective, 'lower ranks first')}")
@@ -316,7 +316,7 @@ def _print_pump_candidates(res: object, target: object) -> None:
                      c.angle_at_volume_upper_deg, 8) + " "
               + (f"{p:9.0f} " if p is not None else f"{'--':>9s} ")
               + (",".join(c.curve.validity["flags"]) or "-"))
-    # a budget's design is read where it meets the angle (design_search._tolerance)
+    # a budget's design is read where it meets the angle (mould_tolerance.change_per_tolerance)
     where = ("the volume it needs" if target.budget  # type: ignore[attr-defined]
              else f"{target.at:.4g} ul")  # type: ignore[attr-defined]
     _print_score_and_tolerances(res, f"deg at {where}")

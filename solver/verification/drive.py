@@ -15,15 +15,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from solver.errors import ConvergenceError
+from solver.hermite_predictor import PREDICTOR_POINTS, State, predictor
+from solver.newton import StepFailed, mixed_newton_step, newton_step
 from solver.settings import SolverSettings
-from solver.stepping import (
-    PREDICTOR_POINTS,
-    State,
-    StepFailed,
-    mixed_newton_step,
-    newton_step,
-    predictor,
-)
 
 
 def drive_volume(model, volumes_mm3: Sequence[float], settings: SolverSettings | None = None,

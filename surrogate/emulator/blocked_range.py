@@ -1,7 +1,7 @@
 """Where a design's blocked-tip FE curve ends, and so where its force is emulated to.
 
 The blocked-tip force is emulated from the group's blocked-tip FE curves that reach its
-force range (``build.force_range``), but many end before it: under volume control the
+force range (``force_fit.force_range``), but many end before it: under volume control the
 chamber pressure levels off as the balloon runs away (dp/dV falls to 5-12 % of its
 mid-curve value, median by group) and Newton fails just past that pressure maximum; soft
 pairs also reach the FE's 500 ul volume stop. In the shipped database, 16 of 92 PDMS-bodied

@@ -86,7 +86,7 @@ def design_curve_band(emulator: Emulator, pe: PairEmulator, point: BoxPoint,
     reference = None
     if pe.force is not None and plain is not None:
         # the force model's F / theta was fitted to the complete-curve GPs' angle
-        # (build.force_angle_rows): the same angle, and its band, multiply it here
+        # (force_fit.force_angle_rows): the same angle, and its band, multiply it here
         p_mean, p_var = plain
         if pe.curves.per_output:
             p_var = emulator.spread_variance(np.concatenate((p_var, var[N_NODES:])))

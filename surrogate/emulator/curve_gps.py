@@ -207,7 +207,7 @@ class CurveGPs:
                                       tuple[np.ndarray, np.ndarray] | None]:
         """``predict``, and the pressure nodes' means and variances of the complete-curve
         GPs alone where the blend changed them (what the force model's angle reads:
-        ``build.force_angle_rows``; None where nothing was blended)."""
+        ``force_fit.force_angle_rows``; None where nothing was blended)."""
         return self._nodes(np.asarray(u, float).ravel(), variance_of, early_weight)
 
     def _nodes(self, u: np.ndarray, variance_of: slice | np.ndarray | None,

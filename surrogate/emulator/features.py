@@ -43,7 +43,7 @@ N_NODES = len(ANGLE_NODES_DEG)   # a curve's nodes: N_NODES pressure, then N_NOD
 # degree (some of the other sign), and covering those relatively took a multiplier of
 # 21-50 below 10 deg (2.8 with this floor). Carried up the curve by its monotone envelope,
 # that made the group's bands run from 0 to twice the angle at 60 deg. Half the 0.1 deg a
-# camera reading resolves; the calibration (build.node_band_scales) counts with it.
+# camera reading resolves; the calibration (band_scales.node_band_scales) counts with it.
 ANGLE_BAND_FLOOR_DEG = 0.05
 
 FORCE_PRESSURE_NODES_PA = np.array([25.0, 50.0, 100.0, 200.0, 300.0, 400.0, 500.0, 750.0,

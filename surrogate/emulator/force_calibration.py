@@ -1,7 +1,7 @@
 """The force band's calibration on FE curves of random blocked-tip designs of the box.
 
 The force band is the force GP's sd times a multiplier from 5-fold cross-validation over
-the database (``build.force_band_scale``), carried through the free tip's angle band
+the database (``force_fit.force_band_scale``), carried through the free tip's angle band
 (``features.force_from_angle_ratio``). Cross-validated, |error| / sd has a heavy tail
 (database designs on the box's faces are extrapolations when left out), and the 95 %
 bands so made covered 0.98-0.99 of the points of 38 held-out random blocked-tip FE curves

@@ -10,7 +10,7 @@ so near the top of the force the box gives -- where many blocked-tip curves end 
 three designs an inverse design listed for 1 mN at 2000 Pa had FE forces 15-21 % below
 the answer (0.85, 0.80, 0.79 mN).
 
-Here the length scales and nugget (one kernel for all nodes, as ``build.fit_force_gps``)
+Here the length scales and nugget (one kernel for all nodes, as ``force_fit.fit_force_gps``)
 are still fitted on the designs that reach every node, but each node's GP is conditioned
 on every design that reaches it (83-92 PDMS-bodied designs below 2500 Pa). A design
 reaches a prefix of the nodes, so the nodes split into a few consecutive segments with

@@ -1,7 +1,7 @@
 """The bands' second calibration: on FE curves of random designs of the box.
 
 The fit calibrates each group's band multipliers by 5-fold cross-validation over the
-database (``build.node_band_scales``). Those bands covered 0.97-0.985 of the
+database (``band_scales.node_band_scales``). Those bands covered 0.97-0.985 of the
 cross-validated points but only 0.83-0.96 of the points of held-out random designs drawn
 uniformly in the box (each layer's stiffness scaled on its own), and 0.71-0.78 of those
 within NEAR_FAILED_RADIUS of a curve that ended early (benchmarks/RESULTS.md, eleventh and
@@ -12,7 +12,7 @@ that are in neither the database nor the held-out test sets:
 
 for every answered FE point (deg, at the FE's own pressure or injected volume) the factor
 by which the band's half-width (log p, or log V, at the FE angle) would have to grow to
-reach it; per angle bin (``build.ANGLE_BINS_DEG``), separately for designs near an
+reach it; per angle bin (``band_scales.ANGLE_BINS_DEG``), separately for designs near an
 early-ended curve and the others, the ``level`` quantile of those factors (never below 1)
 multiplies the nodes' band multipliers of that bin: the far factor into ``band_scale``,
 the near one's excess over it into ``near_failed_band_scale``. A cell with fewer than
@@ -36,7 +36,7 @@ from solver.design_space import locate
 from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
-from surrogate.emulator.build import ANGLE_BINS_DEG, angle_bin
+from surrogate.emulator.band_scales import ANGLE_BINS_DEG, angle_bin
 from surrogate.emulator.curve_band import volume_curves
 from surrogate.emulator.emulator import Emulator
 from surrogate.emulator.features import (

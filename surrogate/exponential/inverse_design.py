@@ -1,227 +1,50 @@
-"""Inverse design: which (material pair, L, t) meets a target, ranked by an objective.
+"""Inverse design with the exponential model: which (material pair, L, t) of its fitted
+families meets a target by pressure, ranked by an objective (targets and objectives:
+``surrogate.design_target``; the answer: ``surrogate.design_result``).
 
-Targets (``DesignTarget.kind``):
-
-    angle_at_pressure   reach |angle_deg| exactly at pressure_pa. For each t the chamber
-                        length is closed form, L = |angle| / (|a| (exp(x + c x^2) - 1)),
-                        x = p / tau(t); candidates are the (L, t) with L inside the bounds.
-    pressure_budget     reach |angle_deg| at a pressure of at most pressure_pa; needed
-                        pressure p = tau x, x + c x^2 = ln(1 + |angle| / |A|), on an L x t grid.
+    angle_at_pressure   for each t the chamber length is closed form,
+                        L = |angle| / (|a| (exp(x + c x^2) - 1)), x = p / tau(t)
+                        (``equations.length_mm``); candidates are the (L, t) with L inside
+                        the bounds.
+    pressure_budget     the pressure needed, p = tau x with x + c x^2 = ln(1 + |angle| / |A|)
+                        (``bands.pressure_band``), on an L x t grid.
     force_at_pressure   as angle_at_pressure with the family's force model (mN).
 
-A syringe pump's targets (volume_ul injected, or time_s at flow_ul_s from the undeformed
-state: volume = flow x time) are searched over the box by ``surrogate.design_search``
-only; this family grid refuses them:
-
-    angle_at_volume     reach |angle_deg| exactly at the injected volume_ul
-    volume_budget       reach |angle_deg| with no more than volume_ul injected
-    angle_at_time       reach |angle_deg| exactly after time_s at flow_ul_s
-    time_budget         reach |angle_deg| within time_s at flow_ul_s
-
-Angles are matched in magnitude: a reversed material pair (a < 0) is a candidate too,
-and its predictions carry the negative sign. Objectives (lower score ranks first):
-
-    pressure    pressure needed (pressure_budget)
-    volume      injected volume needed (volume_budget, time_budget: time = volume / flow)
-    margin      band upper end of the pressure (or volume) needed, i.e. the largest
-                margin to the budget at the band's pessimistic end (the budgets)
-    compact     chamber length L
-    certainty   relative width of the prediction band at the target pressure
+A syringe pump's targets are searched over the box by ``surrogate.design_search`` only;
+this family grid refuses them. Angles are matched in magnitude: a reversed material pair
+(a < 0) is a candidate too, and its predictions carry the negative sign. The margin
+objective is the largest margin to the budget at the band's pessimistic end.
 
 Evaluation is vectorised over a grid (per family), the best cell is refined on a finer
 local grid, and the ranked list keeps designs at least ``MIN_SPACING`` apart (normalised
 L, t). Bounds default to each family's fitted domain, with t >= 0.5 mm (no two-balloon
-designs unless the bounds ask for them).
+designs unless the bounds ask for them). Lengths in mm, pressures in Pa, angles in deg.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
 from surrogate.band_level import z_value
+from surrogate.design_result import DesignCandidate, InverseDesignResult
+from surrogate.design_target import DesignTarget, finite_number, resolve_objective
 from surrogate.exponential import bands, equations
 from surrogate.exponential.family import Family
 from surrogate.exponential.paper_tables import TWO_BALLOON_BELOW_t_MM
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.surrogate import Surrogate
-from surrogate.predictor import FE_VOLUME_STOP_UL, SMALLEST_NORMAL, Prediction
-from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
-KINDS = ("angle_at_pressure", "pressure_budget", "force_at_pressure", "angle_at_volume",
-         "volume_budget", "angle_at_time", "time_budget")
-#: the syringe pump's targets: by injected volume, or by time at a flow rate
-TIME_KINDS = ("angle_at_time", "time_budget")
-VOLUME_KINDS = ("angle_at_volume", "volume_budget", *TIME_KINDS)
-#: targets met within a budget (the others exactly)
-BUDGET_KINDS = ("pressure_budget", "volume_budget", "time_budget")
-#: the target a search answers when none is named (HTTP and CLI alike)
-DEFAULT_KIND = "angle_at_pressure"
-#: the largest target magnitudes taken: |angle| in deg, |force| in mN
-MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4}
-OBJECTIVES = ("pressure", "volume", "margin", "compact", "certainty")
-DEFAULT_OBJECTIVE = {"angle_at_pressure": "certainty", "pressure_budget": "pressure",
-                     "force_at_pressure": "certainty", "angle_at_volume": "certainty",
-                     "volume_budget": "volume", "angle_at_time": "certainty",
-                     "time_budget": "volume"}
-#: what a listed design reports for a syringe pump's target (DesignCandidate)
-PUMP_FIELDS = ("volume_needed_ul", "volume_lower_ul", "volume_upper_ul", "time_needed_s",
-               "time_lower_s", "time_upper_s", "angle_at_volume_deg",
-               "angle_at_volume_lower_deg", "angle_at_volume_upper_deg",
-               "pressure_at_volume_pa")
+#: the least distance between two listed designs of one family, in (L, t) normalised by
+#: the bounds
 MIN_SPACING = 0.08
+#: grid points per axis (angle_at_pressure: GRID^2 membrane thicknesses)
 GRID = 48
+#: points of each listed design's curve, from 0 Pa to the target (or needed) pressure
 CURVE_POINTS = 41
-
-
-def resolve_objective(target: DesignTarget, objective: str | None) -> str:
-    """The ranking objective for ``target``: the given one, checked, or the target's
-    default (InputError naming ``objective`` and the allowed values otherwise)."""
-    objective = objective or DEFAULT_OBJECTIVE[target.kind]
-    if objective not in OBJECTIVES:
-        raise InputError("objective", f"unknown objective {objective!r}", " | ".join(OBJECTIVES))
-    budget_of = {"pressure": ("pressure_budget",), "volume": ("volume_budget", "time_budget"),
-                 "margin": BUDGET_KINDS}
-    if objective in budget_of and target.kind not in budget_of[objective]:
-        ranks = [o for o, kinds in budget_of.items() if target.kind in kinds]
-        raise InputError("objective", f"{objective!r} ranks {' or '.join(budget_of[objective])}"
-                         " targets only", " | ".join((*ranks, "certainty", "compact")))
-    return objective
-
-
-@dataclass(frozen=True)
-class DesignTarget:
-    """What the design must do; units in the names. See the module docstring. A pump's
-    target gives volume_ul, or time_s with flow_ul_s, and no pressure_pa."""
-
-    kind: str
-    pressure_pa: float | None = None
-    angle_deg: float | None = None
-    force_mn: float | None = None
-    volume_ul: float | None = None
-    time_s: float | None = None
-    flow_ul_s: float | None = None
-
-    def validated(self) -> DesignTarget:
-        if self.kind not in KINDS:
-            raise InputError("kind", f"unknown target {self.kind!r}", " | ".join(KINDS))
-        uses = self._fields()
-        for name in ("pressure_pa", "volume_ul", "time_s", "flow_ul_s"):
-            if name not in uses and getattr(self, name) is not None:   # never dropped
-                raise InputError(name, f"the {self.kind} target does not use {name}",
-                                 f"leave {name} out (the {self.kind} target takes "
-                                 f"{', '.join(uses)})")
-        if self.kind in TIME_KINDS:
-            self._check_time()
-        elif self.kind in VOLUME_KINDS:
-            if not _finite(self.volume_ul) or not (_positive(self.volume_ul)
-                                                   and self.volume_ul <= FE_VOLUME_STOP_UL):
-                raise InputError("volume_ul", f"the {self.kind} target needs an injected "
-                                 "volume within the FE's volume stop, got "
-                                 + ("none" if self.volume_ul is None else repr(self.volume_ul)),
-                                 f"0 < volume_ul <= {FE_VOLUME_STOP_UL:g} ul")
-        elif not _finite(self.pressure_pa) or not (_positive(self.pressure_pa)
-                                                         and self.pressure_pa <= 1e6):
-            raise InputError("pressure_pa", f"the {self.kind} target needs a pressure, got "
-                             + ("none" if self.pressure_pa is None else repr(self.pressure_pa)),
-                             "0 < pressure_pa <= 1e6 Pa")
-        name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
-        value = getattr(self, name)
-        if value is None or not _finite(value) or not (_positive(abs(value))
-                                                            and abs(value) <= MAX_TARGET[name]):
-            unit = "mN" if name == "force_mn" else "deg"
-            raise InputError(name, f"the {self.kind} target needs a non-zero {name} of "
-                             f"at most {MAX_TARGET[name]:g} {unit}, got "
-                             + ("none" if value is None else repr(value)),
-                             f"0 < |{name}| <= {MAX_TARGET[name]:g} {unit}; "
-                             "positive bends away from the membrane, negative towards it")
-        other = "angle_deg" if name == "force_mn" else "force_mn"
-        if getattr(self, other) is not None:    # given, never silently dropped
-            raise InputError(other, f"the {self.kind} target does not use {other}",
-                             f"leave {other} out (the {self.kind} target takes {name})")
-        return self
-
-    def _fields(self) -> tuple[str, ...]:
-        """The fields besides the angle (or force) this kind of target reads."""
-        if self.kind in TIME_KINDS:
-            return ("time_s", "flow_ul_s")
-        return ("volume_ul",) if self.kind in VOLUME_KINDS else ("pressure_pa",)
-
-    def _check_time(self) -> None:
-        """time_s and flow_ul_s given, in range, and injecting no more than the FE's
-        volume stop (time x flow, from the undeformed state)."""
-        if self.flow_ul_s is None or not _finite(self.flow_ul_s) or not (
-                MIN_FLOW_UL_S <= self.flow_ul_s <= MAX_FLOW_UL_S):
-            raise InputError("flow_ul_s", f"the {self.kind} target needs the pump's flow "
-                             "rate, got " + ("none" if self.flow_ul_s is None
-                                             else repr(self.flow_ul_s)), FLOW_RANGE)
-        if not _finite(self.time_s) or not (_positive(self.time_s) and self.time_s <= MAX_TIME_S):
-            raise InputError("time_s", f"the {self.kind} target needs a time, got "
-                             + ("none" if self.time_s is None else repr(self.time_s)),
-                             f"0 < time_s <= {MAX_TIME_S:g} s")
-        volume = self.time_s * self.flow_ul_s
-        if volume > FE_VOLUME_STOP_UL:
-            raise InputError("time_s", f"{self.time_s:g} s at {self.flow_ul_s:g} ul/s "
-                             f"injects {volume:g} ul, past the FE's volume stop "
-                             f"({FE_VOLUME_STOP_UL:g} ul): no design is answered there",
-                             f"0 < time_s <= {FE_VOLUME_STOP_UL / self.flow_ul_s:.4g} s at "
-                             f"{self.flow_ul_s:g} ul/s (time_s x flow_ul_s <= "
-                             f"{FE_VOLUME_STOP_UL:g} ul)")
-
-    @property
-    def value(self) -> float:
-        return abs(float(self.force_mn if self.kind == "force_at_pressure"
-                         else self.angle_deg))  # type: ignore[arg-type]
-
-    @property
-    def by_volume(self) -> bool:
-        """A syringe pump's target: met at (or within) an injected volume."""
-        return self.kind in VOLUME_KINDS
-
-    @property
-    def budget(self) -> bool:
-        """Met within a budget (pressure, volume or time), not exactly."""
-        return self.kind in BUDGET_KINDS
-
-    @property
-    def at(self) -> float:
-        """Where the target is met: the pressure (Pa), or for a pump's target the injected
-        volume (ul; time x flow for a time target)."""
-        if self.kind in TIME_KINDS:
-            return float(self.time_s) * float(self.flow_ul_s)  # type: ignore[arg-type]
-        return float(self.volume_ul if self.by_volume else self.pressure_pa)  # type: ignore
-
-    @property
-    def at_field(self) -> str:
-        """The field ``at`` is given by: pressure_pa, volume_ul or time_s."""
-        return self._fields()[0]
-
-    def at_text(self, exact: bool = False) -> str:
-        """Where the target is met, in words: "at 1500 Pa", "at 20 ul injected", "after 8 s
-        at 2.5 ul/s (20 ul injected)"; a budget's "within" unless ``exact``."""
-        within = self.budget and not exact
-        if self.kind in TIME_KINDS:
-            return (f"{'within' if within else 'after'} {self.time_s:g} s at "
-                    f"{self.flow_ul_s:g} ul/s ({self.at:.4g} ul injected)")
-        where = "within" if within else "at"
-        if self.by_volume:
-            return f"{where} {self.at:.4g} ul injected"
-        return f"{where} {self.at:g} Pa"
-
-    def with_at(self, at: float) -> DesignTarget:
-        """The same target met at ``at`` instead (Pa, or ul for a pump's target)."""
-        if self.kind in TIME_KINDS:
-            return replace(self, time_s=at / float(self.flow_ul_s))  # type: ignore[arg-type]
-        return replace(self, **{"volume_ul" if self.by_volume else "pressure_pa": at})
-
-    def as_dict(self) -> dict[str, object]:
-        return {"kind": self.kind, "pressure_pa": self.pressure_pa,
-                "angle_deg": self.angle_deg, "force_mn": self.force_mn,
-                "volume_ul": self.volume_ul, "time_s": self.time_s,
-                "flow_ul_s": self.flow_ul_s}
 
 
 @dataclass(frozen=True)
@@ -238,104 +61,9 @@ class DesignBounds:
             r = getattr(self, name)
             if r is None:
                 continue
-            if (len(r) != 2 or not all(_finite(v) for v in r) or not 0 < r[0] <= r[1]):
+            if (len(r) != 2 or not all(finite_number(v) for v in r) or not 0 < r[0] <= r[1]):
                 raise InputError(name, f"bounds {r!r}", "(low, high) with 0 < low <= high mm")
         return self
-
-
-@dataclass(frozen=True)
-class DesignCandidate:
-    """A ranked design: the score of the objective (lower is better), the pressure it
-    needs (pressure_budget) or its predicted value at the target pressure, and the
-    predicted curve from 0 Pa with its band."""
-
-    rank: int
-    design: Design
-    family: str
-    score: float
-    pressure_needed_pa: float
-    pressure_lower_pa: float
-    pressure_upper_pa: float
-    value_at_pressure: float
-    value_lower: float
-    value_upper: float
-    curve: Prediction
-    # the value's change (deg or mN) when one length is made 0.01 mm larger, the others
-    # kept: a mould's tolerance read on the answer (design-space search; None otherwise)
-    change_per_0_01_mm: dict[str, float] | None = None
-    # a syringe pump's target (surrogate.pump_targets.volume_report; None otherwise): the
-    # injected volume needed for the angle with its band (ul), the time at the target's
-    # flow rate (s), and at the target volume the angle with its band (deg) and the
-    # chamber pressure (Pa)
-    volume_needed_ul: float | None = None
-    volume_lower_ul: float | None = None
-    volume_upper_ul: float | None = None
-    time_needed_s: float | None = None
-    time_lower_s: float | None = None
-    time_upper_s: float | None = None
-    angle_at_volume_deg: float | None = None
-    angle_at_volume_lower_deg: float | None = None
-    angle_at_volume_upper_deg: float | None = None
-    pressure_at_volume_pa: float | None = None
-
-    def as_dict(self) -> dict[str, object]:
-        from solver.design_space import recognise
-
-        def preset_and_scale(material: object) -> tuple[str, float]:
-            found = recognise(material)  # type: ignore[arg-type]
-            return found if found is not None else (material.id, 1.0)  # type: ignore
-
-        body, s_body = preset_and_scale(self.design.body_material)
-        membrane, s_membrane = preset_and_scale(self.design.membrane_material)
-        return {"rank": self.rank, "L_mm": self.design.L_mm, "t_mm": self.design.t_mm,
-                "T_mm": self.design.T_mm, "b_mm": self.design.b_mm, "h_mm": self.design.h_mm,
-                "body_material": body, "membrane_material": membrane,
-                "body_stiffness_scale": s_body, "membrane_stiffness_scale": s_membrane,
-                "design": self.design.as_dict(),
-                "family": self.family, "score": self.score,
-                "pressure_needed_pa": self.pressure_needed_pa,
-                "pressure_lower_pa": self.pressure_lower_pa,
-                "pressure_upper_pa": self.pressure_upper_pa,
-                "value_at_pressure": self.value_at_pressure, "value_lower": self.value_lower,
-                "value_upper": self.value_upper,
-                "change_per_0_01_mm": self.change_per_0_01_mm,
-                **{name: getattr(self, name) for name in PUMP_FIELDS},
-                "validity": self.curve.validity,
-                "curve": {k: v for k, v in self.curve.as_dict().items()
-                          if k in ("pressure_pa", "angle_deg", "lower_deg", "upper_deg",
-                                   "force_mn", "force_lower_mn", "force_upper_mn",
-                                   "volume_ul")}}
-
-
-@dataclass(frozen=True)
-class InverseDesignResult:
-    """Ranked feasible designs, or an explanation (``feasible`` False) with the largest
-    value reachable at the target pressure inside the bounds (``best_reachable``)."""
-
-    target: DesignTarget
-    objective: str
-    feasible: bool
-    candidates: tuple[DesignCandidate, ...]
-    explanation: str
-    best_reachable: dict = field(default_factory=dict)
-    n_evaluated: int = 0
-    model: str = ""
-
-    def as_dict(self) -> dict[str, object]:
-        return {"target": self.target.as_dict(),
-                "objective": self.objective, "feasible": self.feasible,
-                "candidates": [c.as_dict() for c in self.candidates],
-                "explanation": self.explanation, "best_reachable": dict(self.best_reachable),
-                "n_evaluated": self.n_evaluated, "model": self.model}
-
-
-def _finite(v: object) -> bool:
-    return isinstance(v, (int, float)) and np.isfinite(v)
-
-
-def _positive(v: float) -> bool:
-    """More than 0, a subnormal magnitude (5e-324 ul, 1e-310 deg) counting as 0."""
-    return v >= SMALLEST_NORMAL
 
 
 def _families(s: Surrogate, bounds: DesignBounds) -> list[Family]:
@@ -363,6 +91,11 @@ def _ranges(fam: Family, bounds: DesignBounds) -> tuple[tuple[float, float], tup
 
 @dataclass
 class _Eval:
+    """The grid's cells: chamber length ``L`` and membrane thickness ``t`` (mm), the
+    objective's ``score`` (+inf where infeasible), the pressure needed ``p`` with its
+    band (Pa), the value at the target pressure ``v`` with its band (deg, or mN for a
+    force target)."""
+
     L: np.ndarray
     t: np.ndarray
     score: np.ndarray
