@@ -1,0 +1,123 @@
+"""The forty-sixth session's hostile-input audit, round seven (after tests/test_hostile_s45.py):
+the explorer's view in the address (a link's bad values named with what each allows,
+their text escaped and cut, a repeated key, fifty thousand keys), and a design search
+whose target angle lies past every FE curve at a budget's pressure or volume.
+
+Each test failed on the code before its fix (commit messages say which).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+# -- 1. the explorer's view in the address ---------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """The app with the shipped models, served for the browser tests."""
+    from explorer_browser import LiveServer
+
+    with LiveServer(tmp_path_factory.mktemp("explorer-s46")) as live:
+        yield live
+
+
+def opened_note(watched, server, fragment: str) -> str:
+    """The link note of the explorer opened at ``fragment``, once its prediction is drawn."""
+    page = watched.page
+    page.goto(server.url + "/" + fragment)
+    page.wait_for_selector("body[data-ready=true]")
+    page.wait_for_function("window.explorer.prediction")
+    return page.locator("#link-note").inner_text()
+
+
+@pytest.mark.timeout(300)
+def test_a_links_bad_values_are_named_with_what_each_allows(watched, server):
+    """Each value the page does not take was named only by its key, "(unknown or not a
+    valid value)": the note now shows its text and the range or choices it allows, and
+    the rest of the view is restored."""
+    from explorer_browser import screenshot
+
+    note = opened_note(watched, server, "#L_mm=%3Cscript%3Ealert(1)%3C%2Fscript%3E&t_mm=0.7"
+                       "&W_mm=-3&near=9&pair=99&ask=bogus&max=1e999&model=javascript:alert(1)")
+    for words in ("L_mm=<script>alert(1)</sc... (allowed: 4 to 18 mm)",
+                  "W_mm=-3 (allowed: 1 to 10 mm)",
+                  "near=9 (allowed: a whole number from 0 to 6)",
+                  "pair=99 (allowed: a whole number from 0 to 3)",
+                  "ask=bogus (allowed: pressure_pa, volume_ul, time_s)",
+                  "max=1e999 (allowed: from 100 to 20000 Pa)",
+                  "model=javascript:alert(1) (allowed: a model's name"):
+        assert words in note, (words, note)
+    page = watched.page
+    assert page.input_value("#t_mm") == "0.7" and page.input_value("#L_mm") == "7.1"
+    assert page.locator("script:not([src])").count() == 0 and page.locator("img").count() == 0
+    screenshot(page, "explorer-hostile-link")
+    assert watched.errors == []
+
+
+@pytest.mark.timeout(300)
+def test_a_links_hidden_characters_are_shown_escaped(watched, server):
+    """A key or value holding a bidi override (U+202E) or a NUL was put on the page raw:
+    text after U+202E is drawn right to left. Escaped now, as the service's problems are."""
+    note = opened_note(watched, server, "#a%E2%80%AEb=1&t_mm=%00&L_mm=9")
+    assert "\u202e" not in note and "\x00" not in note, ascii(note)
+    assert "a\\u202eb (not a key of a view)" in note and "t_mm=\\u0000" in note, note
+    assert watched.page.input_value("#L_mm") == "9"
+
+
+@pytest.mark.timeout(300)
+def test_a_link_of_fifty_thousand_keys_names_a_few_and_counts_the_rest(watched, server):
+    """Every unknown key was listed: 50,000 of them made a note of 389,000 characters."""
+    from explorer_browser import screenshot
+
+    keys = "&".join(f"k{i}=1" for i in range(50_000))
+    note = opened_note(watched, server, f"#L_mm=9&{keys}&{'x' * 100_000}=1")
+    assert len(note) < 1000, len(note)
+    assert "k0 (not a key of a view)" in note and "and 49993 more" in note, note
+    assert watched.page.input_value("#L_mm") == "9"
+    screenshot(watched.page, "explorer-link-fifty-thousand-keys")
+
+
+@pytest.mark.timeout(300)
+def test_a_key_given_twice_is_named_and_neither_value_taken(watched, server):
+    """#L_mm=8&L_mm=12 opened at 12 without a word (the last one won), where an HTTP
+    query refuses a repeated key; which one was meant is unknown, so neither is taken."""
+    note = opened_note(watched, server, "#L_mm=8&L_mm=12&t_mm=0.6")
+    assert "L_mm (given 2 times: allowed once)" in note, note
+    assert watched.page.input_value("#L_mm") == "7.1"
+    assert watched.page.input_value("#t_mm") == "0.6"
+
+
+# -- 2. a budget's angle past every FE curve --------------------------------------------------
+
+PAIR = ["pdms_1_10/ecoflex_00_30"]
+
+
+@pytest.mark.parametrize("target", [
+    {"kind": "pressure_budget", "pressure_pa": 20000, "angle_deg": 179},
+    {"kind": "volume_budget", "volume_ul": 500, "angle_deg": 179},
+    {"kind": "time_budget", "time_s": 200, "flow_ul_s": 2.5, "angle_deg": 95},
+])
+def test_a_budgets_angle_past_every_fe_curve_is_named_not_raise_the_pressure(
+        shipped_client, target):
+    """179 deg within 20 kPa (the FE's pressure stop), or within 500 ul (its volume stop):
+    every design is past its FE range at the budget's end, and the search said "widen the
+    bounds ... or raise the pressure" ("or inject more"), at the stop itself. No FE curve
+    gets past 90 deg, so no bound or budget gives a number there."""
+    r = shipped_client.post("/v1/inverse", json={"target": target, "material_pairs": PAIR})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert not body["feasible"] and body["candidates"] == []
+    text = body["explanation"]
+    assert "raise the pressure" not in text and "inject more" not in text, text
+    assert "widen the bounds" not in text, text
+    assert "past the FE's range, which ends at 90 deg" in text, text
+    assert "ask for at most 90 deg in size (angle_deg)" in text, text
+
+
+def test_a_budget_within_the_fe_range_still_says_raise_the_pressure(shipped_client):
+    """The guard: 80 deg within 200 Pa is short of pressure, not past the FE's range."""
+    r = shipped_client.post("/v1/inverse", json={
+        "target": {"kind": "pressure_budget", "pressure_pa": 200, "angle_deg": 80},
+        "material_pairs": PAIR})
+    assert r.status_code == 200 and "raise the pressure" in r.json()["explanation"], r.text
