@@ -121,3 +121,48 @@ def test_a_budget_within_the_fe_range_still_says_raise_the_pressure(shipped_clie
         "target": {"kind": "pressure_budget", "pressure_pa": 200, "angle_deg": 80},
         "material_pairs": PAIR})
     assert r.status_code == 200 and "raise the pressure" in r.json()["explanation"], r.text
+
+
+# -- 3. a --where that meets no record says what the records hold -----------------------------
+
+
+def small_database(tmp_path):
+    """Three records: L 4.1, 7.1, 11.1 mm, PDMS 1:10 on Ecoflex 00-30 (fake curves)."""
+    from test_precompute_fakes import fake_curve
+    from test_precompute_job import GRID
+
+    from solver.precompute import parse_grid
+    from solver.store import CurveStore, make_record
+
+    path = tmp_path / "c.h5"
+    points = parse_grid(GRID.replace("T_mm = [1.0, 2.0, 3.0]", "T_mm = 1.0"), "g.toml").points
+    with CurveStore(path, mode="a") as db:
+        db.put_many(make_record(p.design, p.settings, fake_curve(p.design)) for p in points)
+    return path
+
+
+@pytest.mark.parametrize(("where", "words"), [
+    ("body_material=pdms_1_1O",
+     "no record has body_material 'pdms_1_1O' (the records hold: pdms_1_10)"),
+    ("L_mm=7.123", "no record has L_mm 7.123 (the records hold: from 4.1 to 11.1 (3 values))"),
+    ("mesh_level=3", "no record has mesh_level 3 (the records hold: 0)"),
+])
+def test_a_filter_that_meets_no_record_names_what_the_records_hold(tmp_path, where, words):
+    """`balloon db ls DB --where body_material=pdms_1_1O` (a letter O for a zero) said "0
+    records", as if the database held no such design: a custom id may be any word, so the
+    filter is not refused, but the line now says what the records hold."""
+    from test_cli_fuzz import run
+
+    db = small_database(tmp_path)
+    for argv in (["db", "ls", str(db), "--where", where],
+                 ["db", "export", str(db), "--where", where, "-o", str(tmp_path / "e.csv")]):
+        code, _, err, escaped = run(argv)
+        assert code == 0 and escaped is None, err
+        assert words in err and err.count("\n") == 1, err
+
+
+def test_a_filter_that_meets_records_says_nothing_more(tmp_path):
+    from test_cli_fuzz import run
+
+    code, _, err, _ = run(["db", "ls", str(small_database(tmp_path)), "--where", "L_mm=7.1"])
+    assert code == 0 and err.strip() == "1 records", err
