@@ -166,3 +166,35 @@ def test_a_filter_that_meets_records_says_nothing_more(tmp_path):
 
     code, _, err, _ = run(["db", "ls", str(small_database(tmp_path)), "--where", "L_mm=7.1"])
     assert code == 0 and err.strip() == "1 records", err
+
+
+# -- 4. a list option's word that is no number states the option's range ---------------------
+
+CLI_DESIGN = ["--model", "paper", "--L-mm", "7.1", "--t-mm", "0.5"]
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["predict", *CLI_DESIGN, "--pressures", "1_000"],
+     "argument --pressures: '1_000' is not a list of numbers"),
+    (["predict", *CLI_DESIGN, "--volumes", "\u0661\u0662"], "argument --volumes: "),
+    (["predict", *CLI_DESIGN, "--flow-ul-s", "2", "--times", "0x10"], "argument --times: "),
+    (["inverse", "--L-mm", "7.1", "--t-mm", "0.5", "--angles-deg", "4\uff15"],
+     "argument --angles-deg: "),
+])
+def test_a_list_options_word_that_is_no_number_states_the_range(argv, words):
+    """`--pressures 1_000` (or Arabic-Indic or fullwidth digits, "0x10") said "is not a list
+    of numbers (numbers in ASCII decimal digits ...)" without the range a design option's
+    bad word is told ("--L-mm: 'abc' is not a number (...; allowed: 0.5 to 60 mm)")."""
+    from test_cli_fuzz import run, visible_lines
+
+    from service.pump import AXES, MAX_ANGLE_DEG
+
+    code, _, err, escaped = run(argv)
+    assert code == 2 and escaped is None, err
+    lines = visible_lines(err)
+    assert len(lines) == 1 and words in lines[0], err
+    option = argv[-2]
+    lo, hi, unit = {"--pressures": AXES["pressures_pa"], "--volumes": AXES["volumes_ul"],
+                    "--times": AXES["times_s"],
+                    "--angles-deg": (-MAX_ANGLE_DEG, MAX_ANGLE_DEG, "deg")}[option]
+    assert f"; allowed: {lo:g} to {hi:g} {unit})" in lines[0], lines[0]
