@@ -8,6 +8,8 @@ Each test failed on the code before its fix (commit messages say which).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 # -- 1. the explorer's view in the address ---------------------------------------------------
@@ -198,3 +200,50 @@ def test_a_list_options_word_that_is_no_number_states_the_range(argv, words):
                     "--times": AXES["times_s"],
                     "--angles-deg": (-MAX_ANGLE_DEG, MAX_ANGLE_DEG, "deg")}[option]
     assert f"; allowed: {lo:g} to {hi:g} {unit})" in lines[0], lines[0]
+
+
+# -- 5. a JSON data file's cells held to the request's rule ----------------------------------
+
+EXAMPLE_CSV = (Path(__file__).resolve().parents[1]
+               / "surrogate/calibration/data/example_lab.csv")
+
+
+def example_rows() -> list[dict]:
+    """The shipped example's rows as JSON writes them (numbers as numbers)."""
+    import csv
+
+    lines = [x for x in EXAMPLE_CSV.read_text().splitlines() if not x.startswith("#")]
+    rows = list(csv.DictReader(lines))
+    for row in rows:
+        for k in ("L_mm", "t_mm", "pressure_pa", "angle_deg", "time_s", "flow_ul_s"):
+            row[k] = float(row[k])
+    return rows
+
+
+@pytest.mark.parametrize(("column", "value", "words"), [
+    ("body_material", False, "false is not a measured value"),
+    ("curve_id", True, "true is not a measured value"),
+    ("angle_deg", {"deg": 5}, "an object is not a measured value"),
+    ("curve_id", "s" * 201, "text of 201 characters (at most 200)"),
+])
+def test_a_json_files_cell_is_read_as_a_requests_is(shipped_client, tmp_path, column, value,
+                                                    words):
+    """`"body_material": false` in a data file was read as the material '' ("unknown
+    material ''"), `"curve_id": true` as the curve 'True', a 201-character id taken,
+    where POST /v1/calibrate refuses each (422 naming row and column). One rule now
+    (surrogate.measured_cell), the same words in both."""
+    import json
+
+    from test_cli_fuzz import run, visible_lines
+
+    rows = example_rows()
+    rows[3][column] = value
+    r = shipped_client.post("/v1/calibrate", json={"rows": rows})
+    assert r.status_code == 422 and words in r.json()["detail"], r.text
+    path = tmp_path / "lab.json"
+    path.write_text(json.dumps(rows))
+    code, _, err, escaped = run(["calibrate", str(path), "--report", str(tmp_path / "r.json")])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    assert f"{column}: row 4: {words}" in lines[0], lines[0]
+    assert "(allowed: a finite number (|value| <= 1e15), text (at most 200" in lines[0]
