@@ -247,3 +247,47 @@ def test_a_json_files_cell_is_read_as_a_requests_is(shipped_client, tmp_path, co
     assert code == 2 and escaped is None and len(lines) == 1, err
     assert f"{column}: row 4: {words}" in lines[0], lines[0]
     assert "(allowed: a finite number (|value| <= 1e15), text (at most 200" in lines[0]
+
+
+# -- 6. no FE solve offered for a design the FE refuses too ----------------------------------
+
+@pytest.mark.parametrize("design", [
+    {"W_mm": 1, "L_mm": 6, "t_mm": 0.15},                          # b 1.8 mm in W 1 mm
+    {"L_mm": 7.1, "t_mm": 0.5,
+     "body_material": {"id": "x", "mu_kpa": [2e-300], "alpha": [3.0]}},  # below the floor
+])
+def test_a_design_the_fe_refuses_too_says_so(shipped_client, design):
+    """A design refused for itself (a chamber wider than the actuator, a material softer
+    than the FE's floor) was answered as a model's refusal is, and the explorer offered an
+    FE solve that POST /v1/solve then refused: the problem now says fe_solvable false."""
+    r = shipped_client.post("/v1/predict", json={"design": design, "pressures_pa": [1000]})
+    assert r.status_code == 422 and r.json().get("fe_solvable") is False, r.text
+    s = shipped_client.post("/v1/solve", json={"design": design},
+                            headers={"X-API-Key": "test-key"})
+    assert s.status_code == 422 and s.json()["errors"] == r.json()["errors"], s.text
+
+
+def test_a_models_refusal_leaves_the_fe_solve_open(shipped_client):
+    """The guard: outside the emulator's box the FE solve is still offered."""
+    r = shipped_client.post("/v1/predict", json={"design": {"L_mm": 30, "t_mm": 0.5},
+                                                 "pressures_pa": [1000]})
+    assert r.status_code == 422 and "fe_solvable" not in r.json(), r.text
+
+
+@pytest.mark.timeout(300)
+def test_the_explorer_offers_no_solve_for_a_design_the_fe_refuses(watched, server):
+    """#W_mm=1&L_mm=6&t_mm=0.15 (the chamber's 1.8 mm width in a 1 mm actuator) and a body
+    stiffness scale of 1e-300 (a modulus below the FE's floor): the page said "The FE
+    solver can compute it" and offered a solve the server refused; now the refusal is
+    named beside the field and no solve is offered."""
+    from explorer_browser import screenshot
+
+    page = watched.page
+    for fragment, slot in (("#W_mm=1&L_mm=6&t_mm=0.15", "#err-b_mm"),
+                           ("#body_scale=1e-300", "#err-body_material")):
+        page.goto("about:blank")
+        page.goto(server.url + "/" + fragment)
+        page.wait_for_selector("body[data-ready=true]")
+        page.wait_for_selector(f"{slot}:not([hidden])")
+        assert page.locator("#refused").is_hidden(), fragment
+    screenshot(page, "explorer-no-solve-for-a-refused-design")

@@ -617,6 +617,9 @@ async function applySchemaLimits() {
 
 async function offersSolve(err, body) {
   if (!(err instanceof ApiError) || err.status !== 422 || !body) return false;
+  // the design itself refused (a chamber wider than the actuator, a material softer than
+  // the FE's floor): the FE solve refuses it the same way
+  if (err.problem && err.problem.fe_solvable === false) return false;
   const errs = err.fieldErrors;
   // the emulator's out-of-box refusal names the design field (["body", "design", "L_mm"];
   // servers before 2026-12-05 named it bare, ["body", "L_mm"])
