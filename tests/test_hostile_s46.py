@@ -291,3 +291,13 @@ def test_the_explorer_offers_no_solve_for_a_design_the_fe_refuses(watched, serve
         page.wait_for_selector(f"{slot}:not([hidden])")
         assert page.locator("#refused").is_hidden(), fragment
     screenshot(page, "explorer-no-solve-for-a-refused-design")
+
+
+def test_accept_xml_is_answered_in_json_as_documented(shipped_client):
+    """The guard of a decision (docs/service.md, Errors): the service disregards Accept
+    (RFC 9110 section 12.5.1) rather than answer 406."""
+    r = shipped_client.get("/v1/materials", headers={"Accept": "application/xml"})
+    assert r.status_code == 200 and r.headers["content-type"].startswith("application/json")
+    r = shipped_client.get("/v1/curves/nosuch", headers={"Accept": "application/xml"})
+    assert r.status_code == 404
+    assert r.headers["content-type"].startswith("application/problem+json")
