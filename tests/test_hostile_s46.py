@@ -1,9 +1,11 @@
 """The forty-sixth session's hostile-input audit, round seven (after tests/test_hostile_s45.py):
 the explorer's view in the address (a link's bad values named with what each allows,
-their text escaped and cut, a repeated key, fifty thousand keys), and a design search
-whose target angle lies past every FE curve at a budget's pressure or volume.
+their text escaped and cut, a repeated key, fifty thousand keys); a design search whose
+target angle lies past every FE curve at a budget's pressure or volume; a --where that
+meets no record; a list option's word that is no number; a JSON data file's cells held to
+the request's rule; a design the FE refuses too (no FE solve offered); Accept disregarded.
 
-Each test failed on the code before its fix (commit messages say which).
+Each test failed on the code before its fix (commit messages say which), bar the guards.
 """
 
 from __future__ import annotations
