@@ -68,16 +68,24 @@ class Parser(argparse.ArgumentParser):
         """argparse's "argument --L-mm: invalid float value: 'abc'" as "'abc' is not a
         number", with the form numbers are written in and the option's allowed range when
         it carries one (service.commands.numbers)."""
+        listed = re.fullmatch(r"argument (\S+): (.* is not a list of numbers \(.*)\)", message)
+        if listed is not None:   # a list option's word (service.commands.predict.number_list)
+            allowed = self._allowed(listed[1])
+            return message if allowed is None else f"{message[:-1]}; allowed: {allowed})"
         match = re.fullmatch(r"argument (\S+): invalid (float|int) value: (.*)", message)
         if match is None:
             return message
         form = NUMBER_FORM if match[2] == "float" else INTEGER_FORM
         what = "a number" if match[2] == "float" else "a whole number"
-        allowed = next((a.allowed for a in self._actions   # type: ignore[attr-defined]
-                        if getattr(a, "allowed", None)
-                        and "/".join(a.option_strings) == match[1]), None)
+        allowed = self._allowed(match[1])
         return (f"argument {match[1]}: {match[3]} is not {what} ({form}"
                 + (f"; allowed: {allowed})" if allowed else ")"))
+
+    def _allowed(self, option: str) -> str | None:
+        """The allowed range attached to ``option`` (service.commands.numbers), if any."""
+        return next((a.allowed for a in self._actions   # type: ignore[attr-defined]
+                     if getattr(a, "allowed", None) and "/".join(a.option_strings) == option),
+                    None)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -30,14 +30,17 @@ def to_design(design: DesignIn | dict[str, Any], loc: tuple[str, ...] = ("body",
             else json.dumps(design, sort_keys=True))
     try:
         resolved = _design_from_json(text)
-    except InputError as exc:
-        raise located(exc, loc) from None
+    except InputError as exc:   # the design itself: POST /v1/solve refuses it the same way
+        refused = located(exc, loc)
+        refused.design_refused = True
+        raise refused from None
     for role in ("body_material", "membrane_material"):
         material = getattr(resolved, role)
         what = reused_id(material)      # one id, one set of parameters
         if what is not None:
             raise FieldError((*loc, role, "id"), f"inline material reuses the {what} "
-                             f"{material.id!r} with other parameters", REUSED_ID_ALLOWED)
+                             f"{material.id!r} with other parameters", REUSED_ID_ALLOWED,
+                             design_refused=True)
     return resolved
 
 

@@ -82,18 +82,23 @@ class FieldError(InputError):
     """An InputError located in the request: ``loc`` is the full path, e.g.
     ``("body", "design", "t_mm")``; ``others`` are further fields of the same refusal
     (a design outside the box in several lengths), each a FieldError; ``nearest``: an
-    out-of-box refusal's nearest design inside the box (a ``solver.design.Design``)."""
+    out-of-box refusal's nearest design inside the box (a ``solver.design.Design``);
+    ``design_refused``: the design itself is refused (its geometry or a material, as
+    ``service.convert.to_design`` checks it), so an FE solve of it is refused the same way:
+    the problem says ``"fe_solvable": false`` (a model's refusal, such as out-of-box,
+    leaves the FE solve open)."""
 
     def __init__(self, loc: tuple[str | int, ...], message: str,
                  allowed: str | None = None, kind: str = "invalid-input",
                  others: tuple[FieldError, ...] = (), allowed_said: bool = False,
-                 nearest: Any = None) -> None:
+                 nearest: Any = None, design_refused: bool = False) -> None:
         super().__init__(".".join(str(p) for p in loc[1:]) or str(loc[0]), message, allowed,
                          allowed_said=allowed_said)
         self.loc = loc
         self.kind = kind
         self.others = others
         self.nearest = nearest
+        self.design_refused = design_refused
 
 
 def located(exc: InputError, prefix: tuple[str | int, ...],
@@ -169,6 +174,8 @@ def problem_for(exc: BaseException) -> Problem:
         errors = [_error_entry(e) for e in (exc, *getattr(exc, "others", ()))]
         nearest = getattr(exc, "nearest", None)
         extra = {} if nearest is None else {"nearest_design": _nearest_design(nearest)}
+        if getattr(exc, "design_refused", False):
+            extra["fe_solvable"] = False
         return Problem(422, "Invalid input", str(exc), kind, errors=errors, extra=extra)
     if isinstance(exc, NotFoundError):
         return Problem(404, "Not found", str(exc), "not-found")

@@ -170,6 +170,15 @@ def no_design_explanation(model: object, target: DesignTarget, seen: SearchSeen,
                        f"{reaching}{direction * reach:.3g} deg {target.at_text()}): no "
                        f"angle past it is known; ask for at most {end:.4g} deg in size "
                        "(angle_deg)")
+    elif what == "angle" and not reach and target.value > DATABASE_ANGLE_STOP_DEG:
+        # no design has a number at the budget's end (each past its FE range there)
+        # and no FE curve gets past the angle: 179 deg within 20 kPa said "widen the
+        # bounds ... or raise the pressure", at the pressure stop
+        explanation = (f"the target angle {direction * target.value:g} deg lies past "
+                       f"the FE's range, which ends at "
+                       f"{direction * DATABASE_ANGLE_STOP_DEG:g} deg for every design: "
+                       f"no angle past it is known; ask for at most "
+                       f"{DATABASE_ANGLE_STOP_DEG:g} deg in size (angle_deg)")
     else:
         # a force target: more pressure helps only as far as the best design's force
         # is given (its blocked-tip FE curve ends at a pressure maximum, or its free

@@ -158,8 +158,34 @@ def run_ls(args: argparse.Namespace) -> int:
               f"{d['T_mm']:5.2f}  {d['body_material'] + '/' + d['membrane_material']:28}  "
               f"{str(s['mesh_level']) + ' ' + s['element']:6}  {row['n_steps']:5d}  "
               f"{float(row['provenance'].get('wall_time_s', 0.0)):7.1f}")
-    print(f"{len(rows)} records", file=sys.stderr)
+    print(f"{len(rows)} records{none_met(db, filters) if not rows else ''}", file=sys.stderr)
     return 0
+
+
+def none_met(db: Any, filters: dict[str, object]) -> str:
+    """Words on each filter that no record of ``db`` meets by itself, with what the records
+    hold: "; no record has body_material 'garbage' (the records hold: ecoflex_00_30,
+    pdms_1_10, pdms_1_15 and 1849 scaled ids, <preset>*<scale>)", or a number's range --
+    a custom id may be any word, so a misspelt one is a filter that meets nothing, not an
+    error. "" when each filter alone meets some record."""
+    from solver.store.hdf5 import summary_field
+
+    words = []
+    for name, value in filters.items():
+        if db.summaries(**{name: value}):
+            continue
+        held = {summary_field(row, name) for row in db.summaries()}
+        numbers = sorted(v for v in held if isinstance(v, int | float))
+        texts = sorted(str(v) for v in held if not isinstance(v, int | float))
+        plain = [v for v in texts if "*" not in v]
+        span = ([] if not numbers else [f"{numbers[0]:g}"] if len(numbers) == 1 else
+                [f"from {numbers[0]:g} to {numbers[-1]:g} ({len(numbers)} values)"])
+        parts = span + plain
+        if len(texts) > len(plain):
+            parts.append(f"{len(texts) - len(plain)} scaled ids, <preset>*<scale>")
+        words.append(f"; no record has {name} {value!r} (the records hold: "
+                     f"{', '.join(parts) or 'nothing'})")
+    return "".join(words)
 
 
 def run_seal(args: argparse.Namespace) -> int:
@@ -241,6 +267,7 @@ def run_export(args: argparse.Namespace) -> int:
     check_output(args.output, "--output", inputs=(("the database", args.db),))
     with CurveStore(args.db) as db:
         records = selected(db, args)
+        hint = none_met(db, query_filters(args)) if not records else ""
     if args.output == "-":
         _export(records, args.format, sys.stdout)
     else:   # a full disk leaves the former file, not half of the new one
@@ -249,7 +276,7 @@ def run_export(args: argparse.Namespace) -> int:
         with atomic_output(args.output) as tmp, open(tmp, "w", newline="",
                                                      encoding="utf-8") as out:
             _export(records, args.format, out)
-    print(f"exported {len(records)} records", file=sys.stderr)
+    print(f"exported {len(records)} records{hint}", file=sys.stderr)
     return 0
 
 

@@ -36,6 +36,7 @@ from service.commands.predict import (
     renamed_as_options,
     surrogate_from_args,
 )
+from service.pump import MAX_ANGLE_DEG
 from solver.errors import InputError
 from surrogate.design_search import N_RESULTS_MAX
 from surrogate.design_target import DEFAULT_KIND, KINDS, OBJECTIVES
@@ -98,7 +99,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n")[1])
     add_design_arguments(parser, required=False)
     add_number_list(parser, "--angles-deg", "DEG",
-                    "one design (--L-mm, --t-mm): the pressures for these angles")
+                    "one design (--L-mm, --t-mm): the pressures for these angles",
+                    (-MAX_ANGLE_DEG, MAX_ANGLE_DEG, "deg"))
     parser.add_argument("--kind", choices=KINDS, default=None,
                         help=f"design target (default {DEFAULT_KIND}; force_at_pressure "
                              "with --force-mn, angle_at_volume with --volume-ul, "

@@ -18,7 +18,8 @@ import os
 import re
 from pathlib import Path
 
-from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges
+from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges, number_action
+from service.pump import AXES
 from solver.number_text import NUMBER_FORM, ascii_float
 from surrogate.predictor import MAX_ASKED_VALUES
 
@@ -58,9 +59,13 @@ class NumberListAction(argparse.Action):
 
 
 def add_number_list(parser: argparse._ActionsContainer, flag: str, metavar: str,
-                    help: str) -> None:
-    parser.add_argument(flag, type=number_list, nargs="+", action=NumberListAction,
-                        metavar=metavar, help=f"{help} (spaces or commas between them)")
+                    help: str, allowed: tuple[float, float, str]) -> None:
+    """A list option whose values lie in ``allowed`` (low, high, unit): a word that is no
+    list of numbers is told the range too (service.commands.numbers)."""
+    number_action(parser.add_argument(flag, type=number_list, nargs="+",
+                                      action=NumberListAction, metavar=metavar,
+                                      help=f"{help} (spaces or commas between them)"),
+                  *allowed)
 
 
 def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True) -> None:
@@ -303,11 +308,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                    description=__doc__.split("\n\n")[0].replace("``", ""))
     add_design_arguments(parser)
     group = parser.add_mutually_exclusive_group(required=True)
-    add_number_list(group, "--pressures", "PA", "pressures, Pa")
+    add_number_list(group, "--pressures", "PA", "pressures, Pa", AXES["pressures_pa"])
     group.add_argument("--pressure-range", type=float, nargs=3, metavar=("START", "STOP", "NUM"),
                        help="NUM evenly spaced pressures from START to STOP, Pa")
-    add_number_list(group, "--volumes", "UL", "injected volumes, ul (the emulator)")
-    add_number_list(group, "--times", "S", "times since the pump started, s (with --flow-ul-s)")
+    add_number_list(group, "--volumes", "UL", "injected volumes, ul (the emulator)",
+                    AXES["volumes_ul"])
+    add_number_list(group, "--times", "S", "times since the pump started, s (with --flow-ul-s)",
+                    AXES["times_s"])
     add_pump_arguments(parser)
     parser.add_argument("--pressures-at", choices=("chamber", "pump_gauge"), default="chamber",
                         help="where --pressures were read (pump_gauge: with --inlet and "
@@ -319,7 +326,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from service.pump import AXES, PumpQuestion, predict_answer
+    from service.pump import PumpQuestion, predict_answer
     from solver.errors import InputError
 
     try:

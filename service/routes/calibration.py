@@ -6,7 +6,6 @@ augmented model (``save``) changes server state, so it needs the API key.
 
 from __future__ import annotations
 
-import math
 import threading
 from pathlib import Path
 from typing import Annotated, Any
@@ -29,6 +28,7 @@ from service.schemas import Schema
 from service.schemas._ranges import field_ranges
 from service.schemas.common import MATERIAL_ID
 from solver.errors import ExistsError, InputError
+from surrogate.measured_cell import CELL_WORDS, cell_problem
 
 router = APIRouter(prefix="/v1", tags=["calibration"])
 
@@ -48,24 +48,13 @@ EXAMPLE_ROWS_BY_VOLUME = [
     | {"volume_ul": 2.5 * row["time_s"]} for row in EXAMPLE_ROWS]
 
 
-MAX_CELL_INT = 10**15  # larger integers are no measurement (and overflow a float)
-
-
 def _cell(value: Any) -> Any:
-    """One value of a measured row: a finite number, text or null; named by its row and
-    column in the 422 (a 400-digit integer, true, a list are input errors, not a 500)."""
-    if value is None or isinstance(value, str):
-        if isinstance(value, str) and len(value) > 200:
-            raise ValueError(f"text of {len(value)} characters (at most 200)")
-        return value
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{type(value).__name__} is not a measured value: give a number, "
-                         "text or null")
-    if isinstance(value, int) and abs(value) > MAX_CELL_INT:
-        raise ValueError(f"an integer of {len(str(abs(value)))} digits is out of range "
-                         f"(|value| <= 1e15)")
-    if not math.isfinite(value):
-        raise ValueError("NaN and infinity are not measured values")
+    """One value of a measured row (``surrogate.measured_cell``'s rule, a data file's too):
+    named by its row and column in the 422 (a 400-digit integer, true, a list are input
+    errors, not a 500)."""
+    problem = cell_problem(value)
+    if problem is not None:
+        raise ValueError(problem)
     return value
 
 
@@ -98,8 +87,7 @@ class CalibrateRequest(Schema):
 # its limits stated in every validation error, as the other requests' are
 FIELD_RANGES.update(field_ranges([CalibrateRequest]))
 FIELD_FORMS["save"] = "a new name of " + name_rule()
-FIELD_RANGES["rows.*"] = ("a finite number (|value| <= 1e15), text (at most 200 characters) "
-                          "or null; each column's range: docs/measured-data.md")
+FIELD_RANGES["rows.*"] = CELL_WORDS
 
 
 class Candidate(BaseModel):

@@ -103,6 +103,11 @@ def check_filter(name: str, value: object) -> None:
         raise InputError("status", f"got {value!r}", " | ".join(STATUSES))
 
 
+def summary_field(row: dict[str, Any], name: str) -> object:
+    """A summary's (``CurveStore.summaries``) value of a query field (QUERY_FIELDS)."""
+    return {**row["settings"], **row["design"], "status": row["status"]}.get(name)
+
+
 def _matches(value: object, wanted: object) -> bool:
     if isinstance(wanted, (int, float)) and not isinstance(wanted, bool):
         return isinstance(value, (int, float)) and math.isclose(
@@ -299,8 +304,7 @@ class CurveStore:
                     with self._reading(k):
                         rows.append(schema.read_summary(group[k]))
         return [row for row in rows
-                if all(_matches({**row["settings"], **row["design"], "status": row["status"]}
-                                .get(k), v) for k, v in filters.items())]
+                if all(_matches(summary_field(row, k), v) for k, v in filters.items())]
 
     def records(self, status: str | None = None) -> Iterator[Record]:
         """Every record (in key order), optionally only those with ``status``."""

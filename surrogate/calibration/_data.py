@@ -46,6 +46,7 @@ from surrogate.calibration._measured_volume import (
 )
 from surrogate.calibration._pump_clock import clock_warning
 from surrogate.json_repeats import loads_with_repeats
+from surrogate.measured_cell import CELL_WORDS, cell_problem
 from surrogate.volume_control import MAX_FLOW_UL_S, MIN_FLOW_UL_S
 
 REQUIRED = ("curve_id", "L_mm", "t_mm", "body_material", "membrane_material",
@@ -922,6 +923,10 @@ def load_observations(path: str | Path, strict: bool = False) -> Observations:
                             "guessed", index[0] + 1 if index else None,
                             "each column once per row")
         rows = data.get("rows") if isinstance(data, dict) else data
+        for i, row in enumerate(rows if isinstance(rows, list) else []):
+            for column, value in (row.items() if isinstance(row, dict) else ()):
+                if (problem := cell_problem(value)) is not None:  # as POST /v1/calibrate
+                    raise DataError(str(column)[:60], problem, i + 1, CELL_WORDS)
         return observations_from_rows(rows, strict)  # type: ignore[arg-type]
     return observations_from_rows(read_csv_rows(text), strict)
 

@@ -11,10 +11,10 @@ import {
   FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
   materialLabel, pairLabel, scaledLengths, shown, stateOfDesign, takeScaleLimits,
 } from "./design.js";
-import { checkNumber, numberBoxes, readNumber } from "./fields.js";
+import { allowedWords, checkNumber, numberBoxes, readNumber } from "./fields.js";
 import { setupInverse } from "./inverse.js";
 import { curveEnd, jobText, nearestStep } from "./job.js";
-import { readLink, writeLink } from "./link.js";
+import { linkNote, readLink, writeLink } from "./link.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
 import { renderSketch } from "./sketch.js";
 import { $, csvCell, download, fmt, fmtSig } from "./util.js";
@@ -112,7 +112,7 @@ function addField(box, f, onValue) {
     // A width or a stiffness scale <= 0 is no design at all: named here (a scale of -1 was
     // sent as a material of negative moduli and offered an FE solve the server refused)
     const text = num.value.trim();
-    const allowed = `allowed: ${allowedText(f, fieldRange(f, app.state.W_mm))}`;
+    const allowed = fieldAllowed(f);
     const read = text === "" ? { error: `empty (${allowed})` } : readNumber(text, allowed);
     const v = read.value;
     if (read.error || ((f === W_FIELD || f.unit === "x") && !(v > 0))) {
@@ -126,6 +126,11 @@ function addField(box, f, onValue) {
     range.value = String(v);
     onValue(v);
   });
+}
+
+// "allowed: 4 to 18 mm": a design field's range at the design's width, in an error's words.
+function fieldAllowed(f) {
+  return `allowed: ${allowedText(f, fieldRange(f, app.state.W_mm))}`;
 }
 
 // A field's allowed values in an error's words.
@@ -396,11 +401,22 @@ function applyLink(hash, reset = false) {
   app.wantAxes = v.x || v.y ? { x: v.x, y: v.y } : null;
   // the readout's point, on the curve's grid (one past its end is named, not moved)
   const max = gridMax();
-  if (v.at !== undefined && v.at > max) link.ignored.push("at");
+  if (v.at !== undefined && v.at > max) link.ignored.push({ key: "at", value: String(v.at), why: "invalid" });
   app.opFraction = v.at !== undefined && v.at <= max ? v.at / max : 0.5;
   const note = $("link-note");
   note.hidden = link.ignored.length === 0;
-  note.textContent = link.ignored.length ? `The link's ${link.ignored.join(", ")} ignored (unknown or not a valid value).` : "";
+  note.textContent = linkNote(link.ignored, linkAllowed);
+}
+
+// What a link's key read into a box allows, in the boxes' own words (null: no box).
+function linkAllowed(key) {
+  const field = [W_FIELD, ...FIELDS].find((f) => f.name === key);
+  if (field) return fieldAllowed(field);
+  const a = ASK[askAxis()];
+  if (key === "at") return `allowed: from 0 to ${gridMax()} ${a.unit}`;
+  const box = { max: [a.input, a.unit], flow: ["flow"], tubing: ["tubing_length"], bore: ["tubing_bore"],
+    near: ["nearby"] }[key];
+  return box ? allowedWords($(box[0]), { integer: key === "near", unit: box[1] }) : null;
 }
 
 const DESIGN_SLOTS = () => {
@@ -601,6 +617,9 @@ async function applySchemaLimits() {
 
 async function offersSolve(err, body) {
   if (!(err instanceof ApiError) || err.status !== 422 || !body) return false;
+  // the design itself refused (a chamber wider than the actuator, a material softer than
+  // the FE's floor): the FE solve refuses it the same way
+  if (err.problem && err.problem.fe_solvable === false) return false;
   const errs = err.fieldErrors;
   // the emulator's out-of-box refusal names the design field (["body", "design", "L_mm"];
   // servers before 2026-12-05 named it bare, ["body", "L_mm"])

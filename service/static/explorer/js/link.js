@@ -2,8 +2,10 @@
 // so that a view can be bookmarked, shared and reopened as it was. Pure functions: the
 // fragment is text from anywhere, so only known keys with valid values are taken (numbers
 // finite and > 0, the readout's point and the tubing length finite and >= 0, the pair an
-// index, the axis one of three, the model a name; an empty flow rate, none); the others
-// are returned as ignored, never interpreted.
+// index, the axis one of three, the model a name; an empty flow rate, none; each key
+// once); the others are returned as ignored, with their text, never interpreted, and
+// named on the page with what each allows (``linkNote``: at most MAX_NAMED of them, their
+// text cut and its hidden characters escaped).
 
 import { FIELDS, PAIRS, W_FIELD } from "./design.js";
 
@@ -13,6 +15,19 @@ export const Y_AXES = ["angle", "force"];
 const MAX_NEAR = 6;  // the "Nearest FE curves" field's largest count
 const NUMBER_KEYS = [W_FIELD.name, ...FIELDS.map((f) => f.name)];
 const MODEL = /^[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}$/;
+export const MAX_NAMED = 8;  // ignored keys named in the note; the rest counted
+const KEY_CHARS = 40;        // a key's and a value's text as the note shows it, at most
+const VALUE_CHARS = 20;
+// What the keys not read from a box allow, in the note's words (the boxes' own ranges,
+// which depend on the page's state, come from the page: ``linkNote``'s ``boxAllowed``).
+const ALLOWED = {
+  pair: `allowed: a whole number from 0 to ${PAIRS.length - 1}`,
+  ask: `allowed: ${ASK_AXES.join(", ")}`,
+  x: `allowed: ${X_AXES.join(", ")}`,
+  y: `allowed: ${Y_AXES.join(", ")}`,
+  inlet: "allowed: 0 or 1",
+  model: "allowed: a model's name, up to 64 letters, digits, _ . -",
+};
 
 function positive(text) {
   const v = Number(text);
@@ -25,15 +40,24 @@ function nonNegative(text) {
 }
 
 // {design: {...state keys}, view: {ask, max, flow, inlet, tubing, bore, model, x, y, near, at},
-//  ignored: ["key", ...]}; view.flow null: the link's flow rate is none ("flow=").
+//  ignored: [{key, value, why}, ...]} (why: "unknown", "repeated" or "invalid"); view.flow
+// null: the link's flow rate is none ("flow=").
 export function readLink(hash) {
   const out = { design: {}, view: {}, ignored: [] };
   const text = String(hash || "").replace(/^#/, "");
   if (!text) return out;
-  let params;
-  try { params = new URLSearchParams(text); } catch { out.ignored.push("the whole fragment"); return out; }
+  const params = new URLSearchParams(text);
+  const counts = new Map();
+  for (const key of params.keys()) counts.set(key, (counts.get(key) || 0) + 1);
+  const named = new Set();
   for (const [key, value] of params) {
     let ok = true;
+    const times = counts.get(key);
+    if (times > 1) {  // which one was meant is unknown (HTTP refuses a repeated key too)
+      if (!named.has(key)) out.ignored.push({ key, value: "", why: "repeated", times });
+      named.add(key);
+      continue;
+    }
     if (NUMBER_KEYS.includes(key)) {
       const v = positive(value);
       if (v === null) ok = false; else out.design[key] = v;
@@ -63,11 +87,40 @@ export function readLink(hash) {
       const k = Number(value);
       if (value.trim() !== "" && Number.isInteger(k) && k >= 0 && k <= MAX_NEAR) out.view.near = k; else ok = false;
     } else {
-      ok = false;
+      out.ignored.push({ key, value, why: "unknown" });
+      continue;
     }
-    if (!ok) out.ignored.push(key.slice(0, 40));
+    if (!ok) out.ignored.push({ key, value, why: "invalid" });
   }
   return out;
+}
+
+// Text from the address as the page shows it: cut to ``n`` characters, and each control,
+// bidi-override, zero-width or other invisible character written as its escape (U+202E as
+// \u202e), as the service writes a user's text in its problems (solver/plain_text.py).
+export function shownText(text, n) {
+  const cut = [...String(text)];
+  const head = cut.slice(0, n).join("");
+  const escaped = head.replace(/[\p{Cc}\p{Cf}\p{Cs}\p{Zl}\p{Zp}\p{Cn}]|[^\P{Zs} ]/gu,
+    (c) => `\\u${c.codePointAt(0).toString(16).padStart(4, "0")}`);
+  return cut.length > n ? `${escaped}...` : escaped;
+}
+
+// The note naming the link's ignored keys, each with its text and what it allows (a
+// box's range from ``boxAllowed(key)``, which returns null for a key of no box), the
+// first MAX_NAMED of them, then how many more; "" when none.
+export function linkNote(ignored, boxAllowed) {
+  if (!ignored.length) return "";
+  const named = ignored.slice(0, MAX_NAMED).map(({ key, value, why, times }) => {
+    const k = shownText(key, KEY_CHARS);
+    if (why === "unknown") return `${k} (not a key of a view)`;
+    if (why === "repeated") return `${k} (given ${times} times: allowed once)`;
+    const allowed = ALLOWED[key] || boxAllowed(key) || "allowed: a number above 0";
+    return `${k}=${shownText(value, VALUE_CHARS)} (${allowed})`;
+  });
+  const more = ignored.length - named.length;
+  return `The link's ${named.join("; ")}${more ? `; and ${more} more` : ""}: ignored, the `
+    + "page's own values kept.";
 }
 
 // The fragment of a state (design keys) and view ({ask, max, flow, inlet, tubing, bore
