@@ -231,3 +231,29 @@ def test_workers_end_when_the_job_is_killed_with_sigkill(tmp_path):
         if job.poll() is None:
             job.kill()
             job.wait()
+
+
+def test_a_release_interrupted_by_ctrl_c_can_be_called_again(tmp_path, monkeypatch):
+    """Ctrl-C (KeyboardInterrupt) inside a release, as the descriptor is closed: the
+    outer ``finally`` releases again, and that must neither raise nor touch the closed
+    descriptor (it raised OSError: Bad file descriptor, and under load the number may
+    already be another file's). The lock is free for the next writer after it."""
+    import solver.store.locking as locking
+
+    lock = WriterLock(tmp_path / "c.h5.lock")
+    lock.acquire()
+    real_close = os.close
+
+    def close_then_interrupt(fd: int) -> None:
+        real_close(fd)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(locking.os, "close", close_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        lock.release()
+    monkeypatch.setattr(locking.os, "close", real_close)
+    lock.release()                       # the outer finally's call: a no-op now
+    assert not lock.held
+    nxt = WriterLock(tmp_path / "c.h5.lock")
+    nxt.acquire()
+    nxt.release()

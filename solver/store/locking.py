@@ -197,12 +197,21 @@ class WriterLock:
         return (here.st_dev, here.st_ino) == (mine.st_dev, mine.st_ino)
 
     def release(self) -> None:
-        if self._fd is not None:
-            if self._still_at_path(self._fd):  # not another writer's (ours was deleted)
+        """Let go: the lock file removed (if it is still ours), unlocked and closed. Safe
+        to call again, also when a Ctrl-C interrupted the first call: the descriptor is
+        forgotten before it is closed, so a second release (an outer ``finally``) never
+        unlocks a descriptor that is closed or, by then, another file's (it raised
+        ``OSError: Bad file descriptor`` from the precompute job's Ctrl-C test under
+        load, 2026-12-07)."""
+        fd, self._fd = self._fd, None
+        if fd is None:
+            return
+        try:
+            if self._still_at_path(fd):  # not another writer's (ours was deleted)
                 try:  # removed while held, so that no writer locks it after
                     os.unlink(self.path)
                 except OSError:  # a directory that takes no change: it blocks nothing
                     pass
-            fcntl.flock(self._fd, fcntl.LOCK_UN)
-            os.close(self._fd)
-            self._fd = None
+            fcntl.flock(fd, fcntl.LOCK_UN)
+        finally:
+            os.close(fd)
