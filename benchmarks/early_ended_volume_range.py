@@ -52,7 +52,7 @@ def with_end_volumes(emulator, db_path: str):
     from surrogate.emulator.database_rows import collect_rows
 
     with CurveStore(db_path) as db:
-        free, _ = collect_rows(db.records())
+        free, _, _ = collect_rows(db.records())
     pairs = {}
     for key, pe in emulator.pairs.items():
         rows = free[key[:-1]]
