@@ -6,7 +6,9 @@ designs they were not made on; the forty-third session's fresh sets N6-N13 on th
 (D11-D13: a stiffness-scaled body, the reversed pair, PDMS 1:15), their truths and seeds
 written here before any was calibrated; the forty-fifth session's fresh sets N14-N21 on
 three more (D14-D16: Ecoflex/Ecoflex, a membrane-scaled Ecoflex x 0.8, a short PDMS 1:10
-body), likewise.
+body), likewise; the forty-sixth session's fresh sets N22-N29 on three more (D17-D19:
+the reversed pair bending towards its membrane, a long body `pdms_1_10*1.6`, a thick
+membrane), likewise.
 
 Ten designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
@@ -28,12 +30,18 @@ chamber), air in the line with the gauge's zero off, and a camera whose time sta
 without a hold, a fast and a slow pump, pressures in mbar or psi and times in ms (the
 unit in the header); for N14-N21 also a membrane 10 % softer (its FE solves), Mullins
 softening on the unloading (outside the catalogue), and readings every 0.5 s, hPa, inH2O,
-one specimen run four times, a loading without an unloading and a hold of 30 s.
+one specimen run four times, a loading without an unloading and a hold of 30 s; for
+N22-N29 also a membrane 0.08 mm thicker (its FE solves), a gauge drifting at +4 Pa/s,
+an inlet with air in the line at two flow rates, the moduli drifting over the session (a
+lamp warming the rig: outside the catalogue), creep of the bend, a camera gain with the
+gauge's zero off, and a staircase of holds, angles in radians, the pump's volume in ml
+(with and without time), mmHg, time as mm:ss text, a units row under the header, a wide
+layout with a column per specimen, and 4 readings a curve on 2 specimens.
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
-The first solves what the cache lacks (27 + 12 + 12 + 12 solves of 15-90 s; run alone) and
+The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
 writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the eleven sets
 with the pump's log that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
@@ -88,10 +96,20 @@ DESIGNS = {
                 body_material="pdms_1_15", membrane_material="ecoflex_00_30*0.8"),
     "D16": dict(L_mm=5.1, t_mm=0.55, T_mm=0.8, b_mm=1.25, h_mm=0.28,
                 body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
+    # the forty-sixth session's designs, solved for the fresh sets N22-N29 only: the
+    # reversed pair bending towards its membrane, a long stiffened body, a thick membrane
+    "D17": dict(L_mm=8.8, t_mm=0.92, T_mm=1.42, b_mm=2.3, h_mm=0.14,
+                body_material="ecoflex_00_30", membrane_material="pdms_1_15"),
+    "D18": dict(L_mm=15.4, t_mm=0.7, T_mm=1.05, b_mm=1.5, h_mm=0.22,
+                body_material="pdms_1_10*1.6", membrane_material="ecoflex_00_30"),
+    "D19": dict(L_mm=11.6, t_mm=1.12, T_mm=1.6, b_mm=2.15, h_mm=0.13,
+                body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
 }
 # a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
 VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12),
             "_m0.9": ("membrane_material", 0.9)}
+# a specimen's FE solves with its membrane thicker: cache suffix -> added thickness (mm)
+THICKER = {"_t+0.08": 0.08}
 T_FACTORS = {"a": 0.96, "b": 1.0, "c": 1.045}   # the specimens' membrane thickness
 SPECIMENS = ["a", "b", "c"]
 STATE = {1: "load", 0: "hold", -1: "unload"}
@@ -172,10 +190,51 @@ SETS = {
     "N21-inlet+offset-fast-D16": ("D16", [None], 0.5, 8, 2, 6,
                                   {"kind": "inlet+angle_offset", "R_pa_per_ul_s": 120.0,
                                    "deg": -2.0}, 48, {"p_unit": "hPa"}),
+    # the forty-sixth session's fresh sets, truths and seeds fixed before any calibration:
+    # new lab habits (angles in radians, the pump's volume in ml, a units row under the
+    # header, a staircase of holds, two flow rates in one file, time as mm:ss text, a wide
+    # layout with one column per specimen, 4 readings a curve on 2 specimens, mmHg, a
+    # volume log without time)
+    "N22-clean-reversed-D17": ("D17", [None], 2.0, 7, 3, 4, {}, 51,
+                               {"a_unit": "rad", "v_unit": "ml"}),
+    # a spin-coated membrane batch 0.08 mm thicker than drawn (its FE solves)
+    "N23-membrane-thicker-D18": ("D18", [None], 2.0, 7, 3, 4, {"kind": "membrane_thicker"}, 52,
+                                 {"fe_suffix": "_t+0.08", "units_row": True}),
+    # the gauge's zero running away at +4 Pa/s; the pump in three steps, each held 6 s
+    "N24-drift-staircase-D19": ("D19", [None], 2.0, 0, 0, 0,
+                                {"kind": "gauge_drift", "pa_per_s": 4.0}, 53,
+                                {"program": [(1, 3), (0, 3), (1, 3), (0, 3), (1, 3), (0, 3),
+                                             (-1, 6)]}),
+    # 1 m of soft 0.5 mm bore tubing: an inlet of 100 Pa per ul/s and 2 ul/kPa of
+    # compliance; the same specimens at two flow rates (3 ul/s and 1 ul/s), time in ms
+    "N25-inlet+air-two-flows-D17": ("D17", [3.0, 1.0], 1.0, 10, 3, 5,
+                                    {"kind": "compliance+inlet", "C_ul_per_kpa": 2.0,
+                                     "R_pa_per_ul_s": 100.0}, 54, {"t_unit": "ms"}),
+    # outside the catalogue: a lamp warming the rig, both layers' moduli x (1 - 0.0006 per
+    # s of the session); the three specimens run twice in turn (S1, S2, S3, S1, ...) with
+    # 30 s between curves; time written as mm:ss text
+    "N26-warming-session-D18": ("D18", [None, None], 2.0, 7, 3, 4,
+                                {"kind": "session_drift", "per_s": -0.0006, "gap_s": 30.0},
+                                55, {"t_fmt": "mmss"}),
+    # creep of the silicone (g 0.2, tau 4 s) in a wide layout: one row per time, a
+    # pressure and an angle column per specimen
+    "N27-creep-wide-D19": ("D19", [None], 2.0, 7, 4, 5,
+                           {"kind": "creep", "g": 0.2, "tau_s": 4.0}, 56, {"layout": "wide"}),
+    # the mount tilted +2.5 deg; 2 specimens read at 4 points each (rest and 3 loading)
+    "N28-offset-few-points-D17": ("D17", [None], 3.0, 3, 0, 0,
+                                  {"kind": "angle_offset", "deg": 2.5}, 57, {"specimens": 2}),
+    # the angle tool's scale 7 % short (angle x 0.93) and the gauge's zero 50 Pa low; the
+    # pump's volume log in ml and no time, pressures in mmHg
+    "N29-camera-gain+zero-volume-only-D18": ("D18", [None], 2.0, 7, 3, 4,
+                                             {"kind": "camera_gain+gauge_offset", "k": 0.93,
+                                              "pa": -50}, 58,
+                                             {"v_unit": "ml", "no_time_flow": True,
+                                              "p_unit": "mmHg"}),
 }
 # the pressure and time units a lab writes: unit -> (per Pa or per s, decimals)
 PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4),
-                  "hPa": (1e-2, 2), "inH2O": (1 / 249.08891, 3)}
+                  "hPa": (1e-2, 2), "inH2O": (1 / 249.08891, 3),
+                  "mmHg": (1 / 133.322387415, 3)}
 TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0)}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
 # test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
@@ -202,7 +261,9 @@ def solve_missing(cache: Path) -> None:
         if path.exists():
             continue
         kw = dict(DESIGNS[d], t_mm=round(DESIGNS[d]["t_mm"] * T_FACTORS[k], 4))
-        if suffix:
+        if suffix in THICKER:
+            kw["t_mm"] = round((DESIGNS[d]["t_mm"] + THICKER[suffix]) * T_FACTORS[k], 4)
+        elif suffix:
             layer, factor = VARIANTS[suffix]
             preset, _, scale = kw[layer].partition("*")
             kw[layer] = f"{preset}*{round(float(scale or 1) * factor, 6):g}"
@@ -233,6 +294,19 @@ def pump_volume(t: np.ndarray, q: float, dt: float, n_load: int, n_hold: int) ->
     t_load, t_hold = n_load * dt, (n_load + n_hold) * dt
     return np.where(t <= t_load, q * t, np.where(
         t <= t_hold, q * t_load, np.maximum(q * t_load - q * (t - t_hold), 0.0)))
+
+
+def pump_volume_program(t: np.ndarray, q: float, dt: float,
+                        program: list[tuple[int, int]]) -> np.ndarray:
+    """The syringe's volume (ul) at times t for a program of (direction, readings) steps:
+    in at q (+1), stopped (0), withdrawn at q (-1), never below empty."""
+    rate = np.zeros_like(t)
+    start = 0.0
+    for direction, count in program:
+        rate[(t > start) & (t <= start + count * dt)] = direction * q
+        start += count * dt
+    v = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
+    return np.maximum(v, 0.0)
 
 
 def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -270,20 +344,34 @@ def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray
 def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
              rng: np.random.Generator, effect: dict) -> dict:
     """One curve as the camera and the gauge read it, from rest at t = 0."""
-    states = [1] * n[0] + [0] * n[1] + [-1] * n[2]
+    program = effect.get("program")
+    states = ([d for d, k in program for _ in range(k)] if program
+              else [1] * n[0] + [0] * n[1] + [-1] * n[2])
     t = dt * np.arange(len(states) + 1)
     fine = np.arange(0, t[-1] + H_S / 2, H_S)
     kinds = effect.get("kind", "").split("+")
-    vp = pump_volume(fine, q, dt, n[0], n[1])
+    vp = (pump_volume_program(fine, q, dt, program) if program
+          else pump_volume(fine, q, dt, n[0], n[1]))
     vch, p = chamber(c, s, vp, effect)
     a = c["a"](np.clip(vch, 0, c["vmax"]))
+    if "session_drift" in kinds:                 # both layers' moduli drift with the session
+        p = p * (1 + effect["per_s"] * (effect["t0_s"] + fine))
+    if "creep" in kinds:                         # the bend creeps: a standard linear solid
+        y = np.zeros_like(a)
+        for i in range(1, a.size):
+            y[i] = y[i - 1] + H_S * (a[i - 1] - y[i - 1]) / effect["tau_s"]
+        a = (1 - effect["g"]) * a + effect["g"] * y
     if "inlet" in kinds:                         # the gauge at the pump: R times the flow
         flow = np.concatenate([[0.0], np.diff(vp) / H_S])    # just before each stamp
         p = p + effect["R_pa_per_ul_s"] * flow
     if "camera_lag" in kinds:                    # each frame shows the bend s earlier
         a = np.concatenate([np.zeros(round(effect["s"] / H_S)), a])[:a.size]
     idx = np.round(t / H_S).astype(int)
-    p, a = p[idx], a[idx]
+    p, a, v_pump = p[idx], a[idx], vp[idx]
+    if "gauge_drift" in kinds:                   # the gauge's zero running away
+        p = p + effect["pa_per_s"] * t
+    if "camera_gain" in kinds:                   # the angle tool's scale off
+        a = a * effect["k"]
     if "angle_offset" in kinds:                  # the mount tilted
         a = a + effect["deg"]
     if "tilted_camera" in kinds:                 # the bending plane seen at phi
@@ -294,7 +382,10 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
     zero = rng.normal(0, 3)
     p = p + zero + rng.normal(0, 1, t.size) * (0.015 * np.abs(p) + 2.0)
     a = a + rng.normal(0, 0.7, t.size)
-    return dict(t=t, state=[1, *states], p=p, a=a, q=q)
+    return dict(t=t, state=[1, *states], p=p, a=a, q=q, v=v_pump)
+
+
+HABITS = ("a_unit", "v_unit", "units_row", "t_fmt", "layout", "no_time_flow")
 
 
 def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
@@ -309,14 +400,25 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     v_top = volume_at_angle(fe_curve(cache, f"{d}b{suffix}"), kw.get("angle_target", 75))
     p_unit, t_unit = kw.get("p_unit", "kPa"), kw.get("t_unit", "s")
     (p_per_pa, p_nd), (t_per_s, t_nd) = PRESSURE_UNITS[p_unit], TIME_UNITS[t_unit]
+    program = kw.get("program")
+    n_in = sum(k for way, k in program if way == 1) if program else n_load
+    t_curve = dt * (sum(k for _, k in program) if program else n_load + n_hold + n_unload)
     rows = []
     for run, q in enumerate(flows, 1):
         for k, sp in enumerate(SPECIMENS[:kw.get("specimens", len(SPECIMENS))]):
-            qq = v_top / (n_load * dt) if q is None else q
+            qq = v_top / (n_in * dt) if q is None else q
+            session_s = (len(rows) // (round(t_curve / dt) + 1)) * (t_curve
+                                                                     + effect.get("gap_s", 0))
+            ef = dict(effect, program=program, t0_s=session_s) if program or (
+                effect.get("kind") == "session_drift") else effect
             r = readings(fe_curve(cache, f"{d}{sp}{suffix}"), stiff[sp], qq, dt,
-                         (n_load, n_hold, n_unload), rng, effect)
+                         (n_load, n_hold, n_unload), rng, ef)
             rows += [(f"S{k + 1}", run, r["t"][i] * t_per_s, qq, r["p"][i] * p_per_pa,
-                      r["a"][i], STATE[r["state"][i]]) for i in range(r["t"].size)]
+                      r["a"][i], STATE[r["state"][i]], r["v"][i]) for i in range(r["t"].size)]
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"{file_name or name}.csv"
+    if any(h in kw for h in HABITS):
+        return write_habits(path, name, effect, nominal, rows, kw)
     sep, dec = (";", ",") if kw.get("fmt", "semicolon") == "semicolon" else (",", ".")
     geometry = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
     header = ["curve_id", "run", *geometry, "body_material", "membrane_material",
@@ -325,14 +427,12 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
 
     def num(x: float, nd: int) -> str:
         return f"{x:.{nd}f}".replace(".", dec)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / f"{file_name or name}.csv"
     with open(path, "w", newline="", encoding="utf-8") as fh:
         fh.write(f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
                  f"benchmarks/lab_rig_sets.py from FE solves{note}\n")
         w = csv.writer(fh, delimiter=sep)
         w.writerow(header)
-        for cid, run, t, q, p_read, a, state in rows:
+        for cid, run, t, q, p_read, a, state, _ in rows:
             w.writerow([cid, run, *(num(nominal[g], 2) for g in geometry),
                         nominal["body_material"], nominal["membrane_material"], num(t, t_nd),
                         num(q, 2), num(p_read, p_nd), num(a, 1)] + ([state] if with_pump else []))
@@ -341,8 +441,69 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
                                   nominal["body_material"], nominal["membrane_material"],
                                   round(t, t_nd), round(q, 2), round(p_read, p_nd),
                                   round(a, 1)],
-                         strict=True)) for cid, run, t, q, p_read, a, _ in rows]
+                         strict=True)) for cid, run, t, q, p_read, a, _, _ in rows]
         (out / f"{name}.json").write_text(json.dumps({"rows": body}))
+    return path
+
+
+def write_habits(path: Path, name: str, effect: dict, nominal: dict, rows: list,
+                 kw: dict) -> Path:
+    """A set as a lab with other habits writes it (comma-separated, '.' decimals): angles
+    in radians, the pump's volume in ml, no time or flow, time as mm:ss text, a units row
+    under the header, or a wide layout (one row per time, a pressure and an angle column
+    per specimen). The API's JSON rows stay the long layout with units in the keys."""
+    p_unit, t_unit = kw.get("p_unit", "kPa"), kw.get("t_unit", "s")
+    p_nd, t_nd = PRESSURE_UNITS[p_unit][1], TIME_UNITS[t_unit][1]
+    a_unit, v_unit = kw.get("a_unit", "deg"), kw.get("v_unit")
+    timed = not kw.get("no_time_flow")
+    geometry = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
+
+    def angle(a: float) -> float:
+        return round(math.radians(round(a, 1)), 4) if a_unit == "rad" else round(a, 1)
+
+    def clock(t: float) -> str:
+        return f"{int(t // 60):02d}:{t % 60:04.1f}" if kw.get("t_fmt") == "mmss" \
+            else f"{t:.{t_nd}f}"
+    measured = ([f"Time ({t_unit})", "Flow (ul/s)"] if timed else []) + (
+        [f"Volume ({v_unit})"] if v_unit else [])
+
+    def values(t, q, v):
+        return ([round(t, t_nd), round(q, 2)] if timed else []) + (
+            [round(v / 1000, 4)] if v_unit else [])
+    long_header = ["curve_id", "run", *geometry, "body_material", "membrane_material",
+                   *measured, f"Pressure ({p_unit})", f"Angle ({a_unit})"]
+    long_rows = [[cid, run, *(nominal[g] for g in geometry), nominal["body_material"],
+                  nominal["membrane_material"], *values(t, q, v), round(p_read, p_nd),
+                  angle(a)] for cid, run, t, q, p_read, a, _, v in rows]
+    (path.parent / f"{name}.json").write_text(json.dumps(
+        {"rows": [dict(zip(long_header, r, strict=True)) for r in long_rows]}))
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        fh.write(f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
+                 f"benchmarks/lab_rig_sets.py from FE solves\n")
+        w = csv.writer(fh)
+        if kw.get("layout") == "wide":           # one row per time, a column per specimen
+            ids = sorted({r[0] for r in rows})
+            w.writerow([*geometry, "body_material", "membrane_material", *measured,
+                        *(f"{x} {cid} ({u})" for cid in ids
+                          for x, u in (("Pressure", p_unit), ("Angle", a_unit)))])
+            by_id = {cid: [r for r in rows if r[0] == cid] for cid in ids}
+            for i, (_, _, t, q, _, _, _, v) in enumerate(by_id[ids[0]]):
+                w.writerow([*(nominal[g] for g in geometry), nominal["body_material"],
+                            nominal["membrane_material"], *values(t, q, v),
+                            *(x for cid in ids for x in (round(by_id[cid][i][4], p_nd),
+                                                         angle(by_id[cid][i][5])))])
+            return path
+        if kw.get("units_row"):                  # names, then a row of units under them
+            w.writerow([h.split(" (")[0] if " (" in h else h for h in long_header])
+            w.writerow(["", "", *("mm" for _ in geometry), "", "",
+                        *(h.split(" (")[1].rstrip(")") for h in long_header[9:])])
+        else:
+            w.writerow([("Time (mm:ss)" if kw.get("t_fmt") == "mmss" and h == measured[0]
+                         and timed else h) for h in long_header])
+        for r, (_, _, t, *_rest) in zip(long_rows, rows, strict=True):
+            if timed and kw.get("t_fmt") == "mmss":
+                r = [*r[:9], clock(t), *r[10:]]
+            w.writerow(r)
     return path
 
 
