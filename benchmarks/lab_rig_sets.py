@@ -42,11 +42,12 @@ layout with a column per specimen, and 4 readings a curve on 2 specimens.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the eleven sets
-with the pump's log that tests/test_calibration_history.py and
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the thirteen sets
+(eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
-test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py).
+test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
+N24's, without the pump's log, for test_calibration_lab_s46.py).
 """
 
 from __future__ import annotations
@@ -245,7 +246,9 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "inlet_fast_unload": "N9-inlet-fast-D13", "camera_late": "N13-camera-lag-D12",
              "body_stiffer": "N8-body1.12-D11", "leak_slow_pump": "N11-leak-slow-D11",
              "membrane_softer_inh2o": "N15-membrane0.9-D14",
-             "inlet_tilted_fast": "N21-inlet+offset-fast-D16"}
+             "inlet_tilted_fast": "N21-inlet+offset-fast-D16",
+             "flat_top_hold_reversed": "N22-clean-reversed-D17",
+             "staircase_drift": "N24-drift-staircase-D19"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -418,7 +421,7 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{file_name or name}.csv"
     if any(h in kw for h in HABITS):
-        return write_habits(path, name, effect, nominal, rows, kw)
+        return write_habits(path, name, effect, nominal, rows, kw, api_json=not with_pump)
     sep, dec = (";", ",") if kw.get("fmt", "semicolon") == "semicolon" else (",", ".")
     geometry = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
     header = ["curve_id", "run", *geometry, "body_material", "membrane_material",
@@ -447,11 +450,12 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
 
 
 def write_habits(path: Path, name: str, effect: dict, nominal: dict, rows: list,
-                 kw: dict) -> Path:
+                 kw: dict, api_json: bool = True) -> Path:
     """A set as a lab with other habits writes it (comma-separated, '.' decimals): angles
     in radians, the pump's volume in ml, no time or flow, time as mm:ss text, a units row
     under the header, or a wide layout (one row per time, a pressure and an angle column
-    per specimen). The API's JSON rows stay the long layout with units in the keys."""
+    per specimen). The API's JSON rows (``api_json``) stay the long layout with units in
+    the keys; tests/data's files (no pump column: their history is read) have none."""
     p_unit, t_unit = kw.get("p_unit", "kPa"), kw.get("t_unit", "s")
     p_nd, t_nd = PRESSURE_UNITS[p_unit][1], TIME_UNITS[t_unit][1]
     a_unit, v_unit = kw.get("a_unit", "deg"), kw.get("v_unit")
@@ -475,8 +479,9 @@ def write_habits(path: Path, name: str, effect: dict, nominal: dict, rows: list,
     long_rows = [[cid, run, *(nominal[g] for g in geometry), nominal["body_material"],
                   nominal["membrane_material"], *values(t, q, v), round(p_read, p_nd),
                   angle(a)] for cid, run, t, q, p_read, a, _, v in rows]
-    (path.parent / f"{name}.json").write_text(json.dumps(
-        {"rows": [dict(zip(long_header, r, strict=True)) for r in long_rows]}))
+    if api_json:
+        (path.parent / f"{name}.json").write_text(json.dumps(
+            {"rows": [dict(zip(long_header, r, strict=True)) for r in long_rows]}))
     with open(path, "w", newline="", encoding="utf-8") as fh:
         fh.write(f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
                  f"benchmarks/lab_rig_sets.py from FE solves\n")
@@ -512,7 +517,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's eleven sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's thirteen sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

@@ -90,12 +90,18 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
     gauge read to 1-2 % falls by its noise where a curve's pressure flattens near its
     top (until 2026-12-06 such a reading was unloading, the replicates' vote made it
     theirs, and every later volume was two intervals off). One bending by less than
-    STILL_SHARE of it, its pressure within twice the hold tolerance, or within half of
-    what the pump moves it in the running intervals at that bend, or falling, stood: a
-    hold whose gauge noise exceeds 1 % of a soft curve's range (a gauge read to 1.5 %
-    rises by 50-85 Pa at 2.3 kPa in a hold: until 2026-12-06 that read as loading where
-    the pump moves it by 250), or the inlet's R Q vanishing when the pump stops (the
-    pressure drops, the bend stays)."""
+    STILL_SHARE of it stood -- its pressure within twice the hold tolerance, or within
+    what the pump moves it in the running intervals at that bend, or falling, or its bend
+    falling while its gauge rose (a pump running in raises both, and by a full interval's
+    bend): a hold whose gauge noise exceeds 1 % of a soft curve's range (a gauge read to
+    1.5 % rises by 50-85 Pa at 2.3 kPa in a hold: until 2026-12-06 that read as loading
+    where the pump moves it by 250), or the inlet's R Q vanishing when the pump stops
+    (the pressure drops, the bend stays). At a flat top the pump moves the gauge by
+    70-110 Pa a reading, less than twice a 1.5 % gauge's noise there (47 Pa a reading):
+    until 2026-12-07 a hold reading whose gauge rose by more than half of that read as
+    loading, the replicates' vote made it theirs (benchmarks/lab_rig_sets.py N22, N24:
+    a clean hold's volume 11 ul high, a measured volume said to disagree with the pump's
+    log, a staircase's last hold fitted as a pump switch 0.3 of an interval late)."""
     if d.size < 3:
         return d
     da = np.diff(bend)
@@ -121,7 +127,7 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
         if abs(da[i]) >= MOVING_SHARE * expected and (agrees or against or flat):
             out[i] = np.sign(da[i])
         elif (abs(da[i]) <= STILL_SHARE * expected and expected > 2 * floor
-              and (abs(dp[i]) <= max(2 * tol_p, MOVING_SHARE * pumped_pa) or dp[i] < 0)):
+              and (abs(dp[i]) <= max(2 * tol_p, pumped_pa) or dp[i] < 0 or da[i] < 0)):
             out[i] = 0.0
     return out
 

@@ -1,0 +1,54 @@
+"""The calibration loop on the forty-sixth session's fresh lab sets
+(benchmarks/lab_rig_sets.py N22-N29, made from FE solves of designs D17-D19, their truths
+fixed before any calibration; tests/data/lab_gauge_noise_*.csv from its ``--test-data``,
+read without the pump's log, as a lab writes them).
+
+* a hold at the flat top of a curve, whose gauge (read to 1.5 %) moved by more than half
+  of what the pump moves it there, was read as loading: on the reversed pair D17 (N22)
+  the pump's history put 11 ul more in than the pump's own volume log, which was then
+  said to disagree with flow x time ("check flow_ul_s, time_s and the pump's log"); on a
+  staircase of holds (N24) the last hold's last reading was loading on every specimen.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from surrogate.calibration import observations_from_rows
+from surrogate.calibration._data import decode_text, read_csv_rows
+
+DATA = Path(__file__).parent / "data"
+
+
+def _program(*steps: tuple[int, int]) -> list[int]:
+    """A pump program's direction at each reading: the reading at rest takes the first
+    step's (as ``_history.directions`` gives it), then each step's for its readings."""
+    out = [d for d, n in steps for _ in range(n)]
+    return [out[0], *out]
+
+
+@pytest.mark.parametrize(("name", "program"), [
+    # N22: loaded in 7 readings of 2 s to 75 deg, held 3, unloaded 4 (a clean set)
+    ("flat_top_hold_reversed", _program((1, 7), (0, 3), (-1, 4))),
+    # N24: three steps of 3 readings, each held 3, then unloaded in 6 (gauge drift 4 Pa/s)
+    ("staircase_drift", _program((1, 3), (0, 3), (1, 3), (0, 3), (1, 3), (0, 3), (-1, 6))),
+])
+def test_a_hold_at_a_flat_top_is_read_as_a_hold(name, program):
+    """Every curve's history read from its readings is the pump's program: at the flat
+    top the pump moves the gauge by 70-110 Pa a reading, less than twice the gauge's
+    noise there, while a running pump moves the bend by 8-10 deg and the hold's bend by
+    the camera's noise. Before (2026-12-07): N22's hold read as loading at its third
+    reading (88.5 ul where the pump held 77.4) and a warning blamed the volume log;
+    N24's last hold reading was loading on all three specimens."""
+    path = DATA / f"lab_gauge_noise_{name}.csv"
+    rows = read_csv_rows(decode_text(path.read_bytes(), path.name))
+    obs = observations_from_rows([{k: v for k, v in r.items() if k != "pump"}
+                                  for r in rows])       # N24's file logs the pump
+    for c, cid in enumerate(obs.curve_ids):
+        assert obs.direction[obs.curve == c].astype(int).tolist() == program, cid
+    assert not [w for w in obs.warnings if w.startswith("volume_ul")]
+    if obs.has_volume:    # N22 logs the pump's volume: the history now gives the same
+        assert np.all(~obs.volume_measured)
