@@ -42,12 +42,13 @@ layout with a column per specimen, and 4 readings a curve on 2 specimens.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the thirteen sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the sixteen sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
-N24's, without the pump's log, for test_calibration_lab_s46.py).
+N24's, N23's, N26's and N27's, as their habits write them, for
+test_calibration_lab_s46.py).
 """
 
 from __future__ import annotations
@@ -248,7 +249,9 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "membrane_softer_inh2o": "N15-membrane0.9-D14",
              "inlet_tilted_fast": "N21-inlet+offset-fast-D16",
              "flat_top_hold_reversed": "N22-clean-reversed-D17",
-             "staircase_drift": "N24-drift-staircase-D19"}
+             "staircase_drift": "N24-drift-staircase-D19",
+             "units_row": "N23-membrane-thicker-D18", "clock_time": "N26-warming-session-D18",
+             "one_column_per_specimen": "N27-creep-wide-D19"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -517,7 +520,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's thirteen sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's sixteen sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

@@ -7,7 +7,9 @@ read without the pump's log, as a lab writes them).
   of what the pump moves it there, was read as loading: on the reversed pair D17 (N22)
   the pump's history put 11 ul more in than the pump's own volume log, which was then
   said to disagree with flow x time ("check flow_ul_s, time_s and the pump's log"); on a
-  staircase of holds (N24) the last hold's last reading was loading on every specimen.
+  staircase of holds (N24) the last hold's last reading was loading on every specimen;
+* a units row under the header (N23), a time written as a clock (N26) and one column per
+  specimen (N27) were refused with errors that named no layout and no conversion.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from surrogate.calibration import observations_from_rows
+from surrogate.calibration import DataError, load_observations, observations_from_rows
 from surrogate.calibration._data import decode_text, read_csv_rows
 
 DATA = Path(__file__).parent / "data"
@@ -52,3 +54,39 @@ def test_a_hold_at_a_flat_top_is_read_as_a_hold(name, program):
     assert not [w for w in obs.warnings if w.startswith("volume_ul")]
     if obs.has_volume:    # N22 logs the pump's volume: the history now gives the same
         assert np.all(~obs.volume_measured)
+
+
+@pytest.mark.parametrize(("name", "column", "says", "how"), [
+    # N23: 'Time', 'Flow', 'Pressure', 'Angle' over a row of 's', 'ul/s', 'kPa', 'deg'
+    ("units_row", "Time", "the row under the header holds units", "'Time (s)'"),
+    # N26: a logger's 'Time (mm:ss)' column of 00:02.0, 00:04.0, ...
+    ("clock_time", "Time (mm:ss)", "'mm:ss' is a clock", "(01:04.5 is 64.5)"),
+    # N27: one row per time, 'Pressure S1 (kPa)', 'Angle S1 (deg)', 'Pressure S2 (kPa)', ...
+    ("one_column_per_specimen", "curve_id", "one column per specimen ('Angle S1 (deg)'",
+     "a curve_id column naming its specimen"),
+])
+def test_a_lab_layout_not_read_is_refused_saying_how_to_convert_it(name, column, says, how):
+    """Layouts a lab plainly uses that the loader does not read are refused on one line
+    naming the layout and the conversion, from a file and as the API's JSON rows alike.
+    Before (2026-12-07) the errors named no layout: ``Time: read as time_s, but no unit is
+    given for time``, ``'mm:ss' is not a unit of time``, ``curve_id: required column is
+    missing``."""
+    path = DATA / f"lab_gauge_noise_{name}.csv"
+    lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
+    as_json = [dict(zip(lines[0].split(","), ln.split(","), strict=True)) for ln in lines[1:]]
+    for read in (lambda: load_observations(path), lambda: observations_from_rows(as_json)):
+        with pytest.raises(DataError) as err:
+            read()
+        assert err.value.column == column
+        assert says in str(err.value) and how in str(err.value)
+        assert "\n" not in str(err.value) and str(DATA) not in str(err.value)
+
+
+def test_a_clock_time_under_a_seconds_header_is_said_to_be_a_clock():
+    """A 'Time (s)' column holding 00:02.0 (N26's values under a header in seconds):
+    the cell's error says it is a clock and how to write it, not only 'not a number'."""
+    path = DATA / "lab_gauge_noise_clock_time.csv"
+    text = path.read_text().replace("Time (mm:ss)", "Time (s)")
+    with pytest.raises(DataError, match=r"row 1: not a number: '00:00.0' \(a clock: write "
+                       r"the time in seconds"):
+        observations_from_rows(read_csv_rows(text))

@@ -37,6 +37,12 @@ from surrogate.calibration._headers import (
     read_headers,
 )
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
+from surrogate.calibration._layouts import (
+    CLOCK_HOW,
+    is_clock,
+    layout_error,
+    one_column_per_specimen,
+)
 from surrogate.calibration._measured_volume import (
     check_runs,
     disagreements,
@@ -335,7 +341,9 @@ def _number(value: object, column: str, row: int) -> float:
     except OverflowError:
         raise _cell_error(column, "number too large: " + _short(value), row) from None
     except (TypeError, ValueError):
-        raise _cell_error(column, "not a number: " + _short(value), row) from None
+        clock = f" (a clock: write {CLOCK_HOW})" if column == "time_s" and is_clock(value) \
+            else ""
+        raise _cell_error(column, "not a number: " + _short(value) + clock, row) from None
     if isinstance(value, str) and not is_number_text(value):   # '1_0' (10), '٧' (7)
         raise _cell_error(column, f"not a number: {_short(value)} (numbers in {NUMBER_FORM})",
                           row)
@@ -385,7 +393,10 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
     rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
     headers = list(dict.fromkeys(k for r in rows if isinstance(r, dict) for k in r))
-    readings = read_headers(headers, tuple(RANGES))
+    try:
+        readings = read_headers(headers, tuple(RANGES))
+    except DataError as exc:     # a units row, a clock for a unit: said so (_layouts.py)
+        raise layout_error(exc, rows[0] if isinstance(rows[0], dict) else None) from None
     converted = {r.column: r for r in readings.values() if r.header != r.column}
     if converted:       # the file's names -> the canonical columns, values converted below
         rename = {r.header: r.column for r in converted.values()}
@@ -758,7 +769,11 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     names = [unnamed.get(k, n) for k, n in enumerate(names)]
     if len(set(names)) != len(names):
         raise DataError("header", "a column name is repeated", 0, "each column once")
-    readings = read_headers(names, tuple(RANGES))   # 'Pressure (kPa)' is pressure_pa
+    try:                                            # 'Pressure (kPa)' is pressure_pa
+        readings = read_headers(names, tuple(RANGES))
+    except DataError as exc:     # a units row, a clock for a unit: said so (_layouts.py)
+        first = next(csv.reader(lines[1:2], delimiter=sep), [])
+        raise layout_error(exc, dict(zip(names, (c.strip() for c in first)))) from None
     for name in REQUIRED:
         if name not in names and name not in {r.column for r in readings.values()}:
             raise _missing(name, set(names))
@@ -803,6 +818,9 @@ def _missing(name: str, columns: set) -> DataError:
         inside = text.split("[", 1)[1].split("]")[0] if "[" in text else ""
         return (inside or text.rsplit("_", 1)[-1]).strip()
 
+    wide = one_column_per_specimen(columns, tuple(RANGES)) if name == "curve_id" else None
+    if wide is not None:
+        return wide
     stem = name.rsplit("_", 1)[0]
     unit = canonical_unit(name)
     dimension = unit[1] if unit else None

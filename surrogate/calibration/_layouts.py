@@ -1,0 +1,70 @@
+"""Lab layouts the loader does not read, refused with how to convert them.
+
+A lab's spreadsheet or logger may put the units in a row under the header (``Time`` over
+``s``), write the time as a clock (``01:04.5``, a header ``Time (mm:ss)``), or give each
+specimen its own columns (``Pressure S1 (kPa)``, ``Angle S1 (deg)``, one row per time).
+Each was refused with an error that did not say what the file held (``Time: read as
+time_s, but no unit is given for time``, ``'mm:ss' is not a unit of time``, ``curve_id:
+required column is missing``: benchmarks/lab_rig_sets.py N23, N26, N27); the error now
+names the layout and the conversion, on one line.
+"""
+
+from __future__ import annotations
+
+import re
+
+from surrogate.calibration._errors import DataError
+from surrogate.calibration._headers import _split, _unit, read_header
+
+#: a time of day or a stopwatch's reading: 01:04, 01:04.5, 0:01:04.5, and their formats
+CLOCK = re.compile(r"\s*(\d+:)?\d+:\d+([.,]\d*)?\s*|\s*(h+:)?m+:s+([.,]s*)?\s*", re.I)
+
+
+def is_clock(text: object) -> bool:
+    """Whether ``text`` is a clock reading or format (mm:ss, hh:mm:ss.s), not seconds."""
+    return isinstance(text, str) and CLOCK.fullmatch(text) is not None
+
+
+CLOCK_HOW = "the time in seconds from the pump's start, 'Time (s)' (01:04.5 is 64.5)"
+
+
+def layout_error(exc: DataError, first_row: dict | None) -> DataError:
+    """``exc`` (a header ``read_headers`` refused) said as the layout it comes from: a
+    clock for a unit (``Time (mm:ss)``), or a header without a unit over a row that holds
+    units (``Time`` over ``s``); else ``exc`` itself."""
+    _, unit = _split(exc.column)
+    if "not a unit of time" in str(exc) and is_clock(unit):
+        return DataError(exc.column, f"read as time_s, but {unit!r} is a clock, not a unit "
+                         "of time", None, CLOCK_HOW)
+    cell = (first_row or {}).get(exc.column)
+    if "no unit is given" not in str(exc) or not isinstance(cell, str) or not _unit(cell):
+        return exc
+    units = ", ".join(f"{k} ({v})" for k, v in first_row.items()
+                      if isinstance(v, str) and v.strip() and _unit(v))
+    return DataError(exc.column, f"the row under the header holds units ({units}): a units "
+                     "row is not read", None, f"each unit in its header, '{exc.column} "
+                     f"({cell.strip()})', and the units row deleted")
+
+
+def one_column_per_specimen(columns: set, numeric: tuple[str, ...]) -> DataError | None:
+    """The error for a wide layout: two or more headers that read as a quantity once a
+    last word (the specimen's label) is taken off its name (``Pressure S1 (kPa)``)."""
+    wide = []
+    for header in sorted(map(str, columns)):
+        name, unit = _split(header)
+        words = name.split()
+        if len(words) < 2:
+            continue
+        plain = " ".join(words[:-1]) + (f" ({unit})" if unit else "")
+        try:
+            if read_header(plain, numeric) is not None:
+                wide.append(header)
+        except DataError:
+            continue
+    if len(wide) < 2:
+        return None
+    shown = ", ".join(repr(h) for h in wide[:3]) + (", ..." if len(wide) > 3 else "")
+    return DataError("curve_id", f"required column is missing: the file has one column per "
+                     f"specimen ({shown}), which is not read", None,
+                     "one row per reading, a curve_id column naming its specimen and one "
+                     "column per quantity ('Pressure (kPa)', 'Angle (deg)')")
