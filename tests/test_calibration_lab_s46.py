@@ -9,7 +9,9 @@ read without the pump's log, as a lab writes them).
   said to disagree with flow x time ("check flow_ul_s, time_s and the pump's log"); on a
   staircase of holds (N24) the last hold's last reading was loading on every specimen;
 * a units row under the header (N23), a time written as a clock (N26) and one column per
-  specimen (N27) were refused with errors that named no layout and no conversion.
+  specimen (N27) were refused with errors that named no layout and no conversion;
+* with nothing selected, the closest explanation named was a set one of whose members did
+  not earn its place (N28: a stiffer membrane beside the mount's tilt).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_calibration_history import lab_rows
 
 from surrogate.calibration import DataError, load_observations, observations_from_rows
 from surrogate.calibration._data import decode_text, read_csv_rows
@@ -90,3 +93,23 @@ def test_a_clock_time_under_a_seconds_header_is_said_to_be_a_clock():
     with pytest.raises(DataError, match=r"row 1: not a number: '00:00.0' \(a clock: write "
                        r"the time in seconds"):
         observations_from_rows(read_csv_rows(text))
+
+
+def test_the_closest_explanation_is_not_a_set_whose_member_does_not_earn_its_place():
+    """N28: the mount tilted +2.5 deg on the reversed pair D17, 2 specimens read at 4
+    points each. Two specimens back no parameter (k + 2), so nothing is selected; the
+    report names the closest explanation. Before (2026-12-07) that was a membrane 1.12 x
+    as stiff beside an offset of 3.22 deg -- a pair whose membrane lowered the BIC by 2.8
+    only -- while the tilt alone (2.52 +/- 0.42 deg) predicted unseen curves as well."""
+    from calibration_lab import emulator
+
+    from surrogate.calibration import run_calibration
+
+    rows, _ = lab_rows("offset_two_specimens_four_points")
+    report = run_calibration(rows, emulator()).report
+    assert report["selected_effects"] == []
+    near = report["closest_rejected"]
+    assert near["effects"] == ["angle_offset"]
+    assert abs(near["params"]["offset_deg"]["value"] - 2.5) < 3 * near["params"][
+        "offset_deg"]["sd"]
+    assert "The closest plausible explanation is angle_offset (" in report["interpretation"]
