@@ -32,14 +32,14 @@ def test_the_readings_at_rest_read_the_gauges_zero_against_the_models():
     curve withdrawn back to 0 ul (its chamber is not at rest) do not enter."""
     curve, t, v, gauge = _curves([56.0, 57.0, 65.0])
     model = 400.0 * v
-    rest = gauge_at_rest(curve, t, v, gauge, model)
+    rest = gauge_at_rest(curve, v, gauge, model)
     assert rest["curves"] == 3 and np.isclose(rest["mean_pa"], 178.0 / 3.0)
     assert np.isclose(rest["se_pa"], np.std([56.0, 57.0, 65.0], ddof=1) / np.sqrt(3.0))
     assert np.isclose(rest["critical_t"], 9.925, atol=1e-3) and LEVEL == 0.01
     assert rest["off"]
     said = sentence(rest, [])
     assert "+59 +/- 3 Pa" in said and "zero the gauge" in said
-    fitted = gauge_at_rest(curve, t, v, gauge, model + rest["mean_pa"])
+    fitted = gauge_at_rest(curve, v, gauge, model + rest["mean_pa"])
     assert not fitted["off"] and sentence(fitted, ["pressure_offset"]) is None
 
 
@@ -49,13 +49,13 @@ def test_a_zeroed_gauge_and_too_few_curves_say_nothing():
     Infinity, no JSON number, and the zero said to be off); two curves give no spread
     worth a test."""
     curve, t, v, gauge = _curves([-2.0, 3.0, 1.0])
-    assert not gauge_at_rest(curve, t, v, gauge, 400.0 * v)["off"]
+    assert not gauge_at_rest(curve, v, gauge, 400.0 * v)["off"]
     curve, t, v, gauge = _curves([2.0, 2.0, 2.0])
-    agree = gauge_at_rest(curve, t, v, gauge, 400.0 * v)
+    agree = gauge_at_rest(curve, v, gauge, 400.0 * v)
     assert np.isfinite(agree["t"]) and not agree["off"]
     assert np.isclose(agree["se_pa"], MIN_SD_PA / np.sqrt(3.0))
     two = curve < 2
-    assert gauge_at_rest(curve[two], t[two], v[two], gauge[two], 400.0 * v[two]) is None
+    assert gauge_at_rest(curve[two], v[two], gauge[two], 400.0 * v[two]) is None
 
 
 def test_a_lab_whose_gauge_reads_60_pa_high_is_told_so():

@@ -11,7 +11,9 @@ read without the pump's log, as a lab writes them).
 * a units row under the header (N23), a time written as a clock (N26) and one column per
   specimen (N27) were refused with errors that named no layout and no conversion;
 * with nothing selected, the closest explanation named was a set one of whose members did
-  not earn its place (N28: a stiffer membrane beside the mount's tilt).
+  not earn its place (N28: a stiffer membrane beside the mount's tilt);
+* a gauge's zero 50 Pa off went unsaid in a pump's volume log without time (N29): only a
+  ``time_s`` placed a reading at rest.
 """
 
 from __future__ import annotations
@@ -113,3 +115,23 @@ def test_the_closest_explanation_is_not_a_set_whose_member_does_not_earn_its_pla
     assert abs(near["params"]["offset_deg"]["value"] - 2.5) < 3 * near["params"][
         "offset_deg"]["sd"]
     assert "The closest plausible explanation is angle_offset (" in report["interpretation"]
+
+
+def test_the_gauge_at_rest_is_read_from_a_volume_log_without_time():
+    """N29: the gauge's zero 50 Pa low (and the angle tool's scale 7 % short), the
+    pump's volume in ml, no time or flow. Each curve's first reading is at 0 ul, at rest:
+    the gauge reads its own zero there whatever the actuator. Before (2026-12-07) only a
+    ``time_s`` placed a reading at rest, and ``gauge_at_rest`` was null: the zero went
+    unsaid while a membrane 0.11 mm thinner was selected. The three readings at rest are
+    the gauge's noise of 1.5 % + 2 Pa at 0 Pa (sd 2 Pa) about -50 Pa."""
+    from calibration_lab import emulator
+
+    from surrogate.calibration import run_calibration
+
+    path = DATA / "lab_gauge_noise_gauge_zero_volume_log.csv"
+    rows = read_csv_rows(decode_text(path.read_bytes(), path.name))
+    report = run_calibration(rows, emulator()).report
+    rest = report["gauge_at_rest"]
+    assert rest is not None and rest["curves"] == 3 and rest["off"]
+    assert abs(rest["mean_pa"] + 50.0) < 3 * rest["se_pa"] + 3.0    # +-3 Pa: the zero's own
+    assert "At rest, before the pump has put any volume in" in report["interpretation"]

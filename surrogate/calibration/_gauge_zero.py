@@ -46,18 +46,21 @@ MIN_CURVES = 3        # a mean and a spread from at least two degrees of freedom
 MIN_SD_PA = 1.0
 
 
-def gauge_at_rest(curve: np.ndarray, time_s: np.ndarray, volume_ul: np.ndarray,
-                  gauge_pa: np.ndarray, model_pa: np.ndarray) -> dict | None:
+def gauge_at_rest(curve: np.ndarray, volume_ul: np.ndarray, gauge_pa: np.ndarray,
+                  model_pa: np.ndarray) -> dict | None:
     """The readings at rest (injected volume 0, before any volume was injected on their
-    curve) against the model's gauge there (Pa): None with fewer than MIN_CURVES curves
-    read at rest; else the mean difference, its se, t, the critical t and ``off``."""
+    curve: rows in history order, by time or, without time, the file's) against the
+    model's gauge there (Pa): None with fewer than MIN_CURVES curves read at rest; else
+    the mean difference, its se, t, the critical t and ``off``. A pump's volume log
+    without time places them too (until 2026-12-07 only a ``time_s`` did: a gauge 50 Pa
+    low went unsaid, benchmarks/lab_rig_sets.py N29)."""
     d = gauge_pa - model_pa
     per_curve = []
     for c in np.unique(curve):
         rows = np.flatnonzero(curve == c)
-        pumped = rows[volume_ul[rows] > 0.0]
-        start = np.min(time_s[pumped]) if pumped.size else np.inf
-        rest = rows[(volume_ul[rows] == 0.0) & (time_s[rows] < start) & np.isfinite(d[rows])]
+        pumped = np.flatnonzero(volume_ul[rows] > 0.0)
+        before = rows[:pumped[0]] if pumped.size else rows
+        rest = before[(volume_ul[before] == 0.0) & np.isfinite(d[before])]
         if rest.size:
             per_curve.append(float(np.mean(d[rest])))
     n = len(per_curve)

@@ -341,7 +341,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     unbacked = better_unbacked(candidates, chosen, base_joint)
     after = get_fit(chosen)
     rmse_after, resid_after = get_cv(chosen)
-    rest = (gauge_at_rest(obs.curve, obs.time_s, obs.volume_ul, obs.pressure_pa,
+    rest = (gauge_at_rest(obs.curve, obs.volume_ul, obs.pressure_pa,
                           after.model.gauge_pressures(after.x))
             if channel["used"] and "hydraulic_resistance" not in chosen else None)
     if not zeroed and wants_zeroed_pass(rest, chosen):
