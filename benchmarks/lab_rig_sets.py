@@ -42,12 +42,12 @@ layout with a column per specimen, and 4 readings a curve on 2 specimens.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the eighteen sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the nineteen sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
-N24's, N23's, N26's and N27's, as their habits write them, N28's and N29's for
+N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
 test_calibration_lab_s46.py).
 """
 
@@ -253,7 +253,8 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "units_row": "N23-membrane-thicker-D18", "clock_time": "N26-warming-session-D18",
              "one_column_per_specimen": "N27-creep-wide-D19",
              "offset_two_specimens_four_points": "N28-offset-few-points-D17",
-             "gauge_zero_volume_log": "N29-camera-gain+zero-volume-only-D18"}
+             "gauge_zero_volume_log": "N29-camera-gain+zero-volume-only-D18",
+             "inlet_air_two_flows": "N25-inlet+air-two-flows-D17"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -522,7 +523,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's eighteen sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's nineteen sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

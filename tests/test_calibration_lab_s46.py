@@ -13,7 +13,9 @@ read without the pump's log, as a lab writes them).
 * with nothing selected, the closest explanation named was a set one of whose members did
   not earn its place (N28: a stiffer membrane beside the mount's tilt);
 * a gauge's zero 50 Pa off went unsaid in a pump's volume log without time (N29): only a
-  ``time_s`` placed a reading at rest.
+  ``time_s`` placed a reading at rest;
+* what a catalogued pair explains to the floor but too few specimens back (N25) was
+  called an effect outside the catalogue.
 """
 
 from __future__ import annotations
@@ -135,3 +137,26 @@ def test_the_gauge_at_rest_is_read_from_a_volume_log_without_time():
     assert rest is not None and rest["curves"] == 3 and rest["off"]
     assert abs(rest["mean_pa"] + 50.0) < 3 * rest["se_pa"] + 3.0    # +-3 Pa: the zero's own
     assert "At rest, before the pump has put any volume in" in report["interpretation"]
+
+
+def test_what_a_set_too_large_for_the_specimens_explains_is_not_called_outside_the_catalogue():
+    """N25: 1 m of soft narrow tubing, an inlet of 100 Pa per ul/s and 2 ul/kPa of air,
+    three specimens at 3 and 1 ul/s. The pair explains the data (cross-validated 0.74 deg
+    against a floor of 0.70 deg) but two parameters need four specimens (k + 2), so
+    nothing is selected. Before (2026-12-07) the report went on: "an effect outside the
+    catalogue acts on these data ... No catalogued effect explains it". Now it says the
+    rest is the pair's, and to measure more specimens."""
+    from calibration_lab import emulator
+
+    from surrogate.calibration import run_calibration
+
+    rows, _ = lab_rows("inlet_air_two_flows")
+    report = run_calibration(rows, emulator()).report
+    assert report["selected_effects"] == [] and report["residual_structured_after"]
+    near = report["closest_rejected"]
+    assert near["effects"] == ["hydraulic_resistance", "line_compliance"]
+    assert near["wants_specimens"]
+    compliance = near["params"]["C_ul_per_kpa"]
+    assert abs(compliance["value"] - 2.0) < 3 * compliance["sd"]
+    assert "outside the catalogue acts" not in report["interpretation"]
+    assert "too large for these specimens to back" in report["interpretation"]

@@ -190,7 +190,8 @@ def judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_jo
                        "injected volume the wrong way")
     n_params = sum(1 for e in effects for p in EFFECTS[e].parameters if p.tested)
     n_units = f.model.obs.n_specimens     # a specimen's runs share its stiffness
-    if n_units < n_params + MIN_SPARE_CURVES:
+    few = n_units < n_params + MIN_SPARE_CURVES
+    if few:
         unit = "curves" if n_units == f.model.obs.n_curves else "specimens (their runs as one)"
         reasons.append(f"{n_params} tested parameters from {n_units} {unit}: each curve "
                        "is one specimen's own stiffness and camera, so a cross-validation "
@@ -224,6 +225,7 @@ def judge(effects, get_fit, get_xv, base: FitResult, rmse_before: float, base_jo
             "plausible": plausible, "significant": significant,
             "z": {n: finite_or_none(v) for n, v in z.items()}, "selectable": not reasons,
             "unbacked": unbacked and len(reasons) == 1,
+            "wants_specimens": few and len(reasons) == 1,
             "baseline_sd_at_fit_deg": finite_or_none(f.baseline_sd_deg)
             if f.baseline_sd_deg is not None else None,
             "why_not": reasons}
@@ -265,6 +267,7 @@ def closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:
         return None
     c = min(ok, key=lambda c: c["rmse_cv_joint"])  # both channels (by volume)
     return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"], "why_not": c["why_not"],
+            "wants_specimens": c["wants_specimens"],
             "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
                        for n, p in c["params"].items()}}
 
