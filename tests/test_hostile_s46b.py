@@ -66,3 +66,25 @@ def test_a_tiny_pressure_in_range_is_still_read():
     code, out, err, escaped = run(["predict", "--model", "paper", *DESIGN,
                                    "--pressures", "1e-400", "500"])
     assert code == 0 and escaped is None, err
+
+
+# -- 2. an empty item of a list option -------------------------------------------------------
+
+@pytest.mark.parametrize(("argv", "words", "allowed"), [
+    (["predict", "--model", "paper", *DESIGN, "--pressures", "1,,2"],
+     "'1,,2' is not a list of numbers (item 2 is an empty place", "allowed: 0 to 20000 Pa)"),
+    (["predict", "--model", "paper", *DESIGN, "--pressures", "100,200 300,,400"],
+     "(item 4 is an empty place", "allowed: 0 to 20000 Pa)"),
+    (["predict", "--model", "paper", *DESIGN, "--pressures", ",,500"],
+     "(item 1 is an empty place", "allowed: 0 to 20000 Pa)"),
+    (["inverse", *DESIGN, "--angles-deg", "10,20,,"],
+     "(item 3 is an empty place", "allowed: -360 to 360 deg)"),
+])
+def test_an_empty_item_of_a_list_is_named_with_the_range(argv, words, allowed):
+    """`--pressures 1,,2` said "has an empty place between two commas" but neither which
+    item nor the range other list errors state."""
+    code, _, err, escaped = run(argv)
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    assert f"argument {argv[-2]}: " in lines[0] and words in lines[0], lines[0]
+    assert allowed in lines[0], lines[0]
