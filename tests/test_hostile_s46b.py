@@ -10,6 +10,7 @@ Each test failed on the code before its fix (commit messages say which), bar the
 from __future__ import annotations
 
 import pickle
+import textwrap
 
 import pytest
 from test_cli_fuzz import run, visible_lines
@@ -88,3 +89,38 @@ def test_an_empty_item_of_a_list_is_named_with_the_range(argv, words, allowed):
     assert code == 2 and escaped is None and len(lines) == 1, err
     assert f"argument {argv[-2]}: " in lines[0] and words in lines[0], lines[0]
     assert allowed in lines[0], lines[0]
+
+
+# -- 3. a grid's integer setting given a float -----------------------------------------------
+
+@pytest.mark.parametrize(("setting", "value"), [("mesh_level", "1.5"), ("max_steps", "2.5"),
+                                                ("max_newton_iter", "true")])
+def test_an_integer_setting_given_a_float_is_told_its_range(tmp_path, setting, value):
+    """`mesh_level = 1.5` in a grid said "(allowed: an integer)": no range. The range
+    from the one table of the settings' limits (SETTING_RANGES) now."""
+    from solver.settings import SETTING_RANGES
+
+    grid = tmp_path / "g.toml"
+    grid.write_text(textwrap.dedent(f"""\
+        pairs = [["pdms_1_10", "ecoflex_00_30"]]
+        L_mm = [7.1]
+        t_mm = [0.5]
+        [settings]
+        {setting} = {value}
+        """))
+    code, _, err, escaped = run(["precompute", str(grid), "--db", str(tmp_path / "c.h5"),
+                                 "--dry-run"])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    lo, hi = SETTING_RANGES[setting]
+    assert f"(allowed: an integer {lo} <= {setting} <= {hi})" in lines[0], lines[0]
+    assert "line 5" in lines[0], lines[0]
+
+
+def test_settings_from_plain_data_say_the_range_too():
+    from solver.errors import InputError
+    from solver.settings import MAX_MESH_LEVEL, settings_from_dict
+
+    with pytest.raises(InputError) as info:
+        settings_from_dict({"mesh_level": 1.5})
+    assert info.value.allowed == f"an integer 0 <= mesh_level <= {MAX_MESH_LEVEL}"
