@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import pickle
 import textwrap
+from pathlib import Path
 
 import pytest
 from test_cli_fuzz import run, visible_lines
@@ -124,3 +125,38 @@ def test_settings_from_plain_data_say_the_range_too():
     with pytest.raises(InputError) as info:
         settings_from_dict({"mesh_level": 1.5})
     assert info.value.allowed == f"an integer 0 <= mesh_level <= {MAX_MESH_LEVEL}"
+
+
+# -- 4. a CSV file's cells held to the rule of a JSON file's ---------------------------------
+
+EXAMPLE_CSV = (Path(__file__).resolve().parents[1]
+               / "surrogate/calibration/data/example_lab.csv")
+
+
+@pytest.mark.parametrize("column", ["curve_id", "body_material", "membrane_material"])
+@pytest.mark.parametrize("suffix", [".csv", ".json"])
+def test_a_long_text_cell_is_refused_alike_in_csv_and_json(tmp_path, column, suffix):
+    """A CSV curve_id or material of 10,000 characters was taken (or named as an unknown
+    material), where the same cell in a JSON file (and POST /v1/calibrate) is refused at
+    200 characters. One rule for both (surrogate.measured_cell), naming row and column."""
+    import csv
+    import io
+    import json
+
+    lines = [x for x in EXAMPLE_CSV.read_text().splitlines() if not x.startswith("#")]
+    rows = list(csv.DictReader(lines))
+    rows[3][column] = "s" * 10_000
+    path = tmp_path / f"lab{suffix}"
+    if suffix == ".json":
+        path.write_text(json.dumps(rows))
+    else:
+        out = io.StringIO()
+        writer = csv.DictWriter(out, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+        path.write_text(out.getvalue())
+    code, _, err, escaped = run(["calibrate", str(path), "--report", str(tmp_path / "r.json")])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    assert f"{column}: row 4: text of 10000 characters (at most 200)" in lines[0], lines[0]
+    assert "(allowed: a finite number (|value| <= 1e15), text (at most 200" in lines[0]
