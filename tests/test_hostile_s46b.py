@@ -2,7 +2,8 @@
 tests/test_hostile_s46.py): a number whose text a float does not hold (1e-400) refused as
 written, not as "got 0.0"; an empty item of a list option named with the option's range; a
 grid's integer setting given a float told the setting's range; a CSV data file's cells held
-to the JSON file's rule of 200 characters.
+to the JSON file's rule of 200 characters; the explorer's number boxes never showing another
+number than the one typed (1e-300 as "0").
 
 Each test failed on the code before its fix (commit messages say which), bar the guards.
 """
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from test_cli_fuzz import run, visible_lines
+from test_hostile_s46 import server  # noqa: F401 - its live server, the fixture of part 5
 
 # -- 1. a number the float does not hold is refused as written --------------------------------
 
@@ -160,3 +162,25 @@ def test_a_long_text_cell_is_refused_alike_in_csv_and_json(tmp_path, column, suf
     assert code == 2 and escaped is None and len(lines) == 1, err
     assert f"{column}: row 4: text of 10000 characters (at most 200)" in lines[0], lines[0]
     assert "(allowed: a finite number (|value| <= 1e15), text (at most 200" in lines[0]
+
+
+# -- 5. the explorer's number boxes show the number the user typed ---------------------------
+
+@pytest.mark.timeout(300)
+def test_a_number_box_never_shows_another_number(watched, server):  # noqa: F811
+    """A stiffness scale of 1e-300, shown again when the width changed (every design box
+    is redrawn), read "0": the boxes showed values rounded to 1e-4 whatever they were
+    (1e305 read "Infinity"). To 4 significant digits where rounding to 1e-4 is off by
+    more than 1 % now."""
+    from explorer_browser import change, open_explorer
+
+    page = open_explorer(watched, server.url)
+    page.fill("#body_scale", "1e-300")
+    change(page, "#W_mm", "4")
+    page.wait_for_function("document.getElementById('L_mm').value !== '7.1'")
+    assert page.input_value("#body_scale") == "1e-300"
+    assert page.input_value("#L_mm") == str(round(7.1 * 4 / 3, 4))  # lengths still to 0.1 um
+    shown = page.evaluate("import('/static/explorer/js/design.js').then((m) => "
+                          "[1e305, 0.00015, 1.234567e-300, 7.123456, 0.0333333, 0, 2.5]"
+                          ".map(m.shown))")
+    assert shown == ["1e+305", "0.00015", "1.235e-300", "7.1235", "0.0333", "0", "2.5"], shown
