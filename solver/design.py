@@ -24,6 +24,7 @@ from dataclasses import dataclass, field, replace
 
 from solver.errors import InputError
 from solver.materials import MATERIALS, OgdenMaterial
+from solver.number_text import WrittenNumber
 
 PAPER_WIDTH_MM = 3.0               # the standard design's W (Table 3)
 DEFAULT_BODY_LENGTH_MM = 12.0      # at PAPER_WIDTH_MM; scaled with W
@@ -171,7 +172,8 @@ def design_from_dict(data: dict) -> Design:
     for name in LIMITS_MM:
         if data.get(name) is not None:
             try:
-                kwargs[name] = float(data[name])
+                value = data[name]    # a WrittenNumber (1e-400) refused as written
+                kwargs[name] = value if isinstance(value, WrittenNumber) else float(value)
             except (TypeError, ValueError):
                 raise InputError(name, f"not a number: {data[name]!r}") from None
     for name in ("body_material", "membrane_material"):

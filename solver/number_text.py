@@ -12,6 +12,7 @@ a query or in a data file. (The service's query models: ``service.schemas.common
 
 from __future__ import annotations
 
+import math
 import re
 
 _UNSIGNED = r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
@@ -38,12 +39,42 @@ def is_integer_text(text: str) -> bool:
     return bool(_INT.fullmatch(text.strip()))
 
 
+class WrittenNumber(float):
+    """A number whose text a float does not hold (``1e-400`` underflows to 0.0, ``1e400``
+    overflows to inf): the float's value, shown as written. A range check's "got {value!r}"
+    or "got {value:g}" then says "got 1e-400", not "got 0.0", a different number."""
+
+    text: str
+
+    def __new__(cls, value: float, text: str) -> WrittenNumber:
+        number = super().__new__(cls, value)
+        number.text = text
+        return number
+
+    def __repr__(self) -> str:
+        return self.text
+
+    __str__ = __repr__
+
+    def __format__(self, spec: str) -> str:
+        return self.text if not spec or spec[-1] in "gGr" else super().__format__(spec)
+
+    def __reduce__(self) -> tuple:
+        return (WrittenNumber, (float(self), self.text))
+
+
 def ascii_float(text: str) -> float:
     """``text`` as a float, if it is written in NUMBER_FORM; ValueError otherwise (its
-    message says the form)."""
+    message says the form). A value the float does not hold is a WrittenNumber."""
     if not is_number_text(text):
         raise ValueError(f"{text!r} is not a number ({NUMBER_FORM})")
-    return float(text)
+    value = float(text)
+    written = text.strip()
+    digits = re.split("[eE]", written)[0]
+    if ((value == 0 and re.search("[1-9]", digits))
+            or (math.isinf(value) and "inf" not in written.lower())):
+        return WrittenNumber(value, written)
+    return value
 
 
 def ascii_int(text: str) -> int:

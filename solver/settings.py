@@ -31,6 +31,25 @@ MIN_FLOW_UL_S = 1e-6
 MAX_FLOW_UL_S = 1000.0
 
 
+# The numeric settings' ranges, lo <= value <= hi: one table for the check
+# (SolverSettings.validated) and every refusal that names a setting's range (a grid
+# file's ``mesh_level = 1.5`` as much as ``mesh_level = 9``).
+SETTING_RANGES: dict[str, tuple[float, float]] = {
+    "mesh_level": (0, MAX_MESH_LEVEL), "max_angle_deg": (0.1, 360.0),
+    "max_pressure_pa": (1.0, 1e7), "max_volume_ul": (1e-3, 1e4),
+    "flow_ul_s": (MIN_FLOW_UL_S, MAX_FLOW_UL_S), "bulk_ratio": (10.0, 1e6),
+    "newton_tol": (1e-14, 1e-2), "max_newton_iter": (3, 200), "max_steps": (1, 10000),
+    "spring_k_n_per_m": (0.0, 1e6),
+}
+
+
+def range_words(name: str, kind: str = "") -> str:
+    """A numeric setting's allowed range in words (``SETTING_RANGES``), after ``kind``
+    when given: ``"an integer 0 <= mesh_level <= 2"``."""
+    lo, hi = SETTING_RANGES[name]
+    return f"{kind} {lo} <= {name} <= {hi}".lstrip()
+
+
 @dataclass(frozen=True)
 class SolverSettings:
     """How a design is solved.
@@ -78,17 +97,10 @@ class SolverSettings:
     spring_k_n_per_m: float = 0.0
 
     def validated(self) -> SolverSettings:
-        checks: list[tuple[str, float, float]] = [
-            ("mesh_level", 0, MAX_MESH_LEVEL), ("max_angle_deg", 0.1, 360.0),
-            ("max_pressure_pa", 1.0, 1e7), ("max_volume_ul", 1e-3, 1e4),
-            ("flow_ul_s", MIN_FLOW_UL_S, MAX_FLOW_UL_S), ("bulk_ratio", 10.0, 1e6),
-            ("newton_tol", 1e-14, 1e-2), ("max_newton_iter", 3, 200), ("max_steps", 1, 10000),
-            ("spring_k_n_per_m", 0.0, 1e6),
-        ]
-        for name, lo, hi in checks:
+        for name, (lo, hi) in SETTING_RANGES.items():
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or value != value or not lo <= value <= hi:
-                raise InputError(name, f"got {value!r}", f"{lo} <= {name} <= {hi}")
+                raise InputError(name, f"got {value!r}", range_words(name))
         if self.mesh_divisions in LEGACY_MESH_DIVISIONS:
             raise InputError("mesh_divisions", f"{self.mesh_divisions!r} is the former name of "
                              f"{LEGACY_MESH_DIVISIONS[self.mesh_divisions]!r}; the default "
@@ -123,9 +135,11 @@ def settings_from_dict(data: dict) -> SolverSettings:
     for key, value in data.items():
         kind = type(getattr(defaults, key))
         if kind in (int, float) and isinstance(value, bool):
-            raise InputError(key, f"got {value!r}", f"a number ({kind.__name__})")
+            raise InputError(key, f"got {value!r}",
+                             range_words(key, "an integer" if kind is int else "a number"))
         if kind is int and isinstance(value, float) and not value.is_integer():
-            raise InputError(key, f"got {value!r}, which is not a whole number", "an integer")
+            raise InputError(key, f"got {value!r}, which is not a whole number",
+                             range_words(key, "an integer"))
         try:
             kwargs[key] = kind(value) if kind is not str else str(value)
         except (TypeError, ValueError):

@@ -31,11 +31,14 @@ def number_list(text: str) -> list[float]:
     people paste them from a spreadsheet, or spaces between words). An empty place
     between two commas (``1,,2``: a spreadsheet's empty cell) is refused, not skipped:
     the numbers after it would move up by one."""
+    items = []     # a word's one leading or trailing comma is no place ("1," "2")
     for word in text.split():
-        if ",," in word:
-            raise argparse.ArgumentTypeError(
-                f"{text!r} has an empty place between two commas (a missing value?): "
-                "give a number in each place")
+        places = word.split(",")
+        items += places[places[0] == "":len(places) - (len(places) > 1 and places[-1] == "")]
+    if "" in items:      # the parser adds the option's range (service.cli.Parser)
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a list of numbers (item {items.index('') + 1} is an empty "
+            "place between two commas: a missing value?; give a number in each place)")
     words = text.replace(",", " ").split()
     try:
         return [ascii_float(w) for w in words] if words else [float("nan")]

@@ -56,9 +56,13 @@ export function scaledLengths(state, W) {
   return out;
 }
 
-// A value as the inputs and labels show it: to 0.1 um (or 1e-4 of a stiffness scale).
+// A value as the inputs and labels show it: to 0.1 um (or 1e-4 of a stiffness scale), or to
+// 4 significant digits where that rounding is off by more than 1 % (a scale of 1e-300 had
+// read "0" and 1e305 "Infinity": another number than the one typed).
 export function shown(v) {
-  return typeof v === "number" && Number.isFinite(v) ? String(Math.round(v * 1e4) / 1e4) : String(v);
+  if (typeof v !== "number" || !Number.isFinite(v)) return String(v);
+  const rounded = Math.round(v * 1e4) / 1e4;
+  return String(Math.abs(rounded - v) <= 0.01 * Math.abs(v) ? rounded : Number(v.toPrecision(4)));
 }
 export const PAIRS = [
   ["pdms_1_10", "ecoflex_00_30"],
