@@ -10,7 +10,7 @@ from solver.settings import MAX_MESH_LEVEL, settings_from_dict
 
 @pytest.mark.parametrize("data, field, allowed", [
     ({"mesh_level": 0.5}, "mesh_level", "an integer"),
-    ({"mesh_level": True}, "mesh_level", "a number"),
+    ({"mesh_level": True}, "mesh_level", f"an integer 0 <= mesh_level <= {MAX_MESH_LEVEL}"),
     ({"max_angle_deg": False}, "max_angle_deg", "a number"),
     ({"mesh_level": MAX_MESH_LEVEL + 1}, "mesh_level", f"0 <= mesh_level <= {MAX_MESH_LEVEL}"),
     ({"newton_tol": 0.5}, "newton_tol", "newton_tol <= 0.01"),
