@@ -45,7 +45,10 @@ SETTING_RANGES: dict[str, tuple[float, float]] = {
 
 def range_words(name: str, kind: str = "") -> str:
     """A numeric setting's allowed range in words (``SETTING_RANGES``), after ``kind``
-    when given: ``"an integer 0 <= mesh_level <= 2"``."""
+    when given: ``"an integer 0 <= mesh_level <= 2"``; ``kind`` alone for a setting
+    without a range."""
+    if name not in SETTING_RANGES:
+        return kind
     lo, hi = SETTING_RANGES[name]
     return f"{kind} {lo} <= {name} <= {hi}".lstrip()
 

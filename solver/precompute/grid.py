@@ -48,7 +48,7 @@ from solver.materials import (
     make_material,
 )
 from solver.precompute.lines import deepest, key_lines, line_of
-from solver.settings import SETTING_RANGES, SolverSettings, range_words, settings_from_dict
+from solver.settings import SolverSettings, range_words, settings_from_dict
 from solver.store.keys import canonical_number, record_key
 
 PARAMETERS = tuple(LIMITS_MM)
@@ -299,7 +299,7 @@ def _check_setting_types(reader: _Reader, table: dict) -> None:
             wanted = "a number"
         if not ok:       # with the setting's range, when it has one (SETTING_RANGES)
             raise reader.fail(("settings", key), f"settings.{key}", f"{value!r} is not {wanted}",
-                              range_words(key, wanted) if key in SETTING_RANGES else wanted)
+                              range_words(key, wanted))
 
 
 def _expand(reader: _Reader, where: tuple, merged: dict, own: dict,

@@ -68,7 +68,7 @@ MAX_HEADER_CHARS = 100
 MAX_COLUMNS = 1000
 
 
-def _unit(text: str) -> tuple[str, float] | None:
+def unit_of(text: str) -> tuple[str, float] | None:
     """(dimension, factor) of a unit as written (``kPa``, ``µl``, ``ml/min``, ``ul_s``)."""
     text = text.strip().lower().replace("µ", "u").replace("μ", "u").replace(" ", "")
     text = text.removesuffix(".")
@@ -89,13 +89,13 @@ def canonical_unit(column: str) -> tuple[str, str, float] | None:
     None for a column in no unit of ``UNITS`` (the design's lengths, named exactly)."""
     parts = column.split("_")
     for k in range(1, len(parts)):
-        unit = _unit("_".join(parts[k:]))
+        unit = unit_of("_".join(parts[k:]))
         if unit is not None:
             return "_".join(parts[:k]), unit[0], unit[1]
     return None
 
 
-def _split(header: str) -> tuple[str, str | None]:
+def split_header(header: str) -> tuple[str, str | None]:
     """(quantity, unit or None) of a header: 'Pressure (kPa)', 'p [mbar]', 'p / psi'."""
     m = re.fullmatch(r"(.*?)\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*", header)
     if m:
@@ -154,7 +154,7 @@ def read_header(header: str, numeric: tuple[str, ...]) -> Reading | None:
     if len(header) > MAX_HEADER_CHARS:     # no lab's header: an unknown column, said short
         return None
     names = _names(numeric)
-    splits = [_split(header)]
+    splits = [split_header(header)]
     parts = header.split("_")   # 'p_mbar', 'Flow_ml_min': every split of the name
     splits += [("_".join(parts[:k]), "_".join(parts[k:])) for k in range(1, len(parts))]
     for name, unit_text in splits:
@@ -165,7 +165,7 @@ def read_header(header: str, numeric: tuple[str, ...]) -> Reading | None:
         if unit_text is None and key == _key(column):
             return Reading(header, column, 1.0)     # 'Angle_deg': the name in its case
         _, dimension, own = canonical_unit(column)  # type: ignore[misc]
-        unit = _unit(unit_text) if unit_text else None
+        unit = unit_of(unit_text) if unit_text else None
         if unit is None or unit[0] != dimension:
             if unit_text is not None and "_" in unit_text:
                 continue            # 'time_of_day': an underscore that is no unit

@@ -14,7 +14,7 @@ from __future__ import annotations
 import re
 
 from surrogate.calibration._errors import DataError
-from surrogate.calibration._headers import _split, _unit, read_header
+from surrogate.calibration._headers import read_header, split_header, unit_of
 
 #: a time of day or a stopwatch's reading: 01:04, 01:04.5, 0:01:04.5, and their formats
 CLOCK = re.compile(r"\s*(\d+:)?\d+:\d+([.,]\d*)?\s*|\s*(h+:)?m+:s+([.,]s*)?\s*", re.I)
@@ -32,15 +32,15 @@ def layout_error(exc: DataError, first_row: dict | None) -> DataError:
     """``exc`` (a header ``read_headers`` refused) said as the layout it comes from: a
     clock for a unit (``Time (mm:ss)``), or a header without a unit over a row that holds
     units (``Time`` over ``s``); else ``exc`` itself."""
-    _, unit = _split(exc.column)
+    _, unit = split_header(exc.column)
     if "not a unit of time" in str(exc) and is_clock(unit):
         return DataError(exc.column, f"read as time_s, but {unit!r} is a clock, not a unit "
                          "of time", None, CLOCK_HOW)
     cell = (first_row or {}).get(exc.column)
-    if "no unit is given" not in str(exc) or not isinstance(cell, str) or not _unit(cell):
+    if "no unit is given" not in str(exc) or not isinstance(cell, str) or not unit_of(cell):
         return exc
     units = ", ".join(f"{k} ({v})" for k, v in first_row.items()
-                      if isinstance(v, str) and v.strip() and _unit(v))
+                      if isinstance(v, str) and v.strip() and unit_of(v))
     return DataError(exc.column, f"the row under the header holds units ({units}): a units "
                      "row is not read", None, f"each unit in its header, '{exc.column} "
                      f"({cell.strip()})', and the units row deleted")
@@ -51,7 +51,7 @@ def one_column_per_specimen(columns: set, numeric: tuple[str, ...]) -> DataError
     last word (the specimen's label) is taken off its name (``Pressure S1 (kPa)``)."""
     wide = []
     for header in sorted(map(str, columns)):
-        name, unit = _split(header)
+        name, unit = split_header(header)
         words = name.split()
         if len(words) < 2:
             continue
