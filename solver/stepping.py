@@ -42,7 +42,8 @@ reason then says where it ended).
 The loop (``inflate_model``) reads as these steps: ``start_at_rest``, then per step
 ``next_load``, ``converge_step`` (on failure ``cut_back``, and ``switch_past_fold``),
 ``accept_step``, ``switch_past_bifurcation``, the next step's size, ``end_on_stop``; the
-state they share between steps is one ``Path``, what they hold fixed one ``Run``.
+state they share between steps is one ``PathState``, what they hold fixed one
+``Run``.
 """
 
 from __future__ import annotations
@@ -146,7 +147,7 @@ class Run:
 
 
 @dataclass
-class Path:
+class PathState:
     """The continuation's state between steps: the last converged state (displacement u
     in mm, element pressures q and cavity pressure in Pa, its evaluation with the
     tangent), the converged states the predictor passes through, and the next load
@@ -167,6 +168,7 @@ class Path:
     switch_index: int = -1        # the step at which the curve left the primary branch
 
     def state(self) -> tuple[np.ndarray, list[np.ndarray], float]:
+        """The last converged (u, q, p)."""
         return self.u, self.q, self.pressure_pa
 
     def adopt(self, out: Converged) -> None:
@@ -232,7 +234,7 @@ def inflate_model(model, settings: SolverSettings,
 
 
 def start_at_rest(model, settings: SolverSettings, backend: str, columns: CurveColumns
-                  ) -> tuple[Path, str | None]:
+                  ) -> tuple[PathState, str | None]:
     """The undeformed state (u = 0, p = 0, element pressures consistent with u) as the
     curve's first row, and the path's tangent there (K^-1 g: the first step starts from
     the Euler predictor along it). Returns the path and None, or with the reason the
@@ -246,7 +248,7 @@ def start_at_rest(model, settings: SolverSettings, backend: str, columns: CurveC
     last = model.evaluate(u, p, pressures=q)
     columns.append(u, p, 0, 0.0, 0, last)
     step = first_step(volume_control, model.volume0_mm3, model.mu0_min_pa)
-    path = Path(u, q, p, last, [], step, step)
+    path = PathState(u, q, p, last, [], step, step)
     try:
         b0 = counted_solve(model, counted_factorisation(model, last.K, backend), last.g)
     except (StepFailed, FloatingPointError) as exc:
@@ -256,7 +258,7 @@ def start_at_rest(model, settings: SolverSettings, backend: str, columns: CurveC
     return path, None
 
 
-def next_load(run: Run, path: Path) -> float:
+def next_load(run: Run, path: PathState) -> float:
     """The next step's load: the cavity volume (mm^3) under volume control, capped at the
     volume stop's; the pressure (Pa) under pressure control, capped at max_pressure_pa
     (the other stops: ``end_on_stop``)."""
@@ -265,7 +267,7 @@ def next_load(run: Run, path: Path) -> float:
     return min(path.pressure_pa + path.step, run.settings.max_pressure_pa)
 
 
-def converge_step(run: Run, path: Path, load: float,
+def converge_step(run: Run, path: PathState, load: float,
                   guess: tuple[np.ndarray, list[np.ndarray], float] | None) -> Converged:
     """Newton at ``load`` (solver/newton.py) from the predictor's ``guess``, or from the
     last converged state with its tangent; StepFailed (or FloatingPointError) if it does
@@ -277,7 +279,7 @@ def converge_step(run: Run, path: Path, load: float,
                              target_pressure, run.backend, start=start)
 
 
-def cut_back(run: Run, path: Path, load: float, extrapolated: bool,
+def cut_back(run: Run, path: PathState, load: float, extrapolated: bool,
              exc: Exception) -> str | None:
     """A step to ``load`` failed: retried from the converged state if it started from the
     predictor; else, when following the stable branch, past a fold after
@@ -306,7 +308,7 @@ def cut_back(run: Run, path: Path, load: float, extrapolated: bool,
     return None
 
 
-def switch_past_fold(run: Run, path: Path, load: float) -> bool:
+def switch_past_fold(run: Run, path: PathState, load: float) -> bool:
     """The switch at a step that keeps failing (a fold in volume, solver/
     branch_following.py) to the cavity volume ``load``: on success its state is recorded
     as the branch switch and the step halved."""
@@ -325,7 +327,7 @@ def switch_past_fold(run: Run, path: Path, load: float) -> bool:
     return True
 
 
-def accept_step(run: Run, path: Path, load: float, out: Converged) -> int:
+def accept_step(run: Run, path: PathState, load: float, out: Converged) -> int:
     """The step converged at ``load``: its state is the path's last and the predictor's
     newest, and the curve's new row. Returns its Newton solves."""
     path.adopt(out)
@@ -337,7 +339,7 @@ def accept_step(run: Run, path: Path, load: float, out: Converged) -> int:
     return out.iterations
 
 
-def switch_past_bifurcation(run: Run, path: Path, before: tuple, load: float,
+def switch_past_bifurcation(run: Run, path: PathState, before: tuple, load: float,
                             solves: int) -> int:
     """The step converged unstable at constant volume: where it crossed the bifurcation
     (the state ``before`` was stable), switch just past it (the pump's path leaves the
@@ -375,7 +377,7 @@ def last_stop_values(columns: CurveColumns, back: int = 1) -> dict[str, float]:
                        columns.last("volume_ul", back))
 
 
-def end_on_stop(run: Run, path: Path, reached: list[str], before: tuple, load: float,
+def end_on_stop(run: Run, path: PathState, reached: list[str], before: tuple, load: float,
                 solves: int) -> str:
     """The step to ``load`` reached the stops ``reached``: under volume control (and not
     a branch switch) it is replaced by the step landed on the stop met first
