@@ -38,8 +38,8 @@ PUMP_TARGETS = [("angle_at_pressure", 1500.0, {"angle_deg": 45.0}),
 CHILD = """
 import json, sys, time
 from surrogate.emulator import load_emulator
-from surrogate.design_search import SearchBounds, search_designs
-from surrogate.design_target import DesignTarget
+from surrogate.search.design_search import SearchBounds, search_designs
+from surrogate.search.design_target import DesignTarget
 e = load_emulator(sys.argv[1])
 out = []
 for kind, p, kw in json.loads(sys.argv[2]):

@@ -23,47 +23,46 @@ is retried from the converged state before it is cut back; a failed step is cut 
 half; the step grows when Newton converges quickly and shrinks when the angle increment
 is large, aiming at ~8 degrees and at most ~150 Pa (or 8 % of the
 pressure, if more) per step (so that the curve is resolved where the angle is small
-and the pressure rises fast).
+and the pressure rises fast; solver/step_size.py).
 A step that cannot converge after the cut-backs ends the curve with status
-"failed" and the reason.
+"failed" and the reason. With ``follow_stable_branch`` the curve leaves a branch that is
+unstable at constant volume (solver/branch_following.py).
 
 The curve ends on its stop, not one step past it. Under pressure control the last step's
 pressure is capped at max_pressure_pa, under volume control its volume at max_volume_ul;
 and a volume step that converged past max_angle_deg or max_pressure_pa is replaced by one
-from the previous converged state to the volume at which the stop is met (solver/
-landing.py: interpolated, then up to two secant corrections, and for a stop other than
-the defaults' up to ten Illinois corrections; the landed state at or past the stop by at
-most 0.1 % of it and 0.01 deg). Only the curve's last point moves; where no landing
-converges nearer the stop, or the step switched branch, the step past the stop ends the
-curve, as before the landing (a user's stop's reason then says where it ended).
+from the previous converged state to the volume at which the stop is met
+(solver/stop_landing.py, solver/landing.py: interpolated, then up to two secant
+corrections, and for a stop other than the defaults' up to ten Illinois corrections; the
+landed state at or past the stop by at most 0.1 % of it and 0.01 deg). Only the curve's
+last point moves; where no landing converges nearer the stop, or the step switched
+branch, the step past the stop ends the curve, as before the landing (a user's stop's
+reason then says where it ended).
+
+The loop (``inflate_model``) reads as these steps: ``start_at_rest``, then per step
+``next_load``, ``converge_step`` (on failure ``cut_back``, and ``switch_past_fold``),
+``accept_step``, ``switch_past_bifurcation``, the next step's size, ``end_on_stop``; the
+state they share between steps is one ``PathState``, what they hold fixed one
+``Run``.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from solver.branching import lowest_volume_neutral_mode, pass_fold, switch_branch
+from solver.branch_following import FAILURES_BEFORE_SWITCH, near_bifurcation, try_switch
 from solver.curve import Curve
+from solver.curve_columns import CurveColumns
 from solver.design import Design
 from solver.discrete import ActuatorModel, Evaluation
 from solver.hermite_predictor import PREDICTOR_POINTS, State, path_rate, predictor
-from solver.landing import (
-    STOPS,
-    USER_STOP_CORRECTIONS,
-    Point,
-    interpolated_load,
-    land,
-    landing_tolerance,
-    stop_reason,
-    stop_values,
-    stops_reached,
-    volume_load_at,
-)
+from solver.landing import stop_reason, stop_values, stops_reached
 from solver.mesh import MeshDivisions
 from solver.newton import (
     Converged,
@@ -73,24 +72,8 @@ from solver.newton import (
     mixed_newton_step,
 )
 from solver.settings import SolverSettings
-from solver.stability import volume_control_index
-
-TARGET_ANGLE_STEP_DEG = 8.0
-MAX_PRESSURE_STEP_PA = 150.0   # output resolution where the curve is steep in pressure,
-MAX_RELATIVE_PRESSURE_STEP = 0.08   # or 8 % of the pressure when that is more (a blocked
-                                    # tip climbing to kPa: ~45 steps to 20 kPa, not 130)
-GROW_SOLVES = 4     # a step converged in at most this many Newton solves grows the next 1.6x,
-HOLD_SOLVES = 7     # in at most this many keeps it, otherwise shrinks it to 0.6x (the
-                    # Hermite predictor takes ~2 solves where the parabola took 3-4: these
-                    # were 6 and 9 with the parabola)
-MIN_CUTBACK = 1.0 / 1024.0
-DEFAULT_SETTINGS = SolverSettings()   # its stops are the database's (solver/landing.py)
-FAILURES_BEFORE_SWITCH = 6   # follow_stable_branch: failed attempts from one converged state
-                             # (extrapolated and plain, each size; the step cut to 1/4) before
-                             # the branch switch is tried at the last failed volume
-SWITCH_NEWTON_ITER = 12      # Newton iterations allowed when the mode's amplitude is released
-BIFURCATION_OVERSHOOT = 0.25  # the switch is made this share of the way from the located
-                              # bifurcation to the unstable state that revealed it
+from solver.step_size import MIN_CUTBACK, first_step, step_factor
+from solver.stop_landing import Stops, land_on_stop, solve_stops
 
 
 def solve(design: Design, settings: SolverSettings | None = None,
@@ -144,6 +127,56 @@ def _inflate(design: Design, settings: SolverSettings, on_step: Callable[[dict],
     return curve, model, u
 
 
+@dataclass(frozen=True)
+class Run:
+    """What one solve holds fixed: the model (mm, Pa), its settings and stops, the linear
+    solver's backend, whether it follows the stable branch (volume control only), and the
+    curve's rows being written."""
+
+    model: Any
+    settings: SolverSettings
+    backend: str
+    debug: bool
+    follow_stable_branch: bool
+    stops: Stops
+    columns: CurveColumns
+
+    @property
+    def volume_control(self) -> bool:
+        return self.settings.control == "volume"
+
+
+@dataclass
+class PathState:
+    """The continuation's state between steps: the last converged state (displacement u
+    in mm, element pressures q and cavity pressure in Pa, its evaluation with the
+    tangent), the converged states the predictor passes through, and the next load
+    increment ``step`` (cavity volume in mm^3 under volume control, pressure in Pa under
+    pressure control; the cut-backs' floor is ``MIN_CUTBACK`` of ``first_step``)."""
+
+    u: np.ndarray
+    q: list[np.ndarray]
+    pressure_pa: float
+    evaluation: Evaluation
+    history: list[State]
+    step: float
+    first_step: float
+    extrapolate: bool = True      # start the next step from the predictor
+    failures_here: int = 0        # failed attempts from the current converged state
+    fold_attempted: bool = False  # the switch at a failed step is tried once per curve (its
+                                  # arc length costs minutes on the actuator)
+    switch_index: int = -1        # the step at which the curve left the primary branch
+
+    def state(self) -> tuple[np.ndarray, list[np.ndarray], float]:
+        """The last converged (u, q, p)."""
+        return self.u, self.q, self.pressure_pa
+
+    def adopt(self, out: Converged) -> None:
+        """``out`` as the last converged state."""
+        self.u, self.pressure_pa, self.q, self.evaluation = (
+            out.u, out.pressure_pa, out.q, out.evaluation)
+
+
 def inflate_model(model, settings: SolverSettings,
                   on_step: Callable[[dict], None] | None = None, backend: str = "auto",
                   debug: bool = False, follow_stable_branch: bool = False,
@@ -152,300 +185,214 @@ def inflate_model(model, settings: SolverSettings,
     ``SolidModel`` with a cavity that also provides ``end_face_kinematics(u) -> (angle,
     tip (2,))``, ``injected_volume_ul(half_volume)`` and ``tip_force_mn(evaluation)``
     (the reference problems of solver/verification, e.g. two balloons sharing one
-    pressure). Returns the curve and the last converged displacement."""
+    pressure). Returns the curve and the last converged displacement.
+
+    The continuation: from the undeformed state, each step's load (cavity volume or
+    pressure) is the last plus the step; Newton converges it from the Hermite predictor
+    (from the converged state if that fails); a failed step is cut back, a converged one
+    recorded, switched to the stable branch where it is unstable at constant volume
+    (``follow_stable_branch``), and the next step sized (solver/step_size.py); the
+    curve ends on the first stop reached, the last step landed on it (volume control)."""
     if t_start is None:
         t_start = time.perf_counter()
-    volume_control = settings.control == "volume"
+    columns = CurveColumns(model, on_step)
+    path, failure = start_at_rest(model, settings, backend, columns)
+    run = Run(model, settings, backend, debug,
+              follow_stable_branch and settings.control == "volume",
+              solve_stops(settings, model), columns)
+    status, reason = "stopped", f"reached max_steps = {settings.max_steps}"
+    if failure is not None:
+        status, reason = "failed", failure
+    for _ in range(0 if failure is not None else settings.max_steps):
+        load = next_load(run, path)
+        guess = predictor(path.history, load) if path.extrapolate else None
+        try:
+            out = converge_step(run, path, load, guess)
+        except (StepFailed, FloatingPointError) as exc:
+            failure = cut_back(run, path, load, guess is not None, exc)
+            if failure is not None:
+                status, reason = "failed", failure
+                break
+            continue
+        before = (*path.state(), path.evaluation)
+        solves = accept_step(run, path, load, out)
+        if (run.follow_stable_branch and path.switch_index < 0
+                and columns.last("volume_control_negative_eigenvalues") > 0):
+            solves = switch_past_bifurcation(run, path, before, load, solves)
+        path.step *= step_factor(solves,
+                                 abs(columns.last("angle_deg") - columns.last("angle_deg", 2)),
+                                 abs(path.pressure_pa - columns.last("pressure_pa", 2)),
+                                 path.pressure_pa, run.volume_control)
+        reached = stops_reached(run.stops.limits, last_stop_values(columns),
+                                at_volume_cap=(run.volume_control
+                                               and load >= run.stops.volume_cap_mm3))
+        if reached:
+            status, reason = "complete", end_on_stop(run, path, reached, before, load, solves)
+            break
+    return columns.curve(settings, status, reason, path.switch_index,
+                         time.perf_counter() - t_start), path.u
 
+
+def start_at_rest(model, settings: SolverSettings, backend: str, columns: CurveColumns
+                  ) -> tuple[PathState, str | None]:
+    """The undeformed state (u = 0, p = 0, element pressures consistent with u) as the
+    curve's first row, and the path's tangent there (K^-1 g: the first step starts from
+    the Euler predictor along it). Returns the path and None, or with the reason the
+    curve fails there: a tangent at rest that cannot be solved (an inline material of
+    mu = 5e-324 kPa: a stiffness of subnormal numbers, PARDISO's solution not finite)
+    ends the curve, failed, as a step that does not converge does."""
+    volume_control = settings.control == "volume"
     u = np.zeros(model.n_free)
     q = model.consistent_pressures(u)
     p = 0.0
-    rows: dict[str, list] = {k: [] for k in ("p", "v", "a", "tip", "lam", "it", "res", "neg", "f",
-                                             "negv")}
-
-    def record(u_: np.ndarray, p_: float, it: int, res: float, neg: int, ev: Evaluation,
-               g_kinv_g: float = 1.0) -> float:
-        angle, tip = model.end_face_kinematics(u_)
-        rows["negv"].append(volume_control_index(neg, g_kinv_g) if neg >= 0 else neg)
-        rows["p"].append(p_)
-        rows["v"].append(model.injected_volume_ul(ev.volume_mm3))
-        rows["a"].append(angle)
-        rows["tip"].append(tip)
-        rows["lam"].append(ev.max_membrane_stretch)
-        rows["it"].append(it)
-        rows["res"].append(res)
-        rows["neg"].append(neg)
-        rows["f"].append(model.tip_force_mn(ev))
-        report_step()
-        return angle
-
-    def report_step() -> None:
-        """The last converged step to ``on_step``, with the cut-backs so far: after every
-        converged step and after every cut-back (a job's page then says why the curve
-        stands still: 70 s at one pressure had looked like a hang); a step landed on a
-        stop is reported again under the same number as the step past it it replaces."""
-        if on_step is not None and len(rows["p"]) > 1:
-            on_step({"step": len(rows["p"]) - 1, "pressure_pa": rows["p"][-1],
-                     "volume_ul": rows["v"][-1], "angle_deg": rows["a"][-1],
-                     "newton_iterations": rows["it"][-1],
-                     "cutbacks": int(model.timings.get("cutbacks", 0))})
-
-    switch_settings = replace(settings, max_newton_iter=SWITCH_NEWTON_ITER)
-
-    def try_switch(u_, q_, p_, volume, at_target):
-        """One branch-switch attempt from the converged state (u_, q_, p_) to a stable
-        state at the cavity volume ``volume`` (solver/branching.py): along the unstable
-        mode if the state is at that volume; otherwise (a failed step) over a fold in
-        volume by arc length first, then along the lowest volume-neutral mode."""
-        def converge(us, qs, ps):
-            return mixed_newton_step(model, us, qs, ps, switch_settings, volume, None,
-                                     backend, patient=True)
-        attempts = ((switch_branch,) if at_target else (pass_fold, switch_branch))
-        for attempt in attempts:
-            if attempt is switch_branch:
-                switch = switch_branch(model, u_, q_, p_, volume, converge, backend,
-                                       settings.newton_tol, at_target)
-            else:
-                switch = pass_fold(model, u_, q_, p_, volume, converge, backend,
-                                   settings.newton_tol)
-            model.timings["branch_switch_attempts"] = (
-                model.timings.get("branch_switch_attempts", 0) + 1)
-            if debug:
-                print(f"branch switch after step {len(rows['p']) - 1}: {switch.reason}")
-            if switch.converged is not None:
-                break
-        return switch
-
-    def near_bifurcation(a, b, volume_a, volume_b):
-        """A converged primary state just past the bifurcation crossed between the
-        converged states a (stable at constant volume) and b (unstable), each (u, q, p):
-        the lowest volume-neutral eigenvalue interpolated linearly in volume to zero,
-        then ``BIFURCATION_OVERSHOOT`` of the way on towards b. Returns (Converged,
-        volume), or None if that state does not converge or is not unstable."""
-        mu_a = lowest_volume_neutral_mode(model, *a, backend)[0]
-        mu_b = lowest_volume_neutral_mode(model, *b, backend)[0]
-        if not mu_a > 0.0 > mu_b:
-            return None
-        critical = volume_a + (volume_b - volume_a) * mu_a / (mu_a - mu_b)
-        volume = critical + BIFURCATION_OVERSHOOT * (volume_b - critical)
-        try:
-            out = mixed_newton_step(model, *a, settings, volume, None, backend)
-        except (StepFailed, FloatingPointError):
-            return None
-        if lowest_volume_neutral_mode(model, out.u, out.q, out.pressure_pa, backend)[0] >= 0:
-            return None
-        if debug:
-            print(f"bifurcation located at {critical:.6g} mm^3 (eigenvalues {mu_a:.3g}, "
-                  f"{mu_b:.3g} uN/mm at {volume_a:.6g}, {volume_b:.6g}); switching at "
-                  f"{volume:.6g}")
-        return out, volume
-
-    def land_on_stop(reached: list[str], before: tuple, after_load: float,
-                     history_: list[State]) -> tuple[str, Converged, int] | None:
-        """The last converged step (rows[-1], at the volume ``after_load``) reached the
-        stops ``reached``: the converged state on the stop met first from ``before`` (the
-        previous converged state (u, q, p, evaluation), rows[-2]), by solver/landing.py,
-        as (stop, state, its Newton solves); None where the step needs no landing (it
-        is on the volume stop, or ``before`` was past a stop too) or none converged
-        nearer the stop than the step itself (the curve then ends on it, as before).
-        Each landing step starts from the Hermite predictor through the last converged
-        states (the step past the stop among them: an interpolation), else from
-        ``before``."""
-        was = stop_values(rows["a"][-2], rows["p"][-2], rows["v"][-2])
-        now = stop_values(rows["a"][-1], rows["p"][-1], rows["v"][-1])
-        if any(was[name] >= limits[name] for name in reached):
-            return None
-        before_load = before[3].volume_mm3
-        loads = {name: volume_stop_mm3 if name == "max_volume_ul" else interpolated_load(
-            limits[name], Point(before_load, was[name]), Point(after_load, now[name]))
-            for name in reached}
-        stop = min(reached, key=lambda name: loads[name])     # met first along the step
-        if stop == "max_volume_ul":
-            return None
-        tried = list(history_)
-        solves = 0
-
-        def converge(load_: float) -> Point | None:
-            nonlocal solves
-            model.timings["landing_steps"] = model.timings.get("landing_steps", 0) + 1
-            guess = predictor(tried, load_)
-            for u0, q0, p0, start in ([] if guess is None else [(*guess, None)]) + [before]:
-                try:
-                    out = mixed_newton_step(model, u0, q0, p0, settings, load_, None,
-                                            backend, start=start)
-                except (StepFailed, FloatingPointError):
-                    continue
-                solves += out.iterations
-                tried.append(State(load_, out.u, out.q, out.pressure_pa, out.rate))
-                del tried[:-PREDICTOR_POINTS]
-                values = stop_values(model.end_face_kinematics(out.u)[0], out.pressure_pa,
-                                     model.injected_volume_ul(out.evaluation.volume_mm3))
-                return Point(load_, values[stop], out)
-            return None
-
-        limit = limits[stop]
-        best = land(limit, landing_tolerance(stop, limit), Point(before_load, was[stop]),
-                    Point(after_load, now[stop]), converge,
-                    further=USER_STOP_CORRECTIONS if user_stop[stop] else 0)
-        if best is None or abs(best.value - limit) >= abs(now[stop] - limit):
-            return None
-        return stop, best.state, solves
-
     last = model.evaluate(u, p, pressures=q)
-    record(u, p, 0, 0.0, 0, last)
-    # Initial increments: a small fraction of the chamber volume, or of the membrane modulus.
-    step = 0.05 * model.volume0_mm3 if volume_control else 0.05 * model.mu0_min_pa
-    initial_step = step
-    status, reason = "stopped", f"reached max_steps = {settings.max_steps}"
-    # The path's tangent at the undeformed state: the first step starts from the Euler
-    # predictor along it.
-    # A tangent at rest that cannot be solved (an inline material of mu = 5e-324 kPa: a
-    # stiffness of subnormal numbers, PARDISO's solution not finite) ends the curve there,
-    # failed, as a step that does not converge does: it escaped solve() as StepFailed.
+    columns.append(u, p, 0, 0.0, 0, last)
+    step = first_step(volume_control, model.volume0_mm3, model.mu0_min_pa)
+    path = PathState(u, q, p, last, [], step, step)
     try:
         b0 = counted_solve(model, counted_factorisation(model, last.K, backend), last.g)
-        history = [State(model.volume0_mm3 if volume_control else 0.0, u, q, p,
-                         path_rate(model, last, b0, float(last.g @ b0), volume_control))]
-        steps = settings.max_steps
     except (StepFailed, FloatingPointError) as exc:
-        status, reason = "failed", f"the tangent at rest cannot be solved: {exc}"
-        steps = 0
-    extrapolate = True
-    switch_index = -1
-    limits = {name: getattr(settings, name) for name in STOPS}
-    # a stop the user chose (not the default's, where the database's curves end): landed
-    # with the Illinois corrections too, and its reason says where a curve ended off it
-    user_stop = {name: limits[name] != getattr(DEFAULT_SETTINGS, name) for name in STOPS}
-    # The cavity volume at max_volume_ul, and past it by the Newton tolerance on the
-    # volume (so that the state converged there is at or past the stop): the last volume
-    # step is capped at it.
-    volume_stop_mm3 = (volume_load_at(settings.max_volume_ul, model.injected_volume_ul,
-                                      model.volume0_mm3)
-                       + settings.newton_tol * model.volume0_mm3 if volume_control else np.inf)
-    fold_attempted = False       # the switch at a failed step is tried once per curve (its
-                                 # arc length costs minutes on the actuator)
-    failures_here = 0            # failed attempts from the current converged state
-    for _ in range(steps):
-        # The last step lands on max_volume_ul under volume control and on max_pressure_pa
-        # under pressure control, not beyond it (the other stops: ``land_on_stop``).
-        load = min(last.volume_mm3 + step, volume_stop_mm3) if volume_control else (
-            min(p + step, settings.max_pressure_pa))
-        guess = predictor(history, load) if extrapolate else None
-        try:
-            u0, q0, p0, start = (u, q, p, last) if guess is None else (*guess, None)
-            if volume_control:
-                step_out = mixed_newton_step(model, u0, q0, p0, settings, load, None, backend,
-                                             start=start)
-            else:
-                step_out = mixed_newton_step(model, u0, q0, p0, settings, None, load, backend,
-                                             start=start)
-        except (StepFailed, FloatingPointError) as exc:
-            model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
-            report_step()
-            if debug:
-                print(f"cut-back at p = {p:.1f}, step {step:.4g}: {exc}")
-            failures_here += 1
-            if guess is not None:
-                extrapolate = False            # retry the same step from the converged state
-                continue
-            extrapolate = True
-            if (follow_stable_branch and volume_control and switch_index < 0
-                    and failures_here == FAILURES_BEFORE_SWITCH and not fold_attempted):
-                fold_attempted = True
-                switch = try_switch(u, q, p, load, at_target=False)
-                if switch.converged is not None:
-                    out = switch.converged
-                    u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
-                    history = [State(load, u, q, p, out.rate)]
-                    angle = record(u, p, out.iterations, out.residual, out.negative_pivots,
-                                   last, out.g_kinv_g)
-                    switch_index = len(rows["p"]) - 1
-                    failures_here = 0
-                    step = 0.5 * step
-                    continue
-            step *= 0.5
-            if step < MIN_CUTBACK * initial_step:
-                status, reason = "failed", (f"step at p = {p:.1f} Pa, angle = "
-                                            f"{rows['a'][-1]:.1f} deg did not converge after "
-                                            f"cut-backs: {exc}")
-                break
-            continue
-        before = (u, q, p, last)
-        u, p, q, last = step_out.u, step_out.pressure_pa, step_out.q, step_out.evaluation
-        extrapolate = True
-        failures_here = 0
-        history = (history + [State(load, u, q, p, step_out.rate)])[-PREDICTOR_POINTS:]
-        its = step_out.iterations
-        angle = record(u, p, its, step_out.residual, step_out.negative_pivots, last,
-                       step_out.g_kinv_g)
-        if (follow_stable_branch and volume_control and switch_index < 0
-                and rows["negv"][-1] > 0):
-            # Where the step crossed the bifurcation, switch just past it (the pump's
-            # path leaves the primary branch there); else, or if that fails, here.
-            near = (near_bifurcation(before[:3], (u, q, p), before[3].volume_mm3,
-                                     last.volume_mm3)
-                    if rows["negv"][-2] == 0 else None)
-            switch = None
-            if near is not None:
-                n_out, n_volume = near
-                switch = try_switch(n_out.u, n_out.q, n_out.pressure_pa, n_volume, True)
-                its += n_out.iterations
-            if switch is None or switch.converged is None:
-                n_volume = load
-                switch = try_switch(u, q, p, load, at_target=True)
-            if switch.converged is not None:
-                out = switch.converged
-                for column in rows.values():
-                    column.pop()
-                u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
-                history = [State(n_volume, u, q, p, out.rate)]
-                angle = record(u, p, its + out.iterations, out.residual, out.negative_pivots,
-                               last, out.g_kinv_g)
-                switch_index = len(rows["p"]) - 1
-        d_angle = abs(angle - rows["a"][-2])
-        factor = 1.6 if its <= GROW_SOLVES else (1.0 if its <= HOLD_SOLVES else 0.6)
-        if d_angle > 1e-9:
-            factor = min(factor, max(0.5, TARGET_ANGLE_STEP_DEG / d_angle))
-        d_pressure = abs(p - rows["p"][-2])
-        if volume_control and d_pressure > 1e-9:
-            allowed = max(MAX_PRESSURE_STEP_PA, MAX_RELATIVE_PRESSURE_STEP * abs(p))
-            factor = min(factor, max(0.5, allowed / d_pressure))
-        step *= factor
-        reached = stops_reached(limits, stop_values(angle, p, rows["v"][-1]),
-                                at_volume_cap=volume_control and load >= volume_stop_mm3)
-        if reached:
-            stop = reached[0]
-            if volume_control and switch_index != len(rows["p"]) - 1:
-                landing = land_on_stop(reached, before, load, history)
-                if landing is not None:
-                    stop, out, landing_solves = landing
-                    for column in rows.values():
-                        column.pop()
-                    u, p, q, last = out.u, out.pressure_pa, out.q, out.evaluation
-                    record(u, p, its + landing_solves, out.residual, out.negative_pivots,
-                           last, out.g_kinv_g)
-            ended = stop_values(rows["a"][-1], rows["p"][-1], rows["v"][-1])[stop]
-            status, reason = "complete", stop_reason(stop, limits[stop], ended,
-                                                     user_stop[stop])
-            break
+        return path, f"the tangent at rest cannot be solved: {exc}"
+    path.history = [State(model.volume0_mm3 if volume_control else 0.0, u, q, p,
+                          path_rate(model, last, b0, float(last.g @ b0), volume_control))]
+    return path, None
 
-    pressure = np.array(rows["p"])
-    pmax = -1
-    if volume_control and len(pressure) > 2:
-        drops = np.nonzero(np.diff(pressure) < 0)[0]
-        if len(drops):
-            pmax = int(drops[0])
-    volume = np.array(rows["v"])
-    n = len(pressure)
-    curve = Curve(
-        pressure_pa=pressure, volume_ul=volume, time_s=volume / settings.flow_ul_s,
-        angle_deg=np.array(rows["a"]), tip_displacement_mm=np.array(rows["tip"]).reshape(n, 2),
-        max_membrane_stretch=np.array(rows["lam"]), force_mn=np.array(rows["f"]),
-        newton_iterations=np.array(rows["it"], dtype=np.int64),
-        residual_norm=np.array(rows["res"]),
-        negative_eigenvalues=np.array(rows["neg"], dtype=np.int64),
-        status=status, reason=reason, pressure_maximum_index=pmax, n_dofs=model.n_free,
-        wall_time_s=time.perf_counter() - t_start, timings_s=dict(model.timings),
-        volume_control_negative_eigenvalues=np.array(rows["negv"], dtype=np.int64),
-        branch_switch_index=switch_index)
-    return curve, u
+
+def next_load(run: Run, path: PathState) -> float:
+    """The next step's load: the cavity volume (mm^3) under volume control, capped at the
+    volume stop's; the pressure (Pa) under pressure control, capped at max_pressure_pa
+    (the other stops: ``end_on_stop``)."""
+    if run.volume_control:
+        return min(path.evaluation.volume_mm3 + path.step, run.stops.volume_cap_mm3)
+    return min(path.pressure_pa + path.step, run.settings.max_pressure_pa)
+
+
+def converge_step(run: Run, path: PathState, load: float,
+                  guess: tuple[np.ndarray, list[np.ndarray], float] | None) -> Converged:
+    """Newton at ``load`` (solver/newton.py) from the predictor's ``guess``, or from the
+    last converged state with its tangent; StepFailed (or FloatingPointError) if it does
+    not converge."""
+    u0, q0, p0, start = ((*path.state(), path.evaluation) if guess is None
+                         else (*guess, None))
+    target_volume, target_pressure = (load, None) if run.volume_control else (None, load)
+    return mixed_newton_step(run.model, u0, q0, p0, run.settings, target_volume,
+                             target_pressure, run.backend, start=start)
+
+
+def cut_back(run: Run, path: PathState, load: float, extrapolated: bool,
+             exc: Exception) -> str | None:
+    """A step to ``load`` failed: retried from the converged state if it started from the
+    predictor; else, when following the stable branch, past a fold after
+    ``FAILURES_BEFORE_SWITCH`` failures (once per curve); else halved. Returns the
+    reason the curve fails when the step falls below ``MIN_CUTBACK`` of the first."""
+    model = run.model
+    model.timings["cutbacks"] = model.timings.get("cutbacks", 0) + 1
+    run.columns.report()
+    if run.debug:
+        print(f"cut-back at p = {path.pressure_pa:.1f}, step {path.step:.4g}: {exc}")
+    path.failures_here += 1
+    if extrapolated:
+        path.extrapolate = False            # retry the same step from the converged state
+        return None
+    path.extrapolate = True
+    if (run.follow_stable_branch and path.switch_index < 0
+            and path.failures_here == FAILURES_BEFORE_SWITCH and not path.fold_attempted):
+        path.fold_attempted = True
+        if switch_past_fold(run, path, load):
+            return None
+    path.step *= 0.5
+    if path.step < MIN_CUTBACK * path.first_step:
+        return (f"step at p = {path.pressure_pa:.1f} Pa, angle = "
+                f"{run.columns.last('angle_deg'):.1f} deg did not converge after "
+                f"cut-backs: {exc}")
+    return None
+
+
+def switch_past_fold(run: Run, path: PathState, load: float) -> bool:
+    """The switch at a step that keeps failing (a fold in volume, solver/
+    branch_following.py) to the cavity volume ``load``: on success its state is recorded
+    as the branch switch and the step halved."""
+    switch = try_switch(run.model, run.settings, run.backend, path.state(), load, False,
+                        len(run.columns) - 1, run.debug)
+    if switch.converged is None:
+        return False
+    out = switch.converged
+    path.adopt(out)
+    path.history = [State(load, *path.state(), out.rate)]
+    run.columns.append(path.u, path.pressure_pa, out.iterations, out.residual,
+                       out.negative_pivots, path.evaluation, out.g_kinv_g)
+    path.switch_index = len(run.columns) - 1
+    path.failures_here = 0
+    path.step = 0.5 * path.step
+    return True
+
+
+def accept_step(run: Run, path: PathState, load: float, out: Converged) -> int:
+    """The step converged at ``load``: its state is the path's last and the predictor's
+    newest, and the curve's new row. Returns its Newton solves."""
+    path.adopt(out)
+    path.extrapolate = True
+    path.failures_here = 0
+    path.history = (path.history + [State(load, *path.state(), out.rate)])[-PREDICTOR_POINTS:]
+    run.columns.append(path.u, path.pressure_pa, out.iterations, out.residual,
+                       out.negative_pivots, path.evaluation, out.g_kinv_g)
+    return out.iterations
+
+
+def switch_past_bifurcation(run: Run, path: PathState, before: tuple, load: float,
+                            solves: int) -> int:
+    """The step converged unstable at constant volume: where it crossed the bifurcation
+    (the state ``before`` was stable), switch just past it (the pump's path leaves the
+    primary branch there); else, or if that fails, at ``load``. A switch replaces the
+    step's row. Returns the step's Newton solves, those to the located state included."""
+    columns = run.columns
+    near = (near_bifurcation(run.model, run.settings, run.backend, before[:3], path.state(),
+                             before[3].volume_mm3, path.evaluation.volume_mm3, run.debug)
+            if columns.last("volume_control_negative_eigenvalues", 2) == 0 else None)
+    switch = None
+    if near is not None:
+        n_out, n_volume = near
+        switch = try_switch(run.model, run.settings, run.backend,
+                            (n_out.u, n_out.q, n_out.pressure_pa), n_volume, True,
+                            len(columns) - 1, run.debug)
+        solves += n_out.iterations
+    if switch is None or switch.converged is None:
+        n_volume = load
+        switch = try_switch(run.model, run.settings, run.backend, path.state(), load, True,
+                            len(columns) - 1, run.debug)
+    if switch.converged is not None:
+        out = switch.converged
+        columns.drop_last()
+        path.adopt(out)
+        path.history = [State(n_volume, *path.state(), out.rate)]
+        columns.append(path.u, path.pressure_pa, solves + out.iterations, out.residual,
+                       out.negative_pivots, path.evaluation, out.g_kinv_g)
+        path.switch_index = len(columns) - 1
+    return solves
+
+
+def last_stop_values(columns: CurveColumns, back: int = 1) -> dict[str, float]:
+    """The stops' quantities at the curve's row ``back`` from the end."""
+    return stop_values(columns.last("angle_deg", back), columns.last("pressure_pa", back),
+                       columns.last("volume_ul", back))
+
+
+def end_on_stop(run: Run, path: PathState, reached: list[str], before: tuple, load: float,
+                solves: int) -> str:
+    """The step to ``load`` reached the stops ``reached``: under volume control (and not
+    a branch switch) it is replaced by the step landed on the stop met first
+    (solver/stop_landing.py). Returns the curve's reason."""
+    columns = run.columns
+    stop = reached[0]
+    if run.volume_control and path.switch_index != len(columns) - 1:
+        landing = land_on_stop(run.model, run.settings, run.backend, run.stops, reached,
+                               last_stop_values(columns, 2), last_stop_values(columns),
+                               before, load, path.history)
+        if landing is not None:
+            stop, out, landing_solves = landing
+            columns.drop_last()
+            path.adopt(out)
+            columns.append(path.u, path.pressure_pa, solves + landing_solves, out.residual,
+                           out.negative_pivots, path.evaluation, out.g_kinv_g)
+    ended = last_stop_values(columns)[stop]
+    return stop_reason(stop, run.stops.limits[stop], ended, run.stops.user_stop[stop])

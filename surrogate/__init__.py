@@ -18,8 +18,6 @@ Errors: OutOfFamilyError and SurrogateFileError (both InputError, see surrogate.
 """
 
 from surrogate.dataset import CurveData, curves_from_store
-from surrogate.design_result import DesignCandidate, InverseDesignResult
-from surrogate.design_target import DesignTarget
 from surrogate.errors import OutOfFamilyError, SurrogateFileError
 from surrogate.exponential.file import (
     FORMAT_VERSION,
@@ -32,6 +30,8 @@ from surrogate.exponential.inverse_design import DesignBounds, inverse_design
 from surrogate.exponential.paper_preset import paper_surrogate
 from surrogate.exponential.surrogate import Surrogate
 from surrogate.predictor import InversePrediction, Prediction, Predictor
+from surrogate.search.design_result import DesignCandidate, InverseDesignResult
+from surrogate.search.design_target import DesignTarget
 
 __all__ = [
     "FORMAT_VERSION", "CurveData", "DesignBounds", "DesignCandidate", "DesignTarget",

@@ -96,8 +96,8 @@ def test_the_inverse_search_lists_no_design_past_its_blocked_tip_end(emulator):
     """A force target near the largest the box gives at 2000 Pa (0.93 mN): every listed
     design's blocked range reaches the target pressure (its force was given there), as
     the predict path says."""
-    from surrogate.design_search import SearchBounds, search_designs
-    from surrogate.design_target import DesignTarget
+    from surrogate.search.design_search import SearchBounds, search_designs
+    from surrogate.search.design_target import DesignTarget
 
     result = search_designs(emulator, DesignTarget("force_at_pressure", 2000.0, force_mn=0.8),
                             SearchBounds(), n_results=3)
@@ -152,8 +152,8 @@ def test_a_force_past_what_the_box_reaches_is_not_told_to_raise_the_pressure(emu
     """1 mN at 2000 Pa: no design reaches it (0.93 mN the most), and the design that
     reaches the most has its force only a little further (its blocked-tip FE curve ends
     soon past 2000 Pa): "or raise the pressure" was the wrong advice."""
-    from surrogate.design_search import SearchBounds, search_designs
-    from surrogate.design_target import DesignTarget
+    from surrogate.search.design_search import SearchBounds, search_designs
+    from surrogate.search.design_target import DesignTarget
 
     result = search_designs(emulator, DesignTarget("force_at_pressure", 2000.0, force_mn=1.0),
                             SearchBounds(), n_results=3)

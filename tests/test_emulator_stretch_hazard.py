@@ -193,8 +193,8 @@ def test_the_design_search_names_the_listed_designs_past_their_stretch_onset(emu
     """A design search whose listed designs include one that reaches the target past its
     emulated stretch onset (80 deg at 3000 Pa, thick PDMS 1:10 bodies) says which ranks
     do, in its explanation; the ranking itself is unchanged (a flag, not a cut)."""
-    from surrogate.design_search import SearchBounds, search_designs
-    from surrogate.design_target import DesignTarget
+    from surrogate.search.design_search import SearchBounds, search_designs
+    from surrogate.search.design_target import DesignTarget
 
     res = search_designs(emulator, DesignTarget("angle_at_pressure", 3000.0, angle_deg=80.0),
                          SearchBounds(T_mm=(1.8, 2.0), pairs=(("pdms_1_10", "ecoflex_00_30"),)),

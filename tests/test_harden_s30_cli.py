@@ -62,7 +62,7 @@ def test_a_stiffness_scale_that_is_not_a_number_names_its_range(capsys):
 ])
 def test_search_bounds_past_the_box_are_refused_naming_the_flag_and_the_box(
         capsys, monkeypatch, flag, name, bounds):
-    monkeypatch.setattr("surrogate.design_search.search_designs",
+    monkeypatch.setattr("surrogate.search.design_search.search_designs",
                         lambda *a, **k: pytest.fail("searched a clipped range"))
     lo, hi = BOX_MM.get(name, STIFFNESS_SCALE_RANGE)
     code = main(["inverse", "--angle-deg", "30", "--pressure-pa", "1200", "--model", "paper",

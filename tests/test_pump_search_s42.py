@@ -1,6 +1,6 @@
 """The design search in a syringe-pump user's terms (issue 17, forty-second session): a lab
 sets a flow rate and a time, or an injected volume, not a pressure. Targets
-angle_at_volume, volume_budget, angle_at_time and time_budget (surrogate/pump_targets.py);
+angle_at_volume, volume_budget, angle_at_time and time_budget (surrogate/search/pump_targets.py);
 before this session POST /v1/inverse and `balloon inverse` took angle_at_pressure,
 pressure_budget and force_at_pressure only, and `--flow-ul-s` given to a search was
 silently dropped. The top-ranked designs of three searches were solved by the default FE
@@ -20,8 +20,8 @@ from service.cli import main
 from service.settings import DATA_DIR
 from solver.design import design_from_dict
 from surrogate import DesignTarget
-from surrogate.design_search import SearchBounds, search_designs
 from surrogate.emulator import load_emulator
+from surrogate.search.design_search import SearchBounds, search_designs
 
 CASES = json.loads((Path(__file__).parent / "data" / "fe_pump_search_s42.json").read_text())
 PAIR = ["pdms_1_10/ecoflex_00_30"]
@@ -172,7 +172,7 @@ def test_the_batch_screen_reads_as_one_design_at_a_time(emulator):
     what predict_volume and inverse give each design: the means to 1e-6, the bands to
     1e-3 (their variances are computed by different products)."""
     from solver.design_space import PAIRS
-    from surrogate.search_space import candidate_design, sobol_candidates
+    from surrogate.search.space import candidate_design, sobol_candidates
 
     ranges = SearchBounds().ranges()
     designs = [candidate_design(PAIRS[0], v) for v in sobol_candidates(ranges, None, 3, 16)]

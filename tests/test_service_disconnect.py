@@ -95,7 +95,7 @@ def test_a_calibration_stops_soon_after_its_client_disconnects(server, monkeypat
 
 
 def test_a_design_search_stops_soon_after_its_client_disconnects(server, monkeypatch):
-    import surrogate.design_search as search
+    import surrogate.search.design_search as search
 
     starts = slowed(monkeypatch, search, "screen")
     body = {"model": "paper", "target": {"kind": "angle_at_pressure", "pressure_pa": 1500,

@@ -53,7 +53,7 @@ from service.jobs import JobManager
 from service.routes.calibration import EXAMPLE_ROWS
 from service.settings import DATA_DIR
 from solver.store import CurveStore
-from surrogate.design_target import VOLUME_KINDS
+from surrogate.search.design_target import VOLUME_KINDS
 
 SEED = 20240917
 KEY = {"X-API-Key": "test-key"}

@@ -9,7 +9,7 @@ of the former stepping are in the comments (measured 2026-12-06)."""
 import numpy as np
 import pytest
 
-from solver import Design, SolverSettings, stepping
+from solver import Design, SolverSettings, stop_landing
 from solver.landing import (
     USER_STOP_CORRECTIONS,
     Point,
@@ -30,7 +30,7 @@ HALF_DEGREE = SolverSettings(element="hex1", max_angle_deg=0.5)
 def without_landing(monkeypatch, design: Design, settings: SolverSettings):
     """The curve the stepping makes when no landing converges: the former one."""
     with monkeypatch.context() as m:
-        m.setattr(stepping, "land", lambda *args, **kwargs: None)
+        m.setattr(stop_landing, "land", lambda *args, **kwargs: None)
         return solve(design, settings)
 
 
@@ -94,19 +94,19 @@ def test_a_blocked_tip_lands_on_its_pressure_stop():
 
 
 def test_a_landing_that_does_not_converge_keeps_the_step_past_the_stop(monkeypatch):
-    original_land = stepping.land
+    original_land = stop_landing.land
 
     def failing_steps(*args, **kwargs):
-        raise stepping.StepFailed("made to fail")
+        raise stop_landing.StepFailed("made to fail")
 
     def land_failing(*args, **kwargs):
         # Every Newton step of the landing fails, from the predictor and from the state.
         with monkeypatch.context() as m:
-            m.setattr(stepping, "mixed_newton_step", failing_steps)
+            m.setattr(stop_landing, "mixed_newton_step", failing_steps)
             return original_land(*args, **kwargs)
 
     former = without_landing(monkeypatch, SHORT, HALF_DEGREE)
-    monkeypatch.setattr(stepping, "land", land_failing)
+    monkeypatch.setattr(stop_landing, "land", land_failing)
     infos: list[dict] = []
     curve = solve(SHORT, HALF_DEGREE, on_step=infos.append)
     assert curve.status == "complete"

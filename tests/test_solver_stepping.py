@@ -5,7 +5,7 @@ Newton tolerance, with fewer factorisations."""
 import numpy as np
 import pytest
 
-from solver import Design, SolverSettings, newton, stepping
+from solver import Design, SolverSettings, newton, stepping, stop_landing
 from solver.hermite_predictor import Rate, State, predictor
 from solver.stepping import solve
 
@@ -38,8 +38,8 @@ def test_predictor_is_exact_on_a_quintic_through_three_states_and_their_tangents
 def test_speed_ups_leave_the_converged_curve_unchanged(monkeypatch):
     fast = solve(Design(L_mm=4.1), SMALL)
     monkeypatch.setattr(newton, "CHORD_SWITCH", 0.0)      # full Newton every iteration
-    monkeypatch.setattr(stepping, "predictor", lambda history, load: None)   # restart from
-                                                                             # the last state
+    for module in (stepping, stop_landing):   # restart each step (and landing step) from
+        monkeypatch.setattr(module, "predictor", lambda history, load: None)   # the last state
     plain = solve(Design(L_mm=4.1), SMALL)
     assert fast.status == plain.status == "complete"
     # The same steps (the step control sees the same converged states): compare the
@@ -76,3 +76,19 @@ def test_a_cut_back_is_reported_with_the_last_converged_step(monkeypatch):
     at = counts.index(1)
     assert infos[at]["step"] == infos[at - 1]["step"]          # the same converged step
     assert infos[at]["pressure_pa"] == infos[at - 1]["pressure_pa"]
+
+
+def test_the_step_size_rule_grows_holds_and_limits_the_step():
+    # solver/step_size.py's rule: 1.6 after <= 4 Newton solves, 1.0 after <= 7, else 0.6;
+    # no more than 8 deg per step at the last step's rate, no more than max(150 Pa, 8 % of
+    # p) per step under volume control, neither limit below half the last step.
+    from solver.step_size import step_factor
+
+    assert step_factor(4, 0.0, 0.0, 0.0, True) == 1.6
+    assert step_factor(7, 0.0, 0.0, 0.0, True) == 1.0
+    assert step_factor(8, 0.0, 0.0, 0.0, True) == 0.6
+    assert step_factor(2, 10.0, 0.0, 0.0, True) == pytest.approx(0.8)       # 8 / 10 deg
+    assert step_factor(2, 40.0, 0.0, 0.0, True) == 0.5                      # floor
+    assert step_factor(2, 1.0, 300.0, 1000.0, True) == pytest.approx(0.5)   # 150 / 300 Pa
+    assert step_factor(2, 1.0, 200.0, 2500.0, True) == 1.0                  # 8 % = 200 Pa
+    assert step_factor(2, 1.0, 300.0, 1000.0, False) == 1.6                 # pressure control

@@ -78,9 +78,10 @@ def test_fit_predict_inverse_commands(db, tmp_path, capsys) -> None:
 
 
 def test_design_search_on_the_default_model_searches_the_box_like_the_api(capsys) -> None:
-    """``balloon inverse`` without --angles-deg runs the API's search (surrogate.design_search)
-    with every bound of POST /v1/inverse. Before, it ran the exponential model's own search,
-    and with the default model (the emulator) it ended in a traceback."""
+    """``balloon inverse`` without --angles-deg runs the API's search
+    (surrogate.search.design_search) with every bound of POST /v1/inverse. Before, it ran
+    the exponential model's own search, and with the default model (the emulator) it ended
+    in a traceback."""
     argv = ["inverse", "--kind", "angle_at_pressure", "--angle-deg", "30", "--pressure-pa",
             "1500", "-n", "2", "--L-range", "10", "10", "--membrane-stiffness-range", "0.8",
             "1.2", "--json"]

@@ -138,7 +138,7 @@ def test_a_pinned_chamber_length_is_met_along_the_next_free_variable(emulator, t
     """A lab with one mould: the chamber length fixed, an exact target is solved along the
     membrane (thickness; with that fixed too, the next free variable). Before, only L was
     solved along, and a pinned L answered "not reachable; the largest reachable is 85"."""
-    from surrogate.design_search import SearchBounds, search_designs, solve_variable
+    from surrogate.search.design_search import SearchBounds, search_designs, solve_variable
 
     bounds = SearchBounds(**pinned)
     assert solve_variable(bounds.ranges()) == along
@@ -158,7 +158,7 @@ def test_a_soft_pair_that_bends_the_other_way_at_the_thick_end_is_solved_along_t
     balance), 60 deg lies between (t ~ 0.71 mm). The thick end counted as "too large"
     like the thin one, and the search said the target was not crossed along t (an audit
     of the thirty-fifth session)."""
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     pair = ("ecoflex_00_30", "ecoflex_00_30")
     bounds = SearchBounds(L_mm=(10.0, 10.0), T_mm=(1.0, 1.0), b_mm=(1.8, 1.8),
@@ -174,7 +174,7 @@ def test_a_soft_pair_that_bends_the_other_way_at_the_thick_end_is_solved_along_t
 
 def test_every_variable_pinned_answers_the_one_design_when_it_meets_the_target(emulator):
     from solver.design import Design
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     geometry = {"L_mm": 9.0, "t_mm": 0.7, "T_mm": 1.2, "b_mm": 1.6, "h_mm": 0.2}
     design = Design(W_mm=3.0, **geometry)
@@ -193,7 +193,7 @@ def test_every_variable_pinned_answers_the_one_design_when_it_meets_the_target(e
 def test_a_pair_given_twice_is_searched_once():
     """The allowed pairs are each searched once, in the order given: twenty copies of one
     pair cost twenty searches (25 s over HTTP) and found nothing more."""
-    from surrogate.design_search import SearchBounds
+    from surrogate.search.design_search import SearchBounds
 
     pair = ("pdms_1_10", "ecoflex_00_30")
     other = ("ecoflex_00_30", "pdms_1_15")
@@ -204,7 +204,7 @@ def test_a_pair_given_twice_is_searched_once():
 def test_bounds_past_the_box_are_said_with_the_answer(emulator):
     """L 2-30 mm was searched as 4-18 without a word: "no design meets the target" then
     reads as covering 2-30 mm. The answer says what was searched."""
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     bounds = SearchBounds(L_mm=(2.0, 30.0), t_mm=(0.5, 0.6), T_mm=(1.0, 1.0),
                           b_mm=(1.8, 1.8), h_mm=(0.15, 0.15),
@@ -222,7 +222,7 @@ def test_the_target_angles_sign_is_the_way_the_design_bends(emulator):
     """A +30 deg target listed reversed-pair designs at -30 deg beside the +30 ones, and a
     -30 deg target only +30 designs (the search matched magnitudes; an audit of
     2026-12-06). The sign is the bending direction asked for."""
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     pairs = (("pdms_1_15", "ecoflex_00_30"), ("ecoflex_00_30", "pdms_1_15"))
     bounds = SearchBounds(L_mm=(10.0, 10.0), pairs=pairs)
@@ -250,7 +250,7 @@ def test_the_first_k_of_n_results_are_the_k_best(emulator):
     """With 3 results the search solved fewer candidates than with 5 and missed the best
     design of the 5-result search (an audit of 2026-12-06): the same candidates are
     solved whatever n_results is."""
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     target = DesignTarget("angle_at_pressure", 1500.0, angle_deg=30.0)
     bounds = SearchBounds(L_mm=(10.0, 10.0), pairs=(("pdms_1_10", "ecoflex_00_30"),
@@ -267,7 +267,7 @@ def test_a_pressure_budget_candidate_reports_its_angle_where_it_meets_the_target
     """A budget candidate's angle was read at the budget pressure, often past its FE range:
     null, with the CLI's "--" (an audit of 2026-12-06). It is read at the pressure
     needed: the target angle, with its band."""
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     res = search_designs(emulator, DesignTarget("pressure_budget", 1500.0, angle_deg=60.0),
                          SearchBounds(pairs=(("pdms_1_10", "ecoflex_00_30"),)), n_results=3)
@@ -281,7 +281,7 @@ def test_a_pressure_budget_candidate_reports_its_angle_where_it_meets_the_target
 def test_the_other_way_is_offered_only_where_it_reaches_the_target(emulator):
     """ "designs bending towards the membrane reach -5.22 deg there: ask for -80 deg" was
     said where neither way reaches 80 deg (an audit of 2026-12-06)."""
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     res = search_designs(emulator, DesignTarget("angle_at_pressure", 300.0, angle_deg=80.0),
                          SearchBounds(L_mm=(6.0, 6.0), t_mm=(0.8, 0.8)), n_results=3)
@@ -302,7 +302,7 @@ def test_each_candidate_says_what_0_01_mm_of_each_length_does(emulator):
     not asserted."""
     from dataclasses import replace
 
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     res = search_designs(emulator, DesignTarget("angle_at_pressure", 1500.0, angle_deg=45.0),
                          SearchBounds(L_mm=(10.0, 10.0)), n_results=2)
@@ -340,7 +340,7 @@ def test_a_candidate_is_listed_only_where_predict_answers_as_the_screen_did(emul
     membranes: none of them is listed, and every listed one predicts back to the target."""
     from dataclasses import replace
 
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     class PartsForThinMembranes:
         def __init__(self, inner):

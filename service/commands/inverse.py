@@ -38,9 +38,9 @@ from service.commands.predict import (
 )
 from service.pump import MAX_ANGLE_DEG
 from solver.errors import InputError
-from surrogate.design_search import N_RESULTS_MAX
-from surrogate.design_target import DEFAULT_KIND, KINDS, OBJECTIVES
 from surrogate.predictor import FE_VOLUME_STOP_UL
+from surrogate.search.design_search import N_RESULTS_MAX
+from surrogate.search.design_target import DEFAULT_KIND, KINDS, OBJECTIVES
 
 # The search's bounds (surrogate.design_search.SearchBounds field -> flag, what it bounds);
 # a pinned range (LO = HI) fixes that variable (one mould: --L-range 10 10). Each range
@@ -195,7 +195,7 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
     """Designs for a target over the box: the same search as POST /v1/inverse."""
     from service.convert import jsonable
     from surrogate import DesignTarget
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     # one design's flags (--L-mm for L_mm, ...) do not steer the search: refused, naming
     # what does (the range flags, RANGE_FLAGS, for the variables it searches)
@@ -280,7 +280,7 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
 
 def _print_score_and_tolerances(res: object, unit: str) -> None:
     """What the score means, and what a mould's tolerance does to each answer."""
-    from surrogate.search_ranking import SCORE_MEANING
+    from surrogate.search.ranking import SCORE_MEANING
 
     objective = res.objective  # type: ignore[attr-defined]
     print(f"score ({objective}): {SCORE_MEANING.get(objective, 'lower ranks first')}")

@@ -49,7 +49,7 @@ async def inverse(request: InverseRequest, models: ModelsDep, http: Request
 
 def _search(request: InverseRequest, models: Any, cancel: threading.Event) -> InverseResponse:
     from surrogate import DesignTarget
-    from surrogate.design_search import SearchBounds, search_designs
+    from surrogate.search.design_search import SearchBounds, search_designs
 
     model = models.get(request.model)
     if not (hasattr(model, "evaluate_designs") or hasattr(model, "covered_slices")):

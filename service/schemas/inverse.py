@@ -12,15 +12,15 @@ from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
 from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
 from solver.design import LIMITS_MM
 from solver.design_space import BOX_MM, STIFFNESS_SCALE_LIMITS, STIFFNESS_SCALE_RANGE
-from surrogate.design_search import N_RESULTS_MAX
-from surrogate.design_target import (
+from surrogate.predictor import FE_VOLUME_STOP_UL, MAX_ASKED_VALUES
+from surrogate.search.design_search import N_RESULTS_MAX
+from surrogate.search.design_target import (
     DEFAULT_KIND,
     KINDS,
     MAX_TARGET,
     OBJECTIVES,
 )
-from surrogate.predictor import FE_VOLUME_STOP_UL, MAX_ASKED_VALUES
-from surrogate.search_ranking import SCORE_MEANING
+from surrogate.search.ranking import SCORE_MEANING
 from surrogate.volume_control import MAX_TIME_S
 
 Angle = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]

@@ -4,7 +4,7 @@ Uses the solver's own ``newton_step`` (the production Newton loop, bordered syst
 under volume control) so that the verification exercises the code the product
 runs; only the stepping is simpler: fixed increments, halved on failure.
 ``drive_pressure`` also starts each increment from the production predictor
-(``solver.stepping.predictor``; from the last converged state if that start fails), as
+(``solver.hermite_predictor.predictor``; from the last converged state if that start fails), as
 the felupe benchmark compares the two codes' solves at the same increments.
 """
 

@@ -1,6 +1,6 @@
 """Inverse design with the exponential model: which (material pair, L, t) of its fitted
 families meets a target by pressure, ranked by an objective (targets and objectives:
-``surrogate.design_target``; the answer: ``surrogate.design_result``).
+``surrogate.search.design_target``; the answer: ``surrogate.search.design_result``).
 
     angle_at_pressure   for each t the chamber length is closed form,
                         L = |angle| / (|a| (exp(x + c x^2) - 1)), x = p / tau(t)
@@ -10,7 +10,7 @@ families meets a target by pressure, ranked by an objective (targets and objecti
                         (``bands.pressure_band``), on an L x t grid.
     force_at_pressure   as angle_at_pressure with the family's force model (mN).
 
-A syringe pump's targets are searched over the box by ``surrogate.design_search`` only;
+A syringe pump's targets are searched over the box by ``surrogate.search.design_search`` only;
 this family grid refuses them. Angles are matched in magnitude: a reversed material pair
 (a < 0) is a candidate too, and its predictions carry the negative sign. The margin
 objective is the largest margin to the budget at the band's pessimistic end.
@@ -30,13 +30,13 @@ import numpy as np
 from solver.design import Design
 from solver.errors import InputError
 from surrogate.band_level import z_value
-from surrogate.design_result import DesignCandidate, InverseDesignResult
-from surrogate.design_target import DesignTarget, finite_number, resolve_objective
 from surrogate.exponential import bands, equations
 from surrogate.exponential.family import Family
 from surrogate.exponential.paper_tables import TWO_BALLOON_BELOW_t_MM
 from surrogate.exponential.parameters import ModelParameters
 from surrogate.exponential.surrogate import Surrogate
+from surrogate.search.design_result import DesignCandidate, InverseDesignResult
+from surrogate.search.design_target import DesignTarget, finite_number, resolve_objective
 
 #: the least distance between two listed designs of one family, in (L, t) normalised by
 #: the bounds
@@ -174,7 +174,8 @@ def inverse_design(surrogate: Surrogate, target: DesignTarget,
     if target.by_volume:
         raise InputError("kind", f"the family grid searches by pressure only, not "
                          f"{target.kind}", "angle_at_pressure | pressure_budget | "
-                         "force_at_pressure here; surrogate.design_search for a pump's target")
+                         "force_at_pressure here; surrogate.search.design_search for a "
+                         "pump's target")
     bounds = (bounds or DesignBounds()).validated()
     objective = resolve_objective(target, objective)
     if not 1 <= n_results <= 50:

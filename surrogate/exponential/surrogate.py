@@ -72,7 +72,7 @@ class Surrogate:
 
     def covered_slices(self, pair: tuple[str, str]) -> list[dict[str, float]]:
         """The (T_mm, b_mm, h_mm) of every family of ``pair`` (preset materials): the
-        exponential model answers only there (``surrogate.design_search``)."""
+        exponential model answers only there (``surrogate.search.design_search``)."""
         from solver.materials import MATERIALS
 
         out = []

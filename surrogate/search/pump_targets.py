@@ -18,8 +18,8 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate.design_target import DesignTarget
 from surrogate.predictor import InversePrediction, Prediction
+from surrogate.search.design_target import DesignTarget
 from surrogate.volume_control import cut_past_longest_time
 
 #: volumes tried below the target's, as fractions of it, for a design's bending direction
@@ -57,7 +57,7 @@ def screen_by_volume(model: object, designs: list[Design], target: DesignTarget,
     """For every design: |angle| (deg) with its band at the target volume (``value``),
     the injected volume (ul) needed for the target angle with its band (``needed``) and
     the bending direction (``sign``), NaN where the model has no answer (past the FE's
-    range); the keys of ``search_screen.screen``, and ``no_volume`` where the model
+    range); the keys of ``screen.screen``, and ``no_volume`` where the model
     gives no volume for the design (the paper's families). ``band=False``: the batch
     reads the means alone (bands NaN), for a bisection step."""
     batch = getattr(model, "evaluate_designs_by_volume", None)

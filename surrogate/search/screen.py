@@ -3,7 +3,7 @@
 For a target by pressure: |angle| (deg; |force|, mN, for a force target) with its band at
 the target pressure (Pa), and the pressure (Pa) needed for the target angle with its
 band; for a syringe pump's target the same by injected volume (ul:
-``surrogate.pump_targets.screen_by_volume``). With each design's bending direction
+``surrogate.search.pump_targets.screen_by_volume``). With each design's bending direction
 (``sign``: +1 away from the membrane, -1 towards it, 0 unknown): the search matches
 magnitudes, and a design bending against the target's direction is no candidate.
 NaN wherever the model has no number (past a design's FE range, outside its domain).
@@ -17,8 +17,8 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate.design_target import DesignTarget
-from surrogate.pump_targets import screen_by_volume
+from surrogate.search.design_target import DesignTarget
+from surrogate.search.pump_targets import screen_by_volume
 
 #: the screen's numbers of a design, in the order ``Screened`` holds them
 SCREENED_KEYS = ("needed", "needed_lo", "needed_hi", "value", "value_lo", "value_hi")
@@ -26,7 +26,7 @@ SCREENED_KEYS = ("needed", "needed_lo", "needed_hi", "value", "value_lo", "value
 
 @dataclass
 class Screened:
-    """One candidate as screened: its pair, searched values (``search_space.VARIABLES``)
+    """One candidate as screened: its pair, searched values (``space.VARIABLES``)
     and design; ``needed`` with its band: the pressure (Pa; a pump's target: the injected
     volume, ul) needed for the target angle; ``value`` with its band: |angle| (deg) or
     |force| (mN) at the target pressure (a pump's target: |angle| at the target volume)."""

@@ -21,15 +21,15 @@ import numpy as np
 from solver.design import Design
 from solver.errors import InputError
 from solver.settings import SolverSettings
-from surrogate.design_result import DesignCandidate
-from surrogate.design_target import DesignTarget
 from surrogate.emulator.stretch_hazard import FLAG as STRETCH_FLAG
 from surrogate.emulator.stretch_hazard import HAZARD_STRETCH
 from surrogate.errors import stop_if_cancelled
-from surrogate.pump_targets import ask
-from surrogate.search_ranking import MIN_SPACING
-from surrogate.search_screen import Screened, keep_direction, screen
-from surrogate.solve_to_target import solve_variable
+from surrogate.search.design_result import DesignCandidate
+from surrogate.search.design_target import DesignTarget
+from surrogate.search.pump_targets import ask
+from surrogate.search.ranking import MIN_SPACING
+from surrogate.search.screen import Screened, keep_direction, screen
+from surrogate.search.solve_to_target import solve_variable
 
 #: the bending directions in words (+1, -1)
 WAY = {1.0: "away from the membrane (positive angles)",
@@ -84,7 +84,7 @@ class SearchSeen:
 
     def note_screen(self, designs: list[Design], screen_out: dict[str, np.ndarray],
                     direction: float) -> None:
-        """A pair's screen (``search_screen.screen``) before the designs bending against
+        """A pair's screen (``screen.screen``) before the designs bending against
         ``direction`` are dropped from it."""
         r = screen_out
         # the designs bending the way asked with no number at the target pressure

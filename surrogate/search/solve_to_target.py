@@ -4,7 +4,7 @@ An exact target (an angle or force at a pressure, an angle at an injected volume
 is rarely met by a screened candidate: the best ones are solved to it along one variable,
 the chamber length L (the angle moves about as L does), or where the user pins L (a fixed
 mould) along the first free one of ``KNOBS``. Geometric bisection, all candidates at
-once, each step one batch screen (``search_screen.screen``); a candidate counts as a hit
+once, each step one batch screen (``screen.screen``); a candidate counts as a hit
 when its value lies within 1 % of the target.
 """
 
@@ -15,10 +15,10 @@ import threading
 import numpy as np
 
 from solver.design import Design
-from surrogate.design_target import DesignTarget
 from surrogate.errors import stop_if_cancelled
-from surrogate.search_screen import Screened, keep_direction, screen, target_direction
-from surrogate.search_space import candidate_design
+from surrogate.search.design_target import DesignTarget
+from surrogate.search.screen import Screened, keep_direction, screen, target_direction
+from surrogate.search.space import candidate_design
 
 # Bisection steps in L: the bracket shrinks to (L_hi / L_lo)^(2^-16), 2.3e-5 of L over the
 # whole box (the angle moves about as L does), far inside the 1 % the hit is held to.

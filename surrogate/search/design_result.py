@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from solver.design import Design
-from surrogate.design_target import DesignTarget
 from surrogate.predictor import Prediction
+from surrogate.search.design_target import DesignTarget
 
 #: what a listed design reports for a syringe pump's target (DesignCandidate)
 PUMP_FIELDS = ("volume_needed_ul", "volume_lower_ul", "volume_upper_ul", "time_needed_s",
@@ -38,7 +38,7 @@ class DesignCandidate:
     # the value's change (deg or mN) when one length is made 0.01 mm larger, the others
     # kept: a mould's tolerance read on the answer (design-space search; None otherwise)
     change_per_0_01_mm: dict[str, float] | None = None
-    # a syringe pump's target (surrogate.pump_targets.volume_report; None otherwise): the
+    # a syringe pump's target (surrogate.search.pump_targets.volume_report; None otherwise): the
     # injected volume needed for the angle with its band (ul), the time at the target's
     # flow rate (s), and at the target volume the angle with its band (deg) and the
     # chamber pressure (Pa)

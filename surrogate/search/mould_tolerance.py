@@ -14,8 +14,8 @@ import numpy as np
 
 from solver.design import Design
 from solver.errors import InputError
-from surrogate.design_target import DesignTarget
-from surrogate.pump_targets import ask
+from surrogate.search.design_target import DesignTarget
+from surrogate.search.pump_targets import ask
 
 #: the length step of the sensitivity, mm (a mould's usual tolerance)
 TOLERANCE_MM = 0.01

@@ -14,11 +14,11 @@ import threading
 import numpy as np
 
 from solver.errors import InputError
-from surrogate.design_target import DesignTarget
 from surrogate.errors import stop_if_cancelled
-from surrogate.pump_targets import ask
-from surrogate.search_screen import Screened
-from surrogate.search_space import unit_coordinates
+from surrogate.search.design_target import DesignTarget
+from surrogate.search.pump_targets import ask
+from surrogate.search.screen import Screened
+from surrogate.search.space import unit_coordinates
 
 #: the least distance between two listed designs of one pair, in the bounds' unit cube
 MIN_SPACING = 0.08

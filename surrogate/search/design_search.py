@@ -12,7 +12,7 @@ family) lists them with ``covered_slices()``; the search then pins those values.
 Method: 512 scrambled Sobol candidates per pair (log-uniform in every bound), each
 evaluated by the model's own inverse (the pressure that gives the target angle) or
 forward prediction (force); a syringe pump's target (angle_at_volume, volume_budget,
-angle_at_time, time_budget: surrogate/pump_targets.py) by the model's answers by injected
+angle_at_time, time_budget: surrogate/search/pump_targets.py) by the model's answers by injected
 volume instead (the volume that gives the target angle, the angle at the target volume;
 time = volume / flow). For targets hit exactly (at a pressure, volume or time), the
 best candidates are then solved by bisection so that the target is met to 1 %: along the
@@ -29,10 +29,10 @@ Ranking (lower score first):
 Candidates closer than MIN_SPACING (unit-cube distance) to a better one are dropped.
 
 The parts, one module each: the searched space and its candidates
-(``surrogate.search_space``), the screen (``surrogate.search_screen``), the solve to an
-exact target (``surrogate.solve_to_target``), the ranking (``surrogate.search_ranking``),
-a listed design's sensitivity to a mould's tolerance (``surrogate.mould_tolerance``) and
-the explanation when none is listed (``surrogate.search_explanations``); this module runs
+(``surrogate.search.space``), the screen (``surrogate.search.screen``), the solve to an
+exact target (``surrogate.search.solve_to_target``), the ranking (``surrogate.search.ranking``),
+a listed design's sensitivity to a mould's tolerance (``surrogate.search.mould_tolerance``) and
+the explanation when none is listed (``surrogate.search.explanations``); this module runs
 them in order.
 
 The target's sign is the bending direction asked for: a positive angle (or force) bends
@@ -52,32 +52,32 @@ import numpy as np
 
 from solver.errors import InputError
 from surrogate.band_level import z_value
-from surrogate.design_result import DesignCandidate, InverseDesignResult
-from surrogate.design_target import DesignTarget, resolve_objective
 from surrogate.errors import stop_if_cancelled
-from surrogate.mould_tolerance import change_per_tolerance
-from surrogate.pump_targets import (
-    ask,
-    no_volume_error,
-    require_volumes,
-    volume_report,
-)
-from surrogate.search_explanations import (
+from surrogate.search.design_result import DesignCandidate, InverseDesignResult
+from surrogate.search.design_target import DesignTarget, resolve_objective
+from surrogate.search.explanations import (
     SearchSeen,
     no_design_explanation,
     passed_over_note,
     stretch_hazard_note,
     unanswered_error,
 )
-from surrogate.search_ranking import rank, score
-from surrogate.search_screen import Screened, keep_direction, screen, target_direction
-from surrogate.search_space import (
+from surrogate.search.mould_tolerance import change_per_tolerance
+from surrogate.search.pump_targets import (
+    ask,
+    no_volume_error,
+    require_volumes,
+    volume_report,
+)
+from surrogate.search.ranking import rank, score
+from surrogate.search.screen import Screened, keep_direction, screen, target_direction
+from surrogate.search.solve_to_target import BISECTION_STEPS, solve_along, solve_variable
+from surrogate.search.space import (
     CANDIDATES_PER_PAIR,
     SearchBounds,
     candidate_design,
     sobol_candidates,
 )
-from surrogate.solve_to_target import BISECTION_STEPS, solve_along, solve_variable
 
 #: designs returned at most (the HTTP schema and the CLI read it)
 N_RESULTS_MAX = 20
