@@ -12,7 +12,7 @@
     balloon inverse --angle-deg 45 --time-s 8 --flow-ul-s 2.5       # after 8 s at 2.5 ul/s
     balloon inverse --kind time_budget --angle-deg 45 --time-s 8 --flow-ul-s 2.5
 
-Targets, objectives and defaults: docs/surrogate.md (``surrogate.design_search``: the
+Targets, objectives and defaults: docs/surrogate.md (``surrogate.search.design_search``: the
 same search as POST /v1/inverse).
 """
 
@@ -42,7 +42,7 @@ from surrogate.predictor import FE_VOLUME_STOP_UL
 from surrogate.search.design_search import N_RESULTS_MAX
 from surrogate.search.design_target import DEFAULT_KIND, KINDS, OBJECTIVES
 
-# The search's bounds (surrogate.design_search.SearchBounds field -> flag, what it bounds);
+# The search's bounds (surrogate.search.design_search.SearchBounds field -> flag, what it bounds);
 # a pinned range (LO = HI) fixes that variable (one mould: --L-range 10 10). Each range
 # lies within the emulator's box (search_box); the stiffness scales default to 1 1.
 RANGE_FLAGS = {

@@ -42,7 +42,7 @@ def _pair(values: list[float] | None) -> tuple[float, float] | None:
 async def inverse(request: InverseRequest, models: ModelsDep, http: Request
                   ) -> InverseResponse:
     """Searches L, t, T, b, h (and the stiffness scales when bounded) within the bounds,
-    for every allowed material pair the model covers (surrogate.design_search). The
+    for every allowed material pair the model covers (surrogate.search.design_search). The
     search stops soon after its client disconnects (service.disconnect)."""
     return await unless_disconnected(http, lambda cancel: _search(request, models, cancel))
 

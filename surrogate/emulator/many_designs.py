@@ -1,4 +1,4 @@
-"""Many designs at once, for the inverse design's search (``surrogate.design_search``).
+"""Many designs at once, for the inverse design's search (``surrogate.search.design_search``).
 
 The same answers as a query of one design at a time (the angle with its band at one
 pressure, the pressure needed for one angle, the force; or, for a syringe pump's target,
