@@ -23,7 +23,7 @@ from fastapi import Request
 
 from service.errors import FieldError, field_range, short_name
 from solver.number_text import unheld_words
-from surrogate.json_repeats import first_unheld, loads_with_repeats
+from surrogate.json_repeats import loads_with_repeats, unheld
 
 #: the text of a number a float may not hold: 1e-400, 1E+400, 400 digits in a row
 MAYBE_UNHELD = re.compile(rb"[eE][+-]?[0-9]{3}|[0-9]{309}")
@@ -31,7 +31,7 @@ MAYBE_UNHELD = re.compile(rb"[eE][+-]?[0-9]{3}|[0-9]{309}")
 
 async def refuse_unheld_numbers(request: Request) -> None:
     """Refuse (422 at its location, with the field's range) the first number of a JSON
-    body whose text a float does not hold."""
+    body whose text a float does not hold, given where a number goes."""
     if request.method not in ("POST", "PUT", "PATCH"):
         return
     body = await request.body()
@@ -41,8 +41,10 @@ async def refuse_unheld_numbers(request: Request) -> None:
         document, _ = loads_with_repeats(body)
     except (ValueError, RecursionError):
         return      # not JSON: FastAPI's own parse refuses it
-    found = first_unheld(document)
-    if found is not None:
-        path, number = found
+    for path, number in unheld(document):
+        # a number field (each has a range); elsewhere -- an object, a choice of words,
+        # an unknown field -- the schema refuses a number whatever its value
         loc = ("body", *(short_name(p) for p in path))
-        raise FieldError(loc, unheld_words(number), allowed=field_range(loc))
+        allowed = field_range(loc)
+        if allowed is not None:
+            raise FieldError(loc, unheld_words(number), allowed=allowed)

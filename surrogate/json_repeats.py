@@ -6,7 +6,7 @@ row ``{"angle_deg": 5, "angle_deg": 50}`` would be read as 50 deg. ``loads_with_
 parses a document and says where the first repeat sits, so the caller can refuse it
 naming the place (the HTTP body, a calibration file). Its numbers are read by
 ``solver.number_text.JSON_NUMBER_HOOKS``: one whose text a float does not hold (``1e-400``,
-``1e400``) is a ``WrittenNumber``, for the caller to refuse as written (``first_unheld``).
+``1e400``) is a ``WrittenNumber``, for the caller to refuse as written (``unheld``).
 """
 
 from __future__ import annotations
@@ -45,11 +45,11 @@ def _first_repeat(document: Any) -> Path | None:
                  if isinstance(value, _Object) and value.repeated), None)
 
 
-def first_unheld(document: Any) -> tuple[Path, WrittenNumber] | None:
-    """(path, number) of the first number of a parsed document whose text a float does
-    not hold, depth first; None when every number is held."""
-    return next(((path, value) for path, value in nodes(document)
-                 if isinstance(value, WrittenNumber)), None)
+def unheld(document: Any) -> Iterator[tuple[Path, WrittenNumber]]:
+    """(path, number) of each number of a parsed document whose text a float does not
+    hold, depth first."""
+    return ((path, value) for path, value in nodes(document)
+            if isinstance(value, WrittenNumber))
 
 
 def loads_with_repeats(text: str | bytes) -> tuple[Any, Path | None]:

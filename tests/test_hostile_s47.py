@@ -105,3 +105,40 @@ def test_a_data_files_cell_the_float_does_not_hold_is_refused(tmp_path, cell):
     lines = visible_lines(err)
     assert code == 2 and escaped is None and len(lines) == 1, err
     assert "angle_deg: row 2:" in lines[0] and "does not fit a 64-bit float" in lines[0], err
+
+
+def test_every_number_field_of_a_request_body_has_its_range():
+    """Guard: the rule refuses an unheld number where a number goes, by the field's range
+    (service.errors.field_range); a number field without one would read 1e-400 as 0."""
+    from service.app import create_app
+    from service.errors import FIELD_RANGES
+    from service.settings import ServiceSettings
+
+    spec = create_app(ServiceSettings(), load_surrogate=False).openapi()
+    schemas = spec["components"]["schemas"]
+    found: dict[str, bool] = {}
+
+    def walk(schema: dict, name: str, seen: frozenset) -> None:
+        ref = schema.get("$ref", "").rsplit("/", 1)[-1]
+        if ref:
+            if ref not in seen:
+                walk(schemas[ref], name, seen | {ref})
+            return
+        for option in (*schema.get("anyOf", ()), *schema.get("oneOf", ())):
+            walk(option, name, seen)
+        kinds = schema.get("type")
+        if {"number", "integer"} & set(kinds if isinstance(kinds, list) else [kinds]):
+            found[name] = name in FIELD_RANGES or name == "rows"
+        if "items" in schema:
+            walk(schema["items"], name, seen)
+        for child, sub in schema.get("properties", {}).items():
+            walk(sub, child, seen)
+        if isinstance(schema.get("additionalProperties"), dict):   # a measured row's cells
+            walk(schema["additionalProperties"], name, seen)
+
+    for operations in spec["paths"].values():
+        for op in operations.values():
+            if "requestBody" in op:
+                walk(op["requestBody"]["content"]["application/json"]["schema"], "body",
+                     frozenset())
+    assert len(found) > 30 and all(found.values()), [n for n, ok in found.items() if not ok]
