@@ -142,3 +142,16 @@ def test_every_number_field_of_a_request_body_has_its_range():
                 walk(op["requestBody"]["content"]["application/json"]["schema"], "body",
                      frozenset())
     assert len(found) > 30 and all(found.values()), [n for n, ok in found.items() if not ok]
+
+
+@pytest.mark.parametrize(("query", "field"), [
+    ("/v1/curves?L_mm=1e400", "L_mm"),
+    ("/v1/predict/plot?L_mm=7.1&t_mm=0.5&measured_pressure_pa=1e-400&measured_angle_deg=1",
+     "measured_pressure_pa"),
+])
+def test_a_query_number_the_float_does_not_hold_is_refused_as_written(client, query, field):
+    """A query's ``L_mm=1e400`` was "Input should be a finite number", and a measured point
+    at ``1e-400`` Pa was drawn at 0 Pa: refused as written with the range, as in a body."""
+    problem = assert_problem(client.get(query), 422, field)
+    error = next(e for e in problem["errors"] if e["field"] == field)
+    assert "does not fit a 64-bit float" in error["message"] and "<=" in error["allowed"]
