@@ -22,8 +22,8 @@ import re
 from fastapi import Request
 
 from service.errors import FieldError, field_range, short_name
-from solver.number_text import unheld_words
-from surrogate.json_repeats import loads_with_repeats, unheld
+from solver.number_text import unheld, unheld_words
+from surrogate.json_repeats import loads_with_repeats
 
 #: the text of a number a float may not hold: 1e-400, 1E+400, 400 digits in a row
 MAYBE_UNHELD = re.compile(rb"[eE][+-]?[0-9]{3}|[0-9]{309}")

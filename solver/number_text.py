@@ -15,6 +15,8 @@ from __future__ import annotations
 import math
 import re
 import sys
+from collections.abc import Iterator
+from typing import Any
 
 _UNSIGNED = r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
 _DECIMAL = rf"[+-]?{_UNSIGNED}"
@@ -119,3 +121,24 @@ def ascii_int(text: str) -> int:
     if not is_integer_text(text):
         raise ValueError(f"{text!r} is not a whole number ({INTEGER_FORM})")
     return int(text)
+
+
+def nodes(document: Any) -> Iterator[tuple[tuple[str | int, ...], Any]]:
+    """Every value of a parsed document (JSON, TOML) with its path (keys and list
+    indices), depth first, the document itself first (a stack, not recursion: a document
+    nested as deep as its parser takes is walked too)."""
+    stack: list[tuple[tuple[str | int, ...], Any]] = [((), document)]
+    while stack:
+        path, value = stack.pop()
+        yield path, value
+        items = value.items() if isinstance(value, dict) else (
+            enumerate(value) if isinstance(value, list) else ())
+        stack.extend(reversed([(path + (key,), item) for key, item in items]))
+
+
+def unheld(document: Any) -> Iterator[tuple[tuple[str | int, ...], WrittenNumber]]:
+    """(path, number) of each number of a parsed document whose text a float does not
+    hold (read with JSON_NUMBER_HOOKS, or ``tomllib.loads(parse_float=written_float)``),
+    depth first."""
+    return ((path, value) for path, value in nodes(document)
+            if isinstance(value, WrittenNumber))

@@ -5,17 +5,17 @@ within an object SHOULD be unique"), and Python's ``json`` keeps the last one: a
 row ``{"angle_deg": 5, "angle_deg": 50}`` would be read as 50 deg. ``loads_with_repeats``
 parses a document and says where the first repeat sits, so the caller can refuse it
 naming the place (the HTTP body, a calibration file). Its numbers are read by
-``solver.number_text.JSON_NUMBER_HOOKS``: one whose text a float does not hold (``1e-400``,
-``1e400``) is a ``WrittenNumber``, for the caller to refuse as written (``unheld``).
+``solver.number_text.JSON_NUMBER_HOOKS``: one whose text a float does not hold
+(``1e-400``, ``1e400``) is a ``WrittenNumber``, for the caller to refuse as written
+(``solver.number_text.unheld``).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from typing import Any
 
-from solver.number_text import JSON_NUMBER_HOOKS, WrittenNumber
+from solver.number_text import JSON_NUMBER_HOOKS, nodes
 
 Path = tuple[str | int, ...]
 
@@ -26,30 +26,10 @@ class _Object(dict):
     repeated: tuple[str, ...] = ()
 
 
-def nodes(document: Any) -> Iterator[tuple[Path, Any]]:
-    """Every value of a parsed document with its path (keys and list indices), depth
-    first, the document itself first (a stack, not recursion: a document nested as deep
-    as the parser takes is walked too)."""
-    stack: list[tuple[Path, Any]] = [((), document)]
-    while stack:
-        path, value = stack.pop()
-        yield path, value
-        items = value.items() if isinstance(value, dict) else (
-            enumerate(value) if isinstance(value, list) else ())
-        stack.extend(reversed([(path + (key,), item) for key, item in items]))
-
-
 def _first_repeat(document: Any) -> Path | None:
     """The location of the first repeated name in a parsed document, depth first."""
     return next((path + (value.repeated[0],) for path, value in nodes(document)
                  if isinstance(value, _Object) and value.repeated), None)
-
-
-def unheld(document: Any) -> Iterator[tuple[Path, WrittenNumber]]:
-    """(path, number) of each number of a parsed document whose text a float does not
-    hold, depth first."""
-    return ((path, value) for path, value in nodes(document)
-            if isinstance(value, WrittenNumber))
 
 
 def loads_with_repeats(text: str | bytes) -> tuple[Any, Path | None]:

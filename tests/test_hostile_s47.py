@@ -155,3 +155,53 @@ def test_a_query_number_the_float_does_not_hold_is_refused_as_written(client, qu
     problem = assert_problem(client.get(query), 422, field)
     error = next(e for e in problem["errors"] if e["field"] == field)
     assert "does not fit a 64-bit float" in error["message"] and "<=" in error["allowed"]
+
+
+# -- 2. a hostile grid file ------------------------------------------------------------------
+
+PAIR = 'pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = 7.1\nt_mm = 0.5\n'
+
+
+@pytest.mark.parametrize("line", [".".join(["a"] * 3000) + " = 1",
+                                  "[" + ".".join(["a"] * 3000) + "]",
+                                  'x = {' + " . ".join(['"a"'] * 3000) + " = 1}"])
+def test_a_grid_key_of_thousands_of_dotted_parts_is_refused_before_parsing(line):
+    """tomllib keeps every prefix of a dotted key: one of 50,000 parts (a 100 kB line) took
+    `balloon precompute --dry-run` 88 s and 9.9 GB before "a: unknown key". Refused now
+    by its length, before tomllib (3000 parts here: 0.2 s on the former code)."""
+    from solver.precompute.grid import GridError, parse_grid
+
+    with pytest.raises(GridError) as err:
+        parse_grid(PAIR + line + "\n", "g.toml")
+    assert "of 3000 parts" in str(err.value) and "line 4" in str(err.value), err.value
+    assert "at most 10 parts" in str(err.value)
+
+
+def test_a_grids_dotted_keys_as_a_grid_writes_them_are_read():
+    """Guard: materials.soft.mu_kpa as a dotted key, a dotted string, a time's fraction."""
+    from solver.precompute.grid import parse_grid
+
+    grid = parse_grid('description = "a.b.c.d.e.f.g.h.i.j.k.l.m"\npairs = [["pdms_1_10", '
+                      '"soft"]]\nL_mm = [7.1, 9.3]\nt_mm = 0.5\nmaterials.soft.mu_kpa = '
+                      "[1.5]\nmaterials . soft . alpha = [2.0]\n", "g.toml")
+    assert len(grid.points) == 2
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    (PAIR + "[settings]\ntip = \"spring\"\nspring_k_n_per_m = 1e-400\n",
+     "line 6: settings.spring_k_n_per_m: 1e-400 does not fit a 64-bit float"),
+    ('pairs = [["pdms_1_10", "soft"]]\nL_mm = 7.1\nt_mm = 0.5\n[materials.soft]\n'
+     "mu_kpa = [1e-400, 1.0]\nalpha = [2.0, 3.0]\n",
+     "line 5: materials.soft.mu_kpa.0: 1e-400 does not fit a 64-bit float"),
+    ('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = {start = 4, stop = 1e-400, num = 3}\n'
+     "t_mm = 0.5\n", "line 2: L_mm.stop: 1e-400 does not fit a 64-bit float"),
+])
+def test_a_grid_number_the_float_does_not_hold_is_refused_as_written(text, words):
+    """A grid's mu_kpa = [1e-400, 1.0] was solved as a term of mu 0 (dropped), a spring of
+    1e-400 N/m told "a spring tip needs a positive stiffness", a range's stop = 1e-400 "0.0
+    mm is out of range": the number named as written, with the key's range."""
+    from solver.precompute.grid import GridError, parse_grid
+
+    with pytest.raises(GridError) as err:
+        parse_grid(text, "g.toml")
+    assert words in str(err.value) and "allowed:" in str(err.value), err.value
