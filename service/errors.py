@@ -467,7 +467,13 @@ def install_error_handlers(app: FastAPI) -> None:
     async def on_http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         if exc.status_code == 400 and exc.detail == BODY_NOT_PARSED:
             # FastAPI's 400 for a body json.loads cannot take (nested deeper than the
-            # parser's recursion limit, not UTF-8): an input error like any other JSON one
+            # parser's recursion limit, not UTF-8, an integer of > 4300 digits): an input
+            # error like any other JSON one; the integer named where it sits
+            from service.unheld_numbers import unheld_number_error  # imports this module
+
+            unheld = unheld_number_error(await request.body())
+            if unheld is not None:
+                return problem_for(unheld).response(request)
             return Problem(422, "Invalid input", "body: cannot be parsed as JSON",
                            "invalid-input", errors=[_unparsed_body("cannot be parsed as JSON")]
                            ).response(request)

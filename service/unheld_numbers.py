@@ -10,9 +10,11 @@ number; it is a hand-written or a unit-conversion bug, and the answer names it a
 with the field's range (``solver.number_text.unheld_words``), on every route alike.
 
 One app-level dependency, beside ``service.repeated_fields``: it runs before the body is
-validated. The body is parsed again (``surrogate.json_repeats``, whose numbers keep their
-text where a float does not hold it) only when its text holds a number that may be one: a
-3-digit exponent or a run of 309 digits.
+validated; an integer of more than 4300 digits, which FastAPI's own parse cannot take, is
+named by the error handler the same way (``service.errors``). The body is parsed again
+(``surrogate.json_repeats``, whose numbers keep their text where a float does not hold
+it) only when its text holds a number that may be one: a 3-digit exponent or a run of
+309 digits.
 """
 
 from __future__ import annotations
@@ -29,22 +31,29 @@ from surrogate.json_repeats import loads_with_repeats
 MAYBE_UNHELD = re.compile(rb"[eE][+-]?[0-9]{3}|[0-9]{309}")
 
 
-async def refuse_unheld_numbers(request: Request) -> None:
-    """Refuse (422 at its location, with the field's range) the first number of a JSON
-    body whose text a float does not hold, given where a number goes."""
-    if request.method not in ("POST", "PUT", "PATCH"):
-        return
-    body = await request.body()
+def unheld_number_error(body: bytes) -> FieldError | None:
+    """The 422 of the first number of a JSON body whose text a float does not hold, given
+    where a number goes; None when there is none (or the body is not JSON)."""
     if not MAYBE_UNHELD.search(body):
-        return
+        return None
     try:
         document, _ = loads_with_repeats(body)
     except (ValueError, RecursionError):
-        return      # not JSON: FastAPI's own parse refuses it
+        return None     # not JSON: FastAPI's own parse refuses it
     for path, number in unheld(document):
         # a number field (each has a range); elsewhere -- an object, a choice of words,
         # an unknown field -- the schema refuses a number whatever its value
         loc = ("body", *(short_name(p) for p in path))
         allowed = field_range(loc)
         if allowed is not None:
-            raise FieldError(loc, unheld_words(number), allowed=allowed)
+            return FieldError(loc, unheld_words(number), allowed=allowed)
+    return None
+
+
+async def refuse_unheld_numbers(request: Request) -> None:
+    """Refuse (422 at its location, with the field's range) the first number of a JSON
+    body whose text a float does not hold, given where a number goes."""
+    if request.method in ("POST", "PUT", "PATCH"):
+        error = unheld_number_error(await request.body())
+        if error is not None:
+            raise error
