@@ -31,6 +31,7 @@ from service.routes import calibration, curves, health, inverse, jobs, materials
 from service.routes.pages import install_pages
 from service.settings import ServiceSettings, get_settings
 from service.store_access import ResultWriter
+from service.unheld_numbers import refuse_unheld_numbers
 from service.unread_query import refuse_unread_query
 
 DESCRIPTION = """\
@@ -67,7 +68,8 @@ def create_app(settings: ServiceSettings | None = None, *,
                   description=DESCRIPTION, lifespan=lifespan,
                   docs_url=None, redoc_url=None,  # served from local files by install_pages
                   dependencies=[Depends(refuse_repeated_fields),  # a field given twice
-                                Depends(refuse_unread_query)])  # a query string ignored
+                                Depends(refuse_unread_query),  # a query string ignored
+                                Depends(refuse_unheld_numbers)])  # 1e-400 read as 0
     app.state.settings = settings
     app.state.models = ModelRegistry(settings.surrogate_path, settings.models_dir,
                                      settings.emulator_path)

@@ -222,6 +222,17 @@ FIELD_RANGES: dict[str, str] = {}
 FIELD_FORMS: dict[str, str] = {}
 
 
+def field_range(loc: list[str | int] | tuple[str | int, ...]) -> str | None:
+    """The allowed range in words of the request field at ``loc`` (``("body", "design",
+    "L_mm")``; a list's item by its list), from FIELD_RANGES. A measured row's column
+    (/v1/calibrate's rows) is not the request field of that name elsewhere (its
+    pressure_pa is not a target's): what any cell may hold."""
+    names = [p for p in loc[1:] if isinstance(p, str)]
+    if "rows" in loc[1:2]:
+        return FIELD_RANGES.get("rows.*")
+    return FIELD_RANGES.get(names[-1]) if names else None
+
+
 # A material is a preset id (text) or an inline object (service.schemas.common.MaterialRef):
 # pydantic tries both and reports each branch's error under its tag; the request has
 # no field of that name. The tags -> whether the branch is the text one.
@@ -328,10 +339,7 @@ def _validation_errors(exc: RequestValidationError, request: Request | None = No
                                 "message": str(err.get("msg", "invalid value"))}
         if err.get("type") == "value_error":     # a validator's own words, without
             item["message"] = str((err.get("ctx") or {}).get("error", item["message"]))
-        # a measured row's column (/v1/calibrate's rows) is not the request field of that
-        # name elsewhere (its pressure_pa is not a target's): what any cell may hold
-        allowed = (FIELD_RANGES.get("rows.*") if "rows" in loc[1:2]
-                   else FIELD_RANGES.get(names[-1]) if names else None)
+        allowed = field_range(loc)
         if err.get("type") in OBJECT_TYPES:
             # an object was asked for: its fields, not the range of a field of that name
             # elsewhere (the plot's query `inlet` is true or false, the body's an object;
@@ -459,7 +467,13 @@ def install_error_handlers(app: FastAPI) -> None:
     async def on_http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         if exc.status_code == 400 and exc.detail == BODY_NOT_PARSED:
             # FastAPI's 400 for a body json.loads cannot take (nested deeper than the
-            # parser's recursion limit, not UTF-8): an input error like any other JSON one
+            # parser's recursion limit, not UTF-8, an integer of > 4300 digits): an input
+            # error like any other JSON one; the integer named where it sits
+            from service.unheld_numbers import unheld_number_error  # imports this module
+
+            unheld = unheld_number_error(await request.body())
+            if unheld is not None:
+                return problem_for(unheld).response(request)
             return Problem(422, "Invalid input", "body: cannot be parsed as JSON",
                            "invalid-input", errors=[_unparsed_body("cannot be parsed as JSON")]
                            ).response(request)

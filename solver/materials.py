@@ -17,6 +17,7 @@ docs/physics.md. Terms with alpha = 0 or mu = 0 carry no energy under this form
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from solver.errors import InputError, NotFoundError
@@ -60,6 +61,12 @@ class OgdenMaterial:
         return {"id": self.id, "mu_kpa": list(self.mu_kpa), "alpha": list(self.alpha)}
 
 
+#: an Ogden term's limits (each of 1 to 6 terms), and in words
+MAX_MU_KPA = 1e6
+MAX_ALPHA = 50.0
+TERM_WORDS = f"|mu| <= 1e{math.log10(MAX_MU_KPA):.0f} kPa, |alpha| <= {MAX_ALPHA:g}"
+
+
 def make_material(material_id: str, mu_kpa: list[float] | tuple[float, ...],
                   alpha: list[float] | tuple[float, ...]) -> OgdenMaterial:
     """Validate Ogden parameters and drop the terms that carry no energy.
@@ -82,9 +89,9 @@ def make_material(material_id: str, mu_kpa: list[float] | tuple[float, ...],
             if v != v or abs(v) == float("inf"):
                 raise InputError(name, "values must be finite numbers")
     for m, a in zip(mu, al):
-        if abs(m) > 1e6 or abs(a) > 50:
+        if abs(m) > MAX_MU_KPA or abs(a) > MAX_ALPHA:
             raise InputError("mu_kpa", f"term (mu={m} kPa, alpha={a}) is out of range",
-                             "|mu| <= 1e6 kPa, |alpha| <= 50")
+                             TERM_WORDS)
     kept = [(m, a) for m, a in zip(mu, al) if m != 0.0 and a != 0.0]
     if not kept:
         raise InputError("mu_kpa", "every Ogden term has mu = 0 or alpha = 0",

@@ -14,6 +14,9 @@ from __future__ import annotations
 
 import math
 import re
+import sys
+from collections.abc import Iterator
+from typing import Any
 
 _UNSIGNED = r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
 _DECIMAL = rf"[+-]?{_UNSIGNED}"
@@ -68,6 +71,13 @@ def ascii_float(text: str) -> float:
     message says the form). A value the float does not hold is a WrittenNumber."""
     if not is_number_text(text):
         raise ValueError(f"{text!r} is not a number ({NUMBER_FORM})")
+    return written_float(text)
+
+
+def written_float(text: str) -> float:
+    """``float(text)`` of a number's text (NUMBER_FORM, or a JSON number's), a
+    WrittenNumber where the float does not hold it: non-zero digits that underflow to 0,
+    a finite number that overflows to inf. ``json.loads(parse_float=...)``."""
     value = float(text)
     written = text.strip()
     digits = re.split("[eE]", written)[0]
@@ -77,8 +87,58 @@ def ascii_float(text: str) -> float:
     return value
 
 
+def written_int(text: str) -> int | float:
+    """``int(text)`` of a JSON integer's text; one larger than a float holds (above
+    about 1.8e308: 309 digits and more) is a WrittenNumber of inf, its digits not
+    converted past 4300 (Python's own limit: json.loads raised "Exceeds the limit").
+    ``json.loads(parse_int=...)``."""
+    digits = text.lstrip("+-")
+    if len(digits) < 309:
+        return int(text)
+    if len(digits) <= 4300 and abs(value := int(text)) <= sys.float_info.max:
+        return value
+    return WrittenNumber(-math.inf if text.startswith("-") else math.inf, text)
+
+
+#: json.loads' hooks that keep a number's text where the float does not hold it
+JSON_NUMBER_HOOKS = {"parse_float": written_float, "parse_int": written_int}
+
+#: what a 64-bit float holds, in words
+HELD_RANGE = "sizes about 5e-324 to 1.8e308, or 0"
+
+
+def unheld_words(number: WrittenNumber) -> str:
+    """Why a WrittenNumber is refused where it is given as a value: its text (cut) and
+    the number the float would read it as -- a different number from the one written."""
+    text = number.text if len(number.text) <= 40 else (
+        f"{number.text[:20]}... ({len(number.text)} characters)")
+    read = "0" if number == 0 else f"{float(number)}"
+    return f"{text} does not fit a 64-bit float ({HELD_RANGE}): it would be read as {read}"
+
+
 def ascii_int(text: str) -> int:
     """``text`` as an int, if it is written in INTEGER_FORM; ValueError otherwise."""
     if not is_integer_text(text):
         raise ValueError(f"{text!r} is not a whole number ({INTEGER_FORM})")
     return int(text)
+
+
+def nodes(document: Any) -> Iterator[tuple[tuple[str | int, ...], Any]]:
+    """Every value of a parsed document (JSON, TOML) with its path (keys and list
+    indices), depth first, the document itself first (a stack, not recursion: a document
+    nested as deep as its parser takes is walked too)."""
+    stack: list[tuple[tuple[str | int, ...], Any]] = [((), document)]
+    while stack:
+        path, value = stack.pop()
+        yield path, value
+        items = value.items() if isinstance(value, dict) else (
+            enumerate(value) if isinstance(value, list) else ())
+        stack.extend(reversed([(path + (key,), item) for key, item in items]))
+
+
+def unheld(document: Any) -> Iterator[tuple[tuple[str | int, ...], WrittenNumber]]:
+    """(path, number) of each number of a parsed document whose text a float does not
+    hold (read with JSON_NUMBER_HOOKS, or ``tomllib.loads(parse_float=written_float)``),
+    depth first."""
+    return ((path, value) for path, value in nodes(document)
+            if isinstance(value, WrittenNumber))

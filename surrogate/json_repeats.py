@@ -4,13 +4,18 @@ JSON leaves an object's repeated name to the parser (RFC 8259, section 4: "the n
 within an object SHOULD be unique"), and Python's ``json`` keeps the last one: a lab's
 row ``{"angle_deg": 5, "angle_deg": 50}`` would be read as 50 deg. ``loads_with_repeats``
 parses a document and says where the first repeat sits, so the caller can refuse it
-naming the place (the HTTP body, a calibration file).
+naming the place (the HTTP body, a calibration file). Its numbers are read by
+``solver.number_text.JSON_NUMBER_HOOKS``: one whose text a float does not hold
+(``1e-400``, ``1e400``) is a ``WrittenNumber``, for the caller to refuse as written
+(``solver.number_text.unheld``).
 """
 
 from __future__ import annotations
 
 import json
 from typing import Any
+
+from solver.number_text import JSON_NUMBER_HOOKS, nodes
 
 Path = tuple[str | int, ...]
 
@@ -21,22 +26,10 @@ class _Object(dict):
     repeated: tuple[str, ...] = ()
 
 
-def _first_repeat(value: Any, path: Path) -> Path | None:
+def _first_repeat(document: Any) -> Path | None:
     """The location of the first repeated name in a parsed document, depth first."""
-    if isinstance(value, _Object):
-        if value.repeated:
-            return path + (value.repeated[0],)
-        items: Any = value.items()
-    elif isinstance(value, list):
-        items = enumerate(value)
-    else:
-        return None
-    for key, item in items:
-        if isinstance(item, dict | list):
-            found = _first_repeat(item, path + (key,))
-            if found is not None:
-                return found
-    return None
+    return next((path + (value.repeated[0],) for path, value in nodes(document)
+                 if isinstance(value, _Object) and value.repeated), None)
 
 
 def loads_with_repeats(text: str | bytes) -> tuple[Any, Path | None]:
@@ -55,5 +48,5 @@ def loads_with_repeats(text: str | bytes) -> tuple[Any, Path | None]:
             found = True
         return obj
 
-    document = json.loads(text, object_pairs_hook=hook)
-    return document, (_first_repeat(document, ()) if found else None)
+    document = json.loads(text, object_pairs_hook=hook, **JSON_NUMBER_HOOKS)
+    return document, (_first_repeat(document) if found else None)

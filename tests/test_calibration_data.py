@@ -191,10 +191,15 @@ def test_very_large_numbers_are_an_input_error_naming_row_and_column(value):
     assert len(str(err.value)) < 200
 
 
-def test_a_json_integer_too_long_to_parse_is_a_data_error(tmp_path):
+def test_a_json_integer_too_long_to_parse_is_a_data_error_naming_its_cell(tmp_path):
+    """A 5001-digit integer (past Python's 4300-digit limit) was "not valid JSON"; it is
+    read as a number a float does not hold, named by its row and column (the forty-
+    seventh session)."""
     text = json.dumps({"rows": rows()}).replace('"300.0"', "1" + "0" * 5000, 1)
-    with pytest.raises(DataError, match="not valid JSON"):
+    with pytest.raises(DataError, match="does not fit a 64-bit float") as err:
         load_observations(_write(tmp_path / "d.json", text.encode()))
+    assert err.value.column == "pressure_pa" and err.value.row == 2
+    assert "(5001 characters)" in str(err.value) and len(str(err.value)) < 400
 
 
 def test_kpa_looking_pressures_warn_naming_column_and_factor():

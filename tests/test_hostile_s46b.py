@@ -65,11 +65,15 @@ def test_a_written_number_is_the_floats_value():
         assert type(ascii_float(text)) is float, text
 
 
-def test_a_tiny_pressure_in_range_is_still_read():
-    """Guard: 1e-400 Pa is inside 0..20000 Pa, and is answered (as 0 Pa)."""
+def test_a_tiny_pressure_in_range_is_refused_as_written():
+    """1e-400 Pa was answered as 0 Pa (inside 0..20000 Pa) until the forty-seventh session:
+    a list item the float does not hold is now refused as written, as a JSON body's is
+    (tests/test_hostile_s47.py)."""
     code, out, err, escaped = run(["predict", "--model", "paper", *DESIGN,
                                    "--pressures", "1e-400", "500"])
-    assert code == 0 and escaped is None, err
+    assert code == 2 and escaped is None, err
+    assert "item 1: 1e-400 does not fit a 64-bit float" in err
+    assert "allowed: 0 to 20000 Pa" in err
 
 
 # -- 2. an empty item of a list option -------------------------------------------------------

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges, number_action
 from service.pump import AXES
-from solver.number_text import NUMBER_FORM, ascii_float
+from solver.number_text import NUMBER_FORM, WrittenNumber, ascii_float, unheld_words
 from surrogate.predictor import MAX_ASKED_VALUES
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
@@ -41,11 +41,17 @@ def number_list(text: str) -> list[float]:
             "place between two commas: a missing value?; give a number in each place)")
     words = text.replace(",", " ").split()
     try:
-        return [ascii_float(w) for w in words] if words else [float("nan")]
+        numbers = [ascii_float(w) for w in words] if words else [float("nan")]
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"{text!r} is not a list of numbers (numbers in {NUMBER_FORM}, separated by "
             "spaces or commas)") from None
+    unheld = [i for i, n in enumerate(numbers, start=1) if isinstance(n, WrittenNumber)]
+    if unheld:     # 1e-400 Pa was answered as 0 Pa; a JSON body's list refuses it too
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a list of numbers (item {unheld[0]}: "
+            f"{unheld_words(numbers[unheld[0] - 1])})")  # type: ignore[arg-type]
+    return numbers
 
 
 class NumberListAction(argparse.Action):

@@ -10,7 +10,15 @@ from pydantic_core import PydanticCustomError
 from service.errors import QUERY_BOOL_ERROR
 from solver.design import LIMITS_MM
 from solver.materials import MATERIAL_ID_PATTERN
-from solver.number_text import INTEGER_FORM, NUMBER_FORM, is_integer_text, is_number_text
+from solver.number_text import (
+    INTEGER_FORM,
+    NUMBER_FORM,
+    WrittenNumber,
+    is_integer_text,
+    is_number_text,
+    unheld_words,
+    written_float,
+)
 from solver.settings import MAX_MESH_LEVEL, MESH_DIVISIONS, SolverSettings
 
 MATERIAL_ID = r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$"  # a name, never a path
@@ -70,7 +78,9 @@ def query_number(value: object, kind: type = float) -> object:
     """A query model's number field (``kind`` float or int): text not written as the
     command line writes such a number (NUMBER_FORM; INTEGER_FORM: pydantic read
     ``limit=1.0`` as 1, which ``-n 1.0`` refuses) is refused; anything else goes on to the
-    field's own checks (its type, finiteness and range)."""
+    field's own checks (its type, finiteness and range). A number whose text a float does
+    not hold (``1e-400``, read as 0) is refused as written, as in a JSON body
+    (``service.unheld_numbers``)."""
     if not isinstance(value, str):
         return value
     if kind is int and not is_integer_text(value):
@@ -78,6 +88,8 @@ def query_number(value: object, kind: type = float) -> object:
                                   f"Input should be a whole number in {INTEGER_FORM}")
     if not is_number_text(value):
         raise PydanticCustomError("number_text", f"Input should be a number in {NUMBER_FORM}")
+    if kind is float and isinstance(number := written_float(value), WrittenNumber):
+        raise PydanticCustomError("number_text", unheld_words(number))  # as a body's 1e-400
     return value
 
 

@@ -44,10 +44,12 @@ from solver.materials import (
     MATERIAL_ID_PATTERN,
     MATERIAL_ID_WORDS,
     MATERIALS,
+    TERM_WORDS,
     OgdenMaterial,
     make_material,
 )
-from solver.precompute.lines import deepest, key_lines, line_of
+from solver.number_text import unheld, unheld_words, written_float
+from solver.precompute.lines import deepest, key_lines, line_of, longest_key
 from solver.settings import SolverSettings, range_words, settings_from_dict
 from solver.store.keys import canonical_number, record_key
 
@@ -62,6 +64,7 @@ RANGE_KEYS = ("start", "stop", "num")
 MAX_POINTS = 100_000
 MAX_GRID_BYTES = 16 * 2**20   # a grid is sweeps and samples (a few kB); read no more
 MAX_NESTING = 100  # what a grid needs is 3 ([[body, membrane], ...] in a table)
+MAX_KEY_PARTS = 10  # what a grid needs is 3 (materials.soft.mu_kpa)
 
 
 class GridError(InputError):
@@ -228,15 +231,25 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     if depth > MAX_NESTING:  # before tomllib, which recurses once per level
         raise GridError(source, at, "toml", f"values nested {depth} levels deep",
                         f"at most {MAX_NESTING} levels of [ ] and {{ }}")
+    parts, at = longest_key(text)
+    if parts > MAX_KEY_PARTS:  # before tomllib, whose cost grows as its square
+        raise GridError(source, at, "toml", f"a dotted key or table name of {parts} parts",
+                        f"at most {MAX_KEY_PARTS} parts, as materials.soft.mu_kpa")
     reader = _Reader(text, source)
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text, parse_float=written_float)  # 1e-400 kept as written
     except tomllib.TOMLDecodeError as exc:
         raise GridError(source, _toml_line(str(exc), text), "toml", str(exc),
                         "valid TOML (https://toml.io)") from None
     except RecursionError:  # arrays or tables nested thousands deep
         raise GridError(source, 1, "toml", "values nested too deeply to parse",
                         f"at most {MAX_NESTING} levels of [ ] and {{ }}") from None
+    for path, number in unheld(data):     # a number the float does not hold, as written
+        name = next((p for p in reversed(path) if p in LIMITS_MM), path[-1])
+        allowed = (_limits(str(name)) if name in LIMITS_MM else TERM_WORDS
+                   if path[0] == "materials" else range_words(str(name), "a number"))
+        raise reader.fail(path, ".".join(map(str, path)), unheld_words(number), allowed,
+                          needle=number.text)
     reader.check_keys(data, (), TOP_KEYS)
     for key in ("name", "description"):
         if key in data and not isinstance(data[key], str):
