@@ -317,7 +317,8 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "offset_two_specimens_four_points": "N28-offset-few-points-D17",
              "gauge_zero_volume_log": "N29-camera-gain+zero-volume-only-D18",
              "inlet_air_two_flows": "N25-inlet+air-two-flows-D17",
-             "text_above_header": "N30-clean-preamble-D20"}
+             "text_above_header": "N30-clean-preamble-D20",
+             "air_tilt_two_flows_rad": "N34-air+offset-two-flows-rad-D22"}
 
 
 def solve_missing(cache: Path) -> None:

@@ -4,6 +4,9 @@ fixed before any calibration; tests/data/lab_gauge_noise_*.csv from its ``--test
 
 * a logger's lines of text above the header (N30) were refused as ``curve_id: required
   column is missing``, naming neither the text nor the header below it;
+* a pair that holds the selection and fails only for want of specimens went unsaid, while
+  its added member was significant and the fit far better (N34: the mount's tilt beside
+  air in the line).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from surrogate.calibration import DataError, load_observations, observations_from_rows
+from surrogate.calibration._data import decode_text, read_csv_rows
 
 DATA = Path(__file__).parent / "data"
 
@@ -41,3 +45,29 @@ def test_text_above_the_header_is_refused_naming_the_header_below_it(tmp_path):
     text = path.read_text().replace("RigLogger", "# RigLogger").replace("Sample", "# Sample")
     (tmp_path / "commented.csv").write_text(text)
     assert len(load_observations(tmp_path / "commented.csv").curve_ids) == 3
+
+
+def test_a_larger_set_that_wants_only_a_specimen_more_is_said_beside_the_selection():
+    """N34: 2.5 ul/kPa of air in the line and the mount tilted -1.5 deg on the deep
+    chamber D22, three specimens at 2 and 5 ul/s, angles in radians. Three specimens back
+    one tested parameter (k + 2), so line_compliance alone is selected; the pair with the
+    tilt fits far better (BIC 48 lower, the tilt's z 3.7, cross-validated 1.48 against
+    1.66 deg) and is now said beside it, with its sizes and what would back it. Before
+    (2026-12-07) the report left the tilt unsaid: "What remains is consistent with
+    replicate scatter"."""
+    from calibration_lab import emulator
+
+    from surrogate.calibration import run_calibration
+
+    path = DATA / "lab_gauge_noise_air_tilt_two_flows_rad.csv"
+    report = run_calibration(read_csv_rows(decode_text(path.read_bytes(), path.name)),
+                             emulator()).report
+    assert report["selected_effects"] == ["line_compliance"]
+    beyond = report["wants_specimens_beyond"]
+    assert beyond["effects"] == ["line_compliance", "angle_offset"]
+    assert beyond["added"] == ["angle_offset"] and beyond["z"]["offset_deg"] > 3.0
+    offset = beyond["params"]["offset_deg"]
+    assert abs(offset["value"] + 1.5) < 3 * offset["sd"]       # the truth, -1.5 deg
+    assert "needs 4 curves to back them" in beyond["why_not"][0]
+    assert "with more specimens the data may show angle_offset acting too" in report[
+        "interpretation"]

@@ -117,6 +117,16 @@ def interpret(report: dict, left: dict) -> str:
                  + ", so its better fit may be the baseline's own error there. An FE solve "
                  "of the design (`balloon solve`) or a baseline with more FE data there "
                  "would decide.")
+    beyond = report.get("wants_specimens_beyond")
+    if beyond is not None:
+        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
+                          for n, p in beyond["params"].items())
+        added = " and ".join(beyond["added"])
+        s.append(f"{' and '.join(beyond['effects'])} fits better ({sizes}; BIC "
+                 f"{-beyond['delta_bic_vs_selected']:.0f} lower, cross-validated "
+                 f"{beyond['rmse_cv_deg']:.2f} deg, {added} significant beside it), not "
+                 f"selected: {beyond['why_not'][0]}; with more specimens the data may show "
+                 f"{added} acting too.")
     said = gauge_zero_sentence(report.get("gauge_at_rest"), report["selected_effects"])
     if said:
         s.append(said)

@@ -68,6 +68,7 @@ from surrogate.calibration._selection import (
     indistinguishable,
     judge,
     parameter_table,
+    wants_specimens_beyond,
 )
 from surrogate.calibration._specimens import SpecimenScatter, specimen_scatter
 from surrogate.calibration._start import Baseline
@@ -419,6 +420,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "indistinguishable": alike,
         "closest_rejected": (closest_rejected(candidates, rmse_before)
                              if not chosen and left["structured"] else None),
+        "wants_specimens_beyond": wants_specimens_beyond(candidates, chosen),
         "baseline_calls": responses.calls,
         "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
                            if e.stage == "design" and responses.reach(e).limits},

@@ -272,6 +272,32 @@ def closest_rejected(candidates: list[dict], rmse_before: float) -> dict | None:
                        for n, p in c["params"].items()}}
 
 
+def wants_specimens_beyond(candidates: list[dict], chosen: tuple[str, ...]) -> dict | None:
+    """A set that holds the selection, fails only for want of specimens (k + 2), and fits
+    better (BIC lower by more than 6 and both channels' cross-validated error lower) with
+    every member it adds significant (``adds_evidence``): what a further specimen could
+    back beside the selection, said rather than left out. Until 2026-12-07 a mount tilted
+    -1.5 deg beside 2.5 ul/kPa of air in the line went unsaid on 3 specimens at two flow
+    rates: line_compliance alone was selected (C 2.77 +/- 0.11) while with the tilt the
+    fit was 47.6 lower in BIC, the tilt's z 3.7, cross-validated 1.48 against 1.66 deg
+    (benchmarks/lab_rig_sets.py N34)."""
+    ref = next((c for c in candidates if tuple(c["effects"]) == chosen), None)
+    if ref is None or not chosen:
+        return None
+    more = [c for c in candidates if c.get("wants_specimens") and len(c["why_not"]) == 1
+            and set(chosen) < set(c["effects"]) and c["plausible"]
+            and c["bic"] < ref["bic"] + DELTA_BIC
+            and c["rmse_cv_joint"] < ref["rmse_cv_joint"] and adds_evidence(c, ref)]
+    if not more:
+        return None
+    c = min(more, key=lambda c: c["bic"])
+    return {"effects": c["effects"], "rmse_cv_deg": c["rmse_cv_deg"],
+            "delta_bic_vs_selected": c["bic"] - ref["bic"], "why_not": c["why_not"],
+            "added": [e for e in c["effects"] if e not in chosen], "z": dict(c["z"]),
+            "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
+                       for n, p in c["params"].items()}}
+
+
 def indistinguishable(candidates: list[dict], chosen: tuple[str, ...]) -> list[dict]:
     """Other explanations the data cannot tell from the selection: selectable, or failing
     only for want of the baseline's backing, and predicting unseen curves as well (paired
