@@ -93,7 +93,15 @@ def interpret(report: dict, left: dict) -> str:
                  f"({sizes}; cross-validated {near['rmse_cv_deg']:.2f} deg), not selected: "
                  + "; ".join(near["why_not"]) + ".")
     for c in report["candidates"]:
-        if c.get("stands_in_for"):
+        if c.get("stands_in_for") and c.get("stands_in_because") == "replicate scatter":
+            s.append(f"{' and '.join(c['effects'])} fits with plausible, significant values, "
+                     f"but {' and '.join(c['stands_in_for'])} fits better while its size is "
+                     "within what replicate scatter explains: not selected, for it would "
+                     "stand in for an explanation these data cannot size. Measure more "
+                     "specimens, or measure directly: " + "; ".join(
+                         EFFECTS[e].measure_directly for e in [*c["effects"],
+                                                               *c["stands_in_for"]]) + ".")
+        elif c.get("stands_in_for"):
             s.append(f"{' and '.join(c['effects'])} fits with plausible, significant values, "
                      f"but {' and '.join(c['stands_in_for'])} fits better: not selected, "
                      "for it would stand in for an explanation the baseline cannot judge.")

@@ -62,6 +62,7 @@ from surrogate.calibration._selection import (
     DELTA_BIC,
     Z_SIGNIFICANT,
     better_unbacked,
+    better_within_scatter,
     closest_rejected,
     effect_status,
     explains_better,
@@ -299,10 +300,23 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         # (a set that holds this one and adds an unbacked member does not replace it)
         rival = better_unbacked([c for c in candidates
                                  if not set(effects) < set(c["effects"])], effects, base_joint)
-        if better is None and rival is None:
+        unsized = better_within_scatter(candidates, effects) if rival is None else None
+        if better is None and rival is None and unsized is None:
             chosen = effects
             break
         cand["selectable"] = False
+        if better is None and unsized is not None:   # the data prefer a set they cannot size
+            z = ", ".join(f"z {v:.1f}" for v in unsized["z"].values())
+            cand["why_not"].append(
+                f"{'+'.join(unsized['effects'])} explains the data better (BIC "
+                f"{unsized['bic'] - cand['bic']:.0f} lower, cross-validated "
+                f"{unsized['rmse_cv_joint']:.2f} vs {cand['rmse_cv_joint']:.2f} deg"
+                + (", angle and gauge pressure together" if channel["used"] else "")
+                + f") but its size is within what replicate scatter explains ({z}): this "
+                "set would stand in for an explanation the data cannot size")
+            cand["stands_in_for"] = unsized["effects"]
+            cand["stands_in_because"] = "replicate scatter"
+            continue
         if better is None:      # the data prefer a set the baseline cannot back
             cand["why_not"].append(
                 f"{'+'.join(rival['effects'])} explains the data better (BIC "
@@ -312,6 +326,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                 + ") but the baseline cannot back its size there: this set would stand in "
                 "for it")
             cand["stands_in_for"] = rival["effects"]
+            cand["stands_in_because"] = "the baseline's backing"
             continue
         cand["why_not"].append(
             f"what it leaves is within the baseline's own uncertainty at the fitted design "
