@@ -48,13 +48,13 @@ decimal commas, the flow in ul/min with the time in min, and two flow rates in r
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the nineteen sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 21 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
-test_calibration_lab_s46.py).
+test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py).
 """
 
 from __future__ import annotations
@@ -302,7 +302,7 @@ FLOW_UNITS = {"ul/s": (1.0, 2), "ul/min": (60.0, 1)}
 FORMATS = {"semicolon": (";", ","), "comma": (",", "."), "tab": ("\t", ",")}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
 # test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
-# test_calibration_lab_s45.py read, with the pump's log
+# test_calibration_lab_s45.py, _s46.py and _s47.py read, with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
              "gauge_zero_off_soft_batch": "N2-gauge60-D9",
@@ -610,7 +610,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's nineteen sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's 21 sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:
