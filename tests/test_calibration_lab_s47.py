@@ -6,11 +6,15 @@ fixed before any calibration; tests/data/lab_gauge_noise_*.csv from its ``--test
   column is missing``, naming neither the text nor the header below it;
 * a pair that holds the selection and fails only for want of specimens went unsaid, while
   its added member was significant and the fit far better (N34: the mount's tilt beside
-  air in the line).
+  air in the line);
+* a set that fits better but whose size is within replicate scatter did not block the
+  set that would stand in for it (N23's offset; the rule decided on 47 lab sets), and the
+  reasons a set gives way said "BIC -31 lower".
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -80,7 +84,7 @@ def test_a_better_fit_within_replicate_scatter_blocks_the_set_that_would_stand_i
     a stiffer membrane and a shorter chamber fitted 27-31 lower in BIC and as well held
     out, their sizes within replicate scatter (z 1.7-2.0). Such a better fit now blocks
     the offset as an unbacked one does, and the report says so plainly: nothing selected.
-    Decided on 50 lab sets (benchmarks/RESULTS.md, the forty-seventh session): N23 is the
+    Decided on 47 lab sets (benchmarks/RESULTS.md, the forty-seventh session): N23 is the
     only selection the rule changes."""
     from calibration_lab import emulator
 
@@ -97,6 +101,22 @@ def test_a_better_fit_within_replicate_scatter_blocks_the_set_that_would_stand_i
     offset = next(c for c in report["candidates"] if c["effects"] == ["angle_offset"])
     assert offset["stands_in_for"] and offset["stands_in_because"] == "replicate scatter"
     assert "within what replicate scatter explains (z " in offset["why_not"][-1]
+    assert re.match(r"\w+ explains the data better \(BIC \d+ lower", offset["why_not"][-1])
     assert ("angle_offset fits with plausible, significant values, but "
             in report["interpretation"])
     assert "No catalogued effect is warranted" in report["interpretation"]
+
+
+def test_a_fit_that_explains_the_data_better_is_said_so_many_bic_units_lower():
+    """The words a set gives way in: the BIC difference is a positive count of units
+    lower. N23's figures (the forty-sixth session: the thicker membrane's BIC 38.7 below
+    the recalibrated baseline's, the selected offset's 6.6 below it). Before (2026-12-07)
+    the reason read "BIC -32 lower" (chamber_length's in benchmarks/RESULTS.md: "BIC -20
+    lower")."""
+    from surrogate.calibration._selection import explains_better_words
+
+    said = explains_better_words({"effects": ["membrane_thickness"], "bic": -38.7,
+                                  "rmse_cv_joint": 0.941}, {"bic": -6.6, "rmse_cv_joint":
+                                                            0.945}, True)
+    assert said == ("membrane_thickness explains the data better (BIC 32 lower, "
+                    "cross-validated 0.94 vs 0.94 deg, angle and gauge pressure together)")

@@ -241,6 +241,16 @@ def explains_better(cand: dict, candidates: list[dict]) -> dict | None:
     return min(better, key=lambda c: c["bic"]) if better else None
 
 
+def explains_better_words(better: dict, cand: dict, by_volume: bool, note: str = "") -> str:
+    """'X explains the data better (BIC n lower, cross-validated a vs b deg)': why
+    ``cand`` gives way to ``better``, the BIC difference as a positive number of units
+    lower (until 2026-12-07 it was written "BIC -20 lower")."""
+    return (f"{'+'.join(better['effects'])}{note} explains the data better (BIC "
+            f"{cand['bic'] - better['bic']:.0f} lower, cross-validated "
+            f"{better['rmse_cv_joint']:.2f} vs {cand['rmse_cv_joint']:.2f} deg"
+            + (", angle and gauge pressure together" if by_volume else "") + ")")
+
+
 def adds_evidence(c: dict, cand: dict) -> bool:
     """A set containing ``cand`` explains the data better only through its other
     members: each must be significant (an added free parameter always lowers the
@@ -345,7 +355,7 @@ def better_within_scatter(candidates: list[dict], chosen: tuple[str, ...]) -> di
     2026-12-07 a membrane 0.08 mm thicker than drawn (benchmarks/lab_rig_sets.py N23, D18)
     had an angle offset of 0.84 +/- 0.24 deg selected, which its three readings at rest
     (0.7, 0.0, -1.6 deg) did not show, while a stiffer membrane fitted 30.7 lower in BIC
-    and as well held out (z 1.73, within scatter). Decided on the 50 lab sets of the
+    and as well held out (z 1.73, within scatter). Decided on the 47 lab sets of the
     forty-seventh session: N23 is the only selection it changes (benchmarks/RESULTS.md)."""
     ref = next((c for c in candidates if tuple(c["effects"]) == chosen), None)
     if ref is None:
