@@ -409,9 +409,9 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN, RUN_COLUMN}
     for name in REQUIRED:
         if name not in columns:     # a logger's text above the header, sent as rows?
-            below = header_below_text([list(r.values()) for r in rows
-                                       if isinstance(r, dict)], REQUIRED, tuple(RANGES))
-            if below is not None:
+            below = header_below_text([list(r.values()) if isinstance(r, dict) else []
+                                       for r in rows], REQUIRED, tuple(RANGES))
+            if below is not None and columns:
                 raise text_above_header([", ".join(map(str, rows[0]))] * (below + 1))
             raise _missing(name, columns)
     present = [c for c in OPTIONAL if c in columns]

@@ -12,6 +12,7 @@ N23, N26, N27, N30); the error now names the layout and the conversion, on one l
 
 from __future__ import annotations
 
+import itertools
 import re
 
 from surrogate.calibration._errors import DataError
@@ -73,6 +74,10 @@ def one_column_per_specimen(columns: set, numeric: tuple[str, ...]) -> DataError
 
 #: how many lines below the first a header standing under a logger's text is looked for
 PREAMBLE_LINES = 20
+#: how much of each such line is read for column names: a header's worth, not a stray
+#: line of 10^5 separators (each name costs a header reading)
+PREAMBLE_PARTS = 1000
+PREAMBLE_CHARS = 65536
 PREAMBLE_HOW = "each line above the header starting with '#' (a comment), or deleted"
 
 
@@ -85,13 +90,14 @@ def header_below_text(lines: list[list[object]], required: tuple[str, ...],
     first line), so each is split on ',', ';' and tabs."""
     for k, cells in enumerate(lines[:PREAMBLE_LINES]):
         named = set()
-        for cell in cells:
-            for part in re.split(r"[,;\t]", cell) if isinstance(cell, str) else ():
-                try:
-                    reading = read_header(part.strip(), numeric)
-                except DataError:
-                    continue
-                named.add(reading.column if reading is not None else part.strip())
+        parts = (part for cell in cells if isinstance(cell, str)
+                 for part in re.split(r"[,;\t]", cell[:PREAMBLE_CHARS]))
+        for part in itertools.islice(parts, PREAMBLE_PARTS):
+            try:
+                reading = read_header(part.strip(), numeric)
+            except DataError:
+                continue
+            named.add(reading.column if reading is not None else part.strip())
         if set(required) <= named:
             return k
     return None
