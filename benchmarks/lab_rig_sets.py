@@ -8,7 +8,9 @@ written here before any was calibrated; the forty-fifth session's fresh sets N14
 three more (D14-D16: Ecoflex/Ecoflex, a membrane-scaled Ecoflex x 0.8, a short PDMS 1:10
 body), likewise; the forty-sixth session's fresh sets N22-N29 on three more (D17-D19:
 the reversed pair bending towards its membrane, a long body `pdms_1_10*1.6`, a thick
-membrane), likewise.
+membrane), likewise; the forty-seventh session's fresh sets N30-N37 on three more
+(D20-D22: Ecoflex on an Ecoflex membrane twice as stiff, bending towards it; a short
+thick PDMS 1:15 body; a deep chamber under a soft PDMS 1:10 body), likewise.
 
 Ten designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
@@ -36,19 +38,23 @@ an inlet with air in the line at two flow rates, the moduli drifting over the se
 lamp warming the rig: outside the catalogue), creep of the bend, a camera gain with the
 gauge's zero off, and a staircase of holds, angles in radians, the pump's volume in ml
 (with and without time), mmHg, time as mm:ss text, a units row under the header, a wide
-layout with a column per specimen, and 4 readings a curve on 2 specimens.
+layout with a column per specimen, and 4 readings a curve on 2 specimens; for N30-N37
+also a gauge whose calibration errs quadratically and a rim that leaks only above a
+pressure (both outside the catalogue), the gauge re-zeroed on each day of measuring,
+and a logger's lines of text above the header, a date column, a tab-separated export with
+decimal commas, the flow in ul/min with the time in min, and two flow rates in radians.
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
-The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the nineteen sets
+The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 21 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
-test_calibration_lab_s46.py).
+test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py).
 """
 
 from __future__ import annotations
@@ -106,6 +112,14 @@ DESIGNS = {
                 body_material="pdms_1_10*1.6", membrane_material="ecoflex_00_30"),
     "D19": dict(L_mm=11.6, t_mm=1.12, T_mm=1.6, b_mm=2.15, h_mm=0.13,
                 body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
+    # the forty-seventh session's designs, solved for the fresh sets N30-N37 only: Ecoflex
+    # on an Ecoflex membrane twice as stiff, a short thick PDMS 1:15 body, a deep chamber
+    "D20": dict(L_mm=10.6, t_mm=0.66, T_mm=0.64, b_mm=1.95, h_mm=0.18,
+                body_material="ecoflex_00_30", membrane_material="ecoflex_00_30*2"),
+    "D21": dict(L_mm=5.2, t_mm=0.84, T_mm=1.88, b_mm=1.05, h_mm=0.16,
+                body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
+    "D22": dict(L_mm=12.9, t_mm=0.57, T_mm=0.92, b_mm=1.4, h_mm=0.28,
+                body_material="pdms_1_10*0.7", membrane_material="ecoflex_00_30"),
 }
 # a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
 VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12),
@@ -232,15 +246,63 @@ SETS = {
                                               "pa": -50}, 58,
                                              {"v_unit": "ml", "no_time_flow": True,
                                               "p_unit": "mmHg"}),
+    # the forty-seventh session's fresh sets, truths and seeds fixed before any
+    # calibration: new lab habits (an instrument's preamble above the header, a date
+    # column with the gauge re-zeroed each day, a tab-separated export with decimal
+    # commas, the flow in ul/min and the time in min, two flow rates with angles in
+    # radians, a hold staircase, psi)
+    # a clean set at lab realism: 5 readings loading, 2 held, 4 unloading, every 3 s; the
+    # logger's two lines of text above the header
+    "N30-clean-preamble-D20": ("D20", [None], 3.0, 5, 2, 4, {}, 61, {"preamble": True}),
+    # a membrane batch 10 % stiffer (its FE solves); the specimens measured on three days,
+    # the gauge re-zeroed each morning (its zero -30, +10, +35 Pa), a date column;
+    # loaded to 60 deg (the thickest specimen's FE solve ends at 64 deg)
+    "N31-membrane1.1-days-D21": ("D21", [None], 2.0, 7, 3, 4,
+                                 {"kind": "membrane_x1.1+day_zero",
+                                  "zeros_pa": [-30.0, 10.0, 35.0]}, 62,
+                                 {"fe_suffix": "_m1.1", "dates": True, "angle_target": 60}),
+    # a pinhole leak G 0.12 ul/s per kPa; the pump in two steps each held 4 readings;
+    # the flow in ul/min, the time in min
+    "N32-leak-staircase-D22": ("D22", [None], 2.0, 0, 0, 0,
+                               {"kind": "leak", "G_ul_s_per_kpa": 0.12}, 63,
+                               {"program": [(1, 4), (0, 4), (1, 4), (0, 4), (-1, 6)],
+                                "q_unit": "ul/min", "t_unit": "min"}),
+    # the gauge's zero running away at -3 Pa/s; a LabVIEW-style tab-separated export with
+    # decimal commas, pressures in mbar
+    "N33-drift-tabs-D21": ("D21", [None], 2.0, 7, 3, 4,
+                           {"kind": "gauge_drift", "pa_per_s": -3.0}, 64,
+                           {"fmt": "tab", "p_unit": "mbar"}),
+    # air in the line (C 2.5 ul/kPa) and the mount tilted -1.5 deg; the specimens at
+    # 2 and 5 ul/s in one file, angles in radians
+    "N34-air+offset-two-flows-rad-D22": ("D22", [2.0, 5.0], 1.0, 10, 3, 6,
+                                         {"kind": "compliance+angle_offset",
+                                          "C_ul_per_kpa": 2.5, "deg": -1.5}, 65,
+                                         {"a_unit": "rad"}),
+    # outside the catalogue: a gauge whose calibration errs quadratically, p_read = p +
+    # k p^2 (k 4e-5 per Pa: +10 Pa at 0.5 kPa, +78 Pa at D20's top, 1.4 kPa: 5.6 %)
+    "N35-gauge-quadratic-D20": ("D20", [None], 2.0, 7, 3, 4,
+                                {"kind": "gauge_quadratic", "k_per_pa": 4e-5}, 66, {}),
+    # outside the catalogue: a rim that opens above a pressure, dV_lost/dt = G (p -
+    # p_open) where p > p_open (G 0.8 ul/s per kPa above 4 kPa, D21's top at 5.1 kPa);
+    # a hold of 8 s at the top
+    "N36-leak-above-D21": ("D21", [None], 1.0, 8, 8, 6,
+                           {"kind": "leak_above", "G_ul_s_per_kpa": 0.8, "p_open_pa": 4000.0},
+                           67, {}),
+    # pressure relaxation of the silicone (g 0.2, tau 3 s), pressures in psi
+    "N37-relax-psi-D20": ("D20", [None], 1.5, 8, 4, 5,
+                          {"kind": "relaxation", "g": 0.2, "tau_s": 3.0}, 68, {"p_unit": "psi"}),
 }
 # the pressure and time units a lab writes: unit -> (per Pa or per s, decimals)
 PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4),
                   "hPa": (1e-2, 2), "inH2O": (1 / 249.08891, 3),
                   "mmHg": (1 / 133.322387415, 3)}
-TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0)}
+TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0), "min": (1 / 60, 4)}
+FLOW_UNITS = {"ul/s": (1.0, 2), "ul/min": (60.0, 1)}
+# the field separator and the decimal mark: German Excel's, English, a tab-separated export
+FORMATS = {"semicolon": (";", ","), "comma": (",", "."), "tab": ("\t", ",")}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
 # test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
-# test_calibration_lab_s45.py read, with the pump's log
+# test_calibration_lab_s45.py, _s46.py and _s47.py read, with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
              "gauge_zero_off_soft_batch": "N2-gauge60-D9",
@@ -254,7 +316,9 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "one_column_per_specimen": "N27-creep-wide-D19",
              "offset_two_specimens_four_points": "N28-offset-few-points-D17",
              "gauge_zero_volume_log": "N29-camera-gain+zero-volume-only-D18",
-             "inlet_air_two_flows": "N25-inlet+air-two-flows-D17"}
+             "inlet_air_two_flows": "N25-inlet+air-two-flows-D17",
+             "text_above_header": "N30-clean-preamble-D20",
+             "air_tilt_two_flows_rad": "N34-air+offset-two-flows-rad-D22"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -339,6 +403,13 @@ def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray
             k2 = g * p_of(vp[i] - lost - H_S * k1) / 1000
             lost = min(lost + 0.5 * H_S * (k1 + k2), vp[i])
             vch[i] = vp[i] - lost
+    if "leak_above" in kinds:                    # a rim that opens above p_open
+        g, p_open, lost = effect["G_ul_s_per_kpa"], effect["p_open_pa"], 0.0
+        for i in range(1, vp.size):
+            k1 = g * max(p_of(vp[i - 1] - lost) - p_open, 0.0) / 1000
+            k2 = g * max(p_of(vp[i] - lost - H_S * k1) - p_open, 0.0) / 1000
+            lost = min(lost + 0.5 * H_S * (k1 + k2), vp[i])
+            vch[i] = vp[i] - lost
     p = p_of(vch)
     if "mullins" in kinds:                       # softer below the volume held before
         p = p * (1 - effect["m"] * (1 - vch / np.maximum(np.maximum.accumulate(vch), 1e-12)))
@@ -388,6 +459,10 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
         a = np.degrees(np.arctan2(np.sin(np.radians(a)) * math.cos(phi), np.cos(np.radians(a))))
     if "gauge_offset" in kinds:
         p = p + effect["pa"]
+    if "gauge_quadratic" in kinds:               # the gauge's calibration curved
+        p = p + effect["k_per_pa"] * p ** 2
+    if "day_zero" in kinds:                      # the gauge re-zeroed on each day
+        p = p + effect["zero_pa"]
     zero = rng.normal(0, 3)
     p = p + zero + rng.normal(0, 1, t.size) * (0.015 * np.abs(p) + 2.0)
     a = a + rng.normal(0, 0.7, t.size)
@@ -420,6 +495,8 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
                                                                      + effect.get("gap_s", 0))
             ef = dict(effect, program=program, t0_s=session_s) if program or (
                 effect.get("kind") == "session_drift") else effect
+            if "zeros_pa" in effect:             # the day's zero: one specimen a day
+                ef = dict(ef, zero_pa=effect["zeros_pa"][k])
             r = readings(fe_curve(cache, f"{d}{sp}{suffix}"), stiff[sp], qq, dt,
                          (n_load, n_hold, n_unload), rng, ef)
             rows += [(f"S{k + 1}", run, r["t"][i] * t_per_s, qq, r["p"][i] * p_per_pa,
@@ -428,10 +505,16 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     path = out / f"{file_name or name}.csv"
     if any(h in kw for h in HABITS):
         return write_habits(path, name, effect, nominal, rows, kw, api_json=not with_pump)
-    sep, dec = (";", ",") if kw.get("fmt", "semicolon") == "semicolon" else (",", ".")
+    sep, dec = FORMATS[kw.get("fmt", "semicolon")]
+    q_unit = kw.get("q_unit", "ul/s")
+    q_per_ul_s, q_nd = FLOW_UNITS[q_unit]
     geometry = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
-    header = ["curve_id", "run", *geometry, "body_material", "membrane_material",
-              f"Time ({t_unit})", "Flow (ul/s)", f"Pressure ({p_unit})",
+    dated = ["Date"] if kw.get("dates") else []
+
+    def day(cid: str) -> list[str]:               # specimen S<k> measured on day k
+        return [f"2026-12-0{cid[1:]}"] if dated else []
+    header = ["curve_id", "run", *dated, *geometry, "body_material", "membrane_material",
+              f"Time ({t_unit})", f"Flow ({q_unit})", f"Pressure ({p_unit})",
               "Angle (deg)"] + (["pump"] if with_pump else [])
 
     def num(x: float, nd: int) -> str:
@@ -439,17 +522,21 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     with open(path, "w", newline="", encoding="utf-8") as fh:
         fh.write(f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
                  f"benchmarks/lab_rig_sets.py from FE solves{note}\n")
+        if kw.get("preamble"):                   # a logger's lines above its header
+            fh.write("RigLogger 2.3 export, 2026-12-05 14:02\nSample batch 7, three "
+                     "specimens\n")
         w = csv.writer(fh, delimiter=sep)
         w.writerow(header)
         for cid, run, t, q, p_read, a, state, _ in rows:
-            w.writerow([cid, run, *(num(nominal[g], 2) for g in geometry),
+            w.writerow([cid, run, *day(cid), *(num(nominal[g], 2) for g in geometry),
                         nominal["body_material"], nominal["membrane_material"], num(t, t_nd),
-                        num(q, 2), num(p_read, p_nd), num(a, 1)] + ([state] if with_pump else []))
+                        num(q * q_per_ul_s, q_nd), num(p_read, p_nd), num(a, 1)]
+                       + ([state] if with_pump else []))
     if not with_pump:      # the API's body: the same rows, numbers as JSON numbers
-        body = [dict(zip(header, [cid, run, *(nominal[g] for g in geometry),
+        body = [dict(zip(header, [cid, run, *day(cid), *(nominal[g] for g in geometry),
                                   nominal["body_material"], nominal["membrane_material"],
-                                  round(t, t_nd), round(q, 2), round(p_read, p_nd),
-                                  round(a, 1)],
+                                  round(t, t_nd), round(q * q_per_ul_s, q_nd),
+                                  round(p_read, p_nd), round(a, 1)],
                          strict=True)) for cid, run, t, q, p_read, a, _, _ in rows]
         (out / f"{name}.json").write_text(json.dumps({"rows": body}))
     return path
@@ -523,7 +610,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's nineteen sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's 21 sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

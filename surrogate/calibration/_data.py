@@ -39,9 +39,11 @@ from surrogate.calibration._headers import (
 from surrogate.calibration._history import directions, injected_volume_ul, pump_switches
 from surrogate.calibration._layouts import (
     CLOCK_HOW,
+    header_below_text,
     is_clock,
     layout_error,
     one_column_per_specimen,
+    text_above_header,
 )
 from surrogate.calibration._measured_volume import (
     check_runs,
@@ -406,7 +408,11 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
     known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN, RUN_COLUMN}
     for name in REQUIRED:
-        if name not in columns:
+        if name not in columns:     # a logger's text above the header, sent as rows?
+            below = header_below_text([list(r.values()) if isinstance(r, dict) else []
+                                       for r in rows], REQUIRED, tuple(RANGES))
+            if below is not None and columns:
+                raise text_above_header([", ".join(map(str, rows[0]))] * (below + 1))
             raise _missing(name, columns)
     present = [c for c in OPTIONAL if c in columns]
     parsed = []
@@ -755,8 +761,9 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     ';' or tabs with ',' as the decimal mark (a German Excel's CSV; _csv_dialect.py). A
     column without a name in the header (a trailing separator) is dropped when it is
     empty on every row."""
-    lines = [ln for ln in io.StringIO(text, newline=None)
-             if not is_blank(ln) and not ln.lstrip().startswith("#")]
+    numbered = [(n, ln) for n, ln in enumerate(io.StringIO(text, newline=None), 1)
+                if not is_blank(ln) and not ln.lstrip().startswith("#")]
+    lines = [ln for _, ln in numbered]
     if not lines:
         raise DataError("header", "the file is empty", None,
                         "a header line naming the columns " + ", ".join(REQUIRED))
@@ -776,6 +783,9 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
         raise layout_error(exc, dict(zip(names, (c.strip() for c in first)))) from None
     for name in REQUIRED:
         if name not in names and name not in {r.column for r in readings.values()}:
+            below = header_below_text([[ln] for ln in lines[1:]], REQUIRED, tuple(RANGES))
+            if below is not None:       # a logger's text above the header (_layouts.py)
+                raise text_above_header(lines[:below + 1], numbered[below + 1][0])
             raise _missing(name, set(names))
     reader = csv.DictReader(lines[1:], fieldnames=names, delimiter=sep)
     out = []

@@ -93,7 +93,15 @@ def interpret(report: dict, left: dict) -> str:
                  f"({sizes}; cross-validated {near['rmse_cv_deg']:.2f} deg), not selected: "
                  + "; ".join(near["why_not"]) + ".")
     for c in report["candidates"]:
-        if c.get("stands_in_for"):
+        if c.get("stands_in_for") and c.get("stands_in_because") == "replicate scatter":
+            s.append(f"{' and '.join(c['effects'])} fits with plausible, significant values, "
+                     f"but {' and '.join(c['stands_in_for'])} fits better while its size is "
+                     "within what replicate scatter explains: not selected, for it would "
+                     "stand in for an explanation these data cannot size. Measure more "
+                     "specimens, or measure directly: " + "; ".join(
+                         EFFECTS[e].measure_directly for e in [*c["effects"],
+                                                               *c["stands_in_for"]]) + ".")
+        elif c.get("stands_in_for"):
             s.append(f"{' and '.join(c['effects'])} fits with plausible, significant values, "
                      f"but {' and '.join(c['stands_in_for'])} fits better: not selected, "
                      "for it would stand in for an explanation the baseline cannot judge.")
@@ -117,6 +125,16 @@ def interpret(report: dict, left: dict) -> str:
                  + ", so its better fit may be the baseline's own error there. An FE solve "
                  "of the design (`balloon solve`) or a baseline with more FE data there "
                  "would decide.")
+    beyond = report.get("wants_specimens_beyond")
+    if beyond is not None:
+        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
+                          for n, p in beyond["params"].items())
+        added = " and ".join(beyond["added"])
+        s.append(f"{' and '.join(beyond['effects'])} fits better ({sizes}; BIC "
+                 f"{-beyond['delta_bic_vs_selected']:.0f} lower, cross-validated "
+                 f"{beyond['rmse_cv_deg']:.2f} deg, {added} significant beside it), not "
+                 f"selected: {beyond['why_not'][0]}; with more specimens the data may show "
+                 f"{added} acting too.")
     said = gauge_zero_sentence(report.get("gauge_at_rest"), report["selected_effects"])
     if said:
         s.append(said)

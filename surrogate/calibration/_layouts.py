@@ -3,14 +3,16 @@
 A lab's spreadsheet or logger may put the units in a row under the header (``Time`` over
 ``s``), write the time as a clock (``01:04.5``, a header ``Time (mm:ss)``), or give each
 specimen its own columns (``Pressure S1 (kPa)``, ``Angle S1 (deg)``, one row per time).
-Each was refused with an error that did not say what the file held (``Time: read as
-time_s, but no unit is given for time``, ``'mm:ss' is not a unit of time``, ``curve_id:
-required column is missing``: benchmarks/lab_rig_sets.py N23, N26, N27); the error now
-names the layout and the conversion, on one line.
+A logger may also write lines of text above the header (its name, the operator, the
+batch) that are no '#' comments. Each was refused with an error that did not say what
+the file held (``Time: read as time_s, but no unit is given for time``, ``'mm:ss' is not
+a unit of time``, ``curve_id: required column is missing``: benchmarks/lab_rig_sets.py
+N23, N26, N27, N30); the error now names the layout and the conversion, on one line.
 """
 
 from __future__ import annotations
 
+import itertools
 import re
 
 from surrogate.calibration._errors import DataError
@@ -68,3 +70,45 @@ def one_column_per_specimen(columns: set, numeric: tuple[str, ...]) -> DataError
                      f"specimen ({shown}), which is not read", None,
                      "one row per reading, a curve_id column naming its specimen and one "
                      "column per quantity ('Pressure (kPa)', 'Angle (deg)')")
+
+
+#: how many lines below the first a header standing under a logger's text is looked for
+PREAMBLE_LINES = 20
+#: how much of each such line is read for column names: a header's worth, not a stray
+#: line of 10^5 separators (each name costs a header reading)
+PREAMBLE_PARTS = 1000
+PREAMBLE_CHARS = 65536
+PREAMBLE_HOW = "each line above the header starting with '#' (a comment), or deleted"
+
+
+def header_below_text(lines: list[list[object]], required: tuple[str, ...],
+                      numeric: tuple[str, ...]) -> int | None:
+    """The index in ``lines`` (each a line's cells, as a CSV row or a JSON row's values)
+    of the first line among the first ``PREAMBLE_LINES`` that names every required
+    column (by name, or as a header with a unit: ``Pressure (kPa)``), or None. A cell may
+    hold a whole line (a ';'-separated header read as one cell of a ','-separated
+    first line), so each is split on ',', ';' and tabs."""
+    for k, cells in enumerate(lines[:PREAMBLE_LINES]):
+        named = set()
+        parts = (part for cell in cells if isinstance(cell, str)
+                 for part in re.split(r"[,;\t]", cell[:PREAMBLE_CHARS]))
+        for part in itertools.islice(parts, PREAMBLE_PARTS):
+            try:
+                reading = read_header(part.strip(), numeric)
+            except DataError:
+                continue
+            named.add(reading.column if reading is not None else part.strip())
+        if set(required) <= named:
+            return k
+    return None
+
+
+def text_above_header(above: list[str], line: int | None = None) -> DataError:
+    """The error for a file whose header stands below lines of text (a logger's name,
+    the operator): the text is named, and where the header is when the line is known."""
+    first = str(above[0]).strip()
+    shown = repr(first if len(first) <= 60 else first[:57] + "...") + (
+        ", ..." if len(above) > 1 else "")
+    where = f"line {line} holds the header" if line is not None else "the header stands"
+    return DataError("header", f"{where} below text ({shown}), which is not read: a file's "
+                     "first line that is no comment is its header", None, PREAMBLE_HOW)

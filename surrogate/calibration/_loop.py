@@ -62,12 +62,15 @@ from surrogate.calibration._selection import (
     DELTA_BIC,
     Z_SIGNIFICANT,
     better_unbacked,
+    better_within_scatter,
     closest_rejected,
     effect_status,
     explains_better,
+    explains_better_words,
     indistinguishable,
     judge,
     parameter_table,
+    wants_specimens_beyond,
 )
 from surrogate.calibration._specimens import SpecimenScatter, specimen_scatter
 from surrogate.calibration._start import Baseline
@@ -298,27 +301,32 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         # (a set that holds this one and adds an unbacked member does not replace it)
         rival = better_unbacked([c for c in candidates
                                  if not set(effects) < set(c["effects"])], effects, base_joint)
-        if better is None and rival is None:
+        unsized = better_within_scatter(candidates, effects) if rival is None else None
+        if better is None and rival is None and unsized is None:
             chosen = effects
             break
         cand["selectable"] = False
+        if better is None and unsized is not None:   # the data prefer a set they cannot size
+            z = ", ".join(f"z {v:.1f}" for v in unsized["z"].values())
+            cand["why_not"].append(
+                explains_better_words(unsized, cand, channel["used"]) + " but its size is "
+                f"within what replicate scatter explains ({z}): this set would stand in for "
+                "an explanation the data cannot size")
+            cand["stands_in_for"] = unsized["effects"]
+            cand["stands_in_because"] = "replicate scatter"
+            continue
         if better is None:      # the data prefer a set the baseline cannot back
             cand["why_not"].append(
-                f"{'+'.join(rival['effects'])} explains the data better (BIC "
-                f"{rival['bic'] - cand['bic']:.0f} lower, cross-validated "
-                f"{rival['rmse_cv_joint']:.2f} vs {cand['rmse_cv_joint']:.2f} deg"
-                + (", angle and gauge pressure together" if channel["used"] else "")
-                + ") but the baseline cannot back its size there: this set would stand in "
-                "for it")
+                explains_better_words(rival, cand, channel["used"]) + " but the baseline "
+                "cannot back its size there: this set would stand in for it")
             cand["stands_in_for"] = rival["effects"]
+            cand["stands_in_because"] = "the baseline's backing"
             continue
         cand["why_not"].append(
-            f"what it leaves is within the baseline's own uncertainty at the fitted design "
-            f"only, while {better['effect']} (plausible) explains the data better (BIC "
-            f"{better['bic'] - cand['bic']:.0f} lower, cross-validated "
-            f"{better['rmse_cv_joint']:.2f} vs {cand['rmse_cv_joint']:.2f} deg"
-            + (", angle and gauge pressure together" if channel["used"] else "")
-            + "): the baseline's uncertainty does not excuse the worse fit")
+            "what it leaves is within the baseline's own uncertainty at the fitted design "
+            "only, while " + explains_better_words(better, cand, channel["used"],
+                                                   " (plausible)")
+            + ": the baseline's uncertainty does not excuse the worse fit")
         cand["outdone_by"] = better["effects"]
     xv_chosen = get_xv(chosen)
     for cand in candidates:
@@ -419,6 +427,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "indistinguishable": alike,
         "closest_rejected": (closest_rejected(candidates, rmse_before)
                              if not chosen and left["structured"] else None),
+        "wants_specimens_beyond": wants_specimens_beyond(candidates, chosen),
         "baseline_calls": responses.calls,
         "baseline_reach": {e.id: responses.reach(e).as_dict() for e in CATALOGUE
                            if e.stage == "design" and responses.reach(e).limits},
