@@ -238,7 +238,11 @@ def test_a_thinner_membrane_past_the_box_edge_is_said_so_not_fitted_past_it():
     assert "chamber_length" in r["baseline_reach"]  # L 4.1 mm: dL >= -0.1 mm
 
 
-@pytest.mark.parametrize("truth", [Truth(hysteresis_deg=5.0), Truth(contact_deg=25.0)],
+# the contact saturation is slow since 2026-12-07 (the default suite 624 s, over its 10
+# minutes); outside-catalogue cases stay in the default suite here (the loop) and in
+# tests/test_calibration_lab_fresh.py (a camera late against the pump)
+@pytest.mark.parametrize("truth", [Truth(hysteresis_deg=5.0),
+                                   pytest.param(Truth(contact_deg=25.0), marks=pytest.mark.slow)],
                          ids=["hysteresis-loop", "contact-saturation"])
 def test_effects_outside_the_catalogue_are_flagged_not_explained(truth):
     r = calibrate(Lab(designs=BASES, protocol=FULL_LOOP), truth)
