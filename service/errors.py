@@ -116,6 +116,16 @@ def located(exc: InputError, prefix: tuple[str | int, ...],
                       allowed_said=exc.allowed_said, nearest=getattr(exc, "nearest", None))
 
 
+#: characters of a request's path a problem echoes as its ``instance``
+LONGEST_INSTANCE = 1000
+
+
+def instance_of(path: str) -> str:
+    """A request's path as its problem's ``instance``, cut at LONGEST_INSTANCE characters
+    (a 404 for a path of 100,000 characters echoed it whole, a 100 kB answer)."""
+    return path if len(path) <= LONGEST_INSTANCE else f"{path[:LONGEST_INSTANCE]}..."
+
+
 @dataclass
 class Problem:
     """An RFC 9457 problem document."""
@@ -131,7 +141,7 @@ class Problem:
     def response(self, request: Request) -> JSONResponse:
         body: dict[str, Any] = {"type": f"urn:balloon:problem:{self.kind}", "title": self.title,
                                 "status": self.status, "detail": self.detail,
-                                "instance": request.url.path}
+                                "instance": instance_of(request.url.path)}
         if self.errors:
             body["errors"] = self.errors
         body.update(self.extra)

@@ -1,7 +1,8 @@
 """The forty-eighth session's hostile-input audit, round nine (after tests/test_hostile_s47.py):
 a single command-line option's number that a float does not hold (``--tubing-mm 1e-400
 0.5``: tubing 0 mm long) refused as written with the option's range, as a list option's
-and a JSON body's already were.
+and a JSON body's already were; a long path no longer echoed whole in a problem's
+``instance``; the request uvicorn cannot read (a 1 MB URL) answered as a problem document.
 
 Each test failed on the code before its fix (commit messages say which), bar the guards.
 """
@@ -9,8 +10,12 @@ Each test failed on the code before its fix (commit messages say which), bar the
 from __future__ import annotations
 
 import argparse
+import json
+import socket
 
 import pytest
+from explorer_browser import free_port, running
+from service_fakes import settings_for
 from test_cli_fuzz import run, visible_lines
 
 # -- 1. a single option's number the float does not hold --------------------------------------
@@ -68,3 +73,88 @@ def test_a_single_options_number_the_float_holds_is_read_as_before():
     code, out, err, _ = run(["predict", "--model", "paper", *DESIGN,
                              "--pressure-range", "0", "1e-300", "2"])
     assert code == 0 and "0.000" in out, err
+
+
+# -- 2. a long URL ------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def served(tmp_path_factory):
+    """The app (no models: nothing here reaches them) served as `balloon serve` serves it."""
+    import uvicorn
+
+    from service.app import create_app
+    from service.commands.serve import server_options
+
+    app = create_app(settings_for(tmp_path_factory.mktemp("hostile-s48")), load_surrogate=False)
+    port = free_port()
+    with running(uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port,
+                                               log_level="critical", timeout_graceful_shutdown=2,
+                                               **server_options()))):
+        yield port
+
+
+def raw_answer(port: int, request: bytes) -> tuple[int, dict[str, str], bytes]:
+    """(status, headers, body) of ``request`` sent as bytes (no client library's limits)."""
+    with socket.create_connection(("127.0.0.1", port), timeout=30) as sock:
+        try:
+            sock.sendall(request)
+        except OSError:     # the server answered and closed before reading it all
+            pass
+        data = b""
+        try:
+            while chunk := sock.recv(65536):
+                data += chunk
+        except ConnectionResetError:   # closed with the request unread: the answer came first
+            pass
+    head, _, body = data.partition(b"\r\n\r\n")
+    lines = head.decode("latin-1").split("\r\n")
+    headers = dict(line.lower().split(": ", 1) for line in lines[1:])
+    return int(lines[0].split()[1]), headers, body
+
+
+@pytest.mark.parametrize("request_bytes", [
+    b"GET /" + b"a" * 1_000_000 + b" HTTP/1.1\r\nHost: x\r\n\r\n",
+    b"GET /v1/health HTTP/1.1\r\nHost: x\r\nX-Big: " + b"a" * 300_000 + b"\r\n\r\n",
+    b"NOT HTTP AT ALL\r\n\r\n",
+])
+def test_a_request_uvicorn_cannot_read_is_a_problem_document(served, request_bytes):
+    """A 1 MB URL, a 300 kB header or a malformed request line was answered by uvicorn
+    itself, `400 text/plain` "Invalid HTTP request received.": now a problem document
+    saying why, as every other error of the service."""
+    status, headers, body = raw_answer(served, request_bytes)
+    assert status == 400 and headers["content-type"] == "application/problem+json", body
+    problem = json.loads(body)
+    assert problem["status"] == 400 and "HTTP/1.1" in problem["detail"]
+    assert "16384 bytes" in problem["detail"] and "allowed" in problem["detail"]
+
+
+def test_a_long_path_is_not_echoed_whole(served):
+    """A 404 for a path of 60,000 characters echoed it whole in ``instance`` (a 60 kB
+    answer): cut at 1000 characters now, whatever the error."""
+    path = b"/v1/models/" + b"b" * 60_000
+    status, headers, body = raw_answer(
+        served, b"GET " + path + b" HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+    if status == 400:    # h11 read the head in pieces over its 16 kB buffer: the 400 above
+        pytest.skip("the request's head arrived in pieces")
+    problem = json.loads(body)
+    assert status == 404 and len(body) < 1500, len(body)
+    assert problem["instance"] == path[:1000].decode() + "..."
+
+
+def test_a_long_path_is_not_echoed_whole_by_any_answer(tmp_path):
+    """The same for the answers the middleware writes (413, 415 and Starlette's own), in
+    process: the one rule (``service.errors.instance_of``)."""
+    from fastapi.testclient import TestClient
+
+    from service.app import create_app
+
+    app = create_app(settings_for(tmp_path, max_body_bytes=1024), load_surrogate=False)
+    with TestClient(app) as client:
+        path = "/v1/predict" + "/x" * 30_000
+        answers = [client.post(path, content=b" " * 2000),             # 413
+                   client.post(path, content=b"{}", headers={"Content-Encoding": "gzip"}),
+                   client.get("/v1/jobs/" + "j" * 60_000)]              # 404, the route's
+        for answer in answers:
+            assert answer.headers["content-type"] == "application/problem+json"
+            assert len(answer.json()["instance"]) <= 1003, answer.status_code
