@@ -2,7 +2,8 @@
 a single command-line option's number that a float does not hold (``--tubing-mm 1e-400
 0.5``: tubing 0 mm long) refused as written with the option's range, as a list option's
 and a JSON body's already were; a long path no longer echoed whole in a problem's
-``instance``; the request uvicorn cannot read (a 1 MB URL) answered as a problem document.
+``instance``; the request uvicorn cannot read (a 1 MB URL) answered as a problem document;
+a 422 of thousands of errors listing the first 20 and counting the rest.
 
 Each test failed on the code before its fix (commit messages say which), bar the guards.
 """
@@ -158,3 +159,33 @@ def test_a_long_path_is_not_echoed_whole_by_any_answer(tmp_path):
         for answer in answers:
             assert answer.headers["content-type"] == "application/problem+json"
             assert len(answer.json()["instance"]) <= 1003, answer.status_code
+
+
+# -- 3. a body of thousands of errors -----------------------------------------------------------
+
+
+@pytest.mark.parametrize(("route", "body", "count"), [
+    ("/v1/predict", {"design": {f"x{i}": 1 for i in range(1000)}, "pressures_pa": [1000]},
+     1000),
+    ("/v1/predict", {"design": {}, "pressures_pa": ["a"] * 1000}, 1000),
+    ("/v1/calibrate", {"rows": [{"curve_id": f"s{i // 5}", "L_mm": 7.1, "t_mm": 0.5,
+                                 "body_material": "pdms_1_10",
+                                 "membrane_material": "ecoflex_00_30", "pressure_pa": 400,
+                                 "angle_deg": True} for i in range(5000)]}, 5000),
+])
+def test_a_problem_lists_the_first_errors_and_counts_the_rest(tmp_path, route, body, count):
+    """A 9 kB body of 1000 unknown fields had a 296 kB answer, a 3 MB /v1/calibrate body
+    with `true` in each of 20,000 rows one of 9.6 MB (every error in `errors` and again in
+    `detail`): the first 20 are listed now, the rest counted."""
+    from fastapi.testclient import TestClient
+
+    from service.app import create_app
+
+    app = create_app(settings_for(tmp_path), load_surrogate=False)
+    with TestClient(app) as client:
+        answer = client.post(route, json=body)
+    problem = answer.json()
+    assert answer.status_code == 422 and len(answer.content) < 20_000, len(answer.content)
+    assert len(problem["errors"]) == 20 and "allowed" in problem["errors"][0]
+    assert problem["detail"].endswith(f"and {count - 20} more errors (the first 20 of "
+                                      f"{count} are listed)")
