@@ -10,6 +10,11 @@ predict throughput >= 70 % of health's, predict p99 < 20 ms.
 
     .venv/bin/python benchmarks/bench_service.py [--duration 20] [--concurrency 2]
 
+``--without refuse_unheld_numbers`` (or another of the app's request-wide dependencies,
+``DEPENDENCIES``) measures what one costs instead: a second server whose app has it
+replaced by an async no-op, and POST /v1/predict on the two in alternating phases; it
+reports their throughputs and the ratio, without / with.
+
 The client runs on the same machine and competes for its cores: the figures are a
 lower bound of what the server does alone.
 """
@@ -32,9 +37,13 @@ import httpx
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-LAUNCH = ("import argparse, sys; from service.commands import serve; "
+LAUNCH = ("import argparse, os, sys; from service.commands import serve; import service.app; "
+          "exec(os.environ.get('BENCH_WITHOUT', '')); "
           "p = argparse.ArgumentParser(prog='balloon'); serve.register(p.add_subparsers()); "
           "a = p.parse_args(sys.argv[1:]); sys.exit(a.func(a))")
+#: the app's request-wide dependencies (service.app.create_app) --without can replace
+DEPENDENCIES = ("refuse_repeated_fields", "refuse_unread_query", "refuse_unheld_numbers")
+NO_OP = "async def _no_op() -> None:\n    return None\nservice.app.{name} = _no_op\n"
 PREDICT = {"design": {"L_mm": 7.1, "t_mm": 0.5},
            "pressures_pa": [0, 250, 500, 750, 1000, 1250, 1500, 1750, 2000, 2250]}
 
@@ -45,8 +54,9 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def start_server(tmp: Path) -> tuple[subprocess.Popen, str]:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+def start_server(tmp: Path, without: str | None = None) -> tuple[subprocess.Popen, str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT),
+           "BENCH_WITHOUT": NO_OP.format(name=without) if without else ""}
     if not (ROOT / "service" / "data" / "surrogate.json").is_file():
         from surrogate import paper_surrogate, save_surrogate
 
@@ -89,20 +99,26 @@ async def phase(client: httpx.AsyncClient, kind: str, seconds: float, concurrenc
     return latencies, errors
 
 
-async def drive(url: str, duration: float, concurrency: int, rounds: int) -> dict:
+async def drive(urls: dict[str, tuple[str, str]], duration: float, concurrency: int,
+                rounds: int) -> dict:
+    """Alternating phases of each entry of ``urls`` (name -> server url, endpoint kind)."""
     limits = httpx.Limits(max_connections=concurrency, max_keepalive_connections=concurrency)
-    out: dict[str, dict] = {k: {"lat": [], "errors": 0, "time": 0.0}
-                            for k in ("health", "predict")}
-    async with httpx.AsyncClient(base_url=url, limits=limits, timeout=10) as client:
-        for kind in out:  # warm-up
-            await phase(client, kind, 1.0, concurrency)
+    out: dict[str, dict] = {k: {"lat": [], "errors": 0, "time": 0.0} for k in urls}
+    clients = {k: httpx.AsyncClient(base_url=url, limits=limits, timeout=10)
+               for k, (url, _) in urls.items()}
+    try:
+        for name, (_, kind) in urls.items():  # warm-up
+            await phase(clients[name], kind, 1.0, concurrency)
         for _ in range(rounds):
-            for kind in out:
+            for name, (_, kind) in urls.items():
                 t0 = time.perf_counter()
-                lat, err = await phase(client, kind, duration / rounds, concurrency)
-                out[kind]["time"] += time.perf_counter() - t0
-                out[kind]["lat"] += lat
-                out[kind]["errors"] += err
+                lat, err = await phase(clients[name], kind, duration / rounds, concurrency)
+                out[name]["time"] += time.perf_counter() - t0
+                out[name]["lat"] += lat
+                out[name]["errors"] += err
+    finally:
+        for client in clients.values():
+            await client.aclose()
     result = {}
     for kind, d in out.items():
         lat = np.asarray(d["lat"]) * 1e3
@@ -118,11 +134,16 @@ def main() -> int:
     parser.add_argument("--duration", type=float, default=20.0, help="seconds per endpoint")
     parser.add_argument("--concurrency", type=int, default=2, help="requests in flight")
     parser.add_argument("--rounds", type=int, default=4, help="alternating phases")
+    parser.add_argument("--without", choices=DEPENDENCIES,
+                        help="measure this dependency's cost to POST /v1/predict instead")
     args = parser.parse_args()
+    if args.without:
+        return compare_without(args)
     with tempfile.TemporaryDirectory() as tmp:
         proc, url = start_server(Path(tmp))
         try:
-            result = asyncio.run(drive(url, args.duration, args.concurrency, args.rounds))
+            result = asyncio.run(drive({"health": (url, "health"), "predict": (url, "predict")},
+                                       args.duration, args.concurrency, args.rounds))
         finally:
             proc.terminate()
             proc.wait(10)
@@ -131,12 +152,7 @@ def main() -> int:
           f"load average {os.getloadavg()[0]:.1f}; python {platform.python_version()}")
     print(f"concurrency {args.concurrency}, {args.duration:g} s per endpoint, "
           f"{len(PREDICT['pressures_pa'])} pressures per predict")
-    print("| endpoint | requests | errors | throughput (req/s) | p50 (ms) | p99 (ms) |")
-    print("|---|---|---|---|---|---|")
-    for kind in ("health", "predict"):
-        r = result[kind]
-        print(f"| {kind} | {r['requests']} | {r['errors']} | {r['throughput_rps']:.0f} | "
-              f"{r['p50_ms']:.2f} | {r['p99_ms']:.2f} |")
+    print_table("endpoint", result)
     ok_ratio = ratio >= 0.70
     ok_p99 = result["predict"]["p99_ms"] < 20.0
     print(f"predict / health throughput: {ratio:.2f} (target >= 0.70: "
@@ -145,6 +161,41 @@ def main() -> int:
           f"{'met' if ok_p99 else 'NOT met'})")
     print(json.dumps({"ratio": ratio, **result}))
     return 0 if ok_ratio and ok_p99 else 1
+
+
+def print_table(first: str, result: dict[str, dict]) -> None:
+    """``result`` (name -> figures) as a Markdown table."""
+    print(f"| {first} | requests | errors | throughput (req/s) | p50 (ms) | p99 (ms) |")
+    print("|---|---|---|---|---|---|")
+    for name, r in result.items():
+        print(f"| {name} | {r['requests']} | {r['errors']} | {r['throughput_rps']:.0f} | "
+              f"{r['p50_ms']:.2f} | {r['p99_ms']:.2f} |")
+
+
+def compare_without(args: argparse.Namespace) -> int:
+    """POST /v1/predict on the app as served and on one without ``args.without``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        proc, url = start_server(Path(tmp))
+        try:
+            bare, bare_url = start_server(Path(tmp), args.without)
+            try:
+                result = asyncio.run(drive({"with": (url, "predict"),
+                                            "without": (bare_url, "predict")},
+                                           args.duration, args.concurrency, args.rounds))
+            finally:
+                bare.terminate()
+                bare.wait(10)
+        finally:
+            proc.terminate()
+            proc.wait(10)
+    ratio = result["without"]["throughput_rps"] / result["with"]["throughput_rps"]
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"load average {os.getloadavg()[0]:.1f}; concurrency {args.concurrency}, "
+          f"{args.duration:g} s per server")
+    print_table(f"POST /v1/predict, {args.without}", result)
+    print(f"throughput without / with: {ratio:.3f}")
+    print(json.dumps({"ratio": ratio, **result}))
+    return 0
 
 
 if __name__ == "__main__":

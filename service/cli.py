@@ -21,8 +21,10 @@ from solver.number_text import (
     INTEGER_FORM,
     NEGATIVE_NUMBER,
     NUMBER_FORM,
+    WrittenNumber,
     ascii_float,
     ascii_int,
+    unheld_words,
 )
 from solver.plain_text import escaped
 
@@ -57,7 +59,7 @@ class Parser(argparse.ArgumentParser):
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self._negative_number_matcher = NEGATIVE_NUMBER    # -1e3 a value, as -5 is
-        self.register("type", float, ascii_float)
+        self.register("type", float, held_float)
         self.register("type", int, ascii_int)
 
     def error(self, message: str) -> NoReturn:
@@ -72,6 +74,10 @@ class Parser(argparse.ArgumentParser):
         if listed is not None:   # a list option's word (service.commands.predict.number_list)
             allowed = self._allowed(listed[1])
             return message if allowed is None else f"{message[:-1]}; allowed: {allowed})"
+        unheld = re.fullmatch(r"argument (\S+): .* does not fit a 64-bit float .*", message)
+        if unheld is not None:   # held_float's refusal
+            allowed = self._allowed(unheld[1])
+            return message if allowed is None else f"{message} (allowed: {allowed})"
         match = re.fullmatch(r"argument (\S+): invalid (float|int) value: (.*)", message)
         if match is None:
             return message
@@ -86,6 +92,16 @@ class Parser(argparse.ArgumentParser):
         return next((a.allowed for a in self._actions   # type: ignore[attr-defined]
                      if getattr(a, "allowed", None) and "/".join(a.option_strings) == option),
                     None)
+
+
+def held_float(text: str) -> float:
+    """A number option's word read by the one rule (``ascii_float``), refused as written
+    where a float does not hold it: ``--tubing-mm 1e-400 0.5`` was tubing 0 mm long, as a
+    JSON body's or a list option's 1e-400 is not (the parser adds the option's range)."""
+    number = ascii_float(text)
+    if isinstance(number, WrittenNumber):
+        raise argparse.ArgumentTypeError(unheld_words(number))
+    return number
 
 
 def build_parser() -> argparse.ArgumentParser:

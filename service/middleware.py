@@ -9,7 +9,7 @@ import json
 from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service.errors import PROBLEM_JSON
+from service.errors import PROBLEM_JSON, instance_of
 
 
 class BodyLimitMiddleware:
@@ -59,7 +59,7 @@ class BodyLimitMiddleware:
         await _send_json(send, 413, {"type": "urn:balloon:problem:payload-too-large",
                                      "title": "Request body too large", "status": 413,
                                      "detail": self._message(limit),
-                                     "instance": scope.get("path", "")},
+                                     "instance": instance_of(scope.get("path", ""))},
                          [(b"connection", b"close")])
 
 
@@ -104,7 +104,7 @@ class IdentityBodyMiddleware(_HttpMiddleware):
         await _send_json(send, 415, {
             "type": "urn:balloon:problem:unsupported-media-type",
             "title": "Unsupported Media Type", "status": 415, "detail": detail,
-            "instance": scope.get("path", ""),
+            "instance": instance_of(scope.get("path", "")),
             "errors": [{"loc": ["header", "content-encoding"], "field": "Content-Encoding",
                         "message": f"{shown!r} is not accepted",
                         "allowed": ACCEPTED_ENCODING}]},
@@ -170,7 +170,7 @@ async def _send_problem(send: Send, start: Message, text: bytes, scope: Scope) -
             if k.lower() not in (b"content-type", b"content-length")]
     await _send_json(send, status, {"type": f"urn:balloon:problem:http-{status}",
                                     "title": phrase, "status": status, "detail": detail,
-                                    "instance": scope.get("path", "")}, kept)
+                                    "instance": instance_of(scope.get("path", ""))}, kept)
 
 
 class HeadAsGetMiddleware(_HttpMiddleware):

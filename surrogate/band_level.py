@@ -8,11 +8,14 @@ from scipy.stats import norm
 
 from solver.errors import InputError
 
+#: a band's level, as every refusal of one states it
+LEVEL_RANGE = "0.5 <= level < 1"
+
 
 def z_value(level: float) -> float:
     """Two-sided normal quantile for a band at ``level`` (e.g. 1.96 at 0.95)."""
     if not isinstance(level, (int, float)) or not 0.5 <= level < 1.0:
-        raise InputError("level", f"got {level!r}", "0.5 <= level < 1")
+        raise InputError("level", f"got {level!r}", LEVEL_RANGE)
     return _z(float(level))
 
 

@@ -32,8 +32,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "(the shipped one: service/data/band-calibration.h5)")
     parser.add_argument("--report-dir", metavar="DIR", help="also write report.json and PNGs")
     parser.add_argument("--name", default="fe-fit", help="the surrogate's name")
-    parser.add_argument("--level", type=float, default=0.95,
-                        help="band level for the coverage check (default 0.95)")
+    from service.commands.numbers import allowed_action
+    from surrogate.band_level import LEVEL_RANGE
+
+    allowed_action(parser.add_argument("--level", type=float, default=0.95,
+                                       help="band level for the coverage check (default 0.95)"),
+                   LEVEL_RANGE)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 

@@ -23,7 +23,7 @@ import json
 import math
 from dataclasses import replace
 
-from service.commands.numbers import number_action, range_text
+from service.commands.numbers import allowed_action, number_action, range_text
 from service.commands.predict import (
     add_design_arguments,
     add_model_arguments,
@@ -40,7 +40,8 @@ from service.pump import MAX_ANGLE_DEG
 from solver.errors import InputError
 from surrogate.predictor import FE_VOLUME_STOP_UL
 from surrogate.search.design_search import N_RESULTS_MAX
-from surrogate.search.design_target import DEFAULT_KIND, KINDS, OBJECTIVES
+from surrogate.search.design_target import DEFAULT_KIND, KINDS, MAX_TARGET, OBJECTIVES
+from surrogate.volume_control import MAX_TIME_S
 
 # The search's bounds (surrogate.search.design_search.SearchBounds field -> flag, what it bounds);
 # a pinned range (LO = HI) fixes that variable (one mould: --L-range 10 10). Each range
@@ -105,15 +106,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help=f"design target (default {DEFAULT_KIND}; force_at_pressure "
                              "with --force-mn, angle_at_volume with --volume-ul, "
                              "angle_at_time with --time-s)")
-    parser.add_argument("--angle-deg", type=float, help="target angle, deg: positive bends "
-                        "away from the membrane, negative towards it (the reversed pair)")
-    parser.add_argument("--force-mn", type=float, help="target blocked-tip force, mN (signed "
-                        "as the angle)")
-    parser.add_argument("--pressure-pa", type=float, help="target pressure or budget, Pa")
-    parser.add_argument("--volume-ul", type=float, help="a pump's target: injected volume "
-                        f"or budget, ul (0 < V <= {FE_VOLUME_STOP_UL:g}, the FE's volume stop)")
-    parser.add_argument("--time-s", type=float, help="a pump's target: time or budget at "
-                        "--flow-ul-s from the undeformed state, s (volume = flow x time)")
+    allowed_action(parser.add_argument("--angle-deg", type=float, help="target angle, deg: "
+                                       "positive bends away from the membrane, negative "
+                                       "towards it (the reversed pair)"),
+                   f"0 < |angle| <= {MAX_TARGET['angle_deg']:g} deg")
+    allowed_action(parser.add_argument("--force-mn", type=float, help="target blocked-tip "
+                                       "force, mN (signed as the angle)"),
+                   f"0 < |force| <= {MAX_TARGET['force_mn']:g} mN")
+    allowed_action(parser.add_argument("--pressure-pa", type=float,
+                                       help="target pressure or budget, Pa"),
+                   f"0 < pressure <= {MAX_TARGET['pressure_pa']:g} Pa")
+    allowed_action(parser.add_argument("--volume-ul", type=float, help="a pump's target: "
+                                       "injected volume or budget, ul (0 < V <= "
+                                       f"{FE_VOLUME_STOP_UL:g}, the FE's volume stop)"),
+                   f"0 < volume <= {FE_VOLUME_STOP_UL:g} ul")
+    allowed_action(parser.add_argument("--time-s", type=float, help="a pump's target: time "
+                                       "or budget at --flow-ul-s from the undeformed state, s "
+                                       "(volume = flow x time)"),
+                   f"0 < time <= {MAX_TIME_S:g} s")
     for name, (flag, what) in RANGE_FLAGS.items():
         lo, hi, unit = search_box(name)
         number_action(parser.add_argument(flag, type=float, nargs=2, metavar=("LO", "HI"),

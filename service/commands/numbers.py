@@ -8,7 +8,9 @@ it too:
 
 The ranges come from the tables that check the values afterwards
 (``solver.design.LIMITS_MM``, ``solver.design_space.BOX_MM``, the stiffness scales'):
-this module only parses, the range checks stay where they are.
+this module only parses, the range checks stay where they are. Every number option
+carries one (a test checks): a word the parser refuses -- ``abc``, or ``1e-400``, which a
+float reads as 0 -- is told the option's range whatever the check after it would say.
 """
 
 from __future__ import annotations
@@ -17,6 +19,10 @@ import argparse
 
 from solver.design import LIMITS_MM
 from solver.design_space import STIFFNESS_SCALE_LIMITS
+from solver.settings import SETTING_RANGES
+
+#: a setting's unit, by the end of its name
+_UNITS = {"_deg": "deg", "_pa": "Pa", "_ul_s": "ul/s", "_n_per_m": "N/m"}
 
 
 def range_text(lo: float, hi: float, unit: str = "") -> str:
@@ -28,8 +34,23 @@ def number_action(action: argparse.Action, lo: float, hi: float,
                   unit: str = "") -> argparse.Action:
     """``action`` (a float option) with its allowed range ``lo``..``hi`` attached: text
     that is not a number is then told the range too (``service.cli.Parser.error``)."""
-    action.allowed = range_text(lo, hi, unit)  # type: ignore[attr-defined]
+    return allowed_action(action, range_text(lo, hi, unit))
+
+
+def allowed_action(action: argparse.Action, allowed: str) -> argparse.Action:
+    """``action`` with its allowed values in words (``"0 to 20000 Pa"``) attached, for
+    the parser's refusals (``service.cli.Parser.error``)."""
+    action.allowed = allowed  # type: ignore[attr-defined]
     return action
+
+
+def attach_setting_ranges(parser: argparse.ArgumentParser) -> None:
+    """Attach its allowed range (``solver.settings.SETTING_RANGES``, by the option's
+    dest) to each solver-setting option of ``parser``."""
+    for action in parser._actions:  # noqa: SLF001 - argparse keeps its options there
+        if action.dest in SETTING_RANGES and action.type is float:
+            unit = next((u for end, u in _UNITS.items() if action.dest.endswith(end)), "")
+            number_action(action, *SETTING_RANGES[action.dest], unit)
 
 
 def attach_design_ranges(parser: argparse.ArgumentParser) -> None:

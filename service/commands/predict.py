@@ -18,10 +18,23 @@ import os
 import re
 from pathlib import Path
 
-from service.commands.numbers import STIFFNESS_SCALE_LIMITS, attach_design_ranges, number_action
+from service.commands.numbers import (
+    STIFFNESS_SCALE_LIMITS,
+    allowed_action,
+    attach_design_ranges,
+    number_action,
+)
 from service.pump import AXES
 from solver.number_text import NUMBER_FORM, WrittenNumber, ascii_float, unheld_words
+from surrogate.band_level import LEVEL_RANGE
+from surrogate.hydraulics import LIMITS as INLET_LIMITS
 from surrogate.predictor import MAX_ASKED_VALUES
+from surrogate.volume_control import FLOW_RANGE
+
+#: the most pressures ``--pressure-range START STOP NUM`` spaces, and its values' range
+MAX_RANGE_NUM = 100_000
+_RANGE_ALLOWED = (f"{AXES['pressures_pa'][0]:g} <= START, STOP <= {AXES['pressures_pa'][1]:g} "
+                  f"{AXES['pressures_pa'][2]}; NUM an integer 1..{MAX_RANGE_NUM}")
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
@@ -124,22 +137,38 @@ def add_model_arguments(parser: argparse.ArgumentParser) -> None:
                              " else ~/.balloon/models)")
     parser.add_argument("--form", choices=("exponential", "extended"), default=None,
                         help="model form (default: each family's fitted default)")
-    parser.add_argument("--level", type=float, default=0.95, help="band level (0.95)")
+    allowed_action(parser.add_argument("--level", type=float, default=0.95,
+                                       help="band level (0.95)"), LEVEL_RANGE)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
 def add_pump_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--flow-ul-s", type=float, default=None, metavar="UL_S",
-                        help="the syringe pump's flow rate, ul/s (adds the time axis)")
+    allowed_action(parser.add_argument("--flow-ul-s", type=float, default=None, metavar="UL_S",
+                                       help="the syringe pump's flow rate, ul/s (adds the "
+                                            "time axis)"), FLOW_RANGE)
     parser.add_argument("--inlet", action="store_true",
                         help="add the pump-gauge pressure, chamber + R Q (Hagen-Poiseuille; "
                              "default the paper's channel 0.5 x 3 x 0.15 mm, water)")
-    parser.add_argument("--channel-mm", type=float, nargs=3, metavar=("W", "L", "H"),
-                        help="inlet channel width, length, height, mm (with --inlet)")
-    parser.add_argument("--tubing-mm", type=float, nargs=2, metavar=("LENGTH", "BORE"),
-                        help="tubing length and bore, mm (with --inlet)")
-    parser.add_argument("--viscosity-pa-s", type=float, default=None,
-                        help="the fluid's viscosity, Pa s (with --inlet; default water, 1e-3)")
+    allowed_action(parser.add_argument("--channel-mm", type=float, nargs=3,
+                                       metavar=("W", "L", "H"), help="inlet channel width, "
+                                       "length, height, mm (with --inlet)"),
+                   _inlet_range(W="channel_width_mm", L="channel_length_mm",
+                                H="channel_height_mm"))
+    allowed_action(parser.add_argument("--tubing-mm", type=float, nargs=2,
+                                       metavar=("LENGTH", "BORE"),
+                                       help="tubing length and bore, mm (with --inlet)"),
+                   _inlet_range(LENGTH="tubing_length_mm", BORE="tubing_bore_mm"))
+    allowed_action(parser.add_argument("--viscosity-pa-s", type=float, default=None,
+                                       help="the fluid's viscosity, Pa s (with --inlet; "
+                                            "default water, 1e-3)"),
+                   _inlet_range(unit="Pa s", viscosity="viscosity_pa_s"))
+
+
+def _inlet_range(unit: str = "mm", **names: str) -> str:
+    """An inlet option's values' ranges in words, from the Inlet's one table
+    (``surrogate.hydraulics.LIMITS``): ``"LENGTH 0 to 100000, BORE 0.05 to 20 mm"``."""
+    return ", ".join(f"{word} {INLET_LIMITS[name][0]:g} to {INLET_LIMITS[name][1]:g}"
+                     for word, name in names.items()) + f" {unit}"
 
 
 # the request fields of service/pump.py -> the flags that set them
@@ -318,8 +347,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_design_arguments(parser)
     group = parser.add_mutually_exclusive_group(required=True)
     add_number_list(group, "--pressures", "PA", "pressures, Pa", AXES["pressures_pa"])
-    group.add_argument("--pressure-range", type=float, nargs=3, metavar=("START", "STOP", "NUM"),
-                       help="NUM evenly spaced pressures from START to STOP, Pa")
+    allowed_action(group.add_argument("--pressure-range", type=float, nargs=3,
+                                      metavar=("START", "STOP", "NUM"),
+                                      help="NUM evenly spaced pressures from START to STOP, Pa"),
+                   _RANGE_ALLOWED)
     add_number_list(group, "--volumes", "UL", "injected volumes, ul (the emulator)",
                     AXES["volumes_ul"])
     add_number_list(group, "--times", "S", "times since the pump started, s (with --flow-ul-s)",
@@ -347,12 +378,11 @@ def run(args: argparse.Namespace) -> int:
     pressures = args.pressures
     if args.pressure_range is not None:
         start, stop, num = args.pressure_range
-        if not 1 <= num <= 100_000 or num != int(num):
-            raise InputError("--pressure-range", f"NUM = {num:g}", "an integer 1..100000")
-        lo, hi, unit = AXES["pressures_pa"]   # checked before linspace (inf: a warning)
-        if not all(math.isfinite(x) and lo <= x <= hi for x in (start, stop)):
-            raise InputError("--pressure-range", f"START = {start:g}, STOP = {stop:g}",
-                             f"{lo:g} <= START, STOP <= {hi:g} {unit}")
+        lo, hi, _ = AXES["pressures_pa"]   # checked before linspace (inf: a warning)
+        if (not 1 <= num <= MAX_RANGE_NUM or num != int(num)
+                or not all(math.isfinite(x) and lo <= x <= hi for x in (start, stop))):
+            raise InputError("--pressure-range", f"START = {start:g}, STOP = {stop:g}, "
+                             f"NUM = {num:g}", _RANGE_ALLOWED)
         pressures = np.linspace(start, stop, int(num)).tolist()
     question = PumpQuestion(pressures, args.volumes, args.times, args.flow_ul_s, inlet,  # type: ignore[arg-type]
                             args.pressures_at)

@@ -62,5 +62,14 @@ def run(args: argparse.Namespace) -> int:
 
     app = create_app(get_settings())
     uvicorn.run(app, host=args.host, port=args.port, log_level=args.log_level,
-                proxy_headers=True)
+                **server_options())
     return 0
+
+
+def server_options() -> dict[str, object]:
+    """uvicorn's options of ``balloon serve`` beside the address: the client's address
+    from a proxy's headers, and uvicorn's own 400 (a request it cannot read as HTTP/1.1)
+    a problem document too (``service.unreadable_request``)."""
+    from service.unreadable_request import ProblemH11Protocol
+
+    return {"proxy_headers": True, "http": ProblemH11Protocol}

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from service.commands.numbers import attach_design_ranges
+from service.commands.numbers import attach_design_ranges, attach_setting_ranges
 from solver.curve import Curve
 from solver.design import LIMITS_MM, design_from_dict
 from solver.io import CSV_COLUMNS
@@ -95,6 +95,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     o.add_argument("--vtk", metavar="PATH",
                    help="write the final deformed state with stretch and stress (VTU)")
     o.add_argument("--quiet", action="store_true", help="no progress bar")
+    attach_setting_ranges(p)
     p.set_defaults(func=run)
 
 

@@ -42,8 +42,8 @@ VOLUME_KINDS = ("angle_at_volume", "volume_budget", *TIME_KINDS)
 BUDGET_KINDS = ("pressure_budget", "volume_budget", "time_budget")
 #: the target a search answers when none is named (HTTP and CLI alike)
 DEFAULT_KIND = "angle_at_pressure"
-#: the largest target magnitudes taken: |angle| in deg, |force| in mN
-MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4}
+#: the largest target magnitudes taken: |angle| in deg, |force| in mN, a pressure in Pa
+MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4, "pressure_pa": 1e6}
 OBJECTIVES = ("pressure", "volume", "margin", "compact", "certainty")
 DEFAULT_OBJECTIVE = {"angle_at_pressure": "certainty", "pressure_budget": "pressure",
                      "force_at_pressure": "certainty", "angle_at_volume": "certainty",
@@ -96,11 +96,11 @@ class DesignTarget:
                                  "volume within the FE's volume stop, got "
                                  + ("none" if self.volume_ul is None else repr(self.volume_ul)),
                                  f"0 < volume_ul <= {FE_VOLUME_STOP_UL:g} ul")
-        elif not finite_number(self.pressure_pa) or not (_positive(self.pressure_pa)
-                                                         and self.pressure_pa <= 1e6):
+        elif not finite_number(self.pressure_pa) or not (
+                _positive(self.pressure_pa) and self.pressure_pa <= MAX_TARGET["pressure_pa"]):
             raise InputError("pressure_pa", f"the {self.kind} target needs a pressure, got "
                              + ("none" if self.pressure_pa is None else repr(self.pressure_pa)),
-                             "0 < pressure_pa <= 1e6 Pa")
+                             f"0 < pressure_pa <= {MAX_TARGET['pressure_pa']:g} Pa")
         name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
         value = getattr(self, name)
         if value is None or not finite_number(value) or not (_positive(abs(value))
