@@ -37,7 +37,7 @@ UNHELD = "does not fit a 64-bit float (sizes about 5e-324 to 1.8e308, or 0): it 
      f"--spring-k-n-per-m: 1e-400 {UNHELD} 0 (allowed: 0 to 1e+06 N/m)"),
     # ranges without 0: a later check said "got 1e-400"; the parser's words now, one rule
     (["inverse", "--angle-deg", "30", "--pressure-pa", "-1e-400"],
-     f"--pressure-pa: -1e-400 {UNHELD} 0 (allowed: 0 < pressure <= 1e+06 Pa)"),
+     f"--pressure-pa: -1e-400 {UNHELD} 0 (allowed: 0 < pressure <= 20000 Pa)"),
     (["fit", "--db", "x.h5", "-o", "y.json", "--level", "1e-400"],
      f"--level: 1e-400 {UNHELD} 0 (allowed: 0.5 <= level < 1)"),
 ])
@@ -189,3 +189,25 @@ def test_a_problem_lists_the_first_errors_and_counts_the_rest(tmp_path, route, b
     assert len(problem["errors"]) == 20 and "allowed" in problem["errors"][0]
     assert problem["detail"].endswith(f"and {count - 20} more errors (the first 20 of "
                                       f"{count} are listed)")
+
+
+def test_a_target_pressure_has_one_limit_on_the_cli_and_over_http(tmp_path):
+    """A design search's target pressure was taken up to 1e6 Pa on the command line and
+    up to 20000 Pa (the default FE's pressure stop) over HTTP: one fact, two limits. Both
+    now refuse 30000 Pa naming the FE's stop."""
+    from fastapi.testclient import TestClient
+
+    from service.app import create_app
+
+    code, out, err, escaped = run(["inverse", "--model", "paper", "--angle-deg", "45",
+                                   "--pressure-pa", "30000"])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1 and not out, (err, out)
+    assert "--pressure-pa" in lines[0] and "<= 20000 Pa" in lines[0], lines[0]
+    app = create_app(settings_for(tmp_path), load_surrogate=False)
+    with TestClient(app) as client:
+        answer = client.post("/v1/inverse", json={"target": {"angle_deg": 45,
+                                                             "pressure_pa": 30000}})
+    problem = answer.json()
+    assert answer.status_code == 422, answer.text
+    assert "pressure_pa" in problem["detail"] and "20000" in problem["detail"], problem

@@ -9,7 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema, model_validat
 
 from service.pump import MAX_ANGLE_DEG, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
-from service.schemas.predict import INLET, LEVEL, MAX_PRESSURE_PA, MODEL, InletIn
+from service.schemas.predict import INLET, LEVEL, MODEL, InletIn
 from solver.design import LIMITS_MM
 from solver.design_space import BOX_MM, STIFFNESS_SCALE_LIMITS, STIFFNESS_SCALE_RANGE
 from surrogate.predictor import FE_VOLUME_STOP_UL, MAX_ASKED_VALUES
@@ -37,7 +37,7 @@ class TargetIn(Schema):
     flow_ul_s). Each kind takes its own fields and refuses the others."""
 
     kind: Literal[KINDS] = DEFAULT_KIND  # type: ignore[valid-type]
-    pressure_pa: float | None = Field(None, gt=0.0, le=MAX_PRESSURE_PA,
+    pressure_pa: float | None = Field(None, gt=0.0, le=MAX_TARGET["pressure_pa"],
                                       description="pressure, Pa (the targets by pressure)")
     volume_ul: float | None = Field(
         None, gt=0.0, le=FE_VOLUME_STOP_UL, description="injected volume, ul, whole "

@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from solver.errors import InputError
-from surrogate.predictor import FE_VOLUME_STOP_UL, SMALLEST_NORMAL
+from surrogate.predictor import FE_PRESSURE_STOP_PA, FE_VOLUME_STOP_UL, SMALLEST_NORMAL
 from surrogate.volume_control import FLOW_RANGE, MAX_FLOW_UL_S, MAX_TIME_S, MIN_FLOW_UL_S
 
 KINDS = ("angle_at_pressure", "pressure_budget", "force_at_pressure", "angle_at_volume",
@@ -43,7 +43,8 @@ BUDGET_KINDS = ("pressure_budget", "volume_budget", "time_budget")
 #: the target a search answers when none is named (HTTP and CLI alike)
 DEFAULT_KIND = "angle_at_pressure"
 #: the largest target magnitudes taken: |angle| in deg, |force| in mN, a pressure in Pa
-MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4, "pressure_pa": 1e6}
+#: (the default FE's pressure stop: no design is answered past it, over HTTP or the CLI)
+MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4, "pressure_pa": FE_PRESSURE_STOP_PA}
 OBJECTIVES = ("pressure", "volume", "margin", "compact", "certainty")
 DEFAULT_OBJECTIVE = {"angle_at_pressure": "certainty", "pressure_budget": "pressure",
                      "force_at_pressure": "certainty", "angle_at_volume": "certainty",
@@ -98,7 +99,8 @@ class DesignTarget:
                                  f"0 < volume_ul <= {FE_VOLUME_STOP_UL:g} ul")
         elif not finite_number(self.pressure_pa) or not (
                 _positive(self.pressure_pa) and self.pressure_pa <= MAX_TARGET["pressure_pa"]):
-            raise InputError("pressure_pa", f"the {self.kind} target needs a pressure, got "
+            raise InputError("pressure_pa", f"the {self.kind} target needs a pressure within "
+                             "the FE's pressure stop, got "
                              + ("none" if self.pressure_pa is None else repr(self.pressure_pa)),
                              f"0 < pressure_pa <= {MAX_TARGET['pressure_pa']:g} Pa")
         name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
