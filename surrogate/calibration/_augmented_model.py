@@ -135,6 +135,7 @@ class AugmentedModel:
         self.family_pos = np.array([fam_pos[f] for f in obs.family])
         if self.time:
             self._prepare_substeps()
+        self._last_volumes: tuple[bytes | None, np.ndarray | None] = (None, None)
         # each curve's design (its rows share it): what a leak's pressure is read on
         self._curve_design = np.array([self.design_index[self.obs.curve == c][0]
                                        for c in range(obs.n_curves)], dtype=int)
@@ -293,7 +294,20 @@ class AugmentedModel:
     def _substep_volumes(self, x: np.ndarray) -> np.ndarray:
         """The volume (ul) in the line at every substep: the pump's, linear between the
         readings' volumes with the pump switches' shifts applied, less what leaked out
-        along the curve's time (the time effects that act on the volume)."""
+        along the curve's time (the time effects that act on the volume). With a leak,
+        the last ``x``'s answer is kept (read-only): a residual asks for it twice, for the
+        angles and for the gauge, and the leak's integration along every curve is most of
+        a fit's time."""
+        if not self._leaks:
+            return self._line_volumes(x)
+        key = x.tobytes()
+        if self._last_volumes[0] != key:
+            v = self._line_volumes(x)
+            v.flags.writeable = False
+            self._last_volumes = (key, v)
+        return self._last_volumes[1]
+
+    def _line_volumes(self, x: np.ndarray) -> np.ndarray:
         s = self._sub
         v = s["v"]
         if self.switch_cols.size:

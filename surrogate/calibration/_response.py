@@ -33,6 +33,7 @@ PRESSURE_POINTS = 241
 BAND_LEVEL = 0.95
 BAND_Z = 1.959964  # two-sided 95 %
 PROBE_STEPS = 16   # bisection steps of the reach: 1/65536 of the fit range
+RECENT_CURVES = 4  # interpolated curves kept (``Responses.curves``)
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,7 @@ class Responses:
         self._volumes: dict[tuple[str, ...], dict[str, np.ndarray]] = {}
         self._sd: np.ndarray | None = None
         self._reach: dict[str, Reach] = {}
+        self._recent_curves: dict[tuple, np.ndarray] = {}
         self.calls = 0
 
     def _refusal(self, design) -> InputError | None:
@@ -234,6 +236,22 @@ class Responses:
             values = self._volumes[tuple(e.id for e in effects)][what]
         if not effects:
             return values
+        # one evaluation of the augmented model asks for the same curves up to four times
+        # (the gauge, the angle, the chamber's volume, a leak's pressure): the last few
+        # answers are kept, read-only
+        key = (tuple(e.id for e in effects), np.asarray(thetas, float).tobytes(), what)
+        if key in self._recent_curves:
+            return self._recent_curves[key]
+        out = self._interpolated(nodes, values, thetas)
+        out.flags.writeable = False
+        if len(self._recent_curves) >= RECENT_CURVES:
+            del self._recent_curves[next(iter(self._recent_curves))]
+        self._recent_curves[key] = out
+        return out
+
+    @staticmethod
+    def _interpolated(nodes: list[np.ndarray], values: np.ndarray, thetas: list[float]
+                      ) -> np.ndarray:
         out = values
         for axis_nodes, theta in zip(nodes, thetas, strict=True):
             idx, w = lagrange_weights(axis_nodes, theta)
