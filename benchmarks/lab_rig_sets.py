@@ -56,13 +56,14 @@ told apart by a 'Sample' column, and two empty columns at the end of every line.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 6 x 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 21 sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 26 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
-test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py).
+test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py; N38's,
+N39's, N40's, N42's and N43's for test_calibration_lab_s48.py).
 """
 
 from __future__ import annotations
@@ -376,7 +377,7 @@ def logger_stamp(kind: str, session_s: float) -> str:
 FORMATS = {"semicolon": (";", ","), "comma": (",", "."), "tab": ("\t", ",")}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
 # test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
-# test_calibration_lab_s45.py, _s46.py and _s47.py read, with the pump's log
+# test_calibration_lab_s45.py, _s46.py, _s47.py and _s48.py read, with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
              "gauge_zero_off_soft_batch": "N2-gauge60-D9",
@@ -392,7 +393,12 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "gauge_zero_volume_log": "N29-camera-gain+zero-volume-only-D18",
              "inlet_air_two_flows": "N25-inlet+air-two-flows-D17",
              "text_above_header": "N30-clean-preamble-D20",
-             "air_tilt_two_flows_rad": "N34-air+offset-two-flows-rad-D22"}
+             "air_tilt_two_flows_rad": "N34-air+offset-two-flows-rad-D22",
+             "timestamp_only": "N38-clean-timestamp-D23",
+             "pressure_unit_after_space": "N39-membrane0.9-kpa-D23",
+             "sample_column": "N40-leak-sample-column-D24",
+             "date_beside_time": "N42-gain+drift-date-D24",
+             "epoch_beside_time": "N43-relax+offset-epoch-D25"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -705,7 +711,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's 21 sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's 26 sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

@@ -200,6 +200,9 @@ def interpret(report: dict, left: dict) -> str:
     read = report["data"]["columns_read"]
     if read:
         s.append("Columns read: " + "; ".join(r["reading"] for r in read) + ".")
+    clocks = report["data"].get("clock_columns")
+    if clocks:
+        s.append("Timestamps: " + "; ".join(c["reading"] for c in clocks) + ".")
     out = report["left_out"]
     if out is not None and report["selected_effects"]:
         s.append(f"Of the {out['readings']} readings left out, the calibrated model answers "

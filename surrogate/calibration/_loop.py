@@ -381,6 +381,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                  "volume_ul_used_for": [obs.curve_ids[c] for c in np.unique(
                      obs.curve[obs.volume_measured])],
                  "columns_read": [r.as_dict() for r in obs.columns_read],
+                 "clock_columns": [dict(c) for c in obs.clock_columns],
                  "flow_rates_ul_s": sorted({float(q) for q in np.round(
                      obs.flow_ul_s[np.isfinite(obs.flow_ul_s)], 6)}),
                  "readings": h, "holds": traits.has_holds, "unloading": traits.has_unloading,
