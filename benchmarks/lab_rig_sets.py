@@ -56,14 +56,14 @@ told apart by a 'Sample' column, and two empty columns at the end of every line.
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
 The first solves what the cache lacks (27 + 6 x 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 26 sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 27 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
 test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py; N38's,
-N39's, N40's, N42's and N43's for test_calibration_lab_s48.py).
+N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py).
 """
 
 from __future__ import annotations
@@ -398,7 +398,8 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "pressure_unit_after_space": "N39-membrane0.9-kpa-D23",
              "sample_column": "N40-leak-sample-column-D24",
              "date_beside_time": "N42-gain+drift-date-D24",
-             "epoch_beside_time": "N43-relax+offset-epoch-D25"}
+             "epoch_beside_time": "N43-relax+offset-epoch-D25",
+             "first_loading_stiffer": "N44-mullins-first-loading-D23"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -711,7 +712,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's 26 sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's 27 sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

@@ -8,9 +8,11 @@ fixed before any calibration; tests/data/lab_gauge_noise_*.csv from its ``--test
   read (and said) where there is one (_timestamps.py);
 * a header with its unit after a space, ``Pressure kPa`` (N39), was a missing
   pressure_pa;
-* the specimens told apart by a ``Sample`` column (N40) were a missing curve_id.
+* the specimens told apart by a ``Sample`` column (N40) were a missing curve_id;
+* the first loading of each specimen stiffer than its later runs (Mullins softening,
+  N44, outside the catalogue) was called replicate scatter (_first_run.py).
 
-Each case reads a file only (no calibration): the loader is where each was refused.
+Each case but one (slow) reads a file only, no calibration.
 """
 
 from __future__ import annotations
@@ -161,3 +163,43 @@ def test_a_date_without_a_time_of_day_is_not_read():
     assert not obs.has_time
     assert obs.clock_columns[0]["reading"] == ("`Date` not read: a date without a time of "
                                                "day (no time within a curve)")
+
+
+def _first_run(name: str) -> dict | None:
+    from surrogate.calibration._first_run import first_run_against_later
+
+    obs = load_observations(DATA / f"lab_gauge_noise_{name}.csv")
+    return first_run_against_later(obs.curve, obs.specimen, obs.volume_ul, obs.direction,
+                                   obs.pressure_pa)
+
+
+def test_a_first_loading_stiffer_than_the_later_runs_is_said():
+    """N44 (outside the catalogue): each specimen loaded twice, its membrane softening
+    after the first loading (Mullins, m 0.25: the second loading 4-20 % below the first
+    at one volume; the bend at a volume unmoved). The first run reads the gauge higher at
+    19 of the 21 loading readings the runs share (median +10 %; a sign test, p 2e-4),
+    and the report says so and how to precondition. Before (2026-12-07): nothing
+    selected and "What remains is consistent with replicate scatter". Control: L1's
+    runs at two flow rates, clean, 8 of 15 higher."""
+    from surrogate.calibration._first_run import first_run_sentence
+
+    mullins = _first_run("first_loading_stiffer")
+    assert mullins["differs"] and (mullins["first_higher"], mullins["pairs"]) == (19, 21)
+    assert 0.08 < mullins["median_relative"] < 0.12
+    said = first_run_sentence(mullins)
+    assert said.startswith("Each specimen's first run reads the gauge higher than its "
+                           "later runs at the same injected volume (19 of 21")
+    assert "precondition each specimen" in said
+    clean = _first_run("flat_top_two_flows")
+    assert not clean["differs"] and first_run_sentence(clean) is None
+
+
+@pytest.mark.slow
+def test_the_report_says_the_first_loading_was_stiffer(tmp_path):
+    """N44's whole calibration (about 30 s): the sentence is in the interpretation and
+    the field in the report."""
+    assert main(["calibrate", str(DATA / "lab_gauge_noise_first_loading_stiffer.csv"),
+                 "--report", str(tmp_path / "r.json")]) == 0
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["first_run_against_later"]["differs"]
+    assert "Each specimen's first run reads the gauge higher" in report["interpretation"]

@@ -8,6 +8,7 @@ import math
 
 from surrogate.calibration._backing import PRESSURE_SCALE_SD
 from surrogate.calibration._exact_alike import sentence as exact_alike_sentence
+from surrogate.calibration._first_run import first_run_sentence
 from surrogate.calibration._gauge_check import gauge_gain_clause, gauge_sentence
 from surrogate.calibration._gauge_zero import sentence as gauge_zero_sentence
 from surrogate.calibration._held_reading import sentence as held_sentence
@@ -136,6 +137,9 @@ def interpret(report: dict, left: dict) -> str:
                  f"selected: {beyond['why_not'][0]}; with more specimens the data may show "
                  f"{added} acting too.")
     said = gauge_zero_sentence(report.get("gauge_at_rest"), report["selected_effects"])
+    if said:
+        s.append(said)
+    said = first_run_sentence(report.get("first_run_against_later"))
     if said:
         s.append(said)
     for c in report["not_identifiable"]:
