@@ -10,9 +10,12 @@ body), likewise; the forty-sixth session's fresh sets N22-N29 on three more (D17
 the reversed pair bending towards its membrane, a long body `pdms_1_10*1.6`, a thick
 membrane), likewise; the forty-seventh session's fresh sets N30-N37 on three more
 (D20-D22: Ecoflex on an Ecoflex membrane twice as stiff, bending towards it; a short
-thick PDMS 1:15 body; a deep chamber under a soft PDMS 1:10 body), likewise.
+thick PDMS 1:15 body; a deep chamber under a soft PDMS 1:10 body), likewise; the
+forty-eighth session's fresh sets N38-N45 on three more (D23-D25: a long wide shallow
+chamber, a stiffened Ecoflex body on Ecoflex, the reversed pair on a softened PDMS 1:15
+membrane), likewise.
 
-Ten designs inside the emulator's box and not in service/data/curves.h5 (the four
+Designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
 solves of the membrane thickness x 0.96, 1 and 1.045 (scatter), and each specimen has its
 own stiffness (both layers' mu x s, s ~ N(1, 0.07) within +-10 %: the pressure axis x s,
@@ -42,19 +45,25 @@ layout with a column per specimen, and 4 readings a curve on 2 specimens; for N3
 also a gauge whose calibration errs quadratically and a rim that leaks only above a
 pressure (both outside the catalogue), the gauge re-zeroed on each day of measuring,
 and a logger's lines of text above the header, a date column, a tab-separated export with
-decimal commas, the flow in ul/min with the time in min, and two flow rates in radians.
+decimal commas, the flow in ul/min with the time in min, and two flow rates in radians;
+for N38-N45 also Mullins softening after the first loading only (two runs a specimen)
+and an angle sensor that saturates at its stop (both outside the catalogue), and a
+logger's timestamp column (ISO 8601 as the only time axis, day/month/year with the time
+of day, epoch seconds), a header 'Pressure kPa' (the unit after a space), the specimens
+told apart by a 'Sample' column, and two empty columns at the end of every line.
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
 
-The first solves what the cache lacks (27 + 12 + 12 + 12 + 12 + 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 21 sets
+The first solves what the cache lacks (27 + 6 x 12 solves of 15-90 s; run alone) and
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 27 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
-test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py).
+test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py; N38's,
+N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py).
 """
 
 from __future__ import annotations
@@ -120,6 +129,16 @@ DESIGNS = {
                 body_material="pdms_1_15", membrane_material="ecoflex_00_30"),
     "D22": dict(L_mm=12.9, t_mm=0.57, T_mm=0.92, b_mm=1.4, h_mm=0.28,
                 body_material="pdms_1_10*0.7", membrane_material="ecoflex_00_30"),
+    # the forty-eighth session's designs, solved for the fresh sets N38-N45 only: a long
+    # wide shallow chamber under PDMS 1:10, a stiffened Ecoflex body on Ecoflex, the
+    # reversed pair on a softened PDMS 1:15 membrane, long (away from the short, thick
+    # corner where the emulator misses: D21)
+    "D23": dict(L_mm=13.4, t_mm=0.88, T_mm=1.22, b_mm=2.35, h_mm=0.12,
+                body_material="pdms_1_10", membrane_material="ecoflex_00_30"),
+    "D24": dict(L_mm=7.6, t_mm=0.52, T_mm=1.12, b_mm=2.2, h_mm=0.2,
+                body_material="ecoflex_00_30*1.5", membrane_material="ecoflex_00_30"),
+    "D25": dict(L_mm=16.8, t_mm=0.76, T_mm=1.48, b_mm=1.2, h_mm=0.21,
+                body_material="ecoflex_00_30", membrane_material="pdms_1_15*0.6"),
 }
 # a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
 VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12),
@@ -291,6 +310,47 @@ SETS = {
     # pressure relaxation of the silicone (g 0.2, tau 3 s), pressures in psi
     "N37-relax-psi-D20": ("D20", [None], 1.5, 8, 4, 5,
                           {"kind": "relaxation", "g": 0.2, "tau_s": 3.0}, 68, {"p_unit": "psi"}),
+    # the forty-eighth session's fresh sets, truths and seeds fixed before any
+    # calibration: new lab habits (a logger's timestamp column, ISO, day/month/year or
+    # epoch seconds; the pressure's unit after a space, 'Pressure kPa'; the specimens told
+    # apart by a 'Sample' column; semicolons, decimal commas and trailing empty columns)
+    # a clean set at lab realism: 5 readings loading, 2 held, 4 unloading, every 3 s; the
+    # logger's ISO timestamp the only time axis (no time column)
+    "N38-clean-timestamp-D23": ("D23", [None], 3.0, 5, 2, 4, {}, 71,
+                                {"stamp": "iso", "no_time": True}),
+    # a membrane batch 10 % softer (its FE solves); the pressure's header 'Pressure kPa'
+    "N39-membrane0.9-kpa-D23": ("D23", [None], 2.0, 7, 3, 4, {"kind": "membrane_x0.9"}, 72,
+                                {"fe_suffix": "_m0.9", "p_header": "space"}),
+    # a pinhole leak G 0.15 ul/s per kPa with a 12 s hold; the specimens told apart by a
+    # 'Sample' column (no curve_id)
+    "N40-leak-sample-column-D24": ("D24", [None], 2.0, 6, 6, 4,
+                                   {"kind": "leak", "G_ul_s_per_kpa": 0.15}, 73,
+                                   {"id_col": "Sample"}),
+    # a narrow inlet, 140 Pa per ul/s, a fast pump read every 0.5 s; German Excel's ';'
+    # and decimal commas with two empty columns at the end of every line
+    "N41-inlet-trailing-D25": ("D25", [None], 0.5, 8, 2, 6,
+                               {"kind": "inlet", "R_pa_per_ul_s": 140.0}, 74, {"trailing": 2}),
+    # the angle tool's scale 8 % short and the gauge's zero running away at +3 Pa/s; a
+    # 'Date' column, day/month/year and the time of day, beside the time column
+    "N42-gain+drift-date-D24": ("D24", [None], 2.0, 7, 3, 4,
+                                {"kind": "camera_gain+gauge_drift", "k": 0.92,
+                                 "pa_per_s": 3.0}, 75, {"stamp": "dmy"}),
+    # pressure relaxation (g 0.25, tau 5 s) and the mount tilted -2 deg; an epoch-seconds
+    # column beside the time column, comma-separated
+    "N43-relax+offset-epoch-D25": ("D25", [None], 1.5, 8, 4, 5,
+                                   {"kind": "relaxation+angle_offset", "g": 0.25,
+                                    "tau_s": 5.0, "deg": -2.0}, 76,
+                                   {"stamp": "epoch", "fmt": "comma"}),
+    # outside the catalogue: Mullins softening after the first loading only, each specimen
+    # loaded twice (runs 1 and 2): the pressure x (1 - m (1 - V / V_max so far)), V_max
+    # counted over both runs, so the first loading is the virgin curve and everything
+    # after it (its unloading, the second run) is softer; the shape at a volume unchanged
+    "N44-mullins-first-loading-D23": ("D23", [None, None], 2.0, 7, 3, 4,
+                                      {"kind": "mullins_first", "m": 0.25}, 77, {}),
+    # outside the catalogue: an angle sensor that saturates, reading no more than 60 deg
+    # of bend (its stop) while the actuator bends to 75 deg
+    "N45-angle-saturates-D25": ("D25", [None], 2.0, 7, 3, 4,
+                                {"kind": "angle_saturation", "max_deg": 60.0}, 78, {}),
 }
 # the pressure and time units a lab writes: unit -> (per Pa or per s, decimals)
 PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4),
@@ -298,11 +358,26 @@ PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.75729316
                   "mmHg": (1 / 133.322387415, 3)}
 TIME_UNITS = {"s": (1.0, 1), "ms": (1e3, 0), "min": (1 / 60, 4)}
 FLOW_UNITS = {"ul/s": (1.0, 2), "ul/min": (60.0, 1)}
+# a logger's timestamp column: kind -> its header; the session starts 2026-12-07 14:03:11
+STAMP_HEADERS = {"iso": "Timestamp", "dmy": "Date", "epoch": "Epoch (s)"}
+SESSION_START = 1796652191.0      # 2026-12-07T14:03:11 UTC in epoch seconds
+
+
+def logger_stamp(kind: str, session_s: float) -> str:
+    """A reading's time stamp as a logger writes it: ISO 8601, day/month/year and the time
+    of day (to the second), or epoch seconds (to 0.1 s)."""
+    import datetime as dt
+    when = dt.datetime.fromtimestamp(SESSION_START + session_s, dt.UTC)
+    if kind == "epoch":
+        return f"{SESSION_START + session_s:.1f}"
+    return when.strftime("%Y-%m-%dT%H:%M:%S" if kind == "iso" else "%d/%m/%Y %H:%M:%S")
+
+
 # the field separator and the decimal mark: German Excel's, English, a tab-separated export
 FORMATS = {"semicolon": (";", ","), "comma": (",", "."), "tab": ("\t", ",")}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
 # test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
-# test_calibration_lab_s45.py, _s46.py and _s47.py read, with the pump's log
+# test_calibration_lab_s45.py, _s46.py, _s47.py and _s48.py read, with the pump's log
 TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-tilt40-soft-D2",
              "leak_in_a_hold": "L6-leak-D6", "gauge_zero_off": "L9-gauge60-D1",
              "gauge_zero_off_soft_batch": "N2-gauge60-D9",
@@ -318,7 +393,13 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "gauge_zero_volume_log": "N29-camera-gain+zero-volume-only-D18",
              "inlet_air_two_flows": "N25-inlet+air-two-flows-D17",
              "text_above_header": "N30-clean-preamble-D20",
-             "air_tilt_two_flows_rad": "N34-air+offset-two-flows-rad-D22"}
+             "air_tilt_two_flows_rad": "N34-air+offset-two-flows-rad-D22",
+             "timestamp_only": "N38-clean-timestamp-D23",
+             "pressure_unit_after_space": "N39-membrane0.9-kpa-D23",
+             "sample_column": "N40-leak-sample-column-D24",
+             "date_beside_time": "N42-gain+drift-date-D24",
+             "epoch_beside_time": "N43-relax+offset-epoch-D25",
+             "first_loading_stiffer": "N44-mullins-first-loading-D23"}
 
 
 def solve_missing(cache: Path) -> None:
@@ -413,6 +494,9 @@ def chamber(c: dict, s: float, vp: np.ndarray, effect: dict) -> tuple[np.ndarray
     p = p_of(vch)
     if "mullins" in kinds:                       # softer below the volume held before
         p = p * (1 - effect["m"] * (1 - vch / np.maximum(np.maximum.accumulate(vch), 1e-12)))
+    if "mullins_first" in kinds:                 # softer below the most held, runs before too
+        held = np.maximum(np.maximum.accumulate(vch), effect.get("v_before", 0.0))
+        p = p * (1 - effect["m"] * (1 - vch / np.maximum(held, 1e-12)))
     if "relaxation" in kinds:                    # a standard linear solid at a held volume
         y = np.zeros_like(p)
         for i in range(1, p.size):
@@ -457,6 +541,8 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
     if "tilted_camera" in kinds:                 # the bending plane seen at phi
         phi = math.radians(effect["phi_deg"])
         a = np.degrees(np.arctan2(np.sin(np.radians(a)) * math.cos(phi), np.cos(np.radians(a))))
+    if "angle_saturation" in kinds:              # the sensor at its stop
+        a = np.clip(a, -effect["max_deg"], effect["max_deg"])
     if "gauge_offset" in kinds:
         p = p + effect["pa"]
     if "gauge_quadratic" in kinds:               # the gauge's calibration curved
@@ -487,7 +573,7 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     program = kw.get("program")
     n_in = sum(k for way, k in program if way == 1) if program else n_load
     t_curve = dt * (sum(k for _, k in program) if program else n_load + n_hold + n_unload)
-    rows = []
+    rows, clock_s, n_curves = [], [], 0     # clock_s: each reading's second of the session
     for run, q in enumerate(flows, 1):
         for k, sp in enumerate(SPECIMENS[:kw.get("specimens", len(SPECIMENS))]):
             qq = v_top / (n_in * dt) if q is None else q
@@ -497,10 +583,14 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
                 effect.get("kind") == "session_drift") else effect
             if "zeros_pa" in effect:             # the day's zero: one specimen a day
                 ef = dict(ef, zero_pa=effect["zeros_pa"][k])
+            if effect.get("kind") == "mullins_first" and run > 1:   # stretched before
+                ef = dict(ef, v_before=v_top)
             r = readings(fe_curve(cache, f"{d}{sp}{suffix}"), stiff[sp], qq, dt,
                          (n_load, n_hold, n_unload), rng, ef)
             rows += [(f"S{k + 1}", run, r["t"][i] * t_per_s, qq, r["p"][i] * p_per_pa,
                       r["a"][i], STATE[r["state"][i]], r["v"][i]) for i in range(r["t"].size)]
+            clock_s += [n_curves * (t_curve + 30.0) + x for x in r["t"]]   # 30 s apart
+            n_curves += 1
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{file_name or name}.csv"
     if any(h in kw for h in HABITS):
@@ -510,12 +600,21 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     q_per_ul_s, q_nd = FLOW_UNITS[q_unit]
     geometry = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")
     dated = ["Date"] if kw.get("dates") else []
+    stamp = kw.get("stamp")
+    dated += [STAMP_HEADERS[stamp]] if stamp else []
 
-    def day(cid: str) -> list[str]:               # specimen S<k> measured on day k
+    def day(cid: str, i: int = 0) -> list[str]:   # specimen S<k> measured on day k
+        if stamp:
+            return [logger_stamp(stamp, clock_s[i])]
         return [f"2026-12-0{cid[1:]}"] if dated else []
-    header = ["curve_id", "run", *dated, *geometry, "body_material", "membrane_material",
-              f"Time ({t_unit})", f"Flow ({q_unit})", f"Pressure ({p_unit})",
-              "Angle (deg)"] + (["pump"] if with_pump else [])
+    timed = not kw.get("no_time")
+    p_header = f"Pressure {p_unit}" if kw.get("p_header") == "space" else \
+        f"Pressure ({p_unit})"
+    trailing = [""] * kw.get("trailing", 0)
+    header = [kw.get("id_col", "curve_id"), "run", *dated, *geometry, "body_material",
+              "membrane_material", *([f"Time ({t_unit})"] if timed else []),
+              f"Flow ({q_unit})", p_header, "Angle (deg)"] + (
+        ["pump"] if with_pump else []) + trailing
 
     def num(x: float, nd: int) -> str:
         return f"{x:.{nd}f}".replace(".", dec)
@@ -527,17 +626,20 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
                      "specimens\n")
         w = csv.writer(fh, delimiter=sep)
         w.writerow(header)
-        for cid, run, t, q, p_read, a, state, _ in rows:
-            w.writerow([cid, run, *day(cid), *(num(nominal[g], 2) for g in geometry),
-                        nominal["body_material"], nominal["membrane_material"], num(t, t_nd),
-                        num(q * q_per_ul_s, q_nd), num(p_read, p_nd), num(a, 1)]
-                       + ([state] if with_pump else []))
+        for i, (cid, run, t, q, p_read, a, state, _) in enumerate(rows):
+            w.writerow([cid, run, *day(cid, i), *(num(nominal[g], 2) for g in geometry),
+                        nominal["body_material"], nominal["membrane_material"],
+                        *([num(t, t_nd)] if timed else []), num(q * q_per_ul_s, q_nd),
+                        num(p_read, p_nd), num(a, 1)] + ([state] if with_pump else [])
+                       + trailing)
     if not with_pump:      # the API's body: the same rows, numbers as JSON numbers
-        body = [dict(zip(header, [cid, run, *day(cid), *(nominal[g] for g in geometry),
-                                  nominal["body_material"], nominal["membrane_material"],
-                                  round(t, t_nd), round(q * q_per_ul_s, q_nd),
-                                  round(p_read, p_nd), round(a, 1)],
-                         strict=True)) for cid, run, t, q, p_read, a, _, _ in rows]
+        keys = header[:len(header) - len(trailing)]
+        body = [dict(zip(keys, [cid, run, *day(cid, i), *(nominal[g] for g in geometry),
+                                nominal["body_material"], nominal["membrane_material"],
+                                *([round(t, t_nd)] if timed else []),
+                                round(q * q_per_ul_s, q_nd), round(p_read, p_nd),
+                                round(a, 1)], strict=True))
+                for i, (cid, run, t, q, p_read, a, _, _) in enumerate(rows)]
         (out / f"{name}.json").write_text(json.dumps({"rows": body}))
     return path
 
@@ -610,7 +712,7 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's 21 sets")
+    ap.add_argument("--test-data", action="store_true", help="write tests/data's 27 sets")
     args = ap.parse_args()
     solve_missing(args.cache)
     if args.test_data:

@@ -53,6 +53,7 @@ from surrogate.calibration._measured_volume import (
     written_step_ul,
 )
 from surrogate.calibration._pump_clock import clock_warning
+from surrogate.calibration._timestamps import clock_columns_read
 from surrogate.json_repeats import loads_with_repeats
 from surrogate.measured_cell import CELL_WORDS, cell_problem
 from surrogate.volume_control import MAX_FLOW_UL_S, MIN_FLOW_UL_S
@@ -75,6 +76,10 @@ PUMP_STATES = {"load": 1.0, "hold": 0.0, "unload": -1.0}
 #: header named by any of ``RUN_NAMES`` (any case) is this column.
 RUN_COLUMN = "run"
 RUN_NAMES = ("run", "cycle", "repeat", "repetition", "trial")
+#: a header naming the specimen (any case, '_' a space), read as curve_id when the file
+#: has no curve_id: a lab's 'Sample' or 'Specimen' column (until 2026-12-07 "curve_id:
+#: required column is missing": benchmarks/lab_rig_sets.py N40)
+CURVE_ID_NAMES = ("specimen", "sample", "specimen id", "sample id")
 DEFAULTS = {"T_mm": 1.0, "b_mm": 1.8, "h_mm": 0.15}
 MIN_POINTS_PER_CURVE = 4
 MAX_ROWS = 200_000
@@ -149,6 +154,9 @@ class Observations:
     #: the runs of one specimen, the data's only one, taken as replicates of each other
     #: (``as_replicates``): each run is then a unit of its own
     runs_as_replicates: bool = False
+    #: a logger's timestamp columns and how each was read (_timestamps.py): as time_s
+    #: (no time column), or not (a time column, or a date without a time of day)
+    clock_columns: tuple[dict[str, str | None], ...] = ()
 
     def __post_init__(self) -> None:
         if self.specimen is None:
@@ -311,7 +319,7 @@ class Observations:
             self.switch_after[keep], self.switch_at[keep], self.switch_names,
             self.pump_logged, self.columns_read, specimen.ravel(),
             self.measured_volume_ul[keep], self.volume_step_ul, self.volume_measured[keep],
-            self.runs_as_replicates)
+            self.runs_as_replicates, self.clock_columns)
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
@@ -396,7 +404,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
     headers = list(dict.fromkeys(k for r in rows if isinstance(r, dict) for k in r))
     try:
-        readings = read_headers(headers, tuple(RANGES))
+        readings = read_headers(headers, tuple(RANGES)) | specimen_reading(headers)
     except DataError as exc:     # a units row, a clock for a unit: said so (_layouts.py)
         raise layout_error(exc, rows[0] if isinstance(rows[0], dict) else None) from None
     converted = {r.column: r for r in readings.values() if r.header != r.column}
@@ -405,6 +413,8 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         rows = [{rename.get(k, k): v for k, v in r.items()} if isinstance(r, dict) else r
                 for r in rows]
     rows = _run_named(rows, headers)
+    time_header = converted["time_s"].header if "time_s" in converted else "time_s"
+    rows, clocks = clock_columns_read(rows, time_header)
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
     known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN, RUN_COLUMN}
     for name in REQUIRED:
@@ -476,6 +486,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         obs = _build(parsed, present, tuple(warnings), tuple(converted.values()), step)
     except DataError as exc:     # a measured volume's run, named as the file names it
         raise _as_written(exc, converted) from None
+    obs = replace(obs, clock_columns=clocks) if clocks else obs
     if strict and len(obs.warnings) > len(warnings):   # the pump history's check
         raise DataError("volume_ul", obs.warnings[len(warnings)].removeprefix("volume_ul: ")
                         + " (refused: strict)", None, "data without warnings (drop --strict "
@@ -496,6 +507,20 @@ def _as_written(exc: DataError, converted: dict[str, Reading]) -> DataError:
         return exc
     return DataError(reading.header, f"{exc.detail.removeprefix(f'row {exc.row}: ')} "
                      f"({reading.words()})", exc.row, exc.allowed)
+
+
+def specimen_reading(headers: list) -> dict[str, Reading]:
+    """{header: Reading as curve_id} for a header of ``CURVE_ID_NAMES`` ('Sample') in a
+    file without curve_id; empty otherwise. Two such headers are a DataError naming
+    both."""
+    if "curve_id" in headers:
+        return {}
+    named = [h for h in headers if isinstance(h, str)
+             and " ".join(h.replace("_", " ").lower().split()) in CURVE_ID_NAMES]
+    if len(named) > 1:
+        raise DataError(named[1], f"{named[0]!r} and {named[1]!r} both name the specimen",
+                        None, "one column naming the specimen (curve_id)")
+    return {named[0]: Reading(named[0], "curve_id", 1.0)} if named else {}
 
 
 def _run_named(rows: list, headers: list) -> list:
@@ -781,6 +806,7 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     except DataError as exc:     # a units row, a clock for a unit: said so (_layouts.py)
         first = next(csv.reader(lines[1:2], delimiter=sep), [])
         raise layout_error(exc, dict(zip(names, (c.strip() for c in first)))) from None
+    readings |= specimen_reading(names)             # 'Sample' is curve_id
     for name in REQUIRED:
         if name not in names and name not in {r.column for r in readings.values()}:
             below = header_below_text([[ln] for ln in lines[1:]], REQUIRED, tuple(RANGES))

@@ -1,14 +1,15 @@
 """A lab's column headers with units (``Pressure (kPa)``, ``Angle [°]``, ``p / psi``,
 ``t [min]``, ``Flow (ml/min)``) read as the canonical columns (``pressure_pa``, ...).
 
-A header is a quantity and a unit: ``name (unit)``, ``name [unit]``, ``name / unit`` or
-``name_unit``. The quantity is one of the canonical numeric columns (``_data.RANGES``),
-named by its own stem (``pressure`` of ``pressure_pa``) or a synonym (``QUANTITY_NAMES``);
-the unit is one of ``UNITS`` of the same dimension. The canonical column's own unit is
-read off its name (``pa`` of ``pressure_pa``, ``ul_s`` = ul/s of ``flow_ul_s``), so the
-factor is the ratio of the two units' factors: ``Pressure (kPa)`` is pressure_pa x 1000.
-The values are multiplied once, when the rows are read (``_data.observations_from_rows``),
-and every check after that (ranges, kPa-looking pressures) sees the canonical unit.
+A header is a quantity and a unit: ``name (unit)``, ``name [unit]``, ``name / unit``,
+``name_unit`` or ``name unit``. The quantity is one of the canonical numeric columns
+(``_data.RANGES``), named by its own stem (``pressure`` of ``pressure_pa``) or a synonym
+(``QUANTITY_NAMES``); the unit is one of ``UNITS`` of the same dimension. The canonical
+column's own unit is read off its name (``pa`` of ``pressure_pa``, ``ul_s`` = ul/s of
+``flow_ul_s``), so the factor is the ratio of the two units' factors: ``Pressure (kPa)``
+is pressure_pa x 1000. The values are multiplied once, when the rows are read
+(``_data.observations_from_rows``), and every check after that (ranges, kPa-looking
+pressures) sees the canonical unit.
 
 Refused, naming the header: a known quantity in an unknown unit (``Angle (grad)``: the
 gradian or the German "Grad" = degree? not guessed), a unit of another dimension
@@ -173,7 +174,21 @@ def read_header(header: str, numeric: tuple[str, ...]) -> Reading | None:
             raise DataError(header, f"read as {column}, but {said} {dimension}", None,
                             f"{header_form(column)} with {allowed_units(dimension)}")
         return Reading(header, column, unit[1] / own)
-    return None
+    return _unit_after_space(header, names)
+
+
+def _unit_after_space(header: str, names: dict[str, str]) -> Reading | None:
+    """A header whose last word is its unit, ``Pressure kPa``, ``Flow ul/s`` (a logger's
+    habit; until 2026-12-07 "pressure_pa: required column is missing":
+    benchmarks/lab_rig_sets.py N39); None unless the rest names a quantity and the word
+    is a unit of its dimension (``Pressure gauge`` stays a column of no quantity)."""
+    name, _, unit_text = header.strip().rpartition(" ")
+    column = names.get(_key(name)) if name else None
+    unit = unit_of(unit_text) if column else None
+    if column is None or unit is None:
+        return None
+    _, dimension, own = canonical_unit(column)  # type: ignore[misc]
+    return Reading(header, column, unit[1] / own) if unit[0] == dimension else None
 
 
 def allowed_units(dimension: str) -> str:

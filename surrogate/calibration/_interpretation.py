@@ -8,6 +8,7 @@ import math
 
 from surrogate.calibration._backing import PRESSURE_SCALE_SD
 from surrogate.calibration._exact_alike import sentence as exact_alike_sentence
+from surrogate.calibration._first_run import first_run_sentence
 from surrogate.calibration._gauge_check import gauge_gain_clause, gauge_sentence
 from surrogate.calibration._gauge_zero import sentence as gauge_zero_sentence
 from surrogate.calibration._held_reading import sentence as held_sentence
@@ -138,6 +139,9 @@ def interpret(report: dict, left: dict) -> str:
     said = gauge_zero_sentence(report.get("gauge_at_rest"), report["selected_effects"])
     if said:
         s.append(said)
+    said = first_run_sentence(report.get("first_run_against_later"))
+    if said:
+        s.append(said)
     for c in report["not_identifiable"]:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
@@ -200,6 +204,9 @@ def interpret(report: dict, left: dict) -> str:
     read = report["data"]["columns_read"]
     if read:
         s.append("Columns read: " + "; ".join(r["reading"] for r in read) + ".")
+    clocks = report["data"].get("clock_columns")
+    if clocks:
+        s.append("Timestamps: " + "; ".join(c["reading"] for c in clocks) + ".")
     out = report["left_out"]
     if out is not None and report["selected_effects"]:
         s.append(f"Of the {out['readings']} readings left out, the calibrated model answers "

@@ -24,6 +24,7 @@ from surrogate.calibration._backing import with_baseline_uncertainty
 from surrogate.calibration._data import Observations
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._exact_alike import exact_alikes
+from surrogate.calibration._first_run import first_run_against_later
 from surrogate.calibration._gauge_check import gauge_left, gauge_worse, pressure_rms_pa, reads_gauge
 from surrogate.calibration._gauge_zero import gauge_at_rest, wants_zeroed_pass, zeroed_summary
 from surrogate.calibration._held_reading import held_instead, reads_better, wants_held_reading
@@ -352,6 +353,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     rest = (gauge_at_rest(obs.curve, obs.volume_ul, obs.pressure_pa,
                           after.model.gauge_pressures(after.x))
             if channel["used"] and "hydraulic_resistance" not in chosen else None)
+    runs = (first_run_against_later(obs.curve, obs.specimen, obs.volume_ul, obs.direction,
+                                    obs.pressure_pa) if channel["used"] else None)
     if not zeroed and wants_zeroed_pass(rest, chosen):
         again = calibrate(replace(all_obs, pressure_pa=all_obs.pressure_pa - rest["mean_pa"]),
                           baseline, folds, progress, cancel, zeroed=True)
@@ -381,6 +384,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                  "volume_ul_used_for": [obs.curve_ids[c] for c in np.unique(
                      obs.curve[obs.volume_measured])],
                  "columns_read": [r.as_dict() for r in obs.columns_read],
+                 "clock_columns": [dict(c) for c in obs.clock_columns],
                  "flow_rates_ul_s": sorted({float(q) for q in np.round(
                      obs.flow_ul_s[np.isfinite(obs.flow_ul_s)], 6)}),
                  "readings": h, "holds": traits.has_holds, "unloading": traits.has_unloading,
@@ -398,6 +402,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "rmse_pressure_before_pa": pressure_rms_pa(get_xv(()), channel),
         "rmse_pressure_after_pa": pressure_rms_pa(get_xv(chosen), channel),
         "gauge_at_rest": rest,
+        "first_run_against_later": runs,
         "gauge_left_after": gauge_left(pressure_rms_pa(get_xv(chosen), channel), channel,
                                        left["plain_allowance"]),
         "cross_validation": {"method": _cv_method(obs), "folds": k,
