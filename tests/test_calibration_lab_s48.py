@@ -203,3 +203,6 @@ def test_the_report_says_the_first_loading_was_stiffer(tmp_path):
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["first_run_against_later"]["differs"]
     assert "Each specimen's first run reads the gauge higher" in report["interpretation"]
+    # the angle's residual said as such, not "what remains" beside the gauge's finding
+    assert "What remains is consistent with replicate scatter" not in report["interpretation"]
+    assert "The angle's residual is consistent with replicate scatter" in report["interpretation"]

@@ -211,3 +211,18 @@ def test_a_target_pressure_has_one_limit_on_the_cli_and_over_http(tmp_path):
     problem = answer.json()
     assert answer.status_code == 422, answer.text
     assert "pressure_pa" in problem["detail"] and "20000" in problem["detail"], problem
+
+
+def test_a_header_repeated_in_the_file_is_said_to_be_one():
+    """Two exports joined (`cat a.csv b.csv`) repeat the header mid-file: it was refused
+    as "unknown material 'body_material'" at that row, which sends a lab looking at its
+    materials. Said as what it is now, with the row."""
+    from solver.errors import InputError
+    from surrogate.calibration._data import read_csv_rows
+
+    header = "curve_id,L_mm,t_mm,body_material,membrane_material,pressure_pa,angle_deg\n"
+    row = "s1,7.1,0.5,pdms_1_10,ecoflex_00_30,500,5\n"
+    with pytest.raises(InputError) as caught:
+        read_csv_rows(header + row + row + header + row)
+    assert "row 3" in str(caught.value) and "repeats the header" in str(caught.value)
+    assert "unknown material" not in str(caught.value)

@@ -830,6 +830,10 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
         if None in raw:
             raise DataError("row", "more values than columns", i,
                             "one value per column of the header")
+        if [str(v).strip() for v in raw.values()] == names and not unnamed:
+            # two exports joined (`cat a.csv b.csv`): said so, not "unknown material"
+            raise DataError("row", "repeats the header line (two files joined?)", i,
+                            "one header line at the top: delete the repeated ones")
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
     for name in unnamed.values():
         filled = next((j for j, r in enumerate(out, 1) if r.get(name)), None)

@@ -139,9 +139,9 @@ def interpret(report: dict, left: dict) -> str:
     said = gauge_zero_sentence(report.get("gauge_at_rest"), report["selected_effects"])
     if said:
         s.append(said)
-    said = first_run_sentence(report.get("first_run_against_later"))
-    if said:
-        s.append(said)
+    runs_differ = first_run_sentence(report.get("first_run_against_later"))
+    if runs_differ:
+        s.append(runs_differ)
     for c in report["not_identifiable"]:
         if c["effect"] == "viscoelastic_creep" and report["data"]["has_time_s"]:
             s.append(f"Creep cannot be identified from these data ({c['reason']}): "
@@ -190,7 +190,7 @@ def interpret(report: dict, left: dict) -> str:
             s.append("What remains is consistent with replicate scatter and the baseline's "
                      f"own uncertainty at the fitted design ({at_fit:.2f} deg RMS): an FE "
                      "solve of that design (`balloon solve`) would sharpen the size.")
-        elif gauge_sentence(report["gauge_left_after"]) is None:
+        elif gauge_sentence(report["gauge_left_after"]) is None and not runs_differ:
             s.append("What remains is consistent with replicate scatter (no structure along "
                      "the curves).")
         else:
