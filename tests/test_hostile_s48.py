@@ -37,7 +37,8 @@ UNHELD = "does not fit a 64-bit float (sizes about 5e-324 to 1.8e308, or 0): it 
      f"--spring-k-n-per-m: 1e-400 {UNHELD} 0 (allowed: 0 to 1e+06 N/m)"),
     # ranges without 0: a later check said "got 1e-400"; the parser's words now, one rule
     (["inverse", "--angle-deg", "30", "--pressure-pa", "-1e-400"],
-     f"--pressure-pa: -1e-400 {UNHELD} 0 (allowed: 0 < pressure <= 20000 Pa)"),
+     f"--pressure-pa: -1e-400 {UNHELD} 0 (allowed: 0 < pressure <= 20000 Pa, the FE's "
+     "pressure stop (a budget: <= 1e+06 Pa))"),
     (["fit", "--db", "x.h5", "-o", "y.json", "--level", "1e-400"],
      f"--level: 1e-400 {UNHELD} 0 (allowed: 0.5 <= level < 1)"),
 ])
@@ -193,8 +194,9 @@ def test_a_problem_lists_the_first_errors_and_counts_the_rest(tmp_path, route, b
 
 def test_a_target_pressure_has_one_limit_on_the_cli_and_over_http(tmp_path):
     """A design search's target pressure was taken up to 1e6 Pa on the command line and
-    up to 20000 Pa (the default FE's pressure stop) over HTTP: one fact, two limits. Both
-    now refuse 30000 Pa naming the FE's stop."""
+    up to 20000 Pa (the default FE's pressure stop) over HTTP: one fact, two limits. A
+    pressure a target is met at is now at most the FE's stop on both (30000 Pa refused
+    naming it), a budget up to 1e6 Pa on both (any design within it)."""
     from fastapi.testclient import TestClient
 
     from service.app import create_app
@@ -207,10 +209,18 @@ def test_a_target_pressure_has_one_limit_on_the_cli_and_over_http(tmp_path):
     app = create_app(settings_for(tmp_path), load_surrogate=False)
     with TestClient(app) as client:
         answer = client.post("/v1/inverse", json={"target": {"angle_deg": 45,
-                                                             "pressure_pa": 30000}})
+                                                             "pressure_pa": 30000},
+                                                  "model": "paper"})
+        budget = client.post("/v1/inverse", json={"target": {
+            "kind": "pressure_budget", "angle_deg": 45, "pressure_pa": 30000},
+            "model": "paper"})
     problem = answer.json()
     assert answer.status_code == 422, answer.text
     assert "pressure_pa" in problem["detail"] and "20000" in problem["detail"], problem
+    assert budget.status_code == 200, budget.text
+    code, out, err, escaped = run(["inverse", "--kind", "pressure_budget", "--pressure-pa",
+                                   "30000", "--angle-deg", "45", "--model", "paper"])
+    assert code == 0 and escaped is None, err
 
 
 def test_a_header_repeated_in_the_file_is_said_to_be_one():

@@ -38,7 +38,7 @@ from service.commands.predict import (
 )
 from service.pump import MAX_ANGLE_DEG
 from solver.errors import InputError
-from surrogate.predictor import FE_VOLUME_STOP_UL
+from surrogate.predictor import FE_PRESSURE_STOP_PA, FE_VOLUME_STOP_UL
 from surrogate.search.design_search import N_RESULTS_MAX
 from surrogate.search.design_target import DEFAULT_KIND, KINDS, MAX_TARGET, OBJECTIVES
 from surrogate.volume_control import MAX_TIME_S
@@ -115,7 +115,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    f"0 < |force| <= {MAX_TARGET['force_mn']:g} mN")
     allowed_action(parser.add_argument("--pressure-pa", type=float,
                                        help="target pressure or budget, Pa"),
-                   f"0 < pressure <= {MAX_TARGET['pressure_pa']:g} Pa")
+                   f"0 < pressure <= {FE_PRESSURE_STOP_PA:g} Pa, the FE's pressure stop (a "
+                   f"budget: <= {MAX_TARGET['pressure_pa']:g} Pa)")
     allowed_action(parser.add_argument("--volume-ul", type=float, help="a pump's target: "
                                        "injected volume or budget, ul (0 < V <= "
                                        f"{FE_VOLUME_STOP_UL:g}, the FE's volume stop)"),

@@ -43,8 +43,9 @@ BUDGET_KINDS = ("pressure_budget", "volume_budget", "time_budget")
 #: the target a search answers when none is named (HTTP and CLI alike)
 DEFAULT_KIND = "angle_at_pressure"
 #: the largest target magnitudes taken: |angle| in deg, |force| in mN, a pressure in Pa
-#: (the default FE's pressure stop: no design is answered past it, over HTTP or the CLI)
-MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4, "pressure_pa": FE_PRESSURE_STOP_PA}
+#: (a pressure budget; a pressure a target is met at exactly is at most the default FE's
+#: pressure stop, FE_PRESSURE_STOP_PA: no design is answered past it)
+MAX_TARGET = {"angle_deg": 360.0, "force_mn": 1e4, "pressure_pa": 1e6}
 OBJECTIVES = ("pressure", "volume", "margin", "compact", "certainty")
 DEFAULT_OBJECTIVE = {"angle_at_pressure": "certainty", "pressure_budget": "pressure",
                      "force_at_pressure": "certainty", "angle_at_volume": "certainty",
@@ -98,11 +99,12 @@ class DesignTarget:
                                  + ("none" if self.volume_ul is None else repr(self.volume_ul)),
                                  f"0 < volume_ul <= {FE_VOLUME_STOP_UL:g} ul")
         elif not finite_number(self.pressure_pa) or not (
-                _positive(self.pressure_pa) and self.pressure_pa <= MAX_TARGET["pressure_pa"]):
-            raise InputError("pressure_pa", f"the {self.kind} target needs a pressure within "
-                             "the FE's pressure stop, got "
+                _positive(self.pressure_pa) and self.pressure_pa <= self.max_pressure_pa):
+            within = "" if self.kind in BUDGET_KINDS else " within the FE's pressure stop"
+            raise InputError("pressure_pa", f"the {self.kind} target needs a pressure{within}"
+                             ", got "
                              + ("none" if self.pressure_pa is None else repr(self.pressure_pa)),
-                             f"0 < pressure_pa <= {MAX_TARGET['pressure_pa']:g} Pa")
+                             f"0 < pressure_pa <= {self.max_pressure_pa:g} Pa")
         name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
         value = getattr(self, name)
         if value is None or not finite_number(value) or not (_positive(abs(value))
@@ -156,6 +158,12 @@ class DesignTarget:
     def by_volume(self) -> bool:
         """A syringe pump's target: met at (or within) an injected volume."""
         return self.kind in VOLUME_KINDS
+
+    @property
+    def max_pressure_pa(self) -> float:
+        """The largest pressure the target takes, Pa: a budget any (``MAX_TARGET``), a
+        pressure the target is met at exactly the default FE's pressure stop."""
+        return MAX_TARGET["pressure_pa"] if self.kind in BUDGET_KINDS else FE_PRESSURE_STOP_PA
 
     @property
     def budget(self) -> bool:
