@@ -72,9 +72,7 @@ def interpret(report: dict, left: dict) -> str:
     alike = [a for a in report.get("indistinguishable") or [] if not a.get("exact")]
     if alike:
         sets = "; ".join(
-            " and ".join(a["effects"]) + " (" + ", ".join(
-                f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
-                for n, p in a["params"].items()) + f", cross-validated "
+            " and ".join(a["effects"]) + " (" + _sizes(a["params"]) + ", cross-validated "
             f"{a['rmse_cv_deg']:.2f} deg" + ("" if a["backed"] else ", not backed by the "
                                              "baseline") + ")" for a in alike)
         chosen = " and ".join(report["selected_effects"])
@@ -88,16 +86,16 @@ def interpret(report: dict, left: dict) -> str:
     u = report.get("unbacked_better")
     near = report.get("closest_rejected")
     if near is not None and u is None:
-        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
-                          for n, p in near["params"].items())
+        sizes = _sizes(near["params"])
         s.append(f"The closest plausible explanation is {' and '.join(near['effects'])} "
                  f"({sizes}; cross-validated {near['rmse_cv_deg']:.2f} deg), not selected: "
                  + "; ".join(near["why_not"]) + ".")
     for c in report["candidates"]:
         if c.get("stands_in_for") and c.get("stands_in_because") == "replicate scatter":
             s.append(f"{' and '.join(c['effects'])} fits with plausible, significant values, "
-                     f"but {' and '.join(c['stands_in_for'])} fits better while its size is "
-                     "within what replicate scatter explains: not selected, for it would "
+                     f"but {_sized(report['candidates'], c['stands_in_for'])} fits better "
+                     "while its size is within what replicate scatter explains: not "
+                     "selected, for it would "
                      "stand in for an explanation these data cannot size. Measure more "
                      "specimens, or measure directly: " + "; ".join(
                          EFFECTS[e].measure_directly for e in [*c["effects"],
@@ -111,8 +109,7 @@ def interpret(report: dict, left: dict) -> str:
                      "baseline's own uncertainty at its fitted design excuses, while "
                      f"{' and '.join(c['outdone_by'])} fits better: not selected.")
     if u is not None:
-        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
-                          for n, p in u["params"].items())
+        sizes = _sizes(u["params"])
         s.append(f"{' and '.join(u['effects'])} fits the data best ({sizes}; cross-validated "
                  f"error {u['rmse_cv_deg']:.2f} deg"
                  + (f", better than {' and '.join(u['instead_of'])}" if u["instead_of"]
@@ -128,8 +125,7 @@ def interpret(report: dict, left: dict) -> str:
                  "would decide.")
     beyond = report.get("wants_specimens_beyond")
     if beyond is not None:
-        sizes = ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g} {p['unit']}"
-                          for n, p in beyond["params"].items())
+        sizes = _sizes(beyond["params"])
         added = " and ".join(beyond["added"])
         s.append(f"{' and '.join(beyond['effects'])} fits better ({sizes}; BIC "
                  f"{-beyond['delta_bic_vs_selected']:.0f} lower, cross-validated "
@@ -213,6 +209,24 @@ def interpret(report: dict, left: dict) -> str:
                  + (f"{out['answered']}, to {out['rmse_deg']:.2f} deg RMS (readings its fit "
                     "never saw)." if out["answered"] else "none either."))
     return " ".join(s)
+
+
+def _sized(candidates: list[dict], effects: list[str]) -> str:
+    """``effects`` named with their fitted sizes, from their own candidate's fit when the
+    report holds it ("membrane_stiffness (membrane_mu_scale = 1.05 +/- 0.03)")."""
+    fit = next((c for c in candidates if list(c["effects"]) == list(effects)
+                and c.get("params")), None)
+    names = " and ".join(effects)
+    if fit is None:
+        return names
+    return f"{names} ({_sizes(fit['params'])})"
+
+
+def _sizes(params: dict) -> str:
+    """Fitted parameters in words, with their units (none for a ratio, unit "-"):
+    "membrane_mu_scale = 1.05 +/- 0.03, ..."."""
+    return ", ".join(f"{n} = {p['value']:.3g} +/- {p['sd']:.2g}"
+                     + ("" if p["unit"] == "-" else f" {p['unit']}") for n, p in params.items())
 
 
 def _wants_specimens(near: dict | None, left: dict, noise: float | None) -> bool:
