@@ -105,7 +105,7 @@ def test_a_better_fit_within_replicate_scatter_blocks_the_set_that_would_stand_i
     assert ("angle_offset fits with plausible, significant values, but "
             in report["interpretation"])
     # the better fit with its size (the forty-eighth session: it was named without one)
-    assert re.search(r"values, but [\w ]+ \(\w+ = -?[\d.]+(e[-+]?\d+)? \+/- [\d.e+-]+ .*\) "
+    assert re.search(r"values, but [\w ]+ \(\w+ = -?[\d.]+(e[-+]?\d+)? \+/- [\d.e+-]+[^)]*\) "
                      r"fits better while its size", report["interpretation"]), (
         report["interpretation"])
     assert "No catalogued effect is warranted" in report["interpretation"]
