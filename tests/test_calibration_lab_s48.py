@@ -206,3 +206,16 @@ def test_the_report_says_the_first_loading_was_stiffer(tmp_path):
     # the angle's residual said as such, not "what remains" beside the gauge's finding
     assert "What remains is consistent with replicate scatter" not in report["interpretation"]
     assert "The angle's residual is consistent with replicate scatter" in report["interpretation"]
+
+
+@pytest.mark.parametrize("cell", ["2026-12-07T10:00:00+99:99", "\u0662\u0660\u0662\u0666-12-07",
+                                  "2026-12-07T10:00:99", "07/12/2026 10:00:75"])
+def test_a_stamp_no_clock_shows_is_refused_naming_header_and_row(cell):
+    """A UTC offset of 99 h, Arabic-Indic digits (every other number is read in ASCII
+    digits only) and 99 or 75 seconds were read as times; refused now, as 25:61 was."""
+    from surrogate.calibration._timestamps import read_stamp
+
+    with pytest.raises(DataError, match=r"Date: row 3: not a time stamp"):
+        read_stamp(cell, "clock", 1.0, "Date", 3)
+    utc = read_stamp("2026-12-07T10:00:00Z", "clock", 1.0, "Date", 3)[0]
+    assert read_stamp("2026-12-07T10:00:00-0530", "clock", 1.0, "Date", 3)[0] == utc + 19800

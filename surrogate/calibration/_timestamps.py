@@ -41,8 +41,10 @@ FORMATS = ("ISO 8601 (2026-12-07T14:03:11), a date and the time of day (07/12/20
            "14:03:11, 07.12.2026 14:03:11), or epoch seconds under a header 'Epoch (s)'")
 _TIME = r"(?:[T ,]\s*(\d{1,2}):(\d{2})(?::(\d{2}(?:[.,]\d+)?))?)?"
 _ZONE = r"\s*(Z|[+-]\d{2}:?\d{2})?"
-ISO = re.compile(r"\s*(\d{4})-(\d{1,2})-(\d{1,2})" + _TIME + _ZONE + r"\s*")
-DAY_MONTH = re.compile(r"\s*(\d{1,2})([/.])(\d{1,2})\2(\d{4})" + _TIME + r"\s*")
+# ASCII digits only (as every number the project reads: solver/number_text.py)
+ISO = re.compile(r"\s*(\d{4})-(\d{1,2})-(\d{1,2})" + _TIME + _ZONE + r"\s*", re.ASCII)
+DAY_MONTH = re.compile(r"\s*(\d{1,2})([/.])(\d{1,2})\2(\d{4})" + _TIME + r"\s*", re.ASCII)
+MAX_ZONE_S = 14 * 3600     # the furthest UTC offset in use (UTC+14)
 
 
 def stamp_kind(header: object) -> str | None:
@@ -66,6 +68,24 @@ def _seconds(day: dt.date, hh: str | None, mm: str | None, ss: str | None) -> fl
     return whole + int(hh or 0) * 3600 + int(mm or 0) * 60 + float((ss or "0").replace(",", "."))
 
 
+def _clock_time(hh: str | None, mm: str | None, ss: str | None) -> bool:
+    """A time of day a clock shows (absent parts are 0): hours < 24, minutes and seconds
+    < 60."""
+    return (int(hh or 0) < 24 and int(mm or 0) < 60
+            and float((ss or "0").replace(",", ".")) < 60)
+
+
+def _zone_s(zone: str | None) -> float | None:
+    """A UTC offset ('Z', '+01:00', '-0530') in seconds, None for one no clock uses."""
+    if not zone or zone == "Z":
+        return 0.0
+    hours, minutes = int(zone[1:3]), int(zone[-2:])
+    offset = hours * 3600 + minutes * 60
+    if minutes >= 60 or offset > MAX_ZONE_S:
+        return None
+    return -offset if zone[0] == "-" else offset
+
+
 def _date(y: int, m: int, d: int) -> dt.date | None:
     try:
         return dt.date(y, m, d)
@@ -86,15 +106,12 @@ def read_stamp(value: object, kind: str, factor: float, header: str, row: int
     m = ISO.fullmatch(text) if kind == "clock" else None
     if m:
         y, mo, d, hh, mm, ss, zone = m.groups()
-        day = _date(int(y), int(mo), int(d))
-        if day is not None and int(hh or 0) < 24 and int(mm or 0) < 60:
-            x = _seconds(day, hh, mm, ss)
-            if zone and zone != "Z":
-                sign = -1 if zone[0] == "-" else 1
-                x -= sign * (int(zone[1:3]) * 3600 + int(zone[-2:]) * 60)
+        day, offset = _date(int(y), int(mo), int(d)), _zone_s(zone)
+        if day is not None and offset is not None and _clock_time(hh, mm, ss):
+            x = _seconds(day, hh, mm, ss) - offset
             return x, x, hh is not None
     m = DAY_MONTH.fullmatch(text) if kind == "clock" else None
-    if m and int(m.group(5) or 0) < 24 and int(m.group(6) or 0) < 60:
+    if m and _clock_time(*m.group(5, 6, 7)):
         a, sep, b, y, hh, mm, ss = m.groups()
         first = _date(int(y), int(b), int(a))
         second = _date(int(y), int(a), int(b)) if sep == "/" else None  # 07.12. day-first
