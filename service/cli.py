@@ -9,6 +9,7 @@ on stderr and exit 2; nothing prints a traceback for them.
 from __future__ import annotations
 
 import argparse
+import functools
 import re
 import sys
 from importlib import import_module
@@ -16,6 +17,7 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import NoReturn
 
 from service.commands.interrupts import caused_by_interrupt, interrupts_kept
+from service.commands.numbers import help_with_allowed
 from solver.errors import BalloonError, InputError, NotFoundError
 from solver.number_text import (
     INTEGER_FORM,
@@ -62,6 +64,11 @@ class Parser(argparse.ArgumentParser):
         self.register("type", float, held_float)
         self.register("type", int, ascii_int)
 
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        """The parser's formatter, each option's help stating its allowed range
+        (``service.commands.numbers.help_with_allowed``)."""
+        return _stating_ranges(self.formatter_class)(prog=self.prog)
+
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {shown(self._with_range(message))} "
                      f"(see `{self.prog} --help`)\n")
@@ -92,6 +99,17 @@ class Parser(argparse.ArgumentParser):
         return next((a.allowed for a in self._actions   # type: ignore[attr-defined]
                      if getattr(a, "allowed", None) and "/".join(a.option_strings) == option),
                     None)
+
+
+@functools.cache
+def _stating_ranges(formatter: type[argparse.HelpFormatter]) -> type[argparse.HelpFormatter]:
+    """``formatter`` (argparse's default, or a subcommand's own) whose option help says
+    the allowed values the option carries."""
+    class StatingRanges(formatter):  # type: ignore[misc, valid-type]
+        def _get_help_string(self, action: argparse.Action) -> str | None:
+            return help_with_allowed(action, super()._get_help_string(action))
+
+    return StatingRanges
 
 
 def held_float(text: str) -> float:

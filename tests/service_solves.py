@@ -32,6 +32,20 @@ def fast_solve(design, settings, on_step=None):
     return make_curve(4)
 
 
+def landing_solve(design, settings, on_step=None):
+    """A solve whose last converged step overshoots the 90-deg stop (92 deg at 2920 Pa)
+    and is replaced by its landing, as the real solver's is (solver/landing.py): the
+    stored curve ends at 90 deg, 2900 Pa."""
+    for step, (p, a) in enumerate(((1000.0, 10.0), (2000.0, 40.0), (2920.0, 92.0)), 1):
+        if on_step:
+            on_step({"step": step, "pressure_pa": p, "volume_ul": p / 1000, "angle_deg": a,
+                     "newton_iterations": 4})
+    curve = make_curve(4)
+    curve.pressure_pa[-1], curve.angle_deg[-1] = 2900.0, 90.0
+    curve.angle_deg[1:3] = (10.0, 40.0)
+    return curve
+
+
 def slow_solve(design, settings, on_step=None):
     """One step, then sleeps 60 s (to be cancelled or timed out)."""
     if on_step:

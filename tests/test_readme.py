@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from service.cli import build_parser, main
+from service.commands.numbers import help_with_allowed
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -78,7 +79,7 @@ def test_solve_help_documents_every_option_with_unit_default_and_range():
     for action in _subparser("solve")._actions:  # noqa: SLF001
         if not action.option_strings or action.dest in ("help", "quiet"):
             continue
-        text = action.help or ""
+        text = help_with_allowed(action, action.help) or ""   # as --help prints it
         assert text, action.dest
         if action.dest in ("json", "csv", "plot", "vtk"):
             continue

@@ -134,7 +134,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--objective", choices=OBJECTIVES,
                         help="ranking (default: pressure for pressure_budget, volume for "
                              "volume_budget and time_budget, certainty otherwise)")
-    parser.add_argument("-n", "--n-results", type=int, help="designs to list (5)")
+    number_action(parser.add_argument("-n", "--n-results", type=int,
+                                      help="designs to list (default 5)"),
+                  1, N_RESULTS_MAX)
     add_pump_arguments(parser)  # with --angles-deg: the volume, time and pump-gauge pressure;
     # a design search reads --flow-ul-s with --time-s
     add_model_arguments(parser)

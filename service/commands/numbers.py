@@ -6,6 +6,10 @@ it too:
     balloon predict: error: argument --L-mm: 'abc' is not a number (ASCII decimal
     digits, as 1000, 2.5 or 1e-3; allowed: 0.5 to 60 mm)
 
+``--help`` states the same range beside each option (``help_with_allowed``, added by
+``service.cli.Parser``'s formatter): a help text never repeats a range by hand (``balloon
+solve --help`` had said ``--flow-ul-s`` took up to 1e6 ul/s, its check 1000).
+
 The ranges come from the tables that check the values afterwards
 (``solver.design.LIMITS_MM``, ``solver.design_space.BOX_MM``, the stiffness scales'):
 this module only parses, the range checks stay where they are. Every number option
@@ -42,6 +46,21 @@ def allowed_action(action: argparse.Action, allowed: str) -> argparse.Action:
     the parser's refusals (``service.cli.Parser.error``)."""
     action.allowed = allowed  # type: ignore[attr-defined]
     return action
+
+
+def help_with_allowed(action: argparse.Action, text: str | None) -> str | None:
+    """``text``, an option's help, with the allowed values attached to ``action`` said
+    too, unless it says them already: ``"chamber length, mm (default 7.1)"`` becomes
+    ``"chamber length, mm (default 7.1; allowed: 0.5 to 60 mm)"``."""
+    allowed = getattr(action, "allowed", None)
+    if not allowed or text == argparse.SUPPRESS or (text and allowed in text):
+        return text
+    said = allowed.replace("%", "%%")     # argparse formats the help with %(default)s
+    if not text:
+        return f"allowed: {said}"
+    if text.endswith(")"):
+        return f"{text[:-1]}; allowed: {said})"
+    return f"{text} (allowed: {said})"
 
 
 def attach_setting_ranges(parser: argparse.ArgumentParser) -> None:

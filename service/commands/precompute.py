@@ -20,6 +20,10 @@ import signal
 import sys
 from pathlib import Path
 
+from service.commands.numbers import number_action
+
+WORKERS = (1, 256)    # local worker processes --workers starts
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
@@ -29,8 +33,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("grid", metavar="GRID.toml", help="grid file (TOML)")
     parser.add_argument("--db", required=True, metavar="PATH",
                         help="curve database (HDF5); created if missing")
-    parser.add_argument("--workers", type=int, default=1, metavar="N",
-                        help="local worker processes (default 1)")
+    number_action(parser.add_argument("--workers", type=int, default=1, metavar="N",
+                                      help="local worker processes (default 1)"), *WORKERS)
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on a Dask cluster, e.g. tcp://host:8786 (extra 'cluster')")
     parser.add_argument("--retry-failed", action="store_true",
@@ -160,8 +164,8 @@ def run(args: argparse.Namespace) -> int:
     from solver.precompute.job import refuse_damaged
     from solver.store import CurveStore, StoreBusyError
 
-    if not 1 <= args.workers <= 256:
-        raise InputError("--workers", f"got {args.workers}", "1 <= N <= 256")
+    if not WORKERS[0] <= args.workers <= WORKERS[1]:
+        raise InputError("--workers", f"got {args.workers}", f"{WORKERS[0]} <= N <= {WORKERS[1]}")
     db_path = Path(args.db)
     if db_path.exists() and not db_path.is_file():
         raise InputError("--db", f"{args.db} is not a file", "the path of an HDF5 file")

@@ -91,16 +91,22 @@ def add_number_list(parser: argparse._ActionsContainer, flag: str, metavar: str,
 
 
 def add_design_arguments(parser: argparse.ArgumentParser, required: bool = True) -> None:
+    from solver.design_space import BOX_MM
+
+    def box(name: str) -> str:   # the emulator's box (its own errors say it too)
+        lo, hi = BOX_MM[name]
+        return f"the emulator's box {lo:g} to {hi:g} at W = 3"
+
     parser.add_argument("--L-mm", type=float, required=required, dest="L_mm",
-                        help="chamber length, mm")
+                        help=f"chamber length, mm ({box('L_mm')})")
     parser.add_argument("--t-mm", type=float, required=required, dest="t_mm",
-                        help="membrane thickness, mm")
+                        help=f"membrane thickness, mm ({box('t_mm')})")
     parser.add_argument("--T-mm", type=float, default=None, dest="T_mm",
-                        help="body thickness above the chamber, mm (default 1)")
+                        help=f"body thickness above the chamber, mm (default 1; {box('T_mm')})")
     parser.add_argument("--b-mm", type=float, default=None, dest="b_mm",
-                        help="chamber width, mm (default 1.8)")
+                        help=f"chamber width, mm (default 1.8; {box('b_mm')})")
     parser.add_argument("--h-mm", type=float, default=None, dest="h_mm",
-                        help="chamber height, mm (default 0.15)")
+                        help=f"chamber height, mm (default 0.15; {box('h_mm')})")
     parser.add_argument("--W-mm", type=float, default=None, dest="W_mm",
                         help="actuator width, mm (default 3; the emulator answers every "
                              "scaled copy of its box: the same ratios to W)")

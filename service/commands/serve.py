@@ -10,6 +10,10 @@ import argparse
 import errno
 import socket
 
+from service.commands.numbers import number_action
+
+PORTS = (1, 65535)    # the TCP ports --port names
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
@@ -19,7 +23,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "see docs/service.md.")
     parser.add_argument("--host", default="127.0.0.1",
                         help="interface to listen on (default 127.0.0.1; 0.0.0.0 for all)")
-    parser.add_argument("--port", type=int, default=8000, help="TCP port (default 8000)")
+    number_action(parser.add_argument("--port", type=int, default=8000,
+                                      help="TCP port (default 8000)"), *PORTS)
     parser.add_argument("--log-level", default="info",
                         choices=("critical", "error", "warning", "info", "debug"))
     parser.set_defaults(func=run)
@@ -52,8 +57,8 @@ def check_address(host: str, port: int) -> None:
 def run(args: argparse.Namespace) -> int:
     from solver.errors import InputError
 
-    if not 0 < args.port < 65536:
-        raise InputError("--port", f"got {args.port}", "1 <= port <= 65535")
+    if not PORTS[0] <= args.port <= PORTS[1]:
+        raise InputError("--port", f"got {args.port}", f"{PORTS[0]} <= port <= {PORTS[1]}")
     check_address(args.host, args.port)   # before the imports and the models' loading
     import uvicorn
 

@@ -803,7 +803,10 @@ function curveSeries() {
     const early = own.curve.status && own.curve.status !== "complete" && end ? `, stops at ${fmt(end.angle_deg, 1)} deg` : "";
     add("fe-solve", `FE curve of this design ${own.id.slice(0, 8)}${early}`, ownData, "#111827", { width: 2, markers: true });
   }
-  if (app.job && app.job.key === key && app.job.trace.length) {
+  // the solve's converged steps while it runs; once its curve is stored, that curve (with
+  // its steps marked): a step the solver replaced -- the overshoot past the 90-deg stop its
+  // landing redoes -- is no point of the stored curve and was drawn past its end
+  if (!ownData && app.job && app.job.key === key && app.job.trace.length) {
     const t = app.job.trace;
     add("fe-progress", "FE solve, converged steps", { pressure_pa: t.map((s) => s.pressure_pa), volume_ul: t.map((s) => s.volume_ul),
       angle_deg: t.map((s) => s.angle_deg) }, "#111827", { markersOnly: true });

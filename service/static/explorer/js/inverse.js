@@ -1,11 +1,11 @@
 // Inverse design: a target (by chamber pressure: angle at a pressure, angle within a
 // pressure budget, force at a pressure; by a syringe pump: angle at or within an injected
-// volume, or a time at the flow rate: js/targets.js), bounds on L and t and the allowed
+// volume, or a time at the flow rate: js/targets.js), bounds on the lengths and the allowed
 // material pairs -> POST /v1/inverse -> ranked designs; "Load" puts one in the design
 // panel, its curve asked on the target's axis (pressure, injected volume or time).
 
 import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
-import { FIELDS, PAIRS, pairLabel } from "./design.js";
+import { FIELDS, PAIRS, W_FIELD, W_MM, pairLabel } from "./design.js";
 import { allowedWords, checkNumber, readNumber } from "./fields.js";
 import { ASK_AXIS, OBJECTIVES, TARGET_BY, TARGET_INPUTS, changeUnit, readoutAt, targetColumns, targetNotes } from "./targets.js";
 import { $, fmt, fmtSig, numberOrNull } from "./util.js";
@@ -51,6 +51,41 @@ function bounds(lo, hi, name) {
   return [a ?? f.min, b ?? f.max];
 }
 
+// The lengths whose range the form bounds (inv-X-lo, inv-X-hi -> X_bounds_mm): every
+// length of the box, so a lab with one body mould can pin T, b and h (the page offered L
+// and t only: its designs came back with any T, b and h, which that mould cannot make).
+const RANGED = ["L", "t", "T", "b", "h"];
+// what each box reads before the server checks it (solver.design.LIMITS_MM; the search
+// itself stays within the box, and a bound outside it is the server's to name)
+const LENGTH_LIMITS_MM = { L: [0.5, 60], t: [0.05, 5], T: [0.1, 10], b: [0.1, 20], h: [0.02, 5] };
+
+// A length's two range boxes, "box" (the design box's edge) when empty, and its error slot.
+function rangeField(k) {
+  const [min, max] = LENGTH_LIMITS_MM[k];
+  const step = FIELDS.find((f) => f.name === `${k}_mm`).step;
+  const box = (end, words) => `<input id="inv-${k}-${end}" type="text" inputmode="decimal" data-unit="mm" ` +
+    `min="${min}" max="${max}" step="${step}" placeholder="box" aria-label="${k} ${words} (mm)">`;
+  const field = document.createElement("div");
+  field.className = "field";
+  field.innerHTML = `<label for="inv-${k}-lo">${k} range (mm)</label>` +
+    `<span class="range2">${box("lo", "from")} to ${box("hi", "to")}</span>` +
+    `<p class="field-error" id="err-inv-${k}" data-for="inv-${k}-lo" hidden></p>`;
+  return field;
+}
+
+// The design panel's body mould (T, b, h) as ranges pinned to it, at W = 3 mm where the
+// search runs (a scaled copy's lengths scaled back by 3 mm / W).
+function pinMould() {
+  const W = Number($(W_FIELD.name).value);
+  for (const k of ["T", "b", "h"]) {
+    const v = Number($(`${k}_mm`).value) * W_MM / W;
+    if (!Number.isFinite(v)) continue;
+    const text = String(Math.round(v * 1e4) / 1e4);
+    $(`inv-${k}-lo`).value = text;
+    $(`inv-${k}-hi`).value = text;
+  }
+}
+
 // The form's shown boxes hold numbers or nothing: text that is none ("0x10") or too
 // large for a double ("1e999") is named beside its box with the box's range, and no
 // search is sent (a number box read "1e999" as "", which was sent as "not a number" and
@@ -81,8 +116,10 @@ export function setupInverse({ loadDesign }) {
     label.innerHTML = `<input type="checkbox" id="${id}" value="${k}" checked> ${pairLabel(b, m)}`;
     pairs.appendChild(label);
   });
+  for (const k of RANGED) $("inv-ranges").appendChild(rangeField(k));
   const kind = $("inv-kind");
   shareFlowRate();
+  $("inv-mould").addEventListener("click", pinMould);
   const showKind = () => {
     const force = kind.value === "force_at_pressure";
     $("inv-angle-field").hidden = force;
@@ -113,9 +150,10 @@ export function setupInverse({ loadDesign }) {
     if (kind.value === "force_at_pressure") target.force_mn = numberOrNull($("inv-force"));
     else target.angle_deg = numberOrNull($("inv-angle"));
     const body = { target, n_results: numberOrNull($("inv-n")) ?? 5 };
-    const L = bounds("inv-L-lo", "inv-L-hi", "L_mm"), t = bounds("inv-t-lo", "inv-t-hi", "t_mm");
-    if (L) body.L_bounds_mm = L;
-    if (t) body.t_bounds_mm = t;
+    for (const k of RANGED) {
+      const range = bounds(`inv-${k}-lo`, `inv-${k}-hi`, `${k}_mm`);
+      if (range) body[`${k}_bounds_mm`] = range;
+    }
     if (TARGET_BY[kind.value] === "time") {
       const flow = checkNumber($("inv-flow"), { unit: "ul/s" });
       if (flow.error) {
@@ -135,7 +173,8 @@ export function setupInverse({ loadDesign }) {
       "target.volume_ul": $("err-inv-volume"), "target.time_s": $("err-inv-time"),
       "target.flow_ul_s": $("err-inv-flow"),
       "target.angle_deg": $("err-inv-angle"), "target.force_mn": $("err-inv-force"),
-      L_bounds_mm: $("err-inv-L"), t_bounds_mm: $("err-inv-t"), material_pairs: $("err-inv-pairs"),
+      ...Object.fromEntries(RANGED.map((k) => [`${k}_bounds_mm`, $(`err-inv-${k}`)])),
+      material_pairs: $("err-inv-pairs"),
       objective: $("err-inv-objective"), n_results: $("err-inv-n"), target: $("err-inv-kind"),
     };
     $("inv-explanation").textContent = "Searching...";
