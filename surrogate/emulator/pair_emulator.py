@@ -23,6 +23,7 @@ from surrogate.emulator.early_ended_nodes import (
 from surrogate.emulator.features import (
     FORCE_PRESSURE_NODES_PA,
     angle_ratio_from_feature,
+    between_force_nodes,
     force_at,
     force_from_angle_ratio,
     free_secant_deg_per_pa,
@@ -256,8 +257,7 @@ class PairEmulator:
                                          node_mean)
             f, a, b = (force_at(y, p_red) for y in per_kpa)
             return self._calibrated(f, np.fmin(a, b), np.fmax(a, b))
-        q = FORCE_PRESSURE_NODES_PA[:len(mean)]
-        y, s = np.interp(p_red, q, mean), np.interp(p_red, q, sd)
+        y, s = between_force_nodes(mean, p_red), between_force_nodes(sd, p_red)
         ratio, lo, hi = (angle_ratio_from_feature(v) for v in (y, y - z * s, y + z * s))
         f, f_lo, f_hi = self._calibrated(*force_from_angle_ratio(angle, angle_lo, angle_hi,
                                                                  ratio, lo, hi))
