@@ -81,3 +81,15 @@ def test_a_finished_solve_draws_no_step_past_its_stored_curve(watched, server):
     # the replaced 92-deg step is no point of the plot once the stored curve is drawn
     assert page.locator('#plot g[data-series="fe-progress"]').count() == 0
     assert "reaches 90.0 deg" in page.inner_text("#job")
+
+
+def test_a_refusal_shows_the_command_it_names_as_code_not_with_backticks(watched, server):
+    """The server's words name commands in backticks (`balloon solve`): on the CLI a
+    reader's convention, on the page they were shown as typed characters."""
+    page = open_explorer(watched, server.url)
+    page.fill("#L_mm", "3")  # outside the emulator's box (L 4..18 mm): refused
+    page.wait_for_selector("#refused:not([hidden])")
+    detail = page.locator("#refused-detail")
+    assert "`" not in detail.inner_text()
+    assert "balloon solve" in detail.locator("code").all_inner_texts()
+    assert "L_mm" in detail.inner_text() and "4" in detail.inner_text()

@@ -2,6 +2,8 @@
 // Every error answer is an RFC 9457 problem document (application/problem+json);
 // ApiError keeps it whole so that the page can show each message beside its field.
 
+import { setTextWithCode } from "./util.js";
+
 export class ApiError extends Error {
   constructor(status, problem) {
     super(problem.detail || problem.title || `HTTP ${status}`);
@@ -104,7 +106,7 @@ export function showProblem(err, slots, fallback, options = {}) {
 // (role alert) and tied to its input (aria-invalid, aria-describedby).
 export function showMessage(el, text) {
   const label = el.classList.contains("field-error") ? slotLabel(el) : "";
-  el.textContent = label && !text.startsWith(label) ? `${label}: ${text}` : text;
+  setTextWithCode(el, label && !text.startsWith(label) ? `${label}: ${text}` : text);
   el.hidden = false;
   el.setAttribute("role", "alert");
   const input = el.dataset.for && document.getElementById(el.dataset.for);

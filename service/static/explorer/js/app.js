@@ -17,7 +17,7 @@ import { curveEnd, jobText, nearestStep } from "./job.js";
 import { linkNote, readLink, writeLink } from "./link.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
 import { renderSketch } from "./sketch.js";
-import { $, csvCell, download, fmt, fmtSig } from "./util.js";
+import { $, csvCell, download, fmt, fmtSig, setTextWithCode } from "./util.js";
 
 const N_POINTS = 81;
 const LEVEL = 0.95;
@@ -1050,7 +1050,7 @@ function renderCompare() {
 function showRefused() {
   const box = $("refused");
   box.hidden = !app.refused;
-  if (app.refused) $("refused-detail").textContent = app.refused.message;
+  if (app.refused) setTextWithCode($("refused-detail"), app.refused.message);
   // the server's nearest design inside the box (an out-of-box refusal), one click away
   const near = app.refused && app.refused.problem.nearest_design ? stateOfDesign(app.refused.problem.nearest_design) : null;
   const button = $("load-nearest");

@@ -4,6 +4,21 @@ import { NUMBER_TEXT } from "./fields.js";
 
 export const $ = (id) => document.getElementById(id);
 
+// A message's text into `el`, each `quoted` span (a command the server's words name, as
+// `balloon solve`) shown as code rather than with its backticks; text nodes only, so
+// nothing in a message is read as HTML.
+export function setTextWithCode(el, text) {
+  el.replaceChildren();
+  String(text).split(/`([^`\n]+)`/).forEach((part, i) => {
+    if (!part) return;
+    if (i % 2) {
+      const code = document.createElement("code");
+      code.textContent = part;
+      el.append(code);
+    } else el.append(document.createTextNode(part));
+  });
+}
+
 export function fmt(v, digits = 1) {
   return typeof v === "number" && Number.isFinite(v) ? v.toFixed(digits) : "-";
 }
