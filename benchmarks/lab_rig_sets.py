@@ -148,13 +148,16 @@ DESIGNS = {
     # the forty-ninth session's designs, drawn at random in the box (numpy seed 20261207:
     # L log-uniform, the pair uniform, the body's scale log-uniform in 0.5-2), solved for
     # the fresh sets N46-N53 only: the reversed pair on a softened Ecoflex body, a thick
-    # membrane under PDMS 1:15, Ecoflex on Ecoflex with the body softer than the membrane
+    # membrane under PDMS 1:15, a short stiffened PDMS 1:10 body (the fourth draw: the
+    # third, Ecoflex x 0.63 on Ecoflex, L 10.8 t 1.08 T 1.45 b 2.33 h 0.16, bent only 16-28
+    # deg at the FE's 500 ul -- a balloon, no lab's actuator -- and was replaced before any
+    # set of it was calibrated)
     "D26": dict(L_mm=14.9, t_mm=0.88, T_mm=1.09, b_mm=1.37, h_mm=0.19,
                 body_material="ecoflex_00_30*0.89", membrane_material="pdms_1_15"),
     "D27": dict(L_mm=8.6, t_mm=1.15, T_mm=0.8, b_mm=2.01, h_mm=0.16,
                 body_material="pdms_1_15*1.05", membrane_material="ecoflex_00_30"),
-    "D28": dict(L_mm=10.8, t_mm=1.08, T_mm=1.45, b_mm=2.33, h_mm=0.16,
-                body_material="ecoflex_00_30*0.63", membrane_material="ecoflex_00_30"),
+    "D28": dict(L_mm=5.0, t_mm=0.89, T_mm=0.83, b_mm=1.44, h_mm=0.15,
+                body_material="pdms_1_10*1.76", membrane_material="ecoflex_00_30"),
 }
 # a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
 VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12),
