@@ -58,18 +58,19 @@ a blank line after each specimen, the columns in another order, and a logger's e
 columns (the rig's temperature, a note).
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
-    .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
+    .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data [SET ...]
 
 The first solves what the named sets need and the cache lacks (all: 28 x 3 + 8 x 3
 solves of 5-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 27 sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 31 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
 test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py; N38's,
-N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py).
+N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py; N45's, N46's, N47's
+and N52's for test_calibration_lab_s49.py), or of them the sets named.
 """
 
 from __future__ import annotations
@@ -454,7 +455,11 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "sample_column": "N40-leak-sample-column-D24",
              "date_beside_time": "N42-gain+drift-date-D24",
              "epoch_beside_time": "N43-relax+offset-epoch-D25",
-             "first_loading_stiffer": "N44-mullins-first-loading-D23"}
+             "first_loading_stiffer": "N44-mullins-first-loading-D23",
+             "angle_sensor_stops": "N45-angle-saturates-D25",
+             "angle_sensor_pinned": "N52-angle-pinned45-D27",
+             "logger_extra_columns": "N47-clean-extra-columns-D27",
+             "blank_lines_other_order": "N46-clean-blank-lines-D26"}
 
 
 def solve_missing(cache: Path, names: list[str] | None = None) -> None:
@@ -792,12 +797,16 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's 27 sets")
+    ap.add_argument("--test-data", action="store_true",
+                    help="write tests/data's 31 sets (those of them named, if any)")
     args = ap.parse_args()
-    solve_missing(args.cache, list(TEST_DATA.values()) if args.test_data else args.sets)
+    test_sets = [n for n in TEST_DATA.values() if not args.sets or n in args.sets]
+    solve_missing(args.cache, test_sets if args.test_data else args.sets)
     if args.test_data:
         data = Path(__file__).resolve().parents[1] / "tests" / "data"
         for file_name, name in TEST_DATA.items():
+            if name not in test_sets:
+                continue
             print(write_set(args.cache, data, name, f"lab_gauge_noise_{file_name}", True,
                             ", the pump column its program"))
         return
