@@ -63,6 +63,14 @@ def test_an_angle_sensor_at_its_stop_is_found_from_the_data_alone(name, level, r
         assert obs.direction[obs.curve == c].tolist() == PROGRAM
 
 
+def test_strict_refuses_a_stopped_sensor_naming_angle_deg():
+    """``--strict`` refuses data with warnings: the stop's names angle_deg (the check of
+    the warnings the readings' history adds had named every one volume_ul)."""
+    with pytest.raises(DataError) as err:
+        observations_from_rows(_rows("angle_sensor_stops"), strict=True)
+    assert err.value.column == "angle_deg" and "(refused: strict)" in str(err.value)
+
+
 def test_with_the_pumps_log_the_stop_is_read_off_the_log():
     """With the pump's log (the pump column) "load" over the interval at the level is the
     evidence of injecting; the same readings are found."""

@@ -436,7 +436,6 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     time_header = converted["time_s"].header if "time_s" in converted else "time_s"
     rows, clocks = clock_columns_read(rows, time_header)
     known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN, RUN_COLUMN}
-    rows, not_read = extra_columns_read(rows, known)
     columns = set(rows[0]) if isinstance(rows[0], dict) else set()
     for name in REQUIRED:
         if name not in columns:     # a logger's text above the header, sent as rows?
@@ -445,6 +444,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             if below is not None and columns:
                 raise text_above_header([", ".join(map(str, rows[0]))] * (below + 1))
             raise _missing(name, columns)
+    rows, not_read = extra_columns_read(rows, known)   # (text above the header: refused)
     present = [c for c in OPTIONAL if c in columns]
     parsed = []
     written: list[float] = []    # the volume_ul column as written (its last digit)
@@ -509,10 +509,10 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
         raise _as_written(exc, converted) from None
     obs = replace(obs, clock_columns=clocks) if clocks else obs
     obs = replace(obs, columns_not_read=not_read) if not_read else obs
-    if strict and len(obs.warnings) > len(warnings):   # the pump history's check
-        raise DataError("volume_ul", obs.warnings[len(warnings)].removeprefix("volume_ul: ")
-                        + " (refused: strict)", None, "data without warnings (drop --strict "
-                        "to accept with a warning)")
+    if strict and len(obs.warnings) > len(warnings):   # the pump's log, a sensor's stop
+        column, _, message = obs.warnings[len(warnings)].partition(": ")
+        raise DataError(column, message + " (refused: strict)", None, "data without "
+                        "warnings (drop --strict to accept with a warning)")
     return obs
 
 
