@@ -83,7 +83,7 @@ def test_with_the_pumps_log_the_stop_is_read_off_the_log():
 @pytest.mark.parametrize("name", sorted(p.name for p in DATA.glob("lab_gauge_noise_*.csv")
                                         if "angle_sensor" not in p.name))
 def test_no_stop_is_found_in_the_other_lab_files(name):
-    """None of the other 29 lab files (holds at flat tops, gauges drifting, relaxing,
+    """None of the other 33 lab files (holds at flat tops, gauges drifting, relaxing,
     lagging cameras, inlets) reads as a sensor at its stop."""
     try:
         obs = load_observations(DATA / name)
