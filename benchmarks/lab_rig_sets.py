@@ -13,7 +13,8 @@ membrane), likewise; the forty-seventh session's fresh sets N30-N37 on three mor
 thick PDMS 1:15 body; a deep chamber under a soft PDMS 1:10 body), likewise; the
 forty-eighth session's fresh sets N38-N45 on three more (D23-D25: a long wide shallow
 chamber, a stiffened Ecoflex body on Ecoflex, the reversed pair on a softened PDMS 1:15
-membrane), likewise.
+membrane), likewise; the forty-ninth session's fresh sets N46-N53 on three more (D26-D28,
+drawn at random in the box), likewise.
 
 Designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
@@ -50,20 +51,26 @@ for N38-N45 also Mullins softening after the first loading only (two runs a spec
 and an angle sensor that saturates at its stop (both outside the catalogue), and a
 logger's timestamp column (ISO 8601 as the only time axis, day/month/year with the time
 of day, epoch seconds), a header 'Pressure kPa' (the unit after a space), the specimens
-told apart by a 'Sample' column, and two empty columns at the end of every line.
+told apart by a 'Sample' column, and two empty columns at the end of every line; for
+N46-N53 also a gauge that lags the pressure (outside the catalogue) and an angle sensor
+that reads exactly its stop, a small tilt of the mount and a small zero of the gauge, and
+a blank line after each specimen, the columns in another order, and a logger's extra
+columns (the rig's temperature, a note).
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
-    .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data
+    .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data [SET ...]
 
-The first solves what the cache lacks (27 + 6 x 12 solves of 15-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 27 sets
+The first solves what the named sets need and the cache lacks (all: 28 x 3 + 8 x 3
+solves of 5-90 s; run alone) and
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 31 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
 test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; N22's and
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
 test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py; N38's,
-N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py).
+N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py; N45's, N46's, N47's
+and N52's for test_calibration_lab_s49.py), or of them the sets named.
 """
 
 from __future__ import annotations
@@ -139,6 +146,19 @@ DESIGNS = {
                 body_material="ecoflex_00_30*1.5", membrane_material="ecoflex_00_30"),
     "D25": dict(L_mm=16.8, t_mm=0.76, T_mm=1.48, b_mm=1.2, h_mm=0.21,
                 body_material="ecoflex_00_30", membrane_material="pdms_1_15*0.6"),
+    # the forty-ninth session's designs, drawn at random in the box (numpy seed 20261207:
+    # L log-uniform, the pair uniform, the body's scale log-uniform in 0.5-2), solved for
+    # the fresh sets N46-N53 only: the reversed pair on a softened Ecoflex body, a thick
+    # membrane under PDMS 1:15, a short stiffened PDMS 1:10 body (the fourth draw: the
+    # third, Ecoflex x 0.63 on Ecoflex, L 10.8 t 1.08 T 1.45 b 2.33 h 0.16, bent only 16-28
+    # deg at the FE's 500 ul -- a balloon, no lab's actuator -- and was replaced before any
+    # set of it was calibrated)
+    "D26": dict(L_mm=14.9, t_mm=0.88, T_mm=1.09, b_mm=1.37, h_mm=0.19,
+                body_material="ecoflex_00_30*0.89", membrane_material="pdms_1_15"),
+    "D27": dict(L_mm=8.6, t_mm=1.15, T_mm=0.8, b_mm=2.01, h_mm=0.16,
+                body_material="pdms_1_15*1.05", membrane_material="ecoflex_00_30"),
+    "D28": dict(L_mm=5.0, t_mm=0.89, T_mm=0.83, b_mm=1.44, h_mm=0.15,
+                body_material="pdms_1_10*1.76", membrane_material="ecoflex_00_30"),
 }
 # a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
 VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12),
@@ -351,6 +371,42 @@ SETS = {
     # of bend (its stop) while the actuator bends to 75 deg
     "N45-angle-saturates-D25": ("D25", [None], 2.0, 7, 3, 4,
                                 {"kind": "angle_saturation", "max_deg": 60.0}, 78, {}),
+    # the forty-ninth session's fresh sets, truths and seeds fixed before any calibration:
+    # new lab habits (a blank line between specimens, the columns in another order, a
+    # logger's extra columns -- the rig's temperature and an operator's note)
+    # a clean set, few points (6 loading, 2 held, 4 unloading every 2 s); a blank line
+    # after each specimen's block, the columns in another order
+    "N46-clean-blank-lines-D26": ("D26", [None], 2.0, 6, 2, 4, {}, 81,
+                                  {"blank_lines": True, "order": "shuffled"}),
+    # a clean set at lab realism, every 3 s; the logger's extra columns (temperature,
+    # a note), comma-separated
+    "N47-clean-extra-columns-D27": ("D27", [None], 3.0, 5, 2, 4, {}, 82,
+                                    {"extra": True, "fmt": "comma"}),
+    # the mount tilted +1 deg (small: 1.4 x the camera's 0.7 deg noise); ';' and decimal
+    # commas with a blank line after each specimen
+    "N48-offset1-small-D28": ("D28", [None], 2.0, 7, 3, 4, {"kind": "angle_offset", "deg": 1.0},
+                              83, {"blank_lines": True}),
+    # a membrane batch 10 % stiffer (its FE solves); the columns in another order
+    "N49-membrane1.1-order-D27": ("D27", [None], 2.0, 7, 3, 4, {"kind": "membrane_x1.1"}, 84,
+                                  {"fe_suffix": "_m1.1", "order": "shuffled"}),
+    # a narrow inlet, 80 Pa per ul/s, a fast pump read every 0.5 s; pressures in mbar
+    "N50-inlet80-fast-D26": ("D26", [None], 0.5, 8, 2, 6,
+                             {"kind": "inlet", "R_pa_per_ul_s": 80.0}, 85, {"p_unit": "mbar"}),
+    # outside the catalogue: a gauge that lags the pressure (a damped gauge, or a long thin
+    # line to it: its reading relaxes to the pressure with tau 1.5 s), read every second:
+    # low while the pump loads, high while it withdraws
+    "N51-gauge-lag-D28": ("D28", [None], 1.0, 10, 3, 6, {"kind": "gauge_lag", "tau_s": 1.5},
+                          86, {}),
+    # an angle sensor at its stop (45 deg) that reads exactly its stop there (its noise
+    # clipped too), while the actuator bends to 75
+    "N52-angle-pinned45-D27": ("D27", [None], 2.0, 7, 3, 4,
+                               {"kind": "angle_saturation", "max_deg": 45.0, "pinned": True},
+                               87, {}),
+    # the gauge's zero 30 Pa high (small: the gauge's 1.5 % + 2 Pa noise is 15-40 Pa at
+    # the top); a tab-separated export with decimal commas and the logger's extra columns
+    "N53-gauge30-small-extra-D26": ("D26", [None], 2.0, 7, 3, 4,
+                                    {"kind": "gauge_offset", "pa": 30}, 88,
+                                    {"extra": True, "fmt": "tab"}),
 }
 # the pressure and time units a lab writes: unit -> (per Pa or per s, decimals)
 PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4),
@@ -399,16 +455,22 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "sample_column": "N40-leak-sample-column-D24",
              "date_beside_time": "N42-gain+drift-date-D24",
              "epoch_beside_time": "N43-relax+offset-epoch-D25",
-             "first_loading_stiffer": "N44-mullins-first-loading-D23"}
+             "first_loading_stiffer": "N44-mullins-first-loading-D23",
+             "angle_sensor_stops": "N45-angle-saturates-D25",
+             "angle_sensor_pinned": "N52-angle-pinned45-D27",
+             "logger_extra_columns": "N47-clean-extra-columns-D27",
+             "blank_lines_other_order": "N46-clean-blank-lines-D26"}
 
 
-def solve_missing(cache: Path) -> None:
-    """FE-solve every specimen the sets use that ``cache`` lacks (one .npz a solve)."""
+def solve_missing(cache: Path, names: list[str] | None = None) -> None:
+    """FE-solve every specimen the sets ``names`` (default: all) use that ``cache`` lacks
+    (one .npz a solve)."""
     from solver import Design, SolverSettings, solve
 
     cache.mkdir(parents=True, exist_ok=True)
-    jobs = [(d, k, "") for d in DESIGNS for k in T_FACTORS]
-    jobs += sorted({(v[0], k, v[8]["fe_suffix"]) for v in SETS.values()
+    used = [SETS[n] for n in names] if names else list(SETS.values())
+    jobs = sorted({(v[0], k, "") for v in used for k in T_FACTORS})
+    jobs += sorted({(v[0], k, v[8]["fe_suffix"]) for v in used
                     if v[8].get("fe_suffix") for k in T_FACTORS})  # one layer stiffer
     for d, k, suffix in jobs:
         path = cache / f"{d}{k}{suffix}.npz"
@@ -528,6 +590,11 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
     if "inlet" in kinds:                         # the gauge at the pump: R times the flow
         flow = np.concatenate([[0.0], np.diff(vp) / H_S])    # just before each stamp
         p = p + effect["R_pa_per_ul_s"] * flow
+    if "gauge_lag" in kinds:                     # the gauge relaxing to the pressure
+        y = np.zeros_like(p)
+        for i in range(1, p.size):
+            y[i] = y[i - 1] + H_S * (p[i - 1] - y[i - 1]) / effect["tau_s"]
+        p = y
     if "camera_lag" in kinds:                    # each frame shows the bend s earlier
         a = np.concatenate([np.zeros(round(effect["s"] / H_S)), a])[:a.size]
     idx = np.round(t / H_S).astype(int)
@@ -541,7 +608,7 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
     if "tilted_camera" in kinds:                 # the bending plane seen at phi
         phi = math.radians(effect["phi_deg"])
         a = np.degrees(np.arctan2(np.sin(np.radians(a)) * math.cos(phi), np.cos(np.radians(a))))
-    if "angle_saturation" in kinds:              # the sensor at its stop
+    if "angle_saturation" in kinds and not effect.get("pinned"):   # the sensor at its stop
         a = np.clip(a, -effect["max_deg"], effect["max_deg"])
     if "gauge_offset" in kinds:
         p = p + effect["pa"]
@@ -552,6 +619,8 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
     zero = rng.normal(0, 3)
     p = p + zero + rng.normal(0, 1, t.size) * (0.015 * np.abs(p) + 2.0)
     a = a + rng.normal(0, 0.7, t.size)
+    if "angle_saturation" in kinds and effect.get("pinned"):   # reads its stop exactly
+        a = np.clip(a, -effect["max_deg"], effect["max_deg"])
     return dict(t=t, state=[1, *states], p=p, a=a, q=q, v=v_pump)
 
 
@@ -611,13 +680,25 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     p_header = f"Pressure {p_unit}" if kw.get("p_header") == "space" else \
         f"Pressure ({p_unit})"
     trailing = [""] * kw.get("trailing", 0)
+    extra = ["Temperature (C)", "Note"] if kw.get("extra") else []
     header = [kw.get("id_col", "curve_id"), "run", *dated, *geometry, "body_material",
               "membrane_material", *([f"Time ({t_unit})"] if timed else []),
-              f"Flow ({q_unit})", p_header, "Angle (deg)"] + (
-        ["pump"] if with_pump else []) + trailing
+              f"Flow ({q_unit})", p_header, "Angle (deg)", *extra] + (
+        ["pump"] if with_pump else [])
+    n_measured = 3 + timed
+    first = header.index(f"Flow ({q_unit})") - timed
+    # the columns in another order: the readings first (angle, pressure, flow, time),
+    # then the rest as before
+    order = (list(range(first + n_measured - 1, first - 1, -1))
+             + [j for j in range(len(header)) if not first <= j < first + n_measured]
+             if kw.get("order") == "shuffled" else list(range(len(header))))
 
     def num(x: float, nd: int) -> str:
         return f"{x:.{nd}f}".replace(".", dec)
+
+    def logged(i: int, cid: str) -> list:        # a logger's extra columns: no reading
+        return [num(22.4 + 0.01 * (i % 40), 1), "fresh specimen" if i == 0 or
+                rows[i - 1][0] != cid else ""] if extra else []
     with open(path, "w", newline="", encoding="utf-8") as fh:
         fh.write(f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
                  f"benchmarks/lab_rig_sets.py from FE solves{note}\n")
@@ -625,20 +706,24 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
             fh.write("RigLogger 2.3 export, 2026-12-05 14:02\nSample batch 7, three "
                      "specimens\n")
         w = csv.writer(fh, delimiter=sep)
-        w.writerow(header)
+        w.writerow([header[j] for j in order] + trailing)
         for i, (cid, run, t, q, p_read, a, state, _) in enumerate(rows):
-            w.writerow([cid, run, *day(cid, i), *(num(nominal[g], 2) for g in geometry),
-                        nominal["body_material"], nominal["membrane_material"],
-                        *([num(t, t_nd)] if timed else []), num(q * q_per_ul_s, q_nd),
-                        num(p_read, p_nd), num(a, 1)] + ([state] if with_pump else [])
-                       + trailing)
+            row = [cid, run, *day(cid, i), *(num(nominal[g], 2) for g in geometry),
+                   nominal["body_material"], nominal["membrane_material"],
+                   *([num(t, t_nd)] if timed else []), num(q * q_per_ul_s, q_nd),
+                   num(p_read, p_nd), num(a, 1), *logged(i, cid)] + (
+                [state] if with_pump else [])
+            w.writerow([row[j] for j in order] + trailing)
+            if kw.get("blank_lines") and (i + 1 == len(rows) or rows[i + 1][:2] != (cid, run)):
+                w.writerow([])                   # a blank line after each specimen's block
     if not with_pump:      # the API's body: the same rows, numbers as JSON numbers
-        keys = header[:len(header) - len(trailing)]
-        body = [dict(zip(keys, [cid, run, *day(cid, i), *(nominal[g] for g in geometry),
-                                nominal["body_material"], nominal["membrane_material"],
-                                *([round(t, t_nd)] if timed else []),
-                                round(q * q_per_ul_s, q_nd), round(p_read, p_nd),
-                                round(a, 1)], strict=True))
+        body = [dict(zip(header, [cid, run, *day(cid, i), *(nominal[g] for g in geometry),
+                                  nominal["body_material"], nominal["membrane_material"],
+                                  *([round(t, t_nd)] if timed else []),
+                                  round(q * q_per_ul_s, q_nd), round(p_read, p_nd),
+                                  round(a, 1), *(float(x.replace(dec, ".")) if k == 0 else x
+                                                 for k, x in enumerate(logged(i, cid)))],
+                         strict=True))
                 for i, (cid, run, t, q, p_read, a, _, _) in enumerate(rows)]
         (out / f"{name}.json").write_text(json.dumps({"rows": body}))
     return path
@@ -712,12 +797,16 @@ def main() -> None:
     ap.add_argument("sets", nargs="*", help=f"some of {', '.join(SETS)} (default: all)")
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
-    ap.add_argument("--test-data", action="store_true", help="write tests/data's 27 sets")
+    ap.add_argument("--test-data", action="store_true",
+                    help="write tests/data's 31 sets (those of them named, if any)")
     args = ap.parse_args()
-    solve_missing(args.cache)
+    test_sets = [n for n in TEST_DATA.values() if not args.sets or n in args.sets]
+    solve_missing(args.cache, test_sets if args.test_data else args.sets)
     if args.test_data:
         data = Path(__file__).resolve().parents[1] / "tests" / "data"
         for file_name, name in TEST_DATA.items():
+            if name not in test_sets:
+                continue
             print(write_set(args.cache, data, name, f"lab_gauge_noise_{file_name}", True,
                             ", the pump column its program"))
         return

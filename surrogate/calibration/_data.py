@@ -26,8 +26,10 @@ from solver.errors import InputError
 from solver.number_text import NUMBER_FORM, is_number_text
 from solver.plain_text import PRINTABLE_WORDS, hidden_character
 from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
+from surrogate.calibration._angle_stop import AngleStop
 from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
 from surrogate.calibration._errors import DataError
+from surrogate.calibration._extra_columns import extra_columns_read
 from surrogate.calibration._headers import (
     UNITS,
     Reading,
@@ -157,6 +159,13 @@ class Observations:
     #: a logger's timestamp columns and how each was read (_timestamps.py): as time_s
     #: (no time column), or not (a time column, or a date without a time of day)
     clock_columns: tuple[dict[str, str | None], ...] = ()
+    #: the angle sensor's stop found in the readings (_angle_stop.py; None: none), and
+    #: whether they were searched (once, on the whole history: rows taken out keep it)
+    angle_stop: AngleStop | None = None
+    angle_stop_read: bool = False
+    #: a logger's columns of nothing the calibration reads, taken out (_extra_columns.py):
+    #: {'header', 'read_as': None, 'reading'}
+    columns_not_read: tuple[dict[str, str | None], ...] = ()
 
     def __post_init__(self) -> None:
         if self.specimen is None:
@@ -165,12 +174,21 @@ class Observations:
             object.__setattr__(self, "measured_volume_ul", np.full(self.n, np.nan))
         measured = not is_absent(self.measured_volume_ul)
         by_history = self.has_time and self.has_flow
+        if not self.angle_stop_read:
+            stop = AngleStop.find(self.curve, self.curve_ids, self.group, self.time_s,
+                                  self.pressure_pa, self.angle_deg,
+                                  self.direction if self.pump_logged else None)
+            object.__setattr__(self, "angle_stop", stop)
+            object.__setattr__(self, "angle_stop_read", True)
+            if stop is not None:
+                object.__setattr__(self, "warnings", self.warnings + (stop.warning(),))
         if self.direction is None:
             object.__setattr__(self, "direction", volume_directions(
                 self.curve, self.measured_volume_ul, self.volume_step_ul)
                 if measured and not by_history else
                 directions(self.curve, self.pressure_pa, self.angle_deg, self.time_s,
-                           self.group))
+                           self.group, None if self.angle_stop is None
+                           else self.angle_stop.pinned))
         if self.volume_ul is None:
             self._take_volume(measured, by_history)
         if self.volume_measured is None:
@@ -319,7 +337,9 @@ class Observations:
             self.switch_after[keep], self.switch_at[keep], self.switch_names,
             self.pump_logged, self.columns_read, specimen.ravel(),
             self.measured_volume_ul[keep], self.volume_step_ul, self.volume_measured[keep],
-            self.runs_as_replicates, self.clock_columns)
+            self.runs_as_replicates, self.clock_columns,
+            None if self.angle_stop is None else self.angle_stop.rows(keep), True,
+            self.columns_not_read)
 
     def design(self, i: int):
         """The nominal Design of curve i (the solver's type; W and lengths at defaults)."""
@@ -415,8 +435,8 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     rows = _run_named(rows, headers)
     time_header = converted["time_s"].header if "time_s" in converted else "time_s"
     rows, clocks = clock_columns_read(rows, time_header)
-    columns = set(rows[0]) if isinstance(rows[0], dict) else set()
     known = set(REQUIRED) | set(OPTIONAL) | {PUMP_COLUMN, RUN_COLUMN}
+    columns = set(rows[0]) if isinstance(rows[0], dict) else set()
     for name in REQUIRED:
         if name not in columns:     # a logger's text above the header, sent as rows?
             below = header_below_text([list(r.values()) if isinstance(r, dict) else []
@@ -424,6 +444,7 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
             if below is not None and columns:
                 raise text_above_header([", ".join(map(str, rows[0]))] * (below + 1))
             raise _missing(name, columns)
+    rows, not_read = extra_columns_read(rows, known)   # (text above the header: refused)
     present = [c for c in OPTIONAL if c in columns]
     parsed = []
     written: list[float] = []    # the volume_ul column as written (its last digit)
@@ -487,10 +508,11 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     except DataError as exc:     # a measured volume's run, named as the file names it
         raise _as_written(exc, converted) from None
     obs = replace(obs, clock_columns=clocks) if clocks else obs
-    if strict and len(obs.warnings) > len(warnings):   # the pump history's check
-        raise DataError("volume_ul", obs.warnings[len(warnings)].removeprefix("volume_ul: ")
-                        + " (refused: strict)", None, "data without warnings (drop --strict "
-                        "to accept with a warning)")
+    obs = replace(obs, columns_not_read=not_read) if not_read else obs
+    if strict and len(obs.warnings) > len(warnings):   # the pump's log, a sensor's stop
+        column, _, message = obs.warnings[len(warnings)].partition(": ")
+        raise DataError(column, message + " (refused: strict)", None, "data without "
+                        "warnings (drop --strict to accept with a warning)")
     return obs
 
 

@@ -21,8 +21,8 @@ REST_FRACTION = 0.1
 
 
 def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray,
-               time_s: np.ndarray | None = None, group: np.ndarray | None = None
-               ) -> np.ndarray:
+               time_s: np.ndarray | None = None, group: np.ndarray | None = None,
+               untrusted: np.ndarray | None = None) -> np.ndarray:
     """+1 / -1 / 0 per row; rows sorted by curve, then history. A reading is classified
     by the pressure's change from the previous one (the pump's state since then): within
     HOLD_FRACTION of the curve's pressure range (at least HOLD_MIN_PA, above a pressure
@@ -30,7 +30,9 @@ def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray
     a hold (the inlet's R Q vanishing when the pump stops), not unloading. Where the
     pressure cannot tell, the bend does (``_by_bend``). Replicates taken with one pump
     program (``group``, with the same reading times ``time_s``) share it: each reading
-    takes the majority of theirs (``_vote``)."""
+    takes the majority of theirs (``_vote``). An interval with an ``untrusted`` angle
+    at either end (a sensor at its stop: _angle_stop.py) is read by the pressure
+    alone."""
     out = np.zeros(pressure_pa.size)
     for c in np.unique(curve):
         rows = np.flatnonzero(curve == c)
@@ -45,7 +47,7 @@ def directions(curve: np.ndarray, pressure_pa: np.ndarray, angle_deg: np.ndarray
             else np.arange(rows.size, dtype=float)
         a = angle_deg[rows]
         bend = a * (1.0 if a[np.argmax(np.abs(a))] >= 0 else -1.0)  # reversed pairs too
-        d = _by_bend(d, dp, bend, t, tol)
+        d = _by_bend(d, dp, bend, t, tol, None if untrusted is None else untrusted[rows])
         out[rows[1:]] = d
         out[rows[0]] = d[0] if d.size else 0.0
     if time_s is not None and group is not None and np.all(np.isfinite(time_s)):
@@ -70,7 +72,7 @@ STILL_SHARE = 0.25   # below: it stood (creep of g = 0.25 bends at most g x the 
 
 
 def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
-             tol_p: float) -> np.ndarray:
+             tol_p: float, untrusted: np.ndarray | None = None) -> np.ndarray:
     """Directions of a curve's intervals checked against its bend (the angle, signed so
     that the curve bends positive: a camera offset may take it below 0). The chamber's
     bend follows its volume, so a pump running at a constant rate bends it at about the
@@ -110,8 +112,12 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
     level = 0.5 * (bend[1:] + bend[:-1])
     floor = max(BEND_INFORMATIVE * float(np.ptp(bend)), BEND_MIN_DEG)
     out = d.copy()
+    # an interval with a reading the sensor could not read (at its stop) is no reference
+    # for the others, and is read by its gauge: running where it moves by MOVING_SHARE of
+    # the pump's pressure per interval nearby, else a hold
+    read = np.ones(d.size, bool) if untrusted is None else ~(untrusted[1:] | untrusted[:-1])
     for i in range(d.size):
-        ran = np.flatnonzero((d != 0) & (np.arange(d.size) != i))
+        ran = np.flatnonzero((d != 0) & (np.arange(d.size) != i) & read)
         if ran.size < 2:
             return d
         moving = ran[np.abs(da[ran]) > floor]     # a hold's gauge noise is no pump rate
@@ -119,6 +125,8 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
         near = near[np.argsort(np.abs(level[near] - level[i]))[:3]]
         expected = float(np.median(rate[near])) * dt[i]
         pumped_pa = float(np.median(np.abs(dp[near] / dt[near]))) * dt[i]
+        if not read[i]:      # the bend cannot tell: read with its run (_unread_run)
+            continue
         if expected <= floor or level[i] < BEND_LOW * float(np.max(bend)):
             continue
         agrees = np.sign(da[i]) == np.sign(dp[i]) and abs(dp[i]) > HOLD_MIN_PA
@@ -129,6 +137,45 @@ def _by_bend(d: np.ndarray, dp: np.ndarray, bend: np.ndarray, t: np.ndarray,
         elif (abs(da[i]) <= STILL_SHARE * expected and expected > 2 * floor
               and (abs(dp[i]) <= max(2 * tol_p, pumped_pa) or dp[i] < 0 or da[i] < 0)):
             out[i] = 0.0
+    return out if untrusted is None else _unread_runs(out, dp, read)
+
+
+def _unread_runs(d: np.ndarray, dp: np.ndarray, read: np.ndarray) -> np.ndarray:
+    """The intervals the bend cannot tell (``read`` False: a sensor at its stop), run by
+    run, read as the pump's program runs at the top of a curve: loading, then standing,
+    then withdrawing (each possibly empty). The gauge moves over the run are split
+    where they fit that best: a mean rise while loading, none while standing, a mean
+    fall while withdrawing, each moving segment's mean a parameter (least squares,
+    BIC: one parameter per moving segment). The pump's pace at the top of a curve is
+    not the pace below it (the pressure flattens there), and one reading's noise must
+    not flip a lone interval."""
+    out = d.copy()
+    i = 0
+    while i < d.size:
+        if read[i]:
+            i += 1
+            continue
+        j = i
+        while j < d.size and not read[j]:
+            j += 1
+        moves = dp[i:j]
+        n = moves.size
+        best, split = np.inf, (0, 0)
+        for a in range(n + 1):
+            for b in range(a, n + 1):
+                up, still, down = moves[:a], moves[a:b], moves[b:]
+                if (up.size and up.mean() <= 0) or (down.size and down.mean() >= 0):
+                    continue
+                rss = (float(np.sum((up - up.mean()) ** 2)) if up.size else 0.0) + float(
+                    np.sum(still ** 2)) + (float(np.sum((down - down.mean()) ** 2))
+                                           if down.size else 0.0)
+                score = n * np.log(rss / n + 1e-9) + (bool(up.size) + bool(down.size)) \
+                    * np.log(n)
+                if score < best:
+                    best, split = score, (a, b)
+        a, b = split
+        out[i:i + a], out[i + a:i + b], out[i + b:j] = 1.0, 0.0, -1.0
+        i = j
     return out
 
 

@@ -203,6 +203,9 @@ def interpret(report: dict, left: dict) -> str:
     clocks = report["data"].get("clock_columns")
     if clocks:
         s.append("Timestamps: " + "; ".join(c["reading"] for c in clocks) + ".")
+    extra = report["data"].get("columns_not_read")
+    if extra:
+        s.append("Columns not read: " + "; ".join(c["reading"] for c in extra) + ".")
     out = report["left_out"]
     if out is not None and report["selected_effects"]:
         s.append(f"Of the {out['readings']} readings left out, the calibrated model answers "

@@ -124,6 +124,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     ``unloading_read``: this is the pass with the falling readings read as a hold, and
     that was the first reading's summary (_held_reading.py)."""
     stop_if_cancelled(cancel)
+    if obs.angle_stop is not None and obs.angle_stop.pinned.any():   # (warned at loading)
+        obs = obs.rows(~obs.angle_stop.pinned)
     if obs.n_curves < MIN_CURVES:
         ids = ", ".join(repr(c) for c in obs.curve_ids)
         raise DataError("curve_id", f"{obs.n_curves} curve ({ids}): cross-validation by "
@@ -385,6 +387,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                      obs.curve[obs.volume_measured])],
                  "columns_read": [r.as_dict() for r in obs.columns_read],
                  "clock_columns": [dict(c) for c in obs.clock_columns],
+                 "columns_not_read": [dict(c) for c in obs.columns_not_read],
                  "flow_rates_ul_s": sorted({float(q) for q in np.round(
                      obs.flow_ul_s[np.isfinite(obs.flow_ul_s)], 6)}),
                  "readings": h, "holds": traits.has_holds, "unloading": traits.has_unloading,
@@ -403,6 +406,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "rmse_pressure_after_pa": pressure_rms_pa(get_xv(chosen), channel),
         "gauge_at_rest": rest,
         "first_run_against_later": runs,
+        "angle_stop": None if obs.angle_stop is None else obs.angle_stop.as_dict(),
         "gauge_left_after": gauge_left(pressure_rms_pa(get_xv(chosen), channel), channel,
                                        left["plain_allowance"]),
         "cross_validation": {"method": _cv_method(obs), "folds": k,
