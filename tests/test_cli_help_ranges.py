@@ -60,3 +60,25 @@ def test_predict_help_names_the_emulators_box(capsys):
         main(["predict", "--help"])
     text = _flat(capsys.readouterr().out)
     assert "chamber length, mm (the emulator's box 4 to 18 at W = 3; allowed: 0.5 to 60 mm)" in text
+
+
+def _without_help(parser, path):
+    """(command, option) of every argument of ``parser`` and its subcommands whose
+    ``--help`` line says nothing but its name."""
+    import argparse
+
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from _without_help(sub, [*path, name])
+        elif not isinstance(action, argparse._HelpAction) and not action.help:
+            yield " ".join(path), "/".join(action.option_strings) or action.dest
+
+
+def test_every_argument_of_every_command_says_what_it_is():
+    """``serve --log-level``, ``db export --where / --status / --format`` and ``db ls
+    --status`` were listed in --help with their name alone (the forty-ninth session's
+    new-user audit)."""
+    from service.cli import build_parser
+
+    assert list(_without_help(build_parser(), ["balloon"])) == []

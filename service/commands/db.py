@@ -20,6 +20,7 @@ import json
 import sys
 from typing import Any
 
+from solver.curve import STATUSES as CURVE_STATUSES
 from solver.io import CSV_COLUMNS
 from surrogate.json_plain import plain_json as jsonable  # NaN and inf as null
 
@@ -30,6 +31,13 @@ CSV_DESIGN = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm",
 CSV_CURVE = CSV_COLUMNS
 
 
+# the record filters of ``db ls`` and ``db export``, said once
+STATUS_HELP = ("only the records that ended so: complete (reached a stop: 90 deg, the volume "
+               "or pressure stop), stopped (ended early by a limit such as max_steps), failed "
+               "(a step could not converge)")
+WHERE_HELP = ("only the records whose design, settings or status field has this value, e.g. "
+              "L_mm=7.1 or tip=blocked (several: all of them)")
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("db", help="list, show, export, seal and salvage curve "
                                    "database records",
@@ -39,9 +47,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sub = parser.add_subparsers(title="db commands", metavar="ACTION", required=True)
     ls = sub.add_parser("ls", help="list the records")
     ls.add_argument("db", help="curve database (HDF5)")
-    ls.add_argument("--status", choices=("complete", "stopped", "failed"))
-    ls.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE",
-                    help="filter on design, settings or status fields, e.g. L_mm=7.1")
+    ls.add_argument("--status", choices=CURVE_STATUSES, help=STATUS_HELP)
+    ls.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE", help=WHERE_HELP)
     ls.add_argument("--json", action="store_true", help="JSON lines instead of a table")
     ls.set_defaults(func=run_ls)
     show = sub.add_parser("show", help="show one record, or the file's metadata")
@@ -52,9 +59,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     export = sub.add_parser("export", help="export curves to CSV or JSON")
     export.add_argument("db", help="curve database (HDF5)")
     export.add_argument("keys", nargs="*", metavar="KEY", help="records (default: all)")
-    export.add_argument("--format", choices=("csv", "json"), default="csv")
-    export.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE")
-    export.add_argument("--status", choices=("complete", "stopped", "failed"))
+    export.add_argument("--format", choices=("csv", "json"), default="csv",
+                        help="csv (default): one row per step; json: the whole records")
+    export.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE",
+                        help=WHERE_HELP)
+    export.add_argument("--status", choices=CURVE_STATUSES, help=STATUS_HELP)
     export.add_argument("-o", "--output", default="-", help="output file (default stdout)")
     export.set_defaults(func=run_export)
     seal = sub.add_parser("seal", help="check the file and write it sealed (its checksum "

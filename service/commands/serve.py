@@ -26,7 +26,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     number_action(parser.add_argument("--port", type=int, default=8000,
                                       help="TCP port (default 8000)"), *PORTS)
     parser.add_argument("--log-level", default="info",
-                        choices=("critical", "error", "warning", "info", "debug"))
+                        choices=("critical", "error", "warning", "info", "debug"),
+                        help="what the server logs to stderr: info (default) a line per "
+                             "request, warning and above only problems, debug everything")
     parser.set_defaults(func=run)
 
 
