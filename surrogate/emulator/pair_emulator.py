@@ -257,7 +257,7 @@ class PairEmulator:
                                          node_mean)
             f, a, b = (force_at(y, p_red) for y in per_kpa)
             return self._calibrated(f, np.fmin(a, b), np.fmax(a, b))
-        y, s = between_force_nodes(mean, p_red), between_force_nodes(sd, p_red)
+        y, s = between_force_nodes(np.stack((mean, sd)), p_red)
         ratio, lo, hi = (angle_ratio_from_feature(v) for v in (y, y - z * s, y + z * s))
         f, f_lo, f_hi = self._calibrated(*force_from_angle_ratio(angle, angle_lo, angle_hi,
                                                                  ratio, lo, hi))
