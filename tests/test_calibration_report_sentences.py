@@ -89,6 +89,18 @@ def test_a_gauge_left_above_its_floor_is_said():
     assert gauge_sentence(None) is None
 
 
+def test_a_gauge_left_above_its_floor_beside_a_zero_found_off_names_the_zero():
+    """N53 (forty-ninth session's lab sets, the gauge's zero +30 Pa): the report named the
+    zero (+31 +/- 3 Pa at rest) and then said that no catalogued effect explains what the
+    gauge is left with -- a zero is a catalogued effect. Beside a zero found off, the
+    sentence names it as part of what is left and asks for a zeroed run."""
+    gauge = gauge_left(77.0, {"pressure_floor_pa": 41.0}, 1.47)
+    said = gauge_sentence(gauge, zero_off=True)
+    assert "77 Pa RMS" in said and "zero found off at rest" in said
+    assert "no catalogued effect explains" not in said
+    assert "no catalogued effect explains" in gauge_sentence(gauge)
+
+
 def test_switch_times_are_not_freed_where_they_predict_the_angle_worse():
     # the independent check's relaxing gauge: joint 1.21 -> 1.21, angle 0.78 -> 0.86 deg
     # (the shifts take up the gauge's misfit); the clean pump-stop set: 3.6 -> 1.0 both;

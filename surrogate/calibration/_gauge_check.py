@@ -61,16 +61,26 @@ def gauge_left(rmse_pa: float | None, channel: dict, allowance: float | None
             "left": bool(ratio > limit)}
 
 
-def gauge_sentence(gauge: dict | None) -> str | None:
-    """The interpretation's sentence on a gauge left above its floor (``gauge_left``)."""
+def gauge_sentence(gauge: dict | None, zero_off: bool = False) -> str | None:
+    """The interpretation's sentence on a gauge left above its floor (``gauge_left``).
+    ``zero_off``: the gauge's zero was found off at rest (``_gauge_zero``), a catalogued
+    effect the whole curves did not select: the sentence then names it as part of what is
+    left rather than saying no catalogued effect explains it (N53 of the forty-ninth
+    session's lab sets, a +30 Pa zero, said both)."""
     if not gauge or not gauge["left"]:
         return None
-    return (f"The gauge pressure is left at {gauge['rmse_pa']:.0f} Pa RMS (cross-validated) "
+    head = (f"The gauge pressure is left at {gauge['rmse_pa']:.0f} Pa RMS (cross-validated) "
             f"against its replicate floor of {gauge['floor_pa']:.0f} Pa ({gauge['ratio']:.2f} "
-            f"x, more than the {gauge['limit']:.2f} x scatter allows here): something acts "
-            "on the pressure that no catalogued effect explains (a gauge drifting with "
-            "time or temperature, or a relaxation, leak or compliance of another form than "
-            "the catalogue's); sizes read from the gauge may carry part of it.")
+            f"x, more than the {gauge['limit']:.2f} x scatter allows here)")
+    if zero_off:
+        return (head + ": part of it is the gauge's zero found off at rest (above); zero "
+                "the gauge and calibrate again to see whether anything acts on the pressure "
+                "besides it (a gauge drifting with time or temperature, or a relaxation, "
+                "leak or compliance of another form than the catalogue's).")
+    return (head + ": something acts on the pressure that no catalogued effect explains (a "
+            "gauge drifting with time or temperature, or a relaxation, leak or compliance "
+            "of another form than the catalogue's); sizes read from the gauge may carry "
+            "part of it.")
 
 
 def pressure_rms_pa(xv: CrossValidation, channel: dict) -> float | None:

@@ -192,7 +192,8 @@ def interpret(report: dict, left: dict) -> str:
         else:
             s.append("The angle's residual is consistent with replicate scatter (no "
                      "structure along the curves).")
-    gauge = gauge_sentence(report["gauge_left_after"])
+    at_rest = report.get("gauge_at_rest")
+    gauge = gauge_sentence(report["gauge_left_after"], bool(at_rest and at_rest["off"]))
     if gauge is not None:
         s.append(gauge)
     for w in report["warnings"]:
