@@ -174,3 +174,32 @@ def test_a_stopped_sensor_is_calibrated_without_its_stopped_readings(tmp_path, n
     assert report["data"]["n_rows"] == 45 - readings
     assert not report["residual_structured_after"]
     assert "angle sensor's range" in report["interpretation"]
+
+
+def test_the_hold_reading_of_the_history_is_made_from_every_reading_the_pinned_included(
+        monkeypatch):
+    """The second reading of the pump's history (falling readings read as a hold,
+    _held_reading.py) recomputes the injected volume from the readings it is given. It
+    was given the rows left after a stopped sensor's pinned readings were dropped, so
+    their time was read as the next kept reading's: at the top of a loading, injection
+    booked as unloading. It is made from every reading now (and the pinned ones are
+    dropped again inside)."""
+    from calibration_lab import emulator
+
+    import surrogate.calibration._loop as loop
+    from surrogate.calibration import run_calibration
+
+    rows = _rows("angle_sensor_stops")
+    n_all = observations_from_rows(rows).n
+    seen = []
+    real = loop.held_instead
+
+    def recorded(obs):
+        seen.append(obs.n)
+        return real(obs)
+
+    monkeypatch.setattr(loop, "held_instead", recorded)
+    monkeypatch.setattr(loop, "wants_held_reading", lambda report: True)
+    report = run_calibration(rows, emulator()).report
+    assert seen == [n_all]
+    assert report["angle_stop"] is not None

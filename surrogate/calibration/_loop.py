@@ -124,6 +124,11 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
     ``unloading_read``: this is the pass with the falling readings read as a hold, and
     that was the first reading's summary (_held_reading.py)."""
     stop_if_cancelled(cancel)
+    # every reading as given: a second reading of the pump's history (_held_reading) is
+    # made from all of them, the ones a stopped sensor pinned included -- their time
+    # between the readings kept is the pump's too (read from the kept rows alone, a stop
+    # at the top of a loading put its injection into the first unloading reading after)
+    given = obs
     if obs.angle_stop is not None and obs.angle_stop.pinned.any():   # (warned at loading)
         obs = obs.rows(~obs.angle_stop.pinned)
     if obs.n_curves < MIN_CURVES:
@@ -449,7 +454,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
                                           "hold": held_summary(report)}
     elif not zeroed and wants_held_reading(report):
         first = held_summary(report)
-        held = calibrate(held_instead(all_obs), baseline, folds, progress, cancel,
+        held = calibrate(held_instead(given), baseline, folds, progress, cancel,
                          unloading_read=first)
         if reads_better(held.report["history_read_as_hold"]["hold"], first):
             return held
