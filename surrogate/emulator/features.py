@@ -164,66 +164,45 @@ def per_kpa_from_feature(feature: np.ndarray, secant_deg_per_pa: np.ndarray | fl
 
 def between_force_nodes(values: np.ndarray, pressure_pa: np.ndarray | float) -> np.ndarray:
     """A force variable given at the first n of FORCE_PRESSURE_NODES_PA (``values`` (n,),
-    or rows (m, n) read alike), read at ``pressure_pa`` (Pa): monotone cubic (PCHIP,
-    Fritsch-Carlson slopes, as ``scipy.interpolate.PchipInterpolator``) between the
-    nodes, the first node's value below it (the linear regime) and the last's above.
+    or rows (m, n) read alike), read at ``pressure_pa`` (Pa): the natural cubic spline
+    through the nodes in log p, sampled on a fixed fine grid (``FORCE_FINE_PER_INTERVAL``
+    points per interval, the nodes among them) and read linearly between its points; the
+    first node's value below it (the linear regime), the last's above.
 
-    Why not linear: the blocked tip's force is the variable times a smooth free-tip angle,
-    so a linear variable put a corner at every node into the force curve (at L 9, t 0.5
-    mm the force's slope fell 28 % across 1750 Pa, a kink a user saw in the plot by
-    volume); PCHIP keeps each interval's values between its two nodes' (no overshoot, a
-    positive sd stays positive) with a continuous slope. Written out (no scipy object,
-    the slopes' weights of the fixed nodes kept): a query reads two rows in ~15 us."""
+    Why not linear between the nodes: the blocked tip's force is this variable times a
+    smooth free-tip angle, so a linear variable put a corner at every node into the force
+    curve (at L 9, t 0.5 mm its slope fell 28 % across 1750 Pa, a kink a user saw in the
+    plot by volume). The spline is one fixed matrix product (its cost is lost in a
+    query's noise, where a monotone cubic's slopes, computed per design, cost 8 % of a
+    design's first query); in log p, as the nodes are spaced, it follows the database's
+    curves as closely (benchmarks/RESULTS.md, forty-ninth session)."""
     y = np.asarray(values, float)
-    n = y.shape[-1]
-    q = FORCE_PRESSURE_NODES_PA[:n]
-    x = np.clip(np.asarray(pressure_pa, float), q[0], q[-1])
-    if n < 2:
-        return np.broadcast_to(y[..., :1], y.shape[:-1] + x.shape).copy()
-    slopes = pchip_slopes(q, y)
-    k = np.minimum(np.searchsorted(q, x, side="right") - 1, n - 2)
-    h = _FORCE_NODE_STEPS[k]
-    t = (x - q[k]) / h
-    t2 = t * t
-    t3 = t2 * t
-    y0, y1, d0, d1 = y[..., k], y[..., k + 1], slopes[..., k], slopes[..., k + 1]
-    return (y0 + (3 * t2 - 2 * t3) * (y1 - y0)
-            + (t3 - 2 * t2 + t) * h * d0 + (t3 - t2) * h * d1)
+    grid, matrix = _FORCE_SPLINES[y.shape[-1]]
+    fine = y @ matrix
+    x = np.asarray(pressure_pa, float)
+    if fine.ndim == 1:
+        return np.interp(x, grid, fine)
+    return np.stack([np.interp(x, grid, row) for row in fine.reshape(-1, len(grid))]
+                    ).reshape(fine.shape[:-1] + x.shape)
 
 
-_FORCE_NODE_STEPS = np.diff(FORCE_PRESSURE_NODES_PA)
+FORCE_FINE_PER_INTERVAL = 32
 
 
-def pchip_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The node slopes (..., n) of the monotone cubic through (x, y) (x (n,) increasing,
-    n >= 2; y (..., n)): the weighted harmonic mean of the neighbouring secants where
-    they agree in sign, 0 where they do not or one is 0; at the ends the
-    shape-preserving three-point form (Fritsch and Carlson 1980; Moler, Numerical
-    Computing with MATLAB, 3.6)."""
-    h = np.diff(x)
-    delta = np.diff(y, axis=-1) / h
-    if len(x) == 2:
-        return np.repeat(delta, 2, axis=-1)
-    d = np.zeros_like(y)
-    w1 = 2 * h[1:] + h[:-1]
-    w2 = h[1:] + 2 * h[:-1]
-    left, right = delta[..., :-1], delta[..., 1:]
-    same = left * right > 0
-    # where the secants agree in sign neither is 0: the harmonic mean is finite there
-    safe_l, safe_r = np.where(same, left, 1.0), np.where(same, right, 1.0)
-    d[..., 1:-1] = np.where(same, (w1 + w2) / (w1 / safe_l + w2 / safe_r), 0.0)
-    d[..., 0] = _end_slope(h[0], h[1], delta[..., 0], delta[..., 1])
-    d[..., -1] = _end_slope(h[-1], h[-2], delta[..., -1], delta[..., -2])
-    return d
-
-
-def _end_slope(h0: float, h1: float, d0: np.ndarray, d1: np.ndarray) -> np.ndarray:
-    """The shape-preserving three-point end slope of a PCHIP (``pchip_slopes``): 0 where
-    it would turn against the end secant d0, at most 3 d0 where the secants change sign."""
-    slope = ((2 * h0 + h1) * d0 - h0 * d1) / (h0 + h1)
-    slope = np.where(np.sign(slope) != np.sign(d0), 0.0, slope)
-    capped = (np.sign(d0) != np.sign(d1)) & (np.abs(slope) > np.abs(3 * d0))
-    return np.where(capped, 3 * d0, slope)
+def _force_splines() -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Per node count n >= 2: the fine grid up to the n-th force node (Pa, log-spaced
+    within each interval, the nodes exact) and the matrix (n, grid) taking node values to
+    the natural spline's there (``spline_matrix``); n = 1: the one value everywhere."""
+    q, k = FORCE_PRESSURE_NODES_PA, FORCE_FINE_PER_INTERVAL
+    grid = np.exp(np.concatenate([np.linspace(np.log(a), np.log(b), k + 1)[:-1]
+                                  for a, b in zip(q[:-1], q[1:], strict=True)]
+                                 + [np.log(q[-1:])]))
+    grid[::k] = q
+    out = {1: (q[:1], np.ones((1, 1)))}
+    for n in range(2, len(q) + 1):
+        g = grid[:k * (n - 1) + 1]
+        out[n] = (g, np.ascontiguousarray(spline_matrix(q[:n], g).T))
+    return out
 
 
 def force_at(per_kpa: np.ndarray, pressure_pa: np.ndarray | float) -> np.ndarray:
@@ -298,3 +277,6 @@ def spline_matrix(nodes: np.ndarray, fine: np.ndarray) -> np.ndarray:
     eye = np.eye(len(nodes))
     return np.column_stack([CubicSpline(ln, eye[i], bc_type="natural")(lf)
                             for i in range(len(nodes))])
+
+
+_FORCE_SPLINES = _force_splines()

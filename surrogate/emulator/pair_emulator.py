@@ -258,6 +258,7 @@ class PairEmulator:
             f, a, b = (force_at(y, p_red) for y in per_kpa)
             return self._calibrated(f, np.fmin(a, b), np.fmax(a, b))
         y, s = between_force_nodes(np.stack((mean, sd)), p_red)
+        s = np.maximum(s, 0.0)      # a spline between two small sds may dip below 0
         ratio, lo, hi = (angle_ratio_from_feature(v) for v in (y, y - z * s, y + z * s))
         f, f_lo, f_hi = self._calibrated(*force_from_angle_ratio(angle, angle_lo, angle_hi,
                                                                  ratio, lo, hi))
