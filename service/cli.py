@@ -24,6 +24,7 @@ from solver.number_text import (
     WrittenNumber,
     ascii_float,
     ascii_int,
+    is_integer_text,
     unheld_words,
 )
 from solver.plain_text import escaped
@@ -60,7 +61,7 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self._negative_number_matcher = NEGATIVE_NUMBER    # -1e3 a value, as -5 is
         self.register("type", float, held_float)
-        self.register("type", int, ascii_int)
+        self.register("type", int, held_int)
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {shown(self._with_range(message))} "
@@ -74,8 +75,9 @@ class Parser(argparse.ArgumentParser):
         if listed is not None:   # a list option's word (service.commands.predict.number_list)
             allowed = self._allowed(listed[1])
             return message if allowed is None else f"{message[:-1]}; allowed: {allowed})"
-        unheld = re.fullmatch(r"argument (\S+): .* does not fit a 64-bit float .*", message)
-        if unheld is not None:   # held_float's refusal
+        unheld = re.fullmatch(r"argument (\S+): .* (does not fit a 64-bit float|digits long,) .*",
+                              message)
+        if unheld is not None:   # held_float's or held_int's refusal
             allowed = self._allowed(unheld[1])
             return message if allowed is None else f"{message} (allowed: {allowed})"
         match = re.fullmatch(r"argument (\S+): invalid (float|int) value: (.*)", message)
@@ -102,6 +104,17 @@ def held_float(text: str) -> float:
     if isinstance(number, WrittenNumber):
         raise argparse.ArgumentTypeError(unheld_words(number))
     return number
+
+
+def held_int(text: str) -> int:
+    """An integer option's word read by the one rule (``ascii_int``); a whole number of
+    more digits than Python converts (4300) refused as too long for any allowed value --
+    it was told "is not a whole number", which it is (the parser adds the range)."""
+    digits = text.strip().lstrip("+-")
+    if is_integer_text(text) and len(digits) > sys.get_int_max_str_digits():
+        raise argparse.ArgumentTypeError(f"{digits[:20]}... is {len(digits)} digits long, "
+                                         "past any allowed value")
+    return ascii_int(text)
 
 
 def build_parser() -> argparse.ArgumentParser:

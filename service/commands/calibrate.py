@@ -16,6 +16,11 @@ import json
 import sys
 from pathlib import Path
 
+from service.commands.numbers import checked_int, int_action
+
+#: folds of the grouped cross-validation, lo <= folds <= hi (POST /v1/calibrate's too)
+FOLDS = (2, 50)
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
@@ -35,8 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "model's name, or a model file")
     parser.add_argument("--models-dir", type=Path,
                         help="where --save writes (default: the service's models_dir)")
-    parser.add_argument("--folds", type=int, default=5,
-                        help="folds of the grouped cross-validation by curve (default 5)")
+    int_action(parser.add_argument("--folds", type=int, default=5,
+                                   help="folds of the grouped cross-validation by curve "
+                                        "(default 5)"), "folds", *FOLDS)
     parser.add_argument("--strict", action="store_true",
                         help="refuse data that only get a warning otherwise (pressures that "
                              "look like kPa, duplicated rows)")
@@ -70,8 +76,7 @@ def run(args: argparse.Namespace) -> int:
         save_model,
     )
 
-    if not 2 <= args.folds <= 50:
-        raise InputError("--folds", f"got {args.folds}", "2 <= folds <= 50")
+    checked_int("--folds", args.folds, "folds", *FOLDS)
     try:        # the report's directory is made if need be; both outputs checked now
         args.report.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

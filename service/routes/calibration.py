@@ -13,6 +13,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Request, Security
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
+from service.commands.calibrate import FOLDS
 from service.deps import API_KEY_HEADER, ModelsDep, SettingsDep, require_api_key
 from service.disconnect import unless_disconnected
 from service.errors import (
@@ -76,8 +77,9 @@ class CalibrateRequest(Schema):
                              description="save the augmented model under this name "
                                          "(needs X-API-Key; a new name, not a built-in "
                                          "model's: emulator, exponential, fitted, paper)")
-    folds: int = Field(5, ge=2, le=50, description="folds of the cross-validation by curve "
-                       "(reduced to the number of curves when there are fewer)")
+    folds: int = Field(5, ge=FOLDS[0], le=FOLDS[1], description="folds of the "
+                       "cross-validation by curve (reduced to the number of curves when "
+                       "there are fewer)")
     strict: bool = Field(False, description="refuse data that otherwise only get a warning "
                          "(pressures that look like kPa, duplicated rows)")
 

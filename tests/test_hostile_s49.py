@@ -1,0 +1,87 @@
+"""The forty-ninth session's hostile-input audit, round ten (after tests/test_hostile_s48.py):
+an integer option's word the parser refuses (``--workers two``) told the option's range,
+from the same table as the check after it; measured data's cells refused with the forms of
+a number and echoed as written.
+
+Each test failed on the code before its fix (commit messages say which), bar the guards.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+from test_cli_fuzz import run, visible_lines
+
+# -- 1. an integer option's word that is no integer ---------------------------------------------
+
+INTEGER = "is not a whole number (ASCII decimal digits, as 5; allowed: "
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["precompute", "g.toml", "--db", "x.h5", "--workers", "two"],
+     f"--workers: 'two' {INTEGER}1 <= N <= 256)"),
+    (["solve", "--mesh", "1.5"], f"--mesh: '1.5' {INTEGER}0 <= mesh_level <= 2)"),
+    (["serve", "--port", "1e9"], f"--port: '1e9' {INTEGER}1 <= port <= 65535)"),
+    (["precompute", "g.toml", "--db", "x.h5", "--adaptive", "x"],
+     f"--adaptive: 'x' {INTEGER}1 <= N <= 10000)"),
+    (["inverse", "--angle-deg", "30", "--pressure-pa", "1000", "-n", "2.0"],
+     f"-n/--n-results: '2.0' {INTEGER}1 <= n <= 20 designs)"),
+    (["calibrate", "x.csv", "--report", "r.json", "--folds", "five"],
+     f"--folds: 'five' {INTEGER}2 <= folds <= 50)"),
+    # a whole number too long to convert was "not a whole number"
+    (["precompute", "g.toml", "--db", "x.h5", "--workers", "9" * 5000],
+     "--workers: 99999999999999999999... is 5000 digits long, past any allowed value "
+     "(allowed: 1 <= N <= 256)"),
+])
+def test_an_integer_options_word_the_parser_refuses_names_the_range(argv, words):
+    """`--workers two`, `--mesh 1.5`, `--port 1e9` were told the form of a whole number but
+    no range, where `--workers 0` is told "1 <= N <= 256" by the check after the parser:
+    the parser's refusal now states the same range, from the same table."""
+    code, out, err, escaped = run(argv)
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1 and not out, (err, out)
+    assert words in lines[0], lines[0]
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["precompute", "g.toml", "--db", "x.h5", "--workers", "0"],
+     "--workers: got 0 (allowed: 1 <= N <= 256)"),
+    (["serve", "--port", "70000"], "--port: got 70000 (allowed: 1 <= port <= 65535)"),
+    (["inverse", "--angle-deg", "30", "--pressure-pa", "1000", "-n", "21"],
+     "-n: got 21 (allowed: 1 <= n <= 20 designs)"),
+    (["calibrate", "x.csv", "--report", "r.json", "--folds", "51"],
+     "--folds: got 51 (allowed: 2 <= folds <= 50)"),
+    (["precompute", "g.toml", "--db", "x.h5", "--adaptive", "0"],
+     "--adaptive: got 0 (allowed: 1 <= N <= 10000)"),
+    (["solve", "--mesh", "3"], "--mesh: got 3 (allowed: 0 <= mesh_level <= 2)"),
+])
+def test_an_integer_out_of_range_is_told_the_same_range(argv, words):
+    """Guard: the check after the parser says the range in the parser's words."""
+    code, out, err, escaped = run(argv)
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, (err, out)
+    assert words in lines[0], lines[0]
+
+
+def test_every_integer_option_carries_its_range():
+    """Guard: every int option of every command has its allowed range attached."""
+    from service.cli import build_parser
+
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    ints = [(name, a) for name, command in commands.choices.items()
+            for a in command._actions if a.type is int]
+    assert len(ints) >= 6
+    assert not [f"{name} {'/'.join(a.option_strings)}" for name, a in ints
+                if not getattr(a, "allowed", None)]
+
+
+def test_the_calibrate_routes_folds_are_the_command_lines():
+    """Guard: one table of the folds for `balloon calibrate --folds` and the request."""
+    from service.commands.calibrate import FOLDS
+    from service.routes.calibration import CalibrateRequest
+
+    metadata = CalibrateRequest.model_fields["folds"].metadata
+    assert [m.ge for m in metadata if hasattr(m, "ge")] == [FOLDS[0]]
+    assert [m.le for m in metadata if hasattr(m, "le")] == [FOLDS[1]]
