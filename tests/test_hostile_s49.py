@@ -85,3 +85,53 @@ def test_the_calibrate_routes_folds_are_the_command_lines():
     metadata = CalibrateRequest.model_fields["folds"].metadata
     assert [m.ge for m in metadata if hasattr(m, "ge")] == [FOLDS[0]]
     assert [m.le for m in metadata if hasattr(m, "le")] == [FOLDS[1]]
+
+
+# -- 2. measured data's cells -------------------------------------------------------------------
+
+DATA = __import__("pathlib").Path(__file__).parent / "data"
+
+
+def _one_cell_changed(tmp_path, name: str, old: str, new: str) -> str:
+    """A test data file with the first data row's ``old`` cell written ``new``."""
+    lines = [line for line in (DATA / name).read_text(encoding="utf-8").splitlines()
+             if not line.startswith("#")]
+    assert old in lines[1]
+    lines[1] = lines[1].replace(old, new, 1)
+    path = tmp_path / "data.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return str(path)
+
+
+NUMBER_WORDS = "(numbers in ASCII decimal digits, as 1000, 2.5 or 1e-3) (allowed: 0 < L_mm <= 60)"
+
+
+@pytest.mark.parametrize(("name", "old", "new", "words"), [
+    # a hexadecimal cell was "not a number: '0x8'" without the forms a number takes
+    ("lab_gauge_noise_air_tilt_two_flows_rad.csv", ",12.9,", ",0x8,",
+     f"L_mm: row 1: not a number: '0x8' {NUMBER_WORDS}"),
+    # a comma-separated file's quoted decimal comma: the same words
+    ("lab_gauge_noise_air_tilt_two_flows_rad.csv", ",12.9,", ',"12,9",',
+     f"L_mm: row 1: not a number: '12,9' {NUMBER_WORDS}"),
+    # Arabic-Indic digits with a decimal comma were echoed '٨.40', the comma converted
+    ("lab_gauge_noise_body_stiffer.csv", ";8,40;", ";٨,40;",
+     f"L_mm: row 1: not a number: '٨,40' {NUMBER_WORDS}"),
+    ("lab_gauge_noise_body_stiffer.csv", ";8,40;", ";8,4,0;",
+     f"L_mm: row 1: not a number: '8,4,0' {NUMBER_WORDS}"),
+])
+def test_a_cell_that_is_no_number_is_echoed_as_written_with_the_forms(
+        tmp_path, name, old, new, words):
+    from surrogate.calibration import DataError, load_observations
+
+    with pytest.raises(DataError) as info:
+        load_observations(_one_cell_changed(tmp_path, name, old, new))
+    assert str(info.value) == words
+
+
+def test_a_decimal_comma_file_is_read_as_before(tmp_path):
+    """Guard: the ';' file's decimal commas still read as points."""
+    from surrogate.calibration import load_observations
+
+    same = load_observations(_one_cell_changed(tmp_path, "lab_gauge_noise_body_stiffer.csv",
+                                               ";8,40;", ";8,40;"))
+    assert same.design(0).L_mm == pytest.approx(8.4)

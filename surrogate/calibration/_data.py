@@ -350,10 +350,10 @@ def _number(value: object, column: str, row: int) -> float:
         x = float(value)  # type: ignore[arg-type]
     except OverflowError:
         raise _cell_error(column, "number too large: " + _short(value), row) from None
-    except (TypeError, ValueError):
-        clock = f" (a clock: write {CLOCK_HOW})" if column == "time_s" and is_clock(value) \
-            else ""
-        raise _cell_error(column, "not a number: " + _short(value) + clock, row) from None
+    except (TypeError, ValueError):   # '0x8', '1,5' in a comma-separated file: the forms
+        how = (f"a clock: write {CLOCK_HOW}" if column == "time_s" and is_clock(value)
+               else f"numbers in {NUMBER_FORM}")
+        raise _cell_error(column, f"not a number: {_short(value)} ({how})", row) from None
     if isinstance(value, str) and not is_number_text(value):   # '1_0' (10), '٧' (7)
         raise _cell_error(column, f"not a number: {_short(value)} (numbers in {NUMBER_FORM})",
                           row)
