@@ -112,13 +112,14 @@ class _Reader:
 
     def __init__(self, text: str, source: str) -> None:
         self.text, self.source = text, source
-        self.lines = text.splitlines()
-        self.spans = key_lines(text)
 
     def fail(self, path: tuple, field: str, message: str, allowed: str | None = None,
              needle: str | None = None) -> GridError:
-        return GridError(self.source, line_of(self.lines, self.spans, path, needle), field,
-                         message, allowed)
+        """The error at ``path``'s line: the text's lines scanned for it only now (a
+        grid read without a fault never needs them)."""
+        line = line_of(self.text.splitlines(), key_lines(self.text, until=tuple(path)),
+                       path, needle)
+        return GridError(self.source, line, field, message, allowed)
 
     def check_keys(self, table: dict, where: tuple, allowed: tuple[str, ...]) -> None:
         for key in table:
@@ -244,13 +245,13 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     except RecursionError:  # arrays or tables nested thousands deep
         raise GridError(source, 1, "toml", "values nested too deeply to parse",
                         f"at most {MAX_NESTING} levels of [ ] and {{ }}") from None
+    reader.check_keys(data, (), TOP_KEYS)   # first: no walk of a file of unknown keys
     for path, number in unheld(data):     # a number the float does not hold, as written
         name = next((p for p in reversed(path) if p in LIMITS_MM), path[-1])
         allowed = (_limits(str(name)) if name in LIMITS_MM else TERM_WORDS
                    if path[0] == "materials" else range_words(str(name), "a number"))
         raise reader.fail(path, ".".join(map(str, path)), unheld_words(number), allowed,
                           needle=number.text)
-    reader.check_keys(data, (), TOP_KEYS)
     for key in ("name", "description"):
         if key in data and not isinstance(data[key], str):
             raise reader.fail((key,), key, f"{data[key]!r} is not a string", "free text")
