@@ -185,3 +185,39 @@ def test_a_refused_keys_line_is_found_deep_in_a_grid():
     with pytest.raises(GridError) as info:
         parse_grid(head + sweeps + "[[sweep]]\nL_mm = [\n  7.1,\n  1e-400,\n]\n")
     assert info.value.line == 2 + 900 + 4 and "1e-400" in str(info.value)
+
+
+# -- 4. two outputs of one command at one path --------------------------------------------------
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["solve", "--json", "{d}/o.json", "--csv", "{d}/./o.json"],
+     "--csv: {d}/./o.json is also --json's file: the second write would replace the first "
+     "(allowed: a path other than --json's)"),
+    (["calibrate", str(DATA / "lab_gauge_noise_body_stiffer.csv"), "--report", "{d}/r.png",
+      "--plot", "{d}/r.png"],
+     "--plot: {d}/r.png is also --report's file"),
+    (["fit", "--db", "{d}/c.h5", "-o", "{d}/m.json", "--emulator-output", "{d}/link.json"],
+     "--emulator-output: {d}/link.json is also --output's file"),
+    (["fit", "--db", "{d}/c.h5", "-o", "{d}/rep/report.json", "--report-dir", "{d}/rep"],
+     "--report-dir: {d}/rep/report.json is also --output's file"),
+])
+def test_two_outputs_of_one_command_at_one_path_are_refused_before_the_work(
+        tmp_path, monkeypatch, argv, words):
+    """`fit -o m.json --emulator-output m.json` fitted for minutes and wrote the
+    exponential model, then the emulator over it; `solve --json o.json --csv o.json`
+    and `calibrate --report r.png --plot r.png` alike: refused now, before the work,
+    naming the later option (by any name: `./`, a symlink)."""
+    import solver
+    import surrogate.calibration
+
+    (tmp_path / "rep").mkdir()
+    (tmp_path / "c.h5").write_bytes(b"")
+    (tmp_path / "link.json").symlink_to(tmp_path / "m.json")
+    monkeypatch.setattr(solver, "solve", lambda *a, **k: pytest.fail("a solve started"))
+    monkeypatch.setattr(surrogate.calibration, "run_calibration",
+                        lambda *a, **k: pytest.fail("a calibration started"))
+    code, out, err, escaped = run([word.format(d=tmp_path) for word in argv])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, (err, out, escaped)
+    assert words.format(d=tmp_path) in lines[0], lines[0]

@@ -65,7 +65,7 @@ def _deg(value: float | None, missing: str = "n/a") -> str:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from service.commands.outputs import PLOT_SUFFIXES, check_output
+    from service.commands.outputs import PLOT_SUFFIXES, check_output, distinct_outputs
     from solver.atomic_file import atomic_output, write_text_atomic
     from solver.errors import InputError
     from surrogate.calibration import (
@@ -86,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
     data = (("the data file", args.data),)
     check_output(args.report, "--report", inputs=data)
     check_output(args.plot, "--plot", PLOT_SUFFIXES, inputs=data)
+    distinct_outputs((("--report", args.report), ("--plot", args.plot)))
     obs = load_observations(args.data, strict=args.strict)  # validates before any work
     if args.save is not None:  # a bad or taken name ("" too) is refused before the work
         from service.models import check_new_model_name

@@ -118,11 +118,17 @@ def _design(args: argparse.Namespace):
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse output paths that cannot be written before spending minutes on a solve."""
-    from service.commands.outputs import PLOT_SUFFIXES, VTK_SUFFIXES, check_output
+    from service.commands.outputs import (
+        PLOT_SUFFIXES,
+        VTK_SUFFIXES,
+        check_output,
+        distinct_outputs,
+    )
 
-    for option, suffixes in (("json", None), ("csv", None), ("plot", PLOT_SUFFIXES),
-                             ("vtk", VTK_SUFFIXES)):
+    outputs = (("json", None), ("csv", None), ("plot", PLOT_SUFFIXES), ("vtk", VTK_SUFFIXES))
+    for option, suffixes in outputs:
         check_output(getattr(args, option), f"--{option}", suffixes)
+    distinct_outputs(tuple((f"--{option}", getattr(args, option)) for option, _ in outputs))
 
 
 def _settings(args: argparse.Namespace) -> SolverSettings:
