@@ -221,3 +221,48 @@ def test_two_outputs_of_one_command_at_one_path_are_refused_before_the_work(
     lines = visible_lines(err)
     assert code == 2 and escaped is None and len(lines) == 1, (err, out, escaped)
     assert words.format(d=tmp_path) in lines[0], lines[0]
+
+
+# -- 5. /v1/calibrate's rows, the list and a row ------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory):
+    """The app without models: nothing here reaches them."""
+    from fastapi.testclient import TestClient
+    from service_fakes import settings_for
+
+    from service.app import create_app
+
+    with TestClient(create_app(settings_for(tmp_path_factory.mktemp("s49")))) as c:
+        yield c
+
+
+@pytest.mark.parametrize(("rows", "field", "allowed"), [
+    ({"a": 1}, "rows", "1-20000 values"),
+    ([], "rows", "1-20000 values"),
+    (None, "rows", "1-20000 values"),
+    ([1, {}], "rows.0", "an object: one observation, its columns named as in "
+                        "docs/measured-data.md"),
+])
+def test_the_rows_and_a_row_are_told_what_they_take_not_a_cells_range(
+        client, rows, field, allowed):
+    """`"rows": {}` and `"rows": []` were told "allowed: a finite number (|value| <= 1e15),
+    text ... or null" -- what a cell holds -- and a row given as 1 the same: the list is
+    told its size, a row that it is an object of columns."""
+    from service_fakes import assert_problem
+
+    problem = assert_problem(client.post("/v1/calibrate", json={"rows": rows}), 422, field)
+    error = next(e for e in problem["errors"] if e["field"] == field)
+    assert error["allowed"] == allowed
+
+
+def test_a_cell_is_still_told_what_a_cell_holds(client):
+    """Guard: a cell's words stay the cell's."""
+    from service_fakes import assert_problem
+
+    from surrogate.measured_cell import CELL_WORDS
+
+    problem = assert_problem(client.post("/v1/calibrate", json={"rows": [{"L_mm": True}]}),
+                             422, "rows.0.L_mm")
+    assert problem["errors"][0]["allowed"] == CELL_WORDS

@@ -89,7 +89,9 @@ class CalibrateRequest(Schema):
 # its limits stated in every validation error, as the other requests' are
 FIELD_RANGES.update(field_ranges([CalibrateRequest]))
 FIELD_FORMS["save"] = "a new name of " + name_rule()
-FIELD_RANGES["rows.*"] = CELL_WORDS
+FIELD_RANGES["rows.*"] = ("an object: one observation, its columns named as in "
+                          "docs/measured-data.md")
+FIELD_RANGES["rows.*.*"] = CELL_WORDS
 
 
 class Candidate(BaseModel):
