@@ -62,6 +62,13 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = NEGATIVE_NUMBER    # -1e3 a value, as -5 is
         self.register("type", float, held_float)
         self.register("type", int, held_int)
+        self.register("action", None, StoreOnce)       # argparse's default action
+        self.register("action", "store", StoreOnce)
+
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        parsed, rest = super().parse_known_args(args, namespace)
+        parsed.__dict__.pop(StoreOnce.GIVEN, None)    # StoreOnce's record, not an option
+        return parsed, rest
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {shown(self._with_range(message))} "
@@ -94,6 +101,27 @@ class Parser(argparse.ArgumentParser):
         return next((a.allowed for a in self._actions   # type: ignore[attr-defined]
                      if getattr(a, "allowed", None) and "/".join(a.option_strings) == option),
                     None)
+
+
+class StoreOnce(argparse._StoreAction):
+    """A value option given twice refused, as a request's field or query parameter given
+    twice is (``service.repeated_fields``): argparse keeps the last, so `--L-mm 7.1 --L-mm
+    9` answered for 9 mm and `db export --where L_mm=7.1 --where t_mm=0.5` exported every
+    record at t = 0.5 mm, without a word. (``--where`` and ``--pair`` gather theirs.)"""
+
+    GIVEN = "_options_given"     # the dests given so far, in the namespace while parsing
+
+    def __call__(self, parser, namespace, values, option_string=None):  # type: ignore[override]
+        self.once(parser, namespace)
+        super().__call__(parser, namespace, values, option_string)
+
+    def once(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace) -> None:
+        """The parser's error unless this is the option's first time on the line."""
+        given = namespace.__dict__.setdefault(self.GIVEN, set())
+        if self.option_strings and self.dest in given:
+            parser.error(f"argument {'/'.join(self.option_strings)}: given twice (allowed: "
+                         "each option once)")
+        given.add(self.dest)
 
 
 def held_float(text: str) -> float:

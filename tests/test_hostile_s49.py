@@ -9,6 +9,7 @@ Each test failed on the code before its fix (commit messages say which), bar the
 from __future__ import annotations
 
 import argparse
+import json
 
 import pytest
 from test_cli_fuzz import run, visible_lines
@@ -208,13 +209,13 @@ def test_two_outputs_of_one_command_at_one_path_are_refused_before_the_work(
     exponential model, then the emulator over it; `solve --json o.json --csv o.json`
     and `calibrate --report r.png --plot r.png` alike: refused now, before the work,
     naming the later option (by any name: `./`, a symlink)."""
-    import solver
+    import solver.stepping
     import surrogate.calibration
 
     (tmp_path / "rep").mkdir()
     (tmp_path / "c.h5").write_bytes(b"")
     (tmp_path / "link.json").symlink_to(tmp_path / "m.json")
-    monkeypatch.setattr(solver, "solve", lambda *a, **k: pytest.fail("a solve started"))
+    monkeypatch.setattr(solver.stepping, "inflate", lambda *a, **k: pytest.fail("a solve"))
     monkeypatch.setattr(surrogate.calibration, "run_calibration",
                         lambda *a, **k: pytest.fail("a calibration started"))
     code, out, err, escaped = run([word.format(d=tmp_path) for word in argv])
@@ -266,3 +267,44 @@ def test_a_cell_is_still_told_what_a_cell_holds(client):
     problem = assert_problem(client.post("/v1/calibrate", json={"rows": [{"L_mm": True}]}),
                              422, "rows.0.L_mm")
     assert problem["errors"][0]["allowed"] == CELL_WORDS
+
+
+# -- 6. an option given twice --------------------------------------------------------------------
+
+SHIPPED_DB = str(__import__("pathlib").Path(__file__).parents[1] / "service" / "data"
+                 / "curves.h5")
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["predict", "--model", "paper", "--L-mm", "7.1", "--L-mm", "9", "--t-mm", "0.5",
+      "--pressures", "1000"], "argument --L-mm: given twice (allowed: each option once)"),
+    (["predict", "--model", "paper", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1000",
+      "--pressures", "2000"], "argument --pressures: given twice (allowed: each option once)"),
+    (["inverse", "--angle-deg", "30", "--angle-deg", "40", "--pressure-pa", "1000"],
+     "argument --angle-deg: given twice"),
+    (["solve", "--mesh", "0", "--mesh", "2"], "argument --mesh: given twice"),
+    (["db", "export", SHIPPED_DB, "--where", "L_mm=7.1", "--where", "L_mm=8"],
+     "--where L_mm: given twice (allowed: each field once)"),
+])
+def test_an_option_given_twice_is_refused_not_read_as_its_last(argv, words, monkeypatch):
+    """argparse keeps an option's last value: `--L-mm 7.1 --L-mm 9` answered for 9 mm,
+    `--pressures 1000 --pressures 2000` for 2000 Pa alone, without a word, where a request
+    field or query parameter given twice is refused (service/repeated_fields.py)."""
+    import solver.stepping
+
+    monkeypatch.setattr(solver.stepping, "inflate", lambda *a, **k: pytest.fail("a solve"))
+    code, out, err, escaped = run(argv)
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1 and not out, (err, out)
+    assert words in lines[0], lines[0]
+
+
+def test_where_given_twice_filters_on_both():
+    """`db export --where L_mm=7.1 --where t_mm=0.5` exported every record at t = 0.5 mm
+    (the second --where replaced the first): both filters hold now."""
+    code, out, err, escaped = run(["db", "ls", SHIPPED_DB, "--where", "L_mm=7.1",
+                                   "--where", "t_mm=0.5", "--json"])
+    assert code == 0 and escaped is None, err
+    records = [json.loads(line) for line in out.splitlines() if line.strip()]
+    assert records and all(r["design"]["L_mm"] == 7.1 and r["design"]["t_mm"] == 0.5
+                           for r in records), records[:2]

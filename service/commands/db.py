@@ -40,8 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     ls = sub.add_parser("ls", help="list the records")
     ls.add_argument("db", help="curve database (HDF5)")
     ls.add_argument("--status", choices=("complete", "stopped", "failed"))
-    ls.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE",
-                    help="filter on design, settings or status fields, e.g. L_mm=7.1")
+    ls.add_argument("--where", nargs="+", action="extend", default=[], metavar="FIELD=VALUE",
+                    help="filter on design, settings or status fields, e.g. L_mm=7.1 "
+                         "(repeatable)")
     ls.add_argument("--json", action="store_true", help="JSON lines instead of a table")
     ls.set_defaults(func=run_ls)
     show = sub.add_parser("show", help="show one record, or the file's metadata")
@@ -53,7 +54,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     export.add_argument("db", help="curve database (HDF5)")
     export.add_argument("keys", nargs="*", metavar="KEY", help="records (default: all)")
     export.add_argument("--format", choices=("csv", "json"), default="csv")
-    export.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE")
+    export.add_argument("--where", nargs="+", action="extend", default=[],
+                        metavar="FIELD=VALUE", help="as ls --where")
     export.add_argument("--status", choices=("complete", "stopped", "failed"))
     export.add_argument("-o", "--output", default="-", help="output file (default stdout)")
     export.set_defaults(func=run_export)

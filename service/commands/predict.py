@@ -18,6 +18,7 @@ import os
 import re
 from pathlib import Path
 
+from service.cli import StoreOnce
 from service.commands.numbers import (
     STIFFNESS_SCALE_LIMITS,
     allowed_action,
@@ -67,12 +68,14 @@ def number_list(text: str) -> list[float]:
     return numbers
 
 
-class NumberListAction(argparse.Action):
+class NumberListAction(StoreOnce):
     """``nargs="+"`` of ``number_list`` words, flattened into one list of floats: at most
-    MAX_ASKED_VALUES of them, the limit of the same list in an HTTP request."""
+    MAX_ASKED_VALUES of them, the limit of the same list in an HTTP request; the option
+    once (``--pressures 1000 --pressures 2000`` was 2000 Pa alone)."""
 
     def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
                  values: object, option_string: str | None = None) -> None:
+        self.once(parser, namespace)
         numbers = [v for word in values for v in word]  # type: ignore[attr-defined]
         if len(numbers) > MAX_ASKED_VALUES:
             parser.error(f"argument {option_string}: {len(numbers)} values (allowed: 1 to "
