@@ -308,3 +308,34 @@ def test_where_given_twice_filters_on_both():
     records = [json.loads(line) for line in out.splitlines() if line.strip()]
     assert records and all(r["design"]["L_mm"] == 7.1 and r["design"]["t_mm"] == 0.5
                            for r in records), records[:2]
+
+
+# -- 7. a grid's samples past the grid's design limit -------------------------------------------
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    # one table: 100000 of each of 4 pairs with both tips was 800,000 designs, 77 s to list
+    ('[[sample]]\nn = 100000\ntips = ["free", "blocked"]\n',
+     "line 2: n: 800000 designs (n = 100000, times 4 pair(s), times 2 tip(s)) "
+     "(allowed: at most 100000 designs per grid)"),
+    # three tables of 40,000 each: 120,000 (each table alone within the limit)
+    ("".join(f"[[sample]]\nn = 10000\nseed = {seed}\n" for seed in (1, 2, 3)),
+     "line 7: sample: more than 100000 designs (allowed: at most 100000 designs per grid)"),
+])
+def test_a_grids_samples_past_its_design_limit_are_refused(text, words):
+    """"More than 100 000 designs" is refused in a grid's sweeps (docs/database.md), but
+    [[sample]] tables were not counted: `n = 100000` with the box's 4 pairs and both tips
+    listed 800,000 designs to solve (in 77 s and 640 MB), three tables added up. Refused
+    now, a table before its designs are drawn."""
+    from solver.precompute.grid import GridError, parse_grid
+
+    with pytest.raises(GridError) as info:
+        parse_grid(text)
+    assert words in str(info.value)
+
+
+def test_the_shipped_grids_samples_are_read_as_before():
+    """Guard: grids/emulator.toml (samples and sweeps) lists its 2105 designs."""
+    from solver.precompute.grid import load_grid
+
+    assert len(load_grid(DATA.parents[1] / "grids" / "emulator.toml")) == 2105

@@ -272,6 +272,9 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     for index, sample in enumerate(samples):
         for point in _sample(reader, ("sample", index), sample, settings):
             points.setdefault(point.key, point)
+        if len(points) > MAX_POINTS:  # the samples together (each is checked alone first)
+            raise reader.fail(("sample", index), "sample", f"more than {MAX_POINTS} designs",
+                              f"at most {MAX_POINTS} designs per grid")
     if samples and "sweep" not in data:
         return Grid(source, text, settings, tuple(points.values()))
     sweeps = data.get("sweep", [{}])
@@ -380,6 +383,11 @@ def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
     faces = table.get("faces", False)
     if not isinstance(faces, bool):
         raise reader.fail((*where, "faces"), "faces", f"{faces!r}", "true or false")
+    count = ints["n"] * len(pairs) * len(tips)
+    if count > MAX_POINTS:   # before drawing them: n = 100000 of 4 pairs, 2 tips was 800,000
+        raise reader.fail((*where, "n"), "n", f"{count} designs (n = {ints['n']}, times "
+                          f"{len(pairs)} pair(s), times {len(tips)} tip(s))",
+                          f"at most {MAX_POINTS} designs per grid")
     variants = {"free": settings,
                 "blocked": replace(settings, tip="blocked", max_pressure_pa=float(p_max))}
     per_pair = [sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"], ints["skip"],
