@@ -339,3 +339,26 @@ def test_the_shipped_grids_samples_are_read_as_before():
     from solver.precompute.grid import load_grid
 
     assert len(load_grid(DATA.parents[1] / "grids" / "emulator.toml")) == 2105
+
+
+# -- 8. a JSON data file of a list of lists of rows ---------------------------------------------
+
+
+def test_a_json_data_file_nested_one_list_too_deep_names_its_first_row(tmp_path):
+    """`[[{row}, {row}, ...]]` (the rows wrapped once more, as a script that collects
+    runs writes them) was refused as "curve_id: required column is missing", the first
+    row's columns read as none: its first row is named now, a list where an object goes."""
+    import csv
+
+    from surrogate.calibration import DataError, load_observations
+
+    lines = [line for line in (DATA / "lab_gauge_noise_air_tilt_two_flows_rad.csv")
+             .read_text(encoding="utf-8").splitlines() if not line.startswith("#")]
+    rows = list(csv.DictReader(lines))
+    path = tmp_path / "runs.json"
+    path.write_text(json.dumps([rows]), encoding="utf-8")
+    with pytest.raises(DataError) as info:
+        load_observations(path)
+    assert str(info.value).startswith("rows: row 1: a row must be an object of column -> value")
+    path.write_text(json.dumps(rows), encoding="utf-8")    # guard: the rows themselves read
+    assert load_observations(path).n_curves == 6

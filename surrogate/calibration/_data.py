@@ -401,6 +401,12 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
                         f"{MIN_POINTS_PER_CURVE} points")
     if len(rows) > MAX_ROWS:
         raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
+    # first: a list of lists of rows (`[[{...}, ...]]`) was "curve_id: required column is
+    # missing", its first row's columns read as none
+    not_object = next((i for i, r in enumerate(rows, 1) if not isinstance(r, dict)), None)
+    if not_object is not None:
+        raise DataError("rows", "a row must be an object of column -> value", not_object,
+                        "an object of the columns " + ", ".join(REQUIRED + OPTIONAL))
     rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
     headers = list(dict.fromkeys(k for r in rows if isinstance(r, dict) for k in r))
     try:
@@ -428,9 +434,6 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     parsed = []
     written: list[float] = []    # the volume_ul column as written (its last digit)
     for i, raw in enumerate(rows, start=1):
-        if not isinstance(raw, dict):
-            raise DataError("rows", "a row must be an object of column -> value", i,
-                            "an object of the columns " + ", ".join(REQUIRED + OPTIONAL))
         extra = sorted(set(raw) - known)
         if extra:       # named as the file names it, cut short (a 10,000-character key)
             name = str(extra[0])
