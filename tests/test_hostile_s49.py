@@ -362,3 +362,17 @@ def test_a_json_data_file_nested_one_list_too_deep_names_its_first_row(tmp_path)
     assert str(info.value).startswith("rows: row 1: a row must be an object of column -> value")
     path.write_text(json.dumps(rows), encoding="utf-8")    # guard: the rows themselves read
     assert load_observations(path).n_curves == 6
+
+
+# -- 9. the fastest pump's time to the FE's end -------------------------------------------------
+
+
+def test_the_time_the_fe_range_ends_is_not_zero_at_the_fastest_pump():
+    """At 1000 ul/s (the fastest flow a request takes) the FE's range of the standard
+    design ends after about 0.03 s: it was said "ends after 0.0 s"."""
+    code, out, err, escaped = run(["predict", "--L-mm", "7.1", "--t-mm", "0.5",
+                                   "--times", "0.01", "100", "--flow-ul-s", "1000", "--json"])
+    assert code == 0 and escaped is None, err
+    messages = " ".join(json.loads(out)["validity"]["messages"])
+    ends = __import__("re").search(r"the FE's range ends after (\S+) s", messages)
+    assert ends is not None and 0.01 < float(ends[1]) < 1, messages
