@@ -376,3 +376,25 @@ def test_the_time_the_fe_range_ends_is_not_zero_at_the_fastest_pump():
     messages = " ".join(json.loads(out)["validity"]["messages"])
     ends = __import__("re").search(r"the FE's range ends after (\S+) s", messages)
     assert ends is not None and 0.01 < float(ends[1]) < 1, messages
+
+
+# -- 10. a band level the command line took and a request refused -------------------------------
+
+
+@pytest.mark.parametrize("command", [
+    ["predict", "--L-mm", "7.1", "--t-mm", "0.5", "--pressures", "1000"],
+    ["inverse", "--L-mm", "7.1", "--t-mm", "0.5", "--angles-deg", "30"],
+])
+def test_a_band_level_a_request_refuses_is_refused_on_the_command_line(command, client):
+    """`balloon predict --level 0.9999` answered (a band of 3.9 sd) where `POST /v1/predict`
+    with `"level": 0.9999` is a 422 "0.5 <= level <= 0.999": one range for both now."""
+    from service_fakes import assert_problem
+
+    code, out, err, escaped = run([*command, "--level", "0.9999"])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, (err, out)
+    assert "--level: got 0.9999 (allowed: 0.5 <= level <= 0.999)" in lines[0]
+    problem = assert_problem(client.post("/v1/predict", json={
+        "design": {"L_mm": 7.1, "t_mm": 0.5}, "pressures_pa": [1000], "level": 0.9999}),
+        422, "level")
+    assert problem["errors"][0]["allowed"] == "0.5 <= level <= 0.999"

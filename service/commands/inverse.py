@@ -36,6 +36,7 @@ from service.commands.predict import (
     add_number_list,
     add_pump_arguments,
     as_flag,
+    check_level,
     design_from_args,
     inlet_from_args,
     print_validity,
@@ -151,7 +152,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-
+    check_level(args.level)
     s = surrogate_from_args(args)
     if not hasattr(s, "inverse"):
         raise InputError("--model", f"the saved calibrated model {args.model!r} predicts but "

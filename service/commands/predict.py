@@ -27,7 +27,7 @@ from service.commands.numbers import (
 )
 from service.pump import AXES
 from solver.number_text import NUMBER_FORM, WrittenNumber, ascii_float, unheld_words
-from surrogate.band_level import LEVEL_RANGE
+from surrogate.band_level import ASKED_LEVEL_WORDS, ASKED_LEVELS
 from surrogate.hydraulics import LIMITS as INLET_LIMITS
 from surrogate.predictor import MAX_ASKED_VALUES
 from surrogate.volume_control import FLOW_RANGE
@@ -141,8 +141,16 @@ def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--form", choices=("exponential", "extended"), default=None,
                         help="model form (default: each family's fitted default)")
     allowed_action(parser.add_argument("--level", type=float, default=0.95,
-                                       help="band level (0.95)"), LEVEL_RANGE)
+                                       help="band level (0.95)"), ASKED_LEVEL_WORDS)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def check_level(level: float) -> None:
+    """InputError naming --level unless a request could ask for it (ASKED_LEVELS)."""
+    from solver.errors import InputError
+
+    if not ASKED_LEVELS[0] <= level <= ASKED_LEVELS[1]:
+        raise InputError("--level", f"got {level:g}", ASKED_LEVEL_WORDS)
 
 
 def add_pump_arguments(parser: argparse.ArgumentParser) -> None:
@@ -372,6 +380,7 @@ def run(args: argparse.Namespace) -> int:
     from service.pump import PumpQuestion, predict_answer
     from solver.errors import InputError
 
+    check_level(args.level)
     try:
         design = design_from_args(args)
     except InputError as exc:
