@@ -26,6 +26,7 @@ from solver.number_text import (
     WrittenNumber,
     ascii_float,
     ascii_int,
+    is_integer_text,
     unheld_words,
 )
 from solver.plain_text import escaped
@@ -62,7 +63,14 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self._negative_number_matcher = NEGATIVE_NUMBER    # -1e3 a value, as -5 is
         self.register("type", float, held_float)
-        self.register("type", int, ascii_int)
+        self.register("type", int, held_int)
+        self.register("action", None, StoreOnce)       # argparse's default action
+        self.register("action", "store", StoreOnce)
+
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        parsed, rest = super().parse_known_args(args, namespace)
+        parsed.__dict__.pop(StoreOnce.GIVEN, None)    # StoreOnce's record, not an option
+        return parsed, rest
 
     def _get_formatter(self) -> argparse.HelpFormatter:
         """The parser's formatter, each option's help stating its allowed range
@@ -81,8 +89,9 @@ class Parser(argparse.ArgumentParser):
         if listed is not None:   # a list option's word (service.commands.predict.number_list)
             allowed = self._allowed(listed[1])
             return message if allowed is None else f"{message[:-1]}; allowed: {allowed})"
-        unheld = re.fullmatch(r"argument (\S+): .* does not fit a 64-bit float .*", message)
-        if unheld is not None:   # held_float's refusal
+        unheld = re.fullmatch(r"argument (\S+): .* (does not fit a 64-bit float|digits long,) .*",
+                              message)
+        if unheld is not None:   # held_float's or held_int's refusal
             allowed = self._allowed(unheld[1])
             return message if allowed is None else f"{message} (allowed: {allowed})"
         match = re.fullmatch(r"argument (\S+): invalid (float|int) value: (.*)", message)
@@ -111,6 +120,26 @@ def _stating_ranges(formatter: type[argparse.HelpFormatter]) -> type[argparse.He
 
     return StatingRanges
 
+class StoreOnce(argparse._StoreAction):
+    """A value option given twice refused, as a request's field or query parameter given
+    twice is (``service.repeated_fields``): argparse keeps the last, so `--L-mm 7.1 --L-mm
+    9` answered for 9 mm and `db export --where L_mm=7.1 --where t_mm=0.5` exported every
+    record at t = 0.5 mm, without a word. (``--where`` and ``--pair`` gather theirs.)"""
+
+    GIVEN = "_options_given"     # the dests given so far, in the namespace while parsing
+
+    def __call__(self, parser, namespace, values, option_string=None):  # type: ignore[override]
+        self.once(parser, namespace)
+        super().__call__(parser, namespace, values, option_string)
+
+    def once(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace) -> None:
+        """The parser's error unless this is the option's first time on the line."""
+        given = namespace.__dict__.setdefault(self.GIVEN, set())
+        if self.option_strings and self.dest in given:
+            parser.error(f"argument {'/'.join(self.option_strings)}: given twice (allowed: "
+                         "each option once)")
+        given.add(self.dest)
+
 
 def held_float(text: str) -> float:
     """A number option's word read by the one rule (``ascii_float``), refused as written
@@ -120,6 +149,17 @@ def held_float(text: str) -> float:
     if isinstance(number, WrittenNumber):
         raise argparse.ArgumentTypeError(unheld_words(number))
     return number
+
+
+def held_int(text: str) -> int:
+    """An integer option's word read by the one rule (``ascii_int``); a whole number of
+    more digits than Python converts (4300) refused as too long for any allowed value --
+    it was told "is not a whole number", which it is (the parser adds the range)."""
+    digits = text.strip().lstrip("+-")
+    if is_integer_text(text) and len(digits) > sys.get_int_max_str_digits():
+        raise argparse.ArgumentTypeError(f"{digits[:20]}... is {len(digits)} digits long, "
+                                         "past any allowed value")
+    return ascii_int(text)
 
 
 def build_parser() -> argparse.ArgumentParser:

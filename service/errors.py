@@ -236,10 +236,12 @@ def field_range(loc: list[str | int] | tuple[str | int, ...]) -> str | None:
     """The allowed range in words of the request field at ``loc`` (``("body", "design",
     "L_mm")``; a list's item by its list), from FIELD_RANGES. A measured row's column
     (/v1/calibrate's rows) is not the request field of that name elsewhere (its
-    pressure_pa is not a target's): what any cell may hold."""
+    pressure_pa is not a target's): what any cell may hold (``rows.*.*``); a row, what a
+    row is (``rows.*``); the rows, how many (``rows``: a cell's words were said for
+    ``"rows": {}`` and ``"rows": []``)."""
     names = [p for p in loc[1:] if isinstance(p, str)]
     if "rows" in loc[1:2]:
-        return FIELD_RANGES.get("rows.*")
+        return FIELD_RANGES.get("rows" + ".*" * min(len(loc) - 2, 2))
     return FIELD_RANGES.get(names[-1]) if names else None
 
 

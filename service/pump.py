@@ -227,8 +227,8 @@ def predict_answer(surrogate: Any, design: Any, question: PumpQuestion, model: s
                           else _over(body.get("volume_ul"), q))
         v_lim = body["validity"].get("fe_limit_volume_ul")
         if axis == "times_s" and v_lim is not None and "past_fe_range" in body["validity"]["flags"]:
-            body["validity"]["messages"].append(
-                f"at {q:g} ul/s the FE's range ends after {v_lim / q:.1f} s")
+            body["validity"]["messages"].append(   # 3 digits: 0.0284 s at 1000 ul/s, not 0.0
+                f"at {q:g} ul/s the FE's range ends after {v_lim / q:.3g} s")
     if inlet is not None:
         body["inlet"] = inlet
         _pump_gauge(body, inlet)

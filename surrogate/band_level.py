@@ -10,6 +10,11 @@ from solver.errors import InputError
 
 #: a band's level, as every refusal of one states it
 LEVEL_RANGE = "0.5 <= level < 1"
+#: the level an answer may be asked for (POST /v1/predict's and /v1/inverse's `level`,
+#: `balloon predict --level`, `balloon inverse --level`), lo <= level <= hi: the command
+#: line took 0.99999999 where a request was refused above 0.999
+ASKED_LEVELS = (0.5, 0.999)
+ASKED_LEVEL_WORDS = f"{ASKED_LEVELS[0]} <= level <= {ASKED_LEVELS[1]}"
 
 
 def z_value(level: float) -> float:

@@ -170,7 +170,7 @@ def test_a_name_differing_only_in_case_from_a_saved_model_is_refused(tmp_path, c
 @pytest.mark.parametrize("level", ["0", "1", "nan"])
 def test_a_band_level_out_of_range_names_the_option(capsys, command, level):
     assert main([*command, "--level", level]) == 2
-    _one_line_error(capsys, "balloon: error: --level:", "0.5 <= level < 1")
+    _one_line_error(capsys, "balloon: error: --level:", "0.5 <= level <= 0.999")
 
 
 def test_a_name_ending_in_a_newline_is_refused_before_the_work(tmp_path, capsys):

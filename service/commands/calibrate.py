@@ -16,9 +16,9 @@ import json
 import sys
 from pathlib import Path
 
-from service.commands.numbers import number_action
+from service.commands.numbers import checked_int, int_action
 
-#: the grouped cross-validation's folds a calibration takes (POST /v1/calibrate's too)
+#: folds of the grouped cross-validation, lo <= folds <= hi (POST /v1/calibrate's too)
 FOLDS = (2, 50)
 
 
@@ -40,9 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "model's name, or a model file")
     parser.add_argument("--models-dir", type=Path,
                         help="where --save writes (default: the service's models_dir)")
-    number_action(parser.add_argument("--folds", type=int, default=5,
-                                      help="folds of the grouped cross-validation by curve "
-                                           "(default 5)"), *FOLDS)
+    int_action(parser.add_argument("--folds", type=int, default=5,
+                                   help="folds of the grouped cross-validation by curve "
+                                        "(default 5)"), "folds", *FOLDS)
     parser.add_argument("--strict", action="store_true",
                         help="refuse data that only get a warning otherwise (pressures that "
                              "look like kPa, duplicated rows)")
@@ -65,7 +65,7 @@ def _deg(value: float | None, missing: str = "n/a") -> str:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from service.commands.outputs import PLOT_SUFFIXES, check_output
+    from service.commands.outputs import PLOT_SUFFIXES, check_output, distinct_outputs
     from solver.atomic_file import atomic_output, write_text_atomic
     from solver.errors import InputError
     from surrogate.calibration import (
@@ -76,8 +76,7 @@ def run(args: argparse.Namespace) -> int:
         save_model,
     )
 
-    if not FOLDS[0] <= args.folds <= FOLDS[1]:
-        raise InputError("--folds", f"got {args.folds}", f"{FOLDS[0]} <= folds <= {FOLDS[1]}")
+    checked_int("--folds", args.folds, "folds", *FOLDS)
     try:        # the report's directory is made if need be; both outputs checked now
         args.report.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -87,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
     data = (("the data file", args.data),)
     check_output(args.report, "--report", inputs=data)
     check_output(args.plot, "--plot", PLOT_SUFFIXES, inputs=data)
+    distinct_outputs((("--report", args.report), ("--plot", args.plot)))
     obs = load_observations(args.data, strict=args.strict)  # validates before any work
     if args.save is not None:  # a bad or taken name ("" too) is refused before the work
         from service.models import check_new_model_name

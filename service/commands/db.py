@@ -36,7 +36,7 @@ STATUS_HELP = ("only the records that ended so: complete (reached a stop: 90 deg
                "or pressure stop), stopped (ended early by a limit such as max_steps), failed "
                "(a step could not converge)")
 WHERE_HELP = ("only the records whose design, settings or status field has this value, e.g. "
-              "L_mm=7.1 or tip=blocked (several: all of them)")
+              "L_mm=7.1 or tip=blocked (several, or --where again: all of them)")
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("db", help="list, show, export, seal and salvage curve "
@@ -48,7 +48,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     ls = sub.add_parser("ls", help="list the records")
     ls.add_argument("db", help="curve database (HDF5)")
     ls.add_argument("--status", choices=CURVE_STATUSES, help=STATUS_HELP)
-    ls.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE", help=WHERE_HELP)
+    ls.add_argument("--where", nargs="+", action="extend", default=[], metavar="FIELD=VALUE",
+                    help=WHERE_HELP)
     ls.add_argument("--json", action="store_true", help="JSON lines instead of a table")
     ls.set_defaults(func=run_ls)
     show = sub.add_parser("show", help="show one record, or the file's metadata")
@@ -61,7 +62,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     export.add_argument("keys", nargs="*", metavar="KEY", help="records (default: all)")
     export.add_argument("--format", choices=("csv", "json"), default="csv",
                         help="csv (default): one row per step; json: the whole records")
-    export.add_argument("--where", nargs="+", default=[], metavar="FIELD=VALUE",
+    export.add_argument("--where", nargs="+", action="extend", default=[], metavar="FIELD=VALUE",
                         help=WHERE_HELP)
     export.add_argument("--status", choices=CURVE_STATUSES, help=STATUS_HELP)
     export.add_argument("-o", "--output", default="-", help="output file (default stdout)")

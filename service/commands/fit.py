@@ -45,7 +45,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _check_arguments(args: argparse.Namespace) -> None:
     """Refuse a band level and output paths that cannot work before reading the database
     and fitting (minutes on a full one), as ``balloon solve`` does."""
-    from service.commands.outputs import check_output, check_output_dir
+    from service.commands.outputs import check_output, check_output_dir, distinct_outputs
     from solver.errors import InputError
     from surrogate.band_level import z_value
 
@@ -56,6 +56,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
     for flag, name in (("--output", args.output), ("--emulator-output", args.emulator_output)):
         check_output(name, flag, inputs=(("--db", args.db),
                                           ("--band-calibration-db", args.band_calibration_db)))
+    distinct_outputs((("--output", args.output), ("--emulator-output", args.emulator_output),
+                      ("--report-dir", args.report_dir and Path(args.report_dir) / "report.json")))
     if args.band_calibration_db is not None:
         if args.emulator_output is None:
             raise InputError("--band-calibration-db", "given without --emulator-output",

@@ -23,13 +23,20 @@ import json
 import math
 from dataclasses import replace
 
-from service.commands.numbers import allowed_action, number_action, range_text
+from service.commands.numbers import (
+    allowed_action,
+    checked_int,
+    int_action,
+    number_action,
+    range_text,
+)
 from service.commands.predict import (
     add_design_arguments,
     add_model_arguments,
     add_number_list,
     add_pump_arguments,
     as_flag,
+    check_level,
     design_from_args,
     inlet_from_args,
     print_validity,
@@ -42,6 +49,8 @@ from surrogate.predictor import FE_PRESSURE_STOP_PA, FE_VOLUME_STOP_UL
 from surrogate.search.design_search import N_RESULTS_MAX
 from surrogate.search.design_target import DEFAULT_KIND, KINDS, MAX_TARGET, OBJECTIVES
 from surrogate.volume_control import MAX_TIME_S
+
+N_RESULTS = (1, N_RESULTS_MAX)   # designs a search lists, lo <= n <= hi
 
 # The search's bounds (surrogate.search.design_search.SearchBounds field -> flag, what it bounds);
 # a pinned range (LO = HI) fixes that variable (one mould: --L-range 10 10). Each range
@@ -134,9 +143,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--objective", choices=OBJECTIVES,
                         help="ranking (default: pressure for pressure_budget, volume for "
                              "volume_budget and time_budget, certainty otherwise)")
-    number_action(parser.add_argument("-n", "--n-results", type=int,
-                                      help="designs to list (default 5)"),
-                  1, N_RESULTS_MAX)
+    int_action(parser.add_argument("-n", "--n-results", type=int,
+                                   help="designs to list (default 5)"),
+               "n", *N_RESULTS, "designs")
     add_pump_arguments(parser)  # with --angles-deg: the volume, time and pump-gauge pressure;
     # a design search reads --flow-ul-s with --time-s
     add_model_arguments(parser)
@@ -144,7 +153,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-
+    check_level(args.level)
     s = surrogate_from_args(args)
     if not hasattr(s, "inverse"):
         raise InputError("--model", f"the saved calibrated model {args.model!r} predicts but "
@@ -242,8 +251,7 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
         pairs = tuple(found)
     if args.n_results is None:
         args.n_results = 5
-    if not 1 <= args.n_results <= N_RESULTS_MAX:
-        raise InputError("-n", f"got {args.n_results}", f"1 <= n <= {N_RESULTS_MAX} designs")
+    checked_int("-n", args.n_results, "n", *N_RESULTS, "designs")
     try:
         target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
                               force_mn=args.force_mn, volume_ul=args.volume_ul,

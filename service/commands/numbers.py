@@ -15,6 +15,11 @@ The ranges come from the tables that check the values afterwards
 this module only parses, the range checks stay where they are. Every number option
 carries one (a test checks): a word the parser refuses -- ``abc``, or ``1e-400``, which a
 float reads as 0 -- is told the option's range whatever the check after it would say.
+
+An integer option (``--workers``, ``--port``, ...) is the same: ``int_action`` attaches
+its range for the parser's refusal of ``two`` or ``1.5``, and ``checked_int`` refuses a
+whole number outside it afterwards, both from one (lo, hi) of the command's and in one
+phrasing, ``1 <= N <= 256``.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ import argparse
 
 from solver.design import LIMITS_MM
 from solver.design_space import STIFFNESS_SCALE_LIMITS
+from solver.errors import InputError
 from solver.settings import SETTING_RANGES
 
 #: a setting's unit, by the end of its name
@@ -61,6 +67,26 @@ def help_with_allowed(action: argparse.Action, text: str | None) -> str | None:
     if text.endswith(")"):
         return f"{text[:-1]}; allowed: {said})"
     return f"{text} (allowed: {said})"
+
+def int_words(name: str, lo: int, hi: int, unit: str = "") -> str:
+    """``"1 <= N <= 256"``: an integer option's allowed range in words, the parser's
+    and the range check's alike."""
+    return f"{lo} <= {name} <= {hi} {unit}".rstrip()
+
+
+def int_action(action: argparse.Action, name: str, lo: int, hi: int,
+               unit: str = "") -> argparse.Action:
+    """``action`` (an int option) with its allowed range ``lo``..``hi`` attached, in the
+    words of ``checked_int`` (``name`` is its metavar as the help shows it)."""
+    return allowed_action(action, int_words(name, lo, hi, unit))
+
+
+def checked_int(flag: str, value: int, name: str, lo: int, hi: int, unit: str = "") -> int:
+    """``value`` of the int option ``flag``; InputError naming it and its range (the
+    words ``int_action`` attached) unless ``lo <= value <= hi``."""
+    if not lo <= value <= hi:
+        raise InputError(flag, f"got {value}", int_words(name, lo, hi, unit))
+    return value
 
 
 def attach_setting_ranges(parser: argparse.ArgumentParser) -> None:

@@ -10,7 +10,9 @@ symlink or a hard link too) or an existing HDF5 file, which no command writes by
 options (`db export C.h5 -o C.h5` replaced the curve database with its CSV and said
 "exported 2404 records"; `-o other.h5` did the same to another database, whose sealed
 header hid its HDF5 signature from a check at byte 0), or a curve database's lock file
-(replaced, it lets a second writer in beside the one that holds the old one)."""
+(replaced, it lets a second writer in beside the one that holds the old one); and when
+two outputs of one command name one file (``distinct_outputs``: `fit -o m.json
+--emulator-output m.json` wrote the exponential model, then the emulator over it)."""
 
 from __future__ import annotations
 
@@ -89,6 +91,23 @@ def check_output(path: str | os.PathLike | None, option: str,
     if suffixes is not None and target.suffix.lower() not in suffixes:
         raise InputError(option, f"{path}: cannot write a {target.suffix or 'suffix-less'} "
                          "file", "a path ending in " + ", ".join(suffixes))
+
+
+def distinct_outputs(outputs: tuple[tuple[str, str | os.PathLike | None], ...]) -> None:
+    """InputError naming the later option unless the (option, path) ``outputs`` of one
+    command name different files (by any name: a symlink, ``./``, a hard link): the
+    second write would replace the first, after the work, without a word."""
+    seen: list[tuple[str, Path]] = []
+    for option, path in outputs:
+        if path is None or str(path) == "-":
+            continue
+        target = Path(path)
+        for earlier, other in seen:
+            if (target.resolve() == other.resolve()
+                    or (target.exists() and other.exists() and os.path.samefile(target, other))):
+                raise InputError(option, f"{path} is also {earlier}'s file: the second "
+                                 "write would replace the first", f"a path other than {earlier}'s")
+        seen.append((option, target))
 
 
 def check_output_dir(path: str | os.PathLike | None, option: str) -> None:

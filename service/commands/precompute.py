@@ -20,9 +20,10 @@ import signal
 import sys
 from pathlib import Path
 
-from service.commands.numbers import number_action
+from service.commands.numbers import checked_int, int_action
+from surrogate.emulator.adaptive import ADAPTIVE_COUNTS
 
-WORKERS = (1, 256)    # local worker processes --workers starts
+WORKERS = (1, 256)   # local worker processes, lo <= N <= hi
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -33,16 +34,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("grid", metavar="GRID.toml", help="grid file (TOML)")
     parser.add_argument("--db", required=True, metavar="PATH",
                         help="curve database (HDF5); created if missing")
-    number_action(parser.add_argument("--workers", type=int, default=1, metavar="N",
-                                      help="local worker processes (default 1)"), *WORKERS)
+    int_action(parser.add_argument("--workers", type=int, default=1, metavar="N",
+                                   help="local worker processes (default 1)"), "N", *WORKERS)
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on a Dask cluster, e.g. tcp://host:8786 (extra 'cluster')")
     parser.add_argument("--retry-failed", action="store_true",
                         help="solve again the designs stored as failed")
-    parser.add_argument("--adaptive", type=int, default=None, metavar="N",
-                        help="instead of the grid's designs, solve the N designs where the "
-                             "emulator (--emulator, default: fitted from --db) is least "
-                             "certain; the grid file still gives the settings")
+    int_action(parser.add_argument(
+        "--adaptive", type=int, default=None, metavar="N",
+        help="instead of the grid's designs, solve the N designs where the emulator "
+             "(--emulator, default: fitted from --db) is least certain; the grid file "
+             "still gives the settings"), "N", *ADAPTIVE_COUNTS)
     parser.add_argument("--emulator", default=None, metavar="PATH",
                         help="emulator file for --adaptive (default: fit one from --db)")
     parser.add_argument("--designs-from", default=None, metavar="PATH",
@@ -164,8 +166,7 @@ def run(args: argparse.Namespace) -> int:
     from solver.precompute.job import refuse_damaged
     from solver.store import CurveStore, StoreBusyError
 
-    if not WORKERS[0] <= args.workers <= WORKERS[1]:
-        raise InputError("--workers", f"got {args.workers}", f"{WORKERS[0]} <= N <= {WORKERS[1]}")
+    checked_int("--workers", args.workers, "N", *WORKERS)
     db_path = Path(args.db)
     if db_path.exists() and not db_path.is_file():
         raise InputError("--db", f"{args.db} is not a file", "the path of an HDF5 file")

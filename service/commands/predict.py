@@ -18,6 +18,7 @@ import os
 import re
 from pathlib import Path
 
+from service.cli import StoreOnce
 from service.commands.numbers import (
     STIFFNESS_SCALE_LIMITS,
     allowed_action,
@@ -26,7 +27,7 @@ from service.commands.numbers import (
 )
 from service.pump import AXES
 from solver.number_text import NUMBER_FORM, WrittenNumber, ascii_float, unheld_words
-from surrogate.band_level import LEVEL_RANGE
+from surrogate.band_level import ASKED_LEVEL_WORDS, ASKED_LEVELS
 from surrogate.hydraulics import LIMITS as INLET_LIMITS
 from surrogate.predictor import MAX_ASKED_VALUES
 from surrogate.volume_control import FLOW_RANGE
@@ -67,12 +68,14 @@ def number_list(text: str) -> list[float]:
     return numbers
 
 
-class NumberListAction(argparse.Action):
+class NumberListAction(StoreOnce):
     """``nargs="+"`` of ``number_list`` words, flattened into one list of floats: at most
-    MAX_ASKED_VALUES of them, the limit of the same list in an HTTP request."""
+    MAX_ASKED_VALUES of them, the limit of the same list in an HTTP request; the option
+    once (``--pressures 1000 --pressures 2000`` was 2000 Pa alone)."""
 
     def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
                  values: object, option_string: str | None = None) -> None:
+        self.once(parser, namespace)
         numbers = [v for word in values for v in word]  # type: ignore[attr-defined]
         if len(numbers) > MAX_ASKED_VALUES:
             parser.error(f"argument {option_string}: {len(numbers)} values (allowed: 1 to "
@@ -144,8 +147,16 @@ def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--form", choices=("exponential", "extended"), default=None,
                         help="model form (default: each family's fitted default)")
     allowed_action(parser.add_argument("--level", type=float, default=0.95,
-                                       help="band level (0.95)"), LEVEL_RANGE)
+                                       help="band level (0.95)"), ASKED_LEVEL_WORDS)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def check_level(level: float) -> None:
+    """InputError naming --level unless a request could ask for it (ASKED_LEVELS)."""
+    from solver.errors import InputError
+
+    if not ASKED_LEVELS[0] <= level <= ASKED_LEVELS[1]:
+        raise InputError("--level", f"got {level:g}", ASKED_LEVEL_WORDS)
 
 
 def add_pump_arguments(parser: argparse.ArgumentParser) -> None:
@@ -375,6 +386,7 @@ def run(args: argparse.Namespace) -> int:
     from service.pump import PumpQuestion, predict_answer
     from solver.errors import InputError
 
+    check_level(args.level)
     try:
         design = design_from_args(args)
     except InputError as exc:

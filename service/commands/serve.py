@@ -10,9 +10,9 @@ import argparse
 import errno
 import socket
 
-from service.commands.numbers import number_action
+from service.commands.numbers import checked_int, int_action
 
-PORTS = (1, 65535)    # the TCP ports --port names
+PORTS = (1, 65535)   # a TCP port, lo <= port <= hi
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -23,8 +23,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "see docs/service.md.")
     parser.add_argument("--host", default="127.0.0.1",
                         help="interface to listen on (default 127.0.0.1; 0.0.0.0 for all)")
-    number_action(parser.add_argument("--port", type=int, default=8000,
-                                      help="TCP port (default 8000)"), *PORTS)
+    int_action(parser.add_argument("--port", type=int, default=8000,
+                                   help="TCP port (default 8000)"), "port", *PORTS)
     parser.add_argument("--log-level", default="info",
                         choices=("critical", "error", "warning", "info", "debug"),
                         help="what the server logs to stderr: info (default) a line per "
@@ -50,17 +50,15 @@ def check_address(host: str, port: int) -> None:
     except OSError as exc:
         if exc.errno in (errno.EADDRINUSE, errno.EACCES):
             raise InputError("--port", f"cannot listen on {host}:{port} "
-                             f"({exc.strerror})", "a free port, 1-65535; below 1024 "
+                             f"({exc.strerror})", f"a free port, {PORTS[0]}-{PORTS[1]}; below 1024 "
                              "needs privileges") from None
         raise InputError("--host", f"cannot listen on {host}:{port} ({exc.strerror})",
                          "an address of this machine, e.g. 127.0.0.1 or 0.0.0.0") from None
 
 
 def run(args: argparse.Namespace) -> int:
-    from solver.errors import InputError
 
-    if not PORTS[0] <= args.port <= PORTS[1]:
-        raise InputError("--port", f"got {args.port}", f"{PORTS[0]} <= port <= {PORTS[1]}")
+    checked_int("--port", args.port, "port", *PORTS)
     check_address(args.host, args.port)   # before the imports and the models' loading
     import uvicorn
 

@@ -6,12 +6,20 @@ import argparse
 import json
 import sys
 
-from service.commands.numbers import attach_design_ranges, attach_setting_ranges, number_action
+from service.commands.numbers import allowed_action, attach_design_ranges, attach_setting_ranges
 from solver.curve import Curve
 from solver.design import design_from_dict
 from solver.io import CSV_COLUMNS
 from solver.materials import MATERIALS
-from solver.settings import CONTROLS, ELEMENTS, MAX_MESH_LEVEL, MESH_DIVISIONS, TIPS, SolverSettings
+from solver.settings import (
+    CONTROLS,
+    ELEMENTS,
+    MAX_MESH_LEVEL,
+    MESH_DIVISIONS,
+    TIPS,
+    SolverSettings,
+    range_words,
+)
 
 # the settings' fields -> the options that set them (an error names what the user typed)
 SETTING_FLAGS = {"mesh_level": "--mesh", "mesh_divisions": "--mesh-divisions",
@@ -62,9 +70,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--element", choices=ELEMENTS, default=d.element,
                    help="hex2: 27-node triquadratic; hex1: 8-node trilinear, faster "
                         "(default %(default)s)")
-    number_action(s.add_argument("--mesh", type=int, default=d.mesh_level, metavar="LEVEL",
-                                 help="mesh level: level n has n + 1 times the divisions "
-                                      "of level 0 (default %(default)s)"), 0, MAX_MESH_LEVEL)
+    allowed_action(s.add_argument(
+        "--mesh", type=int, default=d.mesh_level, metavar="LEVEL",
+        help=f"mesh level 0 to {MAX_MESH_LEVEL}: level n has n + 1 times the divisions of "
+             "level 0 (default %(default)s)"), range_words("mesh_level"))
     s.add_argument("--mesh-divisions", choices=MESH_DIVISIONS, default=d.mesh_divisions,
                    help="level-0 resolution: balanced (the database's: end walls graded "
                         "to the chamber, two chamber layers; within 2 %% in angle), former "
@@ -109,11 +118,17 @@ def _design(args: argparse.Namespace):
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse output paths that cannot be written before spending minutes on a solve."""
-    from service.commands.outputs import PLOT_SUFFIXES, VTK_SUFFIXES, check_output
+    from service.commands.outputs import (
+        PLOT_SUFFIXES,
+        VTK_SUFFIXES,
+        check_output,
+        distinct_outputs,
+    )
 
-    for option, suffixes in (("json", None), ("csv", None), ("plot", PLOT_SUFFIXES),
-                             ("vtk", VTK_SUFFIXES)):
+    outputs = (("json", None), ("csv", None), ("plot", PLOT_SUFFIXES), ("vtk", VTK_SUFFIXES))
+    for option, suffixes in outputs:
         check_output(getattr(args, option), f"--{option}", suffixes)
+    distinct_outputs(tuple((f"--{option}", getattr(args, option)) for option, _ in outputs))
 
 
 def _settings(args: argparse.Namespace) -> SolverSettings:

@@ -77,9 +77,9 @@ class CalibrateRequest(Schema):
                              description="save the augmented model under this name "
                                          "(needs X-API-Key; a new name, not a built-in "
                                          "model's: emulator, exponential, fitted, paper)")
-    folds: int = Field(5, ge=FOLDS[0], le=FOLDS[1],
-                       description="folds of the cross-validation by curve (reduced to "
-                       "the number of curves when there are fewer)")
+    folds: int = Field(5, ge=FOLDS[0], le=FOLDS[1], description="folds of the "
+                       "cross-validation by curve (reduced to the number of curves when "
+                       "there are fewer)")
     strict: bool = Field(False, description="refuse data that otherwise only get a warning "
                          "(pressures that look like kPa, duplicated rows)")
 
@@ -89,7 +89,9 @@ class CalibrateRequest(Schema):
 # its limits stated in every validation error, as the other requests' are
 FIELD_RANGES.update(field_ranges([CalibrateRequest]))
 FIELD_FORMS["save"] = "a new name of " + name_rule()
-FIELD_RANGES["rows.*"] = CELL_WORDS
+FIELD_RANGES["rows.*"] = ("an object: one observation, its columns named as in "
+                          "docs/measured-data.md")
+FIELD_RANGES["rows.*.*"] = CELL_WORDS
 
 
 class Candidate(BaseModel):

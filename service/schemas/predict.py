@@ -18,6 +18,7 @@ from service.schemas.common import (
     mm,
 )
 from surrogate import hydraulics
+from surrogate.band_level import ASKED_LEVELS
 from surrogate.predictor import MAX_ASKED_VALUES
 
 MAX_PRESSURE_PA = AXES["pressures_pa"][1]
@@ -26,7 +27,8 @@ MODEL = Field("emulator", pattern=MATERIAL_ID,
               description='"emulator" (the design-space emulator, default), "exponential" '
                           '(the paper\'s form fitted to the FE database; "fitted" is its old '
                           'name), "paper", or a saved calibrated model\'s name')
-LEVEL = Field(0.95, ge=0.5, le=0.999, description="prediction band's coverage probability")
+LEVEL = Field(0.95, ge=ASKED_LEVELS[0], le=ASKED_LEVELS[1],
+              description="prediction band's coverage probability")
 
 
 def _axis(name: str) -> Any:

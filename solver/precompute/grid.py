@@ -112,13 +112,14 @@ class _Reader:
 
     def __init__(self, text: str, source: str) -> None:
         self.text, self.source = text, source
-        self.lines = text.splitlines()
-        self.spans = key_lines(text)
 
     def fail(self, path: tuple, field: str, message: str, allowed: str | None = None,
              needle: str | None = None) -> GridError:
-        return GridError(self.source, line_of(self.lines, self.spans, path, needle), field,
-                         message, allowed)
+        """The error at ``path``'s line: the text's lines scanned for it only now (a
+        grid read without a fault never needs them)."""
+        line = line_of(self.text.splitlines(), key_lines(self.text, until=tuple(path)),
+                       path, needle)
+        return GridError(self.source, line, field, message, allowed)
 
     def check_keys(self, table: dict, where: tuple, allowed: tuple[str, ...]) -> None:
         for key in table:
@@ -244,13 +245,13 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     except RecursionError:  # arrays or tables nested thousands deep
         raise GridError(source, 1, "toml", "values nested too deeply to parse",
                         f"at most {MAX_NESTING} levels of [ ] and {{ }}") from None
+    reader.check_keys(data, (), TOP_KEYS)   # first: no walk of a file of unknown keys
     for path, number in unheld(data):     # a number the float does not hold, as written
         name = next((p for p in reversed(path) if p in LIMITS_MM), path[-1])
         allowed = (_limits(str(name)) if name in LIMITS_MM else TERM_WORDS
                    if path[0] == "materials" else range_words(str(name), "a number"))
         raise reader.fail(path, ".".join(map(str, path)), unheld_words(number), allowed,
                           needle=number.text)
-    reader.check_keys(data, (), TOP_KEYS)
     for key in ("name", "description"):
         if key in data and not isinstance(data[key], str):
             raise reader.fail((key,), key, f"{data[key]!r} is not a string", "free text")
@@ -271,6 +272,9 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     for index, sample in enumerate(samples):
         for point in _sample(reader, ("sample", index), sample, settings):
             points.setdefault(point.key, point)
+        if len(points) > MAX_POINTS:  # the samples together (each is checked alone first)
+            raise reader.fail(("sample", index), "sample", f"more than {MAX_POINTS} designs",
+                              f"at most {MAX_POINTS} designs per grid")
     if samples and "sweep" not in data:
         return Grid(source, text, settings, tuple(points.values()))
     sweeps = data.get("sweep", [{}])
@@ -379,6 +383,11 @@ def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
     faces = table.get("faces", False)
     if not isinstance(faces, bool):
         raise reader.fail((*where, "faces"), "faces", f"{faces!r}", "true or false")
+    count = ints["n"] * len(pairs) * len(tips)
+    if count > MAX_POINTS:   # before drawing them: n = 100000 of 4 pairs, 2 tips was 800,000
+        raise reader.fail((*where, "n"), "n", f"{count} designs (n = {ints['n']}, times "
+                          f"{len(pairs)} pair(s), times {len(tips)} tip(s))",
+                          f"at most {MAX_POINTS} designs per grid")
     variants = {"free": settings,
                 "blocked": replace(settings, tip="blocked", max_pressure_pa=float(p_max))}
     per_pair = [sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"], ints["skip"],

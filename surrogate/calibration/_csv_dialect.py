@@ -19,6 +19,7 @@ may be 1.5 or 15 hundred, and is the usual "not a number" error.
 
 from __future__ import annotations
 
+from solver.number_text import is_number_text
 from surrogate.calibration._errors import DataError
 
 
@@ -60,5 +61,12 @@ def decimal_commas(rows: list[dict[str, object]], numeric: tuple[str, ...], sep:
                             "as the decimal mark (a thousands separator?)", i,
                             "numbers written as the rest of the file writes them, "
                             "'0,75', without thousands separators")
-    return [{k: (v.replace(",", ".") if k in numeric and isinstance(v, str) else v)
+    return [{k: (_point(v) if k in numeric and isinstance(v, str) else v)
              for k, v in row.items()} for row in rows]
+
+
+def _point(cell: str) -> str:
+    """A cell's decimal comma read as a point where that makes it a number; any other
+    cell as written (``٨,40`` was refused as ``'٨.40'``, a text the user never wrote)."""
+    pointed = cell.replace(",", ".")
+    return pointed if is_number_text(pointed) else cell

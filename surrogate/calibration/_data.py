@@ -370,10 +370,10 @@ def _number(value: object, column: str, row: int) -> float:
         x = float(value)  # type: ignore[arg-type]
     except OverflowError:
         raise _cell_error(column, "number too large: " + _short(value), row) from None
-    except (TypeError, ValueError):
-        clock = f" (a clock: write {CLOCK_HOW})" if column == "time_s" and is_clock(value) \
-            else ""
-        raise _cell_error(column, "not a number: " + _short(value) + clock, row) from None
+    except (TypeError, ValueError):   # '0x8', '1,5' in a comma-separated file: the forms
+        how = (f"a clock: write {CLOCK_HOW}" if column == "time_s" and is_clock(value)
+               else f"numbers in {NUMBER_FORM}")
+        raise _cell_error(column, f"not a number: {_short(value)} ({how})", row) from None
     if isinstance(value, str) and not is_number_text(value):   # '1_0' (10), '٧' (7)
         raise _cell_error(column, f"not a number: {_short(value)} (numbers in {NUMBER_FORM})",
                           row)
@@ -421,6 +421,12 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
                         f"{MIN_POINTS_PER_CURVE} points")
     if len(rows) > MAX_ROWS:
         raise DataError("rows", f"{len(rows)} rows", None, f"at most {MAX_ROWS}")
+    # first: a list of lists of rows (`[[{...}, ...]]`) was "curve_id: required column is
+    # missing", its first row's columns read as none
+    not_object = next((i for i, r in enumerate(rows, 1) if not isinstance(r, dict)), None)
+    if not_object is not None:
+        raise DataError("rows", "a row must be an object of column -> value", not_object,
+                        "an object of the columns " + ", ".join(REQUIRED + OPTIONAL))
     rows = [_plain_keys(r, i) if isinstance(r, dict) else r for i, r in enumerate(rows, 1)]
     headers = list(dict.fromkeys(k for r in rows if isinstance(r, dict) for k in r))
     try:
@@ -449,9 +455,6 @@ def observations_from_rows(rows: list[dict[str, object]], strict: bool = False
     parsed = []
     written: list[float] = []    # the volume_ul column as written (its last digit)
     for i, raw in enumerate(rows, start=1):
-        if not isinstance(raw, dict):
-            raise DataError("rows", "a row must be an object of column -> value", i,
-                            "an object of the columns " + ", ".join(REQUIRED + OPTIONAL))
         extra = sorted(set(raw) - known)
         if extra:       # named as the file names it, cut short (a 10,000-character key)
             name = str(extra[0])

@@ -113,13 +113,15 @@ def _ends_early(pe: PairEmulator, u: np.ndarray) -> bool:
 
 
 MAX_ADAPTIVE = 10_000
+ADAPTIVE_COUNTS = (1, MAX_ADAPTIVE)   # designs one --adaptive N asks for, lo <= N <= hi
 
 
 def check_count(n: int) -> None:
     """InputError naming --adaptive unless 1 <= n <= MAX_ADAPTIVE (checked before an
     emulator is fitted for it: minutes)."""
-    if not 1 <= n <= MAX_ADAPTIVE:
-        raise InputError("--adaptive", f"got {n}", f"1 <= N <= {MAX_ADAPTIVE}")
+    lo, hi = ADAPTIVE_COUNTS
+    if not lo <= n <= hi:
+        raise InputError("--adaptive", f"got {n}", f"{lo} <= N <= {hi}")
 
 
 def next_designs(emulator: Emulator, n: int, settings: SolverSettings | None = None
