@@ -197,6 +197,15 @@ def evaluate(e, records, axis: str = "pressure") -> HeldOut:
     return out
 
 
+def heldout_sets(given: list[str] | None = None) -> list[str]:
+    """The held-out sets a script scores: ``given``, or every random-design set kept in
+    benchmarks/heldout/ (ho20*.h5 and ho4242.h5; force3040.h5, blocked tips only, apart)."""
+    import glob
+
+    return given or (sorted(glob.glob("benchmarks/heldout/ho20*.h5"))
+                     + ["benchmarks/heldout/ho4242.h5"])
+
+
 def scored(rec) -> bool:
     """Whether a held-out record is scored: a complete FE curve, or the converged part of
     one whose Newton iteration failed (a design drawn at random is judged "over each

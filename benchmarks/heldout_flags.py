@@ -15,10 +15,9 @@ from __future__ import annotations
 
 import argparse
 import collections
-import glob
 
 import numpy as np
-from bench_emulator import scored
+from bench_emulator import heldout_sets, scored
 
 from solver.errors import InputError
 from solver.store import CurveStore
@@ -32,8 +31,7 @@ def main() -> None:
     parser.add_argument("--emulator", default="service/data/emulator.json")
     parser.add_argument("--sets", nargs="+", default=None)
     args = parser.parse_args()
-    sets = args.sets or (sorted(glob.glob("benchmarks/heldout/ho20*.h5"))
-                         + ["benchmarks/heldout/ho4242.h5"])
+    sets = heldout_sets(args.sets)
     e = load_emulator(args.emulator)
     counts: collections.Counter = collections.Counter()
     for path in sets:

@@ -20,10 +20,9 @@ from __future__ import annotations
 
 import argparse
 import collections
-import glob
 
 import numpy as np
-from bench_emulator import scored
+from bench_emulator import heldout_sets, scored
 
 from solver.design_space import locate
 from solver.errors import InputError
@@ -45,8 +44,7 @@ def main() -> None:
     ap.add_argument("--emulator", default="service/data/emulator.json")
     ap.add_argument("--sets", nargs="+", default=None)
     args = ap.parse_args()
-    sets = args.sets or (sorted(glob.glob("benchmarks/heldout/ho20*.h5"))
-                         + ["benchmarks/heldout/ho4242.h5"])
+    sets = heldout_sets(args.sets)
     e = load_emulator(args.emulator)
     errors: dict[str, list] = collections.defaultdict(list)
     counts: dict[tuple, list] = collections.defaultdict(lambda: [0, 0, 0, 0])
