@@ -154,6 +154,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_level(args.level)
+    if args.n_results is not None:      # before the model is loaded (seconds)
+        checked_int("-n", args.n_results, "n", *N_RESULTS, "designs")
     s = surrogate_from_args(args)
     if not hasattr(s, "inverse"):
         raise InputError("--model", f"the saved calibrated model {args.model!r} predicts but "

@@ -269,12 +269,17 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     samples = data.get("sample", [])
     if not isinstance(samples, list) or not all(isinstance(t, dict) for t in samples):
         raise reader.fail(("sample",), "sample", "must be [[sample]] tables", "[[sample]]")
-    for index, sample in enumerate(samples):
-        for point in _sample(reader, ("sample", index), sample, settings):
-            points.setdefault(point.key, point)
-        if len(points) > MAX_POINTS:  # the samples together (each is checked alone first)
+    tables = [_sample(reader, ("sample", index), sample, settings)
+              for index, sample in enumerate(samples)]
+    listed = 0
+    for index, table in enumerate(tables):  # the samples together, before any is drawn
+        listed += table.count
+        if listed > MAX_POINTS:
             raise reader.fail(("sample", index), "sample", f"more than {MAX_POINTS} designs",
                               f"at most {MAX_POINTS} designs per grid")
+    for table in tables:
+        for point in table.points():
+            points.setdefault(point.key, point)
     if samples and "sweep" not in data:
         return Grid(source, text, settings, tuple(points.values()))
     sweeps = data.get("sweep", [{}])
@@ -349,14 +354,40 @@ def _expand(reader: _Reader, where: tuple, merged: dict, own: dict,
     return out
 
 
+@dataclass(frozen=True)
+class SampleTable:
+    """A checked [[sample]] table: ``n`` scrambled Sobol designs of the emulator's box
+    (solver/design_space.py) per pair (``faces``: moved onto the box's faces in turn,
+    ``design_space.on_faces``), each solved with every settings variant (a tip of
+    ``tips``); ``count`` the designs it lists, known before they are drawn."""
+
+    n: int
+    seed: int
+    skip: int
+    pairs: tuple[tuple[str, str], ...]
+    faces: bool
+    variants: tuple[SolverSettings, ...]
+
+    @property
+    def count(self) -> int:
+        return self.n * len(self.pairs) * len(self.variants)
+
+    def points(self) -> list[GridPoint]:
+        """The table's designs, point-major: an interrupted job leaves every pair even."""
+        from solver.design_space import sample_designs
+
+        per_pair = [sample_designs(self.n, pair, self.seed, self.skip, self.faces)
+                    for pair in self.pairs]
+        return [GridPoint(record_key(designs[i], s), designs[i], s)
+                for i in range(self.n) for designs in per_pair for s in self.variants]
+
+
 def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
-            ) -> list[GridPoint]:
-    """A [[sample]] table: ``n`` scrambled Sobol designs of the emulator's box
-    (solver/design_space.py) per pair (``faces = true``: moved onto the box's faces in
-    turn, ``design_space.on_faces``), each solved with every tip in ``tips``
-    ("free": the settings as given; "blocked": the tip held, to
-    ``blocked_max_pressure_pa``, for the force curve)."""
-    from solver.design_space import PAIRS, sample_designs
+            ) -> SampleTable:
+    """A [[sample]] table checked (``SampleTable``): "free" tips solved with the settings
+    as given, "blocked" ones with the tip held, to ``blocked_max_pressure_pa``, for the
+    force curve."""
+    from solver.design_space import PAIRS
 
     reader.check_keys(table, where, SAMPLE_KEYS)
     ints = {}
@@ -390,15 +421,9 @@ def _sample(reader: _Reader, where: tuple, table: dict, settings: SolverSettings
                           f"at most {MAX_POINTS} designs per grid")
     variants = {"free": settings,
                 "blocked": replace(settings, tip="blocked", max_pressure_pa=float(p_max))}
-    per_pair = [sample_designs(ints["n"], (pair[0], pair[1]), ints["seed"], ints["skip"],
-                               faces) for pair in pairs]
-    out = []
-    for i in range(ints["n"]):      # point-major: an interrupted job leaves every pair even
-        for designs in per_pair:
-            for tip in tips:
-                s = variants[tip]
-                out.append(GridPoint(record_key(designs[i], s), designs[i], s))
-    return out
+    return SampleTable(ints["n"], ints["seed"], ints["skip"],
+                       tuple((pair[0], pair[1]) for pair in pairs), faces,
+                       tuple(variants[tip] for tip in tips))
 
 
 def _toml_line(message: str, text: str) -> int:
