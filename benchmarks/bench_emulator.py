@@ -215,6 +215,18 @@ def scored(rec) -> bool:
                                         and int((c.pressure_pa > 0).sum()) >= 2)
 
 
+def scored_free_records(given: list[str] | None = None):
+    """Every scored free-tip record (``scored``) of the held-out sets (``heldout_sets``),
+    in order: what the scripts that read the emulator's misses go through."""
+    from solver.store import CurveStore
+
+    for path in heldout_sets(given):
+        with CurveStore(path) as store:
+            for rec in store.records():
+                if scored(rec) and rec.settings.tip != "blocked":
+                    yield rec
+
+
 def forget(model) -> None:
     """Clear the emulator's design memo (``surrogate/emulator/design_memo.py``), so that
     the next query is a design's first; other models keep none."""

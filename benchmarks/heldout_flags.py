@@ -17,10 +17,9 @@ import argparse
 import collections
 
 import numpy as np
-from bench_emulator import heldout_sets, scored
+from bench_emulator import scored_free_records
 
 from solver.errors import InputError
-from solver.store import CurveStore
 from surrogate.emulator import load_emulator
 
 FLAGS = ("high_membrane_stretch", "near_early_ended_fe_curves")
@@ -31,30 +30,25 @@ def main() -> None:
     parser.add_argument("--emulator", default="service/data/emulator.json")
     parser.add_argument("--sets", nargs="+", default=None)
     args = parser.parse_args()
-    sets = heldout_sets(args.sets)
     e = load_emulator(args.emulator)
     counts: collections.Counter = collections.Counter()
-    for path in sets:
-        with CurveStore(path) as store:
-            for r in store.records():
-                if not scored(r) or r.settings.tip == "blocked":
-                    continue
-                angle = np.asarray(r.curve.angle_deg)
-                pressure = np.asarray(r.curve.pressure_pa)
-                keep = (np.abs(angle) <= 90) & (pressure > 0)
-                try:
-                    answer = e.predict(r.design, pressure[keep])
-                except InputError:
-                    counts["refused"] += 1
-                    continue
-                err = np.abs(np.asarray(answer.angle_deg) - angle[keep])
-                err = err[np.isfinite(err)]
-                if err.size == 0:
-                    counts["unanswered"] += 1
-                    continue
-                miss = bool(np.sqrt(np.mean(err ** 2)) > 1 or err.max() > 3)
-                flags = set(answer.validity.get("flags", []))
-                counts[(miss, *(f in flags for f in FLAGS))] += 1
+    for r in scored_free_records(args.sets):
+        angle = np.asarray(r.curve.angle_deg)
+        pressure = np.asarray(r.curve.pressure_pa)
+        keep = (np.abs(angle) <= 90) & (pressure > 0)
+        try:
+            answer = e.predict(r.design, pressure[keep])
+        except InputError:
+            counts["refused"] += 1
+            continue
+        err = np.abs(np.asarray(answer.angle_deg) - angle[keep])
+        err = err[np.isfinite(err)]
+        if err.size == 0:
+            counts["unanswered"] += 1
+            continue
+        miss = bool(np.sqrt(np.mean(err ** 2)) > 1 or err.max() > 3)
+        flags = set(answer.validity.get("flags", []))
+        counts[(miss, *(f in flags for f in FLAGS))] += 1
     print(f"{'':>8} {FLAGS[0]:>22} {FLAGS[1]:>27} curves")
     for key in sorted((k for k in counts if isinstance(k, tuple)), key=str):
         print(f"{'miss' if key[0] else 'within':>8} {key[1]!s:>22} {key[2]!s:>27} "

@@ -22,11 +22,10 @@ import argparse
 import collections
 
 import numpy as np
-from bench_emulator import heldout_sets, scored
+from bench_emulator import scored_free_records
 
 from solver.design_space import locate
 from solver.errors import InputError
-from solver.store import CurveStore
 from surrogate.emulator import load_emulator
 from surrogate.emulator.features import ANGLE_NODES_DEG, N_NODES, curve_features
 
@@ -44,45 +43,40 @@ def main() -> None:
     ap.add_argument("--emulator", default="service/data/emulator.json")
     ap.add_argument("--sets", nargs="+", default=None)
     args = ap.parse_args()
-    sets = heldout_sets(args.sets)
     e = load_emulator(args.emulator)
     errors: dict[str, list] = collections.defaultdict(list)
     counts: dict[tuple, list] = collections.defaultdict(lambda: [0, 0, 0, 0])
-    for path in sets:
-        with CurveStore(path) as store:
-            for r in store.records():
-                if not scored(r) or r.settings.tip == "blocked":
-                    continue
-                point = locate(r.design, reduced=True)
-                u = point.coordinates()
-                try:
-                    pair = e._pair(point, u)
-                    angle = np.asarray(r.curve.angle_deg)
-                    pressure = np.asarray(r.curve.pressure_pa)
-                    keep = (np.abs(angle) <= 90) & (pressure > 0)
-                    answer = e.predict(r.design, pressure[keep])
-                except InputError:
-                    continue
-                fe = curve_features(r.curve.pressure_pa / point.pressure_scale,
-                                    r.curve.volume_ul / point.length_scale**3, angle)
-                mean, var, _, _ = pair.curve_nodes(u, slice(0, N_NODES))
-                errors[point.group].append((mean[:N_NODES] - fe.log_p,
-                                            np.sqrt(var[:N_NODES])))
-                m = np.asarray(answer.angle_deg)
-                ok = np.isfinite(m)
-                if not ok.any():
-                    continue
-                a = angle[keep][ok]
-                err = m[ok] - a
-                inside = ((a >= np.asarray(answer.lower_deg)[ok] - 1e-9)
-                          & (a <= np.asarray(answer.upper_deg)[ok] + 1e-9))
-                miss = bool(np.sqrt(np.mean(err**2)) > 1 or np.abs(err).max() > 3)
-                for key in ((point.group, in_stiff_corner(u)), ("all", in_stiff_corner(u))):
-                    c = counts[key]
-                    c[0] += 1
-                    c[1] += miss
-                    c[2] += int(inside.sum())
-                    c[3] += inside.size
+    for r in scored_free_records(args.sets):
+        point = locate(r.design, reduced=True)
+        u = point.coordinates()
+        try:
+            pair = e._pair(point, u)
+            angle = np.asarray(r.curve.angle_deg)
+            pressure = np.asarray(r.curve.pressure_pa)
+            keep = (np.abs(angle) <= 90) & (pressure > 0)
+            answer = e.predict(r.design, pressure[keep])
+        except InputError:
+            continue
+        fe = curve_features(r.curve.pressure_pa / point.pressure_scale,
+                            r.curve.volume_ul / point.length_scale**3, angle)
+        mean, var, _, _ = pair.curve_nodes(u, slice(0, N_NODES))
+        errors[point.group].append((mean[:N_NODES] - fe.log_p,
+                                    np.sqrt(var[:N_NODES])))
+        m = np.asarray(answer.angle_deg)
+        ok = np.isfinite(m)
+        if not ok.any():
+            continue
+        a = angle[keep][ok]
+        err = m[ok] - a
+        inside = ((a >= np.asarray(answer.lower_deg)[ok] - 1e-9)
+                  & (a <= np.asarray(answer.upper_deg)[ok] + 1e-9))
+        miss = bool(np.sqrt(np.mean(err**2)) > 1 or np.abs(err).max() > 3)
+        for key in ((point.group, in_stiff_corner(u)), ("all", in_stiff_corner(u))):
+            c = counts[key]
+            c[0] += 1
+            c[1] += miss
+            c[2] += int(inside.sum())
+            c[3] += inside.size
     nodes = [int(np.flatnonzero(np.isclose(ANGLE_NODES_DEG, a))[0]) for a in SHOWN_DEG]
     for group, rows in sorted(errors.items()):
         err = np.array([r[0] for r in rows])

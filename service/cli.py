@@ -120,6 +120,7 @@ def _stating_ranges(formatter: type[argparse.HelpFormatter]) -> type[argparse.He
 
     return StatingRanges
 
+
 class StoreOnce(argparse._StoreAction):
     """A value option given twice refused, as a request's field or query parameter given
     twice is (``service.repeated_fields``): argparse keeps the last, so `--L-mm 7.1 --L-mm

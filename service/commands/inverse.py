@@ -251,9 +251,8 @@ def _design_search(s: object, args: argparse.Namespace) -> int:
                 raise InputError("--pair", f"got {text!r}", "BODY/MEMBRANE material ids")
             found.append((body, membrane))
         pairs = tuple(found)
-    if args.n_results is None:
+    if args.n_results is None:    # a given one was checked before the model was loaded
         args.n_results = 5
-    checked_int("-n", args.n_results, "n", *N_RESULTS, "designs")
     try:
         target = DesignTarget(kind, args.pressure_pa, angle_deg=args.angle_deg,
                               force_mn=args.force_mn, volume_ul=args.volume_ul,

@@ -68,6 +68,7 @@ def help_with_allowed(action: argparse.Action, text: str | None) -> str | None:
         return f"{text[:-1]}; allowed: {said})"
     return f"{text} (allowed: {said})"
 
+
 def int_words(name: str, lo: int, hi: int, unit: str = "") -> str:
     """``"1 <= N <= 256"``: an integer option's allowed range in words, the parser's
     and the range check's alike."""

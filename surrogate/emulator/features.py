@@ -26,6 +26,7 @@ F/p's median relative error 8-12 % where the raw F/p gave bands wider than the f
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -177,7 +178,7 @@ def between_force_nodes(values: np.ndarray, pressure_pa: np.ndarray | float) -> 
     design's first query); in log p, as the nodes are spaced, it follows the database's
     curves as closely (benchmarks/RESULTS.md, forty-ninth session)."""
     y = np.asarray(values, float)
-    grid, matrix = _FORCE_SPLINES[y.shape[-1]]
+    grid, matrix = _force_spline(y.shape[-1])
     fine = y @ matrix
     x = np.asarray(pressure_pa, float)
     if fine.ndim == 1:
@@ -189,20 +190,20 @@ def between_force_nodes(values: np.ndarray, pressure_pa: np.ndarray | float) -> 
 FORCE_FINE_PER_INTERVAL = 32
 
 
-def _force_splines() -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Per node count n >= 2: the fine grid up to the n-th force node (Pa, log-spaced
-    within each interval, the nodes exact) and the matrix (n, grid) taking node values to
-    the natural spline's there (``spline_matrix``); n = 1: the one value everywhere."""
+@functools.cache
+def _force_spline(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """For the first n force nodes: the fine grid up to the n-th (Pa, log-spaced within
+    each interval, the nodes exact) and the matrix (n, grid) taking node values to the
+    natural spline's there (``spline_matrix``); n = 1: the one value everywhere. Made at
+    a group's first force answer, not at import."""
     q, k = FORCE_PRESSURE_NODES_PA, FORCE_FINE_PER_INTERVAL
+    if n == 1:
+        return q[:1], np.ones((1, 1))
     grid = np.exp(np.concatenate([np.linspace(np.log(a), np.log(b), k + 1)[:-1]
-                                  for a, b in zip(q[:-1], q[1:], strict=True)]
-                                 + [np.log(q[-1:])]))
-    grid[::k] = q
-    out = {1: (q[:1], np.ones((1, 1)))}
-    for n in range(2, len(q) + 1):
-        g = grid[:k * (n - 1) + 1]
-        out[n] = (g, np.ascontiguousarray(spline_matrix(q[:n], g).T))
-    return out
+                                  for a, b in zip(q[:n - 1], q[1:n], strict=True)]
+                                 + [np.log(q[n - 1:n])]))
+    grid[::k] = q[:n]
+    return grid, np.ascontiguousarray(spline_matrix(q[:n], grid).T)
 
 
 def force_at(per_kpa: np.ndarray, pressure_pa: np.ndarray | float) -> np.ndarray:
@@ -277,6 +278,3 @@ def spline_matrix(nodes: np.ndarray, fine: np.ndarray) -> np.ndarray:
     eye = np.eye(len(nodes))
     return np.column_stack([CubicSpline(ln, eye[i], bc_type="natural")(lf)
                             for i in range(len(nodes))])
-
-
-_FORCE_SPLINES = _force_splines()
