@@ -89,3 +89,24 @@ def shipped_records():
 
     with CurveStore(DATA_DIR / "curves.h5") as db:
         return tuple(db.records())
+
+
+@pytest.fixture
+def no_curve_gps(monkeypatch):
+    """``with no_curve_gps():`` -- inside the block ``emulator_from_dict`` may not build a
+    pair's curve GPs (AssertionError, not SurrogateFileError): a damage the loader checks
+    before that factorisation (~0.4-0.9 s a pair) is refused there, and at once."""
+    import contextlib
+
+    import surrogate.emulator.file as emulator_file
+
+    def unbuilt(_):
+        raise AssertionError("a pair's curve GPs were factorised before the damage was found")
+
+    @contextlib.contextmanager
+    def block():
+        with monkeypatch.context() as m:
+            m.setattr(emulator_file, "vector_gp_from_dict", unbuilt)
+            yield
+
+    return block

@@ -119,7 +119,7 @@ def test_a_group_whose_blocked_tip_curves_all_reach_the_stop_needs_no_range():
 
 
 def test_the_blocked_range_is_stored_older_files_read_without_it_and_damage_is_refused(
-        emulator):
+        emulator, no_curve_gps):
     """The file keeps the blocked range (format 15); a format-14 file has none and gives
     the force to the group's range, as before; a damaged one is refused naming it."""
     key = next(k for k, pe in emulator.pairs.items() if pe.blocked_range is not None
@@ -144,7 +144,8 @@ def test_the_blocked_range_is_stored_older_files_read_without_it_and_damage_is_r
                          ("near_end_band_scale", [0.5, 1.0]), ("near_end_band_scale", [2.0]),
                          ("near_end_band_scale", "x")):
         d["pairs"][0]["blocked_range"] = {**stored, field: value}
-        with pytest.raises(SurrogateFileError, match="damaged emulator file"):
+        # refused before the pair's curve GPs are factorised
+        with no_curve_gps(), pytest.raises(SurrogateFileError, match="damaged emulator file"):
             emulator_from_dict(d, "other.json")
 
 
