@@ -189,6 +189,29 @@ def test_prony_lag_matches_a_fine_euler_integration():
     assert out[4] < static[4] and 19.5 < out[-1] < 20.0  # creeps on towards 20 deg
 
 
+def test_prony_lag_keeps_each_curve_its_own_and_its_state_still_over_the_padding():
+    # three curves on their own uneven time grids, two padded after their last reading
+    # (the calibration pads curves of unequal length so): each curve's lag is the one it
+    # has alone, to the last bit, and the delayed state does not move over the padding
+    rng = np.random.default_rng(3)
+    n = (9, 14, 5)
+    t = np.zeros((3, 14))
+    static = np.full((3, 14), 1000.0)       # the padding's static value: never followed
+    valid = np.zeros((3, 14), bool)
+    for c, m in enumerate(n):
+        t[c] = np.cumsum(rng.uniform(0.2, 1.5, 14)) - 0.2
+        static[c, :m] = np.cumsum(rng.normal(2.0, 3.0, m))
+        valid[c, :m] = True
+    for g in (0.3, -0.25):   # the bend's creep and the gauge's relaxation
+        out = prony_lag(static, t, valid, g, 1.7)
+        for c, m in enumerate(n):
+            alone = prony_lag(static[c:c + 1, :m], t[c:c + 1, :m], valid[c:c + 1, :m], g,
+                              1.7)[0]
+            np.testing.assert_array_equal(out[c, :m], alone)
+            held = (alone[-1] - (1.0 - g) * static[c, m - 1]) / g     # the delayed state
+            np.testing.assert_allclose(out[c, m:], (1.0 - g) * 1000.0 + g * held, rtol=1e-12)
+
+
 def test_pressure_relaxation_overshoots_while_pumping_and_relaxes_in_a_hold():
     # a standard linear solid, by hand: the relaxed pressure rises 300 Pa/s for 4 s and is
     # held; the gauge reads (1 + g) p - g y with y the relaxed pressure delayed by tau
