@@ -143,6 +143,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
         _check_group_coverage(report)
         for p in d["pairs"]:   # the cheap checks first: a damaged file costs no factorisation
             _precheck_pair(p)
+        variance_nodes = _variance_nodes(d.get("variance_nodes"))
         balance_models = (_balance_models(d.get("balance_models"),
                                           set(d.get("sign_models") or {}))
                           if version >= 12 else {})
@@ -188,7 +189,7 @@ def emulator_from_dict(d: object, origin: str = "<dict>", raw: bytes | None = No
             _check_gp(m, f"sign model {group}")
         return Emulator(name=str(d["name"]), pairs=pairs, provenance=dict(d["provenance"]),
                         report=report, sign_models=sign_models,
-                        variance_nodes=_variance_nodes(d.get("variance_nodes")),
+                        variance_nodes=variance_nodes,
                         balance_models=balance_models)
     except (KeyError, TypeError, ValueError, IndexError, AttributeError, ArithmeticError,
             np.linalg.LinAlgError) as exc:
