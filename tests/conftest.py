@@ -1,7 +1,8 @@
 """Shared pytest configuration: heavy finite-element cases are opt-in (--runslow); the
 ``shipped_client`` fixture (the app over the shipped data, one per test module); the
 explorer's browser fixtures ``browser`` and ``watched`` (tests/explorer_browser.py; each
-browser test module gives its own ``server``).
+browser test module gives its own ``server``); ``no_curve_gps`` for the emulator file's
+damage tests (a damage refused before any curve GP is factorised).
 
 Named ``shipped_client``, not ``client``: several modules define their own ``client``
 over fakes or a temporary database, and a conftest fixture of that name would be
