@@ -23,13 +23,16 @@ def prony_lag(static_deg: np.ndarray, time_s: np.ndarray, valid: np.ndarray,
     # y_j = u1 - (u1 - u0) gain + (y_{j-1} - u0) decay: the terms without y made for every
     # step at once, the steps along time as rows (transposed, contiguous); the same
     # operations in the same order as step by step (the same numbers to the last bit),
-    # in ~60 % of the time (a calibration evaluates this ~7,000 times)
+    # in ~half the time (a calibration evaluates this ~7,000 times); a step where every
+    # curve has a reading (all but the padded tails) needs no choice
     ramp = (u1 - (u1 - u0) * gain).T.copy()
     u0, decay, valid = u0.T.copy(), decay.T.copy(), valid[:, 1:].T.copy()
+    every = valid.all(axis=1)
     out = np.empty(static_deg.shape[::-1])
     y = out[0] = static_deg[:, 0]
     for j in range(len(ramp)):
-        y = out[j + 1] = np.where(valid[j], ramp[j] + (y - u0[j]) * decay[j], y)
+        step = ramp[j] + (y - u0[j]) * decay[j]
+        y = out[j + 1] = step if every[j] else np.where(valid[j], step, y)
     return (1.0 - g) * static_deg + g * out.T
 
 
