@@ -15,12 +15,37 @@ be changed from the save dialog, so such a file is read as it is, not refused:
 
 A comma-separated file keeps ``.`` as its only decimal mark: a quoted ``"1,5"`` there
 may be 1.5 or 15 hundred, and is the usual "not a number" error.
+
+A first line ``sep=;`` (``sep=,``, ``sep=`` and a tab), which Excel reads and some
+exports write above the header, names the separator: the file is read with it, the line
+is not data. A ``sep=`` naming any other character is an error saying which it may name.
 """
 
 from __future__ import annotations
 
+import re
+
 from solver.number_text import is_number_text
 from surrogate.calibration._errors import DataError
+
+# the separators a file may use, as an error says them
+SEPARATORS = {",": "','", ";": "';'", "\t": "a tab"}
+_SEP_LINE = re.compile(r'"?sep=(.?)"?[,;\t]*', re.IGNORECASE)
+
+
+def named_separator(first_line: str) -> str | None:
+    """The separator a file's first line ``sep=X`` names (Excel's hint), or None when
+    the line is no such hint. Raises DataError when X is not one of ``SEPARATORS``."""
+    match = _SEP_LINE.fullmatch(first_line.lstrip("\ufeff").rstrip("\r\n"))
+    if match is None:
+        return None
+    sep = match.group(1)
+    if sep not in SEPARATORS:
+        raise DataError("header", f"the first line {first_line.strip()[:40]!r} names "
+                        f"{sep!r} as the field separator", None,
+                        "sep=, sep=; or sep= and a tab (" + ", ".join(SEPARATORS.values())
+                        + "), or no sep= line")
+    return sep
 
 
 def separator(header_line: str) -> str:

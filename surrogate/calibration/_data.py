@@ -27,7 +27,12 @@ from solver.number_text import NUMBER_FORM, is_number_text
 from solver.plain_text import PRINTABLE_WORDS, hidden_character
 from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from surrogate.calibration._angle_stop import AngleStop
-from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
+from surrogate.calibration._csv_dialect import (
+    decimal_commas,
+    is_blank,
+    named_separator,
+    separator,
+)
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._extra_columns import extra_columns_read
 from surrogate.calibration._headers import (
@@ -808,7 +813,8 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     size limit is a DataError naming its row and column. Lines may end in LF, CR LF or CR
     alone (a spreadsheet's "CSV (Macintosh)": read as one line, it was blamed on the
     field size, its CR garbling the terminal's line). Fields are separated by ',', or by
-    ';' or tabs with ',' as the decimal mark (a German Excel's CSV; _csv_dialect.py). A
+    ';' or tabs with ',' as the decimal mark (a German Excel's CSV; _csv_dialect.py), or
+    by the one a first line 'sep=;' names (Excel's hint, read, not data). A
     column without a name in the header (a trailing separator) is dropped when it is
     empty on every row."""
     numbered = [(n, ln) for n, ln in enumerate(io.StringIO(text, newline=None), 1)
@@ -817,7 +823,13 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     if not lines:
         raise DataError("header", "the file is empty", None,
                         "a header line naming the columns " + ", ".join(REQUIRED))
-    sep = separator(lines[0])
+    sep = named_separator(lines[0])        # Excel's 'sep=;' above the header
+    if sep is not None:
+        numbered, lines = numbered[1:], lines[1:]
+        if not lines:
+            raise DataError("header", "the file holds only its 'sep=' line", None,
+                            "a header line naming the columns " + ", ".join(REQUIRED))
+    sep = sep or separator(lines[0])
     try:
         names = [n.strip() for n in next(csv.reader(lines[:1], delimiter=sep))]
     except csv.Error as exc:

@@ -5,7 +5,8 @@
 // The dialect is the server's (surrogate/calibration/_csv_dialect.py): ',' between
 // fields, or ';' or tabs with ',' as the decimal mark when the numbers have one (a
 // German Excel's CSV); rows of separators only are blank; a column without a name in
-// the header is dropped when empty (a trailing separator), else named by its place.
+// the header is dropped when empty (a trailing separator), else named by its place;
+// a first line 'sep=;' (Excel's hint) names the separator.
 
 const TEXT_COLUMNS = new Set(["curve_id", "body_material", "membrane_material"]);
 
@@ -36,7 +37,16 @@ export function parseCsv(text) {
   const lines = text.replace(/^\uFEFF/, "").split(/\r\n|\r|\n/)
     .filter((l) => l.replace(/[\s,;]/g, "") !== "" && !l.trimStart().startsWith("#"));
   if (!lines.length) throw new Error("the file is empty");
-  const sep = separatorOf(lines[0]);
+  // Excel's 'sep=;' (',', a tab) above the header names the separator, as the server
+  // reads it (_csv_dialect.named_separator)
+  const named = /^"?sep=(.?)"?[,;\t]*$/i.exec(lines[0]);
+  if (named && !",;\t".includes(named[1] || "x")) {
+    throw new Error(`the first line '${lines[0].slice(0, 40)}' names '${named[1]}' as the ` +
+      "field separator (allowed: sep=, sep=; or sep= and a tab, or no sep= line)");
+  }
+  if (named) lines.shift();
+  if (!lines.length) throw new Error("the file holds only its 'sep=' line");
+  const sep = named ? named[1] : separatorOf(lines[0]);
   const header = splitLine(lines[0], sep).map((name, k) => name || `column ${k + 1}`);
   const cells = lines.slice(1).map((line) => splitLine(line, sep));
   // with ';' or tabs, ',' is the decimal mark when any number has one; a cell that

@@ -1,0 +1,94 @@
+"""The fiftieth session's hostile-input audit, round eleven (after tests/test_hostile_s49.py):
+round ten's leftovers (Excel's ``sep=;`` line read, a database filter outside its field's
+range refused, one limit for a pressure list however it is asked, a grid file's size
+bounded before its TOML is parsed, a material pair's one message) and what was found
+after them.
+
+Each test failed on the code before its fix (commit messages say which), bar the guards.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+from test_cli_fuzz import run, visible_lines
+
+DATA = Path(__file__).parent / "data"
+ROOT = Path(__file__).resolve().parents[1]
+
+# -- 1. Excel's 'sep=;' line above the header ---------------------------------------------------
+
+
+def _with_first_line(tmp_path, name: str, first: str, *, suffix: str = "\n",
+                     encoding: str = "utf-8") -> Path:
+    """A test data file with ``first`` written above its header (comments dropped)."""
+    lines = [line for line in (DATA / name).read_text(encoding="utf-8").splitlines()
+             if not line.startswith("#")]
+    path = tmp_path / "export.csv"
+    path.write_text(first + suffix + "\n".join(lines) + "\n", encoding=encoding)
+    return path
+
+
+@pytest.mark.parametrize(("name", "first", "encoding"), [
+    ("lab_gauge_noise_body_stiffer.csv", "sep=;", "utf-8"),
+    ("lab_gauge_noise_body_stiffer.csv", "SEP=;", "utf-8-sig"),      # with a BOM
+    ("lab_gauge_noise_body_stiffer.csv", '"sep=;";;;', "utf-16"),    # quoted, as a row
+    ("lab_gauge_noise_air_tilt_two_flows_rad.csv", "sep=,", "utf-8"),
+])
+def test_an_excel_sep_line_names_the_separator_and_is_not_data(tmp_path, name, first,
+                                                                encoding):
+    """A first line `sep=;` (Excel's hint; labs' exports write it) was refused as "text
+    above the header": it is read as the separator it names, the rows the same as
+    without it."""
+    from surrogate.calibration import load_observations
+
+    plain = load_observations(_with_first_line(tmp_path, name, "", suffix=""))
+    hinted = load_observations(_with_first_line(tmp_path, name, first, encoding=encoding))
+    assert hinted.sha256 == plain.sha256 and hinted.n == plain.n
+
+
+def test_a_tab_named_by_sep_is_read(tmp_path):
+    from surrogate.calibration import load_observations
+
+    semi = _with_first_line(tmp_path, "lab_gauge_noise_body_stiffer.csv", "", suffix="")
+    plain = load_observations(semi)
+    tabbed = tmp_path / "tabs.csv"
+    tabbed.write_text("sep=\t\n" + semi.read_text(encoding="utf-8").replace(";", "\t"),
+                      encoding="utf-8")
+    assert load_observations(tabbed).sha256 == plain.sha256
+
+
+@pytest.mark.parametrize(("first", "words"), [
+    ("sep=|", "header: the first line 'sep=|' names '|' as the field separator (allowed: "
+              "sep=, sep=; or sep= and a tab (',', ';', a tab), or no sep= line)"),
+    ("sep=", "header: the first line 'sep=' names '' as the field separator"),
+])
+def test_a_sep_line_naming_another_separator_is_told_which_it_may_name(tmp_path, first, words):
+    path = _with_first_line(tmp_path, "lab_gauge_noise_body_stiffer.csv", first)
+    code, out, err, escaped = run(["calibrate", str(path), "--report", str(tmp_path / "r.json")])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    assert words in lines[0], lines[0]
+
+
+@pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
+def test_the_explorer_reads_a_sep_line_as_the_server_does(tmp_path):
+    """The page's CSV reader (js/csv.js) sent the `sep=;` line as the header."""
+    script = tmp_path / "read.mjs"
+    script.write_text(
+        f'import {{ parseCsv }} from "{(ROOT / "service/static/explorer/js/csv.js").as_uri()}";\n'
+        'const out = [];\n'
+        'out.push(parseCsv("\\uFEFFsep=;\\r\\ncurve_id;pressure_pa;angle_deg\\r\\nc;1,5;2\\r\\n"));\n'
+        'out.push(parseCsv("sep=\\t\\ncurve_id\\tpressure_pa\\nc\\t2,5\\n"));\n'
+        'try { parseCsv("sep=|\\na|b\\n"); } catch (e) { out.push(e.message); }\n'
+        'console.log(JSON.stringify(out));\n', encoding="utf-8")
+    done = subprocess.run(["node", str(script)], capture_output=True, text=True, timeout=60,
+                          check=True)
+    rows_semi, rows_tab, refusal = json.loads(done.stdout)
+    assert rows_semi == [{"curve_id": "c", "pressure_pa": 1.5, "angle_deg": 2}]
+    assert rows_tab == [{"curve_id": "c", "pressure_pa": 2.5}]
+    assert "names '|' as the field separator" in refusal
