@@ -92,3 +92,33 @@ def test_the_explorer_reads_a_sep_line_as_the_server_does(tmp_path):
     assert rows_semi == [{"curve_id": "c", "pressure_pa": 1.5, "angle_deg": 2}]
     assert rows_tab == [{"curve_id": "c", "pressure_pa": 2.5}]
     assert "names '|' as the field separator" in refusal
+
+
+# -- 2. a database filter outside its field's range ----------------------------------------------
+
+SHIPPED_DB = str(ROOT / "service" / "data" / "curves.h5")
+
+
+@pytest.mark.parametrize(("where", "words"), [
+    ("L_mm=1e-400", "--where L_mm: 1e-400 is outside the lengths a design may have "
+                    "(allowed: 0.5 <= L_mm <= 60 (mm))"),
+    ("L_mm=0.1", "--where L_mm: 0.1 is outside the lengths a design may have "
+                 "(allowed: 0.5 <= L_mm <= 60 (mm))"),
+    ("t_mm=99", "--where t_mm: 99 is outside the lengths a design may have "
+                "(allowed: 0.05 <= t_mm <= 5 (mm))"),
+])
+def test_a_filter_no_design_can_have_is_refused_with_the_fields_range(where, words):
+    """`db ls --where L_mm=1e-400` (or 0.1, outside the box) listed "0 records": the value
+    is refused with the design check's range (solver.design.LIMITS_MM), as
+    GET /v1/curves refuses it."""
+    code, out, err, escaped = run(["db", "ls", SHIPPED_DB, "--where", where])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1 and not out, err
+    assert words in lines[0], lines[0]
+
+
+def test_a_filter_in_range_that_no_record_has_still_lists_none():
+    """Guard: a length in range that no record has is "0 records", with what they hold."""
+    code, out, err, escaped = run(["db", "ls", SHIPPED_DB, "--where", "L_mm=60"])
+    assert code == 0 and escaped is None, err
+    assert "0 records; no record has L_mm 60" in err
