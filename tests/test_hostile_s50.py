@@ -122,3 +122,27 @@ def test_a_filter_in_range_that_no_record_has_still_lists_none():
     code, out, err, escaped = run(["db", "ls", SHIPPED_DB, "--where", "L_mm=60"])
     assert code == 0 and escaped is None, err
     assert "0 records; no record has L_mm 60" in err
+
+
+# -- 3. one limit on the pressures asked, however they are asked --------------------------------
+
+PAPER = ["--model", "paper", "--L-mm", "7.1", "--t-mm", "0.5"]
+
+
+def test_a_pressure_range_takes_as_many_pressures_as_a_list():
+    """`--pressure-range 0 2000 100000` was answered (100,000 rows) where `--pressures`
+    and POST /v1/predict's `pressures_pa` take 1000 values: one limit,
+    surrogate.predictor.MAX_ASKED_VALUES."""
+    from surrogate.predictor import MAX_ASKED_VALUES
+
+    code, out, err, escaped = run(["predict", *PAPER, "--pressure-range", "0", "2000",
+                                   str(MAX_ASKED_VALUES + 1)])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1 and not out, err
+    assert (f"--pressure-range: START = 0, STOP = 2000, NUM = {MAX_ASKED_VALUES + 1} "
+            f"(allowed: 0 <= START, STOP <= 20000 Pa; NUM an integer 1..{MAX_ASKED_VALUES}, "
+            "as --pressures' values)") in lines[0], lines[0]
+    code, out, err, escaped = run(["predict", *PAPER, "--pressure-range", "0", "2000",
+                                   str(MAX_ASKED_VALUES), "--json"])
+    assert code == 0 and escaped is None, err
+    assert len(json.loads(out)["angle_deg"]) == MAX_ASKED_VALUES
