@@ -146,3 +146,35 @@ def test_a_pressure_range_takes_as_many_pressures_as_a_list():
                                    str(MAX_ASKED_VALUES), "--json"])
     assert code == 0 and escaped is None, err
     assert len(json.loads(out)["angle_deg"]) == MAX_ASKED_VALUES
+
+
+# -- 4. a grid file's size, before its TOML is parsed --------------------------------------------
+
+
+def test_a_grid_file_past_one_mib_is_refused_before_it_is_parsed(tmp_path, monkeypatch):
+    """A 16 MiB grid of unknown keys cost tomllib's parse (5-15 s, 440 MB) to refuse: a grid
+    file is held to 1 MiB (the shipped ones are 1-9 kB), refused before tomllib sees it."""
+    import tomllib
+
+    path = tmp_path / "big.toml"
+    path.write_text("".join(f"k{i:07d} = 1\n" for i in range(2**20 // 13 + 1)),
+                    encoding="utf-8")
+
+    def never(*args, **kwargs):
+        raise AssertionError("the grid's TOML was parsed")
+
+    monkeypatch.setattr(tomllib, "loads", never)
+    code, out, err, escaped = run(["precompute", str(path), "--db", str(tmp_path / "x.h5"),
+                                   "--dry-run"])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    assert ("big.toml: larger than 1 MiB (allowed: a grid file (TOML: ranges, lists and "
+            "[[sample]] tables) of at most 1 MiB)") in lines[0], lines[0]
+    assert not (tmp_path / "x.h5").exists()
+
+
+def test_the_shipped_grids_are_far_below_the_limit():
+    """Guard: the limit is over 100 times the largest shipped grid."""
+    from solver.precompute.grid import MAX_GRID_BYTES
+
+    assert max(p.stat().st_size for p in (ROOT / "grids").glob("*.toml")) * 100 < MAX_GRID_BYTES

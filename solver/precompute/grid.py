@@ -62,7 +62,12 @@ BLOCKED_MAX_PRESSURE_PA = 3000.0   # blocked-tip force curves: to this chamber p
 #                                    (past the emulator's force range, 2500 Pa)
 RANGE_KEYS = ("start", "stop", "num")
 MAX_POINTS = 100_000
-MAX_GRID_BYTES = 16 * 2**20   # a grid is sweeps and samples (a few kB); read no more
+# A grid is ranges, lists and [[sample]] tables: the shipped ones are 1-9 kB (emulator.toml,
+# 2105 designs). 1 MiB is over 100 times that, and holds some 28,000 designs written out one
+# [[sweep]] each (two lengths: 3.7 MiB for the 100,000 of MAX_POINTS); refused before
+# tomllib parses it, whose cost is about 1 s per MiB (a 16 MiB file of unknown keys, the
+# limit until 2026-12-08, cost 5-16 s and 440 MB to refuse).
+MAX_GRID_BYTES = 2**20
 MAX_NESTING = 100  # what a grid needs is 3 ([[body, membrane], ...] in a table)
 MAX_KEY_PARTS = 10  # what a grid needs is 3 (materials.soft.mu_kpa)
 
@@ -441,7 +446,8 @@ def load_grid(path: str | Path) -> Grid:
     """Read and validate a grid file; FileNotFoundError if it does not exist, GridError
     naming the line when it is not UTF-8 text (TOML is UTF-8; a binary file is refused)."""
     path = Path(path)
-    raw = read_bounded(path, MAX_GRID_BYTES, "grid", "a grid file (TOML)")
+    raw = read_bounded(path, MAX_GRID_BYTES, "grid",
+                       "a grid file (TOML: ranges, lists and [[sample]] tables)")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
