@@ -178,3 +178,65 @@ def test_the_shipped_grids_are_far_below_the_limit():
     from solver.precompute.grid import MAX_GRID_BYTES
 
     assert max(p.stat().st_size for p in (ROOT / "grids").glob("*.toml")) * 100 < MAX_GRID_BYTES
+
+
+# -- 5. an item of a list told its own form, not its list's size ---------------------------------
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory):
+    """The app without models: nothing here reaches them."""
+    from fastapi.testclient import TestClient
+    from service_fakes import settings_for
+
+    from service.app import create_app
+
+    with TestClient(create_app(settings_for(tmp_path_factory.mktemp("s50")))) as c:
+        yield c
+
+
+PAIR_FORMS = ('the text "body/membrane" (e.g. "pdms_1_10/ecoflex_00_30"), or an object of '
+              "body_material, membrane_material")
+TARGET = {"kind": "angle_at_pressure", "pressure_pa": 1500, "angle_deg": 45}
+
+
+@pytest.mark.parametrize(("item", "message"), [
+    # was "'x/y/z' is not body/membrane (e.g. ...)" beside "allowed: 1-20 values"
+    ("x/y/z", "'x/y/z' is not of this form"),
+    # a 5000-character text was echoed whole in the message
+    ("a/" * 2500, "'" + "a/" * 18 + "... is not of this form"),
+    # was told "a JSON object of body_material, membrane_material": the text form too
+    (5, "Input should be a valid dictionary or object to extract fields from"),
+])
+def test_a_material_pair_item_is_told_its_forms_once(client, item, message):
+    from service_fakes import assert_problem
+
+    problem = assert_problem(client.post("/v1/inverse", json={
+        "target": TARGET, "material_pairs": ["pdms_1_10/ecoflex_00_30", item]}), 422,
+        "material_pairs.1")
+    error = next(e for e in problem["errors"] if e["field"] == "material_pairs.1")
+    assert error["message"] == message and error["allowed"] == PAIR_FORMS, error
+
+
+@pytest.mark.parametrize(("path", "body", "field", "allowed"), [
+    ("/v1/predict", {"design": {"L_mm": 7.1, "t_mm": 0.5}, "pressures_pa": [100, -1]},
+     "pressures_pa.1", "each 0 <= pressures_pa <= 20000"),
+    ("/v1/inverse/pressure", {"design": {"L_mm": 7.1, "t_mm": 0.5}, "angles_deg": [1e9]},
+     "angles_deg.0", "each -360 <= angles_deg <= 360"),
+])
+def test_a_list_item_is_told_the_items_range_alone(client, path, body, field, allowed):
+    """An item's error was told "each 0 <= pressures_pa <= 20000; 1-1000 values": its list's
+    size is not the item's to change."""
+    from service_fakes import assert_problem
+
+    problem = assert_problem(client.post(path, json=body), 422, field)
+    assert next(e for e in problem["errors"] if e["field"] == field)["allowed"] == allowed
+
+
+def test_the_list_itself_is_still_told_its_size(client):
+    """Guard: the list's own error keeps its number of values."""
+    from service_fakes import assert_problem
+
+    problem = assert_problem(client.post("/v1/inverse", json={
+        "target": TARGET, "material_pairs": []}), 422, "material_pairs")
+    assert problem["errors"][0]["allowed"] == "1-20 values"
