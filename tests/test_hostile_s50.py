@@ -240,3 +240,34 @@ def test_the_list_itself_is_still_told_its_size(client):
     problem = assert_problem(client.post("/v1/inverse", json={
         "target": TARGET, "material_pairs": []}), 422, "material_pairs")
     assert problem["errors"][0]["allowed"] == "1-20 values"
+
+
+# -- 6. a grid file as Windows and old Mac editors save it ---------------------------------------
+
+GRID = 'pairs = [["pdms_1_10", "ecoflex_00_30"]]\nL_mm = [7.1, 9.1]\nt_mm = 0.5\n'
+
+
+@pytest.mark.parametrize(("encoding", "newline"), [
+    ("utf-8-sig", "\n"),      # Notepad's "UTF-8 with BOM": "Invalid statement (line 1, col 1)"
+    ("utf-16", "\r\n"),       # Notepad's "Unicode": "byte 0xff at offset 0 is not UTF-8"
+    ("utf-8", "\r"),          # a CR alone: "line 3: Expected newline ... (line 1, column 41)"
+])
+def test_a_grid_saved_with_a_byte_order_mark_or_cr_line_ends_is_read(tmp_path, encoding,
+                                                                     newline):
+    from solver.precompute import load_grid
+
+    path = tmp_path / "grid.toml"
+    path.write_bytes(GRID.replace("\n", newline).encode(encoding))
+    grid = load_grid(path)
+    assert sorted(p.design.L_mm for p in grid.points) == [7.1, 9.1]
+
+
+def test_a_grid_in_latin_1_is_still_refused_naming_utf_8(tmp_path):
+    """Guard: without a mark a grid is UTF-8; a latin-1 degree sign is named."""
+    from solver.precompute import GridError, load_grid
+
+    path = tmp_path / "grid.toml"
+    path.write_bytes(('description = "90°"\n' + GRID).encode("latin-1"))
+    with pytest.raises(GridError, match=r"line 1: encoding: byte 0xb0 at offset 17 is not "
+                                        r"UTF-8 \(allowed: a UTF-8 text file"):
+        load_grid(path)

@@ -37,6 +37,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from solver.bounded_read import read_bounded
+from solver.byte_order_mark import bom_encoding, byte_line
 from solver.design import LIMITS_MM, Design
 from solver.design_space import REUSED_ID_ALLOWED, reused_id
 from solver.errors import InputError
@@ -448,13 +449,18 @@ def load_grid(path: str | Path) -> Grid:
     path = Path(path)
     raw = read_bounded(path, MAX_GRID_BYTES, "grid",
                        "a grid file (TOML: ranges, lists and [[sample]] tables)")
+    encoding = bom_encoding(raw)    # Notepad's "UTF-8 with BOM", "Unicode" (UTF-16)
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode(encoding or "utf-8")
     except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise GridError(str(path), line, "encoding",
-                        f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not UTF-8",
-                        "a UTF-8 text file (TOML); save it as UTF-8") from None
+        raise GridError(str(path), byte_line(raw, exc.start, encoding or "utf-8"), "encoding",
+                        f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not "
+                        + (f"{encoding} after the file's byte-order mark" if encoding
+                           else "UTF-8"), "a UTF-8 text file (TOML); save it as UTF-8"
+                        ) from None
+    # lines ended by a CR alone (an old Mac editor's) were "line 3: Expected newline ...
+    # (at line 1, column 41)": TOML holds no lone CR, so each is read as a line end
+    text = text.replace("\r\n", "\n").replace("\r", "\n")
     if "\x00" in text:
         line = text[:text.index("\x00")].count("\n") + 1
         raise GridError(str(path), line, "encoding", "a NUL byte: this is a binary file",

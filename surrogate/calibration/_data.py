@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from solver.bounded_read import read_bounded
+from solver.byte_order_mark import bom_encoding, byte_line
 from solver.design import material_from_input
 from solver.errors import InputError
 from solver.number_text import NUMBER_FORM, is_number_text
@@ -923,10 +924,6 @@ def _csv_error(exc: csv.Error, lines: list[str], row: int, sep: str) -> DataErro
                      f"fields of at most {csv.field_size_limit()} characters")
 
 
-BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe\x00\x00", "utf-32"),
-        (b"\x00\x00\xfe\xff", "utf-32"), (b"\xff\xfe", "utf-16"), (b"\xfe\xff", "utf-16"))
-
-
 # what a lab's data file is when it is not text: told by its first bytes (all of these
 # were read as "UTF-16 without a byte-order mark"; an HDF5 file: looks_like_hdf5)
 FILE_SIGNATURES = ((b"PK\x03\x04", "a zip archive (an Excel .xlsx or .ods workbook?)"),
@@ -940,18 +937,16 @@ def decode_text(data: bytes, name: str) -> str:
     """Text of a measured-data file: UTF-8, or UTF-16/32 with a byte-order mark. Anything
     else (latin-1 from a spreadsheet, UTF-16 without BOM) is one DataError naming the
     file, the line and the expected encoding."""
-    for bom, encoding in BOMS:
-        if data.startswith(bom):
-            try:
-                text = data.decode(encoding)
-            except UnicodeDecodeError as exc:
-                line = data[:exc.start].count(b"\n" if encoding == "utf-8-sig" else
-                                              "\n".encode(encoding)[2:]) + 1
-                raise DataError("file", f"{name}: line {line}: not valid {encoding} after "
-                                "its byte-order mark", None, "UTF-8 text") from None
-            if "\x00" in text:
-                raise _stray_nul(text, name)
-            return text
+    if (encoding := bom_encoding(data)) is not None:
+        try:
+            text = data.decode(encoding)
+        except UnicodeDecodeError as exc:
+            raise DataError("file", f"{name}: line {byte_line(data, exc.start, encoding)}: not "
+                            f"valid {encoding} after its byte-order mark", None,
+                            "UTF-8 text") from None
+        if "\x00" in text:
+            raise _stray_nul(text, name)
+        return text
     # an HDF5 file where HDF5 looks for its signature (a sealed curve database has it
     # after its seal, solver/store/integrity.py), or another kind by its first bytes
     what = ("an HDF5 file (a curve database?)" if looks_like_hdf5(data[:HDF5_HEAD_BYTES])
