@@ -271,3 +271,38 @@ def test_a_grid_in_latin_1_is_still_refused_naming_utf_8(tmp_path):
     with pytest.raises(GridError, match=r"line 1: encoding: byte 0xb0 at offset 17 is not "
                                         r"UTF-8 \(allowed: a UTF-8 text file"):
         load_grid(path)
+
+
+# -- 7. a grid's integer past what Python converts or a float holds ------------------------------
+
+UNHELD = "does not fit a 64-bit float (sizes about 5e-324 to 1.8e308, or 0): it would be read as"
+
+
+@pytest.mark.parametrize(("body", "words"), [
+    # tomllib's ValueError "Exceeds the limit (4300 digits)" escaped as a traceback
+    ("L_mm = {start = 4.1, stop = 5.1, num = " + "9" * 5000 + "}\n",
+     "line 3: toml: an integer of more than 4300 digits, past any value a grid takes "
+     "(allowed: an integer 1 <= num <= 100000; lengths in mm"),
+    # an integer a float does not hold: OverflowError where it was used (or when echoed)
+    ("L_mm = " + "9" * 4000 + "\n",
+     f"line 3: L_mm: 99999999999999999999... (4000 characters) {UNHELD} inf "
+     "(allowed: 0.5 <= L_mm <= 60 (mm))"),
+    ("L_mm = {start = 4.1, stop = 5.1, num = 0x" + "f" * 5000 + "}\n",
+     f"line 3: L_mm.num: 0xffffffffffffffffff... (5002 characters) {UNHELD} inf "
+     "(allowed: an integer 1 <= num <= 100000)"),
+    ("L_mm = 7.1\n[materials.soft]\nmu_kpa = [-" + "9" * 4000 + "]\nalpha = [2.0]\n",
+     f"line 5: materials.soft.mu_kpa.0: -9999999999999999999... (4001 characters) {UNHELD} "
+     "-inf"),
+    ("L_mm = 7.1\n[settings]\nmax_pressure_pa = " + "9" * 4000 + "\n",
+     f"line 5: settings.max_pressure_pa: 99999999999999999999... (4000 characters) {UNHELD} "
+     "inf (allowed: a number 1.0 <= max_pressure_pa <= 10000000.0)"),
+])
+def test_a_grid_integer_too_long_to_use_is_one_line_naming_it(tmp_path, body, words):
+    path = tmp_path / "grid.toml"
+    path.write_text('pairs = [["pdms_1_10", "ecoflex_00_30"]]\nt_mm = 0.5\n' + body,
+                    encoding="utf-8")
+    code, out, err, escaped = run(["precompute", str(path), "--db", str(tmp_path / "x.h5"),
+                                   "--dry-run"])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, (err, escaped)
+    assert words in lines[0], lines[0]

@@ -32,6 +32,7 @@ import hashlib
 import itertools
 import math
 import re
+import sys
 import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -63,6 +64,7 @@ BLOCKED_MAX_PRESSURE_PA = 3000.0   # blocked-tip force curves: to this chamber p
 #                                    (past the emulator's force range, 2500 Pa)
 RANGE_KEYS = ("start", "stop", "num")
 MAX_POINTS = 100_000
+NUM_WORDS = f"an integer 1 <= num <= {MAX_POINTS}"   # a range's num, in every refusal
 # A grid is ranges, lists and [[sample]] tables: the shipped ones are 1-9 kB (emulator.toml,
 # 2105 designs). 1 MiB is over 100 times that, and holds some 28,000 designs written out one
 # [[sweep]] each (two lengths: 3.7 MiB for the 100,000 of MAX_POINTS); refused before
@@ -152,13 +154,13 @@ class _Reader:
             num = value["num"]
             if isinstance(num, bool) or not isinstance(num, int):
                 raise self.fail(path, name, f"num = {num!r} is not an integer",
-                                f"an integer 1 <= num <= {MAX_POINTS}")
+                                NUM_WORDS)
             if num < 1:
                 raise self.fail(path, name, f"empty range: num = {num}",
-                                f"an integer 1 <= num <= {MAX_POINTS}")
+                                NUM_WORDS)
             if num > MAX_POINTS:  # checked before expanding: a typo must not hang the job
                 raise self.fail(path, name, f"num = {num} values",
-                                f"an integer 1 <= num <= {MAX_POINTS}")
+                                NUM_WORDS)
             start = self.number(value["start"], path, name)
             stop = self.number(value["stop"], path, name)
             if stop < start:
@@ -232,6 +234,11 @@ def _limits(name: str) -> str:
     return f"{lo:g} <= {name} <= {hi:g} (mm)"
 
 
+# where an integer too long for Python to convert sits (only looked for once tomllib
+# has refused one): its digits, underscores between them, in any of TOML's bases
+_LONG_INTEGER = re.compile(f"[0-9A-Fa-f_]{{{sys.get_int_max_str_digits() + 1},}}")
+
+
 def parse_grid(text: str, source: str = "<grid>") -> Grid:
     """Parse and validate a grid text; GridError on the first problem found."""
     depth, at = deepest(text)
@@ -251,11 +258,19 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     except RecursionError:  # arrays or tables nested thousands deep
         raise GridError(source, 1, "toml", "values nested too deeply to parse",
                         f"at most {MAX_NESTING} levels of [ ] and {{ }}") from None
+    except ValueError:  # an integer past Python's 4300 digits (was a traceback)
+        digits = _LONG_INTEGER.search(text)
+        line = text.count("\n", 0, digits.start()) + 1 if digits else 1
+        raise GridError(source, line, "toml", "an integer of more than "
+                        f"{sys.get_int_max_str_digits()} digits, past any value a grid "
+                        "takes", f"{NUM_WORDS}; lengths in mm (solver.design.LIMITS_MM)"
+                        ) from None
     reader.check_keys(data, (), TOP_KEYS)   # first: no walk of a file of unknown keys
     for path, number in unheld(data):     # a number the float does not hold, as written
         name = next((p for p in reversed(path) if p in LIMITS_MM), path[-1])
-        allowed = (_limits(str(name)) if name in LIMITS_MM else TERM_WORDS
-                   if path[0] == "materials" else range_words(str(name), "a number"))
+        allowed = (NUM_WORDS if path[-1] == "num" else _limits(str(name))
+                   if name in LIMITS_MM else TERM_WORDS if path[0] == "materials"
+                   else range_words(str(name), "a number"))
         raise reader.fail(path, ".".join(map(str, path)), unheld_words(number), allowed,
                           needle=number.text)
     for key in ("name", "description"):
