@@ -306,3 +306,15 @@ def test_a_grid_integer_too_long_to_use_is_one_line_naming_it(tmp_path, body, wo
     lines = visible_lines(err)
     assert code == 2 and escaped is None and len(lines) == 1, (err, escaped)
     assert words in lines[0], lines[0]
+
+
+# -- 8. a database filter's echo -----------------------------------------------------------------
+
+
+def test_a_filter_that_meets_nothing_is_not_echoed_whole():
+    """`db ls --where body_material=<5000 characters>` printed them all on its "0 records"
+    line: cut as an error line cuts a word (service.cli.shown)."""
+    code, out, err, escaped = run(["db", "ls", SHIPPED_DB, "--where",
+                                   "body_material=" + "x" * 5000])
+    assert code == 0 and escaped is None, err
+    assert len(err) < 400 and "(5002 characters)" in err, err[:500]
