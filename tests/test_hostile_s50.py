@@ -318,3 +318,35 @@ def test_a_filter_that_meets_nothing_is_not_echoed_whole():
                                    "body_material=" + "x" * 5000])
     assert code == 0 and escaped is None, err
     assert len(err) < 400 and "(5002 characters)" in err, err[:500]
+
+
+# -- 9. an API key no client could send -----------------------------------------------------------
+
+
+@pytest.mark.parametrize(("key", "words"), [
+    ("", "BALLOON_API_KEY: is empty (or spaces only): no client could send it"),
+    ("   ", "BALLOON_API_KEY: is empty (or spaces only): no client could send it"),
+    ("s3cret-key ", "BALLOON_API_KEY: begins or ends with a space or tab"),
+    ("s3cret\x07key", "BALLOON_API_KEY: holds a control character"),
+])
+def test_an_api_key_no_header_can_carry_is_refused_at_start_up(monkeypatch, key, words):
+    """`BALLOON_API_KEY=` (a compose file's unset ${KEY}) or a key ending in a space started
+    a server that refused every mutating request, the health "ok": refused at start-up,
+    naming the variable, never echoing the key."""
+    from service.settings import settings_from_environment
+    from solver.errors import InputError
+
+    monkeypatch.setenv("BALLOON_API_KEY", key)
+    with pytest.raises(InputError) as info:
+        settings_from_environment()
+    text = str(info.value)
+    assert text.startswith(words) and "(allowed: unset (the mutating endpoints off)" in text
+    assert "s3cret" not in text
+
+
+def test_a_key_with_a_tab_inside_is_taken(monkeypatch):
+    """Guard: a header's value may hold a tab between its characters."""
+    from service.settings import settings_from_environment
+
+    monkeypatch.setenv("BALLOON_API_KEY", "one\ttwo")
+    assert settings_from_environment().api_key.get_secret_value() == "one\ttwo"
