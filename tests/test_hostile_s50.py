@@ -350,3 +350,27 @@ def test_a_key_with_a_tab_inside_is_taken(monkeypatch):
 
     monkeypatch.setenv("BALLOON_API_KEY", "one\ttwo")
     assert settings_from_environment().api_key.get_secret_value() == "one\ttwo"
+
+
+# -- 10. a target's subnormal value, refused in words that allow it -------------------------------
+
+
+@pytest.mark.parametrize(("target", "field", "got"), [
+    ({"kind": "angle_at_pressure", "pressure_pa": 5e-324, "angle_deg": 45}, "target.pressure_pa",
+     "got 5e-324, below the smallest normal float (2.23e-308): counted as 0 "
+     "(allowed: 0 < pressure_pa <= 20000 Pa)"),
+    ({"kind": "angle_at_time", "time_s": 5e-324, "flow_ul_s": 1, "angle_deg": 45},
+     "target.time_s", "got 5e-324, below the smallest normal float (2.23e-308): counted as 0"),
+    ({"kind": "force_at_pressure", "pressure_pa": 1500, "force_mn": -1e-310},
+     "target.force_mn", "got -1e-310, below the smallest normal float (2.23e-308): counted "
+                        "as 0 (allowed: 0 < |force_mn| <= 10000 mN"),
+])
+def test_a_subnormal_target_is_told_it_counts_as_zero(client, target, field, got):
+    """`pressure_pa: 5e-324` was refused "got 5e-324 (allowed: 0 < pressure_pa <= 20000
+    Pa)": a value the words allow. The search counts a subnormal as 0 (its arithmetic
+    overflows); the refusal says so."""
+    from service_fakes import assert_problem
+
+    problem = assert_problem(client.post("/v1/inverse", json={"target": target,
+                                                             "model": "paper"}), 422, field)
+    assert got in problem["detail"], problem["detail"]
