@@ -374,3 +374,48 @@ def test_a_subnormal_target_is_told_it_counts_as_zero(client, target, field, got
     problem = assert_problem(client.post("/v1/inverse", json={"target": target,
                                                              "model": "paper"}), 422, field)
     assert got in problem["detail"], problem["detail"]
+
+
+# -- 11. two writers at one new database: salvage and another -------------------------------------
+
+
+@pytest.mark.parametrize("other_still_writing", [True, False])
+def test_salvage_never_removes_or_fills_a_database_made_while_it_read(
+        tmp_path, monkeypatch, other_still_writing):
+    """`db salvage DB -o NEW` checks NEW does not exist, reads DB (39 s for the shipped
+    file), then wrote NEW: a database another process made at NEW meanwhile (a second
+    salvage, a precompute job) was deleted when its writer still held it (the busy error
+    unlinked NEW) or written into when it had finished. NEW is now written under a
+    staging name and linked into place only if nothing is there."""
+    from test_store import record_for
+
+    import solver.store.salvage as salvage_module
+    from solver.store import CurveStore
+    from solver.store.salvage import salvage
+
+    source, target = tmp_path / "old.h5", tmp_path / "new.h5"
+    with CurveStore(source, mode="a") as db:
+        db.put_many([record_for(L_mm=L) for L in (4.1, 5.1)])
+    theirs = record_for(L_mm=9.1)
+    other: list[CurveStore] = []
+    reading = salvage_module._read_intact
+
+    def read_while_another_writes(db):
+        writer = CurveStore(target, mode="a")
+        writer.put(theirs)
+        if other_still_writing:
+            other.append(writer)
+        else:
+            writer.close()
+        return reading(db)
+
+    monkeypatch.setattr(salvage_module, "_read_intact", read_while_another_writes)
+    try:
+        with pytest.raises(Exception, match="new.h5 exists"):
+            salvage(source, target)
+    finally:
+        for writer in other:
+            writer.close()
+    with CurveStore(target) as db:
+        assert [r.key for r in db.records()] == [theirs.key]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new.h5", "old.h5"]  # no staging
