@@ -419,3 +419,31 @@ def test_salvage_never_removes_or_fills_a_database_made_while_it_read(
     with CurveStore(target) as db:
         assert [r.key for r in db.records()] == [theirs.key]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["new.h5", "old.h5"]  # no staging
+
+
+# -- 12. the explorer page reads a data file's bytes as the server does ---------------------------
+
+
+@pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
+def test_the_explorer_decodes_a_data_file_as_the_server_does(tmp_path):
+    """The page read a data file with `file.text()`: UTF-16 with a byte-order mark (Excel's
+    "Unicode Text") became NULs and latin-1 "90°" became "90\\uFFFD", sent as rows; the CLI
+    reads the first and refuses the second naming its line. `decodeMeasured` does both."""
+    script = tmp_path / "decode.mjs"
+    script.write_text(
+        f'import {{ decodeMeasured, parseCsv }} from '
+        f'"{(ROOT / "service/static/explorer/js/csv.js").as_uri()}";\n'
+        'const out = [];\n'
+        'const text = "curve_id\\tpressure_pa\\tangle_deg\\r\\nc\\t1,5\\t2\\r\\n";\n'
+        'const le = Buffer.concat([Buffer.from([0xff, 0xfe]), Buffer.from(text, "utf16le")]);\n'
+        'out.push(parseCsv(decodeMeasured(new Uint8Array(le))));\n'
+        'try { decodeMeasured(new Uint8Array([0x61, 0x0a, 0x39, 0x30, 0xb0])); }\n'
+        'catch (e) { out.push(e.message); }\n'
+        'console.log(JSON.stringify(out));\n', encoding="utf-8")
+    done = subprocess.run(["node", str(script)], capture_output=True, text=True, timeout=60,
+                          check=True)
+    rows, refusal = json.loads(done.stdout)
+    assert rows == [{"curve_id": "c", "pressure_pa": 1.5, "angle_deg": 2}]
+    assert refusal.startswith("line 2: not UTF-8 text (latin-1 or Windows-1252"), refusal
+    assert "decodeMeasured(new Uint8Array(await file.arrayBuffer()))" in (
+        ROOT / "service/static/explorer/js/calibration.js").read_text(encoding="utf-8")

@@ -68,6 +68,25 @@ export function parseCsv(text) {
   });
 }
 
+// A data file's bytes as text, as the server reads them (surrogate/calibration/_data.py
+// decode_text, solver/byte_order_mark.py): UTF-8, or UTF-16 with a byte-order mark (Excel's
+// "Unicode Text", tab-separated); anything else is refused, never read with its bytes
+// replaced (file.text() made a latin-1 "90°" into "90\uFFFD" and UTF-16 into NULs).
+const BOMS = [[[0xEF, 0xBB, 0xBF], "utf-8"], [[0xFF, 0xFE], "utf-16le"], [[0xFE, 0xFF], "utf-16be"]];
+
+export function decodeMeasured(bytes) {
+  const [, encoding] = BOMS.find(([bom]) => bom.every((b, i) => bytes[i] === b)) ?? [null, "utf-8"];
+  try {
+    return new TextDecoder(encoding, { fatal: true }).decode(bytes);   // drops the mark
+  } catch {
+    const lossy = new TextDecoder(encoding).decode(bytes);    // where the first bad byte is
+    const line = lossy.slice(0, lossy.indexOf("\uFFFD")).split("\n").length;
+    throw new Error(`line ${line}: not ${encoding === "utf-8" ? "UTF-8" : encoding} text` +
+      (encoding === "utf-8" ? " (latin-1 or Windows-1252 from a spreadsheet?)" : "") +
+      " (allowed: UTF-8 text, or UTF-16 with a byte-order mark: save the file as CSV UTF-8)");
+  }
+}
+
 export function parseMeasured(name, text) {
   if (/\.json$/i.test(name) || text.trimStart().startsWith("[") || text.trimStart().startsWith("{")) {
     const data = JSON.parse(text);
