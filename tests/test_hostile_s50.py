@@ -75,20 +75,26 @@ def test_a_sep_line_naming_another_separator_is_told_which_it_may_name(tmp_path,
     assert words in lines[0], lines[0]
 
 
+def _csv_js(tmp_path, body: str) -> list:
+    """What a node script of ``body`` pushes onto ``out``, with the explorer's
+    js/csv.js imported."""
+    script = tmp_path / "probe.mjs"
+    script.write_text(
+        f'import {{ decodeMeasured, parseCsv }} from '
+        f'"{(ROOT / "service/static/explorer/js/csv.js").as_uri()}";\n'
+        f'const out = [];\n{body}console.log(JSON.stringify(out));\n', encoding="utf-8")
+    done = subprocess.run(["node", str(script)], capture_output=True, text=True, timeout=60,
+                          check=True)
+    return json.loads(done.stdout)
+
+
 @pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
 def test_the_explorer_reads_a_sep_line_as_the_server_does(tmp_path):
     """The page's CSV reader (js/csv.js) sent the `sep=;` line as the header."""
-    script = tmp_path / "read.mjs"
-    script.write_text(
-        f'import {{ parseCsv }} from "{(ROOT / "service/static/explorer/js/csv.js").as_uri()}";\n'
-        'const out = [];\n'
+    rows_semi, rows_tab, refusal = _csv_js(tmp_path, (
         'out.push(parseCsv("\\uFEFFsep=;\\r\\ncurve_id;pressure_pa;angle_deg\\r\\nc;1,5;2\\r\\n"));\n'
         'out.push(parseCsv("sep=\\t\\ncurve_id\\tpressure_pa\\nc\\t2,5\\n"));\n'
-        'try { parseCsv("sep=|\\na|b\\n"); } catch (e) { out.push(e.message); }\n'
-        'console.log(JSON.stringify(out));\n', encoding="utf-8")
-    done = subprocess.run(["node", str(script)], capture_output=True, text=True, timeout=60,
-                          check=True)
-    rows_semi, rows_tab, refusal = json.loads(done.stdout)
+        'try { parseCsv("sep=|\\na|b\\n"); } catch (e) { out.push(e.message); }\n'))
     assert rows_semi == [{"curve_id": "c", "pressure_pa": 1.5, "angle_deg": 2}]
     assert rows_tab == [{"curve_id": "c", "pressure_pa": 2.5}]
     assert "names '|' as the field separator" in refusal
@@ -429,20 +435,12 @@ def test_the_explorer_decodes_a_data_file_as_the_server_does(tmp_path):
     """The page read a data file with `file.text()`: UTF-16 with a byte-order mark (Excel's
     "Unicode Text") became NULs and latin-1 "90°" became "90\\uFFFD", sent as rows; the CLI
     reads the first and refuses the second naming its line. `decodeMeasured` does both."""
-    script = tmp_path / "decode.mjs"
-    script.write_text(
-        f'import {{ decodeMeasured, parseCsv }} from '
-        f'"{(ROOT / "service/static/explorer/js/csv.js").as_uri()}";\n'
-        'const out = [];\n'
+    rows, refusal = _csv_js(tmp_path, (
         'const text = "curve_id\\tpressure_pa\\tangle_deg\\r\\nc\\t1,5\\t2\\r\\n";\n'
         'const le = Buffer.concat([Buffer.from([0xff, 0xfe]), Buffer.from(text, "utf16le")]);\n'
         'out.push(parseCsv(decodeMeasured(new Uint8Array(le))));\n'
         'try { decodeMeasured(new Uint8Array([0x61, 0x0a, 0x39, 0x30, 0xb0])); }\n'
-        'catch (e) { out.push(e.message); }\n'
-        'console.log(JSON.stringify(out));\n', encoding="utf-8")
-    done = subprocess.run(["node", str(script)], capture_output=True, text=True, timeout=60,
-                          check=True)
-    rows, refusal = json.loads(done.stdout)
+        'catch (e) { out.push(e.message); }\n'))
     assert rows == [{"curve_id": "c", "pressure_pa": 1.5, "angle_deg": 2}]
     assert refusal.startswith("line 2: not UTF-8 text (latin-1 or Windows-1252"), refusal
     assert "decodeMeasured(new Uint8Array(await file.arrayBuffer()))" in (
