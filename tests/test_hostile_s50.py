@@ -445,3 +445,17 @@ def test_the_explorer_decodes_a_data_file_as_the_server_does(tmp_path):
     assert refusal.startswith("line 2: not UTF-8 text (latin-1 or Windows-1252"), refusal
     assert "decodeMeasured(new Uint8Array(await file.arrayBuffer()))" in (
         ROOT / "service/static/explorer/js/calibration.js").read_text(encoding="utf-8")
+
+
+# -- 13. a curve database given as the model ------------------------------------------------------
+
+
+def test_a_curve_database_given_as_the_model_is_named_as_one():
+    """`predict --model service/data/curves.h5` was "not valid JSON ('utf-8' codec can't
+    decode byte 0x89 in position 512: invalid start byte)"."""
+    code, out, err, escaped = run(["predict", "--model", SHIPPED_DB, "--L-mm", "7.1",
+                                   "--t-mm", "0.5", "--pressures", "100"])
+    lines = visible_lines(err)
+    assert code == 2 and escaped is None and len(lines) == 1, err
+    assert ("curves.h5: this is an HDF5 file (a curve database?), not a model file (a model "
+            "is a JSON file, or a name)") in lines[0], lines[0]
