@@ -53,6 +53,7 @@ const FLAG_WORDS = {
   past_longest_pump_time: "past the longest pump time",
   pressures_look_like_kpa: "pressures look like kPa",
   near_stiffness_balance: "near the stiffness balance",
+  curve_turns_back: "curve turns back: least reliable here",
   high_membrane_stretch: "membrane stretch where FE curves often fail",
 };
 export const flagWords = (f) => FLAG_WORDS[f] || String(f).replaceAll("_", " ");
