@@ -26,7 +26,12 @@ from surrogate.calibration._errors import DataError
 from surrogate.calibration._exact_alike import exact_alikes
 from surrogate.calibration._first_run import first_run_against_later
 from surrogate.calibration._gauge_check import gauge_left, gauge_worse, pressure_rms_pa, reads_gauge
-from surrogate.calibration._gauge_zero import gauge_at_rest, wants_zeroed_pass, zeroed_summary
+from surrogate.calibration._gauge_zero import (
+    gauge_at_rest,
+    wants_zeroed_pass,
+    whole_curve_offsets,
+    zeroed_summary,
+)
 from surrogate.calibration._held_reading import held_instead, reads_better, wants_held_reading
 from surrogate.calibration._held_reading import summary as held_summary
 from surrogate.calibration._history import history_traits
@@ -362,6 +367,8 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             if channel["used"] and "hydraulic_resistance" not in chosen else None)
     runs = (first_run_against_later(obs.curve, obs.specimen, obs.volume_ul, obs.direction,
                                     obs.pressure_pa) if channel["used"] else None)
+    if rest is not None and rest["off"]:
+        rest = {**rest, "whole_curves": whole_curve_offsets(candidates)}
     if not zeroed and wants_zeroed_pass(rest, chosen):
         again = calibrate(replace(all_obs, pressure_pa=all_obs.pressure_pa - rest["mean_pa"]),
                           baseline, folds, progress, cancel, zeroed=True)
