@@ -67,7 +67,7 @@ reading.
 
 The first solves what the named sets need and the cache lacks (all: 28 x 3 + 8 x 3
 solves of 5-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 31 sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 34 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
@@ -75,7 +75,8 @@ test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; 
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
 test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py; N38's,
 N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py; N45's, N46's, N47's
-and N52's for test_calibration_lab_s49.py), or of them the sets named.
+and N52's for test_calibration_lab_s49.py; N53's, N55's and N60's for
+test_calibration_lab_s50.py), or of them the sets named.
 """
 
 from __future__ import annotations
@@ -520,7 +521,9 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "angle_sensor_pinned": "N52-angle-pinned45-D27",
              "logger_extra_columns": "N47-clean-extra-columns-D27",
              "blank_lines_other_order": "N46-clean-blank-lines-D26",
-             "gauge_zero_small_tabs": "N53-gauge30-small-extra-D26"}
+             "gauge_zero_small_tabs": "N53-gauge30-small-extra-D26",
+             "quoted_decimal_commas_bom": "N55-clean-quoted-bom-D30",
+             "text_after_the_readings": "N60-drift-footer-D29"}
 
 
 def solve_missing(cache: Path, names: list[str] | None = None) -> None:
@@ -871,7 +874,7 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
     ap.add_argument("--test-data", action="store_true",
-                    help="write tests/data's 31 sets (those of them named, if any)")
+                    help="write tests/data's 34 sets (those of them named, if any)")
     args = ap.parse_args()
     test_sets = [n for n in TEST_DATA.values() if not args.sets or n in args.sets]
     solve_missing(args.cache, test_sets if args.test_data else args.sets)

@@ -11,7 +11,14 @@ from its ``--test-data``).
   too), the report says which offset to trust and why (``whole_curves``), and what the
   gauge is left with is said from the zeroed reading (``_gauge_check.gauge_sentence``).
 
-The sentence cases are fast; the calibration of N53 (two passes) is slow.
+* a spreadsheet in a decimal-comma locale set to separate fields by ',' quotes every
+  number ("8,60"): refused as "not a number" (N55). Now read where no numeric cell has a
+  '.' and some comma cannot be a thousands separator (_csv_dialect.py);
+* a logger's line of text after the last reading ("Measurement stopped by user at ...")
+  was read as a reading and refused as "run: row 52: missing run" (N60). Now refused
+  naming the line and the text, as a text above the header is (_layouts.py).
+
+The sentence and file cases are fast; the calibration of N53 (two passes) is slow.
 """
 
 from __future__ import annotations
@@ -20,6 +27,8 @@ from pathlib import Path
 
 import pytest
 
+from surrogate.calibration import DataError, load_observations, observations_from_rows
+from surrogate.calibration._csv_dialect import decimal_commas
 from surrogate.calibration._data import decode_text, read_csv_rows
 from surrogate.calibration._gauge_check import gauge_left, gauge_sentence
 from surrogate.calibration._gauge_zero import sentence as zero_sentence
@@ -116,3 +125,57 @@ def test_n53_reads_the_whole_curves_with_the_zero_found_at_rest():
     assert "Trust the zero read at rest" in said
     assert "explain what the gauge is left with" in said
     assert "no catalogued effect explains" not in said
+
+
+def test_a_comma_separated_export_with_quoted_decimal_commas_is_read(tmp_path):
+    """N55 (D30, no effect): a spreadsheet's comma-separated export in a decimal-comma
+    locale, each number quoted ("8,60","0,030"), a UTF-8 byte-order mark, a blank line
+    after each specimen. Before: "L_mm: row 1: not a number: '8,60'". Now it reads the
+    same numbers as the set written with '.' decimals."""
+    path = DATA / "lab_gauge_noise_quoted_decimal_commas_bom.csv"
+    assert path.read_bytes().startswith(b"\xef\xbb\xbf#") and b'"8,60"' in path.read_bytes()
+    obs = load_observations(str(path))
+    assert obs.n == 36 and obs.n_curves == 3
+    pointed = tmp_path / "pointed.csv"
+    text = path.read_bytes().decode("utf-8-sig")
+    import csv
+    import io
+    rows = list(csv.reader(io.StringIO(text)))
+    with open(pointed, "w", newline="", encoding="utf-8") as fh:
+        csv.writer(fh).writerows([[c.replace(",", ".") for c in r] for r in rows])
+    same = load_observations(str(pointed))
+    for name in ("pressure_pa", "angle_deg", "time_s", "flow_ul_s"):
+        assert getattr(obs, name).tolist() == getattr(same, name).tolist()
+
+
+@pytest.mark.parametrize("cells, read", [
+    (("1,500", "2,250"), None),               # only thousands-shaped: 1500 or 1.5?
+    (("1,5", "2.25"), None),                  # a point beside a comma
+    (("1,5", "2,250"), [1.5, 2.25]),          # 1,5 cannot be a thousands separator
+    (("0,030", "-0,125"), [0.03, -0.125]),    # a whole part of 0 neither
+])
+def test_a_quoted_comma_is_a_decimal_mark_only_where_it_cannot_be_a_thousands_one(
+        cells, read):
+    """A comma-separated file's cells as the csv module gives them (the quotes gone)."""
+    rows = [{"curve_id": "s1", "pressure_pa": c} for c in cells]
+    out = decimal_commas(rows, ("pressure_pa",), ",")
+    if read is None:
+        assert out == rows                    # as written: "not a number" downstream
+    else:
+        assert [float(r["pressure_pa"]) for r in out] == read
+
+
+def test_a_loggers_line_after_the_last_reading_is_named():
+    """N60: "Measurement stopped by user at 2026-12-08 14:22:05" after the last reading.
+    Before: "run: row 52: missing run". Now the line and its text are named, as a text
+    above the header is, with what to do; the same file without it is read."""
+    path = DATA / "lab_gauge_noise_text_after_the_readings.csv"
+    with pytest.raises(DataError) as err:
+        load_observations(str(path))
+    said = str(err.value)
+    assert said.startswith("row: line 54 holds text after the last reading ('Measurement "
+                           "stopped by user at 2026-12-08 14:22:05')")
+    assert "starting with '#'" in said and "\n" not in said
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    rows = read_csv_rows("".join(lines[:-1]))
+    assert observations_from_rows(rows).n == 51
