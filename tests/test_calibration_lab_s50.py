@@ -179,3 +179,45 @@ def test_a_loggers_line_after_the_last_reading_is_named():
     lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
     rows = read_csv_rows("".join(lines[:-1]))
     assert observations_from_rows(rows).n == 51
+
+
+def _page_reading(tmp_path, name: str) -> dict:
+    """What the explorer page's csv.js makes of a tests/data file, run by node: its rows
+    or its error's message."""
+    import json
+    import shutil
+    import subprocess
+
+    node = shutil.which("node")
+    if node is None:
+        pytest.skip("node is not installed")
+    js = Path(__file__).parents[1] / "service" / "static" / "explorer" / "js" / "csv.js"
+    (tmp_path / "csv.mjs").write_text(js.read_text(encoding="utf-8"), encoding="utf-8")
+    (tmp_path / "run.mjs").write_text(
+        'import { parseCsv } from "./csv.mjs";\nimport fs from "fs";\n'
+        "try { console.log(JSON.stringify({ rows: parseCsv(fs.readFileSync(process.argv[2], "
+        '"utf8")) })); } catch (e) { console.log(JSON.stringify({ error: e.message })); }\n',
+        encoding="utf-8")
+    out = subprocess.run([node, str(tmp_path / "run.mjs"), str(DATA / name)],
+                         capture_output=True, text=True, timeout=60, check=True)
+    return json.loads(out.stdout)
+
+
+def test_the_explorer_page_reads_quoted_decimal_commas_as_the_cli_does(tmp_path):
+    """The page parses a file itself and sends its rows (docs/measured-data.md: "the
+    explorer page reads the same dialect"): N55's quoted decimal commas were sent as
+    text ('8,60') and refused; now the server reads the page's rows as the CLI reads the
+    file (the same sha256)."""
+    name = "lab_gauge_noise_quoted_decimal_commas_bom.csv"
+    sent = _page_reading(tmp_path, name)["rows"]
+    assert sent[0]["L_mm"] == 8.6
+    http = observations_from_rows([{k: v for k, v in r.items() if k != "pump"} for r in sent])
+    cli = observations_from_rows(_rows("quoted_decimal_commas_bom"))
+    assert http.sha256 == cli.sha256
+
+
+def test_the_explorer_page_names_a_loggers_line_after_the_readings(tmp_path):
+    """N60's footer: the page sent it as a row and the server answered "missing run"."""
+    said = _page_reading(tmp_path, "lab_gauge_noise_text_after_the_readings.csv")["error"]
+    assert said.startswith("line 54 holds text after the last reading ('Measurement "
+                           "stopped by user at 2026-12-08 14:22:05')")
