@@ -76,16 +76,21 @@ def gauge_at_rest(curve: np.ndarray, volume_ul: np.ndarray, gauge_pa: np.ndarray
             "critical_t": critical, "off": bool(abs(t) > critical)}
 
 
-def wants_zeroed_pass(rest: dict | None, selected: tuple[str, ...]) -> bool:
+def wants_zeroed_pass(rest: dict | None, selected: tuple[str, ...],
+                      gauge: dict | None = None) -> bool:
     """Whether the selection is made again with the zero taken off: the zero is off and
-    the selection is anything but a pressure offset alone -- nothing selected included:
-    the whole curves are then read with the zero measured at rest applied, and what the
-    gauge is left with said from that reading (until 2026-12-08 only a selection with a
-    gauge effect other than the offset was read again, and N53 of the forty-ninth
-    session's lab sets -- a +30 Pa zero, nothing selected -- said the zero at rest, +31
-    +/- 3 Pa, beside a gauge left at 1.88 x its floor and an offset over whole curves of
-    -57 +/- 25 Pa, two opposite readings of one gauge)."""
-    return rest is not None and rest["off"] and set(selected) != {"pressure_offset"}
+    something other than a pressure offset alone is selected, or nothing is and the gauge
+    is left above its floor (``gauge``, ``_gauge_check.gauge_left``): the whole curves
+    are then read with the zero measured at rest applied, and what the gauge is left with
+    said from that reading (until 2026-12-08 only a selection with a gauge effect other
+    than the offset was read again, and N53 of the forty-ninth session's lab sets -- a
+    +30 Pa zero, nothing selected -- said the zero at rest, +31 +/- 3 Pa, beside a gauge
+    left at 1.88 x its floor and an offset over whole curves of -57 +/- 25 Pa, two
+    opposite readings of one gauge). Nothing selected and the gauge within its floor
+    leave nothing to read again: the second pass doubles the loop's time."""
+    if rest is None or not rest["off"] or set(selected) == {"pressure_offset"}:
+        return False
+    return bool(selected) or bool(gauge and gauge["left"])
 
 
 def zeroed_summary(report: dict) -> dict:
