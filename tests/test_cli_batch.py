@@ -106,6 +106,7 @@ def test_a_spreadsheet_reads_it_and_progress_goes_to_stderr(batch) -> None:
     ("L_mm,t_mm\n", [], "a header and no design"),
     ("L_mm,t_mm\n7,0.5\n", ["--L-mm", "7"], "--L-mm: sets one design"),
     ("L_mm,t_mm\n7,0.5\n", ["--pressure-pa", "1000"], "--pressure-pa: sets a design search"),
+    ("L_mm,t_mm\n7,0.5\n", ["--json"], "--json: --designs writes CSV"),
 ])
 def test_a_file_or_flags_that_make_no_batch_are_one_line_before_the_model_loads(
         tmp_path, capsys, monkeypatch, designs, extra, said) -> None:

@@ -114,3 +114,25 @@ def test_every_counted_box_shows_its_range_before_anything_is_typed(watched, ser
     change(page, "#nearby", "2")
     page.wait_for_selector("#err-nearby", state="hidden")
     assert page.get_attribute("#nearby", "aria-describedby") == "nearby-hint"
+
+
+def test_a_design_search_refusal_names_the_forms_boxes_not_the_apis_fields(watched, server):
+    """The server's checks of a pump's target (the FE's 500 ul volume stop) said
+    "allowed: 0 < volume_ul <= 500" and "time_s x flow_ul_s <= 500 ul" beside the boxes."""
+    page = open_explorer(watched, server.url)
+    page.select_option("#inv-kind", "angle_at_volume")
+    page.fill("#inv-volume", "600")
+    page.click("#inv-run")
+    page.wait_for_selector("#err-inv-volume:not([hidden])")
+    text = page.inner_text("#err-inv-volume")
+    assert "volume_ul" not in text and "0 < Injected volume (ul) <= 500" in text, text
+    page.select_option("#inv-kind", "angle_at_time")
+    page.fill("#inv-time", "600")
+    page.fill("#inv-flow", "2.5")
+    page.click("#inv-run")
+    page.wait_for_selector("#err-inv-time:not([hidden])")
+    text = page.inner_text("#err-inv-time")
+    screenshot(page, "s50-search-refusal-words")
+    assert "time_s" not in text and "flow_ul_s" not in text, text
+    assert "Time from empty (s) <= 200 s at 2.5 ul/s" in text, text
+    assert "Pump flow rate (ul/s)" in text, text

@@ -218,6 +218,10 @@ def _check_many(args: argparse.Namespace) -> tuple[list[str], list[dict[str, str
     if args.angles_deg is None:
         raise InputError("--designs", "needs --angles-deg: the pressures for these angles "
                          "of each design", "--designs FILE --angles-deg DEG [DEG ...]")
+    if args.json:
+        raise InputError("--json", "--designs writes CSV (one row per design and angle)",
+                         "leave --json out; the single design's answer (--L-mm, --t-mm) "
+                         "prints JSON")
     for dest in DESIGN_DESTS:
         if getattr(args, dest, None) is not None:
             flag = "--" + dest.replace("_", "-")

@@ -86,7 +86,8 @@ export function showProblem(err, slots, fallback, options = {}) {
     messages.set(el, list);
   };
   const errors = err instanceof ApiError ? err.fieldErrors : [];
-  const pageWords = options.words || ((text) => text);
+  const named = slotNames(slots);
+  const pageWords = (text) => named(options.words ? options.words(text) : text);
   for (const e of errors) {
     const path = (options.slot && options.slot(fieldPath(e), e)) || fieldPath(e);
     let best = null;
@@ -105,6 +106,17 @@ export function showProblem(err, slots, fallback, options = {}) {
     if (!el) continue;
     showMessage(el, texts.join(" "));
   }
+}
+
+// A message with each request field of ``slots`` it names (a path's last part written
+// as the API writes it, with an underscore: "volume_ul", "flow_ul_s") as the label of the
+// page's control that sets it: "allowed: 0 < volume_ul <= 500" beside "Injected volume
+// (ul)" reads "allowed: 0 < Injected volume (ul) <= 500".
+function slotNames(slots) {
+  const names = Object.entries(slots).map(([path, el]) => [path.split(".").pop(), el ? slotLabel(el) : ""])
+    .filter(([name, label]) => label && name.includes("_"));
+  return (text) => names.reduce((t, [name, label]) =>
+    t.replace(new RegExp(`(?<![\\w.])${name}(?!\\w|\\.\\d)`, "g"), label), text);
 }
 
 // One message in an error slot, named by its field when the slot has one, announced
