@@ -129,6 +129,18 @@ def test_designs_needs_angles_and_o_needs_designs(tmp_path, capsys) -> None:
     assert "-o: writes the CSV of --designs" in capsys.readouterr().err
 
 
+def test_a_row_whose_cells_do_not_match_the_header_is_not_read_by_position(
+        tmp_path, capsys) -> None:
+    """"7,1" in a comma-separated file is two cells: the row was answered as L 7, t 1."""
+    path = tmp_path / "designs.csv"
+    path.write_text("L_mm,t_mm\n7,1,0.5\n9,0.7\n")
+    assert cli.main(["inverse", "--designs", str(path), "--angles-deg", "45"]) == 0
+    rows = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
+    assert rows[0]["pressure_pa"] == "" and rows[0]["error"].startswith(
+        "row: 3 cells where the header has 2"), rows[0]
+    assert rows[1]["error"] == "" and float(rows[1]["pressure_pa"]) > 0
+
+
 def test_a_german_excel_file_is_read(tmp_path, capsys) -> None:
     path = tmp_path / "designs.csv"
     path.write_text("\ufeffL_mm;t_mm\n7,1;0,5\n")

@@ -99,23 +99,25 @@ def test_batch_snippet(server, tmp_path):
     grid, dropped a refused design from the CSV and named no model file."""
     designs = tmp_path / "designs.csv"
     designs.write_text("name,L_mm,t_mm,T_mm\nshort,4.1,0.5,\nlong,15.1,0.5,\n"
-                       "outside,3.5,0.5,1.2\ntypo,9,0.7x,\n")
+                       "outside,3.5,0.5,1.2\ntypo,9,0.7x,\ncomma,9,0,7,1\n")
     err: list[str] = []
     text = run_snippet(server, "batch.py", [sys.executable], (str(designs),), err)
     rows = list(csv.DictReader(io.StringIO(text)))
-    assert [r["name"] for r in rows] == ["short", "long", "outside", "typo"]
+    assert [r["name"] for r in rows] == ["short", "long", "outside", "typo", "comma"]
     # a longer chamber bends more at a pressure: it needs less for 45 deg (A = a L)
     assert 0 < float(rows[1]["pressure_pa"]) < float(rows[0]["pressure_pa"])
     assert rows[0]["error"] == rows[1]["error"] == ""
     assert rows[2]["pressure_pa"] == "" and "L_mm" in rows[2]["error"]
     assert "4 <= L_mm <= 18" in rows[2]["error"]
     assert rows[3]["error"].startswith("design.t_mm:")
+    # "0,7" in a comma-separated file is two cells: not answered as t = 0 and T = 7
+    assert rows[4]["pressure_pa"] == "" and "cells do not match the header" in rows[4]["error"]
     health = httpx.get(f"{server['url']}/v1/health", timeout=10).json()
     sha = hashlib.sha256((ROOT / "service" / "data" / "emulator.json").read_bytes()).hexdigest()
     assert health["emulator"]["sha256"] == sha
     assert {(r["model_file"], r["model_sha256"], r["balloon_version"]) for r in rows} == {
         ("emulator.json", sha, health["version"])}
-    assert err[0].endswith("4/4 designs\n")
+    assert err[0].endswith("5/5 designs\n")
 
 
 def test_pump_snippet(server):

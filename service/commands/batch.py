@@ -38,11 +38,14 @@ NUMBER_COLUMNS = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_m
                   "chamber_offset_mm", "body_stiffness_scale", "membrane_stiffness_scale")
 TEXT_COLUMNS = ("body_material", "membrane_material")
 REQUIRED = ("L_mm", "t_mm")
+#: a row's key (no header's: a header cell is text) saying its cells do not match the
+#: header: "7,1" in a comma-separated file is two cells, read as L 7 and t 1 by position
+CELLS = 0
 #: the columns the output adds after the input's own and the answer's
 IDENTITY = ("error", "model", "model_file", "model_sha256", "balloon_version")
 
 
-def read_designs(path: Path, option: str = "--designs") -> tuple[list[str], list[dict[str, str]]]:
+def read_designs(path: Path, option: str = "--designs") -> tuple[list[str], list[dict]]:
     """(header, rows) of a designs file: every cell as text. InputError naming ``option``
     for a file that is no designs table (no header, a column given twice, L_mm or t_mm
     missing, a column that reads as a misspelt length), saying what it allows."""
@@ -78,8 +81,12 @@ def read_designs(path: Path, option: str = "--designs") -> tuple[list[str], list
             hint = f" (did you mean {near[0]!r}?)" if near else ""
             raise InputError(option, f"{path}: column {h!r} is none of the design's{hint}",
                              allowed)
-    rows = [dict(zip(header, (c.strip() for c in cells), strict=False))
-            for cells in reader]
+    rows = []
+    for cells in reader:
+        row = dict(zip(header, (c.strip() for c in cells), strict=False))
+        if len(cells) != len(header):   # its own error: the batch goes on
+            row[CELLS] = f"{len(cells)} cells where the header has {len(header)}"
+        rows.append(row)
     if len(rows) > MAX_DESIGNS:
         raise InputError(option, f"{path}: {len(rows)} designs", f"at most {MAX_DESIGNS}")
     if not rows:
@@ -91,13 +98,17 @@ def read_designs(path: Path, option: str = "--designs") -> tuple[list[str], list
     return header, rows
 
 
-def row_design(row: dict[str, str]) -> object:
+def row_design(row: dict) -> object:
     """The design of one row (solver.design.Design), as ``balloon predict``'s flags make
     it; InputError naming the row's column and its allowed range."""
     from argparse import Namespace
 
     from service.commands.predict import design_from_args
 
+    if CELLS in row:
+        raise InputError("row", f"{row[CELLS]} (a decimal comma in a ',' file?): not read "
+                         "by position", "one cell per header column; '.' decimals, or a "
+                         "';'-separated file for decimal commas")
     values: dict[str, object] = {}
     for name in NUMBER_COLUMNS:
         cell = row.get(name) or ""
@@ -153,7 +164,7 @@ def progress(done: int, total: int, refused: int) -> None:
         print(text, file=sys.stderr, flush=True)
 
 
-def run_batch(header: list[str], rows: list[dict[str, str]], columns: tuple[str, ...],
+def run_batch(header: list[str], rows: list[dict], columns: tuple[str, ...],
               answer: Callable[[object], Iterator[dict[str, object]]],
               identity: dict[str, str], out: io.TextIOBase) -> int:
     """Each row's design answered (``answer(design)``: its output rows, each with

@@ -437,26 +437,18 @@ const DESIGN_SLOTS = () => {
   return slots;
 };
 
-// A request field as the page's control that sets it, with its range in the user's
-// units ("pressures_pa" -> 'Ask by "chamber pressure (Pa)", its largest value from 100 to
-// 20000 Pa'); null for a field the page has no control of its own for.
-function controlWords(field) {
-  const axis = Object.keys(ASK).find((k) => ASK[k].field === field);
-  if (axis) {
-    const a = ASK[axis];
-    const option = $("ask_axis").querySelector(`option[value="${axis}"]`).textContent;
-    return `Ask by "${option}", its largest value ${allowedWords($(a.input), { unit: a.unit }).replace(/^allowed: /, "")}`;
-  }
-  if (field === "flow_ul_s") return `Pump flow rate ${allowedWords($("flow")).replace(/^allowed: /, "")}`;
-  return null;
-}
-
-// A server's message in the page's words: each request field it names as the control that
-// sets it (the paper's model asked by time said "allowed: pressures_pa", the API's name
-// of what the page's "Ask by" chooses), a model by the "Model" box's name.
+// A server's message in the page's words: each asked axis's request field as the "Ask by"
+// choice that sends it (the paper's model asked by time said "allowed: pressures_pa", the
+// API's name of what the page's "Ask by" chooses), a model by the "Model" box's name; the
+// other fields are named by their boxes' labels (showProblem), with the ranges the
+// server states in the user's units.
 function inPageWords(text) {
-  const fields = [...Object.values(ASK).map((a) => a.field), "flow_ul_s"].join("|");
-  return text.replace(new RegExp(`(?<![\\w.])(${fields})(?![\\w.])`, "g"), (m) => controlWords(m) || m)
+  const choice = (field) => {
+    const axis = Object.keys(ASK).find((k) => ASK[k].field === field);
+    return `Ask by "${$("ask_axis").querySelector(`option[value="${axis}"]`).textContent}"`;
+  };
+  const fields = Object.values(ASK).map((a) => a.field).join("|");
+  return text.replace(new RegExp(`(?<![\\w.])(${fields})(?![\\w.])`, "g"), choice)
     .replace(/\bmodel "([^"]+)"/g, 'Model "$1"');
 }
 
