@@ -8,6 +8,7 @@ Chromium on one live server (the shipped emulator and database; FE solves faked 
   pressure it refused every design for the page's default pump flow rate;
 - the FE readout reads the design's FE curve at the asked value, between its steps, and
   says when the value is past the curve's end (it showed the nearest step's angle);
+- the CSV and JSON exports name the model file by its SHA-256 and the service's version;
 - every number box of the Curve panel, the solve's mesh level, the search's count and the
   calibration's folds show their range before anything is typed (they showed it only in
   the error of a value out of it).
@@ -16,6 +17,12 @@ Screenshots: test-artifacts/explorer/s50-*.png.
 """
 
 from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+from pathlib import Path
 
 import pytest
 from explorer_browser import LiveServer, change, open_explorer, screenshot, solved_refused_design
@@ -136,3 +143,26 @@ def test_a_design_search_refusal_names_the_forms_boxes_not_the_apis_fields(watch
     assert "time_s" not in text and "flow_ul_s" not in text, text
     assert "Time from empty (s) <= 200 s at 2.5 ul/s" in text, text
     assert "Pump flow rate (ul/s)" in text, text
+
+
+def test_the_exports_name_the_model_file_and_the_version(watched, server):
+    page = open_explorer(watched, server.url)
+    page.wait_for_selector('#plot g[data-series^="fe-"]')
+    page.wait_for_function("window.explorer.health !== null")
+    sha = hashlib.sha256((Path(__file__).resolve().parent.parent / "service" / "data"
+                          / "emulator.json").read_bytes()).hexdigest()
+    with page.expect_download() as d:
+        page.click("#export-csv")
+    rows = list(csv.DictReader(io.StringIO(open(d.value.path()).read())))
+    model = [r for r in rows if r["series"].startswith("model")]
+    fe = [r for r in rows if r["series"].startswith("FE")]
+    assert model and fe
+    version = page.evaluate("window.explorer.health.version")
+    assert {(r["model"], r["model_file"], r["model_sha256"], r["balloon_version"])
+            for r in model} == {("emulator", "emulator.json", sha, version)}
+    assert {(r["model"], r["model_file"]) for r in fe} == {("FE", "curves.h5")}
+    with page.expect_download() as d:
+        page.click("#export-json")
+    data = json.loads(open(d.value.path()).read())
+    assert data["service"]["emulator"]["sha256"] == sha
+    assert data["service"]["version"] == version

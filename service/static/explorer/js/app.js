@@ -67,6 +67,7 @@ const app = {
   feFamilies: new Map(),// family key -> summaries (GET /v1/curves)
   feDetails: new Map(), // curve id -> record (GET /v1/curves/{id})
   nearest: [],          // records shown
+  health: null,         // the last GET /v1/health answer
   solved: new Map(),    // design key -> FE record from a finished solve
   stored: null,         // {key, record}: the stored FE record of the design shown (any status)
   job: null,            // {id, key, trace: [{pressure_pa, angle_deg, volume_ul, at_ms}]}
@@ -563,6 +564,7 @@ function fieldName(el) {
 // ---------------------------------------------------------------- a service that stopped
 function showHealth() {
   return api("/v1/health").then((h) => {
+    app.health = h;   // the loaded model files' SHA-256, named in the CSV export
     // the default model first: the emulator; the exponential file is the named model
     const emulator = h.emulator && h.emulator.loaded ? "emulator (default model)" : "emulator not loaded";
     const exponential = h.surrogate && h.surrogate.loaded ? `; exponential model "${h.surrogate.name}"` : "";
@@ -1204,18 +1206,34 @@ function shownCurves() {
   return series.map((s) => ({ id: s.id, label: s.label, x_axis: axisKeys().x, x: s.x, y_axis: axisKeys().y, y: s.y, lower: s.lower || null, upper: s.upper || null }));
 }
 
+// The model a curve of the page came from, for a CSV row: its name, file and the SHA-256
+// of the file the server loaded (GET /v1/health), and the service's version. An FE curve
+// is a database record (its id in the series' label); a saved calibrated model's file is
+// not named by the health answer, nor the built-in paper model's (it has none).
+function modelColumns(seriesId) {
+  const h = app.health || {};
+  if (seriesId.startsWith("fe-")) return ["FE", h.database?.name ?? "", "", h.version ?? ""];
+  const name = app.prediction?.model ?? $("model").value.trim();
+  const loaded = { emulator: h.emulator, exponential: h.surrogate, fitted: h.surrogate }[name];
+  return [name, loaded?.file ?? "", loaded?.sha256 ?? "", h.version ?? ""];
+}
+
 function exportCsv() {
   const { x, y } = axisKeys();
   const yName = y === "force" ? "force_mn" : "angle_deg";
-  const lines = [["series", x, yName, `lower_${yName}`, `upper_${yName}`].join(",")];
+  const lines = [["series", x, yName, `lower_${yName}`, `upper_${yName}`, "model", "model_file", "model_sha256", "balloon_version"].join(",")];
   for (const s of shownCurves()) {
-    s.x.forEach((xv, i) => lines.push([s.label, xv, s.y[i], s.lower ? s.lower[i] : "", s.upper ? s.upper[i] : ""].map(csvCell).join(",")));
+    const model = modelColumns(s.id);
+    s.x.forEach((xv, i) => lines.push([s.label, xv, s.y[i], s.lower ? s.lower[i] : "", s.upper ? s.upper[i] : "", ...model].map(csvCell).join(",")));
   }
   download("balloon-curves.csv", lines.join("\n") + "\n", "text/csv");
 }
 
 function exportJson() {
-  const data = { exported_utc: new Date().toISOString(), request: app.request, prediction: app.prediction,
+  const h = app.health || {};
+  const data = { exported_utc: new Date().toISOString(),
+    service: { version: h.version, emulator: h.emulator, surrogate: h.surrogate },  // the model files by SHA-256
+    request: app.request, prediction: app.prediction,
     pinned: app.pinned.map((p) => ({ design: designBody(p.state, app.presets), prediction: pinnedAnswer(p) })),
     fe_curves: app.nearest.map((r) => ({ id: r.id, design: r.design, curve: { pressure_pa: r.curve.pressure_pa, volume_ul: r.curve.volume_ul, angle_deg: r.curve.angle_deg, force_mn: r.curve.force_mn } })),
     shown: shownCurves() };
