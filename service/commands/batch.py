@@ -10,9 +10,11 @@ stiffness scales x the preset's moduli. The model is loaded once (seconds; a loo
 ``balloon inverse`` loaded it for every design, 11-20 s each on the shared 2-core VM) and
 each row is answered in milliseconds: 200 designs in 21 s.
 
-A row the model refuses (outside the box, a cell that is no number) keeps its place, its
+A row the model refuses (outside the box, a cell that is no number, more or fewer cells
+than the header: never read by position) keeps its place, its
 error in the ``error`` column naming the column and the allowed range, and the batch goes
-on. Progress goes to stderr. The output is a plain CSV (',' separators, '.' decimals, one
+on (the exit status is 0 when any row is answered, 2 when none is). Progress goes to
+stderr. The output is a plain CSV (',' separators, '.' decimals, one
 header line: what a spreadsheet reads) with the model's identity on every row: ``model``,
 ``model_file``, ``model_sha256`` (of the file's bytes; empty for the built-in ``paper``)
 and ``balloon_version``, so that a ranking can be made again and told apart from one of

@@ -457,7 +457,7 @@ function inPageWords(text) {
 // model that gives no injected volume (the paper's) refuses it, and is asked again without
 // it, the answer saying so (the page's default 2.5 ul/s made the paper's model refuse
 // every design by pressure, beside "Pump flow rate").
-async function predict(body, signal) {
+async function predictAnswer(body, signal) {
   try {
     return await api("/v1/predict", { method: "POST", body, signal });
   } catch (err) {
@@ -503,7 +503,7 @@ async function update() {
   let body = null;
   try {
     body = predictBody(app.state, grid);  // throws while a scaled layer's preset is unknown
-    const prediction = await predict(body, controller.signal);
+    const prediction = await predictAnswer(body, controller.signal);
     if (controller.signal.aborted) return;
     clearProblems($("design-form"));
     app.prediction = prediction;
@@ -1064,7 +1064,7 @@ async function refreshPinned(grid, controller) {
     if (pin.prediction && pin.ask === ask) continue;
     let prediction = null;
     try {
-      prediction = await predict(predictBody(pin.state, grid), controller.signal);
+      prediction = await predictAnswer(predictBody(pin.state, grid), controller.signal);
     } catch (err) { if (isAbort(err)) return; }
     if (controller.signal.aborted) return;
     pin.prediction = prediction;
