@@ -52,6 +52,7 @@ from surrogate.calibration._layouts import (
     layout_error,
     one_column_per_specimen,
     text_above_header,
+    text_below_readings,
 )
 from surrogate.calibration._measured_volume import (
     check_runs,
@@ -873,6 +874,11 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
             raise DataError("row", "repeats the header line (two files joined?)", i,
                             "one header line at the top: delete the repeated ones")
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
+    last = len(out)                  # a logger's text after the last reading (_layouts.py)
+    while last and text_below_readings(out[last - 1], 0) is not None:
+        last -= 1
+    if last < len(out):
+        raise text_below_readings(out[last], numbered[last + 1][0])
     for name in unnamed.values():
         filled = next((j for j, r in enumerate(out, 1) if r.get(name)), None)
         if filled is not None:
