@@ -91,13 +91,17 @@ def _csv_js(tmp_path, body: str) -> list:
 @pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
 def test_the_explorer_reads_a_sep_line_as_the_server_does(tmp_path):
     """The page's CSV reader (js/csv.js) sent the `sep=;` line as the header."""
-    rows_semi, rows_tab, refusal = _csv_js(tmp_path, (
+    rows_semi, rows_tab, refusal, after = _csv_js(tmp_path, (
         'out.push(parseCsv("\\uFEFFsep=;\\r\\ncurve_id;pressure_pa;angle_deg\\r\\nc;1,5;2\\r\\n"));\n'
         'out.push(parseCsv("sep=\\t\\ncurve_id\\tpressure_pa\\nc\\t2,5\\n"));\n'
-        'try { parseCsv("sep=|\\na|b\\n"); } catch (e) { out.push(e.message); }\n'))
+        'try { parseCsv("sep=|\\na|b\\n"); } catch (e) { out.push(e.message); }\n'
+        'try { parseCsv("sep=;\\ncurve_id;pressure_pa\\nc;1\\nend of log;\\n"); }\n'
+        'catch (e) { out.push(e.message); }\n'))
     assert rows_semi == [{"curve_id": "c", "pressure_pa": 1.5, "angle_deg": 2}]
     assert rows_tab == [{"curve_id": "c", "pressure_pa": 2.5}]
     assert "names '|' as the field separator" in refusal
+    # the sep= line counts as a line of the file in the page's line numbers too
+    assert after.startswith("line 4 holds text after the last reading ('end of log')"), after
 
 
 # -- 2. a database filter outside its field's range ----------------------------------------------
