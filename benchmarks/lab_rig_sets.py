@@ -14,7 +14,8 @@ thick PDMS 1:15 body; a deep chamber under a soft PDMS 1:10 body), likewise; the
 forty-eighth session's fresh sets N38-N45 on three more (D23-D25: a long wide shallow
 chamber, a stiffened Ecoflex body on Ecoflex, the reversed pair on a softened PDMS 1:15
 membrane), likewise; the forty-ninth session's fresh sets N46-N53 on three more (D26-D28,
-drawn at random in the box), likewise.
+drawn at random in the box), likewise; the fiftieth session's fresh sets N54-N61 on three
+more (D29-D31, drawn likewise), likewise.
 
 Designs inside the emulator's box and not in service/data/curves.h5 (the four
 material pairs, L 5.4-16.3 mm, odd T, b, h); each design's three specimens are three FE
@@ -55,14 +56,18 @@ told apart by a 'Sample' column, and two empty columns at the end of every line;
 N46-N53 also a gauge that lags the pressure (outside the catalogue) and an angle sensor
 that reads exactly its stop, a small tilt of the mount and a small zero of the gauge, and
 a blank line after each specimen, the columns in another order, and a logger's extra
-columns (the rig's temperature, a note).
+columns (the rig's temperature, a note); for N54-N61 also a dial gauge's dead band
+(outside the catalogue) and a leak shown by an unloading without a hold, and units in
+square brackets with a degree and a micro sign, a byte-order mark with quoted decimal
+commas in a comma-separated export, Windows-1252 text and a logger's line after the last
+reading.
 
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --out SETS_DIR [SET ...]
     .venv/bin/python benchmarks/lab_rig_sets.py --cache FE_DIR --test-data [SET ...]
 
 The first solves what the named sets need and the cache lacks (all: 28 x 3 + 8 x 3
 solves of 5-90 s; run alone) and
-writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 31 sets
+writes each set as CSV (and the API's JSON rows); ``--test-data`` writes the 34 sets
 (eleven with the pump's log) that tests/test_calibration_history.py and
 tests/test_calibration_gauge_zero.py read (tests/data/lab_gauge_noise_*.csv; N2's too, for
 test_calibration_exact_alike.py; N8's, N9's, N11's and N13's for
@@ -70,7 +75,8 @@ test_calibration_lab_fresh.py; N15's and N21's for test_calibration_lab_s45.py; 
 N24's, N23's, N26's and N27's, as their habits write them, N25's, N28's and N29's for
 test_calibration_lab_s46.py; N30's and N34's for test_calibration_lab_s47.py; N38's,
 N39's, N40's, N42's, N43's and N44's for test_calibration_lab_s48.py; N45's, N46's, N47's
-and N52's for test_calibration_lab_s49.py), or of them the sets named.
+and N52's for test_calibration_lab_s49.py; N53's, N55's and N60's for
+test_calibration_lab_s50.py), or of them the sets named.
 """
 
 from __future__ import annotations
@@ -159,6 +165,16 @@ DESIGNS = {
                 body_material="pdms_1_15*1.05", membrane_material="ecoflex_00_30"),
     "D28": dict(L_mm=5.0, t_mm=0.89, T_mm=0.83, b_mm=1.44, h_mm=0.15,
                 body_material="pdms_1_10*1.76", membrane_material="ecoflex_00_30"),
+    # the fiftieth session's designs, drawn at random in the box likewise (numpy seed
+    # 20261208, the first three draws), solved for the fresh sets N54-N61 only: a long
+    # shallow stiffened Ecoflex body on Ecoflex, a deep chamber under PDMS 1:10, a short
+    # deep stiffened Ecoflex body on the PDMS 1:15 membrane (the reversed pair)
+    "D29": dict(L_mm=15.9, t_mm=0.82, T_mm=1.03, b_mm=1.95, h_mm=0.13,
+                body_material="ecoflex_00_30*1.32", membrane_material="ecoflex_00_30"),
+    "D30": dict(L_mm=8.6, t_mm=0.77, T_mm=1.13, b_mm=1.82, h_mm=0.25,
+                body_material="pdms_1_10*1.09", membrane_material="ecoflex_00_30"),
+    "D31": dict(L_mm=4.8, t_mm=0.99, T_mm=1.49, b_mm=1.33, h_mm=0.28,
+                body_material="ecoflex_00_30*1.66", membrane_material="pdms_1_15"),
 }
 # a specimen's FE solves with one layer's moduli scaled: cache suffix -> (layer, factor)
 VARIANTS = {"_m1.1": ("membrane_material", 1.1), "_b1.12": ("body_material", 1.12),
@@ -407,6 +423,46 @@ SETS = {
     "N53-gauge30-small-extra-D26": ("D26", [None], 2.0, 7, 3, 4,
                                     {"kind": "gauge_offset", "pa": 30}, 88,
                                     {"extra": True, "fmt": "tab"}),
+    # the fiftieth session's fresh sets, truths and seeds fixed before any calibration:
+    # new lab habits (units in square brackets with a degree sign and a micro sign, a
+    # byte-order mark with every decimal comma quoted in a comma-separated export,
+    # Windows-1252 text, a logger's line of text after the last reading)
+    # a clean set at lab realism, every 3 s; headers 'Time [s]', 'Flow [µl/s]',
+    # 'Pressure [kPa]', 'Angle [°]'
+    "N54-clean-brackets-D29": ("D29", [None], 3.0, 5, 2, 4, {}, 91, {"units": "brackets"}),
+    # a clean set, few points, no hold; a spreadsheet's comma-separated export in a
+    # decimal-comma locale (each number with a comma quoted), a UTF-8 byte-order mark and
+    # a blank line after each specimen
+    "N55-clean-quoted-bom-D30": ("D30", [None], 2.0, 6, 0, 5, {}, 92,
+                                 {"fmt": "quoted", "bom": True, "blank_lines": True}),
+    # air in the line, C 0.8 ul/kPa (small: about 4 % of the volume at the top of the
+    # reversed pair's 5 kPa); pressures in mbar
+    "N56-air-small-D31": ("D31", [None], 2.0, 7, 3, 4,
+                          {"kind": "compliance", "C_ul_per_kpa": 0.8}, 93, {"p_unit": "mbar"}),
+    # outside the catalogue: a dial gauge's dead band (friction in its movement: the
+    # pointer moves only once the pressure is 40 Pa away from where it stands), reading
+    # low while the pressure rises and high while it falls -- the opposite sign of an
+    # inlet's R Q
+    "N57-gauge-deadband-D29": ("D29", [None], 2.0, 7, 3, 4,
+                               {"kind": "gauge_deadband", "pa": 40.0}, 94, {}),
+    # a pinhole leak G 0.2 ul/s per kPa with no hold: the loading at a steady pace, the
+    # unloading straight after -- the chamber empties before the pump does, which the
+    # unloading branch shows; the columns in another order
+    "N58-leak-no-hold-D30": ("D30", [None], 1.0, 8, 0, 8,
+                             {"kind": "leak", "G_ul_s_per_kpa": 0.2}, 95,
+                             {"order": "shuffled"}),
+    # the mount tilted -2.5 deg; Windows-1252 text, 'Flow (µl/s)' and 'Angle (°)'
+    "N59-offset-cp1252-D31": ("D31", [None], 2.0, 7, 3, 4, {"kind": "angle_offset", "deg": -2.5},
+                              96, {"encoding": "cp1252", "units": "symbols"}),
+    # the gauge's zero running away at +3 Pa/s with a 12 s hold; time in ms, the logger's
+    # line after the last reading
+    "N60-drift-footer-D29": ("D29", [None], 2.0, 6, 6, 4,
+                             {"kind": "gauge_drift", "pa_per_s": 3.0}, 97,
+                             {"footer": True, "t_unit": "ms"}),
+    # pressure relaxation (g 0.2, tau 3 s), each specimen run twice; comma-separated
+    "N61-relax-two-runs-D30": ("D30", [None, None], 2.0, 7, 4, 4,
+                               {"kind": "relaxation", "g": 0.2, "tau_s": 3.0}, 98,
+                               {"fmt": "comma"}),
 }
 # the pressure and time units a lab writes: unit -> (per Pa or per s, decimals)
 PRESSURE_UNITS = {"kPa": (1e-3, 3), "mbar": (1e-2, 2), "psi": (1 / 6894.757293168361, 4),
@@ -430,7 +486,12 @@ def logger_stamp(kind: str, session_s: float) -> str:
 
 
 # the field separator and the decimal mark: German Excel's, English, a tab-separated export
-FORMATS = {"semicolon": (";", ","), "comma": (",", "."), "tab": ("\t", ",")}
+FORMATS = {"semicolon": (";", ","), "comma": (",", "."), "tab": ("\t", ","),
+           "quoted": (",", ",")}
+# how the measured columns' headers carry their units: habit -> (open, close, flow unit's
+# 'u', the angle's unit)
+UNIT_STYLES = {"parentheses": ("(", ")", "u", "deg"), "brackets": ("[", "]", "µ", "°"),
+               "symbols": ("(", ")", "µ", "°")}
 # the sets tests/test_calibration_history.py, test_calibration_gauge_zero.py,
 # test_calibration_exact_alike.py, test_calibration_lab_fresh.py and
 # test_calibration_lab_s45.py, _s46.py, _s47.py and _s48.py read, with the pump's log
@@ -459,7 +520,10 @@ TEST_DATA = {"flat_top_two_flows": "L1-clean-D1", "hold_at_a_flat_top": "L8b-til
              "angle_sensor_stops": "N45-angle-saturates-D25",
              "angle_sensor_pinned": "N52-angle-pinned45-D27",
              "logger_extra_columns": "N47-clean-extra-columns-D27",
-             "blank_lines_other_order": "N46-clean-blank-lines-D26"}
+             "blank_lines_other_order": "N46-clean-blank-lines-D26",
+             "gauge_zero_small_tabs": "N53-gauge30-small-extra-D26",
+             "quoted_decimal_commas_bom": "N55-clean-quoted-bom-D30",
+             "text_after_the_readings": "N60-drift-footer-D29"}
 
 
 def solve_missing(cache: Path, names: list[str] | None = None) -> None:
@@ -590,6 +654,11 @@ def readings(c: dict, s: float, q: float, dt: float, n: tuple[int, int, int],
     if "inlet" in kinds:                         # the gauge at the pump: R times the flow
         flow = np.concatenate([[0.0], np.diff(vp) / H_S])    # just before each stamp
         p = p + effect["R_pa_per_ul_s"] * flow
+    if "gauge_deadband" in kinds:                # the pointer moves once h Pa away
+        y, h = np.zeros_like(p), effect["pa"]
+        for i in range(1, p.size):
+            y[i] = min(max(y[i - 1], p[i] - h), p[i] + h)
+        p = y
     if "gauge_lag" in kinds:                     # the gauge relaxing to the pressure
         y = np.zeros_like(p)
         for i in range(1, p.size):
@@ -681,12 +750,16 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
         f"Pressure ({p_unit})"
     trailing = [""] * kw.get("trailing", 0)
     extra = ["Temperature (C)", "Note"] if kw.get("extra") else []
+    lu, ru, micro, degree = UNIT_STYLES[kw.get("units", "parentheses")]
+    if kw.get("units") == "brackets":
+        p_header = f"Pressure [{p_unit}]"
+    flow_header = f"Flow {lu}{q_unit.replace('u', micro, 1)}{ru}"
     header = [kw.get("id_col", "curve_id"), "run", *dated, *geometry, "body_material",
-              "membrane_material", *([f"Time ({t_unit})"] if timed else []),
-              f"Flow ({q_unit})", p_header, "Angle (deg)", *extra] + (
+              "membrane_material", *([f"Time {lu}{t_unit}{ru}"] if timed else []),
+              flow_header, p_header, f"Angle {lu}{degree}{ru}", *extra] + (
         ["pump"] if with_pump else [])
     n_measured = 3 + timed
-    first = header.index(f"Flow ({q_unit})") - timed
+    first = header.index(flow_header) - timed
     # the columns in another order: the readings first (angle, pressure, flow, time),
     # then the rest as before
     order = (list(range(first + n_measured - 1, first - 1, -1))
@@ -699,8 +772,9 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
     def logged(i: int, cid: str) -> list:        # a logger's extra columns: no reading
         return [num(22.4 + 0.01 * (i % 40), 1), "fresh specimen" if i == 0 or
                 rows[i - 1][0] != cid else ""] if extra else []
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        fh.write(f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
+    with open(path, "w", newline="", encoding=kw.get("encoding", "utf-8")) as fh:
+        fh.write(("\ufeff" if kw.get("bom") else "")
+                 + f"# {name}: {json.dumps(effect) if effect else 'no effect'}; made by "
                  f"benchmarks/lab_rig_sets.py from FE solves{note}\n")
         if kw.get("preamble"):                   # a logger's lines above its header
             fh.write("RigLogger 2.3 export, 2026-12-05 14:02\nSample batch 7, three "
@@ -716,6 +790,8 @@ def write_set(cache: Path, out: Path, name: str, file_name: str | None = None,
             w.writerow([row[j] for j in order] + trailing)
             if kw.get("blank_lines") and (i + 1 == len(rows) or rows[i + 1][:2] != (cid, run)):
                 w.writerow([])                   # a blank line after each specimen's block
+        if kw.get("footer"):                     # the logger's line after the last reading
+            fh.write("Measurement stopped by user at 2026-12-08 14:22:05\r\n")
     if not with_pump:      # the API's body: the same rows, numbers as JSON numbers
         body = [dict(zip(header, [cid, run, *day(cid, i), *(nominal[g] for g in geometry),
                                   nominal["body_material"], nominal["membrane_material"],
@@ -798,7 +874,7 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, required=True, help="FE curves (.npz), solved once")
     ap.add_argument("--out", type=Path, default=Path("lab-rig-sets"))
     ap.add_argument("--test-data", action="store_true",
-                    help="write tests/data's 31 sets (those of them named, if any)")
+                    help="write tests/data's 34 sets (those of them named, if any)")
     args = ap.parse_args()
     test_sets = [n for n in TEST_DATA.values() if not args.sets or n in args.sets]
     solve_missing(args.cache, test_sets if args.test_data else args.sets)

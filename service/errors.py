@@ -242,7 +242,15 @@ def field_range(loc: list[str | int] | tuple[str | int, ...]) -> str | None:
     names = [p for p in loc[1:] if isinstance(p, str)]
     if "rows" in loc[1:2]:
         return FIELD_RANGES.get("rows" + ".*" * min(len(loc) - 2, 2))
-    return FIELD_RANGES.get(names[-1]) if names else None
+    return FIELD_RANGES.get(_field_key(loc)) if names else None
+
+
+def _field_key(loc: list[str | int] | tuple[str | int, ...]) -> str:
+    """The name FIELD_RANGES and FIELD_FORMS hold a field at ``loc`` under: its own name,
+    or ``list.*`` for an item of a list (``("body", "pressures_pa", 3)``: an item's range,
+    not its list's number of values)."""
+    names = [p for p in loc[1:] if isinstance(p, str)]
+    return names[-1] + (".*" if isinstance(loc[-1], int) else "") if names else ""
 
 
 # A material is a preset id (text) or an inline object (service.schemas.common.MaterialRef):
@@ -358,7 +366,10 @@ def _validation_errors(errors: list[dict[str, Any]], request: Request | None = N
         if err.get("type") == "value_error":     # a validator's own words, without
             item["message"] = str((err.get("ctx") or {}).get("error", item["message"]))
         allowed = field_range(loc)
-        if err.get("type") in OBJECT_TYPES:
+        if isinstance(loc[-1], int) and _field_key(loc) in FIELD_FORMS:
+            # an item of forms in words (a material pair: text or an object)
+            allowed = FIELD_FORMS[_field_key(loc)]
+        elif err.get("type") in OBJECT_TYPES:
             # an object was asked for: its fields, not the range of a field of that name
             # elsewhere (the plot's query `inlet` is true or false, the body's an object;
             # an item of `material_pairs` is not its list's "1-20 values")

@@ -42,8 +42,10 @@ class ModelRegistry:
     emulator_path: Path | None = None
     fitted: Any = None
     fitted_error: str | None = None
+    fitted_sha256: str | None = None     # of the loaded file's bytes: which model answers
     emulator: Any = None
     emulator_error: str | None = None
+    emulator_sha256: str | None = None
     _paper: Any = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
@@ -69,6 +71,7 @@ class ModelRegistry:
 
             self.fitted = load_surrogate(self.surrogate_path)
             self.fitted_error = None
+            self.fitted_sha256 = _sha256(self.surrogate_path)
         except Exception as exc:  # noqa: BLE001 - reported by /v1/health and on use
             self.fitted = None
             path = Path(self.surrogate_path)  # clients see the file's name, not its place
@@ -84,6 +87,7 @@ class ModelRegistry:
 
             self.emulator = load_emulator(self.emulator_path)
             self.emulator_error = None
+            self.emulator_sha256 = _sha256(self.emulator_path)
             # each group's variance kernels made now, not in its first request (0.05-0.6 s)
             threading.Thread(target=_warm_up, args=(self.emulator,), daemon=True,
                              name="emulator-warm-up").start()
@@ -128,6 +132,14 @@ class ModelRegistry:
                 self._paper = paper_surrogate()
             return self._paper
         return load_calibrated(name, self.models_dir, lambda: self.get("emulator"))
+
+
+def _sha256(path: Path) -> str:
+    """The SHA-256 of a model file just loaded (``surrogate.fit_provenance.file_sha256``,
+    imported here: the registry's module is imported by every CLI command)."""
+    from surrogate.fit_provenance import file_sha256
+
+    return file_sha256(path)
 
 
 def _plain_error(exc: BaseException) -> str:

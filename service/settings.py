@@ -13,7 +13,7 @@ import re
 from functools import lru_cache
 from pathlib import Path
 
-from pydantic import Field, SecretStr, ValidationError
+from pydantic import Field, SecretStr, ValidationError, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
 from solver.errors import InputError
@@ -72,6 +72,26 @@ class ServiceSettings(BaseSettings):
     cors_origins: list[str] = Field(default_factory=list,
                                     description="origins allowed by CORS; empty disables CORS")
 
+    @field_validator("api_key")
+    @classmethod
+    def _sendable(cls, key: SecretStr | None) -> SecretStr | None:
+        """A key a client can send in its X-API-Key header: ``BALLOON_API_KEY=`` (a
+        compose file's unset ``${KEY}``) or a key ending in a space (a .env line) was
+        taken, and every mutating request refused (an HTTP header's value has no spaces
+        at its ends, nor control characters). The key itself is never echoed."""
+        text = key.get_secret_value() if key is not None else None
+        if text is None:
+            return key
+        if not text.strip():
+            raise ValueError("is empty (or spaces only): no client could send it")
+        if text != text.strip():
+            raise ValueError("begins or ends with a space or tab, which an HTTP header's "
+                             "value does not carry: no client could send it")
+        if any((ord(c) < 32 and c != "\t") or ord(c) == 127 for c in text):
+            raise ValueError("holds a control character, which an HTTP header's value does "
+                             "not carry: no client could send it")
+        return key
+
 
 def settings_from_environment() -> ServiceSettings:
     """``ServiceSettings()`` read from the environment; a bad value is an InputError
@@ -82,8 +102,9 @@ def settings_from_environment() -> ServiceSettings:
         errors = exc.errors()
         name = str(errors[0]["loc"][0]) if errors[0].get("loc") else ""
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-        raise InputError(ENV_PREFIX + name.upper(), errors[0]["msg"] + more,
-                         _allowed(name)) from None
+        message = (str(errors[0]["ctx"]["error"]) if errors[0]["type"] == "value_error"
+                   else errors[0]["msg"])      # a validator's own words, as over HTTP
+        raise InputError(ENV_PREFIX + name.upper(), message + more, _allowed(name)) from None
     except SettingsError as exc:  # a list that is not JSON
         match = re.search(r'field "(\w+)"', str(exc))
         name = match.group(1) if match else ""
@@ -96,6 +117,9 @@ def _allowed(name: str) -> str | None:
 
     if name == "cors_origins":
         return 'a JSON list of origins, e.g. ["https://lab.example"]'
+    if name == "api_key":
+        return ("unset (the mutating endpoints off), or a key of printable characters, "
+                "without spaces at its ends")
     return field_ranges([ServiceSettings]).get(name)
 
 

@@ -139,6 +139,20 @@ def nodes(document: Any) -> Iterator[tuple[tuple[str | int, ...], Any]]:
 def unheld(document: Any) -> Iterator[tuple[tuple[str | int, ...], WrittenNumber]]:
     """(path, number) of each number of a parsed document whose text a float does not
     hold (read with JSON_NUMBER_HOOKS, or ``tomllib.loads(parse_float=written_float)``),
-    depth first."""
-    return ((path, value) for path, value in nodes(document)
-            if isinstance(value, WrittenNumber))
+    depth first. An integer beyond a float's range that the parser kept as an int (TOML:
+    tomllib has no hook for integers; ``mu_kpa = [1<4000 digits>]`` was an OverflowError
+    where it was used) is one too, a WrittenNumber of infinity."""
+    for path, value in nodes(document):
+        if isinstance(value, WrittenNumber):
+            yield path, value
+        elif type(value) is int and abs(value) > sys.float_info.max:
+            yield path, WrittenNumber(math.inf if value > 0 else -math.inf, _int_text(value))
+
+
+def _int_text(number: int) -> str:
+    """An integer's text: decimal, or hexadecimal past the digits Python converts to
+    decimal (``0xfff...`` of 5000 digits; its repr raised ValueError)."""
+    try:
+        return str(number)
+    except ValueError:
+        return f"{number:#x}"

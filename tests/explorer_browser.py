@@ -170,6 +170,20 @@ def open_explorer(watched: Watched, url: str):
     return page
 
 
+def solved_refused_design(watched: Watched, url: str):
+    """The explorer with L = 3 mm (outside the emulator's box: refused) solved by the
+    server's FE solve function, its stored curve drawn."""
+    page = open_explorer(watched, url)
+    page.fill("#L_mm", "3")
+    page.wait_for_selector("#refused:not([hidden])")
+    page.fill("#api_key", API_KEY)
+    page.click("#solve")
+    page.wait_for_function("document.getElementById('job').dataset.status === 'finished'",
+                           timeout=60_000)
+    page.wait_for_selector('#plot g[data-series="fe-solve"]')
+    return page
+
+
 def wait_prediction(page, **design):
     """Wait until the prediction shown is of a design with these values (to 1e-9)."""
     cond = " && ".join(f"Math.abs(p.design.{k} - {v}) < 1e-9" for k, v in design.items())

@@ -45,12 +45,19 @@ def test_effects_without_an_exact_alike_add_nothing():
     assert sentence(["pressure_offset"], [{"effects": ["camera_gain"]}]) is None
 
 
-def test_the_zeroed_pass_is_asked_only_of_a_gauge_effect_beside_a_zero_that_is_off():
+def test_the_zeroed_pass_is_asked_beside_a_zero_that_is_off_unless_the_offset_reads_it():
+    """Since 2026-12-08 an empty selection beside a zero found off and a gauge left above
+    its floor is read again with the zero taken off too (N53: the gauge's excess over
+    whole curves is then said from the zeroed reading, not beside the zero as if
+    unexplained); within its floor there is nothing to read again."""
     off = {"curves": 3, "mean_pa": 59.0, "se_pa": 2.0, "t": 35.0, "critical_t": 9.9,
            "off": True}
     assert wants_zeroed_pass(off, ("pressure_gain",))
     assert not wants_zeroed_pass(off, ("pressure_offset",))
     assert not wants_zeroed_pass(off, ())
+    assert not wants_zeroed_pass(off, (), {"left": False})
+    assert wants_zeroed_pass(off, (), {"left": True})
+    assert wants_zeroed_pass(off, ("pressure_offset", "pressure_gain"))
     assert not wants_zeroed_pass({**off, "off": False}, ("pressure_gain",))
     assert not wants_zeroed_pass(None, ("pressure_gain",))
     kept = {**off, "zeroed": {"selected_effects": ["pressure_gain"], "params": {

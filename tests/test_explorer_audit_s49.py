@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from explorer_browser import API_KEY, LiveServer, open_explorer, screenshot
+from explorer_browser import LiveServer, open_explorer, screenshot, solved_refused_design
 from service_solves import landing_solve
 
 pytestmark = pytest.mark.timeout(300)
@@ -67,14 +67,7 @@ def test_the_design_search_keeps_the_body_mould_of_the_design_above(watched, ser
 
 
 def test_a_finished_solve_draws_no_step_past_its_stored_curve(watched, server):
-    page = open_explorer(watched, server.url)
-    page.fill("#L_mm", "3")  # outside the emulator's box (L 4..18 mm): refused
-    page.wait_for_selector("#refused:not([hidden])")
-    page.fill("#api_key", API_KEY)
-    page.click("#solve")
-    page.wait_for_function("document.getElementById('job').dataset.status === 'finished'",
-                           timeout=60_000)
-    page.wait_for_selector('#plot g[data-series="fe-solve"]')
+    page = solved_refused_design(watched, server.url)
     screenshot(page, "s49-fe-solve-landed")
     stored = json.loads(page.locator('#plot g[data-series="fe-solve"]').get_attribute("data-y"))
     assert max(stored) == 90

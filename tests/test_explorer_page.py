@@ -311,7 +311,9 @@ def test_an_out_of_range_field_is_refused_beside_it_with_its_allowed_range(watch
     problem = httpx.post(server.url + "/v1/predict", json={
         "design": {"L_mm": 70}, "pressures_pa": [0]}).json()
     allowed = problem["errors"][0]["allowed"]
-    assert allowed in page.locator("#err-L_mm").inner_text()
+    # the server's range in the page's words: its field named as the box's label
+    text = page.locator("#err-L_mm").inner_text()
+    assert allowed.replace("L_mm", "Chamber length L (mm)") in text and "L_mm" not in text
     assert page.get_attribute("#L_mm", "aria-invalid") == "true"
     assert page.locator("#refused").is_hidden()  # a range error is not offered an FE solve
     page.fill("#L_mm", "7.1")
@@ -425,7 +427,9 @@ def test_the_ask_axis_switch_asks_by_volume_and_by_time_at_the_flow_rate(watched
     page.fill("#flow", "")
     page.dispatch_event("#flow", "change")
     page.wait_for_selector("#err-flow_ul_s:not([hidden])")
-    assert "flow_ul_s" in page.locator("#err-flow_ul_s").inner_text()
+    text = page.locator("#err-flow_ul_s").inner_text()   # named by the page's controls
+    assert "Pump flow rate (ul/s) <= 1000 ul/s" in text and "flow_ul_s" not in text, text
+    assert 'with Ask by "time at the pump\'s flow rate (s)"' in text, text
     screenshot(page, "explorer-by-time-1280")
     page.fill("#flow", "2.5")
     page.dispatch_event("#flow", "change")

@@ -149,7 +149,9 @@ def test_a_refused_pump_target_is_shown_beside_its_field(watched, server):
     page.click("#inv-run")
     page.wait_for_selector("#err-inv-volume:not([hidden])")
     text = page.locator("#err-inv-volume").inner_text()
-    assert f"volume_ul <= {volume['maximum']:g}" in text  # the allowed range is named
+    # the allowed range is named, its field by the box's label
+    assert f"< Volume budget, at most (ul) <= {volume['maximum']:g}" in text, text
+    assert "volume_ul" not in text
     assert page.get_attribute("#inv-volume", "aria-invalid") == "true"
     assert page.locator("#inv-table").is_hidden()
     # a time past the volume stop at the flow rate: beside the time
@@ -157,7 +159,8 @@ def test_a_refused_pump_target_is_shown_beside_its_field(watched, server):
     page.fill("#inv-time", "800")
     page.click("#inv-run")
     page.wait_for_selector("#err-inv-time:not([hidden])")
-    assert "time_s x flow_ul_s" in page.locator("#err-inv-time").inner_text()
+    text = page.locator("#err-inv-time").inner_text()   # in the form's own words
+    assert "Time from empty (s) x Pump flow rate (ul/s) <= 500 ul" in text, text
     screenshot(page, "explorer-pump-refusal")
     no_stray_requests_or_errors(watched, refused=True)
 

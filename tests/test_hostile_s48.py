@@ -32,7 +32,7 @@ UNHELD = "does not fit a 64-bit float (sizes about 5e-324 to 1.8e308, or 0): it 
      f"--tubing-mm: 1e-400 {UNHELD} 0 (allowed: LENGTH 0 to 100000, BORE 0.05 to 20 mm)"),
     (["predict", "--model", "paper", *DESIGN, "--pressure-range", "1e-400", "2000", "5"],
      f"--pressure-range: 1e-400 {UNHELD} 0 (allowed: 0 <= START, STOP <= 20000 Pa; "
-     "NUM an integer 1..100000)"),
+     "NUM an integer 1..1000, as --pressures' values)"),
     (["solve", "--spring-k-n-per-m", "1e-400"],
      f"--spring-k-n-per-m: 1e-400 {UNHELD} 0 (allowed: 0 to 1e+06 N/m)"),
     # ranges without 0: a later check said "got 1e-400"; the parser's words now, one rule

@@ -412,7 +412,8 @@ def test_a_material_pair_may_be_written_body_slash_membrane(client):
     r = client.post("/v1/inverse", json={"target": target, "model": "paper",
                                          "material_pairs": ["pdms_1_10"]})
     problem = assert_problem(r, 422, "material_pairs.0")
-    assert "body/membrane" in problem["errors"][0]["message"]
+    assert "'pdms_1_10' is not of this form" == problem["errors"][0]["message"]
+    assert "body/membrane" in problem["errors"][0]["allowed"]   # the form, said once
     assert "Value error" not in problem["detail"]
 
 

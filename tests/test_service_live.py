@@ -8,6 +8,7 @@ database; expected numbers come from the paper's model (Table 4-5 constants).
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import os
 import shutil
@@ -73,10 +74,13 @@ def server(tmp_path_factory):
     proc.wait(10)
 
 
-def run_snippet(server, name: str, interpreter: list[str]) -> str:
-    out = subprocess.run([*interpreter, str(SNIPPETS / name)], env=server["env"],
+def run_snippet(server, name: str, interpreter: list[str], args: tuple[str, ...] = (),
+                stderr: list | None = None) -> str:
+    out = subprocess.run([*interpreter, str(SNIPPETS / name), *args], env=server["env"],
                          capture_output=True, text=True, timeout=60, check=False)
     assert out.returncode == 0, out.stderr
+    if stderr is not None:
+        stderr.append(out.stderr)
     return out.stdout
 
 
@@ -88,13 +92,32 @@ def test_python_client_snippet(server):
     assert lines[-1] == "422 design.t_mm 0.05 <= t_mm <= 5"
 
 
-def test_batch_snippet(server):
-    rows = list(csv.DictReader(io.StringIO(run_snippet(server, "batch.py", [sys.executable]))))
-    assert len(rows) == 4 * 3 * 6  # designs x pressures
-    # the angle grows with L at fixed t and p (Table 4: A = a L)
-    at = {(float(r["L_mm"]), float(r["t_mm"]), float(r["pressure_pa"])): float(r["angle_deg"])
-          for r in rows}
-    assert at[4.1, 0.5, 1000] < at[7.1, 0.5, 1000] < at[15.1, 0.5, 1000]
+def test_batch_snippet(server, tmp_path):
+    """A lab's designs ranked by the pressure for 45 deg: every row kept in its place (a
+    refused one with the server's words: the field and its range), the model file named
+    by its SHA-256 from /v1/health, progress on stderr. The former snippet asked a fixed
+    grid, dropped a refused design from the CSV and named no model file."""
+    designs = tmp_path / "designs.csv"
+    designs.write_text("name,L_mm,t_mm,T_mm\nshort,4.1,0.5,\nlong,15.1,0.5,\n"
+                       "outside,3.5,0.5,1.2\ntypo,9,0.7x,\ncomma,9,0,7,1\n")
+    err: list[str] = []
+    text = run_snippet(server, "batch.py", [sys.executable], (str(designs),), err)
+    rows = list(csv.DictReader(io.StringIO(text)))
+    assert [r["name"] for r in rows] == ["short", "long", "outside", "typo", "comma"]
+    # a longer chamber bends more at a pressure: it needs less for 45 deg (A = a L)
+    assert 0 < float(rows[1]["pressure_pa"]) < float(rows[0]["pressure_pa"])
+    assert rows[0]["error"] == rows[1]["error"] == ""
+    assert rows[2]["pressure_pa"] == "" and "L_mm" in rows[2]["error"]
+    assert "4 <= L_mm <= 18" in rows[2]["error"]
+    assert rows[3]["error"].startswith("design.t_mm:")
+    # "0,7" in a comma-separated file is two cells: not answered as t = 0 and T = 7
+    assert rows[4]["pressure_pa"] == "" and "cells do not match the header" in rows[4]["error"]
+    health = httpx.get(f"{server['url']}/v1/health", timeout=10).json()
+    sha = hashlib.sha256((ROOT / "service" / "data" / "emulator.json").read_bytes()).hexdigest()
+    assert health["emulator"]["sha256"] == sha
+    assert {(r["model_file"], r["model_sha256"], r["balloon_version"]) for r in rows} == {
+        ("emulator.json", sha, health["version"])}
+    assert err[0].endswith("5/5 designs\n")
 
 
 def test_pump_snippet(server):

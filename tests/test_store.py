@@ -106,7 +106,11 @@ def test_records_and_query_filter(db_path):
         # 7.1 reached through float arithmetic still matches (1e-9 relative)
         assert len(db.query(L_mm=0.1 + 7.0, t_mm=0.5, body_material="pdms_1_10")) == 1
         assert len(db.query(status="complete", element="hex1", mesh_level=0)) == 4
-        assert db.query(L_mm=99.0) == []
+        assert db.query(L_mm=59.0) == []
+        # a length no design may have is refused with its range (it was [] until
+        # 2026-12-08, as `db ls --where L_mm=0.1` listed "0 records")
+        with pytest.raises(InputError, match=r"0.5 <= L_mm <= 60 \(mm\)"):
+            db.query(L_mm=99.0)
         with pytest.raises(InputError, match="unknown query field"):
             db.query(colour="red")
         with pytest.raises(InputError, match="status"):

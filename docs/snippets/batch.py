@@ -1,4 +1,7 @@
-"""Query many designs and write one CSV row per (design, pressure) to stdout."""
+"""Rank your designs by the pressure they need for 45 deg: a CSV of designs in (columns
+L_mm, t_mm and any of T_mm, b_mm, h_mm, W_mm, body_material, membrane_material, plus your
+own), the same rows out on stdout with the answer, the error of a refused design, and the
+model file's identity; progress on stderr. Usage: python batch.py designs.csv > out.csv"""
 
 import csv
 import os
@@ -7,20 +10,40 @@ import sys
 import httpx
 
 url = os.environ.get("BALLOON_URL", "http://127.0.0.1:8000")
-pressures_pa = [250, 500, 750, 1000, 1250, 1500]
-designs = [{"L_mm": L, "t_mm": t} for L in (4.1, 7.1, 11.1, 15.1) for t in (0.5, 0.75, 1.0)]
+angle_deg = 45
+fields = {"L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_material", "membrane_material"}
 
-out = csv.writer(sys.stdout)
-out.writerow(["L_mm", "t_mm", "pressure_pa", "angle_deg", "lower_deg", "upper_deg",
-              "in_domain"])
-with httpx.Client(base_url=url, timeout=10) as client:
-    for design in designs:
-        r = client.post("/v1/predict", json={"design": design, "pressures_pa": pressures_pa})
-        if r.status_code != 200:  # e.g. 422 outside the ranges: report and go on
-            print(f"{design}: {r.json()['detail']}", file=sys.stderr)
-            continue
-        pred = r.json()
-        for row in zip(pred["pressure_pa"], pred["angle_deg"], pred["lower_deg"],
-                       pred["upper_deg"], strict=True):
-            out.writerow([design["L_mm"], design["t_mm"], *row,
-                          pred["validity"]["in_domain"]])
+
+def value(text):  # a number as a number; any other text as written (the server names it)
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def answer(client, row):  # pressure, its band, flags, error
+    if None in row or None in row.values():  # a cell past the header ("7,1" in a ','
+        return ["", "", "", "", "the row's cells do not match the header"]  # file), or short
+    design = {key: value(cell) for key, cell in row.items() if key in fields and cell}
+    r = client.post("/v1/inverse/pressure", json={"design": design, "angles_deg": [angle_deg]})
+    if r.status_code != 200:  # a refused design keeps its row: the field, its range
+        return ["", "", "", "", r.json()["detail"]]
+    inv = r.json()
+    return [inv["pressure_pa"][0], inv["lower_pa"][0], inv["upper_pa"][0],
+            " ".join(inv["validity"]["flags"]), ""]
+
+
+with open(sys.argv[1], newline="", encoding="utf-8-sig") as file:
+    reader = csv.DictReader(file)
+    designs = list(reader)
+with httpx.Client(base_url=url, timeout=30) as client:
+    health = client.get("/v1/health").json()  # the model file that answers, in every row
+    identity = [health["emulator"]["file"], health["emulator"]["sha256"], health["version"]]
+    out = csv.writer(sys.stdout)
+    out.writerow([*reader.fieldnames, "pressure_pa", "lower_pa", "upper_pa", "flags", "error",
+                  "model_file", "model_sha256", "balloon_version"])
+    for k, row in enumerate(designs, start=1):
+        result = answer(client, row)
+        out.writerow([*(row.get(name) for name in reader.fieldnames), *result, *identity])
+        print(f"\r{k}/{len(designs)} designs", end="\n" if k == len(designs) else "",
+              file=sys.stderr)

@@ -177,7 +177,10 @@ def none_met(db: Any, filters: dict[str, object]) -> str:
     hold: "; no record has body_material 'garbage' (the records hold: ecoflex_00_30,
     pdms_1_10, pdms_1_15 and 1849 scaled ids, <preset>*<scale>)", or a number's range --
     a custom id may be any word, so a misspelt one is a filter that meets nothing, not an
-    error. "" when each filter alone meets some record."""
+    error. "" when each filter alone meets some record. A value longer than an error
+    line shows whole is cut, as there (``service.cli.shown``: a material of 5000
+    characters was echoed whole)."""
+    from service.cli import shown
     from solver.store.hdf5 import summary_field
 
     words = []
@@ -195,7 +198,7 @@ def none_met(db: Any, filters: dict[str, object]) -> str:
             parts.append(f"{len(texts) - len(plain)} scaled ids, <preset>*<scale>")
         words.append(f"; no record has {name} {value!r} (the records hold: "
                      f"{', '.join(parts) or 'nothing'})")
-    return "".join(words)
+    return shown("".join(words))
 
 
 def run_seal(args: argparse.Namespace) -> int:

@@ -11,6 +11,7 @@
     balloon inverse --kind volume_budget --angle-deg 45 --volume-ul 20   # with <= 20 ul
     balloon inverse --angle-deg 45 --time-s 8 --flow-ul-s 2.5       # after 8 s at 2.5 ul/s
     balloon inverse --kind time_budget --angle-deg 45 --time-s 8 --flow-ul-s 2.5
+    balloon inverse --designs designs.csv --angles-deg 45 -o ranked.csv   # many designs
 
 Targets, objectives and defaults: docs/surrogate.md (``surrogate.search.design_search``: the
 same search as POST /v1/inverse).
@@ -21,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from dataclasses import replace
 
 from service.commands.numbers import (
@@ -149,11 +151,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_pump_arguments(parser)  # with --angles-deg: the volume, time and pump-gauge pressure;
     # a design search reads --flow-ul-s with --time-s
     add_model_arguments(parser)
+    parser.add_argument("--designs", metavar="CSV",
+                        help="many designs, one per row of a CSV file (columns L_mm, t_mm "
+                             "and any of T_mm, b_mm, h_mm, W_mm, body_material, "
+                             "membrane_material, body_stiffness_scale, "
+                             "membrane_stiffness_scale, and your own): the pressures for "
+                             "--angles-deg of each, as CSV with the model's identity; a "
+                             "row the model refuses keeps its place with its error")
+    parser.add_argument("-o", "--output", metavar="CSV",
+                        help="with --designs: write the CSV here (default: standard "
+                             "output; progress goes to standard error)")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     check_level(args.level)
+    if args.output is not None and args.designs is None:
+        raise InputError("-o", "writes the CSV of --designs", "leave -o out, or give --designs")
+    table = _check_many(args) if args.designs is not None else None  # before the model loads
     if args.n_results is not None:      # before the model is loaded (seconds)
         checked_int("-n", args.n_results, "n", *N_RESULTS, "designs")
     s = surrogate_from_args(args)
@@ -162,6 +177,8 @@ def run(args: argparse.Namespace) -> int:
                          "does not invert (a calibration against an exponential model)",
                          "paper, a surrogate file, a calibration against the emulator, or "
                          "leave --model out")
+    if table is not None:
+        return _many_designs(s, args, *table)
     if args.angles_deg is not None:
         if args.L_mm is None or args.t_mm is None:
             raise InputError("--angles-deg", "needs the design's --L-mm and --t-mm")
@@ -181,6 +198,77 @@ SEARCH_ONLY = {"kind": "--kind", "angle_deg": "--angle-deg", "force_mn": "--forc
                "time_s": "--time-s", "pair": "--pair", "objective": "--objective",
                "n_results": "-n", **{flag[2:].replace("-", "_"): flag
                                      for flag, _ in RANGE_FLAGS.values()}}
+
+
+#: one design's own flags, by argparse dest: a designs file's rows give them instead
+DESIGN_DESTS = ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm", "W_mm", "body_length_mm",
+                "chamber_offset_mm", "body_material", "membrane_material",
+                "body_stiffness_scale", "membrane_stiffness_scale")
+
+
+def _check_many(args: argparse.Namespace) -> tuple[list[str], list[dict[str, str]]]:
+    """--designs' file read and its companions checked before the model loads (seconds):
+    --angles-deg given, no design flag (the rows give the designs), no design search's
+    option, -o writable. The file's (header, rows)."""
+    from pathlib import Path
+
+    from service.commands.batch import read_designs
+    from service.commands.outputs import check_output
+
+    if args.angles_deg is None:
+        raise InputError("--designs", "needs --angles-deg: the pressures for these angles "
+                         "of each design", "--designs FILE --angles-deg DEG [DEG ...]")
+    if args.json:
+        raise InputError("--json", "--designs writes CSV (one row per design and angle)",
+                         "leave --json out; the single design's answer (--L-mm, --t-mm) "
+                         "prints JSON")
+    for dest in DESIGN_DESTS:
+        if getattr(args, dest, None) is not None:
+            flag = "--" + dest.replace("_", "-")
+            raise InputError(flag, "sets one design; with --designs each row gives its own",
+                             f"a {dest} column in the designs file, or leave --designs out")
+    for dest, flag in SEARCH_ONLY.items():
+        if getattr(args, dest, None) is not None:
+            raise InputError(flag, "sets a design search's target or bounds; --designs "
+                             "answers --angles-deg for each row", f"leave {flag} out")
+    check_output(args.output, "-o", (".csv",), inputs=(("--designs", Path(args.designs)),))
+    return read_designs(Path(args.designs))
+
+
+def _many_designs(s: object, args: argparse.Namespace, header: list[str],
+                  rows: list[dict[str, str]]) -> int:
+    """--designs: the pressures for --angles-deg of every row's design, as CSV (one row
+    per design and angle), the model loaded once (service.commands.batch)."""
+    from service.commands.batch import model_identity, run_batch
+    from service.pump import inverse_answer
+    from solver.atomic_file import atomic_output
+
+    inlet = inlet_from_args(args)
+    columns = ("angle_deg", "pressure_pa", "lower_pa", "upper_pa",
+               *(("pump_pressure_pa",) if inlet is not None else ()),
+               "volume_ul", "volume_lower_ul", "volume_upper_ul",
+               *(("time_s", "time_lower_s", "time_upper_s") if args.flow_ul_s else ()),
+               "in_domain", "flags")
+
+    def answer(design: object):
+        # a refusal names the row's column (L_mm), not the one design's flag (--L-mm)
+        body = inverse_answer(s, design, args.angles_deg, args.model or "emulator",
+                              args.level, args.flow_ul_s, inlet)  # type: ignore[arg-type]
+        for i in range(len(body["angle_deg"])):
+            yield {**{c: (body.get(c) or [None] * (i + 1))[i] for c in columns[:-2]},
+                   "in_domain": body["validity"]["in_domain"],
+                   "flags": body["validity"]["flags"]}
+
+    identity = model_identity(args.model, getattr(args, "models_dir", None))
+    if args.output is None:
+        refused = run_batch(header, rows, columns, answer, identity, sys.stdout)
+    else:
+        with atomic_output(args.output) as tmp, tmp.open("w", newline="") as out:
+            refused = run_batch(header, rows, columns, answer, identity, out)
+    print(f"balloon: {len(rows) - refused} of {len(rows)} designs answered"
+          + (f"; {refused} refused (their error column says why)" if refused else "")
+          + (f", written to {args.output}" if args.output else ""), file=sys.stderr)
+    return 0 if refused < len(rows) else 2
 
 
 def _one_design(s: object, args: argparse.Namespace) -> int:

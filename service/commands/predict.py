@@ -32,10 +32,12 @@ from surrogate.hydraulics import LIMITS as INLET_LIMITS
 from surrogate.predictor import MAX_ASKED_VALUES
 from surrogate.volume_control import FLOW_RANGE
 
-#: the most pressures ``--pressure-range START STOP NUM`` spaces, and its values' range
-MAX_RANGE_NUM = 100_000
+#: ``--pressure-range START STOP NUM``'s values: the pressures' range, and at most as many
+#: pressures as ``--pressures`` and an HTTP request's list take (``MAX_ASKED_VALUES``;
+#: it took 100,000 until 2026-12-08)
 _RANGE_ALLOWED = (f"{AXES['pressures_pa'][0]:g} <= START, STOP <= {AXES['pressures_pa'][1]:g} "
-                  f"{AXES['pressures_pa'][2]}; NUM an integer 1..{MAX_RANGE_NUM}")
+                  f"{AXES['pressures_pa'][2]}; NUM an integer 1..{MAX_ASKED_VALUES}, as "
+                  "--pressures' values")
 
 DEFAULT_SURROGATE = Path(__file__).resolve().parents[1] / "data" / "surrogate.json"
 
@@ -397,7 +399,7 @@ def run(args: argparse.Namespace) -> int:
     if args.pressure_range is not None:
         start, stop, num = args.pressure_range
         lo, hi, _ = AXES["pressures_pa"]   # checked before linspace (inf: a warning)
-        if (not 1 <= num <= MAX_RANGE_NUM or num != int(num)
+        if (not 1 <= num <= MAX_ASKED_VALUES or num != int(num)
                 or not all(math.isfinite(x) and lo <= x <= hi for x in (start, stop))):
             raise InputError("--pressure-range", f"START = {start:g}, STOP = {stop:g}, "
                              f"NUM = {num:g}", _RANGE_ALLOWED)

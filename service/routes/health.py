@@ -64,10 +64,12 @@ async def health(settings: SettingsDep, models: ModelsDep, jobs: JobsDep) -> Hea
         surrogate=SurrogateStatus(
             loaded=fitted is not None, file=settings.surrogate_path.name,
             name=getattr(fitted, "name", None), error=models.fitted_error,
+            sha256=models.fitted_sha256 if fitted is not None else None,
             families=len(getattr(fitted, "families", []) or [])),
         emulator=SurrogateStatus(
             loaded=emulator is not None,
             file=models.emulator_path.name if models.emulator_path else "",
             name=getattr(emulator, "name", None), error=models.emulator_error,
+            sha256=models.emulator_sha256 if emulator is not None else None,
             families=len(getattr(emulator, "pairs", {}) or {})),
         jobs=JobsStatus(**jobs.stats()))

@@ -18,6 +18,7 @@ from service.schemas.common import (
 from service.schemas.curves import CurveDetail, CurvePage, CurvesQuery, CurveSummary
 from service.schemas.health import Health
 from service.schemas.inverse import (
+    PAIR_FORMS,
     InverseRequest,
     InverseResponse,
     MaterialPair,
@@ -33,7 +34,7 @@ REQUEST_MODELS = (DesignIn, MaterialIn, SolveSettingsIn, CurvesQuery, InverseReq
                   MaterialPair, PressureRequest, SolveRequest, PlotQuery, PredictRequest,
                   InletIn)
 FIELD_RANGES.update(field_ranges(REQUEST_MODELS))
-FIELD_FORMS.update(text_forms())
+FIELD_FORMS.update(text_forms(), **{"material_pairs.*": PAIR_FORMS})
 
 __all__ = [
     "REQUEST_MODELS", "CurveDetail", "CurvePage", "CurveSummary", "CurvesQuery", "DesignIn",

@@ -50,7 +50,9 @@ def _item_metadata(annotation: Any) -> list[Any]:
 
 
 def field_ranges(models: Iterable[type[BaseModel]]) -> dict[str, str]:
-    """``{field name: "lo <= name <= hi"}`` over the models; a name must mean one range."""
+    """``{field name: "lo <= name <= hi"}`` over the models; a name must mean one range.
+    A list whose items have a range has ``name.*`` too, an item's range alone (an item's
+    error is not told its list's "1-1000 values")."""
     ranges: dict[str, str] = {}
     for model in models:
         for name, info in model.model_fields.items():
@@ -61,6 +63,7 @@ def field_ranges(models: Iterable[type[BaseModel]]) -> dict[str, str]:
                 parts.append(f"{lo or ''}{name}{hi or ''}")
             if ilo or ihi:
                 parts.append(f"each {ilo or ''}{name}{ihi or ''}")
+                ranges[f"{name}.*"] = parts[-1]
             kinds = set(typing.get_args(info.annotation)) | {info.annotation}
             if max_len is not None:     # "" for a name was told "at most 64 characters"
                 parts.append((f"{min_len}-{max_len} " if min_len else f"at most {max_len} ")

@@ -21,6 +21,9 @@ class SurrogateStatus(BaseModel):
     name: str | None = Field(None, description="the fitted surrogate's name")
     file: str = Field(description="the surrogate file's name (its directory is not shown)")
     families: int = Field(0, description="material/geometry families it covers")
+    sha256: str | None = Field(None, description="SHA-256 of the loaded file's bytes: which "
+                               "model file answers (a batch's record of its model; the "
+                               "same as `sha256sum` of the file)")
     error: str | None = Field(None, description="why it is not loaded")
 
 

@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema, model_validator
 
+from service.errors import short_input
 from service.pump import MAX_ANGLE_DEG, MAX_FLOW_UL_S, MIN_FLOW_UL_S
 from service.schemas.common import INLINE_MATERIAL_ID, DesignIn, Schema
 from service.schemas.predict import INLET, LEVEL, MODEL, InletIn
@@ -55,6 +56,12 @@ class TargetIn(Schema):
                                                "angle)")
 
 
+# what an item of material_pairs may be, in words (service.errors.FIELD_FORMS
+# "material_pairs.*": an item's error is told this, not its list's "1-20 values")
+PAIR_FORMS = ('the text "body/membrane" (e.g. "pdms_1_10/ecoflex_00_30"), or an object of '
+              "body_material, membrane_material")
+
+
 class MaterialPair(Schema):
     """A (body, membrane) pair: an object, or the text "body/membrane" the CLI's --pair,
     the answer's ``pair`` and ``best_reachable`` use."""
@@ -68,8 +75,7 @@ class MaterialPair(Schema):
         if isinstance(value, str):
             parts = value.split("/")
             if len(parts) != 2:
-                raise ValueError(f"{value!r} is not body/membrane (e.g. "
-                                 "pdms_1_10/ecoflex_00_30)")
+                raise ValueError(f"{short_input(value)} is not of this form")
             return {"body_material": parts[0].strip(), "membrane_material": parts[1].strip()}
         return value
 

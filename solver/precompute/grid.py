@@ -32,11 +32,13 @@ import hashlib
 import itertools
 import math
 import re
+import sys
 import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from solver.bounded_read import read_bounded
+from solver.byte_order_mark import bom_encoding, byte_line
 from solver.design import LIMITS_MM, Design
 from solver.design_space import REUSED_ID_ALLOWED, reused_id
 from solver.errors import InputError
@@ -62,7 +64,13 @@ BLOCKED_MAX_PRESSURE_PA = 3000.0   # blocked-tip force curves: to this chamber p
 #                                    (past the emulator's force range, 2500 Pa)
 RANGE_KEYS = ("start", "stop", "num")
 MAX_POINTS = 100_000
-MAX_GRID_BYTES = 16 * 2**20   # a grid is sweeps and samples (a few kB); read no more
+NUM_WORDS = f"an integer 1 <= num <= {MAX_POINTS}"   # a range's num, in every refusal
+# A grid is ranges, lists and [[sample]] tables: the shipped ones are 1-9 kB (emulator.toml,
+# 2105 designs). 1 MiB is over 100 times that, and holds some 28,000 designs written out one
+# [[sweep]] each (two lengths: 3.7 MiB for the 100,000 of MAX_POINTS); refused before
+# tomllib parses it, whose cost is about 1 s per MiB (a 16 MiB file of unknown keys, the
+# limit until 2026-12-08, cost 5-16 s and 440 MB to refuse).
+MAX_GRID_BYTES = 2**20
 MAX_NESTING = 100  # what a grid needs is 3 ([[body, membrane], ...] in a table)
 MAX_KEY_PARTS = 10  # what a grid needs is 3 (materials.soft.mu_kpa)
 
@@ -146,13 +154,13 @@ class _Reader:
             num = value["num"]
             if isinstance(num, bool) or not isinstance(num, int):
                 raise self.fail(path, name, f"num = {num!r} is not an integer",
-                                f"an integer 1 <= num <= {MAX_POINTS}")
+                                NUM_WORDS)
             if num < 1:
                 raise self.fail(path, name, f"empty range: num = {num}",
-                                f"an integer 1 <= num <= {MAX_POINTS}")
+                                NUM_WORDS)
             if num > MAX_POINTS:  # checked before expanding: a typo must not hang the job
                 raise self.fail(path, name, f"num = {num} values",
-                                f"an integer 1 <= num <= {MAX_POINTS}")
+                                NUM_WORDS)
             start = self.number(value["start"], path, name)
             stop = self.number(value["stop"], path, name)
             if stop < start:
@@ -226,6 +234,11 @@ def _limits(name: str) -> str:
     return f"{lo:g} <= {name} <= {hi:g} (mm)"
 
 
+# where an integer too long for Python to convert sits (only looked for once tomllib
+# has refused one): its digits, underscores between them, in any of TOML's bases
+_LONG_INTEGER = re.compile(f"[0-9A-Fa-f_]{{{sys.get_int_max_str_digits() + 1},}}")
+
+
 def parse_grid(text: str, source: str = "<grid>") -> Grid:
     """Parse and validate a grid text; GridError on the first problem found."""
     depth, at = deepest(text)
@@ -245,11 +258,19 @@ def parse_grid(text: str, source: str = "<grid>") -> Grid:
     except RecursionError:  # arrays or tables nested thousands deep
         raise GridError(source, 1, "toml", "values nested too deeply to parse",
                         f"at most {MAX_NESTING} levels of [ ] and {{ }}") from None
+    except ValueError:  # an integer past Python's 4300 digits (was a traceback)
+        digits = _LONG_INTEGER.search(text)
+        line = text.count("\n", 0, digits.start()) + 1 if digits else 1
+        raise GridError(source, line, "toml", "an integer of more than "
+                        f"{sys.get_int_max_str_digits()} digits, past any value a grid "
+                        "takes", f"{NUM_WORDS}; lengths in mm (solver.design.LIMITS_MM)"
+                        ) from None
     reader.check_keys(data, (), TOP_KEYS)   # first: no walk of a file of unknown keys
     for path, number in unheld(data):     # a number the float does not hold, as written
         name = next((p for p in reversed(path) if p in LIMITS_MM), path[-1])
-        allowed = (_limits(str(name)) if name in LIMITS_MM else TERM_WORDS
-                   if path[0] == "materials" else range_words(str(name), "a number"))
+        allowed = (NUM_WORDS if path[-1] == "num" else _limits(str(name))
+                   if name in LIMITS_MM else TERM_WORDS if path[0] == "materials"
+                   else range_words(str(name), "a number"))
         raise reader.fail(path, ".".join(map(str, path)), unheld_words(number), allowed,
                           needle=number.text)
     for key in ("name", "description"):
@@ -441,14 +462,20 @@ def load_grid(path: str | Path) -> Grid:
     """Read and validate a grid file; FileNotFoundError if it does not exist, GridError
     naming the line when it is not UTF-8 text (TOML is UTF-8; a binary file is refused)."""
     path = Path(path)
-    raw = read_bounded(path, MAX_GRID_BYTES, "grid", "a grid file (TOML)")
+    raw = read_bounded(path, MAX_GRID_BYTES, "grid",
+                       "a grid file (TOML: ranges, lists and [[sample]] tables)")
+    encoding = bom_encoding(raw)    # Notepad's "UTF-8 with BOM", "Unicode" (UTF-16)
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode(encoding or "utf-8")
     except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise GridError(str(path), line, "encoding",
-                        f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not UTF-8",
-                        "a UTF-8 text file (TOML); save it as UTF-8") from None
+        raise GridError(str(path), byte_line(raw, exc.start, encoding or "utf-8"), "encoding",
+                        f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not "
+                        + (f"{encoding} after the file's byte-order mark" if encoding
+                           else "UTF-8"), "a UTF-8 text file (TOML); save it as UTF-8"
+                        ) from None
+    # lines ended by a CR alone (an old Mac editor's) were "line 3: Expected newline ...
+    # (at line 1, column 41)": TOML holds no lone CR, so each is read as a line end
+    text = text.replace("\r\n", "\n").replace("\r", "\n")
     if "\x00" in text:
         line = text[:text.index("\x00")].count("\n") + 1
         raise GridError(str(path), line, "encoding", "a NUL byte: this is a binary file",

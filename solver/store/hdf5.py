@@ -89,14 +89,22 @@ def _fsync_path(path: Path, directory: bool = False) -> None:
 def check_filter(name: str, value: object) -> None:
     """InputError for a filter no record can meet for want of sense: an unknown field, a
     length that is not a finite number (``balloon db ls --where L_mm=nan`` listed "0
-    records"), a status that is none."""
+    records") or outside the design's limits (``LIMITS_MM``, which every stored design
+    was checked against: ``L_mm=0.1`` and ``L_mm=1e-400`` listed "0 records"), a status
+    that is none."""
     if name not in QUERY_FIELDS:
         raise InputError(name, "unknown query field", ", ".join(QUERY_FIELDS))
     number = isinstance(value, int | float) and not isinstance(value, bool)
-    if name in LIMITS_MM and not (number and math.isfinite(value)):  # type: ignore[arg-type]
+    if name in LIMITS_MM:
         lo, hi = LIMITS_MM[name]
-        raise InputError(name, f"{value!r} is not a finite number", f"{lo:g} <= {name} <= "
-                         f"{hi:g} (mm)")
+        if not (number and math.isfinite(value)):  # type: ignore[arg-type]
+            problem = "is not a finite number"
+        elif not lo <= value <= hi:  # type: ignore[operator]
+            problem = "is outside the lengths a design may have"
+        else:
+            problem = ""
+        if problem:
+            raise InputError(name, f"{value!r} {problem}", f"{lo:g} <= {name} <= {hi:g} (mm)")
     if number and not math.isfinite(value):  # type: ignore[arg-type]
         raise InputError(name, f"{value!r} is not a finite number", "a finite number")
     if name == "status" and value not in STATUSES:

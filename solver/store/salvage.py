@@ -13,10 +13,16 @@ A sealed file whose seal no longer matches (bytes changed anywhere) is read as a
 of older code: a copy without its seal in a temporary directory, walked first in a
 guarded child process (``integrity.py``), so damage in HDF5's own structures stalls or
 kills that child, never this process.
+
+NEW is written under a staging name beside it and linked to NEW only when complete: a
+file another process made at NEW meanwhile (a second salvage, a precompute job) is
+refused, never written into or removed (the reading of DB takes seconds a thousand
+records, and the first version wrote into such a file or, finding it busy, deleted it).
 """
 
 from __future__ import annotations
 
+import os
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -27,7 +33,7 @@ from solver.errors import InputError, NotFoundError
 from solver.store import integrity
 from solver.store.errors import DamagedStoreError
 from solver.store.hdf5 import CurveStore
-from solver.store.locking import database_path, no_database
+from solver.store.locking import database_path, lock_path, no_database
 from solver.store.record import Record, utc_now
 
 MANAGED = ("format", "schema_version", "created_utc", "updated_utc", "n_records")
@@ -124,11 +130,17 @@ def salvage(source: str | Path, target: str | Path) -> Salvaged:
     result.copied = len(good)
     origin = {"path": str(source), "n_records": result.total, "damaged": result.damaged,
               "salvaged_utc": utc_now()}
+    staging = target_path.with_name(f".{target_path.name}.{os.getpid()}.salvage")
     try:
-        with CurveStore(target_path, mode="a") as out:
+        with CurveStore(staging, mode="a") as out:
             out.set_metadata(**meta, salvaged_from=origin)
             out.put_many(good)
-    except BaseException:
-        target_path.unlink(missing_ok=True)      # no half-made database left behind
-        raise
+        os.link(staging, target_path)             # never over a file made meanwhile
+    except FileExistsError:
+        raise InputError("--output", f"{target} exists (made while the records were "
+                         "read)", "the path of a new file: salvage never writes into a "
+                         "database") from None
+    finally:                                     # no half-made database left behind
+        for leftover in (staging, lock_path(staging)):
+            leftover.unlink(missing_ok=True)
     return result

@@ -21,13 +21,19 @@ from pathlib import Path
 import numpy as np
 
 from solver.bounded_read import read_bounded
+from solver.byte_order_mark import bom_encoding, byte_line
 from solver.design import material_from_input
 from solver.errors import InputError
 from solver.number_text import NUMBER_FORM, is_number_text
 from solver.plain_text import PRINTABLE_WORDS, hidden_character
 from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from surrogate.calibration._angle_stop import AngleStop
-from surrogate.calibration._csv_dialect import decimal_commas, is_blank, separator
+from surrogate.calibration._csv_dialect import (
+    decimal_commas,
+    is_blank,
+    named_separator,
+    separator,
+)
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._extra_columns import extra_columns_read
 from surrogate.calibration._headers import (
@@ -46,6 +52,7 @@ from surrogate.calibration._layouts import (
     layout_error,
     one_column_per_specimen,
     text_above_header,
+    text_below_readings,
 )
 from surrogate.calibration._measured_volume import (
     check_runs,
@@ -808,7 +815,8 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     size limit is a DataError naming its row and column. Lines may end in LF, CR LF or CR
     alone (a spreadsheet's "CSV (Macintosh)": read as one line, it was blamed on the
     field size, its CR garbling the terminal's line). Fields are separated by ',', or by
-    ';' or tabs with ',' as the decimal mark (a German Excel's CSV; _csv_dialect.py). A
+    ';' or tabs with ',' as the decimal mark (a German Excel's CSV; _csv_dialect.py), or
+    by the one a first line 'sep=;' names (Excel's hint, read, not data). A
     column without a name in the header (a trailing separator) is dropped when it is
     empty on every row."""
     numbered = [(n, ln) for n, ln in enumerate(io.StringIO(text, newline=None), 1)
@@ -817,7 +825,13 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
     if not lines:
         raise DataError("header", "the file is empty", None,
                         "a header line naming the columns " + ", ".join(REQUIRED))
-    sep = separator(lines[0])
+    sep = named_separator(lines[0])        # Excel's 'sep=;' above the header
+    if sep is not None:
+        numbered, lines = numbered[1:], lines[1:]
+        if not lines:
+            raise DataError("header", "the file holds only its 'sep=' line", None,
+                            "a header line naming the columns " + ", ".join(REQUIRED))
+    sep = sep or separator(lines[0])
     try:
         names = [n.strip() for n in next(csv.reader(lines[:1], delimiter=sep))]
     except csv.Error as exc:
@@ -860,6 +874,11 @@ def read_csv_rows(text: str) -> list[dict[str, object]]:
             raise DataError("row", "repeats the header line (two files joined?)", i,
                             "one header line at the top: delete the repeated ones")
         out.append({k.strip(): (v if v is None else v.strip()) for k, v in raw.items()})
+    last = len(out)                  # a logger's text after the last reading (_layouts.py)
+    while last and text_below_readings(out[last - 1], 0) is not None:
+        last -= 1
+    if last < len(out):
+        raise text_below_readings(out[last], numbered[last + 1][0])
     for name in unnamed.values():
         filled = next((j for j, r in enumerate(out, 1) if r.get(name)), None)
         if filled is not None:
@@ -911,10 +930,6 @@ def _csv_error(exc: csv.Error, lines: list[str], row: int, sep: str) -> DataErro
                      f"fields of at most {csv.field_size_limit()} characters")
 
 
-BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe\x00\x00", "utf-32"),
-        (b"\x00\x00\xfe\xff", "utf-32"), (b"\xff\xfe", "utf-16"), (b"\xfe\xff", "utf-16"))
-
-
 # what a lab's data file is when it is not text: told by its first bytes (all of these
 # were read as "UTF-16 without a byte-order mark"; an HDF5 file: looks_like_hdf5)
 FILE_SIGNATURES = ((b"PK\x03\x04", "a zip archive (an Excel .xlsx or .ods workbook?)"),
@@ -928,18 +943,16 @@ def decode_text(data: bytes, name: str) -> str:
     """Text of a measured-data file: UTF-8, or UTF-16/32 with a byte-order mark. Anything
     else (latin-1 from a spreadsheet, UTF-16 without BOM) is one DataError naming the
     file, the line and the expected encoding."""
-    for bom, encoding in BOMS:
-        if data.startswith(bom):
-            try:
-                text = data.decode(encoding)
-            except UnicodeDecodeError as exc:
-                line = data[:exc.start].count(b"\n" if encoding == "utf-8-sig" else
-                                              "\n".encode(encoding)[2:]) + 1
-                raise DataError("file", f"{name}: line {line}: not valid {encoding} after "
-                                "its byte-order mark", None, "UTF-8 text") from None
-            if "\x00" in text:
-                raise _stray_nul(text, name)
-            return text
+    if (encoding := bom_encoding(data)) is not None:
+        try:
+            text = data.decode(encoding)
+        except UnicodeDecodeError as exc:
+            raise DataError("file", f"{name}: line {byte_line(data, exc.start, encoding)}: not "
+                            f"valid {encoding} after its byte-order mark", None,
+                            "UTF-8 text") from None
+        if "\x00" in text:
+            raise _stray_nul(text, name)
+        return text
     # an HDF5 file where HDF5 looks for its signature (a sealed curve database has it
     # after its seal, solver/store/integrity.py), or another kind by its first bytes
     what = ("an HDF5 file (a curve database?)" if looks_like_hdf5(data[:HDF5_HEAD_BYTES])

@@ -61,17 +61,35 @@ def gauge_left(rmse_pa: float | None, channel: dict, allowance: float | None
             "left": bool(ratio > limit)}
 
 
-def gauge_sentence(gauge: dict | None, zero_off: bool = False) -> str | None:
+def gauge_sentence(gauge: dict | None, zero_off: bool = False,
+                   zeroed: dict | None = None) -> str | None:
     """The interpretation's sentence on a gauge left above its floor (``gauge_left``).
     ``zero_off``: the gauge's zero was found off at rest (``_gauge_zero``), a catalogued
     effect the whole curves did not select: the sentence then names it as part of what is
     left rather than saying no catalogued effect explains it (N53 of the forty-ninth
-    session's lab sets, a +30 Pa zero, said both)."""
+    session's lab sets, a +30 Pa zero, said both). ``zeroed``: the selection made again
+    with that zero taken off every gauge reading (``_gauge_zero.zeroed_summary``): the
+    sentence then says what the gauge is left with there, within its floor (the zero and
+    that selection explain it) or not (something besides the zero acts on it)."""
     if not gauge or not gauge["left"]:
         return None
     head = (f"The gauge pressure is left at {gauge['rmse_pa']:.0f} Pa RMS (cross-validated) "
             f"against its replicate floor of {gauge['floor_pa']:.0f} Pa ({gauge['ratio']:.2f} "
             f"x, more than the {gauge['limit']:.2f} x scatter allows here)")
+    after = (zeroed or {}).get("gauge_left_after")
+    if zero_off and after:
+        sel = " and ".join(zeroed["selected_effects"]) or "nothing"
+        there = (f" as the readings are written; with the zero found at rest taken off "
+                 f"every reading ({sel} selected then) it is left at {after['rmse_pa']:.0f} "
+                 f"Pa ({after['ratio']:.2f} x its floor")
+        if not after["left"]:
+            return (head + there + f", within the {after['limit']:.2f} x scatter allows): "
+                    "the zero" + ("" if sel == "nothing" else f" and {sel}")
+                    + " explain what the gauge is left with.")
+        return (head + there + f", still more than the {after['limit']:.2f} x scatter "
+                "allows): besides the zero, something acts on the pressure that no "
+                "catalogued effect explains (a gauge drifting with time or temperature, or "
+                "a relaxation, leak or compliance of another form than the catalogue's).")
     if zero_off:
         return (head + ": part of it is the gauge's zero found off at rest (above); zero "
                 "the gauge and calibrate again to see whether anything acts on the pressure "

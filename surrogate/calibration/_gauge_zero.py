@@ -35,6 +35,8 @@ by a gauge 60 Pa high (lab_rig_sets.py N2, the batch 9.1 % soft) the gain select
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.stats import t as student_t
 
@@ -74,20 +76,66 @@ def gauge_at_rest(curve: np.ndarray, volume_ul: np.ndarray, gauge_pa: np.ndarray
             "critical_t": critical, "off": bool(abs(t) > critical)}
 
 
-def wants_zeroed_pass(rest: dict | None, selected: tuple[str, ...]) -> bool:
+def wants_zeroed_pass(rest: dict | None, selected: tuple[str, ...],
+                      gauge: dict | None = None) -> bool:
     """Whether the selection is made again with the zero taken off: the zero is off and
-    something other than a pressure offset is selected."""
-    return rest is not None and rest["off"] and any(e != "pressure_offset" for e in selected)
+    something other than a pressure offset alone is selected, or nothing is and the gauge
+    is left above its floor (``gauge``, ``_gauge_check.gauge_left``): the whole curves
+    are then read with the zero measured at rest applied, and what the gauge is left with
+    said from that reading (until 2026-12-08 only a selection with a gauge effect other
+    than the offset was read again, and N53 of the forty-ninth session's lab sets -- a
+    +30 Pa zero, nothing selected -- said the zero at rest, +31 +/- 3 Pa, beside a gauge
+    left at 1.88 x its floor and an offset over whole curves of -57 +/- 25 Pa, two
+    opposite readings of one gauge). Nothing selected and the gauge within its floor
+    leave nothing to read again: the second pass doubles the loop's time."""
+    if rest is None or not rest["off"] or set(selected) == {"pressure_offset"}:
+        return False
+    return bool(selected) or bool(gauge and gauge["left"])
 
 
 def zeroed_summary(report: dict) -> dict:
-    """What the second pass selected, from its report: effects, sizes and errors."""
+    """What the second pass selected, from its report: effects, sizes, errors and what
+    the gauge is left with (``_gauge_check.gauge_left``)."""
     fitted = report["fitted"]["effects"]
     return {"selected_effects": list(report["selected_effects"]),
             "params": {n: {"value": p["value"], "sd": p["sd"], "unit": p["unit"]}
                        for n, p in fitted.items()},
             "rmse_after_deg": report["rmse_after_deg"],
-            "rmse_pressure_after_pa": report["rmse_pressure_after_pa"]}
+            "rmse_pressure_after_pa": report["rmse_pressure_after_pa"],
+            "gauge_left_after": report["gauge_left_after"]}
+
+
+def whole_curve_offsets(candidates: list[dict]) -> dict | None:
+    """The pressure offset the whole curves fit (Pa, value and sd), alone and beside a
+    pressure gain when both were fitted: None when no offset candidate has a size. Over
+    whole curves the specimens' mean stiffness moves the gauge in proportion to the
+    pressure, and an offset alone takes it up (N53: -57 +/- 25 Pa for a +30 Pa zero, the
+    batch 5 % soft); beside a gain it is the zero again (+36 +/- 3 Pa)."""
+    def p0(effects: set[str]) -> dict | None:
+        found = [c["params"].get("p0_pa") for c in candidates if set(c["effects"]) == effects]
+        return ({"value_pa": found[0]["value"], "sd_pa": found[0]["sd"]}
+                if found and found[0] and np.isfinite(found[0]["sd"] or np.nan) else None)
+    alone = p0({"pressure_offset"})
+    if alone is None:
+        return None
+    return {"alone": alone, "beside_gain": p0({"pressure_offset", "pressure_gain"})}
+
+
+def _whole_curves_sentence(rest: dict) -> str:
+    w = rest.get("whole_curves")
+    if w is None or abs(w["alone"]["value_pa"] - rest["mean_pa"]) <= 2.0 * math.hypot(
+            w["alone"]["sd_pa"], rest["se_pa"]):
+        return ("Over whole curves the specimens' own stiffness moves the gauge far more "
+                "than that, which is why no offset of this size was selected from them")
+    gain = w["beside_gain"]
+    beside = ("" if gain is None else
+              f"; fitted with a gain beside it, {gain['value_pa']:+.0f} +/- "
+              f"{gain['sd_pa']:.0f} Pa")
+    return (f"Fitted over whole curves an offset alone reads {w['alone']['value_pa']:+.0f} "
+            f"+/- {w['alone']['sd_pa']:.0f} Pa{beside}: there the specimens' own stiffness "
+            "moves the gauge in proportion to the pressure, far more than the zero, and an "
+            "offset alone takes that up. Trust the zero read at rest, where the actuator "
+            "has no say")
 
 
 def _zeroed_sentence(rest: dict, selected: list[str]) -> str:
@@ -119,7 +167,6 @@ def sentence(rest: dict | None, selected: list[str]) -> str | None:
             f"0 Pa whatever the actuator, and the gauge reads {rest['mean_pa']:+.0f} +/- "
             f"{rest['se_pa']:.0f} Pa away from {claim} there ({rest['curves']} curves, "
             f"t {rest['t']:.1f} against {rest['critical_t']:.1f} at "
-            f"{100 * LEVEL:g} %): its zero is off. Over whole curves the specimens' own "
-            "stiffness moves the gauge far more than that, which is why no offset of "
-            "this size was selected from them; zero the gauge before each run (or "
-            "subtract it) and calibrate again." + _zeroed_sentence(rest, selected))
+            f"{100 * LEVEL:g} %): its zero is off. " + _whole_curves_sentence(rest)
+            + "; zero the gauge before each run (or subtract it) and calibrate again."
+            + _zeroed_sentence(rest, selected))

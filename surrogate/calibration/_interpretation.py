@@ -193,7 +193,8 @@ def interpret(report: dict, left: dict) -> str:
             s.append("The angle's residual is consistent with replicate scatter (no "
                      "structure along the curves).")
     at_rest = report.get("gauge_at_rest")
-    gauge = gauge_sentence(report["gauge_left_after"], bool(at_rest and at_rest["off"]))
+    gauge = gauge_sentence(report["gauge_left_after"], bool(at_rest and at_rest["off"]),
+                           (at_rest or {}).get("zeroed"))
     if gauge is not None:
         s.append(gauge)
     for w in report["warnings"]:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import itertools
 import re
 
+from solver.number_text import is_number_text
 from surrogate.calibration._errors import DataError
 from surrogate.calibration._headers import read_header, split_header, unit_of
 
@@ -79,6 +80,7 @@ PREAMBLE_LINES = 20
 PREAMBLE_PARTS = 1000
 PREAMBLE_CHARS = 65536
 PREAMBLE_HOW = "each line above the header starting with '#' (a comment), or deleted"
+FOOTER_HOW = "each line of text below the readings starting with '#' (a comment), or deleted"
 
 
 def header_below_text(lines: list[list[object]], required: tuple[str, ...],
@@ -101,6 +103,22 @@ def header_below_text(lines: list[list[object]], required: tuple[str, ...],
         if set(required) <= named:
             return k
     return None
+
+
+def text_below_readings(row: dict, line: int) -> DataError | None:
+    """The error for a line of text after the last reading (a logger's "Measurement
+    stopped by user at ..."): a row whose first cell is text and whose others are empty,
+    named with its line, as the text above a header is (until 2026-12-08 it was read as a
+    reading and refused as "run: row 52: missing run", benchmarks/lab_rig_sets.py N60);
+    None for any other row."""
+    cells = list(row.values())
+    first = cells[0] if cells else None
+    if (not isinstance(first, str) or not first or is_number_text(first)
+            or any(c not in (None, "") for c in cells[1:])):
+        return None
+    shown = repr(first if len(first) <= 60 else first[:57] + "...")
+    return DataError("row", f"line {line} holds text after the last reading ({shown}), "
+                     "which is not a reading", None, FOOTER_HOW)
 
 
 def text_above_header(above: list[str], line: int | None = None) -> DataError:

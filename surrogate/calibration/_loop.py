@@ -26,7 +26,12 @@ from surrogate.calibration._errors import DataError
 from surrogate.calibration._exact_alike import exact_alikes
 from surrogate.calibration._first_run import first_run_against_later
 from surrogate.calibration._gauge_check import gauge_left, gauge_worse, pressure_rms_pa, reads_gauge
-from surrogate.calibration._gauge_zero import gauge_at_rest, wants_zeroed_pass, zeroed_summary
+from surrogate.calibration._gauge_zero import (
+    gauge_at_rest,
+    wants_zeroed_pass,
+    whole_curve_offsets,
+    zeroed_summary,
+)
 from surrogate.calibration._held_reading import held_instead, reads_better, wants_held_reading
 from surrogate.calibration._held_reading import summary as held_summary
 from surrogate.calibration._history import history_traits
@@ -362,15 +367,19 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
             if channel["used"] and "hydraulic_resistance" not in chosen else None)
     runs = (first_run_against_later(obs.curve, obs.specimen, obs.volume_ul, obs.direction,
                                     obs.pressure_pa) if channel["used"] else None)
-    if not zeroed and wants_zeroed_pass(rest, chosen):
-        again = calibrate(replace(all_obs, pressure_pa=all_obs.pressure_pa - rest["mean_pa"]),
-                          baseline, folds, progress, cancel, zeroed=True)
-        rest = {**rest, "zeroed": zeroed_summary(again.report)}
     nuisance = _nuisance(after)
     structure = structure_test(obs.curve, after.residual, nuisance)
     left = residual_summary(obs, resid_after, rmse_after, noise, structure,
                             own_var(chosen), shift(chosen),
                             by_gauge=scatter is not None)
+    gauge_after = gauge_left(pressure_rms_pa(get_xv(chosen), channel), channel,
+                             left["plain_allowance"])
+    if rest is not None and rest["off"]:
+        rest = {**rest, "whole_curves": whole_curve_offsets(candidates)}
+    if not zeroed and wants_zeroed_pass(rest, chosen, gauge_after):
+        again = calibrate(replace(all_obs, pressure_pa=all_obs.pressure_pa - rest["mean_pa"]),
+                          baseline, folds, progress, cancel, zeroed=True)
+        rest = {**rest, "zeroed": zeroed_summary(again.report)}
     not_identifiable = [{"effect": e.id, "reason": status[e.id]["reason"],
                          "measure": status[e.id]["measure"]}
                         for e in CATALOGUE if status[e.id]["reason"] is not None]
@@ -412,8 +421,7 @@ def calibrate(obs: Observations, baseline: Baseline, folds: int = 5, progress=No
         "gauge_at_rest": rest,
         "first_run_against_later": runs,
         "angle_stop": None if obs.angle_stop is None else obs.angle_stop.as_dict(),
-        "gauge_left_after": gauge_left(pressure_rms_pa(get_xv(chosen), channel), channel,
-                                       left["plain_allowance"]),
+        "gauge_left_after": gauge_after,
         "cross_validation": {"method": _cv_method(obs), "folds": k,
                              "folds_requested": folds_requested},
         "selected_effects": list(chosen),

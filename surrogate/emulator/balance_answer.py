@@ -18,7 +18,13 @@ from solver.design_space import BoxPoint
 from solver.errors import InputError
 from solver.settings import SolverSettings
 from surrogate.band_level import z_value
-from surrogate.emulator.balance import VOLUME_NODES_UL, BalanceModel, first_reach
+from surrogate.emulator.balance import (
+    VOLUME_NODES_UL,
+    BalanceModel,
+    first_reach,
+    turn_back_deg,
+    turns_back,
+)
 from surrogate.emulator.fe_range import end_volume_reason
 from surrogate.emulator.force_answer import blocked_force, force_flags
 from surrogate.emulator.node_curves import floored_band
@@ -67,6 +73,30 @@ def balance_message(designs: int) -> str:
             "way round): answered by the signed angle at fixed injected volumes, "
             f"interpolated across the balance from {designs} FE curves that end there "
             "(docs/surrogate.md); ")
+
+
+TURN_FLAG = "curve_turns_back"
+
+
+def add_turn_back(nodes: tuple, point: BoxPoint, validity: dict) -> None:
+    """Add the flag TURN_FLAG and its message to ``validity`` (its lists "flags" and
+    "messages") where the balance model's curve from ``nodes`` (``BalanceModel.nodes``)
+    turns back: its |angle| falls by more than TURN_BACK_DEG after its peak."""
+    angle, _, p_nodes = nodes
+    if not turns_back(angle):
+        return
+    k = int(np.argmax(np.abs(angle)))
+    validity["flags"].append(TURN_FLAG)
+    validity["messages"].append(
+        f"the emulated curve turns back: its angle peaks at {angle[k]:.1f} deg near "
+        f"{VOLUME_NODES_UL[k] * point.length_scale**3:.0f} ul "
+        f"({p_nodes[k] * point.pressure_scale:.0f} Pa) and falls by "
+        f"{turn_back_deg(angle):.1f} deg by the last volume node. Near the stiffness "
+        "balance an FE curve can turn back (the membrane's balloon takes over the body's "
+        "bending), but few database curves do, and where the emulated curve turns back "
+        "the emulator's error is several times that elsewhere, whether or not the FE's "
+        "does; its band is widened to the turning curves' own calibration "
+        "(docs/surrogate.md). An FE solve (POST /v1/solve) gives this design's own curve")
 
 
 def balance_answers(emulator: Emulator, group: str, model: BalanceModel, u: np.ndarray
@@ -147,6 +177,7 @@ def balance_answer(emulator: Emulator, design: Design, point: BoxPoint, axis: st
         "in_domain": True, "flags": flags, "messages": messages,
         "fe_limit_pa": limit_pa, "fe_limit_angle_deg": limit_angle,
         "fe_stop_reason": stop, "fe_limit_volume_ul": v_limit * ls3}
+    add_turn_back(nodes, point, validity)
     # the curves here end at the volume stop, short of the FE's angle stop: no band past it
     lower, upper = band_within_fe(lower, upper, SolverSettings().max_angle_deg, validity)
     return emulator._prediction(design, point, pressure, (angle, lower, upper), level,
@@ -201,6 +232,7 @@ def balance_inverse(emulator: Emulator, design: Design, point: BoxPoint,
                      "solve (POST /v1/solve) gives this design's own curve"],
         "fe_limit_pa": limit_pa, "fe_limit_angle_deg": limit_angle,
         "fe_stop_reason": stop, "fe_limit_volume_ul": v_limit * ls3}
+    add_turn_back(nodes, point, validity)
     unreached = np.isnan(volumes[0])
     if unreached.any():
         validity["flags"].insert(0, "past_fe_range")

@@ -59,7 +59,9 @@ from surrogate.json_plain import plain_json
 from surrogate.model_file import read_model_file
 
 FORMAT_NAME = "balloon-emulator"
-FORMAT_VERSION = 17  # 17: force_band_factor, the force band's half-widths' multiplier
+FORMAT_VERSION = 18  # 18: turn_band_scales, a balance model's band multipliers for a
+                     # curve that turns back (balance.py; 17 read: none, the plain ones);
+                     # 17: force_band_factor, the force band's half-widths' multiplier
                      # from FE curves of random blocked-tip designs (force_calibration.py;
                      # 16 read: 1, not calibrated);
                      # 16: stretch_hazard, the emulated membrane stretch and the flag

@@ -27,6 +27,7 @@ import numpy as np
 from solver.atomic_file import write_text_atomic
 from solver.design import Design
 from solver.errors import BalloonError, NotFoundError
+from solver.store.integrity import HDF5_HEAD_BYTES, looks_like_hdf5
 from surrogate.errors import SurrogateFileError
 from surrogate.exponential import equations
 from surrogate.exponential.family import family_from_dict
@@ -126,6 +127,10 @@ def load_surrogate(path: str | os.PathLike) -> Surrogate:
     try:  # ValueError: JSONDecodeError, UnicodeDecodeError, an integer of > 4300 digits
         data = json.loads(raw.decode("utf-8"))
     except (ValueError, RecursionError) as exc:
+        if looks_like_hdf5(raw[:HDF5_HEAD_BYTES]):   # `--model curves.h5`: said, not decoded
+            raise SurrogateFileError(str(path), "this is an HDF5 file (a curve database?), "
+                                     "not a model file (a model is a JSON file, or a name)"
+                                     ) from None
         raise SurrogateFileError(str(path), f"not valid JSON ({exc})") from None
     return surrogate_from_dict(data, str(path))
 

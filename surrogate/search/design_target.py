@@ -96,14 +96,14 @@ class DesignTarget:
                                                    and self.volume_ul <= FE_VOLUME_STOP_UL):
                 raise InputError("volume_ul", f"the {self.kind} target needs an injected "
                                  "volume within the FE's volume stop, got "
-                                 + ("none" if self.volume_ul is None else repr(self.volume_ul)),
+                                 + _got(self.volume_ul),
                                  f"0 < volume_ul <= {FE_VOLUME_STOP_UL:g} ul")
         elif not finite_number(self.pressure_pa) or not (
                 _positive(self.pressure_pa) and self.pressure_pa <= self.max_pressure_pa):
             within = "" if self.kind in BUDGET_KINDS else " within the FE's pressure stop"
             raise InputError("pressure_pa", f"the {self.kind} target needs a pressure{within}"
                              ", got "
-                             + ("none" if self.pressure_pa is None else repr(self.pressure_pa)),
+                             + _got(self.pressure_pa),
                              f"0 < pressure_pa <= {self.max_pressure_pa:g} Pa")
         name = "force_mn" if self.kind == "force_at_pressure" else "angle_deg"
         value = getattr(self, name)
@@ -112,7 +112,7 @@ class DesignTarget:
             unit = "mN" if name == "force_mn" else "deg"
             raise InputError(name, f"the {self.kind} target needs a non-zero {name} of "
                              f"at most {MAX_TARGET[name]:g} {unit}, got "
-                             + ("none" if value is None else repr(value)),
+                             + _got(value),
                              f"0 < |{name}| <= {MAX_TARGET[name]:g} {unit}; "
                              "positive bends away from the membrane, negative towards it")
         other = "angle_deg" if name == "force_mn" else "force_mn"
@@ -138,7 +138,7 @@ class DesignTarget:
         if not finite_number(self.time_s) or not (_positive(self.time_s)
                                                   and self.time_s <= MAX_TIME_S):
             raise InputError("time_s", f"the {self.kind} target needs a time, got "
-                             + ("none" if self.time_s is None else repr(self.time_s)),
+                             + _got(self.time_s),
                              f"0 < time_s <= {MAX_TIME_S:g} s")
         volume = self.time_s * self.flow_ul_s
         if volume > FE_VOLUME_STOP_UL:
@@ -216,3 +216,14 @@ def finite_number(v: object) -> bool:
 def _positive(v: float) -> bool:
     """More than 0, a subnormal magnitude (5e-324 ul, 1e-310 deg) counting as 0."""
     return v >= SMALLEST_NORMAL
+
+
+def _got(v: object) -> str:
+    """A target's value as a refusal quotes it: a subnormal one said to count as 0 (a
+    pressure_pa of 5e-324 was refused as "got 5e-324 (allowed: 0 < pressure_pa ...)",
+    a value its words allow)."""
+    if v is None:
+        return "none"
+    subnormal = finite_number(v) and 0 < abs(v) < SMALLEST_NORMAL  # type: ignore[arg-type]
+    return repr(v) + (f", below the smallest normal float ({SMALLEST_NORMAL:.3g}): counted "
+                      "as 0" if subnormal else "")

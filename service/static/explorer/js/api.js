@@ -74,6 +74,10 @@ function slotLabel(el) {
 // The same message for several items of one list (each grid point over a limit) is said
 // once, named by the page's field. `options.rest(rest, error)`: the words for the part of
 // the path below the slot ("rows" + "1.angle_deg" -> "angle_deg"), by default none.
+// `options.words(text)`: the message in the page's words (a request field the server's
+// words name, "allowed: pressures_pa", as the page's control that sets it), by default as
+// the server wrote it. `options.slot(path, error)`: the slot's path where the error's own
+// field is not the one to show it beside (a model refusing the asked axis: "Ask by").
 export function showProblem(err, slots, fallback, options = {}) {
   const messages = new Map();
   const put = (el, text) => {
@@ -82,13 +86,15 @@ export function showProblem(err, slots, fallback, options = {}) {
     messages.set(el, list);
   };
   const errors = err instanceof ApiError ? err.fieldErrors : [];
+  const named = slotNames(slots);
+  const pageWords = (text) => named(options.words ? options.words(text) : text);
   for (const e of errors) {
-    const path = fieldPath(e);
+    const path = (options.slot && options.slot(fieldPath(e), e)) || fieldPath(e);
     let best = null;
     for (const name of Object.keys(slots)) {
       if ((path === name || path.startsWith(name + ".")) && (!best || name.length > best.length)) best = name;
     }
-    let text = e.allowed ? `${e.message} (allowed: ${e.allowed})` : e.message;
+    let text = pageWords(e.allowed ? `${e.message} (allowed: ${e.allowed})` : e.message);
     if (best && path !== best && options.rest) {
       const words = options.rest(path.slice(best.length + 1), e);
       if (words) text = `${words}: ${text}`;
@@ -100,6 +106,17 @@ export function showProblem(err, slots, fallback, options = {}) {
     if (!el) continue;
     showMessage(el, texts.join(" "));
   }
+}
+
+// A message with each request field of ``slots`` it names (a path's last part written
+// as the API writes it, with an underscore: "volume_ul", "flow_ul_s") as the label of the
+// page's control that sets it: "allowed: 0 < volume_ul <= 500" beside "Injected volume
+// (ul)" reads "allowed: 0 < Injected volume (ul) <= 500".
+function slotNames(slots) {
+  const names = Object.entries(slots).map(([path, el]) => [path.split(".").pop(), el ? slotLabel(el) : ""])
+    .filter(([name, label]) => label && name.includes("_"));
+  return (text) => names.reduce((t, [name, label]) =>
+    t.replace(new RegExp(`(?<![\\w.])${name}(?!\\w|\\.\\d)`, "g"), label), text);
 }
 
 // One message in an error slot, named by its field when the slot has one, announced

@@ -5,15 +5,15 @@
 // the FE solve of a refused design (POST /v1/solve, GET /v1/jobs/{id}); exports.
 // The inverse form and the measured-data report live in inverse.js and calibration.js.
 
-import { api, ApiError, clearMessage, clearProblems, isAbort, OfflineError, showMessage, showProblem } from "./api.js";
+import { api, ApiError, clearMessage, clearProblems, fieldPath, isAbort, OfflineError, showMessage, showProblem } from "./api.js";
 import { setupCalibration } from "./calibration.js";
 import {
   FIELDS, PAIRS, W_FIELD, W_MM, axisGrid, defaultState, designBody, designLabel, fieldRange, materialId,
   materialLabel, pairLabel, scaledLengths, shown, stateOfDesign, takeScaleLimits,
 } from "./design.js";
-import { allowedWords, checkNumber, numberBoxes, readNumber } from "./fields.js";
+import { allowedWords, checkNumber, numberBoxes, rangeHints, readNumber } from "./fields.js";
 import { setupInverse } from "./inverse.js";
-import { curveEnd, jobText, nearestStep } from "./job.js";
+import { curveEnd, jobText, readCurve } from "./job.js";
 import { linkNote, readLink, writeLink } from "./link.js";
 import { COLORS, renderPlot, svgText, svgToPngBlob } from "./plot.js";
 import { renderSketch } from "./sketch.js";
@@ -53,6 +53,7 @@ const FLAG_WORDS = {
   past_longest_pump_time: "past the longest pump time",
   pressures_look_like_kpa: "pressures look like kPa",
   near_stiffness_balance: "near the stiffness balance",
+  curve_turns_back: "curve turns back: least reliable here",
   high_membrane_stretch: "membrane stretch where FE curves often fail",
 };
 export const flagWords = (f) => FLAG_WORDS[f] || String(f).replaceAll("_", " ");
@@ -67,6 +68,7 @@ const app = {
   feFamilies: new Map(),// family key -> summaries (GET /v1/curves)
   feDetails: new Map(), // curve id -> record (GET /v1/curves/{id})
   nearest: [],          // records shown
+  health: null,         // the last GET /v1/health answer
   solved: new Map(),    // design key -> FE record from a finished solve
   stored: null,         // {key, record}: the stored FE record of the design shown (any status)
   job: null,            // {id, key, trace: [{pressure_pa, angle_deg, volume_ul, at_ms}]}
@@ -433,8 +435,50 @@ const DESIGN_SLOTS = () => {
   slots["inlet.tubing_length_mm"] = $("err-tubing_length");
   slots["inlet.tubing_bore_mm"] = $("err-tubing_bore");
   slots.model = $("err-model");
+  slots.ask_axis = $("err-ask_axis");
   return slots;
 };
+
+// A server's message in the page's words: each asked axis's request field as the "Ask by"
+// choice that sends it (the paper's model asked by time said "allowed: pressures_pa", the
+// API's name of what the page's "Ask by" chooses), a model by the "Model" box's name; the
+// other fields are named by their boxes' labels (showProblem), with the ranges the
+// server states in the user's units.
+function inPageWords(text) {
+  const choice = (field) => {
+    const axis = Object.keys(ASK).find((k) => ASK[k].field === field);
+    return `Ask by "${$("ask_axis").querySelector(`option[value="${axis}"]`).textContent}"`;
+  };
+  const fields = Object.values(ASK).map((a) => a.field).join("|");
+  return text.replace(new RegExp(`(?<![\\w.])(${fields})(?![\\w.])`, "g"), choice)
+    .replace(/\bmodel "([^"]+)"/g, 'Model "$1"');
+}
+
+// POST /v1/predict. Asked by pressure, the pump's flow rate only adds the time axis: a
+// model that gives no injected volume (the paper's) refuses it, and is asked again without
+// it, the answer saying so (the page's default 2.5 ul/s made the paper's model refuse
+// every design by pressure, beside "Pump flow rate").
+async function predictAnswer(body, signal) {
+  try {
+    return await api("/v1/predict", { method: "POST", body, signal });
+  } catch (err) {
+    const flowOnly = err instanceof ApiError && err.status === 422 && err.fieldErrors.length > 0 &&
+      err.fieldErrors.every((e) => fieldPath(e) === "flow_ul_s");
+    if (!flowOnly || !body.pressures_pa || body.flow_ul_s === undefined || body.inlet) throw err;
+    const { flow_ul_s: _, ...without } = body;
+    const answer = await api("/v1/predict", { method: "POST", body: without, signal });
+    return { ...answer, flow_dropped: err.fieldErrors[0].message };
+  }
+}
+
+// The slot of a refusal of the asked axis itself (a model that answers by pressure only,
+// asked by volume or time: its "allowed" names another axis's field), not of its values:
+// beside "Ask by", not "Largest time (s)".
+function askSlot(path, e) {
+  const fields = Object.values(ASK).map((a) => a.field);
+  const other = fields.find((f) => f !== path && String(e.allowed || "").startsWith(f));
+  return fields.includes(path) && other ? "ask_axis" : null;
+}
 
 async function update() {
   if (app.controller) app.controller.abort();  // a stale request is cancelled
@@ -460,14 +504,15 @@ async function update() {
   let body = null;
   try {
     body = predictBody(app.state, grid);  // throws while a scaled layer's preset is unknown
-    const prediction = await api("/v1/predict", { method: "POST", body, signal: controller.signal });
+    const prediction = await predictAnswer(body, controller.signal);
     if (controller.signal.aborted) return;
     clearProblems($("design-form"));
     app.prediction = prediction;
     app.request = body;
     app.refused = null;
     if (app.offline) backOnline();
-    $("status").textContent = `${prediction.model} model${prediction.form ? ", " + prediction.form + " form" : ""}`;
+    $("status").textContent = `${prediction.model} model${prediction.form ? ", " + prediction.form + " form" : ""}` +
+      (prediction.flow_dropped ? `; no time axis: ${prediction.flow_dropped} (asked without the pump flow rate)` : "");
   } catch (err) {
     if (isAbort(err) || controller.signal.aborted) return;
     clearProblems($("design-form"));
@@ -483,7 +528,8 @@ async function update() {
     // a refusal of the design as a whole is shown once, in the FE solve box (not again
     // beside the field it names); a model the server does not know, beside the Model field
     const unknownModel = err instanceof ApiError && err.status === 404;
-    showProblem(err, app.refused ? {} : DESIGN_SLOTS(), app.refused ? null : $(unknownModel ? "err-model" : "err-design"));
+    showProblem(err, app.refused ? {} : DESIGN_SLOTS(), app.refused ? null : $(unknownModel ? "err-model" : "err-design"),
+      { words: inPageWords, slot: askSlot });
     $("status").textContent = app.refused ? "No prediction: the model refuses this design (below)."
       : `No prediction: ${err instanceof ApiError ? `${err.problem.title || "error"} (${err.status})` : String(err)}`;
   }
@@ -519,6 +565,7 @@ function fieldName(el) {
 // ---------------------------------------------------------------- a service that stopped
 function showHealth() {
   return api("/v1/health").then((h) => {
+    app.health = h;   // the loaded model files' SHA-256, named in the CSV export
     // the default model first: the emulator; the exponential file is the named model
     const emulator = h.emulator && h.emulator.loaded ? "emulator (default model)" : "emulator not loaded";
     const exponential = h.surrogate && h.surrogate.loaded ? `; exponential model "${h.surrogate.name}"` : "";
@@ -588,6 +635,11 @@ async function schemaLimits() {
 async function applySchemaLimits() {
   let spec;
   try { spec = await openapi(); } catch { return; }
+  applySpecLimits(spec);
+  rangeHints();  // the boxes' hints say the limits just set
+}
+
+function applySpecLimits(spec) {
   const schemas = spec.components?.schemas || {};
   const set = (id, prop, { min = true } = {}) => {
     if (!prop) return;
@@ -595,6 +647,8 @@ async function applySchemaLimits() {
     if (min && typeof prop.minimum === "number") $(id).min = String(prop.minimum);
   };
   set("mesh_level", schemas.SolveSettingsIn?.properties?.mesh_level);
+  set("inv-n", schemas.InverseRequest?.properties?.n_results);
+  set("cal-folds", schemas.CalibrateRequest?.properties?.folds);
   const predict = schemas.PredictRequest?.properties || {};
   // a list's items, also inside "anyOf" (a list or null)
   const items = (p) => p && (p.items || (p.anyOf || []).map((a) => a.items).find(Boolean));
@@ -853,15 +907,19 @@ function showOperatingPoint() {
   const p = (gridMax() * i) / (N_POINTS - 1);
   $("compare-p-h").textContent = `angle at ${fmt(p, ask.digits)} ${ask.unit}`;
   if (!pred) {
-    // the design's own FE curve, when one is drawn: its step nearest the readout's point
+    // the design's own FE curve, when one is drawn: read at the readout's point
     const own = ownRecord();
     const data = own && feData(own, false);
-    const step = data && nearestStep(data, axis, p);
-    let text = `${fmt(p, ask.digits)} ${ask.unit}: no model prediction`;
-    if (step) {
-      text += step.beyondEnd
-        ? `; the FE curve stops at ${fmt(step.angle_deg, 1)} deg (${fmt(step.pressure_pa, 0)} Pa), below this ${ask.label}`
-        : `; FE curve: angle ${fmt(step.angle_deg, 1)} deg at its step of ${fmt(step.at, ask.digits)} ${ask.unit}`;
+    const read = data && readCurve(data, axis, p);
+    const v = (x) => `${fmt(x, ask.digits)} ${ask.unit}`;
+    let text = `${v(p)}: no model prediction`;
+    if (read && read.beyondEnd) {
+      text += `; past the FE curve's end: it stops at ${fmt(read.angle_deg, 1)} deg at ${v(read.at)}` +
+        (axis === "pressure_pa" ? "" : ` (${fmt(read.pressure_pa, 0)} Pa)`);
+    } else if (read) {
+      text += `; FE curve: angle ${fmt(read.angle_deg, 1)} deg` +
+        (read.between ? ` (read between its steps at ${fmt(read.between[0], ask.digits)} and ${v(read.between[1])})` : " (at its step)") +
+        (axis === "pressure_pa" || !Number.isFinite(read.pressure_pa) ? "" : `; chamber pressure ${fmt(read.pressure_pa, 0)} Pa`);
     }
     out.textContent = text;
     renderCompare();
@@ -892,11 +950,11 @@ function drawSketch() {
   const design = pred ? pred.design : { ...app.state };
   let angle = pred ? pred.angle_deg[i] : null;
   let source = "predicted";
-  if (!pred) {  // the design's own FE curve, at its step nearest the readout's point
+  if (!pred) {  // the design's own FE curve, read at the readout's point
     const own = ownRecord();
     const data = own && feData(own, false);
-    const step = data && nearestStep(data, askAxis(), (gridMax() * i) / (N_POINTS - 1));
-    if (step && !step.beyondEnd) { angle = step.angle_deg; source = "FE"; }
+    const read = data && readCurve(data, askAxis(), (gridMax() * i) / (N_POINTS - 1));
+    if (read && !read.beyondEnd) { angle = read.angle_deg; source = "FE"; }
   }
   renderSketch($("sketch"), design, angle === null || angle === undefined ? NaN : angle,
     angle === null ? 0 : i / (N_POINTS - 1), { at: ASK[askAxis()].label, source });
@@ -1007,7 +1065,7 @@ async function refreshPinned(grid, controller) {
     if (pin.prediction && pin.ask === ask) continue;
     let prediction = null;
     try {
-      prediction = await api("/v1/predict", { method: "POST", body: predictBody(pin.state, grid), signal: controller.signal });
+      prediction = await predictAnswer(predictBody(pin.state, grid), controller.signal);
     } catch (err) { if (isAbort(err)) return; }
     if (controller.signal.aborted) return;
     pin.prediction = prediction;
@@ -1149,18 +1207,34 @@ function shownCurves() {
   return series.map((s) => ({ id: s.id, label: s.label, x_axis: axisKeys().x, x: s.x, y_axis: axisKeys().y, y: s.y, lower: s.lower || null, upper: s.upper || null }));
 }
 
+// The model a curve of the page came from, for a CSV row: its name, file and the SHA-256
+// of the file the server loaded (GET /v1/health), and the service's version. An FE curve
+// is a database record (its id in the series' label); a saved calibrated model's file is
+// not named by the health answer, nor the built-in paper model's (it has none).
+function modelColumns(seriesId) {
+  const h = app.health || {};
+  if (seriesId.startsWith("fe-")) return ["FE", h.database?.name ?? "", "", h.version ?? ""];
+  const name = app.prediction?.model ?? $("model").value.trim();
+  const loaded = { emulator: h.emulator, exponential: h.surrogate, fitted: h.surrogate }[name];
+  return [name, loaded?.file ?? "", loaded?.sha256 ?? "", h.version ?? ""];
+}
+
 function exportCsv() {
   const { x, y } = axisKeys();
   const yName = y === "force" ? "force_mn" : "angle_deg";
-  const lines = [["series", x, yName, `lower_${yName}`, `upper_${yName}`].join(",")];
+  const lines = [["series", x, yName, `lower_${yName}`, `upper_${yName}`, "model", "model_file", "model_sha256", "balloon_version"].join(",")];
   for (const s of shownCurves()) {
-    s.x.forEach((xv, i) => lines.push([s.label, xv, s.y[i], s.lower ? s.lower[i] : "", s.upper ? s.upper[i] : ""].map(csvCell).join(",")));
+    const model = modelColumns(s.id);
+    s.x.forEach((xv, i) => lines.push([s.label, xv, s.y[i], s.lower ? s.lower[i] : "", s.upper ? s.upper[i] : "", ...model].map(csvCell).join(",")));
   }
   download("balloon-curves.csv", lines.join("\n") + "\n", "text/csv");
 }
 
 function exportJson() {
-  const data = { exported_utc: new Date().toISOString(), request: app.request, prediction: app.prediction,
+  const h = app.health || {};
+  const data = { exported_utc: new Date().toISOString(),
+    service: { version: h.version, emulator: h.emulator, surrogate: h.surrogate },  // the model files by SHA-256
+    request: app.request, prediction: app.prediction,
     pinned: app.pinned.map((p) => ({ design: designBody(p.state, app.presets), prediction: pinnedAnswer(p) })),
     fe_curves: app.nearest.map((r) => ({ id: r.id, design: r.design, curve: { pressure_pa: r.curve.pressure_pa, volume_ul: r.curve.volume_ul, angle_deg: r.curve.angle_deg, force_mn: r.curve.force_mn } })),
     shown: shownCurves() };
@@ -1202,6 +1276,7 @@ async function start() {
   setupInverse({ loadDesign, presets: app.presets });
   setupCalibration({ presets: app.presets });
   numberBoxes();
+  rangeHints();   // the page's own limits until the schema's are read
   applyLink(location.hash);
   // a link pasted into this open page (the browser does not reload for a new fragment)
   window.addEventListener("hashchange", () => {

@@ -7,7 +7,7 @@
 // a missing one is left out, never invented.
 
 import { ApiError, api, clearProblems, showMessage, showProblem } from "./api.js";
-import { asRead, parseMeasured } from "./csv.js";
+import { asRead, decodeMeasured, parseMeasured } from "./csv.js";
 import { checkNumber } from "./fields.js";
 import { COLORS, renderPlot } from "./plot.js";
 import { $, download, fmt, fmtSig } from "./util.js";
@@ -162,7 +162,7 @@ export function setupCalibration() {
     const file = $("cal-file").files[0];
     if (!file) { showProblem(new Error("choose a CSV or JSON file of measured rows"), {}, $("err-cal-rows")); return; }
     try {
-      rows = parseMeasured(file.name, await file.text());
+      rows = parseMeasured(file.name, decodeMeasured(new Uint8Array(await file.arrayBuffer())));
     } catch (err) {
       showProblem(new Error(`${file.name}: ${err.message}`), {}, $("err-cal-rows"));
       return;

@@ -71,3 +71,25 @@ export function numberBoxes(root = document) {
     });
   }
 }
+
+// Each marked box's allowed range beside it before anything is typed ("from 0 to 6";
+// data-hint="integer": "a whole number from 0 to 6"), from its min and max: the limits
+// the page checks it against, the server's schema's where applySchemaLimits set them.
+// The hint is tied to its box (aria-describedby); called again when the limits change.
+// Until 2026-12-08 "Nearest FE curves" and "Mesh level" showed their range only in the
+// error of a value out of it.
+export function rangeHints(root = document) {
+  for (const input of root.querySelectorAll("input[data-hint]")) {
+    const id = `${input.id}-hint`;
+    let hint = document.getElementById(id);
+    if (!hint) {
+      hint = document.createElement("span");
+      hint.id = id;
+      hint.className = "muted small hint";
+      input.after(hint);
+      const ids = (input.getAttribute("aria-describedby") || "").split(/\s+/).filter(Boolean);
+      input.setAttribute("aria-describedby", [...ids, id].join(" "));
+    }
+    hint.textContent = allowedWords(input, { integer: input.dataset.hint === "integer" }).replace(/^allowed: /, "");
+  }
+}

@@ -1,6 +1,6 @@
 // An FE solve job and an FE curve as people read them (pure functions): the progress
 // line, the solver cutting its step back, where a curve that ended early stops, and the
-// curve's step nearest a point of the readout.
+// curve read at a point of the readout.
 
 import { fmt } from "./util.js";
 
@@ -16,22 +16,36 @@ export function curveEnd(curve) {
   return null;
 }
 
-// The step of ``data`` (pressure_pa, volume_ul, time_s, angle_deg arrays) nearest ``value``
-// on ``axis``: {at, angle_deg, pressure_pa}; past the curve's last step, that step with
-// beyondEnd; null when the curve has no such axis.
-export function nearestStep(data, axis, value) {
+// ``data``'s angle and pressure at ``value`` on ``axis`` (pressure_pa, volume_ul or time_s
+// arrays beside angle_deg), read linearly between the two steps that bracket it: the first
+// such pair along the curve (past a pressure maximum a volume-controlled curve's pressure
+// falls, and a pressure is read on the loading branch). {at, angle_deg, pressure_pa,
+// between: [x0, x1]} (no ``between`` at a step itself); past the curve's end (its largest
+// value on the axis), that end with beyondEnd; null when the curve has no such axis or
+// does not reach down to ``value``. The readout had shown the nearest step's angle (10.0
+// deg "at its step of 1000 Pa" for 1500 Pa on a curve at 40 deg by 2000 Pa).
+export function readCurve(data, axis, value) {
   const xs = data[axis];
   if (!Array.isArray(xs)) return null;
-  let best = null, last = null;
+  const points = [];
   xs.forEach((x, i) => {
     const a = data.angle_deg[i];
-    if (typeof x !== "number" || typeof a !== "number") return;
-    if (!last || x > last.at) last = { at: x, angle_deg: a, pressure_pa: data.pressure_pa[i] };
-    if (!best || Math.abs(x - value) < Math.abs(best.at - value)) best = { at: x, angle_deg: a, pressure_pa: data.pressure_pa[i] };
+    if (Number.isFinite(x) && Number.isFinite(a)) points.push({ at: x, angle_deg: a, pressure_pa: (data.pressure_pa || [])[i] ?? null });
   });
-  if (!best) return null;
-  if (value > last.at * 1.02 + 1e-12) return { ...last, beyondEnd: true };
-  return best;
+  if (!points.length) return null;
+  const end = points.reduce((m, q) => (q.at > m.at ? q : m));
+  if (value > end.at) return { ...end, beyondEnd: true };
+  for (let k = 0; k < points.length; k++) {
+    const [p, q] = [points[k], points[k + 1]];
+    if (p.at === value) return p;
+    if (q && (p.at - value) * (q.at - value) < 0) {
+      const w = (value - p.at) / (q.at - p.at);
+      const lerp = (u, v) => (Number.isFinite(u) && Number.isFinite(v) ? u + w * (v - u) : null);
+      return { at: value, angle_deg: lerp(p.angle_deg, q.angle_deg), pressure_pa: lerp(p.pressure_pa, q.pressure_pa),
+               between: [p.at, q.at] };
+    }
+  }
+  return null;
 }
 
 // What the progress says of the step size: a progress field the server may add
