@@ -74,7 +74,7 @@ def _rows(column: str, value, row: int = 2) -> list[dict]:
 @pytest.mark.parametrize("column, value, allowed", [
     ("pressure_pa", "abc", "pressure_pa <= "),
     ("angle_deg", "NaN", "angle_deg <= 720"),
-    ("L_mm", None, "0 < L_mm <= 60"),
+    ("L_mm", None, "0.5 <= L_mm <= 60"),
     ("time_s", "", "0 <= time_s <= "),
     ("curve_id", None, "non-empty text"),
     ("t_mm", 0.6, "one t_mm in every row of curve 's1'"),

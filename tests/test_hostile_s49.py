@@ -104,7 +104,8 @@ def _one_cell_changed(tmp_path, name: str, old: str, new: str) -> str:
     return str(path)
 
 
-NUMBER_WORDS = "(numbers in ASCII decimal digits, as 1000, 2.5 or 1e-3) (allowed: 0 < L_mm <= 60)"
+NUMBER_WORDS = ("(numbers in ASCII decimal digits, as 1000, 2.5 or 1e-3) "
+                "(allowed: 0.5 <= L_mm <= 60)")
 
 
 @pytest.mark.parametrize(("name", "old", "new", "words"), [

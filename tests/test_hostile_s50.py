@@ -463,3 +463,18 @@ def test_a_curve_database_given_as_the_model_is_named_as_one():
     assert code == 2 and escaped is None and len(lines) == 1, err
     assert ("curves.h5: this is an HDF5 file (a curve database?), not a model file (a model "
             "is a JSON file, or a name)") in lines[0], lines[0]
+
+
+def test_measured_lengths_are_held_to_the_design_limits():
+    """A measured row's lengths are checked as a design's are (solver.design.LIMITS_MM):
+    L_mm 5e-324 was calibrated against ``paper`` (which takes any L) where every
+    FE-based model refused it; now the row is refused with the design's range."""
+    from solver.design import LIMITS_MM
+    from surrogate.calibration._data import RANGES, observations_from_rows
+    from surrogate.calibration._errors import DataError
+    for name in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm"):
+        assert RANGES[name][:2] == LIMITS_MM[name]
+    row = {"curve_id": "a", "L_mm": 5e-324, "t_mm": 0.5, "body_material": "pdms_1_10",
+           "membrane_material": "ecoflex_00_30", "pressure_pa": 1000.0, "angle_deg": 10.0}
+    with pytest.raises(DataError, match=r"L_mm.*0\.5 <= L_mm <= 60"):
+        observations_from_rows([row, {**row, "pressure_pa": 2000.0, "angle_deg": 20.0}])

@@ -22,7 +22,7 @@ import numpy as np
 
 from solver.bounded_read import read_bounded
 from solver.byte_order_mark import bom_encoding, byte_line
-from solver.design import material_from_input
+from solver.design import LIMITS_MM, material_from_input
 from solver.errors import InputError
 from solver.number_text import NUMBER_FORM, is_number_text
 from solver.plain_text import PRINTABLE_WORDS, hidden_character
@@ -100,8 +100,10 @@ MAX_FILE_BYTES = 64 * 2**20
 # rate is the syringe pump's, whose range is one table (surrogate.volume_control): a flow
 # of 0 injects nothing (a curve without a pump leaves the column out)
 RANGES: dict[str, tuple[float, float, bool]] = {
-    "L_mm": (0.0, 60.0, False), "t_mm": (0.0, 5.0, False), "T_mm": (0.0, 10.0, False),
-    "b_mm": (0.0, 20.0, False), "h_mm": (0.0, 5.0, False),
+    # the design's lengths as a design is checked (solver.design.LIMITS_MM): a row of
+    # L_mm 5e-324 was calibrated against `paper`, which takes any L, where every FE-based
+    # model refused it
+    **{name: (*LIMITS_MM[name], True) for name in ("L_mm", "t_mm", "T_mm", "b_mm", "h_mm")},
     "pressure_pa": (-1e5, 1e6, True), "angle_deg": (-720.0, 720.0, True),
     "time_s": (0.0, 1e6, True), "flow_ul_s": (MIN_FLOW_UL_S, MAX_FLOW_UL_S, True),
     "angle_sd_deg": (0.0, 360.0, False), "force_mn": (-1e6, 1e6, True),
