@@ -478,3 +478,41 @@ def test_measured_lengths_are_held_to_the_design_limits():
            "membrane_material": "ecoflex_00_30", "pressure_pa": 1000.0, "angle_deg": 10.0}
     with pytest.raises(DataError, match=r"L_mm.*0\.5 <= L_mm <= 60"):
         observations_from_rows([row, {**row, "pressure_pa": 2000.0, "angle_deg": 20.0}])
+
+
+def test_a_refused_save_leaves_no_empty_models_directory(tmp_path):
+    """``calibrate --save N --models-dir NEW/DIR`` makes the directories before the
+    calibration's work (to refuse an unmakeable one at once); when the save is then
+    refused, the ones it made and left empty are removed again, deepest first, and
+    none that holds something (or existed before) is touched."""
+    from service.commands.calibrate import _missing_from, _remove_if_empty
+    before = tmp_path / "lab"
+    before.mkdir()
+    target = before / "new" / "models"
+    made = _missing_from(target)
+    assert made == [target, before / "new"]
+    target.mkdir(parents=True)
+    _remove_if_empty(made)
+    assert before.is_dir() and not (before / "new").exists()
+    assert _missing_from(before) == []
+    target.mkdir(parents=True)
+    (before / "new" / "notes.txt").write_text("kept")
+    _remove_if_empty(made)
+    assert not target.exists() and (before / "new" / "notes.txt").read_text() == "kept"
+
+
+@pytest.mark.slow
+def test_cli_a_refused_save_makes_no_directory(tmp_path, capsys):
+    """N53 (round eight's gauge zero, tests/data): its calibration is not saveable (the
+    gauge left above its floor as written); --save into a new directory is refused and
+    leaves no directory behind."""
+    from pathlib import Path
+
+    from service.cli import main
+    data = Path(__file__).parent / "data" / "lab_gauge_noise_gauge_zero_small_tabs.csv"
+    models = tmp_path / "new" / "models"
+    code = main(["calibrate", str(data), "--report", str(tmp_path / "r.json"),
+                 "--save", "n53", "--models-dir", str(models)])
+    assert code != 0
+    assert "--save" in capsys.readouterr().err
+    assert (tmp_path / "r.json").is_file() and not (tmp_path / "new").exists()

@@ -62,6 +62,27 @@ def _deg(value: float | None, missing: str = "n/a") -> str:
     return missing if value is None else f"{value:.2f}"
 
 
+def _missing_from(directory: Path) -> list[Path]:
+    """The directories ``mkdir(parents=True)`` would make for ``directory``, deepest
+    first: none when it exists."""
+    missing = []
+    for d in (directory, *directory.parents):
+        if d.exists():
+            break
+        missing.append(d)
+    return missing
+
+
+def _remove_if_empty(made: list[Path]) -> None:
+    """Remove the directories this command made (``_missing_from``, deepest first) that
+    are still empty: a refused save leaves no empty models directory behind."""
+    for d in made:
+        try:
+            d.rmdir()
+        except OSError:         # not empty (something else was put there), or gone
+            return
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -103,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
         if args.models_dir.exists() and not args.models_dir.is_dir():
             raise InputError("--models-dir", f"{args.models_dir} is not a directory",
                              "a directory for saved models (made if missing)")
+        made = _missing_from(args.models_dir)   # removed again if nothing is saved
         try:        # made and tried now, not after the calibration's work
             args.models_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -143,6 +165,7 @@ def run(args: argparse.Namespace) -> int:
         try:        # save_model refuses what the saved formats cannot stand for (saveable)
             path = save_model(cal, args.save, args.models_dir)
         except InputError as exc:
+            _remove_if_empty(made)
             if exc.field != "save":
                 raise
             raise InputError("--save", f"{exc.detail}; the report is written to "
