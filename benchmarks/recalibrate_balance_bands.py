@@ -18,17 +18,16 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from dataclasses import replace
 
 import numpy as np
 
 from solver.store import CurveStore
-from solver.store.record import git_commit
 from surrogate.emulator import load_emulator
 from surrogate.emulator.balance import loo_band_scales, on_nodes
 from surrogate.emulator.database_rows import collect_rows
 from surrogate.emulator.file import save_emulator
+from surrogate.fit_provenance import refit_step
 
 
 def main() -> None:
@@ -64,10 +63,8 @@ def main() -> None:
               f"{'none' if turn is None else f'{turn[0]:.3f} / {turn[1]:.3f}'}")
     report["balance"] = balance_report
     provenance = dict(e.provenance)
-    provenance["balance_bands_recalibrated"] = {
-        "git_commit": git_commit(),
-        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "command": "python benchmarks/recalibrate_balance_bands.py " + " ".join(sys.argv[1:])}
+    provenance["balance_bands_recalibrated"] = refit_step(
+        "python benchmarks/recalibrate_balance_bands.py " + " ".join(sys.argv[1:]))
     save_emulator(replace(e, balance_models=models, report=report, provenance=provenance),
                   args.emulator)
 

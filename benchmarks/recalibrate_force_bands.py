@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from dataclasses import replace
 
 from solver.store import CurveStore
-from solver.store.record import git_commit
 from surrogate.emulator import load_emulator
 from surrogate.emulator.file import save_emulator
 from surrogate.emulator.force_calibration import calibrate_force_on_random_designs
+from surrogate.fit_provenance import refit_step
 
 
 def main() -> None:
@@ -41,10 +40,8 @@ def main() -> None:
     source = dict(e.report.get("random_design_force_calibration", {}).get("source", {}))
     calibrated = calibrate_force_on_random_designs(e, records, source=source)
     provenance = dict(calibrated.provenance)
-    provenance["force_bands_recalibrated"] = {
-        "git_commit": git_commit(),
-        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "command": "python benchmarks/recalibrate_force_bands.py " + " ".join(sys.argv[1:])}
+    provenance["force_bands_recalibrated"] = refit_step(
+        "python benchmarks/recalibrate_force_bands.py " + " ".join(sys.argv[1:]))
     calibrated = replace(calibrated, provenance=provenance)
     save_emulator(calibrated, args.emulator)
     cal = calibrated.report["random_design_force_calibration"]

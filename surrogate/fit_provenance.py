@@ -11,6 +11,7 @@ commit whose code writes an older file format, and no checksum of the data it ca
 from __future__ import annotations
 
 import hashlib
+import time
 from pathlib import Path
 
 
@@ -26,3 +27,13 @@ def file_sha256(path: str | Path) -> str:
 def database_entry(path: str | Path, records: int) -> dict[str, object]:
     """An input database as a model file records it: name, records, checksum."""
     return {"name": Path(path).name, "records": int(records), "sha256": file_sha256(path)}
+
+
+def refit_step(command: str) -> dict[str, str]:
+    """A last step of the fit run alone on a model file (a band recalibration without a
+    refit), as its provenance records it: the code's commit, when (UTC), the command."""
+    from solver.store.record import git_commit
+
+    return {"git_commit": git_commit(),
+            "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+            "command": command}
